@@ -1,0 +1,9 @@
+//! One module per subcommand.
+
+pub mod accuracy;
+pub mod calibrate;
+pub mod decode;
+pub mod diagnose;
+pub mod eval;
+pub mod simulate;
+pub mod table;

@@ -1,0 +1,3 @@
+//! armcal: the logic behind the host tool, shared with the tests.
+//!
+//! Modules are added by the work that needs them; each has one job.

@@ -1,0 +1,53 @@
+//! `armcal`: the host tool of quatarm.
+//!
+//! Each subcommand lives in its own module under `commands/`, which owns its arguments and
+//! its output; the library (`armcal::…`) holds the logic they share with tests.
+
+use clap::{Parser, Subcommand};
+
+mod commands;
+
+/// Host tool for articulated-arm CMMs: evaluate, simulate, calibrate, diagnose, build
+/// calibration tables, decode firmware streams.
+#[derive(Parser)]
+#[command(name = "armcal", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Evaluate the arm model on joint readings: CSV in, XYZ and probe direction out.
+    Eval(commands::eval::Args),
+    /// Simulate measurements of a virtual arm (point, spat or length data).
+    Simulate(commands::simulate::Args),
+    /// Identify the arm's parameters from measured data.
+    Calibrate(commands::calibrate::Args),
+    /// Show what the model gets wrong, name the cause, extend the model, measure the gain.
+    Diagnose(commands::diagnose::Args),
+    /// Build or show a binary calibration table for the firmware.
+    #[command(subcommand)]
+    Table(commands::table::Command),
+    /// Decode the firmware's binary stream to CSV.
+    Decode(commands::decode::Args),
+    /// Measure the firmware paths against the f64 reference over random poses.
+    Accuracy(commands::accuracy::Args),
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Eval(a) => commands::eval::run(a),
+        Command::Simulate(a) => commands::simulate::run(a),
+        Command::Calibrate(a) => commands::calibrate::run(a),
+        Command::Diagnose(a) => commands::diagnose::run(a),
+        Command::Table(c) => commands::table::run(c),
+        Command::Decode(a) => commands::decode::run(a),
+        Command::Accuracy(a) => commands::accuracy::run(a),
+    };
+    if let Err(e) = result {
+        eprintln!("armcal: error: {e:#}");
+        std::process::exit(1);
+    }
+}

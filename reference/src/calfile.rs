@@ -1,0 +1,493 @@
+//! The calibration file (`spec/calibration-file.md`): TOML in, TOML out.
+//!
+//! Reading walks the TOML tree by hand rather than through `serde` so that every refusal names
+//! the key path (`joint[3].tilt[1]`) and every unknown key is reported, as the spec asks.
+//! Writing emits every key, zeros included, so that a file read back gives the same arm and a
+//! person sees at a glance which terms exist.
+
+use crate::arm::{Arm, Axis, Frame, Harmonic, Joint, Probe, DEFAULT_COUNTS, JOINT_COUNTS};
+use std::fmt::Write as _;
+use toml::{Table, Value};
+
+/// A calibration file that cannot be used, with the key path at fault.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{path}: {message}")]
+pub struct CalFileError {
+    /// Key path, for example `joint[2].axis`; `(file)` for TOML syntax errors.
+    pub path: String,
+    /// Why it was refused.
+    pub message: String,
+}
+
+/// An arm read from a file, with the unknown keys it ignored.
+#[derive(Debug, Clone)]
+pub struct Parsed {
+    /// The arm.
+    pub arm: Arm,
+    /// Key paths that the spec does not know; they were ignored.
+    pub unknown_keys: Vec<String>,
+}
+
+fn err(path: impl Into<String>, message: impl Into<String>) -> CalFileError {
+    CalFileError {
+        path: path.into(),
+        message: message.into(),
+    }
+}
+
+/// Reads a calibration file from its text.
+pub fn parse(text: &str) -> Result<Parsed, CalFileError> {
+    let root: Table = text
+        .parse()
+        .map_err(|e: toml::de::Error| err("(file)", format!("not valid TOML: {}", e.message())))?;
+    let mut unknown = Vec::new();
+    for key in root.keys() {
+        if !matches!(
+            key.as_str(),
+            "name" | "serial" | "encoder_counts" | "joint" | "probe" | "reference_frame"
+        ) {
+            unknown.push(key.clone());
+        }
+    }
+    let name = opt_string(&root, "name", "name")?;
+    let serial = opt_string(&root, "serial", "serial")?;
+
+    let joint_values = match root.get("joint") {
+        Some(Value::Array(a)) => a,
+        Some(_) => return Err(err("joint", "must be an array of tables ([[joint]])")),
+        None => return Err(err("joint", "missing: the arm needs its [[joint]] tables")),
+    };
+    let n = joint_values.len();
+    if !JOINT_COUNTS.contains(&n) {
+        return Err(err(
+            "joint",
+            format!(
+                "{n} joints; the arm model takes {} or {}",
+                JOINT_COUNTS.start(),
+                JOINT_COUNTS.end()
+            ),
+        ));
+    }
+    let counts = encoder_counts(root.get("encoder_counts"), n)?;
+    let mut joints = Vec::with_capacity(n);
+    for (i, v) in joint_values.iter().enumerate() {
+        let path = format!("joint[{}]", i + 1);
+        let t = v
+            .as_table()
+            .ok_or_else(|| err(&path, "must be a table"))?;
+        joints.push(joint(t, &path, counts[i], &mut unknown)?);
+    }
+    let probe = match root.get("probe") {
+        Some(Value::Table(t)) => probe(t, &mut unknown)?,
+        Some(_) => return Err(err("probe", "must be a table")),
+        None => return Err(err("probe", "missing: the [probe] table with its vector")),
+    };
+    let reference_frame = match root.get("reference_frame") {
+        Some(Value::Table(t)) => Some(frame(t, &mut unknown)?),
+        Some(_) => return Err(err("reference_frame", "must be a table")),
+        None => None,
+    };
+    Ok(Parsed {
+        arm: Arm {
+            name,
+            serial,
+            joints,
+            probe,
+            reference_frame,
+        },
+        unknown_keys: unknown,
+    })
+}
+
+/// Reads a calibration file from disk; errors carry the file name in front of the key path.
+pub fn read(path: &std::path::Path) -> Result<Parsed, CalFileError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| err(path.display().to_string(), format!("cannot read: {e}")))?;
+    parse(&text).map_err(|e| err(format!("{}: {}", path.display(), e.path), e.message))
+}
+
+fn joint(
+    t: &Table,
+    path: &str,
+    counts: u32,
+    unknown: &mut Vec<String>,
+) -> Result<Joint, CalFileError> {
+    const KEYS: &[&str] = &[
+        "axis",
+        "link",
+        "zero_offset",
+        "tilt",
+        "link_error",
+        "harmonics",
+        "gravity",
+        "thermal",
+    ];
+    note_unknown(t, KEYS, path, unknown);
+    let axis = match t.get("axis") {
+        None => return Err(err(format!("{path}.axis"), "missing")),
+        Some(Value::String(s)) => match s.as_str() {
+            "x" => Axis::X,
+            "y" => Axis::Y,
+            "z" => Axis::Z,
+            other => {
+                return Err(err(
+                    format!("{path}.axis"),
+                    format!("\"{other}\" is not an axis: x, y or z"),
+                ))
+            }
+        },
+        Some(_) => return Err(err(format!("{path}.axis"), "must be a string: x, y or z")),
+    };
+    let link = match t.get("link") {
+        None => return Err(err(format!("{path}.link"), "missing")),
+        Some(v) => array::<3>(v, &format!("{path}.link"))?,
+    };
+    let harmonics = match t.get("harmonics") {
+        None => Vec::new(),
+        Some(Value::Array(a)) => a
+            .iter()
+            .enumerate()
+            .map(|(k, h)| harmonic(h, &format!("{path}.harmonics[{}]", k + 1), unknown))
+            .collect::<Result<_, _>>()?,
+        Some(_) => {
+            return Err(err(
+                format!("{path}.harmonics"),
+                "must be an array of { order, sin, cos } tables",
+            ))
+        }
+    };
+    Ok(Joint {
+        axis,
+        link,
+        zero_offset: opt_number(t, "zero_offset", path)?,
+        tilt: opt_array::<2>(t, "tilt", path)?,
+        link_error: opt_array::<3>(t, "link_error", path)?,
+        harmonics,
+        gravity: opt_number(t, "gravity", path)?,
+        thermal: opt_number(t, "thermal", path)?,
+        encoder_counts: counts,
+    })
+}
+
+fn harmonic(v: &Value, path: &str, unknown: &mut Vec<String>) -> Result<Harmonic, CalFileError> {
+    let t = v
+        .as_table()
+        .ok_or_else(|| err(path, "must be a table { order, sin, cos }"))?;
+    note_unknown(t, &["order", "sin", "cos"], path, unknown);
+    let order = match t.get("order") {
+        None => return Err(err(format!("{path}.order"), "missing")),
+        Some(Value::Integer(h)) if (1..=i64::from(u16::MAX)).contains(h) => *h as u32,
+        Some(Value::Integer(h)) => {
+            return Err(err(
+                format!("{path}.order"),
+                format!("{h} is not an order: an integer from 1"),
+            ))
+        }
+        Some(_) => return Err(err(format!("{path}.order"), "must be an integer ≥ 1")),
+    };
+    Ok(Harmonic {
+        order,
+        sin: opt_number(t, "sin", path)?,
+        cos: opt_number(t, "cos", path)?,
+    })
+}
+
+fn probe(t: &Table, unknown: &mut Vec<String>) -> Result<Probe, CalFileError> {
+    note_unknown(t, &["vector", "error", "thermal"], "probe", unknown);
+    let vector = match t.get("vector") {
+        None => return Err(err("probe.vector", "missing")),
+        Some(v) => array::<3>(v, "probe.vector")?,
+    };
+    let p = Probe {
+        vector,
+        error: opt_array::<3>(t, "error", "probe")?,
+        thermal: opt_number(t, "thermal", "probe")?,
+    };
+    let a = p.actual();
+    if a.iter().all(|c| *c == 0.0) {
+        return Err(err(
+            "probe.vector",
+            "vector + error is zero: the probe direction is undefined",
+        ));
+    }
+    Ok(p)
+}
+
+fn frame(t: &Table, unknown: &mut Vec<String>) -> Result<Frame, CalFileError> {
+    note_unknown(t, &["rotation", "translation"], "reference_frame", unknown);
+    let rotation = match t.get("rotation") {
+        None => [1.0, 0.0, 0.0, 0.0],
+        Some(v) => array::<4>(v, "reference_frame.rotation")?,
+    };
+    let norm = rotation.iter().map(|c| c * c).sum::<f64>().sqrt();
+    if (norm - 1.0).abs() > 1e-6 {
+        return Err(err(
+            "reference_frame.rotation",
+            format!("not a unit quaternion (norm {norm})"),
+        ));
+    }
+    Ok(Frame {
+        rotation: rotation.map(|c| c / norm),
+        translation: opt_array::<3>(t, "translation", "reference_frame")?,
+    })
+}
+
+fn encoder_counts(v: Option<&Value>, n: usize) -> Result<Vec<u32>, CalFileError> {
+    fn one(v: &Value, path: &str) -> Result<u32, CalFileError> {
+        let c = match v {
+            Value::Integer(i) => *i,
+            Value::Float(f) if f.fract() == 0.0 && f.is_finite() => *f as i64,
+            _ => return Err(err(path, "must be a positive integer")),
+        };
+        if !(2..=i64::from(i32::MAX)).contains(&c) {
+            return Err(err(path, format!("{c} is out of range 2 ..= 2^31-1")));
+        }
+        Ok(c as u32)
+    }
+    match v {
+        None => Ok(vec![DEFAULT_COUNTS; n]),
+        Some(Value::Array(a)) => {
+            if a.len() != n {
+                return Err(err(
+                    "encoder_counts",
+                    format!("{} values for {n} joints", a.len()),
+                ));
+            }
+            a.iter()
+                .enumerate()
+                .map(|(i, v)| one(v, &format!("encoder_counts[{}]", i + 1)))
+                .collect()
+        }
+        Some(v) => Ok(vec![one(v, "encoder_counts")?; n]),
+    }
+}
+
+fn note_unknown(t: &Table, known: &[&str], path: &str, unknown: &mut Vec<String>) {
+    for k in t.keys() {
+        if !known.contains(&k.as_str()) {
+            unknown.push(format!("{path}.{k}"));
+        }
+    }
+}
+
+fn number(v: &Value, path: &str) -> Result<f64, CalFileError> {
+    let x = match v {
+        Value::Float(f) => *f,
+        Value::Integer(i) => *i as f64,
+        _ => return Err(err(path, "must be a number")),
+    };
+    if !x.is_finite() {
+        return Err(err(path, format!("{x} is not a finite number")));
+    }
+    Ok(x)
+}
+
+fn array<const K: usize>(v: &Value, path: &str) -> Result<[f64; K], CalFileError> {
+    let a = v
+        .as_array()
+        .ok_or_else(|| err(path, format!("must be an array of {K} numbers")))?;
+    if a.len() != K {
+        return Err(err(
+            path,
+            format!("has {} values, must have {K}", a.len()),
+        ));
+    }
+    let mut out = [0.0; K];
+    for (k, x) in a.iter().enumerate() {
+        out[k] = number(x, &format!("{path}[{k}]"))?;
+    }
+    Ok(out)
+}
+
+fn opt_number(t: &Table, key: &str, path: &str) -> Result<f64, CalFileError> {
+    t.get(key)
+        .map_or(Ok(0.0), |v| number(v, &format!("{path}.{key}")))
+}
+
+fn opt_array<const K: usize>(t: &Table, key: &str, path: &str) -> Result<[f64; K], CalFileError> {
+    t.get(key)
+        .map_or(Ok([0.0; K]), |v| array::<K>(v, &format!("{path}.{key}")))
+}
+
+fn opt_string(t: &Table, key: &str, path: &str) -> Result<Option<String>, CalFileError> {
+    match t.get(key) {
+        None => Ok(None),
+        Some(Value::String(s)) => Ok(Some(s.clone())),
+        Some(_) => Err(err(path, "must be a string")),
+    }
+}
+
+/// Writes an arm as a calibration file. `header` lines become `#` comments at the top.
+///
+/// Numbers are written with Rust's shortest round-trip formatting, so reading the file back
+/// gives the same f64 values bit for bit.
+pub fn write(arm: &Arm, header: &[&str]) -> String {
+    let mut s = String::new();
+    for line in header {
+        let _ = writeln!(s, "# {line}");
+    }
+    if let Some(name) = &arm.name {
+        let _ = writeln!(s, "name = {}", quote(name));
+    }
+    if let Some(serial) = &arm.serial {
+        let _ = writeln!(s, "serial = {}", quote(serial));
+    }
+    let counts: Vec<u32> = arm.joints.iter().map(|j| j.encoder_counts).collect();
+    if counts.iter().all(|c| *c == counts[0]) {
+        let _ = writeln!(s, "encoder_counts = {}", counts[0]);
+    } else {
+        let list: Vec<String> = counts.iter().map(u32::to_string).collect();
+        let _ = writeln!(s, "encoder_counts = [{}]", list.join(", "));
+    }
+    for j in &arm.joints {
+        let _ = writeln!(s, "\n[[joint]]");
+        let _ = writeln!(s, "axis = \"{}\"", j.axis.name());
+        let _ = writeln!(s, "link = {}", arr(&j.link));
+        let _ = writeln!(s, "zero_offset = {}", num(j.zero_offset));
+        let _ = writeln!(s, "tilt = {}", arr(&j.tilt));
+        let _ = writeln!(s, "link_error = {}", arr(&j.link_error));
+        let hs: Vec<String> = j
+            .harmonics
+            .iter()
+            .map(|h| {
+                format!(
+                    "{{ order = {}, sin = {}, cos = {} }}",
+                    h.order,
+                    num(h.sin),
+                    num(h.cos)
+                )
+            })
+            .collect();
+        let _ = writeln!(s, "harmonics = [{}]", hs.join(", "));
+        let _ = writeln!(s, "gravity = {}", num(j.gravity));
+        let _ = writeln!(s, "thermal = {}", num(j.thermal));
+    }
+    let _ = writeln!(s, "\n[probe]");
+    let _ = writeln!(s, "vector = {}", arr(&arm.probe.vector));
+    let _ = writeln!(s, "error = {}", arr(&arm.probe.error));
+    let _ = writeln!(s, "thermal = {}", num(arm.probe.thermal));
+    if let Some(f) = &arm.reference_frame {
+        let _ = writeln!(s, "\n[reference_frame]");
+        let _ = writeln!(s, "rotation = {}", arr(&f.rotation));
+        let _ = writeln!(s, "translation = {}", arr(&f.translation));
+    }
+    s
+}
+
+fn num(x: f64) -> String {
+    // `{:?}` is the shortest text that reads back to the same f64, and it always carries a
+    // `.` or an exponent, so TOML reads it as a float.
+    format!("{x:?}")
+}
+
+fn arr(a: &[f64]) -> String {
+    let parts: Vec<String> = a.iter().map(|x| num(*x)).collect();
+    format!("[{}]", parts.join(", "))
+}
+
+fn quote(s: &str) -> String {
+    toml::Value::String(s.to_string()).to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const FULL: &str = r#"
+name = "t"
+serial = "SN-7"
+encoder_counts = 1048576
+[[joint]]
+axis = "z"
+link = [0.0, 0.0, 200.0]
+zero_offset = 1e-3
+tilt = [2e-4, -3e-4]
+link_error = [0.1, -0.2, 0.3]
+harmonics = [ { order = 1, sin = 5e-5, cos = -2e-5 }, { order = 3, sin = 1e-6, cos = 0.0 } ]
+gravity = 3e-8
+thermal = 2.3e-5
+[[joint]]
+axis = "x"
+link = [0, 0, 300]
+[[joint]]
+axis = "z"
+link = [0, 0, 300]
+[[joint]]
+axis = "x"
+link = [0, 0, 250]
+[[joint]]
+axis = "z"
+link = [0, 0, 250]
+[[joint]]
+axis = "x"
+link = [0, 0, 80]
+bogus = 1
+[probe]
+vector = [0.0, 0.0, 120.0]
+error = [0.01, 0.0, -0.02]
+thermal = 1e-5
+[reference_frame]
+rotation = [1.0, 0.0, 0.0, 0.0]
+translation = [10.0, 20.0, 30.0]
+"#;
+
+    #[test]
+    fn reads_every_key() {
+        let p = parse(FULL).unwrap();
+        let a = &p.arm;
+        assert_eq!(a.dof(), 6);
+        assert_eq!(a.serial.as_deref(), Some("SN-7"));
+        assert_eq!(a.joints[0].harmonics.len(), 2);
+        assert_eq!(a.joints[0].harmonics[1].order, 3);
+        assert_eq!(a.joints[0].tilt, [2e-4, -3e-4]);
+        assert_eq!(a.joints[1].link, [0.0, 0.0, 300.0]);
+        assert_eq!(a.joints[1].gravity, 0.0);
+        assert_eq!(a.probe.thermal, 1e-5);
+        assert_eq!(p.unknown_keys, vec!["joint[6].bogus".to_string()]);
+    }
+
+    #[test]
+    fn round_trips_bit_for_bit() {
+        let a = parse(FULL).unwrap().arm;
+        let text = write(&a, &["round trip"]);
+        let b = parse(&text).unwrap();
+        assert_eq!(a, b.arm);
+        assert!(b.unknown_keys.is_empty());
+    }
+
+    #[test]
+    fn refusals_name_the_key() {
+        let cases = [
+            (FULL.replace("axis = \"x\"\nlink = [0, 0, 300]", "axis = \"w\"\nlink = [0, 0, 300]"), "joint[2].axis"),
+            (FULL.replace("link = [0, 0, 80]", ""), "joint[6].link"),
+            (FULL.replace("gravity = 3e-8", "gravity = nan"), "joint[1].gravity"),
+            (FULL.replace("tilt = [2e-4, -3e-4]", "tilt = [2e-4]"), "joint[1].tilt"),
+            (FULL.replace("zero_offset = 1e-3", "zero_offset = \"a\""), "joint[1].zero_offset"),
+            (FULL.replace("vector = [0.0, 0.0, 120.0]", "vector = [0.0, inf, 120.0]"), "probe.vector[1]"),
+            (FULL.replace("order = 3", "order = 0"), "joint[1].harmonics[2].order"),
+            ("name = ".to_string(), "(file)"),
+        ];
+        for (text, path) in cases {
+            let e = parse(&text).unwrap_err();
+            assert_eq!(e.path, path, "{e}");
+        }
+    }
+
+    #[test]
+    fn defaults_apply() {
+        let text = FULL.replace("encoder_counts = 1048576\n", "");
+        let a = parse(&text).unwrap().arm;
+        assert!(a.joints.iter().all(|j| j.encoder_counts == DEFAULT_COUNTS));
+        let per_joint = FULL.replace(
+            "encoder_counts = 1048576",
+            "encoder_counts = [1, 2, 3, 4, 5, 6]",
+        );
+        assert_eq!(parse(&per_joint).unwrap_err().path, "encoder_counts[1]");
+        let per_joint = FULL.replace(
+            "encoder_counts = 1048576",
+            "encoder_counts = [4096, 8192, 4096, 8192, 4096, 65536]",
+        );
+        let a = parse(&per_joint).unwrap().arm;
+        assert_eq!(a.joints[5].encoder_counts, 65536);
+    }
+}

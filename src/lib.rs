@@ -1,0 +1,2 @@
+//! quatarm: the no_std quaternion chain of an articulated-arm CMM.
+#![cfg_attr(not(test), no_std)]
