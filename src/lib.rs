@@ -1,2 +1,4 @@
 //! quatarm: the no_std quaternion chain of an articulated-arm CMM.
 #![cfg_attr(not(test), no_std)]
+
+pub mod stream;

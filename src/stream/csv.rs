@@ -1,0 +1,188 @@
+//! The text mode: one CSV line per report, for a person at a terminal and for `armcal decode`.
+//!
+//! Written with integer arithmetic only, no `core::fmt`: on a Cortex-M0 the formatting
+//! machinery alone would cost several KiB of the 32 KiB budget. Millimetres get six decimals
+//! (the nanometre the stream carries), direction components nine. A report without
+//! coordinates leaves those six fields empty, so a spreadsheet never sees a made-up zero.
+
+use super::{Report, Status};
+
+/// The header line (with its newline) that matches [`write_csv_line`].
+pub const CSV_HEADER: &str = "seq,time_us,status,x_mm,y_mm,z_mm,nx,ny,nz\n";
+
+/// Longest line [`write_csv_line`] writes, newline included.
+pub const MAX_CSV_LINE: usize = 128;
+
+/// Writes [`CSV_HEADER`] into `out`; returns its length (0 if `out` is too small).
+pub fn write_csv_header(out: &mut [u8]) -> usize {
+    let h = CSV_HEADER.as_bytes();
+    match out.get_mut(..h.len()) {
+        Some(dst) => {
+            dst.copy_from_slice(h);
+            h.len()
+        }
+        None => 0,
+    }
+}
+
+/// Writes one report as a CSV line, newline included, into `out`; returns its length.
+/// `out` must hold [`MAX_CSV_LINE`] bytes; a shorter one gets a truncated line (no panic).
+pub fn write_csv_line(report: &Report, out: &mut [u8]) -> usize {
+    let mut w = Cursor { out, len: 0 };
+    w.unsigned(u64::from(report.seq));
+    w.byte(b',');
+    w.unsigned(report.time_us);
+    w.byte(b',');
+    w.hex16(report.status);
+    if let Some(p) = &report.point {
+        for v in p.xyz_nm {
+            w.byte(b',');
+            w.decimal(i64::from(v), 6);
+        }
+        for v in p.dir_e9 {
+            w.byte(b',');
+            w.decimal(i64::from(v), 9);
+        }
+    } else {
+        for _ in 0..6 {
+            w.byte(b',');
+        }
+    }
+    w.byte(b'\n');
+    w.len
+}
+
+struct Cursor<'a> {
+    out: &'a mut [u8],
+    len: usize,
+}
+
+impl Cursor<'_> {
+    fn byte(&mut self, b: u8) {
+        if let Some(slot) = self.out.get_mut(self.len) {
+            *slot = b;
+            self.len += 1;
+        }
+    }
+
+    fn unsigned(&mut self, mut v: u64) {
+        let mut digits = [0u8; 20];
+        let mut n = 0;
+        loop {
+            digits[n] = b'0' + (v % 10) as u8;
+            n += 1;
+            v /= 10;
+            if v == 0 {
+                break;
+            }
+        }
+        for &d in digits[..n].iter().rev() {
+            self.byte(d);
+        }
+    }
+
+    /// `v / 10^decimals` with exactly `decimals` digits after the point.
+    fn decimal(&mut self, v: i64, decimals: u32) {
+        if v < 0 {
+            self.byte(b'-');
+        }
+        let mag = v.unsigned_abs();
+        let scale = 10u64.pow(decimals);
+        self.unsigned(mag / scale);
+        self.byte(b'.');
+        let mut frac = mag % scale;
+        let mut digits = [b'0'; 20];
+        for d in digits[..decimals as usize].iter_mut().rev() {
+            *d = b'0' + (frac % 10) as u8;
+            frac /= 10;
+        }
+        for &d in &digits[..decimals as usize] {
+            self.byte(d);
+        }
+    }
+
+    fn hex16(&mut self, s: Status) {
+        self.byte(b'0');
+        self.byte(b'x');
+        for shift in [12, 8, 4, 0] {
+            let nib = ((s.0 >> shift) & 0xF) as u8;
+            self.byte(if nib < 10 {
+                b'0' + nib
+            } else {
+                b'a' + nib - 10
+            });
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::stream::Coordinates;
+
+    fn line(r: &Report) -> String {
+        let mut out = [0u8; MAX_CSV_LINE];
+        let n = write_csv_line(r, &mut out);
+        String::from_utf8(out[..n].to_vec()).unwrap()
+    }
+
+    #[test]
+    fn coordinates_are_exact_decimal_renderings() {
+        let r = Report {
+            seq: 42,
+            time_us: 1_000_001,
+            status: Status(0x0001),
+            point: Some(Coordinates {
+                xyz_nm: [1_234_567_891, -5, 0],
+                dir_e9: [-1_000_000_000, 12, 999_999_999],
+            }),
+        };
+        assert_eq!(
+            line(&r),
+            "42,1000001,0x0001,1234.567891,-0.000005,0.000000,-1.000000000,0.000000012,0.999999999\n"
+        );
+    }
+
+    #[test]
+    fn no_point_leaves_the_fields_empty() {
+        let r = Report {
+            seq: 0,
+            time_us: 0,
+            status: Status(0x0120),
+            point: None,
+        };
+        assert_eq!(line(&r), "0,0,0x0120,,,,,,\n");
+    }
+
+    #[test]
+    fn the_longest_line_fits_and_matches_the_header() {
+        let r = Report {
+            seq: u32::MAX,
+            time_us: u64::MAX,
+            status: Status(0xFFFF),
+            point: Some(Coordinates {
+                xyz_nm: [i32::MIN; 3],
+                dir_e9: [i32::MIN; 3],
+            }),
+        };
+        let l = line(&r);
+        assert!(l.len() <= MAX_CSV_LINE);
+        assert!(l.ends_with('\n'));
+        assert_eq!(l.split(',').count(), CSV_HEADER.split(',').count());
+        // Matches Rust's own formatting of the same value.
+        assert!(l.contains(&format!(",{:.6},", f64::from(i32::MIN) / 1e6)));
+    }
+
+    #[test]
+    fn a_short_buffer_truncates_without_panicking() {
+        let r = Report {
+            seq: 1,
+            time_us: 2,
+            status: Status(1),
+            point: None,
+        };
+        let mut out = [0u8; 5];
+        assert_eq!(write_csv_line(&r, &mut out), 5);
+        assert_eq!(&out, b"1,2,0");
+    }
+}
