@@ -1,0 +1,223 @@
+//! What every board's main loop does with a reading, in one place that host tests can reach.
+//!
+//! A board supplies the hardware (UART, clock, encoders) and a closure that runs its chain; the
+//! [`Hub`] decides, from the boot check of the table and the faults of this reading, whether the
+//! chain may run at all, numbers the reports and renders them in the current [`Mode`]. Keeping
+//! this out of the boards means the rule "no coordinates beside a fault" is written, and tested,
+//! once.
+
+use super::{
+    encode, write_csv_line, Coordinates, FrameError, Hello, Mode, Precision, Reading, Report,
+    Status, TableState, ToHost, MAX_CSV_LINE, MAX_FRAME, PROTOCOL_VERSION,
+};
+
+/// The rated temperature range of the thermal model, milli-degrees Celsius. Outside it the
+/// hub reports `OVER_TEMPERATURE` and no coordinates: the expansion model is only
+/// calibrated between these limits.
+pub const RATED_TEMP_MC: core::ops::RangeInclusive<i32> = 0..=40_000;
+
+/// Longest output of [`Hub::render`]: a frame or a CSV line.
+pub const MAX_OUTPUT: usize = if MAX_FRAME > MAX_CSV_LINE {
+    MAX_FRAME
+} else {
+    MAX_CSV_LINE
+};
+
+/// The state a hub keeps between readings.
+#[derive(Clone, Debug)]
+pub struct Hub {
+    seq: u32,
+    base: Status,
+    joints: u8,
+    precision: Precision,
+    mode: Mode,
+}
+
+impl Hub {
+    /// A hub whose boot check of the table gave `table`, for a chain of `joints` joints (0 if
+    /// there is no valid table).
+    pub fn new(table: TableState, joints: u8, precision: Precision) -> Hub {
+        Hub {
+            seq: 0,
+            base: Status::for_table(table),
+            joints: if table == TableState::Valid {
+                joints
+            } else {
+                0
+            },
+            precision,
+            mode: Mode::Binary,
+        }
+    }
+
+    /// The boot announcement.
+    pub fn hello(&self) -> ToHost {
+        ToHost::Hello(Hello {
+            protocol: PROTOCOL_VERSION,
+            precision: self.precision,
+            joints: self.joints,
+            status: self.base,
+        })
+    }
+
+    /// The output mode.
+    pub fn mode(&self) -> Mode {
+        self.mode
+    }
+
+    /// Switches the output mode.
+    pub fn set_mode(&mut self, mode: Mode) {
+        self.mode = mode;
+    }
+
+    /// The report for one slot: `reading` is what arrived (or why nothing usable did),
+    /// `eval` runs the chain on counts and a temperature (m°C). `eval` is called only when
+    /// the table is valid, the reading intact, fault-free and in the rated temperature range;
+    /// its error gives `CHAIN_ERROR` and no coordinates.
+    pub fn report<E>(
+        &mut self,
+        time_us: u64,
+        reading: Result<&Reading, FrameError>,
+        eval: impl FnOnce(&[u32], i32) -> Result<Coordinates, E>,
+    ) -> Report {
+        let mut status = self.base;
+        match reading {
+            Err(_) => status = status.with(Status::INPUT_ERROR),
+            Ok(r) => {
+                status = status.with_encoder_faults(r.faults);
+                if !RATED_TEMP_MC.contains(&r.temp_mc) {
+                    status = status.with(Status::OVER_TEMPERATURE);
+                }
+                if usize::from(self.joints) != r.counts.as_slice().len() && status.table_valid() {
+                    status = status.with(Status::CHAIN_ERROR);
+                }
+            }
+        }
+        let mut point = None;
+        if let (true, Ok(r)) = (status.is_measurement(), reading) {
+            match eval(r.counts.as_slice(), r.temp_mc) {
+                Ok(c) => point = Some(c),
+                Err(_) => status = status.with(Status::CHAIN_ERROR),
+            }
+        }
+        let report = Report {
+            seq: self.seq,
+            time_us,
+            status,
+            point,
+        };
+        self.seq = self.seq.wrapping_add(1);
+        report
+    }
+
+    /// Renders a message in the current mode into `out` (at least [`MAX_OUTPUT`] bytes);
+    /// returns the bytes to send. In text mode a `Hello` is not rendered (CSV rows only).
+    pub fn render<'a>(&self, msg: &ToHost, out: &'a mut [u8]) -> &'a [u8] {
+        let n = match (self.mode, msg) {
+            (Mode::Binary, m) => encode(m, out).unwrap_or(0),
+            (Mode::Text, ToHost::Report(r)) => write_csv_line(r, out),
+            (Mode::Text, ToHost::Hello(_)) => 0,
+        };
+        &out[..n]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::stream::{Counts, FrameReader};
+
+    fn reading(faults: u8, temp_mc: i32) -> Reading {
+        Reading {
+            seq: 0,
+            counts: Counts::new(&[1, 2, 3, 4, 5, 6]).unwrap(),
+            temp_mc,
+            faults,
+        }
+    }
+
+    const POINT: Coordinates = Coordinates {
+        xyz_nm: [1, 2, 3],
+        dir_e9: [0, 0, 1_000_000_000],
+    };
+
+    fn ok_eval(_: &[u32], _: i32) -> Result<Coordinates, ()> {
+        Ok(POINT)
+    }
+
+    fn must_not_run(_: &[u32], _: i32) -> Result<Coordinates, ()> {
+        panic!("the chain ran on a reading that must not give coordinates")
+    }
+
+    #[test]
+    fn a_good_reading_gives_the_chain_result() {
+        let mut hub = Hub::new(TableState::Valid, 6, Precision::F32);
+        let r = hub.report(5, Ok(&reading(0, 20_000)), ok_eval);
+        assert_eq!(r.point, Some(POINT));
+        assert_eq!(r.status, Status(Status::TABLE_VALID));
+        assert_eq!(r.time_us, 5);
+        assert_eq!(hub.report(6, Ok(&reading(0, 20_000)), ok_eval).seq, 1);
+    }
+
+    #[test]
+    fn no_table_no_coordinates_and_the_reason_is_reported() {
+        for state in [
+            TableState::Missing,
+            TableState::Corrupt,
+            TableState::WrongVersion,
+            TableState::WrongJointCount,
+            TableState::Malformed,
+        ] {
+            let mut hub = Hub::new(state, 6, Precision::Fixed);
+            let r = hub.report(0, Ok(&reading(0, 20_000)), must_not_run);
+            assert_eq!(r.point, None);
+            assert_eq!(r.status.table(), state);
+            assert!(!r.status.table_valid());
+            match hub.hello() {
+                ToHost::Hello(h) => {
+                    assert_eq!(h.joints, 0);
+                    assert_eq!(h.status.table(), state);
+                }
+                other => panic!("{other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn faults_withhold_coordinates() {
+        let mut hub = Hub::new(TableState::Valid, 6, Precision::F32);
+        let r = hub.report(0, Ok(&reading(0b10_0000, 20_000)), must_not_run);
+        assert_eq!((r.point, r.status.encoder_faults()), (None, 0b10_0000));
+        let r = hub.report(0, Err(FrameError::Crc), must_not_run);
+        assert!(r.point.is_none() && r.status.has(Status::INPUT_ERROR));
+        let r = hub.report(0, Ok(&reading(0, 40_001)), must_not_run);
+        assert!(r.point.is_none() && r.status.has(Status::OVER_TEMPERATURE));
+        let r = hub.report(0, Ok(&reading(0, -1)), must_not_run);
+        assert!(r.point.is_none() && r.status.has(Status::OVER_TEMPERATURE));
+        let r = hub.report(0, Ok(&reading(0, 20_000)), |_, _| Err::<Coordinates, _>(()));
+        assert!(r.point.is_none() && r.status.has(Status::CHAIN_ERROR));
+        let mut seven = Hub::new(TableState::Valid, 7, Precision::F32);
+        let r = seven.report(0, Ok(&reading(0, 20_000)), must_not_run);
+        assert!(r.point.is_none() && r.status.has(Status::CHAIN_ERROR));
+        // Every one of them still took a sequence number: the host sees no gap.
+        assert_eq!(hub.report(0, Ok(&reading(0, 20_000)), ok_eval).seq, 5);
+    }
+
+    #[test]
+    fn render_follows_the_mode() {
+        let mut hub = Hub::new(TableState::Valid, 6, Precision::F32);
+        let report = hub.report(1, Ok(&reading(0, 20_000)), ok_eval);
+        let mut out = [0u8; MAX_OUTPUT];
+        let bin = hub.render(&ToHost::Report(report), &mut out).to_vec();
+        let mut reader = FrameReader::<MAX_FRAME>::new();
+        let got: Vec<_> = bin
+            .iter()
+            .filter_map(|&b| reader.push::<ToHost>(b))
+            .collect();
+        assert_eq!(got, vec![Ok(ToHost::Report(report))]);
+        hub.set_mode(Mode::Text);
+        let text = hub.render(&ToHost::Report(report), &mut out);
+        assert!(text.starts_with(b"0,1,0x0001,0.000001,"));
+        assert!(hub.render(&hub.hello(), &mut out).is_empty());
+    }
+}
