@@ -9,11 +9,16 @@
 //!   effects), as the calibration file holds it.
 //! - [`calfile`]: reading and writing the calibration file (`spec/calibration-file.md`).
 //! - [`forward`]: forward kinematics, base frame, from joint angles and a temperature.
+//! - [`dh`]: the classic formulation (Sładek et al.): Denavit–Hartenberg arms with 4×4
+//!   matrices, published robot tables, and their conversion into the spec's model.
+//! - [`orientation`]: axis–angle of a rotation matrix and the probe-direction error (eq. 22).
 #![deny(missing_docs)]
 
 pub mod arm;
 pub mod calfile;
+pub mod dh;
 pub mod forward;
+pub mod orientation;
 
 pub use arm::{Arm, Axis, Frame, Harmonic, Joint, Probe};
 pub use forward::{forward, Pose};
