@@ -72,9 +72,7 @@ pub fn parse(text: &str) -> Result<Parsed, CalFileError> {
     let mut joints = Vec::with_capacity(n);
     for (i, v) in joint_values.iter().enumerate() {
         let path = format!("joint[{}]", i + 1);
-        let t = v
-            .as_table()
-            .ok_or_else(|| err(&path, "must be a table"))?;
+        let t = v.as_table().ok_or_else(|| err(&path, "must be a table"))?;
         joints.push(joint(t, &path, counts[i], &mut unknown)?);
     }
     let probe = match root.get("probe") {
@@ -287,10 +285,7 @@ fn array<const K: usize>(v: &Value, path: &str) -> Result<[f64; K], CalFileError
         .as_array()
         .ok_or_else(|| err(path, format!("must be an array of {K} numbers")))?;
     if a.len() != K {
-        return Err(err(
-            path,
-            format!("has {} values, must have {K}", a.len()),
-        ));
+        return Err(err(path, format!("has {} values, must have {K}", a.len())));
     }
     let mut out = [0.0; K];
     for (k, x) in a.iter().enumerate() {
@@ -458,13 +453,34 @@ translation = [10.0, 20.0, 30.0]
     #[test]
     fn refusals_name_the_key() {
         let cases = [
-            (FULL.replace("axis = \"x\"\nlink = [0, 0, 300]", "axis = \"w\"\nlink = [0, 0, 300]"), "joint[2].axis"),
+            (
+                FULL.replace(
+                    "axis = \"x\"\nlink = [0, 0, 300]",
+                    "axis = \"w\"\nlink = [0, 0, 300]",
+                ),
+                "joint[2].axis",
+            ),
             (FULL.replace("link = [0, 0, 80]", ""), "joint[6].link"),
-            (FULL.replace("gravity = 3e-8", "gravity = nan"), "joint[1].gravity"),
-            (FULL.replace("tilt = [2e-4, -3e-4]", "tilt = [2e-4]"), "joint[1].tilt"),
-            (FULL.replace("zero_offset = 1e-3", "zero_offset = \"a\""), "joint[1].zero_offset"),
-            (FULL.replace("vector = [0.0, 0.0, 120.0]", "vector = [0.0, inf, 120.0]"), "probe.vector[1]"),
-            (FULL.replace("order = 3", "order = 0"), "joint[1].harmonics[2].order"),
+            (
+                FULL.replace("gravity = 3e-8", "gravity = nan"),
+                "joint[1].gravity",
+            ),
+            (
+                FULL.replace("tilt = [2e-4, -3e-4]", "tilt = [2e-4]"),
+                "joint[1].tilt",
+            ),
+            (
+                FULL.replace("zero_offset = 1e-3", "zero_offset = \"a\""),
+                "joint[1].zero_offset",
+            ),
+            (
+                FULL.replace("vector = [0.0, 0.0, 120.0]", "vector = [0.0, inf, 120.0]"),
+                "probe.vector[1]",
+            ),
+            (
+                FULL.replace("order = 3", "order = 0"),
+                "joint[1].harmonics[2].order",
+            ),
             ("name = ".to_string(), "(file)"),
         ];
         for (text, path) in cases {

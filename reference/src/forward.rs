@@ -155,8 +155,16 @@ mod tests {
     fn shoulder_quarter_turn() {
         // Joint 2 (x axis) by +90°: everything above it swings to -y (right-handed about x).
         let arm = Arm::default6();
-        let pose = forward(&arm, &[0.0, std::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0, 0.0], 20.0);
-        assert!((pose.p - Vector3::new(0.0, -1300.0, 200.0)).norm() < 1e-9, "{}", pose.p);
+        let pose = forward(
+            &arm,
+            &[0.0, std::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0, 0.0],
+            20.0,
+        );
+        assert!(
+            (pose.p - Vector3::new(0.0, -1300.0, 200.0)).norm() < 1e-9,
+            "{}",
+            pose.p
+        );
         assert!((pose.n + Vector3::y()).norm() < 1e-12);
     }
 
@@ -172,7 +180,11 @@ mod tests {
     #[test]
     fn harmonic_adds_to_angle() {
         let mut arm = Arm::default6();
-        arm.joints[3].harmonics.push(Harmonic { order: 2, sin: 1e-3, cos: 2e-3 });
+        arm.joints[3].harmonics.push(Harmonic {
+            order: 2,
+            sin: 1e-3,
+            cos: 2e-3,
+        });
         let th = [0.3, 0.2, 0.1, 0.4, 0.5, 0.6];
         let e = 1e-3 * (0.8f64).sin() + 2e-3 * (0.8f64).cos();
         let mut shifted = th;
@@ -207,6 +219,10 @@ mod tests {
             p += e * c.axes[k].cross(&d);
         }
         assert!((exact - c.p).norm() > 1e-3, "the effect is visible");
-        assert!((exact - p).norm() < 1e-5, "first order agrees: {}", (exact - p).norm());
+        assert!(
+            (exact - p).norm() < 1e-5,
+            "first order agrees: {}",
+            (exact - p).norm()
+        );
     }
 }

@@ -21,4 +21,4 @@ pub mod forward;
 pub mod orientation;
 
 pub use arm::{Arm, Axis, Frame, Harmonic, Joint, Probe};
-pub use forward::{forward, Pose};
+pub use forward::Pose;
