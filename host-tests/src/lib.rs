@@ -1,1 +1,6 @@
-//! Tests live in `tests/`.
+//! Tests live in `tests/`. The library holds what they share with `cargo xtask`: the board
+//! list, the QEMU runner and the recordings a replay sends.
+
+pub mod boards;
+pub mod qemu;
+pub mod recording;

@@ -1,1 +1,58 @@
-fn main() {}
+//! `cargo xtask`: the project's build, test and demo commands, run the same way by a person
+//! and by CI (`.ci/run` calls `cargo xtask test`).
+//!
+//! - `setup`: installs the firmware tool chain and QEMU where missing (the others call it).
+//! - `build`: cross-builds every board (or one).
+//! - `test`: fmt, clippy, workspace tests, board builds, QEMU end-to-end runs.
+//! - `demo`: the main job: qemu-m4f replays a recording; XYZ beside the f64 reference.
+//! - `bench-target`: flash, RAM and instructions per point of every board and chain.
+
+mod bench;
+mod build;
+mod demo;
+mod setup;
+mod test;
+mod toolchain;
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(name = "cargo xtask")]
+struct Cli {
+    #[command(subcommand)]
+    command: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Install the thumb tool chain (rustup targets, else Debian's rustc-web with build-std)
+    /// and qemu-system-arm, where missing.
+    Setup,
+    /// Cross-build the boards (release).
+    Build {
+        /// Only this board.
+        #[arg(long)]
+        board: Option<String>,
+    },
+    /// Everything CI checks: fmt, clippy, tests, board builds, QEMU end-to-end runs.
+    Test,
+    /// Replay the shipped recording on qemu-m4f and compare with the f64 reference.
+    Demo {
+        /// Print every point, not a sample.
+        #[arg(long)]
+        all: bool,
+    },
+    /// Flash, RAM and instructions per corrected point, per board and chain.
+    BenchTarget,
+}
+
+fn main() -> Result<()> {
+    match Cli::parse().command {
+        Cmd::Setup => setup::run(),
+        Cmd::Build { board } => build::run(board.as_deref()),
+        Cmd::Test => test::run(),
+        Cmd::Demo { all } => demo::run(all),
+        Cmd::BenchTarget => bench::run(),
+    }
+}

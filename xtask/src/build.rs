@@ -1,0 +1,39 @@
+//! Cross-building the boards.
+
+use std::process::Command;
+
+use anyhow::{bail, Context, Result};
+use host_tests::boards::{board, Board, BOARDS};
+
+use crate::{setup, toolchain};
+
+/// Runs a command, failing with its description if it fails.
+pub fn check(cmd: &mut Command, what: &str) -> Result<()> {
+    let status = cmd.status().with_context(|| format!("starting {what}"))?;
+    if !status.success() {
+        bail!("{what} failed ({status})");
+    }
+    Ok(())
+}
+
+/// Builds one board's release binaries.
+pub fn build_board(b: &Board) -> Result<()> {
+    let tc = toolchain::detect()?;
+    eprintln!("xtask: building {} ({})", b.name, b.target);
+    let mut cmd = tc.cargo(&b.dir(), b.target, "build");
+    cmd.args(["--release", "--locked", "--bins"]);
+    check(&mut cmd, &format!("building {}", b.name))
+}
+
+/// `cargo xtask build [--board NAME]`.
+pub fn run(only: Option<&str>) -> Result<()> {
+    setup::ensure()?;
+    let boards: Vec<Board> = match only {
+        Some(name) => vec![board(name).with_context(|| format!("no board {name}"))?],
+        None => BOARDS.to_vec(),
+    };
+    for b in &boards {
+        build_board(b)?;
+    }
+    Ok(())
+}

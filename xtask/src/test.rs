@@ -1,0 +1,81 @@
+//! `cargo xtask test`: the README's test command and what `.ci/run` runs.
+
+use std::process::Command;
+use std::time::Instant;
+
+use anyhow::Result;
+use host_tests::boards::{root, BOARDS};
+
+use crate::build::{build_board, check};
+use crate::setup;
+
+fn cargo() -> Command {
+    let mut c = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+    c.current_dir(root());
+    c
+}
+
+/// Runs every check in order, stopping at the first failure.
+pub fn run() -> Result<()> {
+    let start = Instant::now();
+    let step = |name: &str| eprintln!("\nxtask test: {name} [{:.0?}]", start.elapsed());
+    setup::ensure()?;
+
+    step("rustfmt");
+    check(
+        cargo().args(["fmt", "--all", "--", "--check"]),
+        "cargo fmt --check",
+    )?;
+    for b in BOARDS
+        .iter()
+        .map(|b| b.dir())
+        .chain([root().join("boards/common")])
+    {
+        check(
+            cargo()
+                .args(["fmt", "--manifest-path"])
+                .arg(b.join("Cargo.toml"))
+                .args(["--", "--check"]),
+            &format!("cargo fmt --check in {}", b.display()),
+        )?;
+    }
+
+    step("clippy");
+    check(
+        cargo().args([
+            "clippy",
+            "--workspace",
+            "--all-targets",
+            "--",
+            "-D",
+            "warnings",
+        ]),
+        "cargo clippy",
+    )?;
+
+    step("workspace tests");
+    check(
+        cargo().args(["test", "--workspace"]),
+        "cargo test --workspace",
+    )?;
+
+    step("board builds");
+    for b in &BOARDS {
+        build_board(b)?;
+    }
+
+    step("QEMU end-to-end");
+    let mut e2e = cargo();
+    e2e.args(["test", "-p", "host-tests"]);
+    for b in BOARDS.iter().filter(|b| b.qemu.is_some()) {
+        e2e.args([
+            "--test",
+            &format!("qemu_{}", b.name.trim_start_matches("qemu-")),
+        ]);
+    }
+    e2e.args(["--", "--include-ignored"]);
+    check(&mut e2e, "QEMU end-to-end tests")?;
+
+    eprintln!("\nxtask test: all passed in {:.0?}", start.elapsed());
+    Ok(())
+}
