@@ -1,3 +1,5 @@
 //! armcal: the logic behind the host tool, shared with the tests.
 //!
 //! Modules are added by the work that needs them; each has one job.
+
+pub mod stream_decode;
