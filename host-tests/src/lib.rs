@@ -2,5 +2,6 @@
 //! list, the QEMU runner and the recordings a replay sends.
 
 pub mod boards;
+pub mod e2e;
 pub mod qemu;
 pub mod recording;

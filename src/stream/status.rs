@@ -73,6 +73,20 @@ impl TableState {
     }
 }
 
+impl From<&crate::table::TableError> for TableState {
+    /// How the stream reports each reason the table parser gives for refusing a table.
+    fn from(e: &crate::table::TableError) -> TableState {
+        use crate::table::TableError as E;
+        match e {
+            E::Blank | E::BadMagic => TableState::Missing,
+            E::Crc { .. } | E::Truncated { .. } | E::BadLength(_) => TableState::Corrupt,
+            E::UnsupportedVersion(_) => TableState::WrongVersion,
+            E::BadJointCount(_) | E::WrongJointCount { .. } => TableState::WrongJointCount,
+            _ => TableState::Malformed,
+        }
+    }
+}
+
 impl Status {
     /// The calibration table passed every check at boot.
     pub const TABLE_VALID: u16 = 1 << 0;

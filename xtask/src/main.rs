@@ -10,6 +10,7 @@
 mod bench;
 mod build;
 mod demo;
+mod make_recording;
 mod setup;
 mod test;
 mod toolchain;
@@ -45,6 +46,9 @@ enum Cmd {
     },
     /// Flash, RAM and instructions per corrected point, per board and chain.
     BenchTarget,
+    /// Regenerate the shipped recording data/recordings/default-6-session.csv.
+    #[command(hide = true)]
+    MakeRecording,
 }
 
 fn main() -> Result<()> {
@@ -54,5 +58,6 @@ fn main() -> Result<()> {
         Cmd::Test => test::run(),
         Cmd::Demo { all } => demo::run(all),
         Cmd::BenchTarget => bench::run(),
+        Cmd::MakeRecording => make_recording::run(),
     }
 }

@@ -20,7 +20,10 @@ pub fn start(mut syst: SYST) {
 /// Call from the board's `SysTick` exception handler.
 pub fn on_wrap() {
     // Only this handler writes WRAPS, so load + store is enough (the M0 has no atomic add).
-    WRAPS.store(WRAPS.load(Ordering::Relaxed).wrapping_add(1), Ordering::Relaxed);
+    WRAPS.store(
+        WRAPS.load(Ordering::Relaxed).wrapping_add(1),
+        Ordering::Relaxed,
+    );
 }
 
 /// Core-clock ticks since `start`.

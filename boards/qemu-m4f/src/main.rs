@@ -6,10 +6,9 @@
 #![no_std]
 #![no_main]
 
-mod calibration;
 mod uart;
 
-use board_common::{clock, qemu, serve, Link};
+use board_common::{calibration, clock, qemu, serve, Link};
 use cortex_m_rt::{entry, exception};
 use quatarm::stream::Hub;
 
@@ -37,7 +36,7 @@ fn main() -> ! {
     clock::start(cp.SYST);
     // SAFETY: UART0 is used by nothing else.
     let mut link = Uart0(unsafe { uart::Uart::new(uart::Uart::UART0, BAUDDIV) });
-    let cal = calibration::load(board_common::table_region::bytes());
+    let cal = calibration::load::<quatarm::F32>(board_common::table_region::bytes());
     let mut hub = Hub::new(cal.state(), cal.joints(), quatarm::stream::Precision::F32);
     serve(
         &mut link,

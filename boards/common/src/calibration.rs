@@ -1,0 +1,58 @@
+//! The table in its flash region, checked once at boot, and the chain built from it.
+//!
+//! A hub drives a fixed number of encoders, so the table must be for exactly that many joints
+//! (`Table::parse_for`); any refusal of the parser or of the chain's constructor becomes the
+//! [`TableState`] every report then carries, and no chain exists to produce coordinates.
+
+use quatarm::stream::{Coordinates, TableState};
+use quatarm::{Chain, ChainError, Precision, Table};
+
+/// Joints of the arms these hubs drive.
+pub const JOINTS: usize = 6;
+
+/// The boot check's outcome: a chain, or why there is none.
+pub struct Calibration<P: Precision> {
+    chain: Result<Chain<P>, TableState>,
+}
+
+/// Validates the region's bytes and builds the chain.
+pub fn load<P: Precision>(region: &[u8]) -> Calibration<P> {
+    let chain = match Table::parse_for(region, JOINTS) {
+        Ok(table) => Chain::<P>::new(&table).map_err(|_| TableState::Malformed),
+        Err(e) => Err(TableState::from(&e)),
+    };
+    Calibration { chain }
+}
+
+impl<P: Precision> Calibration<P> {
+    /// What the stream reports about the table.
+    pub fn state(&self) -> TableState {
+        match &self.chain {
+            Ok(_) => TableState::Valid,
+            Err(s) => *s,
+        }
+    }
+
+    /// Joints of the valid table (0 without one).
+    pub fn joints(&self) -> u8 {
+        match &self.chain {
+            Ok(c) => c.joint_count() as u8,
+            Err(_) => 0,
+        }
+    }
+
+    /// Runs the chain on one reading.
+    pub fn eval(&self, counts: &[u32], temp_mc: i32) -> Result<Coordinates, ChainError> {
+        match &self.chain {
+            Ok(chain) => chain.eval(counts, temp_mc).map(|p| Coordinates {
+                xyz_nm: p.xyz_nm(),
+                dir_e9: p.dir_e9(),
+            }),
+            // The hub never calls eval without a valid table; answer like a refusal anyway.
+            Err(_) => Err(ChainError::JointCount {
+                expected: 0,
+                found: counts.len() as u8,
+            }),
+        }
+    }
+}

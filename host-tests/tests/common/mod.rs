@@ -1,0 +1,222 @@
+//! The end-to-end cases every QEMU board must pass; `qemu_m4f.rs` and `qemu_m0.rs` run them
+//! on their board with their bounds. They need the board built (`cargo xtask build`) and
+//! `qemu-system-arm`: a missing one fails the test, it is never skipped.
+
+#![allow(dead_code)]
+
+use host_tests::boards::{board, Board};
+use host_tests::e2e::{
+    calibration, default_calibration_path, default_recording_path, deviation_um,
+    direction_deviation, host_points, reference, replay,
+};
+use host_tests::recording::{self, frame, replay_bytes};
+use quatarm::stream::{Counts, Mode, Reading, Status, TableState, ToDevice, CSV_HEADER};
+
+/// What a board's path must achieve against the f64 reference.
+pub struct Bounds {
+    /// Tip, µm.
+    pub tip_um: f64,
+    /// Direction, per component.
+    pub dir: f64,
+}
+
+fn the_board(name: &str) -> Board {
+    board(name).expect("a board of boards.rs")
+}
+
+/// ≥ 10,000 recorded readings in over the UART; every report back, in order, CRC-clean; XYZ
+/// bit-identical to the host build of the same path; within `bounds` of the f64 reference.
+pub fn full_recording(name: &str, bounds: Bounds) {
+    let b = the_board(name);
+    let (arm, table) = calibration(&default_calibration_path()).unwrap();
+    let readings = recording::read(&default_recording_path()).unwrap();
+    assert!(
+        readings.len() >= 10_000,
+        "the recording has {} readings",
+        readings.len()
+    );
+    let out = replay(&b, Some(&table), &replay_bytes(&readings, None)).unwrap();
+    assert!(
+        out.run.status.success(),
+        "firmware exit: {:?}",
+        out.run.status
+    );
+    assert_eq!(out.stats.damaged(), 0, "damaged frames: {:?}", out.stats);
+    assert_eq!(out.stats.lost, 0);
+    assert_eq!(out.hellos.len(), 1);
+    assert_eq!(out.hellos[0].status.table(), TableState::Valid);
+    assert_eq!(out.reports.len(), readings.len(), "one report per reading");
+    let host = host_points(b.precision, &table, &readings).unwrap();
+    let (mut worst_tip, mut worst_dir) = (0.0f64, 0.0f64);
+    for (i, ((rep, r), h)) in out.reports.iter().zip(&readings).zip(&host).enumerate() {
+        assert_eq!(rep.seq, i as u32, "in order");
+        assert_eq!(rep.status, Status(Status::TABLE_VALID), "reading {i}");
+        let c = rep
+            .point
+            .unwrap_or_else(|| panic!("reading {i}: no coordinates"));
+        assert_eq!(Ok(c), *h, "reading {i}: target and host builds differ");
+        let (p, n) = reference(&arm, r);
+        worst_tip = worst_tip.max(deviation_um(&c, &p));
+        worst_dir = worst_dir.max(direction_deviation(&c, &n));
+    }
+    eprintln!(
+        "{name}: {} readings, bit-identical to the host; max deviation from f64: tip {worst_tip:.4} um, direction {worst_dir:.2e}",
+        readings.len()
+    );
+    assert!(
+        worst_tip <= bounds.tip_um,
+        "tip {worst_tip} um > {} um",
+        bounds.tip_um
+    );
+    assert!(
+        worst_dir <= bounds.dir,
+        "direction {worst_dir} > {}",
+        bounds.dir
+    );
+}
+
+fn some_readings(n: usize) -> Vec<Reading> {
+    recording::read(&default_recording_path())
+        .unwrap()
+        .into_iter()
+        .step_by(997)
+        .take(n)
+        .collect()
+}
+
+/// A bit flipped in one incoming frame: that slot reports INPUT_ERROR without coordinates,
+/// every other reading is evaluated as usual.
+pub fn flipped_bit_in_an_incoming_frame(name: &str) {
+    let b = the_board(name);
+    let (_, table) = calibration(&default_calibration_path()).unwrap();
+    let readings = some_readings(8);
+    let mut input = vec![0u8];
+    for (i, r) in readings.iter().enumerate() {
+        let mut f = frame(&ToDevice::Reading(*r));
+        if i == 3 {
+            // A bit that does not turn a byte into the delimiter.
+            let at = f.iter().position(|&x| x & 0x10 != 0 && x != 0x10).unwrap();
+            f[at] ^= 0x10;
+        }
+        input.extend(f);
+    }
+    input.extend(frame(&ToDevice::End));
+    let out = replay(&b, Some(&table), &input).unwrap();
+    assert!(out.run.status.success());
+    assert_eq!(out.reports.len(), readings.len());
+    let host = host_points(b.precision, &table, &readings).unwrap();
+    for (i, rep) in out.reports.iter().enumerate() {
+        if i == 3 {
+            assert!(rep.status.has(Status::INPUT_ERROR), "{:?}", rep.status);
+            assert_eq!(rep.point, None);
+        } else {
+            assert_eq!(rep.status, Status(Status::TABLE_VALID));
+            assert_eq!(Ok(rep.point.unwrap()), host[i]);
+        }
+    }
+}
+
+/// Encoder faults recorded with a reading: that joint's bit, no coordinates.
+pub fn encoder_fault(name: &str) {
+    let b = the_board(name);
+    let (_, table) = calibration(&default_calibration_path()).unwrap();
+    let mut readings = some_readings(6);
+    readings[2].faults = 0b00_0100; // joint 3
+    readings[4].faults = 0b10_0001; // joints 1 and 6
+    let out = replay(&b, Some(&table), &replay_bytes(&readings, None)).unwrap();
+    assert!(out.run.status.success());
+    assert_eq!(out.reports.len(), readings.len());
+    for (rep, r) in out.reports.iter().zip(&readings) {
+        assert_eq!(rep.status.encoder_faults(), r.faults);
+        assert_eq!(rep.point.is_some(), r.faults == 0, "{:?}", rep);
+    }
+}
+
+/// A table that is missing, corrupt, of another version or for another joint count: the boot
+/// announcement and every report say which, and no report has coordinates.
+pub fn bad_tables(name: &str) {
+    let b = the_board(name);
+    let (mut arm, table) = calibration(&default_calibration_path()).unwrap();
+    let mut corrupt = table.clone();
+    corrupt[200] ^= 0x01;
+    let mut version = table.clone();
+    version[4] = 2;
+    let n = version.len();
+    let crc = quatarm::table::CRC.checksum(&version[..n - 4]);
+    version[n - 4..].copy_from_slice(&crc.to_le_bytes());
+    arm.joints.push(arm.joints[5].clone());
+    let seven = armcal::tablebuild::build(&arm).unwrap();
+    let readings = some_readings(3);
+    let input = replay_bytes(&readings, None);
+    for (what, t, state) in [
+        ("missing", None, TableState::Missing),
+        ("corrupt", Some(corrupt), TableState::Corrupt),
+        ("wrong version", Some(version), TableState::WrongVersion),
+        ("7-joint", Some(seven), TableState::WrongJointCount),
+    ] {
+        let out = replay(&b, t.as_deref(), &input).unwrap();
+        assert!(out.run.status.success(), "{what}");
+        assert_eq!(out.hellos.len(), 1, "{what}");
+        assert_eq!(out.hellos[0].status.table(), state, "{what}");
+        assert_eq!(out.hellos[0].joints, 0, "{what}");
+        assert_eq!(out.reports.len(), readings.len(), "{what}");
+        for rep in &out.reports {
+            assert_eq!(rep.status.table(), state, "{what}");
+            assert!(!rep.status.table_valid(), "{what}");
+            assert_eq!(rep.point, None, "{what}: coordinates from a bad table");
+        }
+    }
+}
+
+/// Text mode: CSV lines with the same numbers as the binary stream.
+pub fn text_mode(name: &str) {
+    let b = the_board(name);
+    let (_, table) = calibration(&default_calibration_path()).unwrap();
+    let mut readings = some_readings(4);
+    readings[1].faults = 1;
+    let out = host_tests::qemu::run(
+        &b,
+        &b.elf(b.name),
+        &replay_bytes(&readings, Some(Mode::Text)),
+        &host_tests::qemu::Options {
+            table: Some(
+                host_tests::e2e::table_file(&table)
+                    .unwrap()
+                    .into_temp_path()
+                    .keep()
+                    .unwrap(),
+            ),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(out.status.success());
+    // Binary: delimiter + Hello; then text, starting after the Hello frame's delimiter.
+    let text_start = out.stream.iter().skip(1).position(|&x| x == 0).unwrap() + 2;
+    let text = std::str::from_utf8(&out.stream[text_start..]).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), readings.len(), "{text}");
+    let host = host_points(b.precision, &table, &readings).unwrap();
+    assert_eq!(CSV_HEADER.trim_end().split(',').count(), 9);
+    for (i, line) in lines.iter().enumerate() {
+        let f: Vec<&str> = line.split(',').collect();
+        assert_eq!(f.len(), 9, "{line}");
+        assert_eq!(f[0], i.to_string());
+        if i == 1 {
+            assert!(f[3..].iter().all(|x| x.is_empty()), "{line}");
+        } else {
+            let c = host[i].unwrap();
+            assert_eq!(
+                f[3],
+                format!("{:.6}", f64::from(c.xyz_nm[0]) / 1e6),
+                "{line}"
+            );
+            assert_eq!(
+                f[8],
+                format!("{:.9}", f64::from(c.dir_e9[2]) / 1e9),
+                "{line}"
+            );
+        }
+    }
+    let _ = Counts::default();
+}
