@@ -1,0 +1,788 @@
+//! Calibration: the arm's parameters from any mix of `point`, `spat` and `length` data.
+//!
+//! ## The residuals
+//! - `point`: R_T p + t_T − x, with the instrument frame (R_T, t_T) estimated alongside.
+//! - `spat`: the fixed point of a group is never an unknown of the solver. For any arm, the
+//!   point that fits a group best is the mean of its ball centres, so each row's residual is
+//!   its ball centre minus the group mean (variable projection: exact, and the solver's size
+//!   does not grow with the number of groups).
+//! - `length`: the two ball centres a, b with |a − b| = L. Each end's rows are centred on the
+//!   end's mean (m_a, m_b) as for `spat`; the best constrained centres then move along the
+//!   bar by the length discrepancy, which adds exactly √(n_a n_b / (n_a + n_b)) · (|m_a − m_b| − L)
+//!   as one more residual. The reduced problem has the same minimum as the one with the
+//!   centres as unknowns.
+//!
+//! All residuals are millimetres of ball position, so one noise level weighs them all.
+//!
+//! ## The procedure
+//! 1. Identifiability, structural: the Jacobian of every requested unknown at the arm's
+//!    nominal skeleton (errors zeroed, tilts snapped to their nominal quarter turns) is
+//!    analysed (`ident`); unknowns the data cannot separate are held at their start values.
+//!    The same analysis on a small well-spread simulated design of the same kinds tells a
+//!    degenerate pose set (fewer identifiable unknowns than good poses give) from a limit of
+//!    the data's kinds, and gives the count of equations needed.
+//! 2. Levenberg–Marquardt from the start arm, with the instrument frame started by the best
+//!    rigid alignment of the start arm's ball centres onto the measured ones.
+//! 3. Identifiability, statistical: a direction determined only to more than plausible sizes
+//!    of its terms is also held, and the fit repeated.
+//! 4. Standard uncertainties from σ̂² (JᵀJ)⁻¹ with σ̂ from the residuals.
+
+use crate::data::{Dataset, Layout};
+use crate::ident::{self, Fixed, Identifiability, RFactor, Why};
+use crate::jacobian::tip_jacobian;
+use crate::lm::{self, Normal};
+use crate::params::{apply, frame_params, Param, Terms};
+use crate::residuals::{best_rigid, Rigid};
+use crate::sim;
+use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, Vector3};
+use quatarm_ref::arm::{Arm, Frame};
+use quatarm_ref::forward;
+use std::f64::consts::FRAC_PI_2;
+use std::time::{Duration, Instant};
+
+/// Settings of a calibration.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// What to fit.
+    pub terms: Terms,
+    /// Solver settings.
+    pub lm: lm::Options,
+    /// Singular values below this fraction of the largest (unit-norm columns) are
+    /// dependencies.
+    pub structural_tol: f64,
+    /// Apply the statistical identifiability test after the fit.
+    pub weak_check: bool,
+    /// Compare identifiability with a well-spread design (degenerate pose sets, equation
+    /// count). Off, the data's own rank is trusted.
+    pub design_check: bool,
+    /// Proceed on a degenerate pose set, holding what it cannot determine (instead of an
+    /// error).
+    pub allow_degenerate: bool,
+    /// Show a progress bar on stderr for large fits.
+    pub progress: bool,
+}
+
+impl Default for Options {
+    fn default() -> Options {
+        Options {
+            terms: Terms::geometric(),
+            lm: lm::Options::default(),
+            structural_tol: 1e-8,
+            weak_check: true,
+            design_check: true,
+            allow_degenerate: false,
+            progress: false,
+        }
+    }
+}
+
+/// Why a calibration refused to give a result.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum CalibError {
+    /// Not enough equations for the unknowns.
+    #[error(
+        "too few rows for the parameters: the data give {equations} equations \
+         ({detail}) for {parameters} identifiable parameters; record more rows"
+    )]
+    TooFewRows {
+        /// Equations the data give.
+        equations: usize,
+        /// Unknowns a well-spread data set of these kinds determines.
+        parameters: usize,
+        /// Where the equations come from.
+        detail: String,
+    },
+    /// The poses do not exercise the arm enough.
+    #[error(
+        "degenerate pose set: these poses cannot determine {}, which well-spread poses of \
+         the same kinds would; {hint}",
+        lost.join(", ")
+    )]
+    Degenerate {
+        /// What is lost, in words.
+        lost: Vec<String>,
+        /// What to do about it.
+        hint: String,
+    },
+    /// The solver stopped without converging.
+    #[error(
+        "the fit did not converge: {reason} after {iterations} iterations (RMS residual \
+         {rms_mm:.4} mm); the start arm may be too far from the data, or the data inconsistent"
+    )]
+    NotConverged {
+        /// Iterations done.
+        iterations: usize,
+        /// The solver's reason.
+        reason: String,
+        /// RMS residual where it stopped (mm).
+        rms_mm: f64,
+    },
+    /// The data and the arm do not fit together.
+    #[error("{0}")]
+    Mismatch(String),
+}
+
+/// The state the solver moves: increments of the arm unknowns and the instrument frame.
+#[derive(Clone, Debug)]
+pub struct State {
+    /// Increments of every unknown (aligned with the unknowns; frame entries stay 0).
+    pub x: Vec<f64>,
+    /// Instrument frame.
+    pub frame: Rigid,
+}
+
+/// Row-block evaluation of the residuals and Jacobian for a set of unknowns.
+pub struct Problem<'a> {
+    data: &'a Dataset,
+    layout: &'a Layout,
+    base: &'a Arm,
+    all: &'a [Param],
+    /// Positions (in `all`) of the unknowns solved for, in solver order.
+    kept: Vec<usize>,
+    arm_params: Vec<Param>,
+    arm_cols: Vec<usize>,
+    frame_cols: Vec<(Param, usize)>,
+}
+
+impl<'a> Problem<'a> {
+    /// A problem over the unknowns `kept` (positions in `all`).
+    pub fn new(
+        data: &'a Dataset,
+        layout: &'a Layout,
+        base: &'a Arm,
+        all: &'a [Param],
+        kept: &[usize],
+    ) -> Problem<'a> {
+        let mut arm_params = Vec::new();
+        let mut arm_cols = Vec::new();
+        let mut frame_cols = Vec::new();
+        for (col, &i) in kept.iter().enumerate() {
+            if all[i].is_frame() {
+                frame_cols.push((all[i], col));
+            } else {
+                arm_params.push(all[i]);
+                arm_cols.push(col);
+            }
+        }
+        Problem {
+            data,
+            layout,
+            base,
+            all,
+            kept: kept.to_vec(),
+            arm_params,
+            arm_cols,
+            frame_cols,
+        }
+    }
+
+    /// The arm at a state.
+    pub fn arm(&self, s: &State) -> Arm {
+        apply(self.base, self.all, &s.x)
+    }
+
+    /// Evaluates every residual block, with its Jacobian rows (row-major, one row per
+    /// residual, one column per kept unknown) when `jac`.
+    ///
+    /// Every ball centre goes through the frame, q = R_T p + t_T. For `point` rows that is the
+    /// instrument; for `spat` and `length` rows, whose residuals are centred, it changes no
+    /// residual's length, but it gives the frame's rotation unknowns a column there too:
+    /// a rotation of the whole arm about its base, the symmetry such data cannot see.
+    pub fn visit(&self, s: &State, jac: bool, sink: &mut dyn FnMut(&[f64], &[f64])) {
+        let arm = self.arm(s);
+        let n = self.kept.len();
+        let na = self.arm_params.len();
+        let rot = s.frame.rot;
+        let mut cols = vec![Vector3::zeros(); na];
+        // Ball centre of row i through the frame, and its 3 × n Jacobian rows into `j`.
+        let mut eval = |i: usize, j: &mut [f64]| -> Vector3<f64> {
+            let row = &self.data.rows[i];
+            if !jac {
+                return rot * forward::forward(&arm, &row.theta, row.temp_c).p + s.frame.trans;
+            }
+            let p = tip_jacobian(&arm, &self.arm_params, &row.theta, row.temp_c, &mut cols);
+            j.iter_mut().for_each(|v| *v = 0.0);
+            for (k, &col) in self.arm_cols.iter().enumerate() {
+                let v = rot * cols[k];
+                for c in 0..3 {
+                    j[c * n + col] = v[c];
+                }
+            }
+            // Frame unknowns are small motions in the arm's base frame, before R_T: rotation
+            // ω gives R_T (ω × p), translation τ gives R_T τ.
+            for &(param, col) in &self.frame_cols {
+                let v = match param {
+                    Param::FrameRotation(a) => rot * Vector3::ith(a, 1.0).cross(&p),
+                    Param::FrameTranslation(a) => rot.column(a).into_owned(),
+                    _ => Vector3::zeros(),
+                };
+                for c in 0..3 {
+                    j[c * n + col] = v[c];
+                }
+            }
+            rot * p + s.frame.trans
+        };
+        let mut j = vec![0.0; 3 * n];
+        for &i in &self.layout.points {
+            let q = eval(i, &mut j);
+            let x = self.data.rows[i].xyz.unwrap_or([0.0; 3]);
+            let r = [q.x - x[0], q.y - x[1], q.z - x[2]];
+            sink(&r, &j);
+        }
+        // Groups: ball centres and Jacobians, centred on the mean of their fixed point.
+        let mut br: Vec<f64> = Vec::new();
+        let mut bj: Vec<f64> = Vec::new();
+        let mut mj = vec![0.0; 3 * n];
+        // Appends the centred rows of one fixed point; returns the mean centre and leaves the
+        // mean Jacobian in `mj`.
+        let mut centred = |idx: &[usize], br: &mut Vec<f64>, bj: &mut Vec<f64>, mj: &mut [f64]| {
+            let r0 = br.len();
+            let j0 = bj.len();
+            let mut m = Vector3::zeros();
+            for &i in idx {
+                bj.resize(bj.len() + if jac { 3 * n } else { 0 }, 0.0);
+                let len = bj.len();
+                let q = eval(i, if jac { &mut bj[len - 3 * n..] } else { &mut [] });
+                br.extend_from_slice(&[q.x, q.y, q.z]);
+                m += q;
+            }
+            let k = idx.len() as f64;
+            m /= k;
+            for row in br[r0..].chunks_mut(3) {
+                for c in 0..3 {
+                    row[c] -= m[c];
+                }
+            }
+            if jac {
+                mj.iter_mut().for_each(|v| *v = 0.0);
+                for block in bj[j0..].chunks(3 * n) {
+                    for (a, b) in mj.iter_mut().zip(block) {
+                        *a += b;
+                    }
+                }
+                mj.iter_mut().for_each(|v| *v /= k);
+                for block in bj[j0..].chunks_mut(3 * n) {
+                    for (a, b) in block.iter_mut().zip(mj.iter()) {
+                        *a -= b;
+                    }
+                }
+            }
+            m
+        };
+        for g in &self.layout.spat {
+            br.clear();
+            bj.clear();
+            centred(&g.rows, &mut br, &mut bj, &mut mj);
+            sink(&br, &bj);
+        }
+        let mut mja = vec![0.0; 3 * n];
+        for g in &self.layout.length {
+            br.clear();
+            bj.clear();
+            let ma = centred(&g.a, &mut br, &mut bj, &mut mja);
+            let mb = centred(&g.b, &mut br, &mut bj, &mut mj);
+            // The bar: √(n_a n_b / (n_a + n_b)) (|m_a − m_b| − L).
+            let w = ((g.a.len() * g.b.len()) as f64 / (g.a.len() + g.b.len()) as f64).sqrt();
+            let d = ma - mb;
+            let dist = d.norm();
+            br.push(w * (dist - g.length_mm));
+            if jac {
+                let u = if dist > 0.0 {
+                    d / dist
+                } else {
+                    Vector3::zeros()
+                };
+                for col in 0..n {
+                    let v = (0..3)
+                        .map(|c| u[c] * (mja[c * n + col] - mj[c * n + col]))
+                        .sum::<f64>();
+                    bj.push(w * v);
+                }
+            }
+            sink(&br, &bj);
+        }
+    }
+
+    /// The R factor of the Jacobian at a state.
+    pub fn r_factor(&self, s: &State) -> DMatrix<f64> {
+        let mut f = RFactor::new(self.kept.len());
+        self.visit(s, true, &mut |_, j| f.push(j));
+        f.finish()
+    }
+}
+
+impl lm::Problem for Problem<'_> {
+    type State = State;
+
+    fn dim(&self) -> usize {
+        self.kept.len()
+    }
+
+    fn cost(&self, s: &State) -> f64 {
+        let mut c = 0.0;
+        self.visit(s, false, &mut |r, _| {
+            c += r.iter().map(|v| v * v).sum::<f64>()
+        });
+        0.5 * c
+    }
+
+    fn normal(&self, s: &State) -> Normal {
+        let n = self.kept.len();
+        let mut jtj = vec![0.0; n * n];
+        let mut jtr = vec![0.0; n];
+        let mut cost = 0.0;
+        let mut count = 0;
+        self.visit(s, true, &mut |r, j| {
+            for (row, rv) in r.iter().enumerate() {
+                let jr = &j[row * n..(row + 1) * n];
+                cost += rv * rv;
+                count += 1;
+                for a in 0..n {
+                    let ja = jr[a];
+                    if ja == 0.0 {
+                        continue;
+                    }
+                    jtr[a] += ja * rv;
+                    let dst = &mut jtj[a * n..(a + 1) * n];
+                    for b in a..n {
+                        dst[b] += ja * jr[b];
+                    }
+                }
+            }
+        });
+        let m = DMatrix::from_fn(n, n, |a, b| {
+            if a <= b {
+                jtj[a * n + b]
+            } else {
+                jtj[b * n + a]
+            }
+        });
+        Normal {
+            cost: 0.5 * cost,
+            jtj: m,
+            jtr: DVector::from_vec(jtr),
+            residuals: count,
+        }
+    }
+
+    fn step(&self, s: &State, dx: &[f64]) -> State {
+        let mut t = s.clone();
+        let mut w = Vector3::zeros();
+        let mut tau = Vector3::zeros();
+        for (col, &i) in self.kept.iter().enumerate() {
+            match self.all[i] {
+                Param::FrameRotation(a) => w[a] = dx[col],
+                Param::FrameTranslation(a) => tau[a] = dx[col],
+                _ => t.x[i] += dx[col],
+            }
+        }
+        // x = R_T (exp(ω) p + τ) + t_T.
+        t.frame.trans += s.frame.rot * tau;
+        if w != Vector3::zeros() {
+            t.frame.rot = s.frame.rot * Rotation3::new(w).into_inner();
+        }
+        t
+    }
+}
+
+/// Equations the data give once the fixed points are eliminated: 3 per `point` row, 3 (n − 1)
+/// per `spat` group and per bar end, and 1 per bar.
+pub fn equations(layout: &Layout) -> usize {
+    3 * layout.points.len()
+        + layout
+            .spat
+            .iter()
+            .map(|g| 3 * (g.rows.len() - 1))
+            .sum::<usize>()
+        + layout
+            .length
+            .iter()
+            .map(|g| 3 * (g.a.len() - 1) + 3 * (g.b.len() - 1) + 1)
+            .sum::<usize>()
+}
+
+fn equations_detail(layout: &Layout) -> String {
+    let mut parts = Vec::new();
+    if !layout.points.is_empty() {
+        parts.push(format!("{} point rows × 3", layout.points.len()));
+    }
+    if !layout.spat.is_empty() {
+        parts.push(format!(
+            "{} spat groups: 3 per row beyond the first",
+            layout.spat.len()
+        ));
+    }
+    if !layout.length.is_empty() {
+        parts.push(format!(
+            "{} bar positions: 3 per row beyond the first of each ball, 1 per bar",
+            layout.length.len()
+        ));
+    }
+    parts.join("; ")
+}
+
+/// The arm's nominal skeleton: every error key zeroed, tilts within 1e-3 rad of a multiple of
+/// π/2 snapped onto it. Structural dependencies are exact there, so they show as singular
+/// values at rounding level, not at the level of the errors.
+pub fn skeleton(arm: &Arm) -> Arm {
+    let mut a = arm.clone();
+    for j in &mut a.joints {
+        j.zero_offset = 0.0;
+        j.link_error = [0.0; 3];
+        for t in &mut j.tilt {
+            let q = (*t / FRAC_PI_2).round() * FRAC_PI_2;
+            if (*t - q).abs() < 1e-3 {
+                *t = q;
+            }
+        }
+        for h in &mut j.harmonics {
+            h.sin = 0.0;
+            h.cos = 0.0;
+        }
+        j.gravity = 0.0;
+        j.thermal = 0.0;
+    }
+    a.probe.error = [0.0; 3];
+    a.probe.thermal = 0.0;
+    a
+}
+
+/// The start arm with an entry for every harmonic term to fit, so that the file written
+/// lists it.
+fn with_entries(start: &Arm, params: &[Param]) -> Arm {
+    let mut a = start.clone();
+    for p in params {
+        if matches!(p, Param::Harmonic { .. }) {
+            p.add_to(&mut a, 0.0);
+        }
+    }
+    a
+}
+
+/// The instrument frame that best maps an arm's ball centres onto the `point` rows.
+pub fn start_frame(arm: &Arm, data: &Dataset, layout: &Layout) -> Rigid {
+    if layout.points.is_empty() {
+        return Rigid::identity();
+    }
+    let ps: Vec<Vector3<f64>> = layout
+        .points
+        .iter()
+        .map(|&i| forward::forward(arm, &data.rows[i].theta, data.rows[i].temp_c).p)
+        .collect();
+    let xs: Vec<Vector3<f64>> = layout
+        .points
+        .iter()
+        .map(|&i| Vector3::from(data.rows[i].xyz.unwrap_or([0.0; 3])))
+        .collect();
+    best_rigid(&ps, &xs)
+}
+
+/// The unknowns a calibration of `data` with `terms` has: the arm's, then the instrument
+/// frame's six when there are `point` rows. Without them, the frame's three rotations stand
+/// for the rotation of the whole arm that `spat` and `length` data cannot see: identifiability
+/// names what they absorb, and they are never fitted.
+pub fn unknowns(terms: &Terms, data: &Dataset) -> Vec<Param> {
+    let mut all = terms.params(data.dof);
+    if has_points(data) {
+        all.extend(frame_params());
+    } else {
+        all.extend((0..3).map(Param::FrameRotation));
+    }
+    all
+}
+
+fn has_points(data: &Dataset) -> bool {
+    data.rows.iter().any(|r| r.kind == crate::data::Kind::Point)
+}
+
+/// Structural identifiability of `params` for `data` at the skeleton of `arm`.
+pub fn structural(
+    arm: &Arm,
+    data: &Dataset,
+    params: &[Param],
+    tol: f64,
+) -> (Identifiability, DMatrix<f64>) {
+    let layout = data.layout();
+    let skel = skeleton(&with_entries(arm, params));
+    let all: Vec<usize> = (0..params.len()).collect();
+    let problem = Problem::new(data, &layout, &skel, params, &all);
+    let state = State {
+        x: vec![0.0; params.len()],
+        frame: start_frame(&skel, data, &layout),
+    };
+    let r = problem.r_factor(&state);
+    let mut id = ident::analyse(&r, params, tol);
+    if !has_points(data) {
+        // No instrument: the frame's rotations are the data's symmetry, not unknowns.
+        let sym: Vec<usize> = id
+            .kept
+            .iter()
+            .copied()
+            .filter(|&i| params[i].is_frame())
+            .collect();
+        id.kept.retain(|&i| !params[i].is_frame());
+        id.fixed.retain(|f| !params[f.index].is_frame());
+        id.symmetries = sym;
+        ident::refresh(&r, &mut id);
+    }
+    (id, r)
+}
+
+/// A fitted calibration.
+#[derive(Clone, Debug)]
+pub struct Fit {
+    /// The arm the fit started from (with an entry for each fitted harmonic).
+    pub start: Arm,
+    /// The calibrated arm; its `reference_frame` is the instrument frame for `point` data.
+    pub arm: Arm,
+    /// Every unknown considered.
+    pub params: Vec<Param>,
+    /// The fitted increment of each (0 where held); frame entries are 0 (see `frame`).
+    pub values: Vec<f64>,
+    /// Standard uncertainty of each fitted unknown (`None` where held).
+    pub uncertainty: Vec<Option<f64>>,
+    /// What was fitted and what was held, and why.
+    pub ident: Identifiability,
+    /// The instrument frame, for `point` data.
+    pub frame: Option<Rigid>,
+    /// Residual standard deviation per equation (mm).
+    pub sigma_mm: f64,
+    /// Equations the data give.
+    pub equations: usize,
+    /// Solver iterations over all passes.
+    pub iterations: usize,
+    /// How the solver stopped.
+    pub solver: String,
+    /// RMS of the equations before and after (mm).
+    pub rms_before_mm: f64,
+    /// RMS of the equations after (mm).
+    pub rms_after_mm: f64,
+    /// Time the fit took.
+    pub elapsed: Duration,
+    /// Correlation matrix of the fitted unknowns (kept order).
+    pub correlation: DMatrix<f64>,
+}
+
+impl Fit {
+    /// The fitted value of an identifiable combination: unknown `k` (kept) stands for itself
+    /// plus coefficient × each held unknown it absorbs. Given the true increments of every
+    /// unknown, returns what `values[k]` should equal.
+    pub fn combination(&self, k: usize, truth: &dyn Fn(usize) -> f64) -> f64 {
+        let mut v = truth(k);
+        for f in &self.ident.fixed {
+            for &(by, c) in &f.absorbed_by {
+                if by == k {
+                    v += c * truth(f.index);
+                }
+            }
+        }
+        v
+    }
+
+    /// The calibrated instrument frame as the file stores it.
+    pub fn reference_frame(&self) -> Option<Frame> {
+        self.frame.map(|f| sim::frame_from(&f.rot, &f.trans))
+    }
+}
+
+/// Calibrates `start` on `data`.
+pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, CalibError> {
+    let t0 = Instant::now();
+    if data.dof != start.dof() {
+        return Err(CalibError::Mismatch(format!(
+            "the data have {} joints, the arm {}",
+            data.dof,
+            start.dof()
+        )));
+    }
+    let layout = data.layout();
+    let all = unknowns(&opts.terms, data);
+    let base = with_entries(start, &all);
+    let eqs = equations(&layout);
+    if all.is_empty() {
+        return Err(CalibError::Mismatch(
+            "nothing to fit: no terms requested".into(),
+        ));
+    }
+
+    // 1. Structural identifiability, and the design it is compared with.
+    let (mut id, r_skel) = structural(&base, data, &all, opts.structural_tol);
+    if opts.design_check {
+        let design = sim::design_like(&skeleton(&base), data, 0x5eed);
+        let (id_design, _) = structural(&base, &design, &all, opts.structural_tol);
+        let need = id_design.kept.len();
+        if eqs <= need {
+            return Err(CalibError::TooFewRows {
+                equations: eqs,
+                parameters: need,
+                detail: equations_detail(&layout),
+            });
+        }
+        let lost: Vec<usize> = id_design
+            .kept
+            .iter()
+            .copied()
+            .filter(|i| !id.is_kept(*i))
+            .collect();
+        if id.kept.len() < need && !opts.allow_degenerate {
+            let words: Vec<String> = lost.iter().map(|&i| all[i].describe(&base)).collect();
+            return Err(CalibError::Degenerate {
+                lost: words,
+                hint: degenerate_hint(data),
+            });
+        }
+    } else if eqs <= id.kept.len() {
+        return Err(CalibError::TooFewRows {
+            equations: eqs,
+            parameters: id.kept.len(),
+            detail: equations_detail(&layout),
+        });
+    }
+
+    // 2. The fit, repeated while the statistical test holds a direction.
+    let mut state = State {
+        x: vec![0.0; all.len()],
+        frame: start_frame(&base, data, &layout),
+    };
+    let mut iterations = 0;
+    let progress = opts.progress.then(|| progress_bar(data.rows.len()));
+    let rms_before = {
+        let p = Problem::new(data, &layout, &base, &all, &id.kept);
+        (2.0 * lm::Problem::cost(&p, &state) / eqs as f64).sqrt()
+    };
+    loop {
+        let problem = Problem::new(data, &layout, &base, &all, &id.kept);
+        let mut report = |it: usize, cost: f64| {
+            if let Some(pb) = &progress {
+                pb.set_message(format!(
+                    "iteration {}, RMS {:.4} mm",
+                    iterations + it,
+                    (2.0 * cost / eqs as f64).sqrt()
+                ));
+                pb.tick();
+            }
+        };
+        let out = lm::solve(&problem, state, &opts.lm, &mut report);
+        iterations += out.iterations;
+        if !out.converged {
+            if let Some(pb) = &progress {
+                pb.finish_and_clear();
+            }
+            return Err(CalibError::NotConverged {
+                iterations,
+                reason: out.reason,
+                rms_mm: (2.0 * out.cost / eqs as f64).sqrt(),
+            });
+        }
+        state = out.state;
+        let normal = lm::Problem::normal(&problem, &state);
+        let dof = eqs.saturating_sub(id.kept.len()).max(1);
+        let sigma = (2.0 * normal.cost / dof as f64).sqrt();
+        if opts.weak_check {
+            if let Some((pos, u)) = ident::weakest(&normal.jtj, sigma, &all, &id.kept) {
+                let index = id.kept.remove(pos);
+                state.x[index] = 0.0;
+                id.fixed.push(Fixed {
+                    index,
+                    why: Why::Weak { uncertainty: u },
+                    absorbed_by: Vec::new(),
+                    unexplained: 1.0,
+                });
+                continue;
+            }
+        }
+        if let Some(pb) = &progress {
+            pb.finish_and_clear();
+        }
+        ident::refresh(&r_skel, &mut id);
+        let cov = ident::covariance(&normal.jtj, sigma);
+        let mut uncertainty = vec![None; all.len()];
+        let k = id.kept.len();
+        let mut correlation = DMatrix::identity(k, k);
+        if let Some(c) = &cov {
+            for (pos, &i) in id.kept.iter().enumerate() {
+                uncertainty[i] = Some(c[(pos, pos)].sqrt());
+            }
+            for a in 0..k {
+                for b in 0..k {
+                    correlation[(a, b)] = c[(a, b)] / (c[(a, a)] * c[(b, b)]).sqrt();
+                }
+            }
+        }
+        let mut arm = problem.arm(&state);
+        let frame = (!layout.points.is_empty()).then_some(state.frame);
+        arm.reference_frame = frame.map(|f| sim::frame_from(&f.rot, &f.trans));
+        let mut values = state.x.clone();
+        for (i, p) in all.iter().enumerate() {
+            if p.is_frame() {
+                values[i] = 0.0;
+            }
+        }
+        return Ok(Fit {
+            start: base,
+            arm,
+            params: all,
+            values,
+            uncertainty,
+            ident: id,
+            frame,
+            sigma_mm: sigma,
+            equations: eqs,
+            iterations,
+            solver: out.reason,
+            rms_before_mm: rms_before,
+            rms_after_mm: (2.0 * normal.cost / eqs as f64).sqrt(),
+            elapsed: t0.elapsed(),
+            correlation,
+        });
+    }
+}
+
+/// Which joints hardly move in the data, to say what a degenerate pose set lacks.
+fn degenerate_hint(data: &Dataset) -> String {
+    let still: Vec<String> = (0..data.dof)
+        .filter(|&k| {
+            let (lo, hi) = data
+                .rows
+                .iter()
+                .map(|r| r.theta[k])
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+                    (a.min(t), b.max(t))
+                });
+            hi - lo < 0.1
+        })
+        .map(|k| format!("joint {}", k + 1))
+        .collect();
+    if still.is_empty() {
+        "spread the poses over more of each joint's travel (or pass --allow-degenerate to hold \
+         what they cannot determine)"
+            .into()
+    } else {
+        format!(
+            "{} hardly move{} (less than 0.1 rad over the data); record poses that turn {}, or \
+             pass --allow-degenerate to hold what they cannot determine",
+            still.join(", "),
+            if still.len() == 1 { "s" } else { "" },
+            if still.len() == 1 { "it" } else { "them" }
+        )
+    }
+}
+
+fn progress_bar(rows: usize) -> indicatif::ProgressBar {
+    let pb = if rows >= 20_000 {
+        indicatif::ProgressBar::new_spinner()
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    pb.set_style(
+        indicatif::ProgressStyle::with_template("{spinner} calibrating: {msg} [{elapsed}]")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    );
+    pb
+}
+
+/// Rotation matrices are compared by their angle; a small helper for tests and reports.
+pub fn rotation_angle(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
+    let c = ((a.transpose() * b).trace() - 1.0) / 2.0;
+    c.clamp(-1.0, 1.0).acos()
+}

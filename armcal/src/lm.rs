@@ -1,0 +1,309 @@
+//! Levenberg–Marquardt on normal equations, for problems that hand over JᵀJ and Jᵀr.
+//!
+//! Calibration problems are tall (thousands of residuals) and narrow (tens of unknowns), so a
+//! problem accumulates the n × n normal equations as it evaluates its rows and never stores
+//! its Jacobian. The unknowns are scaled so that JᵀJ has a unit diagonal before the damped
+//! system is factored: this is Marquardt's scaling, which makes steps independent of the
+//! units (radians against millimetres against 1/°C) and keeps the Cholesky factor accurate.
+//! Unidentifiable directions must have been removed before (see [`crate::ident`]); a system
+//! that still cannot be factored is damped further rather than solved badly.
+//!
+//! States are opaque to the solver: the problem applies a step (`step`), so that a rotation
+//! can be updated on its manifold while lengths and angles are simply added.
+
+use nalgebra::{Cholesky, DMatrix, DVector};
+
+/// Normal equations at a state: cost = ½‖r‖², JᵀJ and Jᵀr.
+#[derive(Clone, Debug)]
+pub struct Normal {
+    /// ½‖r‖².
+    pub cost: f64,
+    /// JᵀJ.
+    pub jtj: DMatrix<f64>,
+    /// Jᵀr.
+    pub jtr: DVector<f64>,
+    /// Number of residuals.
+    pub residuals: usize,
+}
+
+/// A least-squares problem.
+pub trait Problem {
+    /// The state the unknowns describe.
+    type State: Clone;
+    /// Number of unknowns.
+    fn dim(&self) -> usize;
+    /// ½‖r‖² at a state.
+    fn cost(&self, s: &Self::State) -> f64;
+    /// The normal equations at a state.
+    fn normal(&self, s: &Self::State) -> Normal;
+    /// The state moved by `dx` (same order as the unknowns).
+    fn step(&self, s: &Self::State, dx: &[f64]) -> Self::State;
+}
+
+/// Solver settings.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Give up after this many linearisations.
+    pub max_iterations: usize,
+    /// Converged when a step changes the predictions by less than this fraction of the
+    /// residual norm.
+    pub step_tolerance: f64,
+    /// Converged when a step lowers the cost by less than this fraction.
+    pub cost_tolerance: f64,
+}
+
+impl Default for Options {
+    fn default() -> Options {
+        Options {
+            max_iterations: 100,
+            step_tolerance: 1e-7,
+            cost_tolerance: 1e-12,
+        }
+    }
+}
+
+/// How a solve ended.
+#[derive(Clone, Debug)]
+pub struct Outcome<S> {
+    /// The final state (the best one seen).
+    pub state: S,
+    /// ½‖r‖² there.
+    pub cost: f64,
+    /// The cost at the start.
+    pub start_cost: f64,
+    /// Linearisations done.
+    pub iterations: usize,
+    /// Whether a convergence test was met.
+    pub converged: bool,
+    /// Why it stopped, in words.
+    pub reason: String,
+}
+
+/// Minimises ½‖r‖² from `start`; `progress` is called after every linearisation with the
+/// iteration number and the cost.
+pub fn solve<P: Problem>(
+    problem: &P,
+    start: P::State,
+    options: &Options,
+    progress: &mut dyn FnMut(usize, f64),
+) -> Outcome<P::State> {
+    let n = problem.dim();
+    let mut state = start;
+    if n == 0 {
+        let cost = problem.cost(&state);
+        return Outcome {
+            state,
+            cost,
+            start_cost: cost,
+            iterations: 0,
+            converged: true,
+            reason: "nothing to fit".into(),
+        };
+    }
+    let mut normal = problem.normal(&state);
+    let start_cost = normal.cost;
+    let mut lambda = 1e-4;
+    let mut iterations = 1;
+    progress(iterations, normal.cost);
+    loop {
+        if normal.cost == 0.0 {
+            return done(
+                state,
+                normal.cost,
+                start_cost,
+                iterations,
+                true,
+                "exact fit",
+            );
+        }
+        // Scale to a unit diagonal; an unknown with no effect (zero column) stays put.
+        let scale: Vec<f64> = (0..n)
+            .map(|i| {
+                let d = normal.jtj[(i, i)];
+                if d > 0.0 {
+                    1.0 / d.sqrt()
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let g: DVector<f64> = DVector::from_fn(n, |i, _| -normal.jtr[i] * scale[i]);
+        let rnorm = (2.0 * normal.cost).sqrt();
+        // First-order optimality: the residual is orthogonal to every column.
+        if g.amax() <= 1e-13 * rnorm {
+            return done(
+                state,
+                normal.cost,
+                start_cost,
+                iterations,
+                true,
+                "gradient vanished",
+            );
+        }
+        if iterations >= options.max_iterations {
+            let reason = format!(
+                "still improving after {} iterations",
+                options.max_iterations
+            );
+            return done(state, normal.cost, start_cost, iterations, false, &reason);
+        }
+        let a = DMatrix::from_fn(n, n, |i, j| normal.jtj[(i, j)] * scale[i] * scale[j]);
+        // Try damped steps until one lowers the cost.
+        loop {
+            let mut m = a.clone();
+            for i in 0..n {
+                m[(i, i)] = if scale[i] > 0.0 {
+                    m[(i, i)] + lambda
+                } else {
+                    1.0
+                };
+            }
+            let Some(ch) = Cholesky::new(m) else {
+                lambda *= 10.0;
+                if lambda > 1e16 {
+                    return done(
+                        state,
+                        normal.cost,
+                        start_cost,
+                        iterations,
+                        false,
+                        "the normal equations cannot be factored",
+                    );
+                }
+                continue;
+            };
+            let y = ch.solve(&g);
+            let dx: Vec<f64> = (0..n).map(|i| y[i] * scale[i]).collect();
+            let trial = problem.step(&state, &dx);
+            let trial_cost = problem.cost(&trial);
+            let actual = normal.cost - trial_cost;
+            let step_small = y.norm() <= options.step_tolerance * rnorm;
+            if trial_cost.is_finite() && actual > 0.0 {
+                // Gain ratio: actual against predicted reduction of the linear model.
+                let predicted = y.dot(&g) - 0.5 * y.dot(&(&a * &y));
+                let rho = if predicted > 0.0 {
+                    actual / predicted
+                } else {
+                    0.0
+                };
+                lambda *= if rho > 0.75 {
+                    0.2
+                } else if rho > 0.25 {
+                    1.0
+                } else {
+                    3.0
+                };
+                lambda = lambda.max(1e-12);
+                let cost_small = actual <= options.cost_tolerance * normal.cost;
+                state = trial;
+                normal = problem.normal(&state);
+                iterations += 1;
+                progress(iterations, normal.cost);
+                if step_small || cost_small {
+                    let why = if step_small {
+                        "step below tolerance"
+                    } else {
+                        "cost no longer decreasing"
+                    };
+                    return done(state, normal.cost, start_cost, iterations, true, why);
+                }
+                break;
+            }
+            // The step does not lower the cost. If it is already negligible we are at the
+            // minimum to rounding; otherwise damp harder.
+            if step_small {
+                return done(
+                    state,
+                    normal.cost,
+                    start_cost,
+                    iterations,
+                    true,
+                    "no smaller cost within rounding",
+                );
+            }
+            lambda *= 8.0;
+            if lambda > 1e16 {
+                return done(
+                    state,
+                    normal.cost,
+                    start_cost,
+                    iterations,
+                    false,
+                    "no step lowers the cost",
+                );
+            }
+        }
+    }
+}
+
+fn done<S>(
+    state: S,
+    cost: f64,
+    start_cost: f64,
+    iterations: usize,
+    converged: bool,
+    reason: &str,
+) -> Outcome<S> {
+    Outcome {
+        state,
+        cost,
+        start_cost,
+        iterations,
+        converged,
+        reason: reason.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Rosenbrock as residuals (1 − x, 10 (y − x²)): a classic bad start.
+    struct Rosen;
+    impl Problem for Rosen {
+        type State = [f64; 2];
+        fn dim(&self) -> usize {
+            2
+        }
+        fn cost(&self, s: &[f64; 2]) -> f64 {
+            let r = [1.0 - s[0], 10.0 * (s[1] - s[0] * s[0])];
+            0.5 * (r[0] * r[0] + r[1] * r[1])
+        }
+        fn normal(&self, s: &[f64; 2]) -> Normal {
+            let r = [1.0 - s[0], 10.0 * (s[1] - s[0] * s[0])];
+            let j = DMatrix::from_row_slice(2, 2, &[-1.0, 0.0, -20.0 * s[0], 10.0]);
+            let rv = DVector::from_row_slice(&r);
+            Normal {
+                cost: self.cost(s),
+                jtj: j.transpose() * &j,
+                jtr: j.transpose() * rv,
+                residuals: 2,
+            }
+        }
+        fn step(&self, s: &[f64; 2], dx: &[f64]) -> [f64; 2] {
+            [s[0] + dx[0], s[1] + dx[1]]
+        }
+    }
+
+    #[test]
+    fn solves_rosenbrock_from_a_bad_start() {
+        let out = solve(&Rosen, [-1.2, 1.0], &Options::default(), &mut |_, _| {});
+        assert!(out.converged, "{}", out.reason);
+        assert!(
+            (out.state[0] - 1.0).abs() < 1e-6 && (out.state[1] - 1.0).abs() < 1e-6,
+            "{:?}",
+            out.state
+        );
+    }
+
+    #[test]
+    fn reports_non_convergence() {
+        let opts = Options {
+            max_iterations: 3,
+            ..Options::default()
+        };
+        let out = solve(&Rosen, [-1.2, 1.0], &opts, &mut |_, _| {});
+        assert!(!out.converged);
+        assert!(out.reason.contains("3 iterations"), "{}", out.reason);
+    }
+}

@@ -1,0 +1,573 @@
+//! The virtual arm: measurements of a known ("truth") arm, recorded as an instrument would.
+//!
+//! A pose is drawn uniformly inside the joint limits (hinges ±170°, swivels a full turn).
+//! The ball is where the truth model, every term of the spec included, puts it at the
+//! *continuous* joint angles; the file records the angles quantised to encoder counts, as the
+//! encoders give them. So quantisation is a small real error of the data (a count of 2^20 per
+//! turn is 6 µrad), exactly as on a real arm.
+//!
+//! - `point`: the ball centre through an unknown rigid instrument frame, with Gaussian noise
+//!   on each axis.
+//! - `spat`: a fixed point (the ball of a first random pose), then further poses found by a
+//!   numeric inverse from random starting poses, so they spread over the redundant joints;
+//!   each probing misses the point by the noise, as a ball seats imperfectly in its cone.
+//! - `length`: a ball bar of fixed length in random positions, each ball probed from several
+//!   poses found the same way.
+//!
+//! Everything is drawn from one ChaCha generator seeded by the caller: the same seed gives the
+//! same file on every machine.
+
+use crate::data::{Dataset, End, Kind, Row};
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use quatarm_ref::arm::{Arm, Frame};
+use quatarm_ref::forward;
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+use std::f64::consts::PI;
+
+/// The generator every simulation uses.
+pub type SimRng = ChaCha8Rng;
+
+/// A seeded generator.
+pub fn rng(seed: u64) -> SimRng {
+    use rand::SeedableRng;
+    ChaCha8Rng::seed_from_u64(seed)
+}
+
+/// Joint travel: readings (rad) from `lo[k]` to `hi[k]`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Limits {
+    /// Lower bounds.
+    pub lo: Vec<f64>,
+    /// Upper bounds.
+    pub hi: Vec<f64>,
+}
+
+/// Hinges travel ±170° (the spec's `default-6`), swivels a full turn (±180°).
+pub fn limits(arm: &Arm) -> Limits {
+    let h = 170f64.to_radians();
+    let (lo, hi) = (0..arm.dof())
+        .map(|k| if arm.is_hinge(k) { (-h, h) } else { (-PI, PI) })
+        .unzip();
+    Limits { lo, hi }
+}
+
+/// A standard normal draw (Box–Muller).
+pub fn normal(rng: &mut SimRng) -> f64 {
+    let u1: f64 = 1.0 - rng.gen::<f64>();
+    let u2: f64 = rng.gen::<f64>();
+    (-2.0 * u1.ln()).sqrt() * (2.0 * PI * u2).cos()
+}
+
+/// A pose drawn uniformly inside the limits.
+pub fn random_pose(limits: &Limits, rng: &mut SimRng) -> Vec<f64> {
+    limits
+        .lo
+        .iter()
+        .zip(&limits.hi)
+        .map(|(lo, hi)| rng.gen_range(*lo..*hi))
+        .collect()
+}
+
+/// The arm with random geometric errors: zero offsets and tilts with standard deviation
+/// `angle` (rad), link and probe errors with `length` (mm) per component. Nominal values stay.
+pub fn perturb(arm: &Arm, angle: f64, length: f64, rng: &mut SimRng) -> Arm {
+    let mut a = arm.clone();
+    for j in &mut a.joints {
+        j.zero_offset += angle * normal(rng);
+        j.tilt[0] += angle * normal(rng);
+        j.tilt[1] += angle * normal(rng);
+        for c in 0..3 {
+            j.link_error[c] += length * normal(rng);
+        }
+    }
+    for c in 0..3 {
+        a.probe.error[c] += length * normal(rng);
+    }
+    a
+}
+
+/// A rotation drawn uniformly (Shoemake) and a translation within ±2 m.
+pub fn random_frame(rng: &mut SimRng) -> Frame {
+    let (u1, u2, u3): (f64, f64, f64) = (rng.gen(), rng.gen(), rng.gen());
+    let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
+    let q = [
+        a * (2.0 * PI * u2).sin(),
+        a * (2.0 * PI * u2).cos(),
+        b * (2.0 * PI * u3).sin(),
+        b * (2.0 * PI * u3).cos(),
+    ];
+    Frame {
+        rotation: q,
+        translation: [
+            rng.gen_range(-2000.0..2000.0),
+            rng.gen_range(-2000.0..2000.0),
+            rng.gen_range(-2000.0..2000.0),
+        ],
+    }
+}
+
+/// R_T of a frame as a matrix.
+pub fn frame_matrix(f: &Frame) -> Matrix3<f64> {
+    let [w, x, y, z] = f.rotation;
+    UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(w, x, y, z))
+        .to_rotation_matrix()
+        .into_inner()
+}
+
+/// A frame from a rotation matrix and a translation.
+pub fn frame_from(r: &Matrix3<f64>, t: &Vector3<f64>) -> Frame {
+    let q = UnitQuaternion::from_matrix(r);
+    let mut c = [q.w, q.i, q.j, q.k];
+    if c[0] < 0.0 {
+        c = c.map(|v| -v);
+    }
+    Frame {
+        rotation: c,
+        translation: [t.x, t.y, t.z],
+    }
+}
+
+/// Readings as the encoders give them: each angle rounded to a whole count, swivels wrapped
+/// into (−π, π].
+pub fn quantise(arm: &Arm, theta: &[f64]) -> Vec<f64> {
+    theta
+        .iter()
+        .zip(&arm.joints)
+        .map(|(t, j)| {
+            let mut t = *t;
+            if t > PI {
+                t -= 2.0 * PI * ((t + PI) / (2.0 * PI)).floor();
+            } else if t <= -PI {
+                t += 2.0 * PI * ((PI - t) / (2.0 * PI)).floor();
+            }
+            let counts = f64::from(j.encoder_counts);
+            let c = (t * counts / (2.0 * PI)).round();
+            2.0 * PI * c / counts
+        })
+        .collect()
+}
+
+/// Joint angles that put the ball of `arm` on `target` at temperature `temp_c`, found by damped
+/// least squares from `start` within `limits`; `None` if it does not get within 1e-9 mm.
+pub fn inverse(
+    arm: &Arm,
+    target: &Vector3<f64>,
+    start: &[f64],
+    temp_c: f64,
+    limits: &Limits,
+) -> Option<Vec<f64>> {
+    let n = arm.dof();
+    let mut th = start.to_vec();
+    for _ in 0..200 {
+        let c = forward::evaluate(arm, &th, temp_c);
+        let e = target - c.p;
+        if e.norm() < 1e-9 {
+            return Some(th);
+        }
+        // J (3 × n) and the minimum-norm damped step Jᵀ (J Jᵀ + μ² I)⁻¹ e.
+        let cols: Vec<Vector3<f64>> = (0..n)
+            .map(|k| c.axes[k].cross(&(c.p - c.origins[k])))
+            .collect();
+        let mut jjt = Matrix3::zeros();
+        for col in &cols {
+            jjt += col * col.transpose();
+        }
+        let mu2 = 1e-6 * jjt.trace() + 1e-9;
+        jjt += Matrix3::identity() * mu2;
+        let w = jjt.try_inverse()? * e;
+        let mut step: Vec<f64> = cols.iter().map(|col| col.dot(&w)).collect();
+        let big = step.iter().fold(0.0f64, |m, s| m.max(s.abs()));
+        if big > 0.3 {
+            step.iter_mut().for_each(|s| *s *= 0.3 / big);
+        }
+        for k in 0..n {
+            th[k] = (th[k] + step[k]).clamp(limits.lo[k], limits.hi[k].max(limits.lo[k]));
+            if limits.hi[k] - limits.lo[k] >= 2.0 * PI - 1e-9 {
+                // A swivel: no end stop, only wrap.
+                th[k] = (th[k] + PI).rem_euclid(2.0 * PI) - PI;
+            }
+        }
+    }
+    None
+}
+
+/// Which instrument frame `point` data are recorded in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameChoice {
+    /// A random rigid transform (the unknown frame of a laser tracker).
+    Random,
+    /// The arm's base frame.
+    Identity,
+}
+
+/// What to simulate.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Kind of data.
+    pub kind: Kind,
+    /// Rows to record.
+    pub count: usize,
+    /// Noise per axis (mm, standard deviation).
+    pub noise_mm: f64,
+    /// Temperature range (°C): each reading uniform in it; `None` is 20 °C and no column.
+    pub temp: Option<(f64, f64)>,
+    /// Instrument frame of `point` data.
+    pub frame: FrameChoice,
+    /// Rows per `spat` or `length` group.
+    pub group_size: usize,
+    /// Ball-bar length (mm); `None` is 40 % of the arm's reach.
+    pub bar_mm: Option<f64>,
+}
+
+impl Options {
+    /// Defaults for a kind and count: 5 µm noise, 20 °C, random frame, groups of 8 (spat) or
+    /// 10 (length, 5 per ball).
+    pub fn new(kind: Kind, count: usize) -> Options {
+        Options {
+            kind,
+            count,
+            noise_mm: 0.005,
+            temp: None,
+            frame: FrameChoice::Random,
+            group_size: if kind == Kind::Length { 10 } else { 8 },
+            bar_mm: None,
+        }
+    }
+}
+
+/// Simulated data and the frame the `point` rows were recorded in.
+#[derive(Clone, Debug)]
+pub struct Simulated {
+    /// The rows.
+    pub data: Dataset,
+    /// The instrument frame (identity for spat and length data).
+    pub frame: Frame,
+}
+
+/// The arm's reach: the sum of its link and probe lengths (mm).
+pub fn reach(arm: &Arm) -> f64 {
+    arm.joints
+        .iter()
+        .map(|j| Vector3::from(j.actual_link()).norm())
+        .sum::<f64>()
+        + Vector3::from(arm.probe.actual()).norm()
+}
+
+/// Records `opts.count` rows of the truth arm.
+pub fn simulate(truth: &Arm, opts: &Options, rng: &mut SimRng) -> Result<Simulated, String> {
+    if opts.count == 0 {
+        return Err("nothing to simulate: --count is 0".into());
+    }
+    if opts.kind != Kind::Point && opts.count < 2 {
+        return Err(format!("{} data need two rows or more", opts.kind.name()));
+    }
+    let lim = limits(truth);
+    let identity = Frame {
+        rotation: [1.0, 0.0, 0.0, 0.0],
+        translation: [0.0; 3],
+    };
+    let frame = match (opts.kind, opts.frame) {
+        (Kind::Point, FrameChoice::Random) => random_frame(rng),
+        _ => identity,
+    };
+    let mut temp = |rng: &mut SimRng| match opts.temp {
+        Some((lo, hi)) if hi > lo => rng.gen_range(lo..hi),
+        Some((lo, _)) => lo,
+        None => forward::REFERENCE_TEMP_C,
+    };
+    let mut rows = Vec::with_capacity(opts.count);
+    match opts.kind {
+        Kind::Point => {
+            let r = frame_matrix(&frame);
+            let t = Vector3::from(frame.translation);
+            for _ in 0..opts.count {
+                let th = random_pose(&lim, rng);
+                let tc = temp(rng);
+                let p = forward::forward(truth, &th, tc).p;
+                let noise = Vector3::new(normal(rng), normal(rng), normal(rng)) * opts.noise_mm;
+                let x = r * p + t + noise;
+                rows.push(Row {
+                    kind: Kind::Point,
+                    group: 1,
+                    theta: quantise(truth, &th),
+                    xyz: Some([x.x, x.y, x.z]),
+                    end: None,
+                    length_mm: None,
+                    temp_c: tc,
+                    line: 0,
+                });
+            }
+        }
+        Kind::Spat | Kind::Length => {
+            let sizes = group_sizes(opts.count, opts.group_size.max(2));
+            let bar = opts.bar_mm.unwrap_or(0.4 * reach(truth));
+            for (g, size) in sizes.into_iter().enumerate() {
+                let group = g as i64 + 1;
+                let made = if opts.kind == Kind::Spat {
+                    spat_group(truth, &lim, size, opts.noise_mm, group, &mut temp, rng)
+                } else {
+                    length_group(truth, &lim, size, bar, opts.noise_mm, group, &mut temp, rng)
+                };
+                rows.extend(made.ok_or_else(|| {
+                    format!("could not place group {group}: the arm does not reach it from any pose tried")
+                })?);
+            }
+        }
+    }
+    let data = Dataset::from_rows(rows, truth.dof(), opts.temp.is_some(), "(simulated)")
+        .map_err(|e| e.to_string())?;
+    Ok(Simulated { data, frame })
+}
+
+/// Splits `count` rows into groups of about `size`, none smaller than two.
+fn group_sizes(count: usize, size: usize) -> Vec<usize> {
+    let groups = count.div_ceil(size).max(1);
+    let groups = groups.min(count / 2).max(1);
+    let base = count / groups;
+    let extra = count % groups;
+    (0..groups).map(|g| base + usize::from(g < extra)).collect()
+}
+
+/// Poses putting the ball on `target` (missed by the noise), from random starts.
+#[allow(clippy::too_many_arguments)]
+fn probe_point(
+    truth: &Arm,
+    lim: &Limits,
+    target: &Vector3<f64>,
+    noise_mm: f64,
+    tc: f64,
+    rng: &mut SimRng,
+) -> Option<Vec<f64>> {
+    let aim = target + Vector3::new(normal(rng), normal(rng), normal(rng)) * noise_mm;
+    for _ in 0..40 {
+        let start = random_pose(lim, rng);
+        if let Some(th) = inverse(truth, &aim, &start, tc, lim) {
+            return Some(th);
+        }
+    }
+    None
+}
+
+fn spat_group(
+    truth: &Arm,
+    lim: &Limits,
+    size: usize,
+    noise_mm: f64,
+    group: i64,
+    temp: &mut dyn FnMut(&mut SimRng) -> f64,
+    rng: &mut SimRng,
+) -> Option<Vec<Row>> {
+    'placement: for _ in 0..20 {
+        let centre = forward::forward(truth, &random_pose(lim, rng), forward::REFERENCE_TEMP_C).p;
+        let mut rows = Vec::with_capacity(size);
+        for _ in 0..size {
+            let tc = temp(rng);
+            let Some(th) = probe_point(truth, lim, &centre, noise_mm, tc, rng) else {
+                continue 'placement;
+            };
+            rows.push(row(truth, Kind::Spat, group, &th, None, tc));
+        }
+        return Some(rows);
+    }
+    None
+}
+
+#[allow(clippy::too_many_arguments)]
+fn length_group(
+    truth: &Arm,
+    lim: &Limits,
+    size: usize,
+    bar: f64,
+    noise_mm: f64,
+    group: i64,
+    temp: &mut dyn FnMut(&mut SimRng) -> f64,
+    rng: &mut SimRng,
+) -> Option<Vec<Row>> {
+    let na = size.div_ceil(2);
+    'placement: for _ in 0..40 {
+        let a = forward::forward(truth, &random_pose(lim, rng), forward::REFERENCE_TEMP_C).p;
+        let dir = Vector3::new(normal(rng), normal(rng), normal(rng)).normalize();
+        let b = a + dir * bar;
+        let mut rows = Vec::with_capacity(size);
+        for i in 0..size {
+            let (end, centre) = if i < na { (End::A, &a) } else { (End::B, &b) };
+            let tc = temp(rng);
+            let Some(th) = probe_point(truth, lim, centre, noise_mm, tc, rng) else {
+                continue 'placement;
+            };
+            let mut r = row(truth, Kind::Length, group, &th, Some(end), tc);
+            r.length_mm = Some(bar);
+            rows.push(r);
+        }
+        return Some(rows);
+    }
+    None
+}
+
+fn row(truth: &Arm, kind: Kind, group: i64, th: &[f64], end: Option<End>, tc: f64) -> Row {
+    Row {
+        kind,
+        group,
+        theta: quantise(truth, th),
+        xyz: None,
+        end,
+        length_mm: None,
+        temp_c: tc,
+        line: 0,
+    }
+}
+
+/// A small, well-spread, noise-free data set of the same kinds (and temperatures) as `like`,
+/// made with `arm`: what identifiability can reach with good poses, to tell a degenerate pose
+/// set from a structural limit of the data's kinds.
+pub fn design_like(arm: &Arm, like: &Dataset, seed: u64) -> Dataset {
+    let mut rng = rng(seed);
+    let temps: Vec<f64> = like.rows.iter().map(|r| r.temp_c).collect();
+    let lim = limits(arm);
+    let mut k = 0usize;
+    let mut next_temp = |_: &mut SimRng| {
+        k += 1;
+        temps[(k * 7919) % temps.len()]
+    };
+    let mut rows = Vec::new();
+    if like.rows.iter().any(|r| r.kind == Kind::Point) {
+        for _ in 0..150 {
+            let th = random_pose(&lim, &mut rng);
+            let tc = next_temp(&mut rng);
+            let p = forward::forward(arm, &th, tc).p;
+            rows.push(Row {
+                kind: Kind::Point,
+                group: 0,
+                theta: th,
+                xyz: Some([p.x, p.y, p.z]),
+                end: None,
+                length_mm: None,
+                temp_c: tc,
+                line: 0,
+            });
+        }
+    }
+    if like.rows.iter().any(|r| r.kind == Kind::Spat) {
+        for g in 0..6 {
+            if let Some(made) = spat_group(arm, &lim, 6, 0.0, 1000 + g, &mut next_temp, &mut rng) {
+                rows.extend(made);
+            }
+        }
+    }
+    let bars: Vec<f64> = like.layout().length.iter().map(|g| g.length_mm).collect();
+    for (g, bar) in bars
+        .iter()
+        .cycle()
+        .take(if bars.is_empty() { 0 } else { 6 })
+        .enumerate()
+    {
+        if let Some(made) = length_group(
+            arm,
+            &lim,
+            6,
+            *bar,
+            0.0,
+            2000 + g as i64,
+            &mut next_temp,
+            &mut rng,
+        ) {
+            rows.extend(made);
+        }
+    }
+    Dataset {
+        rows,
+        dof: arm.dof(),
+        has_temperature: like.has_temperature,
+        warnings: Vec::new(),
+        source: "(design)".into(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn same_seed_same_data() {
+        let truth = perturb(&Arm::default6(), 3e-4, 0.3, &mut rng(1));
+        let o = Options::new(Kind::Point, 20);
+        let a = simulate(&truth, &o, &mut rng(7)).unwrap();
+        let b = simulate(&truth, &o, &mut rng(7)).unwrap();
+        assert_eq!(a.data, b.data);
+        let c = simulate(&truth, &o, &mut rng(8)).unwrap();
+        assert_ne!(a.data, c.data);
+    }
+
+    #[test]
+    fn readings_are_whole_counts() {
+        let truth = Arm::default6();
+        let s = simulate(&truth, &Options::new(Kind::Spat, 16), &mut rng(3)).unwrap();
+        for r in &s.data.rows {
+            for t in &r.theta {
+                let c = t * f64::from(1u32 << 20) / (2.0 * PI);
+                assert!((c - c.round()).abs() < 1e-6, "{c}");
+            }
+        }
+    }
+
+    #[test]
+    fn spat_rows_probe_one_point() {
+        let truth = perturb(&Arm::default6(), 3e-4, 0.3, &mut rng(2));
+        let mut o = Options::new(Kind::Spat, 24);
+        o.noise_mm = 0.0;
+        let s = simulate(&truth, &o, &mut rng(4)).unwrap();
+        let layout = s.data.layout();
+        assert_eq!(layout.spat.len(), 3);
+        for g in &layout.spat {
+            let ps: Vec<Vector3<f64>> = g
+                .rows
+                .iter()
+                .map(|&i| forward::forward(&truth, &s.data.rows[i].theta, 20.0).p)
+                .collect();
+            let spread = ps.iter().map(|p| (p - ps[0]).norm()).fold(0.0, f64::max);
+            // Only quantisation separates them: a few µm at most.
+            assert!(spread < 0.02, "{spread}");
+            let angles = g
+                .rows
+                .iter()
+                .map(|&i| (s.data.rows[i].theta[1] - s.data.rows[g.rows[0]].theta[1]).abs())
+                .fold(0.0, f64::max);
+            assert!(angles > 0.1, "poses should differ: {angles}");
+        }
+    }
+
+    #[test]
+    fn length_groups_have_the_bar_length() {
+        let truth = Arm::default6();
+        let mut o = Options::new(Kind::Length, 20);
+        o.noise_mm = 0.0;
+        let s = simulate(&truth, &o, &mut rng(5)).unwrap();
+        for g in s.data.layout().length {
+            let c = |idx: &[usize]| {
+                idx.iter()
+                    .map(|&i| forward::forward(&truth, &s.data.rows[i].theta, 20.0).p)
+                    .sum::<Vector3<f64>>()
+                    / idx.len() as f64
+            };
+            let d = (c(&g.a) - c(&g.b)).norm();
+            assert!((d - g.length_mm).abs() < 0.01, "{d} vs {}", g.length_mm);
+            assert!((g.length_mm - 0.4 * 1500.0).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn point_rows_go_through_the_frame() {
+        let truth = Arm::default6();
+        let mut o = Options::new(Kind::Point, 10);
+        o.noise_mm = 0.0;
+        let s = simulate(&truth, &o, &mut rng(6)).unwrap();
+        let r = frame_matrix(&s.frame);
+        let t = Vector3::from(s.frame.translation);
+        for row in &s.data.rows {
+            let p = forward::forward(&truth, &row.theta, 20.0).p;
+            let x = Vector3::from(row.xyz.unwrap());
+            assert!((r * p + t - x).norm() < 0.02);
+        }
+    }
+}
