@@ -2,13 +2,6 @@
 //!
 //! Modules are added by the work that needs them; each has one job.
 
+pub mod accuracy;
 pub mod stream_decode;
-
-pub mod calib;
-pub mod data;
-pub mod ident;
-pub mod jacobian;
-pub mod lm;
-pub mod params;
-pub mod residuals;
-pub mod sim;
+pub mod tablebuild;

@@ -1,0 +1,154 @@
+//! Building the firmware's binary calibration table from an arm (host side, f64).
+//!
+//! Everything constant is precomputed here in f64 so that the target does the least work per
+//! point: the misalignment quaternion with the zero offset folded in,
+//! M'_i = R(e1, δα) · R(e2, δβ) · R(u, Δθ) (the spec's M_i followed by the constant part of the
+//! joint rotation, which commutes with the rest of R(u, ·)), the same as a matrix, the link and
+//! probe vectors with their errors, and the probe's unit direction. Layout: `quatarm::table`.
+
+use quatarm::table::{
+    quat_to_matrix, Harmonic, JointData, ProbeData, TableData, FLAG_GEOMETRIC, MAX_HARMONICS,
+    MAX_HARMONIC_ORDER, MAX_TABLE_LEN, SERIAL_LEN,
+};
+use quatarm_ref::{Arm, Axis};
+
+/// Why an arm cannot become a table.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{path}: {message}")]
+pub struct BuildError {
+    /// Key path in calibration-file terms.
+    pub path: String,
+    /// Why.
+    pub message: String,
+}
+
+fn err(path: impl Into<String>, message: impl Into<String>) -> BuildError {
+    BuildError {
+        path: path.into(),
+        message: message.into(),
+    }
+}
+
+/// Hamilton product.
+pub fn qmul(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
+    [
+        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+        a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+        a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
+    ]
+}
+
+/// R(axis, angle) as a quaternion.
+pub fn axis_quat(axis: Axis, angle: f64) -> [f64; 4] {
+    let mut q = [(angle / 2.0).cos(), 0.0, 0.0, 0.0];
+    q[1 + axis.index()] = (angle / 2.0).sin();
+    q
+}
+
+fn axis_code(a: Axis) -> u8 {
+    a.index() as u8
+}
+
+/// The table contents for an arm.
+pub fn table_data(arm: &Arm) -> Result<TableData, BuildError> {
+    let n = arm.dof();
+    if !(6..=7).contains(&n) {
+        return Err(err("joint", format!("{n} joints; the table takes 6 or 7")));
+    }
+    let mut d = TableData {
+        joint_count: n as u8,
+        ..TableData::default()
+    };
+    if let Some(s) = &arm.serial {
+        if s.len() > SERIAL_LEN || s.as_bytes().contains(&0) {
+            return Err(err(
+                "serial",
+                format!("{} bytes; the table holds at most {SERIAL_LEN}", s.len()),
+            ));
+        }
+        d.serial[..s.len()].copy_from_slice(s.as_bytes());
+    }
+    let mut geometric = false;
+    for (i, j) in arm.joints.iter().enumerate() {
+        let path = format!("joint[{}]", i + 1);
+        let (e1, e2) = j.axis.perpendicular();
+        let q = qmul(
+            qmul(axis_quat(e1, j.tilt[0]), axis_quat(e2, j.tilt[1])),
+            axis_quat(j.axis, j.zero_offset),
+        );
+        let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let q = q.map(|x| x / norm);
+        if j.harmonics.len() > MAX_HARMONICS {
+            return Err(err(
+                format!("{path}.harmonics"),
+                format!(
+                    "{} terms; the table holds {MAX_HARMONICS} per joint",
+                    j.harmonics.len()
+                ),
+            ));
+        }
+        let mut harmonics = [Harmonic::default(); MAX_HARMONICS];
+        for (k, h) in j.harmonics.iter().enumerate() {
+            if h.order == 0 || h.order > u32::from(MAX_HARMONIC_ORDER) {
+                return Err(err(
+                    format!("{path}.harmonics[{}].order", k + 1),
+                    format!("{}; the table takes 1..={MAX_HARMONIC_ORDER}", h.order),
+                ));
+            }
+            harmonics[k] = Harmonic {
+                order: h.order as u16,
+                sin: h.sin,
+                cos: h.cos,
+            };
+        }
+        geometric |= j.zero_offset != 0.0 || j.link_error != [0.0; 3];
+        // A tilt is an error unless it is a designed twist of a D–H arm (a multiple of π/2).
+        geometric |= j.tilt.iter().any(|t| {
+            let k = (t / std::f64::consts::FRAC_PI_2).round();
+            (t - k * std::f64::consts::FRAC_PI_2).abs() > 1e-12
+        });
+        d.joints[i] = JointData {
+            axis: axis_code(j.axis),
+            counts: j.encoder_counts,
+            rotation: q,
+            matrix: quat_to_matrix(&q),
+            link: j.actual_link(),
+            thermal: j.thermal,
+            gravity: j.gravity,
+            harmonic_count: j.harmonics.len() as u8,
+            harmonics,
+        };
+    }
+    let v = arm.probe.actual();
+    let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    if len <= 0.0 {
+        return Err(err("probe.vector", "vector + error is zero"));
+    }
+    geometric |= arm.probe.error != [0.0; 3];
+    d.probe = ProbeData {
+        vector: v,
+        direction: v.map(|x| x / len),
+        thermal: arm.probe.thermal,
+    };
+    d.flags = d.content_flags() | if geometric { FLAG_GEOMETRIC } else { 0 };
+    Ok(d)
+}
+
+/// The table bytes for an arm, checked by the firmware's own parser before they are returned.
+pub fn build(arm: &Arm) -> Result<Vec<u8>, BuildError> {
+    let data = table_data(arm)?;
+    let mut buf = vec![0u8; MAX_TABLE_LEN];
+    let len = data
+        .encode(&mut buf)
+        .map_err(|e| err("(table)", e.to_string()))?;
+    buf.truncate(len);
+    quatarm::Table::parse(&buf).map_err(|e| match e {
+        quatarm::TableError::Invalid { joint, field } if joint > 0 => err(
+            format!("joint[{joint}]"),
+            format!("{field} out of the table's range"),
+        ),
+        other => err("(table)", other.to_string()),
+    })?;
+    Ok(buf)
+}

@@ -1,0 +1,965 @@
+//! The binary calibration table: what a board keeps in a flash region of its own.
+//!
+//! The host builds it from a calibration file (`armcal table build`) with everything that is
+//! constant precomputed in f64: the misalignment quaternion with the zero offset folded in,
+//! M'_i = R(e1, δα) · R(e2, δβ) · R(u, Δθ), the same rotation as a 3×3 matrix (for the matrix
+//! chain), the link vectors with their errors, the probe vector and its unit direction. Real
+//! numbers are stored as little-endian IEEE-754 f64: the one format from which both the f32 and
+//! the fixed-point evaluator take their full accuracy (each rounds once, when the chain is
+//! built at boot; nothing in the per-point path touches f64).
+//!
+//! ```text
+//! offset  size  field                                   (all little-endian)
+//! ------  ----  ---------------------------------------------------------------
+//!      0     4  magic "QATB"
+//!      4     2  format version (1)
+//!      6     1  joint count N (6 or 7)
+//!      7     1  flags: bit0 geometric errors, bit1 encoder harmonics,
+//!               bit2 gravity compliance, bit3 thermal expansion (others 0)
+//!      8    16  arm serial, UTF-8, NUL-padded
+//!     24     4  total length in bytes, CRC included (= 32 + N·248 + 56 + 4)
+//!     28     4  reserved, 0
+//!     32 N·248  joint records, base first:
+//!                 +0    1  axis: 0 = x, 1 = y, 2 = z
+//!                 +1    1  harmonic count H (0..=4)
+//!                 +2    2  reserved, 0
+//!                 +4    4  counts per revolution (2..=2^31 − 1)
+//!                 +8   32  M'_i quaternion w, x, y, z (f64)
+//!                 +40  72  M'_i as a 3×3 matrix, row-major (f64)
+//!                 +112 24  link vector v_i + Δv_i (mm, f64 ×3)
+//!                 +136  8  thermal expansion κ_i (1/°C, f64)
+//!                 +144  8  gravity compliance g_i (rad/mm, f64)
+//!                 +152 96  4 harmonic slots of 24 bytes, the first H used:
+//!                            +0 2 order h (1..=64), +2 6 reserved 0,
+//!                            +8 8 sin coefficient (rad), +16 8 cos coefficient (rad)
+//! 32+N·248   56  probe: vector v_p + Δv_p (mm, f64 ×3), its unit direction (f64 ×3),
+//!               thermal expansion κ_p (1/°C, f64)
+//!  len−4     4  CRC-32 (ISO-HDLC, as zlib) of every byte before it
+//! ```
+//!
+//! [`Table::parse`] is a checked constructor in the manner of smoltcp's `new_checked`: it
+//! validates length, magic, version, CRC, joint count and every value's range once; after it
+//! the accessors cannot fail and nothing panics on any input. Erased flash (all 0xFF) and
+//! zeroed flash are reported as [`TableError::Blank`], not as corruption.
+
+use core::fmt;
+
+/// The table's magic bytes.
+pub const MAGIC: [u8; 4] = *b"QATB";
+/// The format version this firmware reads and writes.
+pub const VERSION: u16 = 1;
+/// Most joints a table holds.
+pub const MAX_JOINTS: usize = 7;
+/// Fewest joints a table holds.
+pub const MIN_JOINTS: usize = 6;
+/// Harmonic slots per joint.
+pub const MAX_HARMONICS: usize = 4;
+/// Highest harmonic order.
+pub const MAX_HARMONIC_ORDER: u16 = 64;
+/// Length of the serial field.
+pub const SERIAL_LEN: usize = 16;
+
+/// Header length.
+pub const HEADER_LEN: usize = 32;
+/// Length of one joint record.
+pub const JOINT_LEN: usize = 248;
+/// Length of the probe record.
+pub const PROBE_LEN: usize = 56;
+/// Length of one harmonic slot.
+pub const HARMONIC_LEN: usize = 24;
+const CRC_LEN: usize = 4;
+
+mod off {
+    pub const MAGIC: usize = 0;
+    pub const VERSION: usize = 4;
+    pub const JOINTS: usize = 6;
+    pub const FLAGS: usize = 7;
+    pub const SERIAL: usize = 8;
+    pub const LENGTH: usize = 24;
+    pub const RESERVED: usize = 28;
+    // Joint record.
+    pub const AXIS: usize = 0;
+    pub const HARMONICS: usize = 1;
+    pub const J_RESERVED: usize = 2;
+    pub const COUNTS: usize = 4;
+    pub const QUAT: usize = 8;
+    pub const MATRIX: usize = 40;
+    pub const LINK: usize = 112;
+    pub const THERMAL: usize = 136;
+    pub const GRAVITY: usize = 144;
+    pub const SLOTS: usize = 152;
+    // Harmonic slot.
+    pub const H_ORDER: usize = 0;
+    pub const H_RESERVED: usize = 2;
+    pub const H_SIN: usize = 8;
+    pub const H_COS: usize = 16;
+    // Probe record.
+    pub const P_VECTOR: usize = 0;
+    pub const P_DIR: usize = 24;
+    pub const P_THERMAL: usize = 48;
+}
+
+/// Flag: some geometric error (zero offset, tilt, link or probe error) is non-zero.
+pub const FLAG_GEOMETRIC: u8 = 1 << 0;
+/// Flag: some joint has encoder harmonics.
+pub const FLAG_HARMONICS: u8 = 1 << 1;
+/// Flag: some joint has gravity compliance.
+pub const FLAG_GRAVITY: u8 = 1 << 2;
+/// Flag: some link or the probe has thermal expansion.
+pub const FLAG_THERMAL: u8 = 1 << 3;
+const FLAGS_KNOWN: u8 = 0x0f;
+
+/// Limits of the values a table may hold. They keep every evaluator inside its range and its
+/// small-angle formulas inside their accuracy; a real arm is far inside them.
+pub mod limits {
+    /// |component| of a link or probe vector (mm).
+    pub const LENGTH_MM: f64 = 5000.0;
+    /// |κ| (1/°C).
+    pub const THERMAL: f64 = 4.0e-4;
+    /// |g| (rad/mm).
+    pub const GRAVITY: f64 = 1.0e-6;
+    /// Σ |sin| + |cos| of a joint's harmonics (rad): the small-angle rotation stays
+    /// second-order exact.
+    pub const HARMONIC_SUM: f64 = 1.0e-3;
+    /// How far a stored rotation may be from unit length / orthonormal.
+    pub const UNIT_TOLERANCE: f64 = 1.0e-9;
+}
+
+/// Why a table cannot be used. The firmware streams no coordinates while it has one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum TableError {
+    /// The region is erased (all 0xFF) or zeroed: no table was ever flashed.
+    Blank,
+    /// Fewer bytes than the header says, or than any table needs.
+    Truncated {
+        /// Bytes the table needs.
+        needed: u32,
+        /// Bytes available.
+        available: u32,
+    },
+    /// The first four bytes are not "QATB": not a quatarm table.
+    BadMagic,
+    /// A format version this firmware does not read.
+    UnsupportedVersion(u16),
+    /// A joint count outside 6..=7.
+    BadJointCount(u8),
+    /// The table is for another number of joints than this firmware drives.
+    WrongJointCount {
+        /// Joints the firmware drives.
+        expected: u8,
+        /// Joints in the table.
+        found: u8,
+    },
+    /// The length field disagrees with the joint count.
+    BadLength(u32),
+    /// The CRC does not match: the table is corrupt.
+    Crc {
+        /// CRC stored in the table.
+        stored: u32,
+        /// CRC of the bytes.
+        computed: u32,
+    },
+    /// A value out of its range; `joint` is 1-based, 0 for the header or the probe.
+    Invalid {
+        /// The joint (1..=N), or 0 for the header and probe.
+        joint: u8,
+        /// Which field.
+        field: Field,
+    },
+}
+
+/// A field of the table, named in [`TableError::Invalid`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum Field {
+    /// Header flags (unknown bits, or disagreeing with the contents).
+    Flags,
+    /// A reserved field is not zero.
+    Reserved,
+    /// Serial number not UTF-8.
+    Serial,
+    /// Axis not 0, 1 or 2.
+    Axis,
+    /// Counts per revolution outside 2..=2^31 − 1.
+    Counts,
+    /// Harmonic count above 4.
+    HarmonicCount,
+    /// Harmonic order 0 or above 64.
+    HarmonicOrder,
+    /// Harmonic coefficients not finite or too large.
+    Harmonic,
+    /// Rotation quaternion not unit, or matrix not its rotation.
+    Rotation,
+    /// Link vector not finite or too long.
+    Link,
+    /// Thermal coefficient not finite or too large.
+    Thermal,
+    /// Gravity coefficient not finite or too large.
+    Gravity,
+    /// Probe vector or direction invalid.
+    Probe,
+}
+
+impl fmt::Display for Field {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Field::Flags => "flags",
+            Field::Reserved => "reserved field",
+            Field::Serial => "serial",
+            Field::Axis => "axis",
+            Field::Counts => "counts per revolution",
+            Field::HarmonicCount => "harmonic count",
+            Field::HarmonicOrder => "harmonic order",
+            Field::Harmonic => "harmonic coefficients",
+            Field::Rotation => "rotation",
+            Field::Link => "link vector",
+            Field::Thermal => "thermal coefficient",
+            Field::Gravity => "gravity coefficient",
+            Field::Probe => "probe",
+        })
+    }
+}
+
+impl fmt::Display for TableError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            TableError::Blank => f.write_str("no calibration table (blank flash)"),
+            TableError::Truncated { needed, available } => {
+                write!(
+                    f,
+                    "calibration table truncated: {available} of {needed} bytes"
+                )
+            }
+            TableError::BadMagic => f.write_str("not a calibration table (bad magic)"),
+            TableError::UnsupportedVersion(v) => {
+                write!(
+                    f,
+                    "calibration table format version {v}, this firmware reads {VERSION}"
+                )
+            }
+            TableError::BadJointCount(n) => write!(f, "calibration table has {n} joints"),
+            TableError::WrongJointCount { expected, found } => write!(
+                f,
+                "calibration table is for {found} joints, this firmware drives {expected}"
+            ),
+            TableError::BadLength(l) => write!(f, "calibration table length field {l} is wrong"),
+            TableError::Crc { stored, computed } => write!(
+                f,
+                "calibration table corrupt: CRC {computed:08x}, stored {stored:08x}"
+            ),
+            TableError::Invalid { joint: 0, field } => {
+                write!(f, "calibration table: invalid {field}")
+            }
+            TableError::Invalid { joint, field } => {
+                write!(f, "calibration table: joint {joint}: invalid {field}")
+            }
+        }
+    }
+}
+
+impl core::error::Error for TableError {}
+
+/// The CRC of the table: CRC-32/ISO-HDLC (the zlib and Ethernet CRC).
+pub const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+
+/// Table length for `joints` joints.
+pub const fn table_len(joints: usize) -> usize {
+    HEADER_LEN + joints * JOINT_LEN + PROBE_LEN + CRC_LEN
+}
+
+/// Largest table length.
+pub const MAX_TABLE_LEN: usize = table_len(MAX_JOINTS);
+
+/// One encoder-harmonic term: e += sin·sin(hθ) + cos·cos(hθ).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Harmonic {
+    /// Order h.
+    pub order: u16,
+    /// Coefficient of sin(hθ) (rad).
+    pub sin: f64,
+    /// Coefficient of cos(hθ) (rad).
+    pub cos: f64,
+}
+
+/// One joint's precomputed constants.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct JointData {
+    /// Axis: 0 = x, 1 = y, 2 = z.
+    pub axis: u8,
+    /// Counts per revolution.
+    pub counts: u32,
+    /// M'_i = R(e1, δα) R(e2, δβ) R(u, Δθ) as a unit quaternion (w, x, y, z).
+    pub rotation: [f64; 4],
+    /// The same rotation as a matrix, row-major.
+    pub matrix: [[f64; 3]; 3],
+    /// Link vector with its error (mm).
+    pub link: [f64; 3],
+    /// Thermal expansion κ (1/°C).
+    pub thermal: f64,
+    /// Gravity compliance g (rad/mm).
+    pub gravity: f64,
+    /// Number of harmonics used.
+    pub harmonic_count: u8,
+    /// Harmonic terms (the first `harmonic_count`).
+    pub harmonics: [Harmonic; MAX_HARMONICS],
+}
+
+/// The probe's precomputed constants.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ProbeData {
+    /// Probe vector with its error (mm).
+    pub vector: [f64; 3],
+    /// Its unit direction.
+    pub direction: [f64; 3],
+    /// Thermal expansion κ_p (1/°C).
+    pub thermal: f64,
+}
+
+/// The contents of a table, as plain values: what the encoder writes and [`Table::data`]
+/// reads back.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TableData {
+    /// Arm serial (UTF-8, NUL-padded).
+    pub serial: [u8; SERIAL_LEN],
+    /// Flags (`FLAG_*`).
+    pub flags: u8,
+    /// Number of joints.
+    pub joint_count: u8,
+    /// Joints, base first (the first `joint_count` used).
+    pub joints: [JointData; MAX_JOINTS],
+    /// The probe.
+    pub probe: ProbeData,
+}
+
+impl TableData {
+    /// The flags that the contents call for (geometric errors are the builder's to set).
+    pub fn content_flags(&self) -> u8 {
+        let mut flags = 0;
+        for j in &self.joints[..usize::from(self.joint_count).min(MAX_JOINTS)] {
+            if j.harmonic_count > 0 {
+                flags |= FLAG_HARMONICS;
+            }
+            if j.gravity != 0.0 {
+                flags |= FLAG_GRAVITY;
+            }
+            if j.thermal != 0.0 {
+                flags |= FLAG_THERMAL;
+            }
+        }
+        if self.probe.thermal != 0.0 {
+            flags |= FLAG_THERMAL;
+        }
+        flags
+    }
+
+    /// Writes the table into `out`; returns its length. Fails only if `out` is too short or
+    /// the joint count is outside 6..=7.
+    pub fn encode(&self, out: &mut [u8]) -> Result<usize, TableError> {
+        let n = usize::from(self.joint_count);
+        if !(MIN_JOINTS..=MAX_JOINTS).contains(&n) {
+            return Err(TableError::BadJointCount(self.joint_count));
+        }
+        let len = table_len(n);
+        if out.len() < len {
+            return Err(TableError::Truncated {
+                needed: len as u32,
+                available: out.len() as u32,
+            });
+        }
+        let out = &mut out[..len];
+        out.fill(0);
+        out[off::MAGIC..off::MAGIC + 4].copy_from_slice(&MAGIC);
+        out[off::VERSION..off::VERSION + 2].copy_from_slice(&VERSION.to_le_bytes());
+        out[off::JOINTS] = self.joint_count;
+        out[off::FLAGS] = self.flags;
+        out[off::SERIAL..off::SERIAL + SERIAL_LEN].copy_from_slice(&self.serial);
+        out[off::LENGTH..off::LENGTH + 4].copy_from_slice(&(len as u32).to_le_bytes());
+        for (i, j) in self.joints[..n].iter().enumerate() {
+            let r = &mut out[HEADER_LEN + i * JOINT_LEN..HEADER_LEN + (i + 1) * JOINT_LEN];
+            r[off::AXIS] = j.axis;
+            r[off::HARMONICS] = j.harmonic_count;
+            r[off::COUNTS..off::COUNTS + 4].copy_from_slice(&j.counts.to_le_bytes());
+            put_f64s(&mut r[off::QUAT..], &j.rotation);
+            for (row, m) in j.matrix.iter().enumerate() {
+                put_f64s(&mut r[off::MATRIX + 24 * row..], m);
+            }
+            put_f64s(&mut r[off::LINK..], &j.link);
+            put_f64s(&mut r[off::THERMAL..], &[j.thermal]);
+            put_f64s(&mut r[off::GRAVITY..], &[j.gravity]);
+            for (k, h) in j.harmonics.iter().enumerate() {
+                let s = &mut r[off::SLOTS + k * HARMONIC_LEN..off::SLOTS + (k + 1) * HARMONIC_LEN];
+                s[off::H_ORDER..off::H_ORDER + 2].copy_from_slice(&h.order.to_le_bytes());
+                put_f64s(&mut s[off::H_SIN..], &[h.sin]);
+                put_f64s(&mut s[off::H_COS..], &[h.cos]);
+            }
+        }
+        let p = &mut out[HEADER_LEN + n * JOINT_LEN..HEADER_LEN + n * JOINT_LEN + PROBE_LEN];
+        put_f64s(&mut p[off::P_VECTOR..], &self.probe.vector);
+        put_f64s(&mut p[off::P_DIR..], &self.probe.direction);
+        put_f64s(&mut p[off::P_THERMAL..], &[self.probe.thermal]);
+        let crc = CRC.checksum(&out[..len - CRC_LEN]);
+        out[len - CRC_LEN..].copy_from_slice(&crc.to_le_bytes());
+        Ok(len)
+    }
+}
+
+fn put_f64s(out: &mut [u8], v: &[f64]) {
+    for (chunk, x) in out.chunks_exact_mut(8).zip(v) {
+        chunk.copy_from_slice(&x.to_le_bytes());
+    }
+}
+
+/// A validated calibration table, borrowing its bytes (which may stay in flash).
+#[derive(Clone, Copy, Debug)]
+pub struct Table<'a> {
+    bytes: &'a [u8],
+}
+
+fn rd_u32(b: &[u8], at: usize) -> u32 {
+    let mut a = [0u8; 4];
+    if let Some(s) = b.get(at..at + 4) {
+        a.copy_from_slice(s);
+    }
+    u32::from_le_bytes(a)
+}
+
+fn rd_u16(b: &[u8], at: usize) -> u16 {
+    let mut a = [0u8; 2];
+    if let Some(s) = b.get(at..at + 2) {
+        a.copy_from_slice(s);
+    }
+    u16::from_le_bytes(a)
+}
+
+fn rd_f64(b: &[u8], at: usize) -> f64 {
+    let mut a = [0u8; 8];
+    if let Some(s) = b.get(at..at + 8) {
+        a.copy_from_slice(s);
+    }
+    f64::from_le_bytes(a)
+}
+
+fn rd_f64s<const K: usize>(b: &[u8], at: usize) -> [f64; K] {
+    let mut v = [0.0; K];
+    for (i, x) in v.iter_mut().enumerate() {
+        *x = rd_f64(b, at + 8 * i);
+    }
+    v
+}
+
+fn abs(x: f64) -> f64 {
+    if x < 0.0 {
+        -x
+    } else {
+        x
+    }
+}
+
+fn within(x: f64, limit: f64) -> bool {
+    x.is_finite() && abs(x) <= limit
+}
+
+impl<'a> Table<'a> {
+    /// Validates `bytes` as a table for any supported joint count (bytes after the table's
+    /// length are ignored, so a whole flash region may be passed).
+    pub fn parse(bytes: &'a [u8]) -> Result<Table<'a>, TableError> {
+        Self::check(bytes, None)
+    }
+
+    /// Validates `bytes` as a table for exactly `joints` joints, the number the firmware
+    /// drives.
+    pub fn parse_for(bytes: &'a [u8], joints: usize) -> Result<Table<'a>, TableError> {
+        Self::check(bytes, Some(joints))
+    }
+
+    fn check(bytes: &'a [u8], expected: Option<usize>) -> Result<Table<'a>, TableError> {
+        let head = &bytes[..bytes.len().min(HEADER_LEN)];
+        if !head.is_empty() && (head.iter().all(|&b| b == 0xff) || head.iter().all(|&b| b == 0)) {
+            return Err(TableError::Blank);
+        }
+        if bytes.len() < HEADER_LEN {
+            return Err(TableError::Truncated {
+                needed: HEADER_LEN as u32,
+                available: bytes.len() as u32,
+            });
+        }
+        if bytes[off::MAGIC..off::MAGIC + 4] != MAGIC {
+            return Err(TableError::BadMagic);
+        }
+        let version = rd_u16(bytes, off::VERSION);
+        if version != VERSION {
+            return Err(TableError::UnsupportedVersion(version));
+        }
+        let n8 = bytes[off::JOINTS];
+        let n = usize::from(n8);
+        if !(MIN_JOINTS..=MAX_JOINTS).contains(&n) {
+            return Err(TableError::BadJointCount(n8));
+        }
+        let len = table_len(n);
+        let stated = rd_u32(bytes, off::LENGTH);
+        if stated as usize != len {
+            return Err(TableError::BadLength(stated));
+        }
+        if bytes.len() < len {
+            return Err(TableError::Truncated {
+                needed: len as u32,
+                available: bytes.len() as u32,
+            });
+        }
+        let bytes = &bytes[..len];
+        let stored = rd_u32(bytes, len - CRC_LEN);
+        let computed = CRC.checksum(&bytes[..len - CRC_LEN]);
+        if stored != computed {
+            return Err(TableError::Crc { stored, computed });
+        }
+        if let Some(e) = expected {
+            if e != n {
+                return Err(TableError::WrongJointCount {
+                    expected: e.min(255) as u8,
+                    found: n8,
+                });
+            }
+        }
+        let table = Table { bytes };
+        table.check_values()?;
+        Ok(table)
+    }
+
+    fn check_values(&self) -> Result<(), TableError> {
+        let invalid = |joint: usize, field| TableError::Invalid {
+            joint: joint as u8,
+            field,
+        };
+        let b = self.bytes;
+        if rd_u32(b, off::RESERVED) != 0 {
+            return Err(invalid(0, Field::Reserved));
+        }
+        if core::str::from_utf8(self.serial()).is_err() {
+            return Err(invalid(0, Field::Serial));
+        }
+        let data = self.data();
+        let flags = b[off::FLAGS];
+        if flags & !FLAGS_KNOWN != 0 || flags & !FLAG_GEOMETRIC != data.content_flags() {
+            return Err(invalid(0, Field::Flags));
+        }
+        for i in 0..self.joint_count() {
+            let r = &b[HEADER_LEN + i * JOINT_LEN..HEADER_LEN + (i + 1) * JOINT_LEN];
+            let j = &data.joints[i];
+            let no = i + 1;
+            if rd_u16(r, off::J_RESERVED) != 0 {
+                return Err(invalid(no, Field::Reserved));
+            }
+            if j.axis > 2 {
+                return Err(invalid(no, Field::Axis));
+            }
+            if !(2..=i32::MAX as u32).contains(&j.counts) {
+                return Err(invalid(no, Field::Counts));
+            }
+            if usize::from(j.harmonic_count) > MAX_HARMONICS {
+                return Err(invalid(no, Field::HarmonicCount));
+            }
+            check_rotation(&j.rotation, &j.matrix).map_err(|_| invalid(no, Field::Rotation))?;
+            if !j.link.iter().all(|&x| within(x, limits::LENGTH_MM)) {
+                return Err(invalid(no, Field::Link));
+            }
+            if !within(j.thermal, limits::THERMAL) {
+                return Err(invalid(no, Field::Thermal));
+            }
+            if !within(j.gravity, limits::GRAVITY) {
+                return Err(invalid(no, Field::Gravity));
+            }
+            let mut sum = 0.0;
+            for (k, h) in j.harmonics.iter().enumerate() {
+                let s = &r[off::SLOTS + k * HARMONIC_LEN..off::SLOTS + (k + 1) * HARMONIC_LEN];
+                if s[off::H_RESERVED..off::H_SIN].iter().any(|&x| x != 0) {
+                    return Err(invalid(no, Field::Reserved));
+                }
+                if k >= usize::from(j.harmonic_count) {
+                    if h.order != 0 || h.sin.to_bits() != 0 || h.cos.to_bits() != 0 {
+                        return Err(invalid(no, Field::Reserved));
+                    }
+                    continue;
+                }
+                if h.order == 0 || h.order > MAX_HARMONIC_ORDER {
+                    return Err(invalid(no, Field::HarmonicOrder));
+                }
+                if !(h.sin.is_finite() && h.cos.is_finite()) {
+                    return Err(invalid(no, Field::Harmonic));
+                }
+                sum += abs(h.sin) + abs(h.cos);
+            }
+            if !(sum <= limits::HARMONIC_SUM) {
+                return Err(invalid(no, Field::Harmonic));
+            }
+        }
+        let p = &data.probe;
+        let ok = p.vector.iter().all(|&x| within(x, limits::LENGTH_MM))
+            && p.direction
+                .iter()
+                .all(|&x| within(x, 1.0 + limits::UNIT_TOLERANCE))
+            && within(p.thermal, limits::THERMAL);
+        if !ok {
+            return Err(invalid(0, Field::Probe));
+        }
+        let [dx, dy, dz] = p.direction;
+        if abs(dx * dx + dy * dy + dz * dz - 1.0) > limits::UNIT_TOLERANCE {
+            return Err(invalid(0, Field::Probe));
+        }
+        // The direction must be that of the vector: their cross product vanishes relative to
+        // the vector's length, and they point the same way.
+        let [vx, vy, vz] = p.vector;
+        let len2 = vx * vx + vy * vy + vz * vz;
+        let dot = vx * dx + vy * dy + vz * dz;
+        let cx = vy * dz - vz * dy;
+        let cy = vz * dx - vx * dz;
+        let cz = vx * dy - vy * dx;
+        if !(len2 > 0.0 && dot > 0.0 && (cx * cx + cy * cy + cz * cz) <= 1e-18 * len2) {
+            return Err(invalid(0, Field::Probe));
+        }
+        Ok(())
+    }
+
+    /// The table's bytes (exactly its length).
+    pub fn bytes(&self) -> &'a [u8] {
+        self.bytes
+    }
+
+    /// Number of joints.
+    pub fn joint_count(&self) -> usize {
+        usize::from(self.bytes[off::JOINTS])
+    }
+
+    /// Flags (`FLAG_*`).
+    pub fn flags(&self) -> u8 {
+        self.bytes[off::FLAGS]
+    }
+
+    /// The arm's serial, without its NUL padding.
+    pub fn serial(&self) -> &'a [u8] {
+        let s = &self.bytes[off::SERIAL..off::SERIAL + SERIAL_LEN];
+        let end = s.iter().position(|&b| b == 0).unwrap_or(SERIAL_LEN);
+        &s[..end]
+    }
+
+    /// The CRC stored in the table.
+    pub fn crc(&self) -> u32 {
+        rd_u32(self.bytes, self.bytes.len() - CRC_LEN)
+    }
+
+    /// Joint `i` (0-based); `None` past the last joint.
+    pub fn joint(&self, i: usize) -> Option<JointData> {
+        if i >= self.joint_count() {
+            return None;
+        }
+        let r = self
+            .bytes
+            .get(HEADER_LEN + i * JOINT_LEN..HEADER_LEN + (i + 1) * JOINT_LEN)?;
+        let mut harmonics = [Harmonic::default(); MAX_HARMONICS];
+        for (k, h) in harmonics.iter_mut().enumerate() {
+            let s = off::SLOTS + k * HARMONIC_LEN;
+            *h = Harmonic {
+                order: rd_u16(r, s + off::H_ORDER),
+                sin: rd_f64(r, s + off::H_SIN),
+                cos: rd_f64(r, s + off::H_COS),
+            };
+        }
+        Some(JointData {
+            axis: r[off::AXIS],
+            counts: rd_u32(r, off::COUNTS),
+            rotation: rd_f64s::<4>(r, off::QUAT),
+            matrix: [
+                rd_f64s::<3>(r, off::MATRIX),
+                rd_f64s::<3>(r, off::MATRIX + 24),
+                rd_f64s::<3>(r, off::MATRIX + 48),
+            ],
+            link: rd_f64s::<3>(r, off::LINK),
+            thermal: rd_f64(r, off::THERMAL),
+            gravity: rd_f64(r, off::GRAVITY),
+            harmonic_count: r[off::HARMONICS],
+            harmonics,
+        })
+    }
+
+    /// The probe.
+    pub fn probe(&self) -> ProbeData {
+        let at = HEADER_LEN + self.joint_count() * JOINT_LEN;
+        ProbeData {
+            vector: rd_f64s::<3>(self.bytes, at + off::P_VECTOR),
+            direction: rd_f64s::<3>(self.bytes, at + off::P_DIR),
+            thermal: rd_f64(self.bytes, at + off::P_THERMAL),
+        }
+    }
+
+    /// Everything, as plain values.
+    pub fn data(&self) -> TableData {
+        let mut serial = [0u8; SERIAL_LEN];
+        serial.copy_from_slice(&self.bytes[off::SERIAL..off::SERIAL + SERIAL_LEN]);
+        let mut joints = [JointData::default(); MAX_JOINTS];
+        for (i, j) in joints.iter_mut().enumerate().take(self.joint_count()) {
+            if let Some(d) = self.joint(i) {
+                *j = d;
+            }
+        }
+        TableData {
+            serial,
+            flags: self.flags(),
+            joint_count: self.bytes[off::JOINTS],
+            joints,
+            probe: self.probe(),
+        }
+    }
+}
+
+/// Checks a unit quaternion and its matrix: |q| = 1, and the matrix is q's rotation.
+fn check_rotation(q: &[f64; 4], m: &[[f64; 3]; 3]) -> Result<(), ()> {
+    if !q
+        .iter()
+        .chain(m.iter().flatten())
+        .all(|&x| within(x, 1.0 + limits::UNIT_TOLERANCE))
+    {
+        return Err(());
+    }
+    let [w, x, y, z] = *q;
+    if abs(w * w + x * x + y * y + z * z - 1.0) > limits::UNIT_TOLERANCE {
+        return Err(());
+    }
+    let want = quat_to_matrix(q);
+    for r in 0..3 {
+        for c in 0..3 {
+            if abs(want[r][c] - m[r][c]) > 1e-9 {
+                return Err(());
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The rotation matrix of a unit quaternion (w, x, y, z).
+pub fn quat_to_matrix(q: &[f64; 4]) -> [[f64; 3]; 3] {
+    let [w, x, y, z] = *q;
+    [
+        [
+            1.0 - 2.0 * (y * y + z * z),
+            2.0 * (x * y - w * z),
+            2.0 * (x * z + w * y),
+        ],
+        [
+            2.0 * (x * y + w * z),
+            1.0 - 2.0 * (x * x + z * z),
+            2.0 * (y * z - w * x),
+        ],
+        [
+            2.0 * (x * z - w * y),
+            2.0 * (y * z + w * x),
+            1.0 - 2.0 * (x * x + y * y),
+        ],
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    pub(crate) fn sample() -> TableData {
+        let mut d = TableData {
+            joint_count: 6,
+            ..TableData::default()
+        };
+        d.serial[..7].copy_from_slice(b"SN-0001");
+        let axes = [2u8, 0, 2, 0, 2, 0];
+        let links = [200.0, 300.0, 300.0, 250.0, 250.0, 80.0];
+        for i in 0..6 {
+            let h = 1e-3 * (i as f64 + 1.0);
+            let q = [(1.0f64 - h * h).sqrt(), h, 0.0, 0.0];
+            d.joints[i] = JointData {
+                axis: axes[i],
+                counts: 1 << 20,
+                rotation: q,
+                matrix: quat_to_matrix(&q),
+                link: [0.1, -0.2, links[i]],
+                thermal: 2.3e-5,
+                gravity: if i % 2 == 1 { 3e-8 } else { 0.0 },
+                harmonic_count: 2,
+                harmonics: [
+                    Harmonic {
+                        order: 1,
+                        sin: 1e-4,
+                        cos: -5e-5,
+                    },
+                    Harmonic {
+                        order: 2,
+                        sin: 2e-5,
+                        cos: 1e-5,
+                    },
+                    Harmonic::default(),
+                    Harmonic::default(),
+                ],
+            };
+        }
+        d.probe = ProbeData {
+            vector: [0.0, 0.0, 120.0],
+            direction: [0.0, 0.0, 1.0],
+            thermal: 0.0,
+        };
+        d.flags = d.content_flags() | FLAG_GEOMETRIC;
+        d
+    }
+
+    fn encoded() -> ([u8; MAX_TABLE_LEN], usize) {
+        let mut buf = [0u8; MAX_TABLE_LEN];
+        let n = sample().encode(&mut buf).unwrap();
+        (buf, n)
+    }
+
+    fn recrc(b: &mut [u8]) {
+        let n = b.len();
+        let c = CRC.checksum(&b[..n - 4]);
+        b[n - 4..].copy_from_slice(&c.to_le_bytes());
+    }
+
+    #[test]
+    fn round_trip() {
+        let (buf, n) = encoded();
+        assert_eq!(n, table_len(6));
+        let t = Table::parse(&buf).unwrap();
+        assert_eq!(t.data(), sample());
+        assert_eq!(t.serial(), b"SN-0001");
+        assert_eq!(t.bytes().len(), n);
+        assert!(Table::parse_for(&buf[..n], 6).is_ok());
+    }
+
+    #[test]
+    fn rejections() {
+        let (buf, n) = encoded();
+        assert_eq!(Table::parse(&[0xff; 64]).unwrap_err(), TableError::Blank);
+        assert_eq!(Table::parse(&[0; 2048]).unwrap_err(), TableError::Blank);
+        assert!(matches!(
+            Table::parse(&[]).unwrap_err(),
+            TableError::Truncated { .. }
+        ));
+        assert!(matches!(
+            Table::parse(&buf[..n - 1]).unwrap_err(),
+            TableError::Truncated { .. }
+        ));
+        assert_eq!(
+            Table::parse_for(&buf, 7).unwrap_err(),
+            TableError::WrongJointCount {
+                expected: 7,
+                found: 6
+            }
+        );
+        let mut b = buf;
+        b[0] = b'X';
+        assert_eq!(Table::parse(&b).unwrap_err(), TableError::BadMagic);
+        let mut b = buf;
+        b[4] = 2;
+        assert_eq!(
+            Table::parse(&b).unwrap_err(),
+            TableError::UnsupportedVersion(2)
+        );
+        let mut b = buf;
+        b[6] = 5;
+        assert_eq!(Table::parse(&b).unwrap_err(), TableError::BadJointCount(5));
+        let mut b = buf;
+        b[24] += 1;
+        assert!(matches!(
+            Table::parse(&b).unwrap_err(),
+            TableError::BadLength(_)
+        ));
+        let mut b = buf;
+        b[100] ^= 0x10;
+        assert!(matches!(
+            Table::parse(&b).unwrap_err(),
+            TableError::Crc { .. }
+        ));
+        // Values out of range, with a correct CRC.
+        let cases: [(usize, u8, Field); 5] = [
+            (HEADER_LEN + off::AXIS, 3, Field::Axis),
+            (HEADER_LEN + off::HARMONICS, 5, Field::HarmonicCount),
+            (HEADER_LEN + off::COUNTS + 3, 0x80, Field::Counts),
+            (HEADER_LEN + off::QUAT + 7, 0x40, Field::Rotation),
+            (
+                HEADER_LEN + off::SLOTS + off::H_ORDER,
+                0,
+                Field::HarmonicOrder,
+            ),
+        ];
+        for (at, v, field) in cases {
+            let mut b = buf;
+            b[at] = v;
+            recrc(&mut b[..n]);
+            assert_eq!(
+                Table::parse(&b).unwrap_err(),
+                TableError::Invalid { joint: 1, field },
+                "{field}"
+            );
+        }
+        let mut d = sample();
+        d.joints[2].gravity = f64::NAN;
+        let mut b = [0u8; MAX_TABLE_LEN];
+        d.encode(&mut b).unwrap();
+        assert_eq!(
+            Table::parse(&b).unwrap_err(),
+            TableError::Invalid {
+                joint: 3,
+                field: Field::Gravity
+            }
+        );
+        let mut d = sample();
+        d.probe.direction = [0.0, 1.0, 0.0];
+        d.encode(&mut b).unwrap();
+        assert_eq!(
+            Table::parse(&b).unwrap_err(),
+            TableError::Invalid {
+                joint: 0,
+                field: Field::Probe
+            }
+        );
+        let mut d = sample();
+        d.flags = 0;
+        d.encode(&mut b).unwrap();
+        assert_eq!(
+            Table::parse(&b).unwrap_err(),
+            TableError::Invalid {
+                joint: 0,
+                field: Field::Flags
+            }
+        );
+        let mut d = sample();
+        d.joints[5].harmonics[0].sin = 2e-3;
+        d.encode(&mut b).unwrap();
+        assert_eq!(
+            Table::parse(&b).unwrap_err(),
+            TableError::Invalid {
+                joint: 6,
+                field: Field::Harmonic
+            }
+        );
+    }
+
+    #[test]
+    fn encode_needs_room() {
+        let mut small = [0u8; 100];
+        assert!(matches!(
+            sample().encode(&mut small),
+            Err(TableError::Truncated { .. })
+        ));
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn arbitrary_bytes_never_panic(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..2000)) {
+            let _ = Table::parse(&bytes);
+        }
+
+        #[test]
+        fn flipped_bytes_are_refused(at in 0usize..table_len(6), bit in 0u8..8) {
+            let (mut b, n) = encoded();
+            b[at] ^= 1 << bit;
+            proptest::prop_assert!(Table::parse(&b[..n]).is_err());
+        }
+    }
+}
