@@ -21,7 +21,8 @@ pub fn full_calibration() -> Arm {
     let mut arm = Arm::default6();
     arm.name = Some("default-6-full".into());
     arm.serial = Some("SN-0001".into());
-    let mut r = |a: f64| (rng.gen_range(-a..a) * 1e6_f64).round() / 1e6;
+    // Rounded to 1e-7 (rad or mm) so that the file reads cleanly; + 0.0 turns −0 into 0.
+    let mut r = |a: f64| (rng.gen_range(-a..a) * 1e7_f64).round() / 1e7 + 0.0;
     // Links 1, 3, 5 (columns and swivels) aluminium, 2, 4, 6 carbon fibre.
     let thermal = [23e-6, 2e-6, 23e-6, 2e-6, 23e-6, 2e-6];
     let gravity = [0.0, 4e-8, 0.0, 3e-8, 0.0, 1e-8];

@@ -5,3 +5,4 @@
 pub mod accuracy;
 pub mod stream_decode;
 pub mod tablebuild;
+pub mod eval;

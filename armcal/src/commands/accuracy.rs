@@ -16,6 +16,10 @@ pub struct Args {
     /// Seed of the random poses.
     #[arg(long, default_value_t = SEED)]
     seed: u64,
+    /// Write the built-in full calibration to this TOML file and stop (how
+    /// `data/default-6-full.toml` was made).
+    #[arg(long)]
+    write_calib: Option<PathBuf>,
     /// Worker threads (the result does not depend on it).
     #[arg(long, default_value_t = 2)]
     threads: usize,
@@ -23,6 +27,20 @@ pub struct Args {
 
 /// Runs the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    if let Some(path) = &args.write_calib {
+        let text = quatarm_ref::calfile::write(
+            &full_calibration(),
+            &[
+                "default-6 with a realistic calibration that uses every term of the model:",
+                "zero offsets and tilts of a few mrad, link errors up to 1 mm, two encoder",
+                "harmonics per joint, gravity compliance on the hinges, thermal expansion",
+                "(aluminium links 1, 3, 5; carbon-fibre links 2, 4, 6; steel probe).",
+                "Written by `armcal accuracy --write-calib` (armcal::accuracy::full_calibration).",
+            ],
+        );
+        std::fs::write(path, text).with_context(|| path.display().to_string())?;
+        return Ok(());
+    }
     let arm = match &args.calib {
         Some(p) => {
             let parsed = quatarm_ref::calfile::read(p)?;

@@ -1,10 +1,48 @@
-//! `armcal eval` (placeholder: its issue fills it in).
+//! `armcal eval`: joint readings in, probe-ball XYZ and probe direction out.
+
+use anyhow::Context;
+use armcal::eval::{evaluate, read_rows, Evaluator};
+use std::io::Write;
+use std::path::PathBuf;
 
 /// Arguments of `armcal eval`.
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Calibration file (TOML).
+    #[arg(long)]
+    calib: PathBuf,
+    /// Evaluator: the f64 reference, or the firmware's f32 or fixed-point chain on the
+    /// binary table a board would load.
+    #[arg(long, value_enum, default_value_t = Evaluator::F64)]
+    precision: Evaluator,
+    /// CSV with columns j1..jN (rad) or c1..cN (counts) and optional temp_c; stdin if absent.
+    input: Option<PathBuf>,
+}
 
 /// Runs the subcommand.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("armcal eval: not built yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let parsed = quatarm_ref::calfile::read(&args.calib)?;
+    for k in &parsed.unknown_keys {
+        eprintln!(
+            "armcal: warning: {}: unknown key {k} ignored",
+            args.calib.display()
+        );
+    }
+    let arm = parsed.arm;
+    let (rows, name) = match &args.input {
+        Some(p) => {
+            let f = std::fs::File::open(p).with_context(|| format!("{}", p.display()))?;
+            (read_rows(&arm, f), p.display().to_string())
+        }
+        None => (
+            read_rows(&arm, std::io::stdin().lock()),
+            "stdin".to_string(),
+        ),
+    };
+    let rows = rows.with_context(|| name.clone())?;
+    let out = evaluate(&arm, &rows, args.precision)?;
+    let mut stdout = std::io::stdout().lock();
+    stdout.write_all(out.as_bytes())?;
+    stdout.flush()?;
+    Ok(())
 }

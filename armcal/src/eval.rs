@@ -1,0 +1,250 @@
+//! `armcal eval`: joint readings (CSV) through one evaluator to XYZ and probe direction (CSV).
+//!
+//! Input columns `j1..jN` (radians) or `c1..cN` (encoder counts, 0 ≤ c < counts per
+//! revolution), optional `temp_c` (20 °C where absent or empty); other columns are ignored.
+//! `f64` runs the reference; `f32` and `fixed` run the `quatarm` quaternion chain on the binary
+//! table a board would load, with radians rounded to the nearest count and the temperature to
+//! the nearest milli-degree — the firmware's inputs — and print the firmware's integer outputs
+//! (nm, 1e-9) scaled, so they compare bit for bit with a board's stream. The whole input is
+//! evaluated before anything is written: a bad row gives an error and no partial output.
+
+use quatarm::{Chain, Fixed, Precision, Table, F32};
+use quatarm_ref::Arm;
+use std::fmt::Write as _;
+
+/// The evaluator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Evaluator {
+    /// The f64 reference (exact gravity).
+    F64,
+    /// The firmware's f32 quaternion chain.
+    F32,
+    /// The firmware's fixed-point quaternion chain.
+    Fixed,
+}
+
+/// A refused input, with its place.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("line {line}, column {column}: {message}")]
+pub struct RowError {
+    /// 1-based line of the input (the header is line 1).
+    pub line: u64,
+    /// 1-based column, or the column's name where it is missing.
+    pub column: String,
+    /// Why.
+    pub message: String,
+}
+
+/// One parsed input row.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Reading {
+    /// Radians.
+    Radians(Vec<f64>),
+    /// Counts.
+    Counts(Vec<u32>),
+}
+
+/// Parsed input: readings with their temperature (°C).
+pub type Rows = Vec<(Reading, f64)>;
+
+/// Reads the CSV input for an arm.
+pub fn read_rows(arm: &Arm, input: impl std::io::Read) -> Result<Rows, RowError> {
+    let n = arm.dof();
+    let mut rdr = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .trim(csv::Trim::All)
+        .from_reader(input);
+    let headers = rdr
+        .headers()
+        .map_err(|e| RowError {
+            line: 1,
+            column: "1".into(),
+            message: format!("cannot read the header: {e}"),
+        })?
+        .clone();
+    let find = |name: &str| headers.iter().position(|h| h == name);
+    let j: Vec<Option<usize>> = (1..=n).map(|k| find(&format!("j{k}"))).collect();
+    let c: Vec<Option<usize>> = (1..=n).map(|k| find(&format!("c{k}"))).collect();
+    let temp = find("temp_c");
+    let header_err = |column: String, message: String| RowError {
+        line: 1,
+        column,
+        message,
+    };
+    let radians = if j.iter().all(Option::is_some) && c.iter().all(Option::is_none) {
+        true
+    } else if c.iter().all(Option::is_some) && j.iter().all(Option::is_none) {
+        false
+    } else {
+        return Err(header_err(
+            "header".into(),
+            format!("need columns j1..j{n} (radians) or c1..c{n} (counts), not both or a part"),
+        ));
+    };
+    let cols: Vec<usize> = if radians { &j } else { &c }
+        .iter()
+        .flatten()
+        .copied()
+        .collect();
+    let mut rows = Vec::new();
+    for rec in rdr.records() {
+        let rec = rec.map_err(|e| {
+            let line = e.position().map_or(0, |p| p.line());
+            RowError {
+                line,
+                column: "-".into(),
+                message: e.to_string(),
+            }
+        })?;
+        let line = rec.position().map_or(0, |p| p.line());
+        let field = |col: usize| -> Result<&str, RowError> {
+            rec.get(col).ok_or_else(|| RowError {
+                line,
+                column: (col + 1).to_string(),
+                message: "missing field".into(),
+            })
+        };
+        let bad = |col: usize, message: String| RowError {
+            line,
+            column: (col + 1).to_string(),
+            message,
+        };
+        let reading = if radians {
+            let mut v = Vec::with_capacity(n);
+            for &col in &cols {
+                let s = field(col)?;
+                let x: f64 = s
+                    .parse()
+                    .map_err(|_| bad(col, format!("{s:?} is not a number")))?;
+                if !x.is_finite() {
+                    return Err(bad(col, format!("{s:?} is not finite")));
+                }
+                v.push(x);
+            }
+            Reading::Radians(v)
+        } else {
+            let mut v = Vec::with_capacity(n);
+            for (k, &col) in cols.iter().enumerate() {
+                let s = field(col)?;
+                let x: u32 = s
+                    .parse()
+                    .map_err(|_| bad(col, format!("{s:?} is not a count (integer ≥ 0)")))?;
+                let per_rev = arm.joints[k].encoder_counts;
+                if x >= per_rev {
+                    return Err(bad(
+                        col,
+                        format!("count {x} is not below {per_rev} per revolution"),
+                    ));
+                }
+                v.push(x);
+            }
+            Reading::Counts(v)
+        };
+        let t = match temp {
+            Some(col) => {
+                let s = field(col)?;
+                if s.is_empty() {
+                    20.0
+                } else {
+                    let t: f64 = s
+                        .parse()
+                        .map_err(|_| bad(col, format!("{s:?} is not a temperature")))?;
+                    if !(-80.0..=120.0).contains(&t) {
+                        return Err(bad(col, format!("{t} degC is outside -80..120")));
+                    }
+                    t
+                }
+            }
+            None => 20.0,
+        };
+        rows.push((reading, t));
+    }
+    Ok(rows)
+}
+
+/// The count nearest to an angle (rad), in 0..counts.
+pub fn nearest_count(theta: f64, counts: u32) -> u32 {
+    let c = (theta / std::f64::consts::TAU * f64::from(counts)).round() as i64;
+    c.rem_euclid(i64::from(counts)) as u32
+}
+
+/// The firmware's temperature input: milli-degrees, rounded.
+pub fn temp_mc(temp_c: f64) -> i32 {
+    (temp_c * 1000.0).round() as i32
+}
+
+/// Integer units printed with `decimals` digits after the point, exactly.
+pub fn fixed_decimal(v: i32, decimals: u32) -> String {
+    let scale = 10i64.pow(decimals);
+    let v = i64::from(v);
+    let sign = if v < 0 { "-" } else { "" };
+    let a = v.abs();
+    format!(
+        "{sign}{}.{:0width$}",
+        a / scale,
+        a % scale,
+        width = decimals as usize
+    )
+}
+
+fn counts_of(arm: &Arm, r: &Reading) -> Vec<u32> {
+    match r {
+        Reading::Counts(c) => c.clone(),
+        Reading::Radians(v) => v
+            .iter()
+            .zip(&arm.joints)
+            .map(|(&t, j)| nearest_count(t, j.encoder_counts))
+            .collect(),
+    }
+}
+
+fn firmware<P: Precision>(arm: &Arm, rows: &Rows, out: &mut String) -> anyhow::Result<()> {
+    let bytes = crate::tablebuild::build(arm)?;
+    let table = Table::parse(&bytes)?;
+    let chain = Chain::<P>::new(&table)?;
+    for (r, t) in rows {
+        let counts = counts_of(arm, r);
+        let pt = chain.eval(&counts, temp_mc(*t))?;
+        let [x, y, z] = pt.xyz_nm();
+        let [nx, ny, nz] = pt.dir_e9();
+        let _ = writeln!(
+            out,
+            "{},{},{},{},{},{}",
+            fixed_decimal(x, 6),
+            fixed_decimal(y, 6),
+            fixed_decimal(z, 6),
+            fixed_decimal(nx, 9),
+            fixed_decimal(ny, 9),
+            fixed_decimal(nz, 9)
+        );
+    }
+    Ok(())
+}
+
+/// Evaluates every row; returns the whole output CSV.
+pub fn evaluate(arm: &Arm, rows: &Rows, evaluator: Evaluator) -> anyhow::Result<String> {
+    let mut out = String::from("x,y,z,nx,ny,nz\n");
+    match evaluator {
+        Evaluator::F64 => {
+            for (r, t) in rows {
+                let theta: Vec<f64> = match r {
+                    Reading::Radians(v) => v.clone(),
+                    Reading::Counts(c) => c
+                        .iter()
+                        .zip(&arm.joints)
+                        .map(|(&c, j)| j.count_to_rad(i64::from(c)))
+                        .collect(),
+                };
+                let pose = quatarm_ref::forward::forward(arm, &theta, *t);
+                let _ = writeln!(
+                    out,
+                    "{:.9},{:.9},{:.9},{:.12},{:.12},{:.12}",
+                    pose.p.x, pose.p.y, pose.p.z, pose.n.x, pose.n.y, pose.n.z
+                );
+            }
+        }
+        Evaluator::F32 => firmware::<F32>(arm, rows, &mut out)?,
+        Evaluator::Fixed => firmware::<Fixed>(arm, rows, &mut out)?,
+    }
+    Ok(out)
+}
