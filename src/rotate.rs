@@ -40,18 +40,18 @@ fn cross<P: Precision, E: Scale<P>>(a: &Vec3<P::U>, b: &Vec3<E>) -> Vec3<E> {
 }
 
 impl<P: Precision> Quat<P> {
-    /// q v q*: with t = 2 (q⃗ × v), v' = v + w t + q⃗ × t (15 products, exact algebra for a
-    /// unit q). For a q near the identity the correction terms are small, so their rounding
-    /// is small too: the result rounds little more than v itself.
+    /// q v q*: with t = 2 (q⃗ × v), v' = v + (w t + q⃗ × t) (15 products, exact algebra for a
+    /// unit q). For a q near the identity the correction is small, so its rounding is small
+    /// too, and it joins v in one addition: the result rounds little more than v itself.
     #[inline(always)]
     pub fn rotate<E: Scale<P>>(&self, v: Vec3<E>) -> Vec3<E> {
         let t = cross::<P, E>(&self.v, &v);
         let t = [t[0] + t[0], t[1] + t[1], t[2] + t[2]];
         let u = cross::<P, E>(&self.v, &t);
         [
-            v[0] + t[0].scale(self.w) + u[0],
-            v[1] + t[1].scale(self.w) + u[1],
-            v[2] + t[2].scale(self.w) + u[2],
+            v[0] + (t[0].scale(self.w) + u[0]),
+            v[1] + (t[1].scale(self.w) + u[1]),
+            v[2] + (t[2].scale(self.w) + u[2]),
         ]
     }
 
