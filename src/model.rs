@@ -148,6 +148,9 @@ pub struct Model<P: Precision> {
     pub probe_has_thermal: bool,
 }
 
+/// Every joint's state and the probe vector at temperature.
+pub type ReadingState<P> = ([JointState<P>; MAX_JOINTS], Vec3<<P as Precision>::L>);
+
 /// The per-point state both chains start from.
 #[derive(Clone, Copy, Debug)]
 pub struct JointState<P: Precision> {
@@ -230,7 +233,9 @@ impl<P: Precision> Model<P> {
         reach += abs(p.vector[0]) + abs(p.vector[1]) + abs(p.vector[2]);
         // Thermal expansion over the accepted temperatures stretches every link by at most
         // 4e-4 · 100 = 4 %.
-        if !(reach * 1.04 < P::MAX_REACH_MM) {
+        // Finite by the table's checks; written so that NaN would be refused too.
+        let fits = reach * 1.04 < P::MAX_REACH_MM;
+        if !fits {
             return Err(ChainError::Range { joint: 0 });
         }
         Ok(Model {
@@ -246,11 +251,7 @@ impl<P: Precision> Model<P> {
     /// Checks a reading and computes what both chains need per joint: the split raw angle,
     /// the harmonic angle error, the link at temperature; and the probe vector at temperature.
     #[inline(always)]
-    pub fn state(
-        &self,
-        counts: &[u32],
-        temp_mc: i32,
-    ) -> Result<([JointState<P>; MAX_JOINTS], Vec3<P::L>), ChainError> {
+    pub fn state(&self, counts: &[u32], temp_mc: i32) -> Result<ReadingState<P>, ChainError> {
         if counts.len() != self.n {
             return Err(ChainError::JointCount {
                 expected: self.n as u8,

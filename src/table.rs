@@ -591,7 +591,8 @@ impl<'a> Table<'a> {
                 }
                 sum += abs(h.sin) + abs(h.cos);
             }
-            if !(sum <= limits::HARMONIC_SUM) {
+            // NaN cannot reach here (checked above); `>` is the whole test.
+            if sum > limits::HARMONIC_SUM {
                 return Err(invalid(no, Field::Harmonic));
             }
         }
@@ -616,7 +617,8 @@ impl<'a> Table<'a> {
         let cx = vy * dz - vz * dy;
         let cy = vz * dx - vx * dz;
         let cz = vx * dy - vy * dx;
-        if !(len2 > 0.0 && dot > 0.0 && (cx * cx + cy * cy + cz * cz) <= 1e-18 * len2) {
+        let parallel = len2 > 0.0 && dot > 0.0 && (cx * cx + cy * cy + cz * cz) <= 1e-18 * len2;
+        if !parallel {
             return Err(invalid(0, Field::Probe));
         }
         Ok(())
