@@ -52,6 +52,9 @@ pub struct Options {
     pub structural_tol: f64,
     /// Apply the statistical identifiability test after the fit.
     pub weak_check: bool,
+    /// A direction is held when its standard uncertainty exceeds this fraction of the
+    /// plausible sizes of its unknowns ([`Param::plausible`]).
+    pub weak_threshold: f64,
     /// Compare identifiability with a well-spread design (degenerate pose sets, equation
     /// count). Off, the data's own rank is trusted.
     pub design_check: bool,
@@ -60,6 +63,40 @@ pub struct Options {
     pub allow_degenerate: bool,
     /// Show a progress bar on stderr for large fits.
     pub progress: bool,
+    /// A Gaussian prior on the geometric errors, centred on the start arm (`None`: plain
+    /// least squares).
+    pub prior: Option<Prior>,
+    /// Unknowns to hold at their start values whatever the data say.
+    pub hold: Vec<Param>,
+    /// Backward elimination: while some fitted arm unknown's |value| is below this many
+    /// standard uncertainties, hold the least significant one and refit (0: off).
+    pub significance: f64,
+}
+
+/// Prior standard deviations of the geometric errors: what an arm's drawings and assembly
+/// tolerances say about them before any measurement. It regularises directions the data
+/// determine only weakly (a calibration from one artefact position) and barely moves the
+/// well-determined ones.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Prior {
+    /// Zero offsets and tilts (rad).
+    pub angle_rad: f64,
+    /// Link and probe errors (mm).
+    pub length_mm: f64,
+    /// The noise the prior is weighed against (mm per equation); `None`: estimated by a first
+    /// fit without the prior.
+    pub noise_mm: Option<f64>,
+}
+
+impl Prior {
+    /// The prior's standard deviation for an unknown, if it has one.
+    pub fn sd(&self, p: Param) -> Option<f64> {
+        match p {
+            Param::ZeroOffset(_) | Param::Tilt(..) => Some(self.angle_rad),
+            Param::LinkError(..) | Param::ProbeError(_) => Some(self.length_mm),
+            _ => None,
+        }
+    }
 }
 
 impl Default for Options {
@@ -69,9 +106,13 @@ impl Default for Options {
             lm: lm::Options::default(),
             structural_tol: 1e-8,
             weak_check: true,
+            weak_threshold: 1.0,
             design_check: true,
             allow_degenerate: false,
             progress: false,
+            prior: None,
+            hold: Vec::new(),
+            significance: 0.0,
         }
     }
 }
@@ -142,6 +183,8 @@ pub struct Problem<'a> {
     arm_params: Vec<Param>,
     arm_cols: Vec<usize>,
     frame_cols: Vec<(Param, usize)>,
+    /// Prior weights per kept unknown: the residual w·x joins the cost (0: no prior).
+    prior: Vec<f64>,
 }
 
 impl<'a> Problem<'a> {
@@ -173,7 +216,34 @@ impl<'a> Problem<'a> {
             arm_params,
             arm_cols,
             frame_cols,
+            prior: vec![0.0; kept.len()],
         }
+    }
+
+    /// The same problem with a Gaussian prior centred on the start arm: unknown k (solver
+    /// order) adds the residual `weights[k]` · x_k, i.e. σ/s_k for a prior standard deviation
+    /// s_k against a noise σ.
+    pub fn with_prior(mut self, weights: Vec<f64>) -> Self {
+        assert_eq!(weights.len(), self.kept.len());
+        self.prior = weights;
+        self
+    }
+
+    fn prior_cost(&self, s: &State) -> f64 {
+        self.kept
+            .iter()
+            .zip(&self.prior)
+            .map(|(&i, w)| (w * s.x[i]).powi(2))
+            .sum()
+    }
+
+    /// ½‖r‖² of the data alone (without the prior's residuals).
+    pub fn data_cost(&self, s: &State) -> f64 {
+        let mut c = 0.0;
+        self.visit(s, false, &mut |r, _| {
+            c += r.iter().map(|v| v * v).sum::<f64>()
+        });
+        0.5 * c
     }
 
     /// The arm at a state.
@@ -319,11 +389,7 @@ impl lm::Problem for Problem<'_> {
     }
 
     fn cost(&self, s: &State) -> f64 {
-        let mut c = 0.0;
-        self.visit(s, false, &mut |r, _| {
-            c += r.iter().map(|v| v * v).sum::<f64>()
-        });
-        0.5 * c
+        self.data_cost(s) + 0.5 * self.prior_cost(s)
     }
 
     fn normal(&self, s: &State) -> Normal {
@@ -350,6 +416,10 @@ impl lm::Problem for Problem<'_> {
                 }
             }
         });
+        for (k, (&i, w)) in self.kept.iter().zip(&self.prior).enumerate() {
+            jtj[k * n + k] += w * w;
+            jtr[k] += w * w * s.x[i];
+        }
         let m = DMatrix::from_fn(n, n, |a, b| {
             if a <= b {
                 jtj[a * n + b]
@@ -358,7 +428,7 @@ impl lm::Problem for Problem<'_> {
             }
         });
         Normal {
-            cost: 0.5 * cost,
+            cost: 0.5 * (cost + self.prior_cost(s)),
             jtj: m,
             jtr: DVector::from_vec(jtr),
             residuals: count,
@@ -607,6 +677,19 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
 
     // 1. Structural identifiability, and the design it is compared with.
     let (mut id, r_skel) = structural(&base, data, &all, opts.structural_tol);
+    for p in &opts.hold {
+        if let Some(i) = all.iter().position(|q| q == p) {
+            if id.is_kept(i) {
+                id.kept.retain(|&k| k != i);
+                id.fixed.push(Fixed {
+                    index: i,
+                    why: Why::Requested,
+                    absorbed_by: Vec::new(),
+                    unexplained: 1.0,
+                });
+            }
+        }
+    }
     if opts.design_check {
         let design = sim::design_like(&skeleton(&base), data, 0x5eed);
         let (id_design, _) = structural(&base, &design, &all, opts.structural_tol);
@@ -650,8 +733,18 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
         let p = Problem::new(data, &layout, &base, &all, &id.kept);
         (2.0 * lm::Problem::cost(&p, &state) / eqs as f64).sqrt()
     };
+    let mut prior_noise = opts.prior.and_then(|p| p.noise_mm);
+    let mut passes = 0;
     loop {
-        let problem = Problem::new(data, &layout, &base, &all, &id.kept);
+        let weights: Vec<f64> = id
+            .kept
+            .iter()
+            .map(|&i| match (opts.prior, prior_noise) {
+                (Some(p), Some(noise)) => p.sd(all[i]).map_or(0.0, |sd| noise / sd),
+                _ => 0.0,
+            })
+            .collect();
+        let problem = Problem::new(data, &layout, &base, &all, &id.kept).with_prior(weights);
         let mut report = |it: usize, cost: f64| {
             if let Some(pb) = &progress {
                 pb.set_message(format!(
@@ -662,24 +755,40 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
                 pb.tick();
             }
         };
-        let out = lm::solve(&problem, state, &opts.lm, &mut report);
+        // A first pass gets a short budget: a direction the data barely determine makes the
+        // solver crawl along its valley, and the statistical test below removes it sooner.
+        let budget = opts.lm.max_iterations.saturating_sub(iterations).max(1);
+        let pass = lm::Options {
+            max_iterations: if passes == 0 { budget.min(12) } else { budget },
+            ..opts.lm.clone()
+        };
+        passes += 1;
+        let out = lm::solve(&problem, state, &pass, &mut report);
         iterations += out.iterations;
-        if !out.converged {
+        let unfinished = !out.converged;
+        if unfinished && (!out.exhausted || iterations >= opts.lm.max_iterations) {
             if let Some(pb) = &progress {
                 pb.finish_and_clear();
             }
             return Err(CalibError::NotConverged {
                 iterations,
                 reason: out.reason,
-                rms_mm: (2.0 * out.cost / eqs as f64).sqrt(),
+                rms_mm: (2.0 * problem.data_cost(&out.state) / eqs as f64).sqrt(),
             });
         }
         state = out.state;
         let normal = lm::Problem::normal(&problem, &state);
+        let data_cost = problem.data_cost(&state);
         let dof = eqs.saturating_sub(id.kept.len()).max(1);
-        let sigma = (2.0 * normal.cost / dof as f64).sqrt();
+        let sigma = (2.0 * data_cost / dof as f64).sqrt();
+        if opts.prior.is_some() && prior_noise.is_none() {
+            prior_noise = Some(sigma);
+            continue;
+        }
         if opts.weak_check {
-            if let Some((pos, u)) = ident::weakest(&normal.jtj, sigma, &all, &id.kept) {
+            if let Some((pos, u)) =
+                ident::weakest(&normal.jtj, sigma, &all, &id.kept, opts.weak_threshold)
+            {
                 let index = id.kept.remove(pos);
                 state.x[index] = 0.0;
                 id.fixed.push(Fixed {
@@ -690,6 +799,35 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
                 });
                 continue;
             }
+        }
+        if opts.significance > 0.0 && !unfinished {
+            if let Some(c) = ident::covariance(&normal.jtj, sigma) {
+                let least = id
+                    .kept
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, &i)| !all[i].is_frame())
+                    .map(|(pos, &i)| (pos, i, state.x[i].abs() / c[(pos, pos)].sqrt()))
+                    .filter(|t| t.2 < opts.significance)
+                    .min_by(|a, b| a.2.total_cmp(&b.2));
+                if let Some((pos, i, _)) = least {
+                    id.kept.remove(pos);
+                    id.fixed.push(Fixed {
+                        index: i,
+                        why: Why::Insignificant {
+                            value: state.x[i],
+                            uncertainty: c[(pos, pos)].sqrt(),
+                        },
+                        absorbed_by: Vec::new(),
+                        unexplained: 1.0,
+                    });
+                    state.x[i] = 0.0;
+                    continue;
+                }
+            }
+        }
+        if unfinished {
+            continue;
         }
         if let Some(pb) = &progress {
             pb.finish_and_clear();
@@ -731,7 +869,7 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
             iterations,
             solver: out.reason,
             rms_before_mm: rms_before,
-            rms_after_mm: (2.0 * normal.cost / eqs as f64).sqrt(),
+            rms_after_mm: (2.0 * data_cost / eqs as f64).sqrt(),
             elapsed: t0.elapsed(),
             correlation,
         });

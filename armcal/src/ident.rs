@@ -109,6 +109,16 @@ pub enum Why {
         /// Standard uncertainty of the direction it was part of, in the unknown's unit.
         uncertainty: f64,
     },
+    /// The caller asked for it to be held.
+    Requested,
+    /// Its estimate did not differ significantly from its start value (|value| below the
+    /// threshold times its standard uncertainty), so it was held there.
+    Insignificant {
+        /// The estimate before it was held.
+        value: f64,
+        /// Its standard uncertainty.
+        uncertainty: f64,
+    },
 }
 
 /// An unknown that is not fitted.
@@ -203,9 +213,8 @@ pub fn analyse(r: &DMatrix<f64>, params: &[Param], tol: f64) -> Identifiability 
             })
             .collect();
         let cut = 0.05_f64.min(0.5 * involvement.iter().cloned().fold(0.0, f64::max));
-        let pick = (0..kept.len())
-            .filter(|&c| involvement[c] >= cut)
-            .max_by_key(|&c| (params[kept[c]].priority(), kept[c]))
+        let candidates: Vec<usize> = (0..kept.len()).filter(|&c| involvement[c] >= cut).collect();
+        let pick = choose_held(&candidates, |c| kept[c], params, &norms)
             .expect("a null vector has a non-zero component");
         let index = kept.remove(pick);
         fixed.push(Fixed {
@@ -225,6 +234,37 @@ pub fn analyse(r: &DMatrix<f64>, params: &[Param], tol: f64) -> Identifiability 
     };
     refresh(r, &mut out);
     out
+}
+
+/// Of `candidates` (positions mapped to unknowns by `index`), the one to hold. An arm unknown
+/// whose plausible change moves the data a thousand times less than a typical arm unknown's is
+/// held first: it could only stand in for the others by absurd values (a last joint's zero
+/// offset when the ball sits 0.1 mm off its axis, against the probe's own offset). Otherwise
+/// the lowest priority is held, the later unknown on a tie.
+fn choose_held(
+    candidates: &[usize],
+    index: impl Fn(usize) -> usize,
+    params: &[Param],
+    norms: &[f64],
+) -> Option<usize> {
+    let effect = |i: usize| norms[i] * params[i].plausible();
+    let mut arm: Vec<f64> = (0..params.len())
+        .filter(|&i| !params[i].is_frame() && norms[i] > 0.0)
+        .map(effect)
+        .collect();
+    arm.sort_by(f64::total_cmp);
+    let typical = arm.get(arm.len() / 2).copied().unwrap_or(0.0);
+    let feeble = candidates
+        .iter()
+        .copied()
+        .filter(|&c| !params[index(c)].is_frame() && effect(index(c)) < 1e-3 * typical)
+        .min_by(|&a, &b| effect(index(a)).total_cmp(&effect(index(b))));
+    feeble.or_else(|| {
+        candidates
+            .iter()
+            .copied()
+            .max_by_key(|&c| (params[index(c)].priority(), index(c)))
+    })
 }
 
 /// Recomputes the singular values, the condition number and what absorbs each fixed unknown,
@@ -311,6 +351,7 @@ pub fn weakest(
     sigma: f64,
     params: &[Param],
     kept: &[usize],
+    threshold: f64,
 ) -> Option<(usize, f64)> {
     let k = kept.len();
     if k == 0 {
@@ -326,7 +367,7 @@ pub fn weakest(
         .enumerate()
         .max_by(|a, b| a.1.total_cmp(b.1))
         .map(|(i, l)| (i, *l))?;
-    if lmax.sqrt() <= 1.0 {
+    if lmax.sqrt() <= threshold {
         return None;
     }
     let v = eig.eigenvectors.column(imax);

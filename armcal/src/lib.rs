@@ -3,6 +3,17 @@
 //! Modules are added by the work that needs them; each has one job.
 
 pub mod accuracy;
+pub mod eval;
 pub mod stream_decode;
 pub mod tablebuild;
-pub mod eval;
+
+pub mod calib;
+pub mod data;
+pub mod holdout;
+pub mod ident;
+pub mod jacobian;
+pub mod lm;
+pub mod params;
+pub mod report;
+pub mod residuals;
+pub mod sim;

@@ -75,6 +75,8 @@ pub struct Outcome<S> {
     pub iterations: usize,
     /// Whether a convergence test was met.
     pub converged: bool,
+    /// Whether it stopped only because the iteration budget ran out (still improving).
+    pub exhausted: bool,
     /// Why it stopped, in words.
     pub reason: String,
 }
@@ -97,6 +99,7 @@ pub fn solve<P: Problem>(
             start_cost: cost,
             iterations: 0,
             converged: true,
+            exhausted: false,
             reason: "nothing to fit".into(),
         };
     }
@@ -141,11 +144,16 @@ pub fn solve<P: Problem>(
             );
         }
         if iterations >= options.max_iterations {
-            let reason = format!(
-                "still improving after {} iterations",
-                options.max_iterations
+            let mut out = done(
+                state,
+                normal.cost,
+                start_cost,
+                iterations,
+                false,
+                "still improving",
             );
-            return done(state, normal.cost, start_cost, iterations, false, &reason);
+            out.exhausted = true;
+            return out;
         }
         let a = DMatrix::from_fn(n, n, |i, j| normal.jtj[(i, j)] * scale[i] * scale[j]);
         // Try damped steps until one lowers the cost.
@@ -250,6 +258,7 @@ fn done<S>(
         start_cost,
         iterations,
         converged,
+        exhausted: false,
         reason: reason.to_string(),
     }
 }
@@ -303,7 +312,8 @@ mod tests {
             ..Options::default()
         };
         let out = solve(&Rosen, [-1.2, 1.0], &opts, &mut |_, _| {});
-        assert!(!out.converged);
-        assert!(out.reason.contains("3 iterations"), "{}", out.reason);
+        assert!(!out.converged && out.exhausted);
+        assert_eq!(out.iterations, 3);
+        assert!(out.reason.contains("still improving"), "{}", out.reason);
     }
 }

@@ -1,10 +1,154 @@
-//! `armcal simulate` (placeholder: its issue fills it in).
+//! `armcal simulate`: measurements of a virtual arm (`point`, `spat` or `length` data).
+
+use anyhow::{bail, Context};
+use armcal::data::Kind;
+use armcal::sim::{self, FrameChoice};
+use quatarm_ref::calfile;
+use std::path::PathBuf;
 
 /// Arguments of `armcal simulate`.
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// The truth: a calibration file with every term the virtual arm has.
+    #[arg(long)]
+    truth: PathBuf,
+    /// The nominal arm the data are meant for; checked to have the truth's joints and axes.
+    #[arg(long)]
+    arm: Option<PathBuf>,
+    /// Kind of data: point, spat or length.
+    #[arg(long, value_parser = parse_kind)]
+    kind: Kind,
+    /// Rows to record.
+    #[arg(long)]
+    count: usize,
+    /// Seed of the random generator: the same seed gives the same file.
+    #[arg(long)]
+    seed: u64,
+    /// Noise per axis (µm, standard deviation): the instrument's for point data, the ball's
+    /// seating for spat and length data.
+    #[arg(long, default_value_t = 5.0)]
+    noise_um: f64,
+    /// Arm temperature range (°C), e.g. 16..28: each reading is drawn uniformly in it and
+    /// recorded in `temp_c`.
+    #[arg(long, value_parser = parse_range)]
+    temp: Option<(f64, f64)>,
+    /// Instrument frame of point data: random (an unknown rigid transform) or identity.
+    #[arg(long, default_value = "random", value_parser = parse_frame)]
+    frame: FrameChoice,
+    /// Rows per spat group or bar position (default 8 for spat, 10 for length).
+    #[arg(long)]
+    group_size: Option<usize>,
+    /// Ball-bar length for length data (mm; default 40 % of the arm's reach).
+    #[arg(long)]
+    bar_mm: Option<f64>,
+    /// Output file (CSV of `spec/measured-data.md`).
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+fn parse_kind(s: &str) -> Result<Kind, String> {
+    match s {
+        "point" => Ok(Kind::Point),
+        "spat" => Ok(Kind::Spat),
+        "length" => Ok(Kind::Length),
+        _ => Err(format!("`{s}` is not a kind: point, spat or length")),
+    }
+}
+
+fn parse_frame(s: &str) -> Result<FrameChoice, String> {
+    match s {
+        "random" => Ok(FrameChoice::Random),
+        "identity" => Ok(FrameChoice::Identity),
+        _ => Err(format!("`{s}` is not a frame: random or identity")),
+    }
+}
+
+fn parse_range(s: &str) -> Result<(f64, f64), String> {
+    let bad = || format!("`{s}` is not a range: e.g. 16..28");
+    let (a, b) = s.split_once("..").ok_or_else(bad)?;
+    let lo: f64 = a.trim().parse().map_err(|_| bad())?;
+    let hi: f64 = b.trim().parse().map_err(|_| bad())?;
+    if !(lo.is_finite() && hi.is_finite()) || hi < lo {
+        return Err(bad());
+    }
+    Ok((lo, hi))
+}
 
 /// Runs the subcommand.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("armcal simulate: not built yet")
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let parsed = calfile::read(&a.truth)?;
+    for k in &parsed.unknown_keys {
+        eprintln!(
+            "armcal: warning: {}: unknown key {k} ignored",
+            a.truth.display()
+        );
+    }
+    let truth = parsed.arm;
+    if let Some(path) = &a.arm {
+        let nominal = calfile::read(path)?.arm;
+        if nominal.dof() != truth.dof() {
+            bail!(
+                "{}: {} joints, the truth {} has {}",
+                path.display(),
+                nominal.dof(),
+                a.truth.display(),
+                truth.dof()
+            );
+        }
+        for (k, (n, t)) in nominal.joints.iter().zip(&truth.joints).enumerate() {
+            if n.axis != t.axis || n.link != t.link {
+                bail!(
+                    "{}: joint {} has axis {} and link {:?}, the truth {} and {:?}: not the same arm",
+                    path.display(),
+                    k + 1,
+                    n.axis.name(),
+                    n.link,
+                    t.axis.name(),
+                    t.link
+                );
+            }
+        }
+    }
+    if !(a.noise_um.is_finite() && a.noise_um >= 0.0) {
+        bail!("--noise-um must be a non-negative number");
+    }
+    let mut opts = sim::Options::new(a.kind, a.count);
+    opts.noise_mm = a.noise_um * 1e-3;
+    opts.temp = a.temp;
+    opts.frame = a.frame;
+    if let Some(g) = a.group_size {
+        if g < 2 {
+            bail!("--group-size must be 2 or more");
+        }
+        opts.group_size = g;
+    }
+    opts.bar_mm = a.bar_mm;
+    let mut rng = sim::rng(a.seed);
+    let s = sim::simulate(&truth, &opts, &mut rng).map_err(anyhow::Error::msg)?;
+    let f = &s.frame;
+    let comments = [
+        format!(
+            "simulated by armcal simulate: truth {}, kind {}, {} rows, seed {}, noise {} µm per axis",
+            a.truth.display(),
+            a.kind.name(),
+            a.count,
+            a.seed,
+            a.noise_um
+        ),
+        format!(
+            "instrument frame (x_ref = R p + t): rotation (w, x, y, z) = [{:?}, {:?}, {:?}, {:?}], translation = [{:?}, {:?}, {:?}] mm",
+            f.rotation[0], f.rotation[1], f.rotation[2], f.rotation[3],
+            f.translation[0], f.translation[1], f.translation[2]
+        ),
+    ];
+    let refs: Vec<&str> = comments.iter().map(String::as_str).collect();
+    std::fs::write(&a.output, s.data.to_csv(&refs))
+        .with_context(|| a.output.display().to_string())?;
+    eprintln!(
+        "armcal: wrote {} ({} {} rows)",
+        a.output.display(),
+        s.data.rows.len(),
+        a.kind.name()
+    );
+    Ok(())
 }

@@ -1,0 +1,475 @@
+//! The calibration report: what was fitted, how well, with what uncertainty, and what the data
+//! could not determine — as text a person reads, or JSON a program reads (`--json`).
+
+use crate::calib::Fit;
+use crate::data::{Dataset, Kind};
+use crate::holdout::Holdout;
+use crate::ident::Why;
+use crate::params::Param;
+use crate::residuals::Summary;
+use serde::Serialize;
+use std::fmt::Write as _;
+
+/// The data a calibration used.
+#[derive(Clone, Debug, Serialize)]
+pub struct DataInfo {
+    /// Where it came from.
+    pub file: String,
+    /// Rows in all.
+    pub rows: usize,
+    /// `point` rows.
+    pub point_rows: usize,
+    /// `spat` rows.
+    pub spat_rows: usize,
+    /// `spat` groups.
+    pub spat_groups: usize,
+    /// `length` rows.
+    pub length_rows: usize,
+    /// `length` groups (bar positions).
+    pub length_groups: usize,
+    /// Equations once the fixed points are eliminated.
+    pub equations: usize,
+}
+
+/// One fitted parameter.
+#[derive(Clone, Debug, Serialize)]
+pub struct ParamReport {
+    /// Calibration-file key.
+    pub key: String,
+    /// In words.
+    pub description: String,
+    /// Unit of value, change and uncertainty.
+    pub unit: String,
+    /// The key's value in the start arm.
+    pub start: f64,
+    /// The key's calibrated value.
+    pub value: f64,
+    /// value − start.
+    pub change: f64,
+    /// Standard uncertainty of the change.
+    pub uncertainty: f64,
+}
+
+/// One kept unknown that absorbs a held one.
+#[derive(Clone, Debug, Serialize)]
+pub struct Absorbed {
+    /// Its key.
+    pub key: String,
+    /// In words.
+    pub description: String,
+    /// Change of it per unit change of the held unknown.
+    pub coefficient: f64,
+    /// Unit of the coefficient.
+    pub unit: String,
+}
+
+/// An unknown the data could not determine.
+#[derive(Clone, Debug, Serialize)]
+pub struct HeldReport {
+    /// Its key.
+    pub key: String,
+    /// In words.
+    pub description: String,
+    /// `no_effect`, `inseparable`, `weak`, `requested` or `insignificant`.
+    pub reason: String,
+    /// The reason in a sentence.
+    pub explanation: String,
+    /// What absorbs it.
+    pub absorbed_by: Vec<Absorbed>,
+}
+
+/// The instrument frame of `point` data.
+#[derive(Clone, Debug, Serialize)]
+pub struct FrameReport {
+    /// Unit quaternion (w, x, y, z) of R_T: x_ref = R_T p + t_T.
+    pub rotation: [f64; 4],
+    /// t_T (mm).
+    pub translation: [f64; 3],
+}
+
+/// Held-out validation in the report.
+#[derive(Clone, Debug, Serialize)]
+pub struct HoldoutReport {
+    /// How the folds were made.
+    pub method: String,
+    /// Number of folds.
+    pub folds: usize,
+    /// Residuals of the held-out rows.
+    pub residuals: Summary,
+    /// Folds that could not be fitted.
+    pub failed: Vec<String>,
+}
+
+/// Residual statistics before and after.
+#[derive(Clone, Debug, Serialize)]
+pub struct ResidualReport {
+    /// The start arm on the fitting data (with its best frame and fixed points).
+    pub before: Summary,
+    /// The calibrated arm on the fitting data.
+    pub after: Summary,
+    /// The calibrated arm on data it did not fit.
+    pub holdout: Option<HoldoutReport>,
+}
+
+/// Files written.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct OutputReport {
+    /// The calibration file.
+    pub calibration: Option<String>,
+    /// The firmware's binary table.
+    pub table: Option<String>,
+}
+
+/// A whole calibration report.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    /// The data.
+    pub data: DataInfo,
+    /// The arm's name.
+    pub arm: String,
+    /// Joint count.
+    pub joints: usize,
+    /// What was fitted (`--terms` form).
+    pub terms: String,
+    /// Solver iterations.
+    pub iterations: usize,
+    /// How the solver stopped.
+    pub solver: String,
+    /// Time the fit took (ms).
+    pub fit_ms: f64,
+    /// Residual standard deviation per coordinate (µm).
+    pub noise_um: f64,
+    /// Condition number of the fitted unknowns (unit-norm Jacobian columns).
+    pub condition_number: f64,
+    /// Unknowns fitted / considered.
+    pub fitted: usize,
+    /// Unknowns considered.
+    pub unknowns: usize,
+    /// Residuals.
+    pub residuals: ResidualReport,
+    /// Fitted arm parameters.
+    pub parameters: Vec<ParamReport>,
+    /// The instrument frame (point data).
+    pub frame: Option<FrameReport>,
+    /// What the data could not determine.
+    pub not_identifiable: Vec<HeldReport>,
+    /// Files written.
+    pub output: OutputReport,
+    /// Warnings (unknown columns, keys, a table not written…).
+    pub warnings: Vec<String>,
+}
+
+/// A parameter in words, with the frame's rotations named for what they are without an
+/// instrument.
+fn words(p: Param, fit: &Fit, has_points: bool) -> String {
+    match p {
+        Param::FrameRotation(c) if !has_points => format!(
+            "a rotation of the whole arm about the base {} axis (spat and length data fix no direction)",
+            ["x", "y", "z"][c]
+        ),
+        _ => p.describe(&fit.start),
+    }
+}
+
+fn unit_ratio(num: &str, den: &str) -> String {
+    if num == den {
+        String::new()
+    } else {
+        format!("{num}/{den}")
+    }
+}
+
+/// Builds the report of a fit.
+pub fn build(
+    fit: &Fit,
+    data: &Dataset,
+    before: Summary,
+    after: Summary,
+    holdout: Option<(&str, &Holdout)>,
+) -> Report {
+    let layout = data.layout();
+    let has_points = !layout.points.is_empty();
+    let mut parameters = Vec::new();
+    for &k in &fit.ident.kept {
+        let p = fit.params[k];
+        if p.is_frame() {
+            continue;
+        }
+        let start = p.value(&fit.start);
+        let value = p.value(&fit.arm);
+        parameters.push(ParamReport {
+            key: p.key(),
+            description: p.describe(&fit.start),
+            unit: p.unit().into(),
+            start,
+            value,
+            change: fit.values[k],
+            uncertainty: fit.uncertainty[k].unwrap_or(f64::NAN),
+        });
+    }
+    let mut held = Vec::new();
+    for f in &fit.ident.fixed {
+        let p = fit.params[f.index];
+        let absorbed_by: Vec<Absorbed> = f
+            .absorbed_by
+            .iter()
+            .map(|&(k, c)| Absorbed {
+                key: fit.params[k].key(),
+                description: words(fit.params[k], fit, has_points),
+                coefficient: c,
+                unit: unit_ratio(fit.params[k].unit(), p.unit()),
+            })
+            .collect();
+        let (reason, explanation) = match &f.why {
+            Why::NoEffect => (
+                "no_effect",
+                "it does not change any residual of these data".to_string(),
+            ),
+            Why::Inseparable => (
+                "inseparable",
+                if absorbed_by.is_empty() {
+                    "its effect on these data equals a combination of the fitted parameters'".into()
+                } else {
+                    format!(
+                        "its effect on these data is exactly that of {}",
+                        absorbed_by
+                            .iter()
+                            .map(|a| format!(
+                                "{} (×{})",
+                                a.description,
+                                coef(a.coefficient, &a.unit)
+                            ))
+                            .collect::<Vec<_>>()
+                            .join(" and ")
+                    )
+                },
+            ),
+            Why::Weak { uncertainty } => (
+                "weak",
+                format!(
+                    "these data determine it only to ±{} {} (more than a plausible size, {} {})",
+                    sig(*uncertainty),
+                    p.unit(),
+                    sig(p.plausible()),
+                    p.unit()
+                ),
+            ),
+            Why::Requested => ("requested", "held on request".to_string()),
+            Why::Insignificant { value, uncertainty } => (
+                "insignificant",
+                format!(
+                    "its estimate {} ± {} {} does not differ significantly from its start value",
+                    sig(*value),
+                    sig(*uncertainty),
+                    p.unit()
+                ),
+            ),
+        };
+        held.push(HeldReport {
+            key: p.key(),
+            description: p.describe(&fit.start),
+            reason: reason.into(),
+            explanation,
+            absorbed_by,
+        });
+    }
+    Report {
+        data: DataInfo {
+            file: data.source.clone(),
+            rows: data.rows.len(),
+            point_rows: layout.points.len(),
+            spat_rows: data.count(Kind::Spat),
+            spat_groups: layout.spat.len(),
+            length_rows: data.count(Kind::Length),
+            length_groups: layout.length.len(),
+            equations: fit.equations,
+        },
+        arm: fit.start.name.clone().unwrap_or_else(|| "(unnamed)".into()),
+        joints: fit.start.dof(),
+        terms: String::new(),
+        iterations: fit.iterations,
+        solver: fit.solver.clone(),
+        fit_ms: fit.elapsed.as_secs_f64() * 1e3,
+        noise_um: fit.sigma_mm * 1e3,
+        condition_number: fit.ident.condition_number,
+        fitted: fit.ident.kept.len(),
+        unknowns: fit.ident.kept.len() + fit.ident.fixed.len(),
+        residuals: ResidualReport {
+            before,
+            after,
+            holdout: holdout.map(|(method, h)| HoldoutReport {
+                method: method.into(),
+                folds: h.folds,
+                residuals: h.summary.clone(),
+                failed: h.failed.clone(),
+            }),
+        },
+        parameters,
+        frame: fit.reference_frame().map(|f| FrameReport {
+            rotation: f.rotation,
+            translation: f.translation,
+        }),
+        not_identifiable: held,
+        output: OutputReport::default(),
+        warnings: data.warnings.clone(),
+    }
+}
+
+fn sig(x: f64) -> String {
+    if x == 0.0 {
+        "0".into()
+    } else if (1e-3..1e4).contains(&x.abs()) {
+        format!("{x:.4}")
+    } else {
+        format!("{x:.3e}")
+    }
+}
+
+fn coef(c: f64, unit: &str) -> String {
+    if unit.is_empty() {
+        format!("{c:.4}")
+    } else {
+        format!("{} {unit}", sig(c))
+    }
+}
+
+fn spread_line(s: &mut String, label: &str, sum: &Summary) {
+    let _ = writeln!(
+        s,
+        "  {label:<28} {:>10.2} {:>10.2}   ({} rows)",
+        sum.all.rms_um, sum.all.max_um, sum.all.n
+    );
+    for (kind, sp) in [
+        ("point", &sum.point),
+        ("spat", &sum.spat),
+        ("length", &sum.length),
+    ] {
+        if let (Some(sp), true) = (
+            sp,
+            [&sum.point, &sum.spat, &sum.length]
+                .iter()
+                .filter(|x| x.is_some())
+                .count()
+                > 1,
+        ) {
+            let _ = writeln!(s, "    {kind:<26} {:>10.2} {:>10.2}", sp.rms_um, sp.max_um);
+        }
+    }
+    if let Some(b) = &sum.bar_length {
+        let _ = writeln!(
+            s,
+            "    {:<26} {:>10.2} {:>10.2}   ({} bars)",
+            "bar length error", b.rms_um, b.max_um, b.n
+        );
+    }
+}
+
+impl Report {
+    /// The report as text.
+    pub fn text(&self) -> String {
+        let mut s = String::new();
+        let d = &self.data;
+        let mut kinds = Vec::new();
+        if d.point_rows > 0 {
+            kinds.push(format!("{} point rows", d.point_rows));
+        }
+        if d.spat_rows > 0 {
+            kinds.push(format!(
+                "{} spat rows in {} groups",
+                d.spat_rows, d.spat_groups
+            ));
+        }
+        if d.length_rows > 0 {
+            kinds.push(format!(
+                "{} length rows at {} bar positions",
+                d.length_rows, d.length_groups
+            ));
+        }
+        let _ = writeln!(s, "calibration of {} from {}", self.arm, d.file);
+        let _ = writeln!(
+            s,
+            "  data: {} ({} equations)",
+            kinds.join(", "),
+            d.equations
+        );
+        let _ = writeln!(
+            s,
+            "  model: {} ({} joints); fitted {} of {} unknowns in {} iterations, {:.1} ms ({})",
+            self.terms,
+            self.joints,
+            self.fitted,
+            self.unknowns,
+            self.iterations,
+            self.fit_ms,
+            self.solver
+        );
+        let _ = writeln!(
+            s,
+            "  noise estimate {:.2} µm per coordinate; condition number {:.1}",
+            self.noise_um, self.condition_number
+        );
+        let _ = writeln!(
+            s,
+            "\nresiduals (µm, distance of the ball from where it should be)"
+        );
+        let _ = writeln!(s, "  {:<28} {:>10} {:>10}", "", "RMS", "max");
+        spread_line(&mut s, "before, fitting data", &self.residuals.before);
+        spread_line(&mut s, "after, fitting data", &self.residuals.after);
+        if let Some(h) = &self.residuals.holdout {
+            spread_line(
+                &mut s,
+                &format!("after, held out ({})", h.method),
+                &h.residuals,
+            );
+            for f in &h.failed {
+                let _ = writeln!(s, "    not judged: {f}");
+            }
+        }
+        let _ = writeln!(
+            s,
+            "\nparameters (change from the start arm ± standard uncertainty)"
+        );
+        for p in &self.parameters {
+            let _ = writeln!(
+                s,
+                "  {:<38} {:<28} {:>+12.4e} ± {:.2e} {}",
+                p.description, p.key, p.change, p.uncertainty, p.unit
+            );
+        }
+        if let Some(f) = &self.frame {
+            let _ = writeln!(
+                s,
+                "  instrument frame: rotation (w, x, y, z) = ({:.9}, {:.9}, {:.9}, {:.9}), translation = ({:.4}, {:.4}, {:.4}) mm",
+                f.rotation[0], f.rotation[1], f.rotation[2], f.rotation[3],
+                f.translation[0], f.translation[1], f.translation[2]
+            );
+        }
+        if !self.not_identifiable.is_empty() {
+            let _ = writeln!(
+                s,
+                "\nnot identifiable from these data (held at their start values)"
+            );
+            for h in &self.not_identifiable {
+                let _ = writeln!(s, "  {}: {}", h.description, h.explanation);
+            }
+        }
+        if self.output.calibration.is_some() || self.output.table.is_some() {
+            let _ = writeln!(s);
+            if let Some(c) = &self.output.calibration {
+                let _ = writeln!(s, "wrote {c}");
+            }
+            if let Some(t) = &self.output.table {
+                let _ = writeln!(s, "wrote {t}");
+            }
+        }
+        for w in &self.warnings {
+            let _ = writeln!(s, "warning: {w}");
+        }
+        s
+    }
+
+    /// The report as JSON.
+    pub fn json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    }
+}
