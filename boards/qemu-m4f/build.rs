@@ -1,4 +1,5 @@
-//! Puts `memory.x` where the linker finds it and passes cortex-m-rt's `link.x`.
+//! Puts `memory.x` where the linker finds it and passes cortex-m-rt's `link.x` and defmt's
+//! `defmt.x` (the table of interned log strings).
 use std::{env, fs, path::PathBuf};
 
 fn main() {
@@ -8,4 +9,5 @@ fn main() {
     println!("cargo:rerun-if-changed=memory.x");
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rustc-link-arg=-Tlink.x");
+    println!("cargo:rustc-link-arg=-Tdefmt.x");
 }

@@ -2,6 +2,7 @@
 //! defmt log out of semihosting into a file of its own, the exit code back.
 
 use std::io::{Read, Write};
+use std::os::unix::net::UnixStream;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
@@ -57,16 +58,18 @@ pub fn run(board: &Board, elf: &Path, input: &[u8], opts: &Options) -> Result<Ru
         );
     }
     let dir = tempfile::tempdir()?;
-    let log_path = dir.path().join("semihosting.bin");
+    // The UART on a Unix socket, semihosting (the defmt log) on QEMU's stdout: QEMU 7.2 sends
+    // a semihosting `:tt` handle to stdout whatever `-semihosting-config chardev=` says.
+    let sock = dir.path().join("uart.sock");
     let mut cmd = Command::new("qemu-system-arm");
     cmd.args(["-M", m.machine, "-display", "none", "-monitor", "none"])
-        .args(["-serial", "stdio"])
         .arg("-chardev")
-        .arg(format!("file,id=semihosting,path={}", log_path.display()))
-        .args([
-            "-semihosting-config",
-            "enable=on,target=native,chardev=semihosting",
-        ]);
+        .arg(format!(
+            "socket,id=uart,path={},server=on,wait=on",
+            sock.display()
+        ))
+        .args(["-serial", "chardev:uart"])
+        .args(["-semihosting-config", "enable=on,target=native"]);
     if opts.icount {
         cmd.args(["-icount", "shift=0"]);
     }
@@ -79,20 +82,14 @@ pub fn run(board: &Board, elf: &Path, input: &[u8], opts: &Options) -> Result<Ru
     }
     cmd.arg("-kernel")
         .arg(elf)
-        .stdin(Stdio::piped())
+        .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped());
     let start = Instant::now();
     let mut child = cmd.spawn().context("starting qemu-system-arm")?;
-    let mut stdin = child.stdin.take().context("qemu stdin")?;
     let mut stdout = child.stdout.take().context("qemu stdout")?;
     let mut stderr = child.stderr.take().context("qemu stderr")?;
-    let input = input.to_vec();
-    // QEMU takes input as fast as the UART model drains it; a thread keeps the pipe full.
-    let writer = std::thread::spawn(move || {
-        let _ = stdin.write_all(&input);
-    });
-    let reader = std::thread::spawn(move || {
+    let log_reader = std::thread::spawn(move || {
         let mut out = Vec::new();
         let _ = stdout.read_to_end(&mut out);
         out
@@ -100,6 +97,33 @@ pub fn run(board: &Board, elf: &Path, input: &[u8], opts: &Options) -> Result<Ru
     let err_reader = std::thread::spawn(move || {
         let mut out = String::new();
         let _ = stderr.read_to_string(&mut out);
+        out
+    });
+    let uart = loop {
+        match UnixStream::connect(&sock) {
+            Ok(s) => break s,
+            Err(_) if start.elapsed() < Duration::from_secs(20) => {
+                if let Some(status) = child.try_wait()? {
+                    bail!("qemu exited before opening its UART ({status})");
+                }
+                std::thread::sleep(Duration::from_millis(10));
+            }
+            Err(e) => {
+                let _ = child.kill();
+                return Err(e).context("connecting to QEMU's UART socket");
+            }
+        }
+    };
+    let mut uart_in = uart.try_clone()?;
+    let mut uart_out = uart;
+    let input = input.to_vec();
+    // QEMU takes input as fast as the UART model drains it; a thread keeps the socket full.
+    let writer = std::thread::spawn(move || {
+        let _ = uart_in.write_all(&input);
+    });
+    let reader = std::thread::spawn(move || {
+        let mut out = Vec::new();
+        let _ = uart_out.read_to_end(&mut out);
         out
     });
     let status = loop {
@@ -118,13 +142,13 @@ pub fn run(board: &Board, elf: &Path, input: &[u8], opts: &Options) -> Result<Ru
         std::thread::sleep(Duration::from_millis(20));
     };
     let elapsed = start.elapsed();
-    let _ = writer.join();
     let stream = reader.join().unwrap_or_default();
+    let _ = writer.join();
+    let log = log_reader.join().unwrap_or_default();
     let qemu_err = err_reader.join().unwrap_or_default();
     if !qemu_err.trim().is_empty() && !status.success() {
         eprintln!("qemu: {}", qemu_err.trim());
     }
-    let log = std::fs::read(&log_path).unwrap_or_default();
     Ok(Run {
         stream,
         log,

@@ -60,6 +60,21 @@ impl Hub {
         })
     }
 
+    /// The boot check's verdict on the table.
+    pub fn table(&self) -> TableState {
+        self.base.table()
+    }
+
+    /// Joints of the valid table (0 without one).
+    pub fn joints(&self) -> u8 {
+        self.joints
+    }
+
+    /// The chain arithmetic of this hub.
+    pub fn precision(&self) -> Precision {
+        self.precision
+    }
+
     /// The output mode.
     pub fn mode(&self) -> Mode {
         self.mode

@@ -17,11 +17,21 @@ pub struct Calibration<P: Precision> {
 
 /// Validates the region's bytes and builds the chain.
 pub fn load<P: Precision>(region: &[u8]) -> Calibration<P> {
-    let chain = match Table::parse_for(region, JOINTS) {
-        Ok(table) => Chain::<P>::new(&table).map_err(|_| TableState::Malformed),
-        Err(e) => Err(TableState::from(&e)),
-    };
+    let chain = validate(region).and_then(build::<P>);
     Calibration { chain }
+}
+
+// Validation and construction are kept out of line, one after the other, so that their stack
+// frames are not stacked on top of each other: on the M0 (soft f64) each needs several KiB,
+// and the hub's whole budget is 8 KiB.
+#[inline(never)]
+fn validate(region: &[u8]) -> Result<Table<'_>, TableState> {
+    Table::parse_for(region, JOINTS).map_err(|e| TableState::from(&e))
+}
+
+#[inline(never)]
+fn build<P: Precision>(table: Table<'_>) -> Result<Chain<P>, TableState> {
+    Chain::<P>::new(&table).map_err(|_| TableState::Malformed)
 }
 
 impl<P: Precision> Calibration<P> {

@@ -1,10 +1,14 @@
 //! What every quatarm board shares, so that a board's `main.rs` is only its hardware.
 //!
 //! - [`calibration`]: the table validated at boot and the chain built from it.
+//! - [`stack`]: stack high-water mark by painting.
 //! - [`clock`]: microseconds since boot from SysTick.
 //! - [`table_region`]: the calibration table's flash region, as `memory.x` reserves it.
 //! - [`serve`]: the replay loop: bytes in, [`quatarm::stream::Hub`] reports out.
-//! - [`qemu`] (feature `qemu`): exit codes through semihosting, and the panic handler.
+//! - [`qemu`] (feature `qemu`): exit codes through semihosting, the panic and fault handlers.
+//!
+//! Logs go through defmt, apart from the data stream: semihosting under QEMU (feature
+//! `qemu`), RTT on real boards (feature `rtt`).
 #![no_std]
 #![deny(missing_docs)]
 
@@ -13,6 +17,13 @@ pub mod clock;
 #[cfg(feature = "qemu")]
 pub mod qemu;
 mod serve;
+pub mod stack;
 pub mod table_region;
 
 pub use serve::{serve, Link, Served};
+
+// The defmt transport: a channel apart from the data stream.
+#[cfg(feature = "rtt")]
+use defmt_rtt as _;
+#[cfg(feature = "qemu")]
+use defmt_semihosting as _;

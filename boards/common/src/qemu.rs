@@ -23,3 +23,10 @@ pub fn exit_failure() -> ! {
 fn panic(_: &core::panic::PanicInfo) -> ! {
     exit_failure()
 }
+
+/// A hard fault (a stack overflow into the statics' guard, a bad access) ends the run with
+/// failure instead of looping forever.
+#[cortex_m_rt::exception]
+unsafe fn HardFault(_: &cortex_m_rt::ExceptionFrame) -> ! {
+    exit_failure()
+}

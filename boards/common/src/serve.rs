@@ -30,21 +30,39 @@ pub fn serve<L: Link, E>(
     // A lone delimiter first: whoever listens is in sync from the first frame on.
     link.write(&[0]);
     link.write(hub.render(&hub.hello(), &mut out));
+    defmt::info!(
+        "hub up: table {}, {=u8} joints, {}",
+        hub.table(),
+        hub.joints(),
+        hub.precision()
+    );
     let mut replay = Replay::new();
     let mut reports = 0u32;
+    let mut input_errors = 0u32;
     loop {
         let Some(event) = replay.push(link.read()) else {
             continue;
         };
         let report = match event {
             Event::Reading(r) => hub.report(now_us(), Ok(&r), &mut eval),
-            Event::InputError(e) => hub.report(now_us(), Err(e), &mut eval),
+            Event::InputError(e) => {
+                input_errors += 1;
+                defmt::warn!("damaged input frame: {}", e);
+                hub.report(now_us(), Err(e), &mut eval)
+            }
             Event::SetMode(m) => {
                 hub.set_mode(m);
                 link.write(hub.render(&hub.hello(), &mut out));
                 continue;
             }
-            Event::End => return Served { reports },
+            Event::End => {
+                defmt::info!(
+                    "replay done: {=u32} reports, {=u32} damaged input frames",
+                    reports,
+                    input_errors
+                );
+                return Served { reports };
+            }
         };
         link.write(hub.render(&ToHost::Report(report), &mut out));
         reports = reports.wrapping_add(1);

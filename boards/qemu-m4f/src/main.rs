@@ -8,7 +8,7 @@
 
 mod uart;
 
-use board_common::{calibration, clock, qemu, serve, Link};
+use board_common::{calibration, clock, qemu, serve, stack, Link};
 use cortex_m_rt::{entry, exception};
 use quatarm::stream::Hub;
 
@@ -16,6 +16,9 @@ use quatarm::stream::Hub;
 const CORE_HZ: u32 = 25_000_000;
 /// 115200 baud (QEMU does not pace the UART, but the divider must be valid).
 const BAUDDIV: u32 = CORE_HZ / 115_200;
+
+/// Start of RAM in `memory.x`.
+const RAM_START: usize = 0x2000_0000;
 
 struct Uart0(uart::Uart);
 
@@ -30,6 +33,7 @@ impl Link for Uart0 {
 
 #[entry]
 fn main() -> ! {
+    stack::paint();
     let Some(cp) = cortex_m::Peripherals::take() else {
         qemu::exit_failure()
     };
@@ -43,6 +47,11 @@ fn main() -> ! {
         &mut hub,
         || clock::now_us(CORE_HZ),
         |counts, temp_mc| cal.eval(counts, temp_mc),
+    );
+    defmt::info!(
+        "stack peak {=u32} bytes, statics {=u32} bytes",
+        stack::peak() as u32,
+        stack::statics(RAM_START) as u32
     );
     qemu::exit_success()
 }
