@@ -13,6 +13,7 @@ pub mod holdout;
 pub mod ident;
 pub mod jacobian;
 pub mod lm;
+pub mod mukca;
 pub mod params;
 pub mod report;
 pub mod residuals;

@@ -114,3 +114,26 @@ fn spat_and_length_round_trip() {
     assert!(rms <= 2.5, "{rms}");
     assert!(z <= 4.0, "{z}");
 }
+
+#[test]
+fn seven_axis_round_trip() {
+    // The MUKCa Panda's nominal model: every axis z, the D-H twists in `tilt`.
+    let dir = armcal::mukca::default_dir();
+    let nominal = armcal::mukca::load(&dir, "panda_2").unwrap().arm;
+    let truth = perturb(&nominal, 3e-4, 0.3, &mut rng(71));
+    let data = simulate(&truth, &sim::Options::new(Kind::Point, 600), &mut rng(72))
+        .unwrap()
+        .data;
+    let fit = calibrate(&nominal, &data, &Options::default()).unwrap();
+    show(&fit, &nominal);
+    let after = compare_aligned(&fit.arm, &truth, &fresh_poses(&nominal, 5000, 17));
+    println!("after {after:?}");
+    assert!(after.rms_um <= 2.5, "{after:?}");
+    // The nominal twists stay in `tilt`; only the identified error is added to them.
+    for (a, b) in fit.arm.joints.iter().zip(&nominal.joints) {
+        assert_eq!(a.link, b.link);
+        for c in 0..2 {
+            assert!((a.tilt[c] - b.tilt[c]).abs() < 0.01);
+        }
+    }
+}

@@ -1,0 +1,241 @@
+//! The MUKCa recordings (`data/mukca/`): real robots probing a two-socket block, and the
+//! authors' way of scoring a calibration on them.
+//!
+//! Each session (one placement of the block, the file's `group`) is `length` data: the two
+//! sockets are the bar's ends, 50 mm apart. The authors score a model on a session by the mean
+//! distance of the probed ball centres from their socket's centre, the centre being the mean
+//! of the model's own ball centres on that session, weighted by the rows of each socket
+//! (`evaluate_model` of github.com/platonics-delft/kinematics_calibration, `calibrate_fk/
+//! utils.py`); over several sessions they take the plain mean of the session scores. Nothing
+//! of a test session is fitted but what the metric itself defines: its two centres.
+
+use crate::calib::{calibrate, CalibError, Fit, Options};
+use crate::data::{self, Dataset};
+use crate::residuals::residuals;
+use quatarm_ref::arm::Arm;
+use quatarm_ref::calfile;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// One robot unit: its nominal arm, its recordings, its session names.
+#[derive(Clone, Debug)]
+pub struct Unit {
+    /// The unit's name (`panda_2`).
+    pub name: String,
+    /// The file stem (`mukca-panda-panda_2`).
+    pub stem: String,
+    /// The nominal arm the authors assume.
+    pub arm: Arm,
+    /// Every session's rows.
+    pub data: Dataset,
+    /// Session names by group number.
+    pub sessions: BTreeMap<i64, String>,
+}
+
+/// The folder of the MUKCa files in this repository.
+pub fn default_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/mukca")
+}
+
+/// Every unit listed in `mukca-groups.csv`, in file order, with its file stem.
+pub fn unit_names(dir: &Path) -> Result<Vec<(String, String)>, String> {
+    let path = dir.join("mukca-groups.csv");
+    let mut r = csv::Reader::from_path(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut out: Vec<(String, String)> = Vec::new();
+    for rec in r.records() {
+        let rec = rec.map_err(|e| format!("{}: {e}", path.display()))?;
+        let file = rec
+            .get(0)
+            .unwrap_or("")
+            .trim_end_matches(".csv")
+            .to_string();
+        let unit = rec.get(1).unwrap_or("").to_string();
+        if !out.iter().any(|(u, _)| *u == unit) {
+            out.push((unit, file));
+        }
+    }
+    Ok(out)
+}
+
+/// Loads a unit by name (`panda_2`).
+pub fn load(dir: &Path, name: &str) -> Result<Unit, String> {
+    let stem = unit_names(dir)?
+        .into_iter()
+        .find(|(u, _)| u == name)
+        .map(|(_, s)| s)
+        .ok_or_else(|| format!("no MUKCa unit `{name}`"))?;
+    let arm = calfile::read(&dir.join(format!("{stem}.toml")))
+        .map_err(|e| e.to_string())?
+        .arm;
+    let data =
+        data::read(&dir.join(format!("{stem}.csv")), arm.dof()).map_err(|e| e.to_string())?;
+    let mut sessions = BTreeMap::new();
+    let path = dir.join("mukca-groups.csv");
+    let mut r = csv::Reader::from_path(&path).map_err(|e| e.to_string())?;
+    for rec in r.records() {
+        let rec = rec.map_err(|e| e.to_string())?;
+        if rec.get(1) == Some(name) {
+            let g: i64 = rec.get(2).and_then(|s| s.parse().ok()).unwrap_or(0);
+            sessions.insert(g, rec.get(3).unwrap_or("").to_string());
+        }
+    }
+    Ok(Unit {
+        name: name.to_string(),
+        stem,
+        arm,
+        data,
+        sessions,
+    })
+}
+
+impl Unit {
+    /// The rows of some sessions.
+    pub fn sessions_data(&self, groups: &[i64]) -> Dataset {
+        let idx: Vec<usize> = (0..self.data.rows.len())
+            .filter(|&i| groups.contains(&self.data.rows[i].group))
+            .collect();
+        self.data.subset(&idx)
+    }
+
+    /// The group number of a session by name.
+    pub fn group(&self, session: &str) -> Option<i64> {
+        self.sessions
+            .iter()
+            .find(|(_, n)| n.as_str() == session)
+            .map(|(g, _)| *g)
+    }
+
+    /// Every group number.
+    pub fn groups(&self) -> Vec<i64> {
+        self.sessions.keys().copied().collect()
+    }
+}
+
+/// The authors' score of a model on one session: mean distance (mm) of the ball centres
+/// from their socket's centre.
+pub fn session_score(arm: &Arm, session: &Dataset) -> f64 {
+    let res = residuals(arm, session, None);
+    res.rows.iter().map(|v| v.norm()).sum::<f64>() / session.rows.len().max(1) as f64
+}
+
+/// The plain mean of the session scores over `groups`.
+pub fn score(arm: &Arm, unit: &Unit, groups: &[i64]) -> f64 {
+    groups
+        .iter()
+        .map(|&g| session_score(arm, &unit.sessions_data(&[g])))
+        .sum::<f64>()
+        / groups.len().max(1) as f64
+}
+
+/// A calibration on some sessions, scored on others.
+#[derive(Clone, Debug, Serialize)]
+pub struct Trial {
+    /// Sessions fitted.
+    pub train: Vec<String>,
+    /// Sessions scored.
+    pub test: Vec<String>,
+    /// Nominal model on the training sessions (mm).
+    pub train_before: f64,
+    /// Calibrated model on the training sessions (mm).
+    pub train_after: f64,
+    /// Nominal model on the test sessions (mm).
+    pub test_before: f64,
+    /// Calibrated model on the test sessions (mm).
+    pub test_after: f64,
+    /// Per test session: (name, before, after).
+    pub per_session: Vec<(String, f64, f64)>,
+}
+
+/// Calibrates `unit` on `train` and scores it on `test`.
+pub fn trial(
+    unit: &Unit,
+    train: &[i64],
+    test: &[i64],
+    opts: &Options,
+) -> Result<(Trial, Fit), CalibError> {
+    let fit = calibrate(&unit.arm, &unit.sessions_data(train), opts)?;
+    let name = |g: &i64| unit.sessions.get(g).cloned().unwrap_or_default();
+    let per_session = test
+        .iter()
+        .map(|g| {
+            let d = unit.sessions_data(&[*g]);
+            (
+                name(g),
+                session_score(&unit.arm, &d),
+                session_score(&fit.arm, &d),
+            )
+        })
+        .collect();
+    Ok((
+        Trial {
+            train: train.iter().map(name).collect(),
+            test: test.iter().map(name).collect(),
+            train_before: score(&unit.arm, unit, train),
+            train_after: score(&fit.arm, unit, train),
+            test_before: score(&unit.arm, unit, test),
+            test_after: score(&fit.arm, unit, test),
+            per_session,
+        },
+        fit,
+    ))
+}
+
+/// The authors' published protocol: panda_2, fit on `front_center`, score every other
+/// session but `high`.
+pub fn authors_protocol(dir: &Path, opts: &Options) -> Result<Trial, String> {
+    let unit = load(dir, "panda_2")?;
+    let train = unit
+        .group("front_center")
+        .ok_or("no session front_center")?;
+    let high = unit.group("high").ok_or("no session high")?;
+    let test: Vec<i64> = unit
+        .groups()
+        .into_iter()
+        .filter(|g| *g != train && *g != high)
+        .collect();
+    trial(&unit, &[train], &test, opts)
+        .map(|(t, _)| t)
+        .map_err(|e| e.to_string())
+}
+
+/// Leave-one-session-out: for each session, fit on all others and score it.
+#[derive(Clone, Debug, Serialize)]
+pub struct Loso {
+    /// The unit.
+    pub unit: String,
+    /// Per session: (name, nominal score, calibrated score), or the error of its fit.
+    pub sessions: Vec<(String, Result<(f64, f64), String>)>,
+    /// Mean nominal score over the sessions scored.
+    pub mean_before: f64,
+    /// Mean calibrated score.
+    pub mean_after: f64,
+}
+
+/// Leave-one-session-out figures for a unit (none when it has one session).
+pub fn loso(unit: &Unit, opts: &Options) -> Loso {
+    let groups = unit.groups();
+    let mut sessions = Vec::new();
+    let (mut b, mut a, mut k) = (0.0, 0.0, 0);
+    if groups.len() > 1 {
+        for &g in &groups {
+            let train: Vec<i64> = groups.iter().copied().filter(|x| *x != g).collect();
+            let name = unit.sessions.get(&g).cloned().unwrap_or_default();
+            match trial(unit, &train, &[g], opts) {
+                Ok((t, _)) => {
+                    b += t.test_before;
+                    a += t.test_after;
+                    k += 1;
+                    sessions.push((name, Ok((t.test_before, t.test_after))));
+                }
+                Err(e) => sessions.push((name, Err(e.to_string()))),
+            }
+        }
+    }
+    Loso {
+        unit: unit.name.clone(),
+        sessions,
+        mean_before: if k > 0 { b / k as f64 } else { f64::NAN },
+        mean_after: if k > 0 { a / k as f64 } else { f64::NAN },
+    }
+}

@@ -1,0 +1,210 @@
+//! `armcal simulate` and `armcal calibrate` end to end, as a user runs them.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn armcal(args: &[&str], dir: &Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_armcal"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run armcal")
+}
+
+fn workdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("armcal-calib-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn write_truth(dir: &Path) {
+    let truth = armcal::sim::perturb(
+        &quatarm_ref::Arm::default6(),
+        3e-4,
+        0.3,
+        &mut armcal::sim::rng(3),
+    );
+    std::fs::write(
+        dir.join("truth.toml"),
+        quatarm_ref::calfile::write(&truth, &["truth"]),
+    )
+    .unwrap();
+}
+
+#[test]
+fn simulate_is_deterministic() {
+    let d = workdir("det");
+    write_truth(&d);
+    for out in ["a.csv", "b.csv"] {
+        let o = armcal(
+            &[
+                "simulate",
+                "--truth",
+                "truth.toml",
+                "--kind",
+                "spat",
+                "--count",
+                "24",
+                "--seed",
+                "9",
+                "--temp",
+                "16..28",
+                "-o",
+                out,
+            ],
+            &d,
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let a = std::fs::read(d.join("a.csv")).unwrap();
+    assert_eq!(a, std::fs::read(d.join("b.csv")).unwrap());
+    let text = String::from_utf8(a).unwrap();
+    assert!(text.contains("temp_c"));
+    let data = armcal::data::read(&d.join("a.csv"), 6).unwrap();
+    assert_eq!(data.rows.len(), 24);
+    assert!(data.rows.iter().all(|r| (16.0..28.0).contains(&r.temp_c)));
+}
+
+#[test]
+fn calibrate_writes_file_table_and_json() {
+    let d = workdir("json");
+    write_truth(&d);
+    let o = armcal(
+        &[
+            "simulate",
+            "--truth",
+            "truth.toml",
+            "--kind",
+            "point",
+            "--count",
+            "300",
+            "--seed",
+            "4",
+            "-o",
+            "pts.csv",
+        ],
+        &d,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = armcal(
+        &[
+            "calibrate",
+            "pts.csv",
+            "-o",
+            "cal.toml",
+            "--json",
+            "--folds",
+            "3",
+        ],
+        &d,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON on stdout");
+    let after = j["residuals"]["after"]["all"]["rms_um"].as_f64().unwrap();
+    let before = j["residuals"]["before"]["all"]["rms_um"].as_f64().unwrap();
+    let held_out = j["residuals"]["holdout"]["residuals"]["all"]["rms_um"]
+        .as_f64()
+        .unwrap();
+    assert!(
+        before > 100.0 && after < 12.0 && held_out < 14.0,
+        "{before} {after} {held_out}"
+    );
+    assert_eq!(j["fitted"], 27);
+    assert!(j["condition_number"].as_f64().unwrap() < 100.0);
+    let held = j["not_identifiable"].as_array().unwrap();
+    let dz = held
+        .iter()
+        .find(|h| h["key"] == "joint[1].zero_offset")
+        .expect("Δθ1 named");
+    assert_eq!(dz["reason"], "inseparable");
+    assert_eq!(dz["absorbed_by"][0]["key"], "reference_frame.rotation_z");
+    assert!(j["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|p| p["uncertainty"].as_f64().unwrap() > 0.0));
+    assert!(
+        d.join("cal.bin").exists(),
+        "the binary table is written beside the file"
+    );
+
+    // The file keeps the nominal values and carries the errors in their keys.
+    let cal = quatarm_ref::calfile::read(&d.join("cal.toml")).unwrap();
+    assert!(cal.unknown_keys.is_empty());
+    let nominal = quatarm_ref::Arm::default6();
+    for (a, b) in cal.arm.joints.iter().zip(&nominal.joints) {
+        assert_eq!(a.link, b.link);
+        assert_eq!(a.axis, b.axis);
+    }
+    assert_eq!(cal.arm.probe.vector, nominal.probe.vector);
+    assert!(cal.arm.reference_frame.is_some());
+    assert!(cal.arm.joints[1].zero_offset != 0.0);
+}
+
+#[test]
+fn bad_data_is_refused_with_file_line_and_column() {
+    let d = workdir("bad");
+    std::fs::write(
+        d.join("bad.csv"),
+        "kind,group,j1,j2,j3,j4,j5,j6,x,y,z\npoint,1,0,0,0,0,0,0,1,2,3\npoint,1,0,x,0,0,0,0,1,2,3\n",
+    )
+    .unwrap();
+    let o = armcal(&["calibrate", "bad.csv", "-o", "cal.toml"], &d);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("bad.csv: line 3, column j2"), "{err}");
+    assert!(!d.join("cal.toml").exists(), "no partial result");
+}
+
+#[test]
+fn spat_and_length_calibrate_without_an_instrument() {
+    let d = workdir("spat");
+    write_truth(&d);
+    for (kind, count, seed, out) in [
+        ("spat", "160", "5", "s.csv"),
+        ("length", "80", "6", "l.csv"),
+    ] {
+        let o = armcal(
+            &[
+                "simulate",
+                "--truth",
+                "truth.toml",
+                "--kind",
+                kind,
+                "--count",
+                count,
+                "--seed",
+                seed,
+                "-o",
+                out,
+            ],
+            &d,
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    // One file: length groups renumbered after the spat ones, without the second header.
+    let s = std::fs::read_to_string(d.join("s.csv")).unwrap();
+    let l = std::fs::read_to_string(d.join("l.csv")).unwrap();
+    let mut text = String::from("kind,group,j1,j2,j3,j4,j5,j6,end,length_mm\n");
+    for line in s.lines().filter(|x| x.starts_with("spat")) {
+        text.push_str(&format!("{line},,\n"));
+    }
+    for line in l.lines().filter(|x| x.starts_with("length")) {
+        let mut f: Vec<String> = line.split(',').map(String::from).collect();
+        f[1] = (f[1].parse::<i64>().unwrap() + 100).to_string();
+        text.push_str(&f.join(","));
+        text.push('\n');
+    }
+    std::fs::write(d.join("sl.csv"), text).unwrap();
+    let o = armcal(&["calibrate", "sl.csv", "-o", "cal.toml"], &d);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        report.contains("a rotation of the whole arm about the base z axis"),
+        "{report}"
+    );
+    assert!(report.contains("bar length error"), "{report}");
+    let cal = quatarm_ref::calfile::read(&d.join("cal.toml")).unwrap();
+    assert!(cal.arm.reference_frame.is_none());
+}
