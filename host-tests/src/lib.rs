@@ -2,6 +2,7 @@
 //! list, the QEMU runner and the recordings a replay sends.
 
 pub mod boards;
+pub mod defmt_log;
 pub mod e2e;
 pub mod qemu;
 pub mod recording;

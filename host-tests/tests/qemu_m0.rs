@@ -42,3 +42,9 @@ fn bad_tables_are_reported_and_give_no_coordinates() {
 fn text_mode_prints_the_same_numbers() {
     common::text_mode(BOARD);
 }
+
+#[test]
+#[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
+fn the_defmt_log_decodes_on_the_host() {
+    common::defmt_log(BOARD);
+}

@@ -220,3 +220,29 @@ pub fn text_mode(name: &str) {
     }
     let _ = Counts::default();
 }
+
+/// The defmt log, a channel apart from the data stream, decodes on the host and tells the
+/// boot verdict, the replay's counts and the stack peak.
+pub fn defmt_log(name: &str) {
+    let b = the_board(name);
+    let (_, table) = calibration(&default_calibration_path()).unwrap();
+    let mut readings = some_readings(5);
+    readings[0].faults = 0;
+    let mut input = replay_bytes(&readings, None);
+    // Damage the second reading's frame (first byte after the first frame's delimiter + 2).
+    let second = 1 + frame(&ToDevice::Reading(readings[0])).len() + 2;
+    input[second] ^= 0x40;
+    if input[second] == 0 {
+        input[second] = 0x7F;
+    }
+    let out = replay(&b, Some(&table), &input).unwrap();
+    assert!(out.run.status.success());
+    let lines = host_tests::defmt_log::decode(&b.elf(b.name), &out.run.log).unwrap();
+    eprintln!("{name} defmt log: {lines:#?}");
+    let precision = if b.precision == "f32" { "F32" } else { "Fixed" };
+    assert_eq!(lines[0], format!("hub up: table Valid, 6 joints, {precision}"));
+    assert!(lines[1].starts_with("damaged input frame: "), "{lines:?}");
+    assert_eq!(lines[2], "replay done: 5 reports, 1 damaged input frames");
+    let stack = host_tests::defmt_log::number_after(&lines, "stack peak").unwrap();
+    assert!(stack > 0 && stack < 64 * 1024, "{stack}");
+}
