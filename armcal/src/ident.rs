@@ -184,8 +184,8 @@ pub fn analyse(r: &DMatrix<f64>, params: &[Param], tol: f64) -> Identifiability 
     let max_norm = norms.iter().cloned().fold(0.0, f64::max);
     let mut kept: Vec<usize> = Vec::new();
     let mut fixed: Vec<Fixed> = Vec::new();
-    for j in 0..n {
-        if norms[j] > 1e-13 * max_norm && norms[j] > 0.0 {
+    for (j, &norm) in norms.iter().enumerate().take(n) {
+        if norm > 1e-13 * max_norm && norm > 0.0 {
             kept.push(j);
         } else {
             fixed.push(Fixed {
@@ -391,7 +391,7 @@ pub fn covariance(jtj: &DMatrix<f64>, sigma: f64) -> Option<DMatrix<f64>> {
             }
         })
         .collect();
-    if s.iter().any(|x| *x == 0.0) {
+    if s.contains(&0.0) {
         return None;
     }
     let a = DMatrix::from_fn(k, k, |i, j| jtj[(i, j)] * s[i] * s[j]);

@@ -199,13 +199,16 @@ pub fn authors_protocol(dir: &Path, opts: &Options) -> Result<Trial, String> {
         .map_err(|e| e.to_string())
 }
 
+/// A session's (nominal, calibrated) scores, or why it could not be fitted.
+pub type SessionScore = Result<(f64, f64), String>;
+
 /// Leave-one-session-out: for each session, fit on all others and score it.
 #[derive(Clone, Debug, Serialize)]
 pub struct Loso {
     /// The unit.
     pub unit: String,
     /// Per session: (name, nominal score, calibrated score), or the error of its fit.
-    pub sessions: Vec<(String, Result<(f64, f64), String>)>,
+    pub sessions: Vec<(String, SessionScore)>,
     /// Mean nominal score over the sessions scored.
     pub mean_before: f64,
     /// Mean calibrated score.
