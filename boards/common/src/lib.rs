@@ -1,5 +1,6 @@
 //! What every quatarm board shares, so that a board's `main.rs` is only its hardware.
 //!
+//! - [`bench`]: instructions per point of the quaternion and matrix chains, on target.
 //! - [`calibration`]: the table validated at boot and the chain built from it.
 //! - [`stack`]: stack high-water mark by painting.
 //! - [`clock`]: microseconds since boot from SysTick.
@@ -12,6 +13,7 @@
 #![no_std]
 #![deny(missing_docs)]
 
+pub mod bench;
 pub mod calibration;
 pub mod clock;
 #[cfg(feature = "qemu")]

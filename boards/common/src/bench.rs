@@ -1,0 +1,109 @@
+//! The on-target benchmark: instructions per corrected point of the quaternion chain and of
+//! the 3×4 matrix chain, on the same table and the same recorded readings.
+//!
+//! Run under `qemu -icount shift=0`, where every instruction takes 1 ns of virtual time and
+//! SysTick counts the virtual core clock, so ticks convert to instructions. Each evaluation is
+//! timed on its own (readings arrive over the UART, as in the replay) and the cost of reading
+//! the clock is measured the same way and subtracted. A loop of known length, timed at the
+//! start, gives the instructions per tick instead of trusting the machine's nominal clock.
+//! Results go to the defmt log (`cargo xtask bench-target` decodes it).
+
+use quatarm::encoder::{Event, Replay};
+use quatarm::{Chain, MatrixChain, Precision, Table};
+
+use crate::calibration::JOINTS;
+use crate::{clock, Link};
+
+/// Iterations of the calibration loop (2 instructions each).
+const LOOP_ITERATIONS: u32 = 200_000;
+
+#[inline(never)]
+fn counted_loop(n: u32) {
+    // `subs` + `bne`: exactly two instructions per iteration, on every Cortex-M.
+    // SAFETY: touches only the register it is given.
+    unsafe {
+        core::arch::asm!(
+            "1:",
+            "subs {0}, #1",
+            "bne 1b",
+            inout(reg) n => _,
+            options(nomem, nostack)
+        );
+    }
+}
+
+#[derive(Default)]
+struct Sum {
+    points: u32,
+    ticks: u64,
+    failures: u32,
+}
+
+/// Times both chains on every reading until `End`, then logs the sums.
+pub fn run<L: Link, P: Precision>(link: &mut L, region: &[u8]) {
+    let Ok(table) = Table::parse_for(region, JOINTS) else {
+        defmt::error!("bench: no valid table");
+        return;
+    };
+    let (Ok(quat), Ok(matrix)) = (Chain::<P>::new(&table), MatrixChain::<P>::new(&table)) else {
+        defmt::error!("bench: the table does not fit a chain");
+        return;
+    };
+
+    let t0 = clock::ticks();
+    counted_loop(LOOP_ITERATIONS);
+    let t1 = clock::ticks();
+    defmt::info!(
+        "bench calibration loop {=u32} instructions {=u64} ticks",
+        2 * LOOP_ITERATIONS,
+        t1 - t0
+    );
+
+    let (mut q, mut m, mut empty) = (Sum::default(), Sum::default(), Sum::default());
+    let mut replay = Replay::new();
+    loop {
+        let Some(event) = replay.push(link.read()) else {
+            continue;
+        };
+        let r = match event {
+            Event::Reading(r) => r,
+            Event::End => break,
+            _ => continue,
+        };
+        let counts = core::hint::black_box(r.counts.as_slice());
+        let temp = core::hint::black_box(r.temp_mc);
+
+        let a = clock::ticks();
+        let b = clock::ticks();
+        empty.points += 1;
+        empty.ticks += b - a;
+
+        let a = clock::ticks();
+        let res = core::hint::black_box(quat.eval(counts, temp));
+        let b = clock::ticks();
+        q.points += 1;
+        q.ticks += b - a;
+        q.failures += u32::from(res.is_err());
+
+        let a = clock::ticks();
+        let res = core::hint::black_box(matrix.eval(counts, temp));
+        let b = clock::ticks();
+        m.points += 1;
+        m.ticks += b - a;
+        m.failures += u32::from(res.is_err());
+        link.write(&[0]);
+    }
+    defmt::info!("bench clock overhead {=u32} points {=u64} ticks", empty.points, empty.ticks);
+    defmt::info!(
+        "bench quaternion {=u32} points {=u64} ticks {=u32} failures",
+        q.points,
+        q.ticks,
+        q.failures
+    );
+    defmt::info!(
+        "bench matrix {=u32} points {=u64} ticks {=u32} failures",
+        m.points,
+        m.ticks,
+        m.failures
+    );
+}
