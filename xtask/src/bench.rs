@@ -1,6 +1,174 @@
-//! `cargo xtask bench-target` (filled in with the chain).
-use anyhow::Result;
+//! `cargo xtask bench-target`: per board, flash and RAM used and instructions per corrected
+//! point of the quaternion chain and of the 3×4 matrix chain, measured on the target code.
+//!
+//! Instructions: the board's benchmark image runs under `qemu-system-arm -icount shift=0`
+//! (one instruction per nanosecond of virtual time; SysTick counts that clock), timing each
+//! evaluation of both chains on the first readings of the shipped recording with the default
+//! full calibration (`../shared/notes/numerics.md` has the method). Flash and RAM: the hub
+//! image's loadable segments (flash: every byte stored; RAM: statics), plus the stack's peak
+//! measured by painting during a replay. Boards QEMU does not model are only measured for size.
 
-pub fn run() -> Result<()> {
-    anyhow::bail!("bench-target: waits for the chain")
+use anyhow::{bail, Context, Result};
+use host_tests::boards::{Board, BOARDS};
+use host_tests::defmt_log::{self, number_after};
+use host_tests::e2e::{
+    calibration, default_calibration_path, default_recording_path, replay, table_file,
+};
+use host_tests::qemu::{self, Options};
+use host_tests::recording::{self, replay_bytes};
+use object::{Object, ObjectSegment};
+
+use crate::build::build_board;
+use crate::setup;
+
+/// Readings timed per chain.
+const POINTS: usize = 2_000;
+const RAM_START: u64 = 0x2000_0000;
+
+/// Bytes of flash and of RAM statics of an ELF.
+pub fn sizes(elf: &std::path::Path) -> Result<(u64, u64)> {
+    let data = std::fs::read(elf).with_context(|| format!("reading {}", elf.display()))?;
+    let file = object::File::parse(&*data)?;
+    let (mut flash, mut ram) = (0, 0);
+    for seg in file.segments() {
+        flash += seg.file_range().1;
+        if seg.address() >= RAM_START {
+            ram += seg.size();
+        }
+    }
+    Ok((flash, ram))
+}
+
+/// One row of the table.
+pub struct Row {
+    /// The board.
+    pub board: Board,
+    /// Flash bytes of the hub image.
+    pub flash: u64,
+    /// RAM statics of the hub image.
+    pub statics: u64,
+    /// Peak stack of the hub during a replay (QEMU boards).
+    pub stack: Option<u64>,
+    /// Instructions per point: quaternion, matrix (QEMU boards).
+    pub instructions: Option<(f64, f64)>,
+}
+
+fn instructions(b: &Board, table: &[u8]) -> Result<(f64, f64)> {
+    let readings = recording::read(&default_recording_path())?;
+    let input = replay_bytes(&readings[..POINTS.min(readings.len())], None);
+    let file = table_file(table)?;
+    let elf = b.elf("bench");
+    let run = qemu::run(
+        b,
+        &elf,
+        &input,
+        &Options {
+            table: Some(file.path().to_path_buf()),
+            icount: true,
+            ..Options::default()
+        },
+    )?;
+    if !run.status.success() {
+        bail!("{} bench image failed: {:?}", b.name, run.status);
+    }
+    let lines = defmt_log::decode(&elf, &run.log)?;
+    let get = |key: &str| {
+        number_after(&lines, key).with_context(|| format!("`{key}` missing in {lines:?}"))
+    };
+    let loop_instr = get("bench calibration loop")? as f64;
+    let loop_ticks = lines
+        .iter()
+        .find(|l| l.starts_with("bench calibration loop"))
+        .and_then(|l| l.split_whitespace().rev().nth(1)?.parse::<f64>().ok())
+        .context("calibration loop ticks")?;
+    let per_tick = loop_instr / loop_ticks;
+    let ticks_of = |key: &str| -> Result<(f64, f64)> {
+        let line = lines
+            .iter()
+            .find(|l| l.starts_with(key))
+            .with_context(|| format!("`{key}` missing"))?;
+        let w: Vec<&str> = line.split_whitespace().collect();
+        let points: f64 =
+            w[w.iter().position(|&x| x == "points").context("points")? - 1].parse()?;
+        let ticks: f64 = w[w.iter().position(|&x| x == "ticks").context("ticks")? - 1].parse()?;
+        if line.contains("failures") && !line.ends_with(" 0 failures") {
+            bail!("{}: {line}", b.name);
+        }
+        Ok((points, ticks))
+    };
+    let (n0, t0) = ticks_of("bench clock overhead")?;
+    let (nq, tq) = ticks_of("bench quaternion")?;
+    let (nm, tm) = ticks_of("bench matrix")?;
+    let overhead = t0 / n0;
+    eprintln!(
+        "{}: {per_tick:.2} instructions per SysTick tick (nominal {}), clock read {:.0} instructions",
+        b.name,
+        1e9 / f64::from(b.qemu.map_or(1, |m| m.core_hz)),
+        overhead * per_tick
+    );
+    Ok((
+        (tq / nq - overhead) * per_tick,
+        (tm / nm - overhead) * per_tick,
+    ))
+}
+
+fn measure(b: &Board, table: &[u8]) -> Result<Row> {
+    let (flash, statics) = sizes(&b.elf(b.name))?;
+    let (mut stack, mut instr) = (None, None);
+    if b.qemu.is_some() {
+        let readings: Vec<_> = recording::read(&default_recording_path())?
+            .into_iter()
+            .take(50)
+            .collect();
+        let out = replay(b, Some(table), &replay_bytes(&readings, None))?;
+        let lines = defmt_log::decode(&b.elf(b.name), &out.run.log)?;
+        stack = number_after(&lines, "stack peak");
+        instr = Some(instructions(b, table)?);
+    }
+    Ok(Row {
+        board: *b,
+        flash,
+        statics,
+        stack,
+        instructions: instr,
+    })
+}
+
+/// The table, as markdown.
+pub fn table(rows: &[Row]) -> String {
+    let mut s = String::from(
+        "| board | target | chain | flash (bytes) | RAM: statics + stack peak (bytes) | quaternion chain (instr/point) | 3×4 matrix chain (instr/point) |\n|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        let ram = match r.stack {
+            Some(st) => format!("{} + {} = {}", r.statics, st, r.statics + st),
+            None => format!("{} + (not run)", r.statics),
+        };
+        let (q, m) = match r.instructions {
+            Some((q, m)) => (format!("{q:.0}"), format!("{m:.0}")),
+            None => ("(no QEMU model)".into(), "(no QEMU model)".into()),
+        };
+        s.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {} | {} |\n",
+            r.board.name, r.board.target, r.board.precision, r.flash, ram, q, m
+        ));
+    }
+    s
+}
+
+/// `cargo xtask bench-target`.
+pub fn run(only: Option<&str>) -> Result<()> {
+    setup::ensure()?;
+    let (_, table_bytes) = calibration(&default_calibration_path())?;
+    let mut rows = Vec::new();
+    for b in BOARDS.iter().filter(|b| only.is_none_or(|o| o == b.name)) {
+        build_board(b)?;
+        rows.push(measure(b, &table_bytes)?);
+    }
+    println!("\n{}", table(&rows));
+    println!(
+        "(instructions under qemu-system-arm -icount shift=0, mean over {POINTS} recorded readings, default full calibration; \
+         the real boards share the cores of qemu-m4f (Cortex-M4F) and qemu-m0 (Cortex-M0; the RP2040 is an M0+))"
+    );
+    Ok(())
 }

@@ -45,7 +45,11 @@ enum Cmd {
         all: bool,
     },
     /// Flash, RAM and instructions per corrected point, per board and chain.
-    BenchTarget,
+    BenchTarget {
+        /// Only this board.
+        #[arg(long)]
+        board: Option<String>,
+    },
     /// Regenerate the shipped recording data/recordings/default-6-session.csv.
     #[command(hide = true)]
     MakeRecording,
@@ -57,7 +61,7 @@ fn main() -> Result<()> {
         Cmd::Build { board } => build::run(board.as_deref()),
         Cmd::Test => test::run(),
         Cmd::Demo { all } => demo::run(all),
-        Cmd::BenchTarget => bench::run(),
+        Cmd::BenchTarget { board } => bench::run(board.as_deref()),
         Cmd::MakeRecording => make_recording::run(),
     }
 }
