@@ -68,8 +68,10 @@ pub struct Options {
     pub prior: Option<Prior>,
     /// Unknowns to hold at their start values whatever the data say.
     pub hold: Vec<Param>,
-    /// Backward elimination: while some fitted arm unknown's |value| is below this many
-    /// standard uncertainties, hold the least significant one and refit (0: off).
+    /// Backward elimination of extended effects: while some fitted effect is not significant
+    /// at this many standard uncertainties (a harmonic's sin and cos tested together, at the
+    /// same tail probability), hold the least significant one and refit. 0: keep every effect
+    /// requested. Geometric unknowns are never eliminated this way.
     pub significance: f64,
 }
 
@@ -735,6 +737,7 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
     };
     let mut prior_noise = opts.prior.and_then(|p| p.noise_mm);
     let mut passes = 0;
+    let mut model_iterations = 0;
     loop {
         let weights: Vec<f64> = id
             .kept
@@ -757,7 +760,8 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
         };
         // A first pass gets a short budget: a direction the data barely determine makes the
         // solver crawl along its valley, and the statistical test below removes it sooner.
-        let budget = opts.lm.max_iterations.saturating_sub(iterations).max(1);
+        // The budget is per model: holding an unknown starts a new fit.
+        let budget = opts.lm.max_iterations.saturating_sub(model_iterations).max(1);
         let pass = lm::Options {
             max_iterations: if passes == 0 { budget.min(12) } else { budget },
             ..opts.lm.clone()
@@ -765,13 +769,14 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
         passes += 1;
         let out = lm::solve(&problem, state, &pass, &mut report);
         iterations += out.iterations;
+        model_iterations += out.iterations;
         let unfinished = !out.converged;
-        if unfinished && (!out.exhausted || iterations >= opts.lm.max_iterations) {
+        if unfinished && (!out.exhausted || model_iterations >= opts.lm.max_iterations) {
             if let Some(pb) = &progress {
                 pb.finish_and_clear();
             }
             return Err(CalibError::NotConverged {
-                iterations,
+                iterations: model_iterations,
                 reason: out.reason,
                 rms_mm: (2.0 * problem.data_cost(&out.state) / eqs as f64).sqrt(),
             });
@@ -783,6 +788,7 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
         let sigma = (2.0 * data_cost / dof as f64).sqrt();
         if opts.prior.is_some() && prior_noise.is_none() {
             prior_noise = Some(sigma);
+            model_iterations = 0;
             continue;
         }
         if opts.weak_check {
@@ -791,6 +797,7 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
             {
                 let index = id.kept.remove(pos);
                 state.x[index] = 0.0;
+                model_iterations = 0;
                 id.fixed.push(Fixed {
                     index,
                     why: Why::Weak { uncertainty: u },
@@ -802,26 +809,22 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
         }
         if opts.significance > 0.0 && !unfinished {
             if let Some(c) = ident::covariance(&normal.jtj, sigma) {
-                let least = id
-                    .kept
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, &i)| !all[i].is_frame())
-                    .map(|(pos, &i)| (pos, i, state.x[i].abs() / c[(pos, pos)].sqrt()))
-                    .filter(|t| t.2 < opts.significance)
-                    .min_by(|a, b| a.2.total_cmp(&b.2));
-                if let Some((pos, i, _)) = least {
-                    id.kept.remove(pos);
-                    id.fixed.push(Fixed {
-                        index: i,
-                        why: Why::Insignificant {
-                            value: state.x[i],
-                            uncertainty: c[(pos, pos)].sqrt(),
-                        },
-                        absorbed_by: Vec::new(),
-                        unexplained: 1.0,
-                    });
-                    state.x[i] = 0.0;
+                if let Some((held, _)) = least_significant(&all, &id.kept, &state.x, &c, opts.significance) {
+                    for i in held {
+                        let pos = id.kept.iter().position(|&k| k == i).expect("kept");
+                        id.fixed.push(Fixed {
+                            index: i,
+                            why: Why::Insignificant {
+                                value: state.x[i],
+                                uncertainty: c[(pos, pos)].sqrt(),
+                            },
+                            absorbed_by: Vec::new(),
+                            unexplained: 1.0,
+                        });
+                        state.x[i] = 0.0;
+                    }
+                    id.kept.retain(|k| !id.fixed.iter().any(|f| f.index == *k));
+                    model_iterations = 0;
                     continue;
                 }
             }
@@ -873,6 +876,86 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
             elapsed: t0.elapsed(),
             correlation,
         });
+    }
+}
+
+/// The least significant extended effect among the kept unknowns, if it is below `t`
+/// standard uncertainties: its unknowns (positions in `all`) and its p-value. An effect's
+/// unknowns are tested together with the Wald statistic xᵀC⁻¹x against the χ² tail of their
+/// count at the two-sided p-value of `t` for one unknown.
+fn least_significant(
+    all: &[Param],
+    kept: &[usize],
+    x: &[f64],
+    cov: &DMatrix<f64>,
+    t: f64,
+) -> Option<(Vec<usize>, f64)> {
+    let p_cut = normal_tail_two_sided(t);
+    let mut effects: Vec<Vec<usize>> = Vec::new();
+    for (pos, &i) in kept.iter().enumerate() {
+        let p = all[i];
+        if p.is_geometric() || p.is_frame() {
+            continue;
+        }
+        let same = effects.iter_mut().find(|e| {
+            let q = all[kept[e[0]]];
+            matches!((p, q), (Param::Harmonic { joint: a, order: h, .. }, Param::Harmonic { joint: b, order: g, .. }) if a == b && h == g)
+        });
+        match same {
+            Some(e) => e.push(pos),
+            None => effects.push(vec![pos]),
+        }
+    }
+    let mut worst: Option<(Vec<usize>, f64)> = None;
+    for e in effects {
+        let k = e.len();
+        let sub = DMatrix::from_fn(k, k, |a, b| cov[(e[a], e[b])]);
+        let v = DVector::from_fn(k, |a, _| x[kept[e[a]]]);
+        let Some(inv) = sub.try_inverse() else { continue };
+        let w = (v.transpose() * inv * &v)[(0, 0)];
+        let p = chi2_tail(w, k);
+        if p > p_cut && worst.as_ref().map_or(true, |(_, q)| p > *q) {
+            worst = Some((e.iter().map(|&pos| kept[pos]).collect(), p));
+        }
+    }
+    worst
+}
+
+/// P(|Z| > t) for a standard normal Z.
+fn normal_tail_two_sided(t: f64) -> f64 {
+    erfc(t / std::f64::consts::SQRT_2)
+}
+
+/// P(χ²_k > w) for k = 1 or 2 (and a Wilson–Hilferty approximation beyond).
+fn chi2_tail(w: f64, k: usize) -> f64 {
+    match k {
+        1 => erfc((w / 2.0).sqrt()),
+        2 => (-w / 2.0).exp(),
+        _ => {
+            let k = k as f64;
+            let z = ((w / k).cbrt() - (1.0 - 2.0 / (9.0 * k))) / (2.0 / (9.0 * k)).sqrt();
+            0.5 * erfc(z / std::f64::consts::SQRT_2)
+        }
+    }
+}
+
+/// The complementary error function (Numerical Recipes' erfcc, relative error below 1.2e-7).
+fn erfc(x: f64) -> f64 {
+    let z = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let r = t * (-z * z - 1.265_512_23
+        + t * (1.000_023_68
+            + t * (0.374_091_96
+                + t * (0.096_784_18
+                    + t * (-0.186_288_06
+                        + t * (0.278_868_07
+                            + t * (-1.135_203_98
+                                + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
+        .exp();
+    if x >= 0.0 {
+        r
+    } else {
+        2.0 - r
     }
 }
 

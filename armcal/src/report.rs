@@ -109,6 +109,9 @@ pub struct ResidualReport {
     pub after: Summary,
     /// The calibrated arm on data it did not fit.
     pub holdout: Option<HoldoutReport>,
+    /// Why there is no held-out validation, when there is none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub holdout_note: Option<String>,
 }
 
 /// Files written.
@@ -303,6 +306,7 @@ pub fn build(
                 residuals: h.summary.clone(),
                 failed: h.failed.clone(),
             }),
+            holdout_note: None,
         },
         parameters,
         frame: fit.reference_frame().map(|f| FrameReport {
@@ -424,6 +428,9 @@ impl Report {
             for f in &h.failed {
                 let _ = writeln!(s, "    not judged: {f}");
             }
+        }
+        if let Some(n) = &self.residuals.holdout_note {
+            let _ = writeln!(s, "  held out: {n}");
         }
         let _ = writeln!(
             s,

@@ -39,6 +39,8 @@ pub enum TableState {
     WrongJointCount = 4,
     /// Any other inconsistency (a length, a count, a flag combination that cannot be).
     Malformed = 5,
+    /// A table whose counts per revolution differ from the resolution of the hub's encoders.
+    WrongResolution = 6,
 }
 
 impl TableState {
@@ -56,6 +58,7 @@ impl TableState {
             3 => TableState::WrongVersion,
             4 => TableState::WrongJointCount,
             5 => TableState::Malformed,
+            6 => TableState::WrongResolution,
             _ => return None,
         })
     }
@@ -69,6 +72,7 @@ impl TableState {
             TableState::WrongVersion => "wrong-version",
             TableState::WrongJointCount => "wrong-joint-count",
             TableState::Malformed => "malformed",
+            TableState::WrongResolution => "wrong-resolution",
         }
     }
 }

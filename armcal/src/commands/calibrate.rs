@@ -42,6 +42,10 @@ pub struct Args {
     /// Fit a degenerate pose set anyway, holding what it cannot determine.
     #[arg(long)]
     allow_degenerate: bool,
+    /// Keep an extended effect only if it is significant at this many standard
+    /// uncertainties (backward elimination; 0 keeps every effect requested).
+    #[arg(long, default_value_t = 0.0)]
+    significance: f64,
     /// Prior standard deviation of zero offsets and tilts (rad), regularising weak directions.
     #[arg(long, requires = "prior_length")]
     prior_angle: Option<f64>,
@@ -75,6 +79,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut opts = calib::Options {
         terms: terms.clone(),
         allow_degenerate: a.allow_degenerate,
+        significance: a.significance,
         progress: !a.json,
         ..calib::Options::default()
     };
@@ -112,6 +117,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         validation.as_ref().map(|h| (method.as_str(), h)),
     );
     rep.terms = terms.spec();
+    if !held && (a.folds > 0 || a.by_group) {
+        rep.residuals.holdout_note = Some(
+            "none: the data are a single unit (one group) that cannot be split into folds".into(),
+        );
+    }
 
     // The calibration file, checked by reading it back and evaluating it.
     let header = [

@@ -93,7 +93,11 @@ pub fn run<L: Link, P: Precision>(link: &mut L, region: &[u8]) {
         m.failures += u32::from(res.is_err());
         link.write(&[0]);
     }
-    defmt::info!("bench clock overhead {=u32} points {=u64} ticks", empty.points, empty.ticks);
+    defmt::info!(
+        "bench clock overhead {=u32} points {=u64} ticks",
+        empty.points,
+        empty.ticks
+    );
     defmt::info!(
         "bench quaternion {=u32} points {=u64} ticks {=u32} failures",
         q.points,

@@ -21,6 +21,23 @@ pub fn load<P: Precision>(region: &[u8]) -> Calibration<P> {
     Calibration { chain }
 }
 
+/// Like [`load`], for a hub whose encoders have the given counts per revolution (joint 1
+/// first): a table made for other encoders would turn every count into a wrong angle.
+pub fn load_for_encoders<P: Precision>(region: &[u8], counts_per_rev: &[u32]) -> Calibration<P> {
+    let chain = validate(region)
+        .and_then(|t| {
+            let fits =
+                (0..JOINTS).all(|i| t.joint(i).map(|j| j.counts) == counts_per_rev.get(i).copied());
+            if fits {
+                Ok(t)
+            } else {
+                Err(TableState::WrongResolution)
+            }
+        })
+        .and_then(build::<P>);
+    Calibration { chain }
+}
+
 // Validation and construction are kept out of line, one after the other, so that their stack
 // frames are not stacked on top of each other: on the M0 (soft f64) each needs several KiB,
 // and the hub's whole budget is 8 KiB.

@@ -5,6 +5,7 @@
 //! - [`stack`]: stack high-water mark by painting.
 //! - [`clock`]: microseconds since boot from SysTick.
 //! - [`table_region`]: the calibration table's flash region, as `memory.x` reserves it.
+//! - [`live`]: a real hub's loop: encoders at a fixed period, replay when the host sends one.
 //! - [`serve`]: the replay loop: bytes in, [`quatarm::stream::Hub`] reports out.
 //! - [`qemu`] (feature `qemu`): exit codes through semihosting, the panic and fault handlers.
 //!
@@ -16,6 +17,7 @@
 pub mod bench;
 pub mod calibration;
 pub mod clock;
+pub mod live;
 #[cfg(feature = "qemu")]
 pub mod qemu;
 mod serve;

@@ -1,0 +1,128 @@
+//! quatarm hub on a NUCLEO-F446RE (STM32F446RE, Cortex-M4F): the f32 chain.
+//!
+//! - Stream: USART2 (PA2 TX, PA3 RX), which the on-board ST-LINK presents as a virtual COM
+//!   port, at 921,600 baud (a report is at most 66 bytes: ~1,400 reports/s).
+//! - Encoders: six AMS AS5047P on SPI1 (PA5 SCK, PA6 MISO, PA7 MOSI, mode 1, 8 MHz), chip
+//!   selects PB0, PB1, PB2, PB10, PB12, PB13 for joints 1 to 6, sampled at 1 kHz. Their
+//!   14-bit counts need a calibration table built with `encoder_counts = 16384`.
+//! - Replay: frames from the host take over from the encoders until the host's `End`
+//!   (hardware-in-the-loop runs with a recording).
+//! - Log: defmt over RTT, read by a debug probe, apart from the stream.
+//! - Temperature: this board has no arm temperature sensor; it reports the reference
+//!   20.000 °C, at which the thermal terms vanish. A hub with a sensor passes its reading.
+#![no_std]
+#![no_main]
+
+use core::cell::RefCell;
+
+use board_common::calibration;
+use board_common::clock;
+use board_common::live::{serve_live, PollLink};
+use cortex_m_rt::{entry, exception};
+use embedded_hal_bus::spi::RefCellDevice;
+use embedded_hal_nb::serial::{Read, Write};
+use quatarm::encoder::{AbsoluteEncoder, As5047p};
+use quatarm::stream::{Hub, Precision};
+use stm32f4xx_hal::{
+    pac,
+    prelude::*,
+    rcc::Config,
+    serial::{self, Serial},
+    spi::{Mode, Phase, Polarity},
+};
+
+/// Core clock.
+const CORE_HZ: u32 = 168_000_000;
+/// Encoder sampling period.
+const PERIOD_US: u64 = 1_000;
+/// The thermal model's reference temperature, reported for want of a sensor.
+const TEMP_MC: i32 = 20_000;
+
+struct Usart2(Serial<pac::USART2, u8>);
+
+impl PollLink for Usart2 {
+    fn try_read(&mut self) -> Option<u8> {
+        // An overrun or framing error loses bytes: the frame they belonged to then fails its
+        // CRC and is reported as damaged, so the error itself needs no handling here.
+        self.0.read().ok()
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            let _ = nb::block!(self.0.write(b));
+        }
+    }
+}
+
+#[entry]
+fn main() -> ! {
+    let (Some(dp), Some(cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
+        panic!()
+    };
+    let mut rcc = dp.RCC.freeze(Config::hsi().sysclk(CORE_HZ.Hz()));
+    clock::start(cp.SYST);
+
+    let gpioa = dp.GPIOA.split(&mut rcc);
+    let gpiob = dp.GPIOB.split(&mut rcc);
+    let Ok(serial) = Serial::new(
+        dp.USART2,
+        (gpioa.pa2, gpioa.pa3),
+        serial::Config::default().baudrate(921_600.bps()),
+        &mut rcc,
+    ) else {
+        panic!()
+    };
+    let mut link = Usart2(serial);
+
+    let mode = Mode {
+        polarity: Polarity::IdleLow,
+        phase: Phase::CaptureOnSecondTransition,
+    };
+    let bus = RefCell::new(dp.SPI1.spi(
+        (Some(gpioa.pa5), Some(gpioa.pa6), Some(gpioa.pa7)),
+        mode,
+        8.MHz(),
+        &mut rcc,
+    ));
+    let cs = [
+        gpiob.pb0.into_push_pull_output().erase(),
+        gpiob.pb1.into_push_pull_output().erase(),
+        gpiob.pb2.into_push_pull_output().erase(),
+        gpiob.pb10.into_push_pull_output().erase(),
+        gpiob.pb12.into_push_pull_output().erase(),
+        gpiob.pb13.into_push_pull_output().erase(),
+    ];
+    let mut encoders = cs.map(|pin| {
+        // Setting a GPIO output cannot fail on this chip (the error type is Infallible).
+        let dev = RefCellDevice::new_no_delay(&bus, pin).unwrap_or_else(|e| match e {});
+        As5047p::new(dev)
+    });
+
+    let resolution = encoders.each_ref().map(|e| e.counts_per_rev());
+    let cal = calibration::load_for_encoders::<quatarm::F32>(
+        board_common::table_region::bytes(),
+        &resolution,
+    );
+    let mut hub = Hub::new(cal.state(), cal.joints(), Precision::F32);
+    serve_live(
+        &mut link,
+        &mut hub,
+        &mut encoders,
+        PERIOD_US,
+        || clock::now_us(CORE_HZ),
+        || TEMP_MC,
+        |counts, temp_mc| cal.eval(counts, temp_mc),
+    )
+}
+
+#[exception]
+fn SysTick() {
+    clock::on_wrap();
+}
+
+/// No message (no `core::fmt`), just a stop a debug probe sees: the stream falls silent, which
+/// a host notices as missing reports.
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    defmt::error!("panic");
+    cortex_m::asm::udf()
+}
