@@ -761,7 +761,11 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
         // A first pass gets a short budget: a direction the data barely determine makes the
         // solver crawl along its valley, and the statistical test below removes it sooner.
         // The budget is per model: holding an unknown starts a new fit.
-        let budget = opts.lm.max_iterations.saturating_sub(model_iterations).max(1);
+        let budget = opts
+            .lm
+            .max_iterations
+            .saturating_sub(model_iterations)
+            .max(1);
         let pass = lm::Options {
             max_iterations: if passes == 0 { budget.min(12) } else { budget },
             ..opts.lm.clone()
@@ -809,7 +813,9 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
         }
         if opts.significance > 0.0 && !unfinished {
             if let Some(c) = ident::covariance(&normal.jtj, sigma) {
-                if let Some((held, _)) = least_significant(&all, &id.kept, &state.x, &c, opts.significance) {
+                if let Some((held, _)) =
+                    least_significant(&all, &id.kept, &state.x, &c, opts.significance)
+                {
                     for i in held {
                         let pos = id.kept.iter().position(|&k| k == i).expect("kept");
                         id.fixed.push(Fixed {
@@ -911,7 +917,9 @@ fn least_significant(
         let k = e.len();
         let sub = DMatrix::from_fn(k, k, |a, b| cov[(e[a], e[b])]);
         let v = DVector::from_fn(k, |a, _| x[kept[e[a]]]);
-        let Some(inv) = sub.try_inverse() else { continue };
+        let Some(inv) = sub.try_inverse() else {
+            continue;
+        };
         let w = (v.transpose() * inv * &v)[(0, 0)];
         let p = chi2_tail(w, k);
         if p > p_cut && worst.as_ref().map_or(true, |(_, q)| p > *q) {
@@ -943,15 +951,17 @@ fn chi2_tail(w: f64, k: usize) -> f64 {
 fn erfc(x: f64) -> f64 {
     let z = x.abs();
     let t = 1.0 / (1.0 + 0.5 * z);
-    let r = t * (-z * z - 1.265_512_23
-        + t * (1.000_023_68
-            + t * (0.374_091_96
-                + t * (0.096_784_18
-                    + t * (-0.186_288_06
-                        + t * (0.278_868_07
-                            + t * (-1.135_203_98
-                                + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
-        .exp();
+    let r = t
+        * (-z * z - 1.265_512_23
+            + t * (1.000_023_68
+                + t * (0.374_091_96
+                    + t * (0.096_784_18
+                        + t * (-0.186_288_06
+                            + t * (0.278_868_07
+                                + t * (-1.135_203_98
+                                    + t * (1.488_515_87
+                                        + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
+            .exp();
     if x >= 0.0 {
         r
     } else {
