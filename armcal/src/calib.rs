@@ -922,7 +922,7 @@ fn least_significant(
         };
         let w = (v.transpose() * inv * &v)[(0, 0)];
         let p = chi2_tail(w, k);
-        if p > p_cut && worst.as_ref().map_or(true, |(_, q)| p > *q) {
+        if p > p_cut && worst.as_ref().is_none_or(|(_, q)| p > *q) {
             worst = Some((e.iter().map(|&pos| kept[pos]).collect(), p));
         }
     }
