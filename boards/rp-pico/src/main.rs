@@ -1,0 +1,152 @@
+//! quatarm hub on a Raspberry Pi Pico (RP2040, Cortex-M0+, no FPU): the fixed-point chain.
+//!
+//! - Stream: UART0 (GP0 TX, GP1 RX) at 921,600 baud, to a USB–serial adapter or a second
+//!   Pico running a debug probe firmware with its UART bridge.
+//! - Encoders: six AMS AS5047P on SPI0 (GP2 SCK, GP3 MOSI, GP4 MISO, mode 1, 8 MHz), chip
+//!   selects GP5 to GP10 for joints 1 to 6, sampled at 1 kHz. Their 14-bit counts need a
+//!   calibration table built with `encoder_counts = 16384` (checked at boot).
+//! - Replay: frames from the host take over from the encoders until the host's `End`.
+//! - Log: defmt over RTT, read by a debug probe, apart from the stream.
+//! - Temperature: the Pico has no arm temperature sensor; it reports the reference 20.000 °C,
+//!   at which the thermal terms vanish. A hub with a sensor passes its reading.
+#![no_std]
+#![no_main]
+
+use core::cell::RefCell;
+
+use board_common::calibration;
+use board_common::clock;
+use board_common::live::{serve_live, PollLink};
+use cortex_m_rt::{entry, exception};
+use embedded_hal_bus::spi::RefCellDevice;
+use embedded_hal_nb::serial::{Read, Write};
+use fugit::RateExtU32;
+use quatarm::encoder::{AbsoluteEncoder, As5047p};
+use quatarm::stream::{Hub, Precision};
+use rp2040_hal::{
+    clocks::init_clocks_and_plls,
+    gpio::{FunctionSpi, FunctionUart, Pins},
+    pac,
+    sio::Sio,
+    spi::Spi,
+    uart::{DataBits, StopBits, UartConfig, UartDevice, UartPeripheral, ValidUartPinout},
+    watchdog::Watchdog,
+    Clock,
+};
+
+/// The second-stage boot loader for the Pico's W25Q080 flash.
+#[link_section = ".boot2"]
+#[used]
+#[no_mangle]
+pub static BOOT2_FIRMWARE: [u8; 256] = rp2040_boot2::BOOT_LOADER_W25Q080;
+
+/// The Pico's crystal.
+const XOSC_HZ: u32 = 12_000_000;
+/// Core clock after `init_clocks_and_plls`.
+const CORE_HZ: u32 = 125_000_000;
+/// Encoder sampling period.
+const PERIOD_US: u64 = 1_000;
+/// The thermal model's reference temperature, reported for want of a sensor.
+const TEMP_MC: i32 = 20_000;
+
+struct Uart0<D: UartDevice, P: ValidUartPinout<D>>(UartPeripheral<rp2040_hal::uart::Enabled, D, P>);
+
+impl<D: UartDevice, P: ValidUartPinout<D>> PollLink for Uart0<D, P> {
+    fn try_read(&mut self) -> Option<u8> {
+        // A lost byte makes its frame fail the CRC: reported as damaged, nothing to do here.
+        self.0.read().ok()
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            let _ = nb::block!(self.0.write(b));
+        }
+    }
+}
+
+#[entry]
+fn main() -> ! {
+    let (Some(mut dp), Some(cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
+        panic!()
+    };
+    let mut watchdog = Watchdog::new(dp.WATCHDOG);
+    let Ok(clocks) = init_clocks_and_plls(
+        XOSC_HZ,
+        dp.XOSC,
+        dp.CLOCKS,
+        dp.PLL_SYS,
+        dp.PLL_USB,
+        &mut dp.RESETS,
+        &mut watchdog,
+    ) else {
+        panic!()
+    };
+    clock::start(cp.SYST);
+    let sio = Sio::new(dp.SIO);
+    let pins = Pins::new(dp.IO_BANK0, dp.PADS_BANK0, sio.gpio_bank0, &mut dp.RESETS);
+
+    let uart_pins = (
+        pins.gpio0.into_function::<FunctionUart>(),
+        pins.gpio1.into_function::<FunctionUart>(),
+    );
+    let Ok(uart) = UartPeripheral::new(dp.UART0, uart_pins, &mut dp.RESETS).enable(
+        UartConfig::new(921_600.Hz(), DataBits::Eight, None, StopBits::One),
+        clocks.peripheral_clock.freq(),
+    ) else {
+        panic!()
+    };
+    let mut link = Uart0(uart);
+
+    let spi_pins = (
+        pins.gpio3.into_function::<FunctionSpi>(),
+        pins.gpio4.into_function::<FunctionSpi>(),
+        pins.gpio2.into_function::<FunctionSpi>(),
+    );
+    let bus = RefCell::new(Spi::<_, _, _, 8>::new(dp.SPI0, spi_pins).init(
+        &mut dp.RESETS,
+        clocks.peripheral_clock.freq(),
+        8.MHz(),
+        embedded_hal::spi::MODE_1,
+    ));
+    let cs = [
+        pins.gpio5.into_push_pull_output().into_dyn_pin(),
+        pins.gpio6.into_push_pull_output().into_dyn_pin(),
+        pins.gpio7.into_push_pull_output().into_dyn_pin(),
+        pins.gpio8.into_push_pull_output().into_dyn_pin(),
+        pins.gpio9.into_push_pull_output().into_dyn_pin(),
+        pins.gpio10.into_push_pull_output().into_dyn_pin(),
+    ];
+    let mut encoders = cs.map(|pin| {
+        // Setting a GPIO output cannot fail on this chip (the error type is Infallible).
+        let dev = RefCellDevice::new_no_delay(&bus, pin).unwrap_or_else(|e| match e {});
+        As5047p::new(dev)
+    });
+
+    let resolution = encoders.each_ref().map(|e| e.counts_per_rev());
+    let cal = calibration::load_for_encoders::<quatarm::Fixed>(
+        board_common::table_region::bytes(),
+        &resolution,
+    );
+    let mut hub = Hub::new(cal.state(), cal.joints(), Precision::Fixed);
+    serve_live(
+        &mut link,
+        &mut hub,
+        &mut encoders,
+        PERIOD_US,
+        || clock::now_us(CORE_HZ),
+        || TEMP_MC,
+        |counts, temp_mc| cal.eval(counts, temp_mc),
+    )
+}
+
+#[exception]
+fn SysTick() {
+    clock::on_wrap();
+}
+
+/// No message (no `core::fmt`), just a stop a debug probe sees: the stream falls silent, which
+/// a host notices as missing reports.
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    defmt::error!("panic");
+    cortex_m::asm::udf()
+}
