@@ -1,17 +1,17 @@
 //! quatarm: the no_std quaternion chain of an articulated-arm CMM.
 #![cfg_attr(not(test), no_std)]
 
-pub mod stream;
-pub mod encoder;
 pub mod angle;
-pub mod rotate;
-pub mod scalar;
-pub mod table;
 pub mod chain;
+pub mod encoder;
 pub mod matrix;
 pub mod model;
+pub mod rotate;
+pub mod scalar;
+pub mod stream;
+pub mod table;
 
-pub use chain::{Chain, ChainFixed, ChainF32};
+pub use chain::{Chain, ChainF32, ChainFixed};
 pub use matrix::{MatrixChain, MatrixChainF32, MatrixChainFixed};
 pub use model::{ChainError, Point};
 pub use scalar::{Fixed, Precision, F32};

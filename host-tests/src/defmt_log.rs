@@ -10,8 +10,8 @@ use defmt_decoder::{DecodeError, StreamDecoder, Table};
 /// The log messages in `bytes`, as text, with the `elf` that produced them.
 pub fn decode(elf: &Path, bytes: &[u8]) -> Result<Vec<String>> {
     let elf_bytes = std::fs::read(elf).with_context(|| format!("reading {}", elf.display()))?;
-    let table = Table::parse(&elf_bytes)?
-        .ok_or_else(|| anyhow!("{} has no defmt table", elf.display()))?;
+    let table =
+        Table::parse(&elf_bytes)?.ok_or_else(|| anyhow!("{} has no defmt table", elf.display()))?;
     let mut decoder: Box<dyn StreamDecoder + Send + Sync + '_> = table.new_stream_decoder();
     decoder.received(bytes);
     let mut lines = Vec::new();
@@ -29,6 +29,10 @@ pub fn decode(elf: &Path, bytes: &[u8]) -> Result<Vec<String>> {
 pub fn number_after(lines: &[String], key: &str) -> Option<u64> {
     lines.iter().find_map(|l| {
         let rest = &l[l.find(key)? + key.len()..];
-        rest.split_whitespace().next()?.trim_matches(',').parse().ok()
+        rest.split_whitespace()
+            .next()?
+            .trim_matches(',')
+            .parse()
+            .ok()
     })
 }

@@ -240,7 +240,10 @@ pub fn defmt_log(name: &str) {
     let lines = host_tests::defmt_log::decode(&b.elf(b.name), &out.run.log).unwrap();
     eprintln!("{name} defmt log: {lines:#?}");
     let precision = if b.precision == "f32" { "F32" } else { "Fixed" };
-    assert_eq!(lines[0], format!("hub up: table Valid, 6 joints, {precision}"));
+    assert_eq!(
+        lines[0],
+        format!("hub up: table Valid, 6 joints, {precision}")
+    );
     assert!(lines[1].starts_with("damaged input frame: "), "{lines:?}");
     assert_eq!(lines[2], "replay done: 5 reports, 1 damaged input frames");
     let stack = host_tests::defmt_log::number_after(&lines, "stack peak").unwrap();
