@@ -9,6 +9,7 @@ pub mod tablebuild;
 
 pub mod calib;
 pub mod data;
+pub mod diagnose;
 pub mod holdout;
 pub mod ident;
 pub mod jacobian;

@@ -1,10 +1,145 @@
-//! `armcal diagnose` (placeholder: its issue fills it in).
+//! `armcal diagnose`: show what the arm's model gets wrong, name the physical cause, extend
+//! the model with it and measure the gain on data it did not fit.
+
+use anyhow::{bail, Context};
+use armcal::diagnose::{self, patterns, plots, report, FoldChoice};
+use quatarm_ref::{calfile, forward};
+use std::path::PathBuf;
 
 /// Arguments of `armcal diagnose`.
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Measured data (CSV of `spec/measured-data.md`): any mix of point, spat and length rows.
+    data: PathBuf,
+    /// The arm's nominal model (or an earlier calibration); default the spec's `default-6`.
+    #[arg(long)]
+    arm: Option<PathBuf>,
+    /// Print the report as JSON instead of text.
+    #[arg(long)]
+    json: bool,
+    /// Write the figures (PNG) into this folder: residuals against each joint's reading,
+    /// each joint's gravity lever, and temperature.
+    #[arg(long, value_name = "DIR")]
+    plots: Option<PathBuf>,
+    /// Write the extended calibration file here; its binary table goes beside it (`.bin`).
+    #[arg(short, long, value_name = "EXTENDED.toml")]
+    output: Option<PathBuf>,
+    /// Folds of held-out validation (units: a point row, a spat or length group whole).
+    #[arg(long, default_value_t = 5)]
+    folds: usize,
+    /// Hold out one group at a time (whole sessions, artefact positions) instead of k folds.
+    #[arg(long)]
+    by_group: bool,
+    /// Family-wise level of the in-sample test at each selection step (Bonferroni over the
+    /// candidates).
+    #[arg(long, default_value_t = 1e-3)]
+    alpha: f64,
+    /// Standard errors by which a cause must lower the held-out error.
+    #[arg(long, default_value_t = 2.0)]
+    z: f64,
+    /// Iterations before a fit is declared not converging.
+    #[arg(long, default_value_t = 100)]
+    max_iter: usize,
+}
 
 /// Runs the subcommand.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("armcal diagnose: not built yet")
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let start = super::calibrate::start_arm(a.arm.as_deref())?;
+    let data = armcal::data::read(&a.data, start.dof())?;
+    for w in &data.warnings {
+        eprintln!("armcal: warning: {w}");
+    }
+    if a.folds < 2 && !a.by_group {
+        bail!("--folds must be 2 or more: a diagnosis needs held-out data");
+    }
+    let valid = a.alpha > 0.0 && a.alpha < 1.0 && a.z >= 0.0;
+    if !valid {
+        bail!("--alpha must be in (0, 1) and --z at least 0");
+    }
+    let mut opts = diagnose::Options {
+        folds: if a.by_group {
+            FoldChoice::ByGroup
+        } else {
+            FoldChoice::KFold {
+                k: a.folds,
+                seed: 0x0f01d,
+            }
+        },
+        ..diagnose::Options::default()
+    };
+    opts.calib.lm.max_iterations = a.max_iter;
+    opts.select.alpha = a.alpha;
+    opts.select.z = a.z;
+    let spinner = (!a.json).then(|| {
+        let pb = indicatif::ProgressBar::new_spinner();
+        pb.set_message("diagnosing: fitting the geometric model, testing candidates…");
+        pb.enable_steady_tick(std::time::Duration::from_millis(200));
+        pb
+    });
+    let d = diagnose::diagnose(&start, &data, &opts)
+        .with_context(|| format!("cannot diagnose {}", a.data.display()));
+    if let Some(pb) = &spinner {
+        pb.finish_and_clear();
+    }
+    let d = d?;
+    let figures = patterns::figures(&d, &data);
+    let mut rep = report::build(&d, &data, &figures);
+
+    if let Some(dir) = &a.plots {
+        let files = plots::write_all(&figures, dir).map_err(anyhow::Error::msg)?;
+        rep.output.plots = files.iter().map(|p| p.display().to_string()).collect();
+        if !d.candidates.thermal {
+            rep.warnings
+                .push("no figure against temperature: the data have no temperature spread".into());
+        }
+    }
+
+    if let Some(out) = &a.output {
+        let arm = &d.extended.fit.arm;
+        let header = [
+            format!(
+                "extended calibration by armcal diagnose from {}",
+                a.data.display()
+            ),
+            format!("model {}; {}", rep.extended.model, rep.verdict),
+        ];
+        let refs: Vec<&str> = header.iter().map(String::as_str).collect();
+        let text = calfile::write(arm, &refs);
+        let back = calfile::parse(&text)
+            .map_err(|e| anyhow::anyhow!("the calibration file written does not read back: {e}"))?
+            .arm;
+        for r in data.rows.iter().take(50) {
+            let dist = (forward::forward(&back, &r.theta, r.temp_c).p
+                - forward::forward(arm, &r.theta, r.temp_c).p)
+                .norm();
+            if dist > 1e-9 {
+                bail!("the calibration file written evaluates {dist} mm away from the fit (a bug)");
+            }
+        }
+        std::fs::write(out, &text).with_context(|| out.display().to_string())?;
+        rep.output.calibration = Some(out.display().to_string());
+        let table = out.with_extension("bin");
+        match armcal::tablebuild::build(arm) {
+            Ok(bytes) => {
+                std::fs::write(&table, bytes).with_context(|| table.display().to_string())?;
+                rep.output.table = Some(table.display().to_string());
+            }
+            Err(e) => {
+                // A stale table beside the file would describe another model.
+                if table.exists() {
+                    let _ = std::fs::remove_file(&table);
+                }
+                rep.output.table_error = Some(format!(
+                    "{e} — the firmware's table cannot hold this term, so a board would not \
+                     apply it; the calibration file is written and evaluates it on the host"
+                ));
+            }
+        }
+    }
+    if a.json {
+        println!("{}", rep.json());
+    } else {
+        print!("{}", rep.text());
+    }
+    Ok(())
 }

@@ -1,0 +1,216 @@
+//! The candidate causes: every term of the spec's vocabulary, and which of them these data can
+//! see at all.
+//!
+//! Candidates are `encoder_harmonic` of every joint and orders 1–4, `gravity_compliance` of
+//! every joint, and `thermal_expansion` of every link and the probe when the data have a
+//! temperature spread. Before any is tested, the structural identifiability of the geometric
+//! model with all of them (the calibration's own analysis, at the arm's nominal skeleton) sorts
+//! them:
+//! - no effect on these data: gravity on a joint whose axis stays vertical (joint 1 of
+//!   `default-6` or of a Panda: a_k · ((p − o_k) × ẑ) is identically 0), thermal terms without
+//!   a temperature spread;
+//! - indistinguishable from another candidate: the thermal expansion of collinear links
+//!   (links 2 and 3, 4 and 5, link 6 and the probe of `default-6`). The pair is one candidate,
+//!   named by its lower joint with the other listed;
+//! - indistinguishable from the geometric model (or the instrument frame): the data could
+//!   never name it, so it is not tested, and the report says so.
+
+use crate::calib::{structural, unknowns};
+use crate::data::Dataset;
+use crate::ident::Why;
+use crate::params::{Effect, Link, Param, Terms};
+use quatarm_ref::arm::Arm;
+
+/// Highest harmonic order tried.
+pub const MAX_ORDER: u32 = 4;
+
+/// Smallest temperature spread (°C, max − min) for which thermal terms are candidates.
+pub const MIN_TEMP_SPREAD_C: f64 = 1.0;
+
+/// A candidate the data can test.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Candidate {
+    /// The effect fitted when it is named.
+    pub effect: Effect,
+    /// Effects the data cannot tell from it (a collinear link's thermal expansion): they are
+    /// named with it, and never fitted.
+    pub indistinguishable: Vec<Effect>,
+}
+
+/// A candidate the data cannot test, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Untestable {
+    /// The effect.
+    pub effect: Effect,
+    /// Why, in words.
+    pub reason: String,
+}
+
+/// The candidates for an arm and data set.
+#[derive(Clone, Debug, Default)]
+pub struct Candidates {
+    /// Those to test.
+    pub testable: Vec<Candidate>,
+    /// Those the data cannot see or separate.
+    pub untestable: Vec<Untestable>,
+    /// Whether thermal terms were considered (the data have a temperature spread).
+    pub thermal: bool,
+    /// Temperature range of the data (°C), when it has a temperature column.
+    pub temp_range: Option<(f64, f64)>,
+}
+
+/// Every effect of the vocabulary for `dof` joints, thermal ones when `thermal`.
+pub fn vocabulary(dof: usize, thermal: bool) -> Vec<Effect> {
+    let mut v = Vec::new();
+    for joint in 0..dof {
+        for order in 1..=MAX_ORDER {
+            v.push(Effect::Harmonic { joint, order });
+        }
+    }
+    v.extend((0..dof).map(Effect::Gravity));
+    if thermal {
+        v.extend((0..dof).map(|j| Effect::Thermal(Link::Joint(j))));
+        v.push(Effect::Thermal(Link::Probe));
+    }
+    v
+}
+
+/// The effect a calibration unknown belongs to.
+pub fn effect_of(p: Param) -> Option<Effect> {
+    match p {
+        Param::Harmonic { joint, order, .. } => Some(Effect::Harmonic { joint, order }),
+        Param::Gravity(j) => Some(Effect::Gravity(j)),
+        Param::Thermal(l) => Some(Effect::Thermal(l)),
+        _ => None,
+    }
+}
+
+/// The data's temperature range, when they record temperatures.
+pub fn temperature_range(data: &Dataset) -> Option<(f64, f64)> {
+    if !data.has_temperature || data.rows.is_empty() {
+        return None;
+    }
+    Some(
+        data.rows
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| {
+                (a.min(r.temp_c), b.max(r.temp_c))
+            }),
+    )
+}
+
+/// Sorts the vocabulary into what these data can test.
+pub fn candidates(start: &Arm, data: &Dataset) -> Candidates {
+    let temp_range = temperature_range(data);
+    let thermal = temp_range.is_some_and(|(lo, hi)| hi - lo >= MIN_TEMP_SPREAD_C);
+    let vocab = vocabulary(data.dof, thermal);
+    let terms = Terms::with(&vocab);
+    let all = unknowns(&terms, data);
+    let (id, _) = structural(start, data, &all, 1e-8);
+    let mut out = Candidates {
+        thermal,
+        temp_range,
+        ..Candidates::default()
+    };
+    // Effects of which some unknown is held, and why.
+    for e in &vocab {
+        let held: Vec<_> = id
+            .fixed
+            .iter()
+            .filter(|f| effect_of(all[f.index]) == Some(*e))
+            .collect();
+        if held.is_empty() {
+            out.testable.push(Candidate {
+                effect: *e,
+                indistinguishable: Vec::new(),
+            });
+            continue;
+        }
+        if held.iter().all(|f| f.why == Why::NoEffect) {
+            out.untestable.push(Untestable {
+                effect: *e,
+                reason: no_effect_reason(start, *e, thermal),
+            });
+            continue;
+        }
+        // Held as inseparable: by one other candidate alone (a twin), or by the geometry?
+        let twin = held.iter().find_map(|f| {
+            let by = &f.absorbed_by;
+            (by.len() == 1 && f.unexplained < 1e-6)
+                .then(|| effect_of(all[by[0].0]))
+                .flatten()
+                .filter(|t| t != e)
+        });
+        if let Some(t) = twin {
+            out.untestable.push(Untestable {
+                effect: *e,
+                reason: format!(
+                    "indistinguishable from {} (named with it)",
+                    describe_effect(start, t)
+                ),
+            });
+            if let Some(c) = out.testable.iter_mut().find(|c| c.effect == t) {
+                c.indistinguishable.push(*e);
+            }
+            continue;
+        }
+        // Perhaps it is inseparable only together with other candidates: alone with the
+        // geometric model it may still be testable.
+        let alone = unknowns(&Terms::with(&[*e]), data);
+        let (id1, _) = structural(start, data, &alone, 1e-8);
+        let blocked: Vec<_> = id1
+            .fixed
+            .iter()
+            .filter(|f| effect_of(alone[f.index]) == Some(*e))
+            .collect();
+        if blocked.is_empty() {
+            out.testable.push(Candidate {
+                effect: *e,
+                indistinguishable: Vec::new(),
+            });
+        } else {
+            let by: Vec<String> = blocked
+                .iter()
+                .flat_map(|f| f.absorbed_by.iter().take(3))
+                .map(|&(k, _)| alone[k].describe(start))
+                .collect();
+            out.untestable.push(Untestable {
+                effect: *e,
+                reason: if by.is_empty() {
+                    "its effect on these data equals that of the geometric model's parameters"
+                        .into()
+                } else {
+                    format!("its effect on these data equals that of {}", by.join(", "))
+                },
+            });
+        }
+    }
+    out
+}
+
+fn no_effect_reason(arm: &Arm, e: Effect, thermal: bool) -> String {
+    match e {
+        Effect::Gravity(j) => format!(
+            "joint {} has no gravity lever on these poses (its axis stays vertical, so \
+             a · ((p − o) × ẑ) = 0)",
+            j + 1
+        ),
+        Effect::Thermal(_) if !thermal => "the data have no temperature spread".into(),
+        _ => format!(
+            "{} does not change any residual of these data",
+            describe_effect(arm, e)
+        ),
+    }
+}
+
+/// An effect in words, joints 1-based.
+pub fn describe_effect(_arm: &Arm, e: Effect) -> String {
+    match e {
+        Effect::Harmonic { joint, order } => {
+            format!("joint {} encoder harmonic of order {order}", joint + 1)
+        }
+        Effect::Gravity(j) => format!("joint {} gravity compliance", j + 1),
+        Effect::Thermal(Link::Joint(j)) => format!("link {} thermal expansion", j + 1),
+        Effect::Thermal(Link::Probe) => "probe thermal expansion".into(),
+    }
+}

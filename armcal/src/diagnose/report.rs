@@ -1,0 +1,683 @@
+//! The diagnosis report: text a person reads, or JSON (`--json`) of the shape
+//!
+//! ```json
+//! {"baseline": {"model": "geometric", "rms_um", "holdout_rms_um", "max_um"},
+//!  "causes": [{"effect": "encoder_harmonic", "joint": 2, "order": 1, "magnitude",
+//!              "unit": "rad", "holdout_rms_um_after"}],
+//!  "extended": {"rms_um", "holdout_rms_um", "max_um"},
+//!  "gain_percent"}
+//! ```
+//!
+//! with more keys. `joint` is 1-based; for `thermal_expansion` it is the link's joint or
+//! `"probe"`, and a link whose expansion the data cannot tell from another's lists that one in
+//! `indistinguishable_from`. `magnitude` is a harmonic's amplitude √(s² + c²) (rad), a
+//! compliance g (rad/mm) or an expansion coefficient κ (1/°C), as the extended calibration file
+//! holds it (for an indistinguishable pair: the named link carrying the pair's expansion).
+
+use super::candidates::describe_effect;
+use super::patterns::Figure;
+use super::{Diagnosis, Model};
+use crate::data::{Dataset, Kind};
+use crate::params::{Effect, Link};
+use serde::Serialize;
+use serde_json::Value;
+use std::fmt::Write as _;
+
+/// A model's residuals.
+#[derive(Clone, Debug, Serialize)]
+pub struct ModelReport {
+    /// `geometric`, or `geometric+<term>…` in `--terms` spelling.
+    pub model: String,
+    /// RMS distance of the ball from where it should be, on the data fitted (µm).
+    pub rms_um: f64,
+    /// The same on held-out data, each fold refitted without it (µm).
+    pub holdout_rms_um: f64,
+    /// Largest distance on the data fitted (µm).
+    pub max_um: f64,
+    /// Largest distance on held-out data (µm).
+    pub holdout_max_um: f64,
+    /// Residual standard deviation per coordinate of the fit (µm): the noise it leaves.
+    pub noise_um: f64,
+    /// Unknowns fitted.
+    pub fitted: usize,
+    /// Bar length errors on held-out data (µm RMS), for `length` data.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub holdout_bar_rms_um: Option<f64>,
+}
+
+/// The evidence for a cause.
+#[derive(Clone, Debug, Serialize)]
+pub struct Evidence {
+    /// F statistic of its unknowns when it entered the model (in sample).
+    pub f_statistic: f64,
+    /// Its p-value (to compare with `p_cut` of the selection).
+    pub p_value: f64,
+    /// Held-out gain of the linearised k-fold validation, in standard errors.
+    pub holdout_z_linearised: f64,
+    /// Held-out gain of the real refits, in standard errors of the paired per-unit
+    /// differences.
+    pub holdout_z: f64,
+}
+
+/// A named cause.
+#[derive(Clone, Debug, Serialize)]
+pub struct CauseReport {
+    /// `encoder_harmonic`, `gravity_compliance` or `thermal_expansion`.
+    pub effect: String,
+    /// 1-based joint; for thermal expansion the link's joint or `"probe"`.
+    pub joint: Value,
+    /// Harmonic order.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub order: Option<u32>,
+    /// Its size (see the module text).
+    pub magnitude: f64,
+    /// Standard uncertainty of the magnitude.
+    pub uncertainty: f64,
+    /// Unit of the magnitude.
+    pub unit: String,
+    /// Held-out RMS (µm) with this cause and those before it.
+    pub holdout_rms_um_after: f64,
+    /// Links the data cannot tell from this one (joint numbers or `"probe"`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub indistinguishable_from: Vec<Value>,
+    /// The `--terms` spelling.
+    pub term: String,
+    /// In words.
+    pub description: String,
+    /// Harmonic: the sin coefficient s (rad).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sin: Option<f64>,
+    /// Harmonic: the cos coefficient c (rad).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cos: Option<f64>,
+    /// Harmonic: φ with e = A sin(hθ + φ), i.e. atan2(c, s) (rad).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub phase_rad: Option<f64>,
+    /// RMS distance the term moves the ball over the data's poses (µm).
+    pub rms_effect_um: f64,
+    /// Why it is named.
+    pub evidence: Evidence,
+}
+
+/// A candidate that entered the selection but did not hold on held-out refits.
+#[derive(Clone, Debug, Serialize)]
+pub struct Rejected {
+    /// `--terms` spelling.
+    pub term: String,
+    /// Held-out gain of the real refits, in standard errors.
+    pub holdout_z: f64,
+    /// Held-out RMS with it (µm).
+    pub holdout_rms_um_with: f64,
+}
+
+/// A candidate not tested, and why.
+#[derive(Clone, Debug, Serialize)]
+pub struct NotTestable {
+    /// `--terms` spelling.
+    pub term: String,
+    /// Why.
+    pub reason: String,
+}
+
+/// How a candidate scored.
+#[derive(Clone, Debug, Serialize)]
+pub struct ScoreReport {
+    /// `--terms` spelling.
+    pub term: String,
+    /// F statistic.
+    pub f_statistic: f64,
+    /// p-value.
+    pub p_value: f64,
+    /// Linearised held-out gain in standard errors.
+    pub holdout_z: f64,
+}
+
+/// One step of the selection.
+#[derive(Clone, Debug, Serialize)]
+pub struct StepReport {
+    /// `add` or `remove`.
+    pub action: String,
+    /// Its scores.
+    #[serde(flatten)]
+    pub score: ScoreReport,
+}
+
+/// The selection's record.
+#[derive(Clone, Debug, Serialize)]
+pub struct SelectionReport {
+    /// Candidates tested.
+    pub candidates: usize,
+    /// Family-wise level of the in-sample test at each step.
+    pub alpha: f64,
+    /// p-value a candidate must beat (alpha / candidates, Bonferroni).
+    pub p_cut: f64,
+    /// Standard errors by which held-out errors must drop.
+    pub z: f64,
+    /// Steps taken.
+    pub steps: Vec<StepReport>,
+    /// The strongest candidates left out at the end.
+    pub strongest_left_out: Vec<ScoreReport>,
+}
+
+/// Held-out validation.
+#[derive(Clone, Debug, Serialize)]
+pub struct HoldoutInfo {
+    /// How the folds were made.
+    pub method: String,
+    /// Folds.
+    pub folds: usize,
+    /// Folds that could not be fitted (baseline and extended).
+    pub failed: Vec<String>,
+}
+
+/// The data.
+#[derive(Clone, Debug, Serialize)]
+pub struct DataReport {
+    /// File.
+    pub file: String,
+    /// Rows.
+    pub rows: usize,
+    /// `point` rows.
+    pub point_rows: usize,
+    /// `spat` rows.
+    pub spat_rows: usize,
+    /// `length` rows.
+    pub length_rows: usize,
+    /// Groups (sessions, artefact positions) of `spat` and `length` rows.
+    pub groups: usize,
+    /// Temperature range (°C), when recorded.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub temperature_c: Option<[f64; 2]>,
+}
+
+/// Files written.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct OutputReport {
+    /// The extended calibration file.
+    pub calibration: Option<String>,
+    /// Its binary table.
+    pub table: Option<String>,
+    /// Why the table could not be written (a term outside the table's limits).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub table_error: Option<String>,
+    /// Figures.
+    pub plots: Vec<String>,
+}
+
+/// A residual pattern and its size before and after.
+#[derive(Clone, Debug, Serialize)]
+pub struct PatternReport {
+    /// Figure file.
+    pub figure: String,
+    /// Panel.
+    pub panel: String,
+    /// Unit of the sizes.
+    pub unit: String,
+    /// RMS of the binned means, geometric model.
+    pub before: f64,
+    /// The same with the named causes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub after: Option<f64>,
+}
+
+/// The whole report.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    /// The geometric model.
+    pub baseline: ModelReport,
+    /// The causes named (empty: none).
+    pub causes: Vec<CauseReport>,
+    /// The geometric model with the causes (the baseline again when none).
+    pub extended: ModelReport,
+    /// Held-out RMS gain, 100 (1 − extended / baseline) (%).
+    pub gain_percent: f64,
+    /// The finding in a sentence.
+    pub verdict: String,
+    /// The arm's name.
+    pub arm: String,
+    /// The data.
+    pub data: DataReport,
+    /// Held-out validation.
+    pub holdout: HoldoutInfo,
+    /// How the causes were chosen.
+    pub selection: SelectionReport,
+    /// Candidates that passed the selection but not the real held-out refits.
+    pub rejected: Vec<Rejected>,
+    /// Candidates these data cannot test.
+    pub not_testable: Vec<NotTestable>,
+    /// The residual patterns of the figures.
+    pub patterns: Vec<PatternReport>,
+    /// Files written.
+    pub output: OutputReport,
+    /// Warnings.
+    pub warnings: Vec<String>,
+}
+
+fn effect_name(e: Effect) -> &'static str {
+    match e {
+        Effect::Harmonic { .. } => "encoder_harmonic",
+        Effect::Gravity(_) => "gravity_compliance",
+        Effect::Thermal(_) => "thermal_expansion",
+    }
+}
+
+fn joint_value(e: Effect) -> Value {
+    match e {
+        Effect::Harmonic { joint, .. } => Value::from(joint + 1),
+        Effect::Gravity(j) => Value::from(j + 1),
+        Effect::Thermal(Link::Joint(j)) => Value::from(j + 1),
+        Effect::Thermal(Link::Probe) => Value::from("probe"),
+    }
+}
+
+/// The `--terms` spelling of a model's effects.
+pub fn model_name(m: &Model) -> String {
+    let mut s = "geometric".to_string();
+    for e in &m.effects {
+        s += &e.spec();
+    }
+    s
+}
+
+fn model_report(m: &Model) -> ModelReport {
+    ModelReport {
+        model: model_name(m),
+        rms_um: m.in_sample.all.rms_um,
+        holdout_rms_um: m.holdout.summary.all.rms_um,
+        max_um: m.in_sample.all.max_um,
+        holdout_max_um: m.holdout.summary.all.max_um,
+        noise_um: m.fit.sigma_mm * 1e3,
+        fitted: m.fit.ident.kept.len(),
+        holdout_bar_rms_um: m.holdout.summary.bar_length.map(|b| b.rms_um),
+    }
+}
+
+fn score_report(s: &super::select::Score) -> ScoreReport {
+    ScoreReport {
+        term: s.effect.spec(),
+        f_statistic: s.f,
+        p_value: s.p,
+        holdout_z: s.z,
+    }
+}
+
+fn explain(e: Effect) -> &'static str {
+    match e {
+        Effect::Harmonic { order: 1, .. } => " (encoder disc eccentricity)",
+        Effect::Harmonic { order: 2, .. } => " (encoder disc ellipticity)",
+        Effect::Harmonic { .. } => "",
+        Effect::Gravity(_) => " (the joint bends under the weight beyond it)",
+        Effect::Thermal(_) => " (the link lengthens with temperature)",
+    }
+}
+
+/// Builds the report of a diagnosis.
+pub fn build(d: &Diagnosis, data: &Dataset, figures: &[Figure]) -> Report {
+    let arm = &d.baseline.fit.start;
+    let causes: Vec<CauseReport> = d
+        .causes
+        .iter()
+        .map(|c| {
+            let harmonic = matches!(c.effect, Effect::Harmonic { .. });
+            let (s, co) = if harmonic {
+                (Some(c.values[0].1), Some(c.values[1].1))
+            } else {
+                (None, None)
+            };
+            let mut description = describe_effect(arm, c.effect) + explain(c.effect);
+            if !c.indistinguishable.is_empty() {
+                description += &format!(
+                    "; indistinguishable from {} (collinear: the data see only their combined \
+                     expansion, carried here by the named link)",
+                    c.indistinguishable
+                        .iter()
+                        .map(|e| describe_effect(arm, *e))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                );
+            }
+            CauseReport {
+                effect: effect_name(c.effect).into(),
+                joint: joint_value(c.effect),
+                order: match c.effect {
+                    Effect::Harmonic { order, .. } => Some(order),
+                    _ => None,
+                },
+                magnitude: c.magnitude,
+                uncertainty: c.magnitude_uncertainty,
+                unit: c.unit.into(),
+                holdout_rms_um_after: c.holdout_rms_um_after,
+                indistinguishable_from: c
+                    .indistinguishable
+                    .iter()
+                    .map(|e| joint_value(*e))
+                    .collect(),
+                term: c.effect.spec(),
+                description,
+                sin: s,
+                cos: co,
+                phase_rad: s.zip(co).map(|(s, c)| c.atan2(s)),
+                rms_effect_um: c.rms_effect_um,
+                evidence: Evidence {
+                    f_statistic: c.score.as_ref().map_or(f64::NAN, |s| s.f),
+                    p_value: c.score.as_ref().map_or(f64::NAN, |s| s.p),
+                    holdout_z_linearised: c.score.as_ref().map_or(f64::NAN, |s| s.z),
+                    holdout_z: c.paired.z(),
+                },
+            }
+        })
+        .collect();
+    let rejected = d
+        .confirmations
+        .iter()
+        .filter(|c| !c.named)
+        .map(|c| Rejected {
+            term: c.effect.spec(),
+            holdout_z: c.paired.z(),
+            holdout_rms_um_with: c.holdout.summary.all.rms_um,
+        })
+        .collect();
+    let layout = data.layout();
+    let mut failed: Vec<String> = d.baseline.holdout.failed.clone();
+    if !d.causes.is_empty() {
+        failed.extend(
+            d.extended
+                .holdout
+                .failed
+                .iter()
+                .map(|f| format!("extended model, {f}")),
+        );
+    }
+    let patterns = figures
+        .iter()
+        .flat_map(|f| {
+            f.panels.iter().map(move |p| {
+                let (before, after) = p.pattern();
+                let unit = if p.y_label.contains("µrad") {
+                    "µrad"
+                } else {
+                    "µm"
+                };
+                PatternReport {
+                    figure: f.file.clone(),
+                    panel: p.title.clone(),
+                    unit: unit.into(),
+                    before,
+                    after,
+                }
+            })
+        })
+        .collect();
+    let b = &d.baseline;
+    let verdict = verdict(d);
+    Report {
+        baseline: model_report(b),
+        causes,
+        extended: model_report(&d.extended),
+        gain_percent: d.gain_percent(),
+        verdict,
+        arm: arm.name.clone().unwrap_or_else(|| "(unnamed)".into()),
+        data: DataReport {
+            file: data.source.clone(),
+            rows: data.rows.len(),
+            point_rows: layout.points.len(),
+            spat_rows: data.count(Kind::Spat),
+            length_rows: data.count(Kind::Length),
+            groups: layout.spat.len() + layout.length.len(),
+            temperature_c: d.candidates.temp_range.map(|(a, b)| [a, b]),
+        },
+        holdout: HoldoutInfo {
+            method: d.folds_method.clone(),
+            folds: d.folds.len(),
+            failed,
+        },
+        selection: SelectionReport {
+            candidates: d.candidates.testable.len(),
+            alpha: d.settings.alpha,
+            p_cut: d.selection.p_cut,
+            z: d.settings.z,
+            steps: d
+                .selection
+                .steps
+                .iter()
+                .map(|s| StepReport {
+                    action: if s.added { "add" } else { "remove" }.into(),
+                    score: score_report(&s.score),
+                })
+                .collect(),
+            strongest_left_out: d
+                .selection
+                .left_out
+                .iter()
+                .filter(|s| s.separable)
+                .take(5)
+                .map(score_report)
+                .collect(),
+        },
+        rejected,
+        not_testable: d
+            .candidates
+            .untestable
+            .iter()
+            .map(|u| NotTestable {
+                term: u.effect.spec(),
+                reason: u.reason.clone(),
+            })
+            .collect(),
+        patterns,
+        output: OutputReport::default(),
+        warnings: data.warnings.clone(),
+    }
+}
+
+fn verdict(d: &Diagnosis) -> String {
+    let b = d.baseline.holdout.summary.all.rms_um;
+    let e = d.extended.holdout.summary.all.rms_um;
+    if d.causes.is_empty() {
+        let extra = if d.confirmations.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " ({} candidate{} passed the in-sample test but did not hold on held-out data)",
+                d.confirmations.len(),
+                if d.confirmations.len() == 1 { "" } else { "s" }
+            )
+        };
+        format!(
+            "none: no candidate explains the geometric model's residuals with evidence on \
+             held-out data{extra}; held-out RMS stays {b:.2} µm"
+        )
+    } else {
+        let names: Vec<String> = d.causes.iter().map(|c| c.effect.spec()).collect();
+        format!(
+            "{} cause{} named ({}): held-out RMS {b:.2} → {e:.2} µm ({:.1} % less)",
+            d.causes.len(),
+            if d.causes.len() == 1 { "" } else { "s" },
+            names.join(" "),
+            d.gain_percent()
+        )
+    }
+}
+
+fn sig(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        format!("{x}")
+    } else if (1e-2..1e4).contains(&x.abs()) {
+        format!("{x:.3}")
+    } else {
+        format!("{x:.3e}")
+    }
+}
+
+impl Report {
+    /// The report as text.
+    pub fn text(&self) -> String {
+        let mut s = String::new();
+        let d = &self.data;
+        let mut kinds = Vec::new();
+        if d.point_rows > 0 {
+            kinds.push(format!("{} point", d.point_rows));
+        }
+        if d.spat_rows > 0 {
+            kinds.push(format!("{} spat", d.spat_rows));
+        }
+        if d.length_rows > 0 {
+            kinds.push(format!("{} length", d.length_rows));
+        }
+        let _ = writeln!(s, "diagnosis of {} from {}", self.arm, d.file);
+        let _ = write!(s, "  data: {} rows ({})", d.rows, kinds.join(", "));
+        if d.groups > 0 {
+            let _ = write!(s, " in {} groups", d.groups);
+        }
+        match d.temperature_c {
+            Some([lo, hi]) => {
+                let _ = writeln!(s, "; {lo:.1}–{hi:.1} °C");
+            }
+            None => {
+                let _ = writeln!(s, "; no temperature column");
+            }
+        }
+        let _ = writeln!(
+            s,
+            "  held out: {} ({} folds)",
+            self.holdout.method, self.holdout.folds
+        );
+        let _ = writeln!(
+            s,
+            "\nwhat the model gets wrong (µm, distance of the ball from where it should be)"
+        );
+        let _ = writeln!(
+            s,
+            "  {:<10} {:>9} {:>9} {:>9} {:>9}   model",
+            "", "RMS", "max", "held-out", "h-o max"
+        );
+        for (label, m) in [("geometric", &self.baseline), ("extended", &self.extended)] {
+            let _ = writeln!(
+                s,
+                "  {:<10} {:>9.2} {:>9.2} {:>9.2} {:>9.2}   {}",
+                label, m.rms_um, m.max_um, m.holdout_rms_um, m.holdout_max_um, m.model
+            );
+        }
+        let _ = writeln!(
+            s,
+            "  noise left per coordinate: {:.2} µm (geometric), {:.2} µm (extended)",
+            self.baseline.noise_um, self.extended.noise_um
+        );
+        if !self.patterns.is_empty() {
+            let _ = writeln!(
+                s,
+                "\nresidual patterns (RMS of binned means of held-out residuals; geometric → extended)"
+            );
+            for p in &self.patterns {
+                let after = p.after.map_or(String::new(), |a| format!(" → {a:.2}"));
+                let _ = writeln!(
+                    s,
+                    "  {:<28} {:<22} {:>8.2}{after} {}",
+                    p.figure
+                        .trim_end_matches(".png")
+                        .trim_start_matches("residuals_"),
+                    p.panel,
+                    p.before,
+                    p.unit
+                );
+            }
+        }
+        let _ = writeln!(s, "\ncauses");
+        if self.causes.is_empty() {
+            let _ = writeln!(s, "  none");
+        }
+        for c in &self.causes {
+            let _ = writeln!(s, "  {}", c.description);
+            let _ = writeln!(
+                s,
+                "    {}: magnitude {} ± {} {}; moves the ball by {:.2} µm RMS; held-out RMS after: {:.2} µm",
+                c.term,
+                sig(c.magnitude),
+                sig(c.uncertainty),
+                c.unit,
+                c.rms_effect_um,
+                c.holdout_rms_um_after
+            );
+            let _ = writeln!(
+                s,
+                "    evidence: F = {:.1} (p = {:.1e}), held-out gain {:.1} standard errors (refits)",
+                c.evidence.f_statistic, c.evidence.p_value, c.evidence.holdout_z
+            );
+        }
+        let _ = writeln!(s, "\n{}", self.verdict);
+        let _ = writeln!(
+            s,
+            "  gain on held-out data: {:.1} % ({:.2} → {:.2} µm RMS)",
+            self.gain_percent, self.baseline.holdout_rms_um, self.extended.holdout_rms_um
+        );
+        let sel = &self.selection;
+        let _ = writeln!(
+            s,
+            "\nselection: {} candidates; in sample p < {:.1e} (α = {} over the candidates), \
+             held out gain > {} standard errors",
+            sel.candidates, sel.p_cut, sel.alpha, sel.z
+        );
+        for st in &sel.steps {
+            let _ = writeln!(
+                s,
+                "  {} {:<28} F = {:>9.1}  p = {:.1e}  held-out z = {:.1}",
+                st.action,
+                st.score.term,
+                st.score.f_statistic,
+                st.score.p_value,
+                st.score.holdout_z
+            );
+        }
+        if !sel.strongest_left_out.is_empty() {
+            let _ = writeln!(s, "  strongest left out:");
+            for c in &sel.strongest_left_out {
+                let _ = writeln!(
+                    s,
+                    "    {:<28} F = {:>9.2}  p = {:.1e}  held-out z = {:.1}",
+                    c.term, c.f_statistic, c.p_value, c.holdout_z
+                );
+            }
+        }
+        for r in &self.rejected {
+            let _ = writeln!(
+                s,
+                "  rejected {}: did not hold on held-out refits (gain {:.1} standard errors)",
+                r.term, r.holdout_z
+            );
+        }
+        if !self.not_testable.is_empty() {
+            let _ = writeln!(s, "\nnot testable on these data");
+            for n in &self.not_testable {
+                let _ = writeln!(s, "  {}: {}", n.term, n.reason);
+            }
+        }
+        for f in &self.holdout.failed {
+            let _ = writeln!(s, "  held-out fold not fitted: {f}");
+        }
+        let o = &self.output;
+        if o.calibration.is_some() || o.table.is_some() || !o.plots.is_empty() {
+            let _ = writeln!(s);
+        }
+        if let Some(c) = &o.calibration {
+            let _ = writeln!(s, "wrote {c}");
+        }
+        if let Some(t) = &o.table {
+            let _ = writeln!(s, "wrote {t}");
+        }
+        for p in &o.plots {
+            let _ = writeln!(s, "wrote {p}");
+        }
+        if let Some(e) = &o.table_error {
+            let _ = writeln!(s, "binary table NOT written: {e}");
+        }
+        for w in &self.warnings {
+            let _ = writeln!(s, "warning: {w}");
+        }
+        s
+    }
+
+    /// The report as JSON.
+    pub fn json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    }
+}

@@ -1,0 +1,348 @@
+//! Choosing the causes: stepwise selection on evidence in sample and on held-out data, then a
+//! confirmation by real refits on held-out data.
+//!
+//! ## Selection (linearised, [`super::linear`])
+//! From the geometric fit, every candidate is scored by what adding it would do:
+//! - **in sample**, the partial F-test of the extra unknowns (q = 2 for a harmonic's sin and
+//!   cos, 1 otherwise) against the residual variance of the larger model; with m candidates
+//!   tested, a candidate passes at p < α/m (Bonferroni), so that the chance of naming any
+//!   cause in pure noise stays below α at every step;
+//! - **out of sample**, k-fold cross-validation: the paired gain of the held-out squared
+//!   errors over the units (a `point` row, a `spat` or `length` group), which must exceed
+//!   `z` standard errors of its spread over the units.
+//!
+//! Of the candidates that pass both, the one with the lowest cross-validated error is added
+//! and the model refitted exactly. Then every effect already named is tested for removal by the
+//! same two criteria (it must still pass them given the others), the weakest failing one is
+//! removed: a term that stood in for two true causes before both were in the model (an
+//! alias) leaves again. Selection stops when no candidate passes.
+//!
+//! ## Confirmation (real refits)
+//! The causes are then added one at a time, in the order chosen, and each model is validated
+//! by refitting it on every fold's training part and judging the held-out part
+//! ([`crate::holdout::validate`]). A cause is named only if this real held-out error drops by
+//! more than `z` standard errors of the paired per-unit differences; one that does not is
+//! reported as rejected, with the numbers.
+
+use super::candidates::{Candidate, Candidates};
+use super::linear::{Linearisation, Set};
+use super::stats::{f_tail, Paired};
+use crate::calib::{calibrate, CalibError, Fit, Options};
+use crate::data::Dataset;
+use crate::holdout::{self, Folds, Holdout};
+use crate::params::{Effect, Param, Terms};
+use quatarm_ref::arm::Arm;
+use std::collections::BTreeMap;
+
+/// Thresholds of the selection.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// Family-wise level of the in-sample test at each step (split over the candidates).
+    pub alpha: f64,
+    /// Standard errors by which the held-out error must drop.
+    pub z: f64,
+    /// Most add/remove steps.
+    pub max_steps: usize,
+}
+
+impl Default for Settings {
+    fn default() -> Settings {
+        Settings {
+            alpha: 1e-3,
+            z: 2.0,
+            max_steps: 24,
+        }
+    }
+}
+
+/// How one candidate scored at one step.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Score {
+    /// The candidate.
+    pub effect: Effect,
+    /// F statistic of its unknowns.
+    pub f: f64,
+    /// Its p-value.
+    pub p: f64,
+    /// Held-out gain (linearised k-fold) in standard errors.
+    pub z: f64,
+    /// Held-out RMS per equation (a coordinate, or a bar's length) of the linearised k-fold
+    /// validation (µm).
+    pub cv_rms_um: f64,
+    /// Whether the data can tell it from the model at all.
+    pub separable: bool,
+}
+
+impl Score {
+    fn passes(&self, p_cut: f64, z: f64) -> bool {
+        self.separable && self.p < p_cut && self.z > z
+    }
+}
+
+/// One step of the selection.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Step {
+    /// `true`: added; `false`: removed.
+    pub added: bool,
+    /// The effect.
+    pub score: Score,
+}
+
+/// The outcome of the selection.
+#[derive(Clone, Debug)]
+pub struct Selection {
+    /// Effects chosen, in the order they entered (and stayed).
+    pub chosen: Vec<Effect>,
+    /// The steps taken.
+    pub steps: Vec<Step>,
+    /// Scores of the candidates left out, at the last step (strongest first).
+    pub left_out: Vec<Score>,
+    /// The exact fit of the chosen model on all data.
+    pub fit: Fit,
+    /// The p-value cut used (α / m).
+    pub p_cut: f64,
+}
+
+/// Fits the geometric model plus `effects`.
+pub fn fit_with(
+    start: &Arm,
+    data: &Dataset,
+    opts: &Options,
+    effects: &[Effect],
+) -> Result<Fit, CalibError> {
+    let o = Options {
+        terms: Terms::with(effects),
+        ..opts.clone()
+    };
+    calibrate(start, data, &o)
+}
+
+fn params_of(effects: &[Effect]) -> Vec<Param> {
+    effects.iter().flat_map(|e| e.params()).collect()
+}
+
+/// Stepwise selection from the geometric fit `baseline` (see the module's text).
+pub fn select(
+    start: &Arm,
+    data: &Dataset,
+    opts: &Options,
+    baseline: &Fit,
+    cands: &Candidates,
+    folds: &Folds,
+    s: &Settings,
+) -> Result<Selection, CalibError> {
+    let m = cands.testable.len().max(1);
+    let p_cut = s.alpha / m as f64;
+    let mut chosen: Vec<Effect> = Vec::new();
+    let mut fit = baseline.clone();
+    let mut steps = Vec::new();
+    let mut removals: BTreeMap<Effect, usize> = BTreeMap::new();
+    let mut left_out = Vec::new();
+    for _ in 0..s.max_steps {
+        let remaining: Vec<&Candidate> = cands
+            .testable
+            .iter()
+            .filter(|c| !chosen.contains(&c.effect))
+            .filter(|c| removals.get(&c.effect).copied().unwrap_or(0) < 2)
+            .collect();
+        let extra = params_of(&remaining.iter().map(|c| c.effect).collect::<Vec<_>>());
+        let lin = Linearisation::at(&fit, data, &extra, folds);
+        let model = lin.model();
+        let rss_m = lin.rss(&Set::of(model.clone()));
+        let n_eq = lin.equations as f64;
+
+        // Sets: the model, the model without each chosen effect, with each remaining one.
+        let mut sets = vec![Set::of(model.clone())];
+        let mut back = Vec::new();
+        for e in &chosen {
+            let cols = lin.positions(&e.params());
+            let without = Set {
+                free: model
+                    .iter()
+                    .copied()
+                    .filter(|c| !cols.contains(c))
+                    .collect(),
+                fixed: lin.removal(&fit, &e.params()),
+            };
+            back.push((*e, cols.len(), sets.len()));
+            sets.push(without);
+        }
+        let mut fwd = Vec::new();
+        for c in &remaining {
+            let cols = lin.positions(&c.effect.params());
+            let separable = !cols.is_empty() && lin.unexplained(&cols, &model) > 1e-3;
+            let mut with = model.clone();
+            with.extend(&cols);
+            fwd.push((c.effect, cols.len(), sets.len(), separable));
+            sets.push(Set::of(with));
+        }
+        let held = lin.heldout(data, &sets);
+        let cv_rms = |k: usize| {
+            let ss: f64 = held[k].iter().sum();
+            1e3 * (ss / lin.equations.max(1) as f64).sqrt()
+        };
+
+        // Removal: the chosen effect with the least support, if it no longer passes.
+        let mut worst: Option<Score> = None;
+        for &(e, q, k) in &back {
+            let rss_s = lin.rss(&sets[k]);
+            let dof = n_eq - model.len() as f64;
+            let f = ((rss_s - rss_m) / q as f64) / (rss_m / dof);
+            let score = Score {
+                effect: e,
+                f,
+                p: f_tail(f, q as f64, dof),
+                z: Paired::of(&held[k], &held[0]).z(),
+                cv_rms_um: cv_rms(k),
+                separable: true,
+            };
+            if !score.passes(p_cut, s.z) && worst.as_ref().is_none_or(|w| score.p > w.p) {
+                worst = Some(score);
+            }
+        }
+        if let Some(w) = worst {
+            chosen.retain(|e| *e != w.effect);
+            *removals.entry(w.effect).or_default() += 1;
+            steps.push(Step {
+                added: false,
+                score: w,
+            });
+            fit = fit_with(start, data, opts, &chosen)?;
+            continue;
+        }
+
+        // Addition: the passing candidate with the lowest cross-validated error.
+        let mut scores: Vec<Score> = fwd
+            .iter()
+            .map(|&(e, q, k, separable)| {
+                let rss_s = lin.rss(&sets[k]);
+                let dof = n_eq - sets[k].free.len() as f64;
+                let f = if separable && q > 0 {
+                    ((rss_m - rss_s) / q as f64) / (rss_s / dof)
+                } else {
+                    0.0
+                };
+                Score {
+                    effect: e,
+                    f,
+                    p: f_tail(f, q.max(1) as f64, dof),
+                    z: Paired::of(&held[0], &held[k]).z(),
+                    cv_rms_um: cv_rms(k),
+                    separable,
+                }
+            })
+            .collect();
+        scores.sort_by(|a, b| a.cv_rms_um.total_cmp(&b.cv_rms_um));
+        let Some(best) = scores.iter().find(|c| c.passes(p_cut, s.z)).cloned() else {
+            left_out = scores;
+            break;
+        };
+        let mut trial = chosen.clone();
+        trial.push(best.effect);
+        let next = fit_with(start, data, opts, &trial)?;
+        let fitted = best
+            .effect
+            .params()
+            .iter()
+            .all(|p| next.ident.kept.iter().any(|&k| next.params[k] == *p));
+        if !fitted {
+            // The exact fit could not determine it after all (held as weak or inseparable):
+            // it cannot be named; try the others.
+            removals.insert(best.effect, usize::MAX);
+            continue;
+        }
+        chosen = trial;
+        fit = next;
+        steps.push(Step {
+            added: true,
+            score: best,
+        });
+    }
+    Ok(Selection {
+        chosen,
+        steps,
+        left_out,
+        fit,
+        p_cut,
+    })
+}
+
+/// Per-unit held-out squared error (mm²) of a validation, in the units of [`holdout::kfold`]
+/// (a `point` row; a `spat` group; a `length` group with its bar error); `None` for a unit
+/// not judged.
+pub fn unit_errors(data: &Dataset, h: &Holdout) -> Vec<Option<f64>> {
+    let layout = data.layout();
+    let row = |i: usize| h.judged[i].then(|| h.residuals.rows[i].norm_squared());
+    let group = |rows: &[usize]| -> Option<f64> { rows.iter().map(|&i| row(i)).sum() };
+    let mut out: Vec<Option<f64>> = layout.points.iter().map(|&i| row(i)).collect();
+    out.extend(layout.spat.iter().map(|g| group(&g.rows)));
+    let bars: BTreeMap<i64, f64> = h.residuals.lengths.iter().copied().collect();
+    out.extend(layout.length.iter().map(|g| {
+        let rows: Vec<usize> = g.a.iter().chain(&g.b).copied().collect();
+        group(&rows).map(|s| s + bars.get(&g.group).map_or(0.0, |e| e * e))
+    }));
+    out
+}
+
+/// The paired comparison of two validations over the units both judged.
+pub fn compare(data: &Dataset, before: &Holdout, after: &Holdout) -> Paired {
+    let a = unit_errors(data, before);
+    let b = unit_errors(data, after);
+    let (x, y): (Vec<f64>, Vec<f64>) = a
+        .iter()
+        .zip(&b)
+        .filter_map(|(a, b)| Some(((*a)?, (*b)?)))
+        .unzip();
+    Paired::of(&x, &y)
+}
+
+/// A cause confirmed (or not) by real refits on held-out data.
+#[derive(Clone, Debug)]
+pub struct Confirmation {
+    /// The effect.
+    pub effect: Effect,
+    /// Whether it is named.
+    pub named: bool,
+    /// The held-out comparison with the model before it.
+    pub paired: Paired,
+    /// The validation of the model with it (and the causes named before it).
+    pub holdout: Holdout,
+}
+
+/// Adds the chosen effects one at a time and keeps those whose real held-out validation
+/// improves on the model before them by more than `z` standard errors.
+pub fn confirm(
+    start: &Arm,
+    data: &Dataset,
+    opts: &Options,
+    folds: &Folds,
+    baseline: &Holdout,
+    chosen: &[Effect],
+    z: f64,
+) -> Vec<Confirmation> {
+    let mut named: Vec<Effect> = Vec::new();
+    let mut current = baseline.clone();
+    let mut out = Vec::new();
+    for &e in chosen {
+        let mut trial = named.clone();
+        trial.push(e);
+        let o = Options {
+            terms: Terms::with(&trial),
+            ..opts.clone()
+        };
+        let h = holdout::validate(start, data, &o, folds);
+        let paired = compare(data, &current, &h);
+        let ok = paired.z() > z && h.failed.len() <= current.failed.len();
+        if ok {
+            named = trial;
+            current = h.clone();
+        }
+        out.push(Confirmation {
+            effect: e,
+            named: ok,
+            paired,
+            holdout: h,
+        });
+    }
+    out
+}
