@@ -5,6 +5,7 @@
 //!     cargo bench -p armcal --bench diagnosis -- spat          # spat + length data
 //!     cargo bench -p armcal --bench diagnosis -- null          # no hidden effect
 //!     cargo bench -p armcal --bench diagnosis -- seeds 1 100   # another range
+//!     cargo bench -p armcal --bench diagnosis -- mukca         # the real robots
 
 use armcal::diagnose::{self, scenario};
 use armcal::params::Effect;
@@ -17,6 +18,10 @@ fn main() {
         .skip(1)
         .filter(|a| a != "--bench")
         .collect();
+    if args.iter().any(|a| a == "mukca") {
+        mukca();
+        return;
+    }
     let spat = args.iter().any(|a| a == "spat");
     let null = args.iter().any(|a| a == "null");
     let (lo, hi) = match args.iter().position(|a| a == "seeds") {
@@ -112,4 +117,72 @@ fn main() {
         secs.get(secs.len() / 2).copied().unwrap_or(0.0),
         secs.last().copied().unwrap_or(0.0)
     );
+}
+
+/// Every MUKCa unit, sessions held out one at a time: what the diagnosis names, its held-out
+/// RMS, and the authors' score (mean distance from the socket centre) leaving each session
+/// out, for the geometric and the extended model.
+fn mukca() {
+    use armcal::mukca;
+    let dir = mukca::default_dir();
+    let opts = diagnose::Options {
+        folds: diagnose::FoldChoice::ByGroup,
+        ..diagnose::Options::default()
+    };
+    println!(
+        "| unit | sessions | named causes (magnitude) | held-out RMS geometric → extended (µm) | \
+         MUKCa score, leave one session out: geometric → extended (mm) | s |"
+    );
+    println!("|---|---|---|---|---|---|");
+    for (name, _) in mukca::unit_names(&dir).expect("mukca-groups.csv") {
+        let unit = mukca::load(&dir, &name).expect("unit");
+        let sessions = unit.groups().len();
+        let t0 = Instant::now();
+        let d = match diagnose::diagnose(&unit.arm, &unit.data, &opts) {
+            Ok(d) => d,
+            Err(e) => {
+                println!("| {name} | {sessions} | – ({e}) | – | – | – |");
+                continue;
+            }
+        };
+        let dt = t0.elapsed().as_secs_f64();
+        let causes = if d.causes.is_empty() {
+            "none".to_string()
+        } else {
+            d.causes
+                .iter()
+                .map(|c| format!("{} ({:.3e} {})", c.effect.spec(), c.magnitude, c.unit))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let rejected: Vec<String> = d
+            .confirmations
+            .iter()
+            .filter(|c| !c.named)
+            .map(|c| format!("{} rejected on refits", c.effect.spec()))
+            .collect();
+        let score = |effects: &[Effect]| {
+            let o = armcal::calib::Options {
+                terms: armcal::params::Terms::with(effects),
+                ..armcal::calib::Options::default()
+            };
+            mukca::loso(&unit, &o).mean_after
+        };
+        let geo = score(&[]);
+        let ext = if d.causes.is_empty() {
+            geo
+        } else {
+            score(&d.extended.effects)
+        };
+        println!(
+            "| {name} | {sessions} | {causes}{} | {:.1} → {:.1} | {geo:.3} → {ext:.3} | {dt:.1} |",
+            if rejected.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", rejected.join(", "))
+            },
+            d.baseline.holdout.summary.all.rms_um,
+            d.extended.holdout.summary.all.rms_um,
+        );
+    }
 }

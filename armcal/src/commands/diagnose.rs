@@ -129,9 +129,20 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 if table.exists() {
                     let _ = std::fs::remove_file(&table);
                 }
+                let why = report::beyond_table(arm);
                 rep.output.table_error = Some(format!(
-                    "{e} — the firmware's table cannot hold this term, so a board would not \
-                     apply it; the calibration file is written and evaluates it on the host"
+                    "{e}{}: the firmware could not apply {}; the calibration file is \
+                     written and the host evaluates every term",
+                    if why.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" ({})", why.join("; "))
+                    },
+                    if why.len() == 1 {
+                        "this term"
+                    } else {
+                        "these terms"
+                    }
                 ));
             }
         }

@@ -108,6 +108,9 @@ pub struct Cause {
     pub holdout_rms_um_after: f64,
     /// The real held-out comparison with the model before it.
     pub paired: Paired,
+    /// When several causes are named: the validation of the extended model without this
+    /// one (what the others alone leave).
+    pub without: Option<Holdout>,
     /// Its in-sample and linearised held-out scores when it entered the selection.
     pub score: Option<select::Score>,
 }
@@ -238,6 +241,16 @@ pub fn diagnose(start: &Arm, data: &Dataset, opts: &Options) -> Result<Diagnosis
             holdout,
         }
     };
+    let without = |e: Effect| -> Option<Holdout> {
+        (named.len() > 1).then(|| {
+            let others: Vec<Effect> = named.iter().copied().filter(|x| *x != e).collect();
+            let o = calib::Options {
+                terms: crate::params::Terms::with(&others),
+                ..inner.clone()
+            };
+            holdout::validate(start, data, &o, &folds)
+        })
+    };
     let causes = confirmations
         .iter()
         .filter(|c| c.named)
@@ -254,7 +267,14 @@ pub fn diagnose(start: &Arm, data: &Dataset, opts: &Options) -> Result<Diagnosis
                 .rev()
                 .find(|s| s.added && s.score.effect == c.effect)
                 .map(|s| s.score.clone());
-            cause(&extended.fit, data, c, indistinguishable, score)
+            cause(
+                &extended.fit,
+                data,
+                c,
+                indistinguishable,
+                score,
+                without(c.effect),
+            )
         })
         .collect();
     Ok(Diagnosis {
@@ -276,6 +296,7 @@ fn cause(
     c: &Confirmation,
     indistinguishable: Vec<Effect>,
     score: Option<select::Score>,
+    without_cause: Option<Holdout>,
 ) -> Cause {
     let params = c.effect.params();
     let pos = |p: &Param| fit.params.iter().position(|q| q == p);
@@ -326,6 +347,7 @@ fn cause(
         rms_effect_um: 1e3 * (ss / data.rows.len().max(1) as f64).sqrt(),
         holdout_rms_um_after: c.holdout.summary.all.rms_um,
         paired: c.paired,
+        without: without_cause,
         score,
     }
 }

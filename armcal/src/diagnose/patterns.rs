@@ -107,9 +107,9 @@ pub struct Panel {
     pub before: Vec<(f64, f64)>,
     /// The extended model's binned means (`None` when no cause was named).
     pub after: Option<Vec<(f64, f64)>>,
-    /// For the panel of a named cause: binned means of its own part, the extended model's
-    /// held-out residuals plus the displacement the cause's term makes (a component-plus-
-    /// residual view: the cause's signature without the other causes that overlap it).
+    /// For the panel of a named cause, when several are named: binned means of the held-out
+    /// residuals of the model with the other causes only, which shows this cause's pattern
+    /// without the others that overlap it.
     pub own: Option<Vec<(f64, f64)>>,
     /// Whether a named cause belongs to this panel (drawn with emphasis).
     pub named: bool,
@@ -167,32 +167,18 @@ pub fn figures(d: &Diagnosis, data: &Dataset) -> Vec<Figure> {
         .collect();
     let named = |e: Effect| d.causes.iter().any(|c| c.effect == e);
     let n = data.dof;
-    // Each named cause's displacement at every row (base frame, mm): the extended arm with
-    // and without its term.
-    let own_parts: Vec<(Effect, Vec<Vector3<f64>>)> = d
+    // For each named cause, when there are several: what the model with the other causes
+    // only misses, on held-out data.
+    let others: Vec<(Effect, Vec<Vector3<f64>>)> = d
         .causes
         .iter()
-        .map(|c| {
-            let ext = &d.extended.fit.arm;
-            let mut without = ext.clone();
-            for (p, v, _) in &c.values {
-                p.add_to(&mut without, p.value(&d.extended.fit.start) - v);
-            }
-            let part = data
-                .rows
-                .iter()
-                .map(|r| {
-                    forward::forward(ext, &r.theta, r.temp_c).p
-                        - forward::forward(&without, &r.theta, r.temp_c).p
-                })
-                .collect();
-            (c.effect, part)
+        .filter_map(|c| {
+            let h = c.without.as_ref()?;
+            Some((c.effect, missing(&h.residuals.rows, frame.as_ref(), data)))
         })
         .collect();
-    let own_of = |e: Option<Effect>| -> Option<Vec<Vector3<f64>>> {
-        let part = &own_parts.iter().find(|(x, _)| Some(*x) == e)?.1;
-        let after = after_all.as_ref()?;
-        Some(after.iter().zip(part).map(|(m, p)| m + p).collect())
+    let own_of = |e: Option<Effect>| -> Option<&Vec<Vector3<f64>>> {
+        Some(&others.iter().find(|(x, _)| Some(*x) == e)?.1)
     };
     // A panel from a per-row (x, y) function; `y` gets the miss vector and returns None to skip.
     let panel =
@@ -206,7 +192,7 @@ pub fn figures(d: &Diagnosis, data: &Dataset) -> Vec<Figure> {
             let points = pts(&before_all);
             let before = binned(&points, BINS, 4);
             let after = after_all.as_ref().map(|m| binned(&pts(m), BINS, 4));
-            let own = own_of(cause).map(|m| binned(&pts(&m), BINS, 4));
+            let own = own_of(cause).map(|m| binned(&pts(m), BINS, 4));
             Panel {
                 title,
                 x_label,

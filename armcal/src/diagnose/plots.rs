@@ -112,7 +112,7 @@ fn legend(area: &Area, x: i32, y: i32) -> DrawResult {
         OWN.stroke_width(3),
     ))?;
     area.draw_text(
-        "a named cause's own part: its term's displacement plus what is left (binned mean)",
+        "binned mean with the other named causes only (held out): the panel's cause alone",
         &font,
         (x + 36, y2),
     )?;
@@ -140,7 +140,7 @@ fn panel(area: &Area, p: &Panel) -> DrawResult {
         .fold(0.0, f64::max);
     let y = (bulk.max(means) * 1.15).max(1e-9);
     let title_style = if p.named {
-        (FAMILY, 19).into_font().color(&EXTENDED)
+        (FAMILY, 19).into_font().color(&OWN)
     } else {
         (FAMILY, 19).into_font().color(&BLACK)
     };

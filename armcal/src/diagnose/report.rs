@@ -57,6 +57,8 @@ pub struct Evidence {
     /// Held-out gain of the real refits, in standard errors of the paired per-unit
     /// differences.
     pub holdout_z: f64,
+    /// Its one-sided p-value (paired t-test over the held-out units).
+    pub holdout_p_value: f64,
 }
 
 /// A named cause.
@@ -106,6 +108,8 @@ pub struct Rejected {
     pub term: String,
     /// Held-out gain of the real refits, in standard errors.
     pub holdout_z: f64,
+    /// Its one-sided p-value (paired t-test over the held-out units).
+    pub holdout_p_value: f64,
     /// Held-out RMS with it (µm).
     pub holdout_rms_um_with: f64,
 }
@@ -130,6 +134,8 @@ pub struct ScoreReport {
     pub p_value: f64,
     /// Linearised held-out gain in standard errors.
     pub holdout_z: f64,
+    /// Its one-sided p-value (paired t-test over the held-out units).
+    pub holdout_p_value: f64,
 }
 
 /// One step of the selection.
@@ -151,8 +157,10 @@ pub struct SelectionReport {
     pub alpha: f64,
     /// p-value a candidate must beat (alpha / candidates, Bonferroni).
     pub p_cut: f64,
-    /// Standard errors by which held-out errors must drop.
+    /// Held-out errors must drop at the one-sided level of this many normal standard errors.
     pub z: f64,
+    /// That level (a p-value of the paired t-test).
+    pub holdout_p_cut: f64,
     /// Steps taken.
     pub steps: Vec<StepReport>,
     /// The strongest candidates left out at the end.
@@ -298,6 +306,7 @@ fn score_report(s: &super::select::Score) -> ScoreReport {
         f_statistic: s.f,
         p_value: s.p,
         holdout_z: s.z,
+        holdout_p_value: s.p_holdout,
     }
 }
 
@@ -363,6 +372,7 @@ pub fn build(d: &Diagnosis, data: &Dataset, figures: &[Figure]) -> Report {
                     p_value: c.score.as_ref().map_or(f64::NAN, |s| s.p),
                     holdout_z_linearised: c.score.as_ref().map_or(f64::NAN, |s| s.z),
                     holdout_z: c.paired.z(),
+                    holdout_p_value: c.paired.p_value(),
                 },
             }
         })
@@ -374,6 +384,7 @@ pub fn build(d: &Diagnosis, data: &Dataset, figures: &[Figure]) -> Report {
         .map(|c| Rejected {
             term: c.effect.spec(),
             holdout_z: c.paired.z(),
+            holdout_p_value: c.paired.p_value(),
             holdout_rms_um_with: c.holdout.summary.all.rms_um,
         })
         .collect();
@@ -436,6 +447,7 @@ pub fn build(d: &Diagnosis, data: &Dataset, figures: &[Figure]) -> Report {
             alpha: d.settings.alpha,
             p_cut: d.selection.p_cut,
             z: d.settings.z,
+            holdout_p_cut: super::stats::normal_tail(d.settings.z),
             steps: d
                 .selection
                 .steps
@@ -497,6 +509,55 @@ fn verdict(d: &Diagnosis) -> String {
             d.gain_percent()
         )
     }
+}
+
+/// The terms of `arm` the firmware's binary table cannot hold, in words (its limits, as
+/// `docs/spec-reading.md` lists them: at most 4 harmonic terms per joint and Σ|coefficients|
+/// ≤ 1e-3 rad, |κ| ≤ 4e-4 /°C, |g| ≤ 1e-6 rad/mm).
+pub fn beyond_table(arm: &quatarm_ref::arm::Arm) -> Vec<String> {
+    let mut out = Vec::new();
+    for (k, j) in arm.joints.iter().enumerate() {
+        let n = j
+            .harmonics
+            .iter()
+            .filter(|h| h.sin != 0.0 || h.cos != 0.0)
+            .count();
+        if n > quatarm::table::MAX_HARMONICS {
+            out.push(format!(
+                "joint {} has {n} harmonic terms; the table holds {}",
+                k + 1,
+                quatarm::table::MAX_HARMONICS
+            ));
+        }
+        let sum: f64 = j.harmonics.iter().map(|h| h.sin.abs() + h.cos.abs()).sum();
+        if sum > 1e-3 {
+            out.push(format!(
+                "joint {} harmonics: Σ|coefficients| = {sum:.3e} rad; the table holds 1e-3 rad",
+                k + 1
+            ));
+        }
+        if j.gravity.abs() > 1e-6 {
+            out.push(format!(
+                "joint {} gravity compliance g = {:.3e} rad/mm; the table holds |g| ≤ 1e-6 rad/mm",
+                k + 1,
+                j.gravity
+            ));
+        }
+        if j.thermal.abs() > 4e-4 {
+            out.push(format!(
+                "link {} thermal expansion κ = {:.3e} /°C; the table holds |κ| ≤ 4e-4 /°C",
+                k + 1,
+                j.thermal
+            ));
+        }
+    }
+    if arm.probe.thermal.abs() > 4e-4 {
+        out.push(format!(
+            "probe thermal expansion κ = {:.3e} /°C; the table holds |κ| ≤ 4e-4 /°C",
+            arm.probe.thermal
+        ));
+    }
+    out
 }
 
 fn sig(x: f64) -> String {
@@ -600,8 +661,12 @@ impl Report {
             );
             let _ = writeln!(
                 s,
-                "    evidence: F = {:.1} (p = {:.1e}), held-out gain {:.1} standard errors (refits)",
-                c.evidence.f_statistic, c.evidence.p_value, c.evidence.holdout_z
+                "    evidence: in sample F = {:.1} (p = {:.1e}); on held-out data (refits) a gain of \
+                 {:.1} standard errors (p = {:.1e})",
+                c.evidence.f_statistic,
+                c.evidence.p_value,
+                c.evidence.holdout_z,
+                c.evidence.holdout_p_value
             );
         }
         let _ = writeln!(s, "\n{}", self.verdict);
@@ -613,19 +678,20 @@ impl Report {
         let sel = &self.selection;
         let _ = writeln!(
             s,
-            "\nselection: {} candidates; in sample p < {:.1e} (α = {} over the candidates), \
-             held out gain > {} standard errors",
-            sel.candidates, sel.p_cut, sel.alpha, sel.z
+            "\nselection: {} candidates; a cause needs in sample p < {:.1e} (F-test, α = {} \
+             over the candidates) and on held-out data p < {:.3} (paired t-test over the units)",
+            sel.candidates, sel.p_cut, sel.alpha, sel.holdout_p_cut
         );
         for st in &sel.steps {
             let _ = writeln!(
                 s,
-                "  {} {:<28} F = {:>9.1}  p = {:.1e}  held-out z = {:.1}",
+                "  {:<6} {:<28} F = {:>9.1}  p = {:.1e}  held-out z = {:>5.1}  p = {:.1e}",
                 st.action,
                 st.score.term,
                 st.score.f_statistic,
                 st.score.p_value,
-                st.score.holdout_z
+                st.score.holdout_z,
+                st.score.holdout_p_value
             );
         }
         if !sel.strongest_left_out.is_empty() {
@@ -633,16 +699,16 @@ impl Report {
             for c in &sel.strongest_left_out {
                 let _ = writeln!(
                     s,
-                    "    {:<28} F = {:>9.2}  p = {:.1e}  held-out z = {:.1}",
-                    c.term, c.f_statistic, c.p_value, c.holdout_z
+                    "    {:<28} F = {:>9.2}  p = {:.1e}  held-out z = {:>5.1}  p = {:.1e}",
+                    c.term, c.f_statistic, c.p_value, c.holdout_z, c.holdout_p_value
                 );
             }
         }
         for r in &self.rejected {
             let _ = writeln!(
                 s,
-                "  rejected {}: did not hold on held-out refits (gain {:.1} standard errors)",
-                r.term, r.holdout_z
+                "  rejected {}: did not hold on held-out refits (gain {:.1} standard errors, p = {:.2})",
+                r.term, r.holdout_z, r.holdout_p_value
             );
         }
         if !self.not_testable.is_empty() {

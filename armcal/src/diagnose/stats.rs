@@ -89,6 +89,30 @@ pub fn f_tail(f: f64, d1: f64, d2: f64) -> f64 {
     inc_beta(d2 / 2.0, d1 / 2.0, d2 / (d2 + d1 * f))
 }
 
+/// P(T > t) for Student's t with `df` degrees of freedom (one-sided).
+pub fn t_tail(t: f64, df: f64) -> f64 {
+    if t.is_nan() || df <= 0.0 {
+        return 1.0;
+    }
+    if t.is_infinite() {
+        return if t > 0.0 { 0.0 } else { 1.0 };
+    }
+    let half = 0.5 * inc_beta(df / 2.0, 0.5, df / (df + t * t));
+    if t > 0.0 {
+        half
+    } else {
+        1.0 - half
+    }
+}
+
+/// P(Z > z) for a standard normal Z (the t tail with unbounded degrees of freedom).
+pub fn normal_tail(z: f64) -> f64 {
+    t_tail(z, 1e12)
+}
+
+/// Fewest held-out units for held-out evidence.
+pub const MIN_UNITS: usize = 3;
+
 /// A paired comparison of two models' held-out errors over the same units (a `point` row, a
 /// `spat` or `length` group): how much the second lowers the sum of squares, and the standard
 /// error of that from the spread of the per-unit differences.
@@ -126,6 +150,18 @@ impl Paired {
             se: (var * u as f64).sqrt(),
             units: u,
         }
+    }
+
+    /// One-sided p-value of the gain (paired t-test, units − 1 degrees of freedom): the
+    /// chance of a gain this large if the second model predicted no better. Few units (three
+    /// sessions) need a large gain: t > 4.5 at the level of z = 2. Fewer than
+    /// [`MIN_UNITS`] units give 1: the spread of the gains over two units says too little
+    /// (and the test leans wholly on their normality), so two sessions confirm nothing.
+    pub fn p_value(&self) -> f64 {
+        if self.units < MIN_UNITS {
+            return 1.0;
+        }
+        t_tail(self.z(), (self.units - 1) as f64)
     }
 
     /// Gain in standard errors.
@@ -174,6 +210,18 @@ mod tests {
     }
 
     #[test]
+    fn t_tail_matches_tables() {
+        // Upper points of Student's t: t(0.025; 2) = 4.303, t(0.05; 8) = 1.860, t(0.01; 30) = 2.457.
+        for (t, df, p) in [(4.303, 2.0, 0.025), (1.860, 8.0, 0.05), (2.457, 30.0, 0.01)] {
+            let got = t_tail(t, df);
+            assert!((got - p).abs() < 0.01 * p, "t({df}) > {t}: {got}");
+        }
+        assert!((t_tail(-1.860, 8.0) - 0.95).abs() < 1e-3);
+        assert!((normal_tail(2.0) - 0.02275).abs() < 1e-5);
+        assert_eq!(t_tail(0.0, 5.0), 0.5);
+    }
+
+    #[test]
     fn paired_gain_and_error() {
         let a = [2.0, 3.0, 4.0, 5.0];
         let b = [1.0, 2.0, 3.0, 4.0];
@@ -187,5 +235,8 @@ mod tests {
         let p = Paired::of(&a, &c);
         assert!((p.gain - 2.0).abs() < 1e-12);
         assert!(p.se > 0.0 && p.z() < 1.0);
+        // Two units prove nothing, however consistent.
+        assert_eq!(Paired::of(&[5.0, 5.1], &[1.0, 1.0]).p_value(), 1.0);
+        assert!(Paired::of(&[5.0, 5.1, 5.05], &[1.0, 1.0, 1.0]).p_value() < 1e-3);
     }
 }

@@ -1,0 +1,129 @@
+//! The parts of the diagnosis: which candidates the data can test, and the linearised
+//! held-out validation the selection ranks them by, against real refits.
+
+use armcal::calib::{calibrate, Options};
+use armcal::data::Kind;
+use armcal::diagnose::candidates::{candidates, vocabulary};
+use armcal::diagnose::linear::{Linearisation, Set};
+use armcal::diagnose::scenario;
+use armcal::diagnose::select::unit_errors;
+use armcal::holdout;
+use armcal::params::{Effect, Link, Terms};
+use armcal::sim;
+use quatarm_ref::arm::Arm;
+
+#[test]
+fn candidates_of_default6_with_and_without_temperatures() {
+    let s = scenario::with_families(1, &[]);
+    let data = scenario::points(&s, 200);
+    let c = candidates(&Arm::default6(), &data);
+    assert!(c.thermal);
+    // 24 harmonics, 6 gravity, 7 thermal, of which: gravity 1 has no lever (vertical axis),
+    // links 3, 5 and the probe are collinear with 2, 4 and 6.
+    assert_eq!(vocabulary(6, true).len(), 37);
+    let untestable: Vec<Effect> = c.untestable.iter().map(|u| u.effect).collect();
+    assert_eq!(
+        untestable,
+        vec![
+            Effect::Gravity(0),
+            Effect::Thermal(Link::Joint(2)),
+            Effect::Thermal(Link::Joint(4)),
+            Effect::Thermal(Link::Probe)
+        ]
+    );
+    assert_eq!(c.testable.len(), 33);
+    let pair = |l: usize| {
+        c.testable
+            .iter()
+            .find(|t| t.effect == Effect::Thermal(Link::Joint(l)))
+            .unwrap()
+            .indistinguishable
+            .clone()
+    };
+    assert_eq!(pair(1), vec![Effect::Thermal(Link::Joint(2))]);
+    assert_eq!(pair(3), vec![Effect::Thermal(Link::Joint(4))]);
+    assert_eq!(pair(5), vec![Effect::Thermal(Link::Probe)]);
+    assert!(pair(0).is_empty());
+
+    // Without a temperature column, no thermal candidate at all.
+    let plain = sim::simulate(
+        &s.truth,
+        &sim::Options::new(Kind::Point, 200),
+        &mut sim::rng(5),
+    )
+    .unwrap()
+    .data;
+    let c = candidates(&Arm::default6(), &plain);
+    assert!(!c.thermal);
+    assert_eq!(c.testable.len(), 29);
+    assert!(c
+        .testable
+        .iter()
+        .all(|t| !matches!(t.effect, Effect::Thermal(_))));
+}
+
+#[test]
+fn candidates_of_a_panda_session() {
+    let dir = armcal::mukca::default_dir();
+    let unit = armcal::mukca::load(&dir, "panda_2").unwrap();
+    let c = candidates(&unit.arm, &unit.data);
+    // Joint 1 of the Panda turns about the vertical: no gravity lever.
+    assert!(c
+        .untestable
+        .iter()
+        .any(|u| u.effect == Effect::Gravity(0) && u.reason.contains("no gravity lever")));
+    assert!(!c.thermal);
+    assert_eq!(c.testable.len(), 7 * 4 + 6);
+}
+
+#[test]
+fn linearised_holdout_matches_real_refits() {
+    // A hidden harmonic; the geometric fit linearised with the harmonic's columns predicts the
+    // held-out error of every unit as real refits of each fold give it.
+    let mut s = scenario::with_families(7, &[]);
+    s.truth.joints[2]
+        .harmonics
+        .push(quatarm_ref::arm::Harmonic {
+            order: 2,
+            sin: 6e-5,
+            cos: 2e-5,
+        });
+    let data = scenario::points(&s, 400);
+    let folds = holdout::kfold(&data, 5, 9);
+    let opts = Options::default();
+    let fit = calibrate(&Arm::default6(), &data, &opts).unwrap();
+    let effect = Effect::Harmonic { joint: 2, order: 2 };
+    let lin = Linearisation::at(&fit, &data, &effect.params(), &folds);
+    let model = lin.model();
+    let mut with = model.clone();
+    with.extend(lin.positions(&effect.params()));
+    let held = lin.heldout(&data, &[Set::of(model), Set::of(with)]);
+    for (k, terms) in [Terms::geometric(), Terms::with(&[effect])]
+        .into_iter()
+        .enumerate()
+    {
+        let real = holdout::validate(
+            &Arm::default6(),
+            &data,
+            &Options {
+                terms,
+                ..opts.clone()
+            },
+            &folds,
+        );
+        let real: Vec<f64> = unit_errors(&data, &real)
+            .into_iter()
+            .map(Option::unwrap)
+            .collect();
+        assert_eq!(real.len(), held[k].len());
+        let (a, b): (f64, f64) = (real.iter().sum(), held[k].iter().sum());
+        println!("model {k}: held-out SS real {a:.6} mm², linearised {b:.6} mm²");
+        assert!((a - b).abs() < 1e-3 * a, "{a} vs {b}");
+        let worst = real
+            .iter()
+            .zip(&held[k])
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-6, "a unit differs by {worst} mm²");
+    }
+}
