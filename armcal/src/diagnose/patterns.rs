@@ -13,6 +13,12 @@
 //!
 //! Points are the geometric model's residuals on held-out folds, and the binned means of the
 //! same quantity for the geometric and the extended model show the pattern and its removal.
+//! In the panel of a named cause a third line shows the cause's own part (component plus
+//! residual): the extended model's held-out residuals plus the displacement the cause's term
+//! makes, i.e. the term as fitted and the scatter the data leave around it. Where the
+//! geometric model had absorbed part of the cause into its parameters (on real data a gravity
+//! compliance trades with link and offset errors), this line is steeper than the geometric
+//! model's residuals show.
 
 use super::Diagnosis;
 use crate::data::{Dataset, Kind};
@@ -107,9 +113,9 @@ pub struct Panel {
     pub before: Vec<(f64, f64)>,
     /// The extended model's binned means (`None` when no cause was named).
     pub after: Option<Vec<(f64, f64)>>,
-    /// For the panel of a named cause, when several are named: binned means of the held-out
-    /// residuals of the model with the other causes only, which shows this cause's pattern
-    /// without the others that overlap it.
+    /// For the panel of a named cause: binned means of its own part, the extended model's
+    /// held-out residuals plus the displacement its term makes (a component-plus-residual
+    /// view: the cause's signature as fitted, free of the other causes that overlap it).
     pub own: Option<Vec<(f64, f64)>>,
     /// Whether a named cause belongs to this panel (drawn with emphasis).
     pub named: bool,
@@ -167,18 +173,34 @@ pub fn figures(d: &Diagnosis, data: &Dataset) -> Vec<Figure> {
         .collect();
     let named = |e: Effect| d.causes.iter().any(|c| c.effect == e);
     let n = data.dof;
-    // For each named cause, when there are several: what the model with the other causes
-    // only misses, on held-out data.
-    let others: Vec<(Effect, Vec<Vector3<f64>>)> = d
-        .causes
-        .iter()
-        .filter_map(|c| {
-            let h = c.without.as_ref()?;
-            Some((c.effect, missing(&h.residuals.rows, frame.as_ref(), data)))
-        })
-        .collect();
+    // Each named cause's own part at every row: the extended model's held-out miss plus the
+    // displacement its term makes (the extended arm with and without the term, base frame).
+    let own_parts: Vec<(Effect, Vec<Vector3<f64>>)> = match &after_all {
+        None => Vec::new(),
+        Some(after) => d
+            .causes
+            .iter()
+            .map(|c| {
+                let ext = &d.extended.fit.arm;
+                let mut without = ext.clone();
+                for (p, v, _) in &c.values {
+                    p.add_to(&mut without, p.value(&d.extended.fit.start) - v);
+                }
+                let part = data
+                    .rows
+                    .iter()
+                    .zip(after)
+                    .map(|(r, m)| {
+                        m + forward::forward(ext, &r.theta, r.temp_c).p
+                            - forward::forward(&without, &r.theta, r.temp_c).p
+                    })
+                    .collect();
+                (c.effect, part)
+            })
+            .collect(),
+    };
     let own_of = |e: Option<Effect>| -> Option<&Vec<Vector3<f64>>> {
-        Some(&others.iter().find(|(x, _)| Some(*x) == e)?.1)
+        Some(&own_parts.iter().find(|(x, _)| Some(*x) == e)?.1)
     };
     // A panel from a per-row (x, y) function; `y` gets the miss vector and returns None to skip.
     let panel =

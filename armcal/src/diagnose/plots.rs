@@ -112,7 +112,7 @@ fn legend(area: &Area, x: i32, y: i32) -> DrawResult {
         OWN.stroke_width(3),
     ))?;
     area.draw_text(
-        "binned mean with the other named causes only (held out): the panel's cause alone",
+        "a named cause's own part: its term's displacement plus what is left (binned mean)",
         &font,
         (x + 36, y2),
     )?;

@@ -79,6 +79,10 @@ pub struct CauseReport {
     pub unit: String,
     /// Held-out RMS (µm) with this cause and those before it.
     pub holdout_rms_um_after: f64,
+    /// When several causes are named: held-out RMS (µm) of the extended model without this
+    /// one (the others kept), what it adds beyond them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub holdout_rms_um_without: Option<f64>,
     /// Links the data cannot tell from this one (joint numbers or `"probe"`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub indistinguishable_from: Vec<Value>,
@@ -356,6 +360,7 @@ pub fn build(d: &Diagnosis, data: &Dataset, figures: &[Figure]) -> Report {
                 uncertainty: c.magnitude_uncertainty,
                 unit: c.unit.into(),
                 holdout_rms_um_after: c.holdout_rms_um_after,
+                holdout_rms_um_without: c.without.as_ref().map(|h| h.summary.all.rms_um),
                 indistinguishable_from: c
                     .indistinguishable
                     .iter()
@@ -659,6 +664,12 @@ impl Report {
                 c.rms_effect_um,
                 c.holdout_rms_um_after
             );
+            if let Some(w) = c.holdout_rms_um_without {
+                let _ = writeln!(
+                    s,
+                    "    without it, the other causes kept: held-out RMS {w:.2} µm"
+                );
+            }
             let _ = writeln!(
                 s,
                 "    evidence: in sample F = {:.1} (p = {:.1e}); on held-out data (refits) a gain of \
