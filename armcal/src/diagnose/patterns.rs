@@ -228,16 +228,40 @@ pub fn figures(d: &Diagnosis, data: &Dataset) -> Vec<Figure> {
         };
     let mut figs = Vec::new();
 
+    // Rows where joint k's angle can be read from the ball: its lever |t_k| at least half
+    // the median and 2 % of the arm's reach (the last joint of a Panda turns the ball about
+    // an axis 0.1 mm away: nothing to read). `None`: too few such rows for a panel.
+    let reach = crate::sim::reach(arm);
+    let cut_of = |k: usize| -> Option<f64> {
+        let levers: Vec<f64> = geo.iter().map(|g| g.turn[k].norm()).collect();
+        let cut = (0.5 * median(levers.clone())).max(0.02 * reach);
+        let enough = levers.iter().filter(|l| **l >= cut).count() * 10 >= levers.len();
+        enough.then_some(cut)
+    };
+    // Hinge or swivel, where the arm's frames say it (not for D–H style twisted frames).
+    let plain = arm
+        .joints
+        .iter()
+        .all(|j| j.tilt.iter().all(|t| t.abs() < 1e-3));
+    let mut skipped = Vec::new();
+
     // Against each joint's reading.
     let mut panels = Vec::new();
     for k in 0..n {
-        let cut = 0.5 * median(geo.iter().map(|g| g.turn[k].norm()).collect());
-        let kind = if arm.is_hinge(k) { "hinge" } else { "swivel" };
+        let Some(cut) = cut_of(k) else {
+            skipped.push(k + 1);
+            continue;
+        };
+        let kind = match (plain, arm.is_hinge(k)) {
+            (false, _) => String::new(),
+            (true, true) => " (hinge)".to_string(),
+            (true, false) => " (swivel)".to_string(),
+        };
         let harmonic = (1..=super::candidates::MAX_ORDER)
             .map(|order| Effect::Harmonic { joint: k, order })
             .find(|e| named(*e));
         panels.push(panel(
-            format!("joint {} ({kind})", k + 1),
+            format!("joint {}{kind}", k + 1),
             format!("joint {} reading θ{} (deg)", k + 1, k + 1),
             "apparent angle error (µrad)".into(),
             harmonic,
@@ -249,11 +273,23 @@ pub fn figures(d: &Diagnosis, data: &Dataset) -> Vec<Figure> {
             },
         ));
     }
+    let mut caption =
+        "An encoder harmonic shows as a wave of its order (cycles per turn)".to_string();
+    if !skipped.is_empty() {
+        caption += &format!(
+            "; no panel for joint {}: the ball passes too close to its axis to show its angle",
+            skipped
+                .iter()
+                .map(|k| k.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
     figs.push(Figure {
         file: "residuals_vs_joint_angle.png".into(),
         title: "What the model misses, as each joint's angle error, against the joint's reading"
             .into(),
-        caption: "An encoder harmonic shows as a wave of its order (cycles per turn)".into(),
+        caption,
         panels,
     });
 
@@ -264,7 +300,7 @@ pub fn figures(d: &Diagnosis, data: &Dataset) -> Vec<Figure> {
         if span < 1.0 {
             continue;
         }
-        let cut = 0.5 * median(geo.iter().map(|g| g.turn[k].norm()).collect());
+        let Some(cut) = cut_of(k) else { continue };
         panels.push(panel(
             format!("joint {}", k + 1),
             format!("joint {} gravity lever a·((p − o) × z) (mm)", k + 1),

@@ -136,6 +136,7 @@ fn panel(area: &Area, p: &Panel) -> DrawResult {
         .before
         .iter()
         .chain(p.after.iter().flatten())
+        .chain(p.own.iter().flatten())
         .map(|q| q.1.abs())
         .fold(0.0, f64::max);
     let y = (bulk.max(means) * 1.15).max(1e-9);
