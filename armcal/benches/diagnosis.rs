@@ -130,10 +130,11 @@ fn mukca() {
         ..diagnose::Options::default()
     };
     println!(
-        "| unit | sessions | named causes (magnitude) | held-out RMS geometric → extended (µm) | \
-         MUKCa score, leave one session out: geometric → extended (mm) | s |"
+        "| unit | sessions | named causes (magnitude) | strongest candidate left out: F-test p, \
+         held-out p | held-out RMS geometric → extended (µm) | MUKCa score, leave one session \
+         out: geometric → extended (mm) | s |"
     );
-    println!("|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|");
     for (name, _) in mukca::unit_names(&dir).expect("mukca-groups.csv") {
         let unit = mukca::load(&dir, &name).expect("unit");
         let sessions = unit.groups().len();
@@ -141,7 +142,7 @@ fn mukca() {
         let d = match diagnose::diagnose(&unit.arm, &unit.data, &opts) {
             Ok(d) => d,
             Err(e) => {
-                println!("| {name} | {sessions} | – ({e}) | – | – | – |");
+                println!("| {name} | {sessions} | – ({e}) | – | – | – | – |");
                 continue;
             }
         };
@@ -174,8 +175,17 @@ fn mukca() {
         } else {
             score(&d.extended.effects)
         };
+        let strongest = d
+            .selection
+            .left_out
+            .iter()
+            .filter(|c| c.separable)
+            .min_by(|a, b| a.p.total_cmp(&b.p))
+            .map_or("–".to_string(), |c| {
+                format!("{} ({:.1e}, {:.2})", c.effect.spec(), c.p, c.p_holdout)
+            });
         println!(
-            "| {name} | {sessions} | {causes}{} | {:.1} → {:.1} | {geo:.3} → {ext:.3} | {dt:.1} |",
+            "| {name} | {sessions} | {causes}{} | {strongest} | {:.1} → {:.1} | {geo:.3} → {ext:.3} | {dt:.1} |",
             if rejected.is_empty() {
                 String::new()
             } else {

@@ -368,3 +368,25 @@ fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn binned_means_follow_the_pattern() {
+        // y = x on [0, 10): bin means are the bin centres.
+        let pts: Vec<(f64, f64)> = (0..1000)
+            .map(|i| (i as f64 / 100.0, i as f64 / 100.0))
+            .collect();
+        let b = binned(&pts, 10, 4);
+        assert_eq!(b.len(), 10);
+        for (x, y) in &b {
+            assert!((x - y).abs() < 0.01, "{x} {y}");
+        }
+        // Sparse bins are left out; a degenerate x range gives nothing.
+        let few = [(0.0, 1.0), (0.1, 1.0), (9.9, 5.0)];
+        assert!(binned(&few, 10, 2).iter().all(|b| b.1 == 1.0));
+        assert!(binned(&[(1.0, 1.0), (1.0, 2.0)], 5, 1).is_empty());
+    }
+}

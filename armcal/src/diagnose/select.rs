@@ -249,18 +249,18 @@ pub fn select(
         };
         let mut trial = chosen.clone();
         trial.push(best.effect);
-        let next = fit_with(start, data, opts, &trial)?;
-        let fitted = best
-            .effect
-            .params()
-            .iter()
-            .all(|p| next.ident.kept.iter().any(|&k| next.params[k] == *p));
-        if !fitted {
-            // The exact fit could not determine it after all (held as weak or inseparable):
-            // it cannot be named; try the others.
+        // The exact fit may not determine it after all (it holds it as weak or inseparable,
+        // or does not converge with it): then it cannot be named; try the others.
+        let next = fit_with(start, data, opts, &trial).ok().filter(|next| {
+            best.effect
+                .params()
+                .iter()
+                .all(|p| next.ident.kept.iter().any(|&k| next.params[k] == *p))
+        });
+        let Some(next) = next else {
             removals.insert(best.effect, usize::MAX);
             continue;
-        }
+        };
         chosen = trial;
         fit = next;
         steps.push(Step {
