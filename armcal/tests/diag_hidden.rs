@@ -296,3 +296,53 @@ fn a_wrist_compliance_below_the_noise_is_not_misnamed() {
     );
     assert!(fresh.rms_um < 3.0, "{fresh:?}");
 }
+
+#[test]
+fn a_seven_axis_arm_is_diagnosed_too() {
+    // The MUKCa Panda's nominal model (D–H twists in `tilt`) with random geometric errors and
+    // three hidden effects, 600 point readings at 16–28 °C.
+    let dir = armcal::mukca::default_dir();
+    let nominal = quatarm_ref::calfile::read(&dir.join("mukca-panda-panda_2.toml"))
+        .unwrap()
+        .arm;
+    let mut truth = armcal::sim::perturb(&nominal, 3e-4, 0.3, &mut armcal::sim::rng(5));
+    truth.joints[3].harmonics.push(Harmonic {
+        order: 2,
+        sin: 5e-5,
+        cos: 3e-5,
+    });
+    truth.joints[1].gravity = 3e-8;
+    truth.joints[4].thermal = 2e-5;
+    let mut o = armcal::sim::Options::new(armcal::data::Kind::Point, 600);
+    o.temp = Some((16.0, 28.0));
+    let data = armcal::sim::simulate(&truth, &o, &mut armcal::sim::rng(6))
+        .unwrap()
+        .data;
+    let d = diagnose::diagnose(&nominal, &data, &diagnose::Options::default()).unwrap();
+    let mut want = vec![
+        (Effect::Harmonic { joint: 3, order: 2 }, vec![]),
+        (Effect::Gravity(1), vec![]),
+        (Effect::Thermal(Link::Joint(4)), vec![]),
+    ];
+    want.sort();
+    assert_eq!(names(&d), want);
+    // Links of zero length (2 and 7 of the Panda) have nothing to expand.
+    let zero: Vec<Effect> = d.candidates.untestable.iter().map(|u| u.effect).collect();
+    assert!(zero.contains(&Effect::Thermal(Link::Joint(1))), "{zero:?}");
+    assert!(zero.contains(&Effect::Thermal(Link::Joint(6))), "{zero:?}");
+    let lim = armcal::sim::limits(&nominal);
+    let mut rng = armcal::sim::rng(7);
+    let poses: Vec<(Vec<f64>, f64)> = (0..2000)
+        .map(|k| {
+            (
+                armcal::sim::random_pose(&lim, &mut rng),
+                16.0 + 12.0 * (k as f64 / 2000.0),
+            )
+        })
+        .collect();
+    let geo = compare_aligned(&d.baseline.fit.arm, &truth, &poses).rms_um;
+    let ext = compare_aligned(&d.extended.fit.arm, &truth, &poses).rms_um;
+    println!("fresh poses: geometric {geo:.2} µm, extended {ext:.2} µm");
+    assert!(ext < 3.0, "{ext}");
+    assert!(geo > 10.0, "{geo}");
+}

@@ -196,6 +196,11 @@ fn no_effect_reason(arm: &Arm, e: Effect, thermal: bool) -> String {
             j + 1
         ),
         Effect::Thermal(_) if !thermal => "the data have no temperature spread".into(),
+        Effect::Thermal(Link::Joint(j))
+            if arm.joints[j].actual_link().iter().all(|c| c.abs() < 1e-9) =>
+        {
+            format!("link {} has no length: nothing to expand", j + 1)
+        }
         _ => format!(
             "{} does not change any residual of these data",
             describe_effect(arm, e)
