@@ -65,6 +65,11 @@ pub fn run() -> Result<()> {
     }
 
     step("QEMU end-to-end");
+    // The tests compare the stream with what the `armcal` binary prints.
+    check(
+        cargo().args(["build", "-p", "armcal"]),
+        "cargo build -p armcal",
+    )?;
     let mut e2e = cargo();
     e2e.args(["test", "-p", "host-tests"]);
     for b in BOARDS.iter().filter(|b| b.qemu.is_some()) {

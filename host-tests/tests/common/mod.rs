@@ -59,9 +59,24 @@ pub fn full_recording(name: &str, bounds: Bounds) {
         worst_tip = worst_tip.max(deviation_um(&c, &p));
         worst_dir = worst_dir.max(direction_deviation(&c, &n));
     }
+    // And literally what `armcal eval --precision <path>` prints for the same counts and
+    // calibration: its CSV is the same integers rendered with 6 and 9 decimals.
+    let eval = armcal_eval(b.precision, &readings);
+    assert_eq!(eval.len(), readings.len());
+    for (i, (rep, line)) in out.reports.iter().zip(&eval).enumerate() {
+        let mut csv = [0u8; quatarm::stream::MAX_CSV_LINE];
+        let n = quatarm::stream::write_csv_line(rep, &mut csv);
+        let streamed = std::str::from_utf8(&csv[..n]).unwrap().trim_end();
+        let fields: Vec<&str> = streamed.splitn(4, ',').collect();
+        assert_eq!(
+            fields[3], line,
+            "reading {i}: stream and `armcal eval` differ"
+        );
+    }
     eprintln!(
-        "{name}: {} readings, bit-identical to the host; max deviation from f64: tip {worst_tip:.4} um, direction {worst_dir:.2e}",
-        readings.len()
+        "{name}: {} readings, bit-identical to the host and to `armcal eval --precision {}`; max deviation from f64: tip {worst_tip:.4} um, direction {worst_dir:.2e}",
+        readings.len(),
+        b.precision
     );
     assert!(
         worst_tip <= bounds.tip_um,
@@ -73,6 +88,42 @@ pub fn full_recording(name: &str, bounds: Bounds) {
         "direction {worst_dir} > {}",
         bounds.dir
     );
+}
+
+/// Runs the `armcal` binary of this build (`cargo xtask test` builds it before these tests)
+/// as a user would: `armcal eval --calib <default calibration> --precision <p> <csv>`.
+fn armcal_eval(precision: &str, readings: &[Reading]) -> Vec<String> {
+    let exe = std::env::current_exe().unwrap();
+    let armcal = exe
+        .parent()
+        .and_then(|deps| deps.parent())
+        .map(|dir| dir.join("armcal"))
+        .unwrap();
+    assert!(
+        armcal.exists(),
+        "{} missing: build it with `cargo build -p armcal` (cargo xtask test does)",
+        armcal.display()
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("counts.csv");
+    std::fs::write(&csv, recording::eval_csv(readings)).unwrap();
+    let out = std::process::Command::new(&armcal)
+        .arg("eval")
+        .arg("--calib")
+        .arg(default_calibration_path())
+        .args(["--precision", precision])
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("x,y,z,nx,ny,nz"));
+    lines.map(str::to_owned).collect()
 }
 
 fn some_readings(n: usize) -> Vec<Reading> {
