@@ -225,18 +225,13 @@ pub fn text_mode(name: &str) {
     let (_, table) = calibration(&default_calibration_path()).unwrap();
     let mut readings = some_readings(4);
     readings[1].faults = 1;
+    let table_file = host_tests::e2e::table_file(&table).unwrap();
     let out = host_tests::qemu::run(
         &b,
         &b.elf(b.name),
         &replay_bytes(&readings, Some(Mode::Text)),
         &host_tests::qemu::Options {
-            table: Some(
-                host_tests::e2e::table_file(&table)
-                    .unwrap()
-                    .into_temp_path()
-                    .keep()
-                    .unwrap(),
-            ),
+            table: Some(table_file.path().to_path_buf()),
             ..Default::default()
         },
     )
