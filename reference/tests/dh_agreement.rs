@@ -8,7 +8,8 @@
 use nalgebra::{Matrix4, Rotation3, Unit, Vector3};
 use quatarm_ref::calfile;
 use quatarm_ref::dh::{agreement, tables, to_spec_arm, Agreement, Convention, DhArm, DhJoint};
-use quatarm_ref::{forward, Arm};
+use quatarm_ref::forward::forward;
+use quatarm_ref::Arm;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::f64::consts::{FRAC_PI_2, PI};
