@@ -107,17 +107,13 @@ pub fn solve<P: Problem>(
     let start_cost = normal.cost;
     let mut lambda = 1e-4;
     let mut iterations = 1;
+    let mut exhausted = false;
     progress(iterations, normal.cost);
-    loop {
+    // Every way out of the iteration says whether it converged and why; the outcome is the
+    // state and normal equations it leaves.
+    let (converged, reason) = 'solve: loop {
         if normal.cost == 0.0 {
-            return done(
-                state,
-                normal.cost,
-                start_cost,
-                iterations,
-                true,
-                "exact fit",
-            );
+            break (true, "exact fit");
         }
         // Scale to a unit diagonal; an unknown with no effect (zero column) stays put.
         let scale: Vec<f64> = (0..n)
@@ -134,26 +130,11 @@ pub fn solve<P: Problem>(
         let rnorm = (2.0 * normal.cost).sqrt();
         // First-order optimality: the residual is orthogonal to every column.
         if g.amax() <= 1e-13 * rnorm {
-            return done(
-                state,
-                normal.cost,
-                start_cost,
-                iterations,
-                true,
-                "gradient vanished",
-            );
+            break (true, "gradient vanished");
         }
         if iterations >= options.max_iterations {
-            let mut out = done(
-                state,
-                normal.cost,
-                start_cost,
-                iterations,
-                false,
-                "still improving",
-            );
-            out.exhausted = true;
-            return out;
+            exhausted = true;
+            break (false, "still improving");
         }
         let a = DMatrix::from_fn(n, n, |i, j| normal.jtj[(i, j)] * scale[i] * scale[j]);
         // Try damped steps until one lowers the cost.
@@ -169,14 +150,7 @@ pub fn solve<P: Problem>(
             let Some(ch) = Cholesky::new(m) else {
                 lambda *= 10.0;
                 if lambda > 1e16 {
-                    return done(
-                        state,
-                        normal.cost,
-                        start_cost,
-                        iterations,
-                        false,
-                        "the normal equations cannot be factored",
-                    );
+                    break 'solve (false, "the normal equations cannot be factored");
                 }
                 continue;
             };
@@ -207,59 +181,33 @@ pub fn solve<P: Problem>(
                 normal = problem.normal(&state);
                 iterations += 1;
                 progress(iterations, normal.cost);
-                if step_small || cost_small {
-                    let why = if step_small {
-                        "step below tolerance"
-                    } else {
-                        "cost no longer decreasing"
-                    };
-                    return done(state, normal.cost, start_cost, iterations, true, why);
+                if step_small {
+                    break 'solve (true, "step below tolerance");
+                }
+                if cost_small {
+                    break 'solve (true, "cost no longer decreasing");
                 }
                 break;
             }
             // The step does not lower the cost. If it is already negligible we are at the
             // minimum to rounding; otherwise damp harder.
             if step_small {
-                return done(
-                    state,
-                    normal.cost,
-                    start_cost,
-                    iterations,
-                    true,
-                    "no smaller cost within rounding",
-                );
+                break 'solve (true, "no smaller cost within rounding");
             }
             lambda *= 8.0;
             if lambda > 1e16 {
-                return done(
-                    state,
-                    normal.cost,
-                    start_cost,
-                    iterations,
-                    false,
-                    "no step lowers the cost",
-                );
+                break 'solve (false, "no step lowers the cost");
             }
         }
-    }
-}
-
-fn done<S>(
-    state: S,
-    cost: f64,
-    start_cost: f64,
-    iterations: usize,
-    converged: bool,
-    reason: &str,
-) -> Outcome<S> {
+    };
     Outcome {
         state,
-        cost,
+        cost: normal.cost,
         start_cost,
         iterations,
         converged,
-        exhausted: false,
-        reason: reason.to_string(),
+        exhausted,
+        reason: reason.into(),
     }
 }
 
