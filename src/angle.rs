@@ -1,28 +1,35 @@
-//! Joint angles from raw encoder counts: integer range reduction, half-angle sine and cosine,
-//! full-angle sine and cosine, and the harmonics' multiple angles.
+//! Joint angles from raw encoder counts: integer range reduction to an exact quarter turn and
+//! a small remainder, its sine and cosine, and what the chains build from them (the full
+//! angle, the joint quaternion's half angle, the harmonics' multiple angles).
 //!
 //! A count never passes through a rounded floating-point angle. It becomes a 32-bit binary
-//! angle t (one turn = 2^32) by one integer multiply; the top two bits of t (rounded) give the
-//! quadrant q, an exact quarter turn that the chain applies as a permutation of components,
-//! and the signed remainder r (|r| ≤ 2^29, an eighth of a turn) gives the half angle
-//! x = r·π/2^32 ≤ π/8 of the joint's remaining rotation. The quaternion of that rotation is
-//! (cos x, sin x · u); both come from short Taylor polynomials in x² whose truncation error
-//! (< 3e-11) is far below either evaluator's resolution. Small arguments keep the relative
-//! accuracy of the sine, which is what makes the half-angle form accurate in f32.
+//! angle t (one turn = 2^32) by one integer multiply (a shift for the usual power-of-two
+//! encoder). Its top two bits, rounded, give the quadrant q: θ = q·π/2 + 2x with the half
+//! remainder x = r·π/2^32, |r| ≤ 2^29, |x| ≤ π/8. Quarter turns are exact for vectors (a
+//! permutation with signs); x is small, so a turn by 2x written as a correction to the vector
+//! (v + (sin 2x · v⊥ − (1 − cos 2x) · v)) rounds little more than v itself. That is what keeps
+//! the f32 chain's large partial sums accurate ([`crate::chain`]).
+//!
+//! sin x and cos x − 1 are minimax polynomials in x² on [−π/8, π/8] (absolute error 4e-12 and
+//! 1.3e-10, under an eighth of the fixed-point resolution). Computing cos x − 1 directly keeps
+//! its relative accuracy where it is small, which the correction form needs.
 
-use crate::scalar::{mul_wide_u, Precision};
+use crate::scalar::{mul_wide_u, Precision, Scale};
 
 /// Converts counts of one joint into 32-bit binary angles (one turn = 2^32).
 ///
-/// For `counts_per_rev` = N: t = round((count · K) / 2^j) with K = round(2^(32+j) / N) < 2^32,
-/// j = ⌊log2 N⌋ (one less for a power of two, where K = 2^31 and t is exact). Otherwise off by
-/// at most 1.5 units of 2^-32 turn (2.2e-9 rad, 3 nm at 1.5 m).
+/// For `counts_per_rev` = 2^k: t = count · 2^(32−k), exact. Otherwise t = round(count' · K /
+/// 2^31) with count' = count · 2^(31−j), K = round(2^(32+j) / N) ∈ [2^31, 2^32), j = ⌊log2 N⌋,
+/// off by at most 1.5 units of 2^-32 turn (2.2e-9 rad, 3 nm at 1.5 m).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct CountScale {
     counts: u32,
     k: u32,
-    shift: u32,
+    /// Left shift of the count: 32 − k for 2^k counts, 31 − j otherwise.
+    pre: u8,
+    /// Whether `counts` is a power of two (then t = count << pre, no multiply).
+    pow2: bool,
 }
 
 impl CountScale {
@@ -31,20 +38,27 @@ impl CountScale {
         if !(2..=i32::MAX as u32).contains(&counts_per_rev) {
             return None;
         }
-        let mut j = 31 - counts_per_rev.leading_zeros(); // ⌊log2 N⌋
+        let j = 31 - counts_per_rev.leading_zeros(); // ⌊log2 N⌋
         if counts_per_rev.is_power_of_two() {
-            j -= 1;
+            return Some(CountScale {
+                counts: counts_per_rev,
+                k: 0,
+                pre: (32 - j) as u8,
+                pow2: true,
+            });
         }
         let n = u64::from(counts_per_rev);
-        let k = ((1u64 << (32 + j)) + n / 2) / n; // < 2^32
+        let k = ((1u64 << (32 + j)) + n / 2) / n; // in [2^31, 2^32)
         Some(CountScale {
             counts: counts_per_rev,
             k: k as u32,
-            shift: j,
+            pre: (31 - j) as u8,
+            pow2: false,
         })
     }
 
     /// Counts per revolution.
+    #[inline(always)]
     pub fn counts(&self) -> u32 {
         self.counts
     }
@@ -52,75 +66,98 @@ impl CountScale {
     /// The binary angle of a count (the caller has checked `count < counts()`).
     #[inline(always)]
     pub fn binary(&self, count: u32) -> u32 {
-        let half = (1u64 << self.shift) >> 1;
-        ((mul_wide_u(count, self.k) + half) >> self.shift) as u32
+        let c = count << (self.pre & 31);
+        if self.pow2 {
+            c
+        } else {
+            // c < 2^32 and K < 2^32: the product and the rounding constant fit in a u64.
+            ((mul_wide_u(c, self.k) + (1 << 30)) >> 31) as u32
+        }
     }
 }
 
-/// A joint's raw reading θ split for the chain: θ = q·π/2 + 2x.
+/// A joint's raw reading split as θ = q·π/2 + 2x, |x| ≤ π/8.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct JointAngle<P: Precision> {
-    /// Quadrant q (0..=3): an exact quarter-turn rotation.
-    pub quadrant: u8,
-    /// cos x, x the half angle of the remainder (|x| ≤ π/8).
-    pub c: P::U,
+pub struct Quarter<P: Precision> {
+    /// Quadrant q, 0..=3: whole quarter turns.
+    pub q: u8,
+    /// cos x − 1.
+    pub cm1: P::U,
     /// sin x.
     pub s: P::U,
 }
 
-impl<P: Precision> JointAngle<P> {
-    /// Splits a binary angle (one turn = 2^32) and evaluates the half-angle sine and cosine.
+impl<P: Precision> Quarter<P> {
+    /// Splits a binary angle (one turn = 2^32) and evaluates the remainder's sine and cosine.
     #[inline(always)]
-    pub fn from_binary(t: u32) -> JointAngle<P> {
-        let mut quadrant = (t >> 30) as u8;
-        let mut r = (t & 0x3fff_ffff) as i32;
-        if r >= 1 << 29 {
-            r -= 1 << 30;
-            quadrant = (quadrant + 1) & 3;
-        }
-        let (c, s) = half_sin_cos::<P>(r);
-        JointAngle { quadrant, c, s }
+    pub fn from_binary(t: u32) -> Quarter<P> {
+        let q = t.wrapping_add(1 << 29) >> 30;
+        let r = t.wrapping_sub(q << 30) as i32; // |r| ≤ 2^29
+        let x = P::angle(r);
+        let z = x.scale(x);
+        let [s1, s2, s3] = P::SIN;
+        let [c1, c2, c3] = P::COS;
+        let s = x + x.scale(z).scale(s1 + z.scale(s2 + z.scale(s3)));
+        let cm1 = z.scale(c1 + z.scale(c2 + z.scale(c3)));
+        Quarter { q: q as u8, cm1, s }
     }
 
-    /// cos θ and sin θ of the whole raw reading: the double-angle formulas on the half angle,
-    /// then the quadrant. Used for the harmonics and by the matrix chain.
+    /// The same remainder turned by a small extra angle 2h (harmonic and gravity
+    /// deflections, |h| ≤ 1e-3), to second order: x → x + h.
+    #[inline(always)]
+    pub fn turned(self, h: P::U) -> Quarter<P> {
+        let c = P::ONE + self.cm1;
+        let g = P::half(h.scale(h));
+        Quarter {
+            q: self.q,
+            cm1: self.cm1 - (self.s.scale(h) + c.scale(g)),
+            s: self.s + (c.scale(h) - self.s.scale(g)),
+        }
+    }
+
+    /// sin 2x and 1 − cos 2x = 2 sin²x: the remainder turn of a vector.
+    #[inline(always)]
+    pub fn double(&self) -> (P::U, P::U) {
+        let s2 = self.s + self.s;
+        (s2.scale(P::ONE + self.cm1), self.s.scale(s2))
+    }
+
+    /// cos θ and sin θ: the remainder's double angle, then the quadrant (exact).
     #[inline(always)]
     pub fn full(&self) -> (P::U, P::U) {
-        let s2 = self.s.scale(self.s);
-        let cr = P::ONE - (s2 + s2);
-        let sc = self.s.scale(self.c);
-        let sr = sc + sc;
-        match self.quadrant {
-            0 => (cr, sr),
-            1 => (-sr, cr),
-            2 => (-cr, -sr),
-            _ => (sr, -cr),
+        let (sin2, omc) = self.double();
+        quarter_turns(self.q, (P::ONE - omc, sin2))
+    }
+
+    /// cos θ/2 and sin θ/2 up to a shared sign, for the joint quaternion: the half remainder
+    /// x turned by q·π/4 — exact for even q, one rounding of (c ∓ s)·√½ for odd q.
+    #[inline(always)]
+    pub fn half(&self) -> (P::U, P::U) {
+        let (mut c, mut s) = (P::ONE + self.cm1, self.s);
+        if self.q & 2 != 0 {
+            (c, s) = (-s, c);
         }
+        if self.q & 1 != 0 {
+            (c, s) = ((c - s).scale(P::SQRT_HALF), (c + s).scale(P::SQRT_HALF));
+        }
+        (c, s)
     }
 }
 
-use crate::scalar::Scale;
-
-/// cos x and sin x for x = r·π/2^32, |r| ≤ 2^29.
+/// (x, y) turned by q quarter turns about z: exact.
 #[inline(always)]
-pub fn half_sin_cos<P: Precision>(r: i32) -> (P::U, P::U) {
-    let x = P::half_angle(r);
-    let x2 = x.scale(x);
-    let [s1, s2, s3, s4] = P::SIN;
-    let [c1, c2, c3, c4] = P::COS;
-    let sp = s3 + x2.scale(s4);
-    let sp = s2 + x2.scale(sp);
-    let sp = s1 + x2.scale(sp);
-    let sin = x + x.scale(x2.scale(sp));
-    let cp = c3 + x2.scale(c4);
-    let cp = c2 + x2.scale(cp);
-    let cp = c1 + x2.scale(cp);
-    let cos = P::ONE + x2.scale(cp);
-    (cos, sin)
+pub fn quarter_turns<E: Copy + core::ops::Neg<Output = E>>(q: u8, (x, y): (E, E)) -> (E, E) {
+    match q & 3 {
+        0 => (x, y),
+        1 => (-y, x),
+        2 => (-x, -y),
+        _ => (y, -x),
+    }
 }
 
-/// sin(hθ) and cos(hθ) for h = 1, 2, … by the angle-addition recurrence from sin θ, cos θ:
-/// one complex multiplication per order instead of a sine and cosine each.
+/// sin(hθ) and cos(hθ) for h = 1, 2, … from sin θ, cos θ: angle doubling where it reaches
+/// the next wanted order, else one angle-addition step — a complex product instead of a sine
+/// and cosine each.
 #[derive(Clone, Copy, Debug)]
 pub struct Multiples<P: Precision> {
     c1: P::U,
@@ -146,14 +183,23 @@ impl<P: Precision> Multiples<P> {
         }
     }
 
-    /// Advances to the next order.
+    /// Advances to order `h` (no-op if already there or past it).
     #[inline(always)]
-    pub fn step(&mut self) {
-        let c = self.c.scale(self.c1) - self.s.scale(self.s1);
-        let s = self.s.scale(self.c1) + self.c.scale(self.s1);
-        self.c = c;
-        self.s = s;
-        self.order += 1;
+    pub fn advance(&mut self, h: u32) {
+        while self.order < h {
+            if 2 * self.order <= h {
+                let cs = self.c.scale(self.s);
+                self.c = (self.c - self.s).scale(self.c + self.s);
+                self.s = cs + cs;
+                self.order *= 2;
+            } else {
+                let c = self.c.scale(self.c1) - self.s.scale(self.s1);
+                let s = self.s.scale(self.c1) + self.c.scale(self.s1);
+                self.c = c;
+                self.s = s;
+                self.order += 1;
+            }
+        }
     }
 }
 
@@ -162,56 +208,87 @@ mod tests {
     use super::*;
     use crate::scalar::{Fixed, F32};
 
-    fn check_half<P: Precision>(step: usize, tol: f64) -> f64 {
+    fn check_remainder<P: Precision>(step: usize, tol: f64) -> f64 {
         let mut worst = 0.0f64;
         for r in (-(1i64 << 29)..=(1i64 << 29)).step_by(step) {
-            let (c, s) = half_sin_cos::<P>(r as i32);
-            let x = r as f64 * core::f64::consts::PI / 4_294_967_296.0;
+            let a = Quarter::<P>::from_binary(r as u32);
+            assert!(a.q <= 1);
+            let x = (r as f64 - f64::from(a.q) * 1_073_741_824.0) * core::f64::consts::PI
+                / 4_294_967_296.0;
             worst = worst
-                .max((P::u_to_f64(c) - x.cos()).abs())
-                .max((P::u_to_f64(s) - x.sin()).abs());
+                .max((P::u_to_f64(a.cm1) - (x.cos() - 1.0)).abs())
+                .max((P::u_to_f64(a.s) - x.sin()).abs());
         }
-        assert!(worst < tol, "{} half-angle error {worst:e}", P::NAME);
+        assert!(worst < tol, "{} remainder error {worst:e}", P::NAME);
         worst
     }
 
     #[test]
-    fn half_angle_f32_dense_sweep() {
-        // Every 64th remainder: 16.8 million evaluations.
-        check_half::<F32>(64, 6.5e-8);
+    fn remainder_f32_dense_sweep() {
+        // Every 61st remainder over ±π/8: 17.6 million evaluations.
+        check_remainder::<F32>(61, 6e-8);
     }
 
     #[test]
-    fn half_angle_fixed_dense_sweep() {
-        check_half::<Fixed>(61, 3e-9);
+    fn remainder_fixed_dense_sweep() {
+        check_remainder::<Fixed>(59, 2e-9);
     }
 
-    #[test]
-    fn every_count_of_a_2_20_encoder() {
+    /// Largest errors over every count of a 2^20 encoder: (cos θ, sin θ) and the half angle
+    /// (sign-aligned).
+    fn every_count<P: Precision>() -> (f64, f64) {
         let scale = CountScale::new(1 << 20).unwrap();
-        let mut worst = [0.0f64; 2];
+        let mut worst = (0.0f64, 0.0f64);
         for count in 0..1u32 << 20 {
             let theta = 2.0 * core::f64::consts::PI * count as f64 / (1u64 << 20) as f64;
             let t = scale.binary(count);
             assert_eq!(t, count << 12);
-            let a = JointAngle::<F32>::from_binary(t);
-            let (c, s) = a.full();
-            worst[0] = worst[0]
-                .max((f64::from(c) - theta.cos()).abs())
-                .max((f64::from(s) - theta.sin()).abs());
-            let a = JointAngle::<Fixed>::from_binary(t);
-            let (c, s) = a.full();
-            worst[1] = worst[1]
-                .max((Fixed::u_to_f64(c) - theta.cos()).abs())
-                .max((Fixed::u_to_f64(s) - theta.sin()).abs());
+            let a = Quarter::<P>::from_binary(t);
+            let (fc, fs) = a.full();
+            worst.0 = worst
+                .0
+                .max((P::u_to_f64(fc) - theta.cos()).abs())
+                .max((P::u_to_f64(fs) - theta.sin()).abs());
+            let (c, s) = a.half();
+            let (c, s) = (P::u_to_f64(c), P::u_to_f64(s));
+            let (hc, hs) = ((theta / 2.0).cos(), (theta / 2.0).sin());
+            let sign = if c * hc + s * hs < 0.0 { -1.0 } else { 1.0 };
+            worst.1 = worst.1.max((sign * c - hc).abs()).max((sign * s - hs).abs());
         }
-        assert!(worst[0] < 2.5e-7, "f32 full-angle {:e}", worst[0]);
-        assert!(worst[1] < 6e-9, "fixed full-angle {:e}", worst[1]);
+        worst
+    }
+
+    #[test]
+    fn every_count_of_a_2_20_encoder() {
+        let (f, h) = every_count::<F32>();
+        assert!(f < 1.2e-7, "f32 full-angle {f:e}");
+        assert!(h < 1.5e-7, "f32 half-angle {h:e}");
+        let (f, h) = every_count::<Fixed>();
+        assert!(f < 4e-9, "fixed full-angle {f:e}");
+        assert!(h < 4e-9, "fixed half-angle {h:e}");
+    }
+
+    #[test]
+    fn small_turn_is_second_order() {
+        let t = 0x1234_5678u32;
+        let h = 7e-4f64;
+        let a = Quarter::<F32>::from_binary(t).turned(h as f32);
+        let theta = t as f64 / 4_294_967_296.0 * 2.0 * core::f64::consts::PI + 2.0 * h;
+        let (c, s) = a.full();
+        assert!((f64::from(c) - theta.cos()).abs() < 2e-7);
+        assert!((f64::from(s) - theta.sin()).abs() < 2e-7);
+    }
+
+    #[test]
+    fn quarter_turns_follow_the_right_hand() {
+        assert_eq!(quarter_turns(1, (1.0f32, 0.0)), (0.0, 1.0));
+        assert_eq!(quarter_turns(2, (1.0f32, 2.0)), (-1.0, -2.0));
+        assert_eq!(quarter_turns(3, (0.0f32, 1.0)), (1.0, 0.0));
     }
 
     #[test]
     fn odd_counts_per_revolution() {
-        for n in [2u32, 3, 360, 14_400, 1_000_000, (1 << 31) - 1, 1 << 24] {
+        for n in [2u32, 3, 360, 14_400, 1_000_000, (1 << 31) - 1, 1 << 24, 1 << 20] {
             let scale = CountScale::new(n).unwrap();
             for count in [0, 1, n / 3, n / 2, n - 1] {
                 let want = count as f64 / n as f64 * 4_294_967_296.0;
@@ -230,12 +307,13 @@ mod tests {
     #[test]
     fn multiples_follow_the_recurrence() {
         let th = 0.73f64;
-        let mut m = Multiples::<F32>::new(th.cos() as f32, th.sin() as f32);
-        for h in 1..=8 {
-            assert_eq!(m.order, h);
-            assert!((f64::from(m.s) - (h as f64 * th).sin()).abs() < 1e-6);
-            assert!((f64::from(m.c) - (h as f64 * th).cos()).abs() < 1e-6);
-            m.step();
+        for target in 1..=9u32 {
+            let mut m = Multiples::<F32>::new(th.cos() as f32, th.sin() as f32);
+            m.advance(target);
+            assert_eq!(m.order, target);
+            let h = target as f64;
+            assert!((f64::from(m.s) - (h * th).sin()).abs() < 2e-6);
+            assert!((f64::from(m.c) - (h * th).cos()).abs() < 2e-6);
         }
     }
 }

@@ -1,15 +1,25 @@
-//! What both chains share: the calibrated model converted to one evaluator's numbers, the
-//! per-point joint angles with their encoder harmonics, thermal expansion of the links, the
-//! gravity deflection angle, and the output point.
+//! What both chains share: the calibrated model converted to one evaluator's numbers, each
+//! joint's part of a reading (angle, encoder-harmonic error, link at temperature), the
+//! first-order gravity correction, and the output point.
 //!
-//! The chains differ only in how they represent and apply rotations ([`crate::chain`]:
-//! quaternions, tip to base; [`crate::matrix`]: 3×4 matrices, base to tip).
+//! The chains differ only in how they represent and compose rotations ([`crate::chain`]:
+//! quaternions; [`crate::matrix`]: 3×3 matrices), both base to tip.
+//!
+//! **Every joint turns about z.** A joint about x or y is rewritten at boot with the cyclic
+//! permutation P_a of the coordinates that takes z to its axis: R(u_a, θ) = P_a R(z, θ) P_a⁻¹,
+//! so the joint's fixed rotation becomes P_(a−1)⁻¹ M'_i P_a (a−1: the previous joint's axis),
+//! its link P_a⁻¹ v_i, the probe P_aN⁻¹ v_p. Permutations move components without arithmetic,
+//! so the rewritten constants are exact (the quaternion products with P are taken in f64 and
+//! rounded once, like any table value). The per-point code then has one shape, no branches or
+//! indexed loads for the axis, and the axis of joint k in the base frame is always the third
+//! column of its accumulated rotation.
 
-use crate::angle::{CountScale, JointAngle, Multiples};
+use crate::angle::{CountScale, Multiples, Quarter};
 use crate::rotate::Vec3;
 use crate::scalar::{Precision, Scale};
 use crate::table::{Table, MAX_HARMONICS, MAX_JOINTS};
 use core::fmt;
+use core::mem::MaybeUninit;
 
 /// Links have their nominal length at 20 °C (20,000 m°C).
 pub const REFERENCE_TEMP_MC: i32 = 20_000;
@@ -111,15 +121,17 @@ pub struct HarmonicTerm<P: Precision> {
 /// One joint's constants, except its fixed rotation (the chains keep that in their own form).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct JointModel<P: Precision> {
-    /// Axis 0 = x, 1 = y, 2 = z.
+    /// The joint's axis in the table: 0 = x, 1 = y, 2 = z (the chain turns about z, see the
+    /// module docs).
     pub axis: u8,
     /// Count to binary angle.
     pub scale: CountScale,
-    /// Link vector with its error (mm).
+    /// Link vector with its error (mm), in the z-axis frame of the joint; for the last joint
+    /// the probe vector is added (both turn with the last joint, so one rotation serves both).
     pub link: Vec3<P::L>,
-    /// Thermal expansion per m°C.
-    pub thermal: P::K,
-    /// Whether `thermal` is non-zero.
+    /// Its thermal expansion, mm per m°C (κ v, and κ_p v_p for the probe).
+    pub link_rate: Vec3<P::R>,
+    /// Whether `link_rate` is non-zero.
     pub has_thermal: bool,
     /// Gravity compliance.
     pub gravity: P::G,
@@ -129,6 +141,9 @@ pub struct JointModel<P: Precision> {
     pub harmonics: [HarmonicTerm<P>; MAX_HARMONICS],
     /// Number of harmonic terms.
     pub harmonic_count: u8,
+    /// For harmonics of orders 1 and 2 only (eccentricity and ellipticity, what calibrations
+    /// fit): (s₁, c₁, 2s₂, c₂), see [`JointModel::reading`].
+    pub harmonic_12: Option<[P::U; 4]>,
 }
 
 /// The calibrated model in one evaluator's numbers.
@@ -138,26 +153,19 @@ pub struct Model<P: Precision> {
     pub n: usize,
     /// Joints, base first.
     pub joints: [JointModel<P>; MAX_JOINTS],
-    /// Probe vector with its error (mm).
-    pub probe: Vec3<P::L>,
-    /// Its unit direction.
-    pub dir: Vec3<P::U>,
-    /// Probe thermal expansion per m°C.
-    pub probe_thermal: P::K,
-    /// Whether `probe_thermal` is non-zero.
-    pub probe_has_thermal: bool,
+    /// Unit direction of the probe vector, in the z-axis frame of the last joint.
+    pub probe_dir: Vec3<P::U>,
 }
 
-/// Every joint's state and the probe vector at temperature.
-pub type ReadingState<P> = ([JointState<P>; MAX_JOINTS], Vec3<<P as Precision>::L>);
-
-/// The per-point state both chains start from.
+/// Joint i's part of one reading.
 #[derive(Clone, Copy, Debug)]
-pub struct JointState<P: Precision> {
-    /// The raw reading split into quadrant and half angle.
-    pub angle: JointAngle<P>,
+pub struct JointReading<P: Precision> {
+    /// The raw reading θ as quarter turns and a small remainder.
+    pub angle: Quarter<P>,
+    /// cos θ and sin θ of the raw reading, where the harmonics or the caller needed them.
+    pub full: Option<(P::U, P::U)>,
     /// The encoder-harmonic angle error e (rad).
-    pub error: P::U,
+    pub e: P::U,
     /// The link at the reading's temperature.
     pub link: Vec3<P::L>,
 }
@@ -171,6 +179,14 @@ fn vec3<P: Precision>(v: [f64; 3], joint: usize) -> Result<Vec3<P::L>, ChainErro
         conv(P::l_from_f64(v[0]), joint)?,
         conv(P::l_from_f64(v[1]), joint)?,
         conv(P::l_from_f64(v[2]), joint)?,
+    ])
+}
+
+fn rates<P: Precision>(v: [f64; 3], joint: usize) -> Result<Vec3<P::R>, ChainError> {
+    Ok([
+        conv(P::r_from_f64(v[0]), joint)?,
+        conv(P::r_from_f64(v[1]), joint)?,
+        conv(P::r_from_f64(v[2]), joint)?,
     ])
 }
 
@@ -194,6 +210,60 @@ fn abs(x: f64) -> f64 {
     }
 }
 
+/// Component k of P_a⁻¹ v is component (k + a + 1) mod 3 of v (a = 2, z: the identity).
+fn unpermute(v: [f64; 3], axis: u8) -> [f64; 3] {
+    let a = usize::from(axis % 3);
+    [v[(a + 1) % 3], v[(a + 2) % 3], v[a % 3]]
+}
+
+/// The quaternion of P_a: a 120° turn about (1, 1, 1) for x, −120° for y, none for z.
+fn perm_quat(axis: u8) -> [f64; 4] {
+    match axis {
+        0 => [0.5, 0.5, 0.5, 0.5],
+        1 => [0.5, -0.5, -0.5, -0.5],
+        _ => [1.0, 0.0, 0.0, 0.0],
+    }
+}
+
+fn qmul(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
+    [
+        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+        a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+        a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
+    ]
+}
+
+/// Joint i's fixed rotation as a quaternion in the z-axis frames: P_prev⁻¹ M'_i P_axis.
+pub(crate) fn z_frame_quat(m: [f64; 4], prev_axis: u8, axis: u8) -> [f64; 4] {
+    let p = perm_quat(prev_axis);
+    let prev_inv = [p[0], -p[1], -p[2], -p[3]];
+    qmul(qmul(prev_inv, m), perm_quat(axis))
+}
+
+/// Joint i's fixed rotation without its relabelling, P_axis⁻¹ M'_i P_axis: M'_i itself, its
+/// vector part permuted into the joint's z-axis frame (exact), near the identity on a real arm.
+pub(crate) fn near_quat(m: [f64; 4], axis: u8) -> [f64; 4] {
+    let v = unpermute([m[1], m[2], m[3]], axis);
+    [m[0], v[0], v[1], v[2]]
+}
+
+/// Joint i's fixed rotation as a matrix in the z-axis frames: P_prev⁻¹ M'_i P_axis, which only
+/// permutes rows and columns.
+pub(crate) fn z_frame_matrix(m: [[f64; 3]; 3], prev_axis: u8, axis: u8) -> [[f64; 3]; 3] {
+    let (pa, a) = (usize::from(prev_axis % 3), usize::from(axis % 3));
+    let mut out = [[0.0; 3]; 3];
+    for (r, row) in out.iter_mut().enumerate() {
+        for (c, x) in row.iter_mut().enumerate() {
+            *x = m[(r + pa + 1) % 3][(c + a + 1) % 3];
+        }
+    }
+    out
+}
+
+/// The axis the base frame stands for before joint 1: z (no permutation).
+pub(crate) const BASE_AXIS: u8 = 2;
+
 impl<P: Precision> Model<P> {
     /// Converts a validated table; fails if a value does not fit this evaluator (for fixed
     /// point: the arm's reach, over ±100 °C of thermal expansion, must stay within 2 m).
@@ -201,6 +271,7 @@ impl<P: Precision> Model<P> {
         let n = table.joint_count();
         let mut joints = [JointModel::<P>::default(); MAX_JOINTS];
         let mut reach = 0.0;
+        let mut last_axis = BASE_AXIS;
         for (i, jm) in joints.iter_mut().enumerate().take(n) {
             let j = table
                 .joint(i)
@@ -216,21 +287,45 @@ impl<P: Precision> Model<P> {
                 };
             }
             harmonics[..count].sort_unstable_by_key(|h| h.order);
+            let mut h12 = [0.0f64; 4]; // s1, c1, s2, c2
+            let mut low = count > 0;
+            for src in &j.harmonics[..count] {
+                match src.order {
+                    1 => (h12[0], h12[1]) = (h12[0] + src.sin, h12[1] + src.cos),
+                    2 => (h12[2], h12[3]) = (h12[2] + src.sin, h12[3] + src.cos),
+                    _ => low = false,
+                }
+            }
+            let harmonic_12 = if low {
+                let [s1, c1, s2, c2] = h12;
+                Some(units::<P, 4>([s1, c1, 2.0 * s2, c2], no)?)
+            } else {
+                None
+            };
             reach += abs(j.link[0]) + abs(j.link[1]) + abs(j.link[2]);
+            let (mut link, mut rate) = (j.link, j.link.map(|x| x * j.thermal));
+            if i + 1 == n {
+                let p = table.probe();
+                reach += abs(p.vector[0]) + abs(p.vector[1]) + abs(p.vector[2]);
+                for k in 0..3 {
+                    link[k] += p.vector[k];
+                    rate[k] += p.vector[k] * p.thermal;
+                }
+            }
             *jm = JointModel {
                 axis: j.axis,
                 scale: conv(CountScale::new(j.counts), no)?,
-                link: vec3::<P>(j.link, no)?,
-                thermal: conv(P::k_from_f64(j.thermal), no)?,
-                has_thermal: j.thermal != 0.0,
+                link: vec3::<P>(unpermute(link, j.axis), no)?,
+                link_rate: rates::<P>(unpermute(rate, j.axis), no)?,
+                has_thermal: rate != [0.0; 3],
                 gravity: conv(P::g_from_f64(j.gravity), no)?,
                 has_gravity: j.gravity != 0.0,
                 harmonics,
                 harmonic_count: count as u8,
+                harmonic_12,
             };
+            last_axis = j.axis;
         }
-        let p = table.probe();
-        reach += abs(p.vector[0]) + abs(p.vector[1]) + abs(p.vector[2]);
         // Thermal expansion over the accepted temperatures stretches every link by at most
         // 4e-4 · 100 = 4 %.
         // Finite by the table's checks; written so that NaN would be refused too.
@@ -241,17 +336,13 @@ impl<P: Precision> Model<P> {
         Ok(Model {
             n,
             joints,
-            probe: vec3::<P>(p.vector, 0)?,
-            dir: units::<P, 3>(p.direction, 0)?,
-            probe_thermal: conv(P::k_from_f64(p.thermal), 0)?,
-            probe_has_thermal: p.thermal != 0.0,
+            probe_dir: units::<P, 3>(unpermute(table.probe().direction, last_axis), 0)?,
         })
     }
 
-    /// Checks a reading and computes what both chains need per joint: the split raw angle,
-    /// the harmonic angle error, the link at temperature; and the probe vector at temperature.
+    /// Checks the reading's shape and temperature; returns the temperature offset from 20 °C.
     #[inline(always)]
-    pub fn state(&self, counts: &[u32], temp_mc: i32) -> Result<ReadingState<P>, ChainError> {
+    pub fn check(&self, counts: &[u32], temp_mc: i32) -> Result<P::T, ChainError> {
         if counts.len() != self.n {
             return Err(ChainError::JointCount {
                 expected: self.n as u8,
@@ -262,60 +353,140 @@ impl<P: Precision> Model<P> {
         if !(-TEMP_RANGE_MC..=TEMP_RANGE_MC).contains(&dt) {
             return Err(ChainError::Temperature);
         }
-        let mut out = [JointState::<P> {
-            angle: JointAngle::default(),
-            error: P::U::default(),
-            link: [P::L::default(); 3],
-        }; MAX_JOINTS];
-        for (i, ((st, j), &count)) in out.iter_mut().zip(&self.joints).zip(counts).enumerate() {
-            if count >= j.scale.counts() {
-                return Err(ChainError::CountOutOfRange { joint: i as u8 + 1 });
+        Ok(P::temperature(dt))
+    }
+
+}
+
+impl<P: Precision> JointModel<P> {
+    /// The link at temperature: v (1 + κ ΔT) = v + (κ v) ΔT.
+    #[inline(always)]
+    pub fn link_at(&self, dt: P::T) -> Vec3<P::L> {
+        let v = self.link;
+        if !self.has_thermal {
+            return v;
+        }
+        let r = self.link_rate;
+        [
+            v[0] + P::expansion(r[0], dt),
+            v[1] + P::expansion(r[1], dt),
+            v[2] + P::expansion(r[2], dt),
+        ]
+    }
+
+    /// Joint `i`'s part of a reading: its angle split into quarter turns and a remainder, the
+    /// harmonic error and the link at temperature. `want_full` asks for cos θ and sin θ even
+    /// without harmonics.
+    ///
+    /// Harmonics of orders 1 and 2 take the double-angle identities in C = cos θ, S = sin θ:
+    /// e = S (s₁ + 2s₂ C − c₂ S) + C (c₁ + c₂ C) — 5 products, no loop.
+    #[inline(always)]
+    pub fn reading(
+        &self,
+        i: usize,
+        count: u32,
+        dt: P::T,
+        want_full: bool,
+    ) -> Result<JointReading<P>, ChainError> {
+        if count >= self.scale.counts() {
+            return Err(ChainError::CountOutOfRange { joint: i as u8 + 1 });
+        }
+        let angle = Quarter::<P>::from_binary(self.scale.binary(count));
+        let mut e = P::U::default();
+        let mut full = None;
+        if self.harmonic_count > 0 || want_full {
+            let (fc, fs) = angle.full();
+            full = Some((fc, fs));
+            if let Some([s1, c1, s2, c2]) = self.harmonic_12 {
+                e = fs.scale(s1 + fc.scale(s2) - fs.scale(c2)) + fc.scale(c1 + fc.scale(c2));
+            } else {
+                let mut m = Multiples::<P>::new(fc, fs);
+                for h in &self.harmonics[..usize::from(self.harmonic_count).min(MAX_HARMONICS)] {
+                    m.advance(h.order);
+                    e = e + (m.s.scale(h.sin) + m.c.scale(h.cos));
+                }
             }
-            st.angle = JointAngle::from_binary(j.scale.binary(count));
-            st.error = harmonic_error(j, &st.angle);
-            st.link = thermal::<P>(j.link, j.has_thermal, j.thermal, dt);
         }
-        let probe = thermal::<P>(self.probe, self.probe_has_thermal, self.probe_thermal, dt);
-        Ok((out, probe))
+        Ok(JointReading {
+            angle,
+            full,
+            e,
+            link: self.link_at(dt),
+        })
     }
 }
 
-/// The encoder-harmonic angle error e = Σ s_h sin(hθ) + c_h cos(hθ) of the raw reading.
-#[inline(always)]
-pub fn harmonic_error<P: Precision>(j: &JointModel<P>, angle: &JointAngle<P>) -> P::U {
-    let mut e = P::U::default();
-    if j.harmonic_count == 0 {
-        return e;
-    }
-    let (c, s) = angle.full();
-    let mut m = Multiples::<P>::new(c, s);
-    for h in &j.harmonics[..usize::from(j.harmonic_count).min(MAX_HARMONICS)] {
-        while m.order < h.order {
-            m.step();
+/// The spec's first-order gravity correction, gathered base to tip and applied at the end:
+/// with d_k = p − o_k and e_k = g_k a_k · (d_k × ẑ) = g_k (a_kx d_ky − a_ky d_kx),
+/// Δp = Σ e_k a_k × d_k, Δn = (Σ e_k a_k) × n. It agrees with the exactly deflected chain to
+/// a few nanometres (`armcal accuracy`, last row).
+pub struct Gravity<P: Precision> {
+    // Filled base to tip; only the first `count` are ever read. Left uninitialised because
+    // zeroing seven slots per reading (a memset) cost more than the whole correction.
+    terms: [MaybeUninit<GravityTerm<P>>; MAX_JOINTS],
+}
+
+/// How many [`Gravity`] slots are filled. Kept apart from the slots: in one struct, LLVM
+/// merges the zero count and the uninitialised slots into one memset of the whole.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct GravityCount(usize);
+
+#[derive(Clone, Copy)]
+struct GravityTerm<P: Precision> {
+    g: P::G,
+    axis: Vec3<P::U>,
+    origin: Vec3<P::L>,
+}
+
+impl<P: Precision> Default for Gravity<P> {
+    #[inline(always)]
+    fn default() -> Self {
+        Gravity {
+            terms: [const { MaybeUninit::uninit() }; MAX_JOINTS],
         }
-        e = e + (m.s.scale(h.sin) + m.c.scale(h.cos));
     }
-    e
 }
 
-/// A link vector at temperature: v (1 + κ ΔT).
-#[inline(always)]
-pub fn thermal<P: Precision>(v: Vec3<P::L>, has: bool, k: P::K, dt_mc: i32) -> Vec3<P::L> {
-    if !has {
-        return v;
+impl<P: Precision> Gravity<P> {
+    /// Records a compliant joint: its coefficient, its axis and its origin in the base frame.
+    #[inline(always)]
+    pub fn push(&mut self, n: &mut GravityCount, g: P::G, axis: Vec3<P::U>, origin: Vec3<P::L>) {
+        if let Some(slot) = self.terms.get_mut(n.0) {
+            slot.write(GravityTerm { g, axis, origin });
+            n.0 += 1;
+        }
     }
-    let s = P::thermal(k, dt_mc);
-    [
-        v[0] + v[0].scale(s),
-        v[1] + v[1].scale(s),
-        v[2] + v[2].scale(s),
-    ]
-}
 
-/// The gravity deflection of a joint, e = g · x, where x = a · (d × ẑ) = (a × d) · z is the
-/// lever term: a the joint's axis, d the vector from the joint's origin to the tip, z the
-/// vertical, all in one frame. Each chain evaluates x in the frame where it is cheapest.
-#[inline(always)]
-pub fn gravity_angle<P: Precision>(g: P::G, lever: P::L) -> P::U {
-    P::gravity(g, lever)
+    /// The corrected tip and direction.
+    #[inline(always)]
+    pub fn apply(
+        &self,
+        count: GravityCount,
+        p: Vec3<P::L>,
+        n: Vec3<P::U>,
+    ) -> (Vec3<P::L>, Vec3<P::U>) {
+        let zero = P::U::default();
+        let (mut w, mut dp) = ([zero; 3], [P::L::default(); 3]);
+        for slot in self.terms.iter().take(count.0) {
+            // SAFETY: `push` wrote every slot below `count` before counting it.
+            let GravityTerm { g, axis: a, origin: o } = unsafe { slot.assume_init_read() };
+            let d = [p[0] - o[0], p[1] - o[1], p[2] - o[2]];
+            let e = P::gravity(g, d[1].scale(a[0]) - d[0].scale(a[1]));
+            let b = [a[0].scale(e), a[1].scale(e), a[2].scale(e)];
+            w = [w[0] + b[0], w[1] + b[1], w[2] + b[2]];
+            dp = [
+                dp[0] + (d[2].scale(b[1]) - d[1].scale(b[2])),
+                dp[1] + (d[0].scale(b[2]) - d[2].scale(b[0])),
+                dp[2] + (d[1].scale(b[0]) - d[0].scale(b[1])),
+            ];
+        }
+        (
+            [p[0] + dp[0], p[1] + dp[1], p[2] + dp[2]],
+            [
+                n[0] + (n[2].scale(w[1]) - n[1].scale(w[2])),
+                n[1] + (n[0].scale(w[2]) - n[2].scale(w[0])),
+                n[2] + (n[1].scale(w[0]) - n[0].scale(w[1])),
+            ],
+        )
+    }
 }

@@ -1,124 +1,127 @@
-//! Rotations of 3-vectors: the unit quaternion sandwich q v q*, specialised for the three
-//! kinds of rotation a joint makes (exact quarter turns, a half-angle axis quaternion, a small
-//! correction angle).
+//! Unit quaternions for the chain: the Hamilton product, the product with a joint's rotation
+//! about z, and the rotation of a 3-vector (q v q*) with a first-order correction for |q| ≠ 1.
 //!
-//! Every function works on vectors of lengths or of dimensionless components alike (through
-//! [`Scale`]), so the probe position and the probe direction share one implementation.
+//! Every joint turns about z of its own frame: the model folds each joint's axis into its
+//! fixed rotation at boot (see [`crate::model`]), so the per-point code has one shape and no
+//! component permutations. Vector functions work on lengths and on dimensionless components
+//! alike (through [`Scale`]).
 
 use crate::scalar::{Precision, Scale};
 
 /// A 3-vector (x, y, z).
 pub type Vec3<E> = [E; 3];
 
-/// The two axes after `axis` in cyclic order: (axis + 1, axis + 2) mod 3, without a division
-/// (there is no divider on a Cortex-M0).
-#[inline(always)]
-pub fn cyclic(axis: u8) -> (usize, usize) {
-    match axis {
-        0 => (1, 2),
-        1 => (2, 0),
-        _ => (0, 1),
-    }
-}
-
-/// A unit quaternion (w, x, y, z), Hamilton convention, scalar first.
+/// A quaternion (w, x, y, z), Hamilton convention, scalar first.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Quat<P: Precision> {
     /// Scalar part.
     pub w: P::U,
     /// Vector part.
-    pub v: Vec3<P::U>,
-}
-
-#[inline(always)]
-fn cross<P: Precision, E: Scale<P>>(a: &Vec3<P::U>, b: &Vec3<E>) -> Vec3<E> {
-    [
-        b[2].scale(a[1]) - b[1].scale(a[2]),
-        b[0].scale(a[2]) - b[2].scale(a[0]),
-        b[1].scale(a[0]) - b[0].scale(a[1]),
-    ]
+    pub x: P::U,
+    /// Vector part.
+    pub y: P::U,
+    /// Vector part.
+    pub z: P::U,
 }
 
 impl<P: Precision> Quat<P> {
-    /// q v q*: with t = 2 (q⃗ × v), v' = v + (w t + q⃗ × t) (15 products, exact algebra for a
-    /// unit q). For a q near the identity the correction is small, so its rounding is small
-    /// too, and it joins v in one addition: the result rounds little more than v itself.
+    /// From (w, x, y, z).
+    pub fn new([w, x, y, z]: [P::U; 4]) -> Quat<P> {
+        Quat { w, x, y, z }
+    }
+
+    /// The Hamilton product self ⊗ o (16 products).
     #[inline(always)]
-    pub fn rotate<E: Scale<P>>(&self, v: Vec3<E>) -> Vec3<E> {
-        let t = cross::<P, E>(&self.v, &v);
-        let t = [t[0] + t[0], t[1] + t[1], t[2] + t[2]];
-        let u = cross::<P, E>(&self.v, &t);
+    pub fn mul(&self, o: &Quat<P>) -> Quat<P> {
+        let a = self;
+        Quat {
+            w: a.w.scale(o.w) - a.x.scale(o.x) - a.y.scale(o.y) - a.z.scale(o.z),
+            x: a.w.scale(o.x) + a.x.scale(o.w) + a.y.scale(o.z) - a.z.scale(o.y),
+            y: a.w.scale(o.y) - a.x.scale(o.z) + a.y.scale(o.w) + a.z.scale(o.x),
+            z: a.w.scale(o.z) + a.x.scale(o.y) - a.y.scale(o.x) + a.z.scale(o.w),
+        }
+    }
+
+    /// self ⊗ (c, 0, 0, s): a turn about z by the half angle whose cosine and sine are c, s
+    /// (8 products).
+    #[inline(always)]
+    pub fn mul_z(&self, c: P::U, s: P::U) -> Quat<P> {
+        Quat {
+            w: self.w.scale(c) - self.z.scale(s),
+            x: self.x.scale(c) + self.y.scale(s),
+            y: self.y.scale(c) - self.x.scale(s),
+            z: self.z.scale(c) + self.w.scale(s),
+        }
+    }
+
+    /// 2/|q|² ≈ 2(2 − |q|²) for |q|² = 1 + ε (error 2ε², 1e-13 for f32 rounding), where
+    /// the precision asks for it ([`Precision::DIVIDE_NORM`]); else `None`, taken as 2.
+    #[inline(always)]
+    pub fn rotation_factor(&self) -> Option<P::U> {
+        if !P::DIVIDE_NORM {
+            return None;
+        }
+        let n = self.w.scale(self.w) + self.x.scale(self.x) + self.y.scale(self.y)
+            + self.z.scale(self.z);
+        let k = (P::ONE + P::ONE) - n;
+        Some(k + k)
+    }
+
+    /// q v q* / |q|², with `f` = [`Quat::rotation_factor`].
+    ///
+    /// With t = q⃗ × v, q v q* = v + 2(w t + q⃗ × t) for a unit q; for any q the correction
+    /// w t + q⃗ × t is |q|² times that of q/|q| (it is quadratic in q), so scaling it by
+    /// 2/|q|² rotates exactly by q/|q| without normalising q. The correction is small where
+    /// the rotation is, and joins v in one rounding.
+    #[inline(always)]
+    pub fn rotate<E: Scale<P>>(&self, v: &Vec3<E>, f: Option<P::U>) -> Vec3<E> {
+        let t = [
+            v[2].scale(self.y) - v[1].scale(self.z),
+            v[0].scale(self.z) - v[2].scale(self.x),
+            v[1].scale(self.x) - v[0].scale(self.y),
+        ];
+        let c = [
+            t[0].scale(self.w) + t[2].scale(self.y) - t[1].scale(self.z),
+            t[1].scale(self.w) + t[0].scale(self.z) - t[2].scale(self.x),
+            t[2].scale(self.w) + t[1].scale(self.x) - t[0].scale(self.y),
+        ];
+        match f {
+            Some(f) => [
+                v[0] + c[0].scale(f),
+                v[1] + c[1].scale(f),
+                v[2] + c[2].scale(f),
+            ],
+            None => [
+                v[0] + (c[0] + c[0]),
+                v[1] + (c[1] + c[1]),
+                v[2] + (c[2] + c[2]),
+            ],
+        }
+    }
+
+    /// q* ẑ q for a unit q: the third row of its rotation matrix (the base frame's vertical
+    /// seen from the rotated frame, for gravity).
+    #[inline(always)]
+    pub fn z_row(&self) -> Vec3<P::U> {
+        let (x2, y2) = (self.x + self.x, self.y + self.y);
         [
-            v[0] + (t[0].scale(self.w) + u[0]),
-            v[1] + (t[1].scale(self.w) + u[1]),
-            v[2] + (t[2].scale(self.w) + u[2]),
+            self.z.scale(x2) - self.w.scale(y2),
+            self.z.scale(y2) + self.w.scale(x2),
+            P::ONE - self.x.scale(x2) - self.y.scale(y2),
         ]
     }
 
-    /// q* v q: the inverse rotation.
+    /// q ẑ q* for a unit q: the third column of its rotation matrix (the joint axis in the
+    /// base frame, for gravity; |q| ≠ 1 scales it by |q|², which gravity does not notice).
     #[inline(always)]
-    pub fn rotate_inverse<E: Scale<P>>(&self, v: Vec3<E>) -> Vec3<E> {
-        Quat::<P> {
-            w: self.w,
-            v: [-self.v[0], -self.v[1], -self.v[2]],
-        }
-        .rotate(v)
+    pub fn z_axis(&self) -> Vec3<P::U> {
+        let (x2, y2, z2) = (self.x + self.x, self.y + self.y, self.z + self.z);
+        [
+            self.x.scale(z2) + self.w.scale(y2),
+            self.y.scale(z2) - self.w.scale(x2),
+            P::ONE - self.x.scale(x2) - self.y.scale(y2),
+        ]
     }
-}
-
-/// Rotation by a quaternion (c, s·u) about the coordinate axis u = `axis` (half angle x with
-/// c = cos x, s = sin x): the sandwich product with the zero components dropped,
-/// v_b' = v_b − 2(c·s·v_d + s·s·v_b), v_d' = v_d + 2(c·s·v_b − s·s·v_d).
-#[inline(always)]
-pub fn axis_rotate<P: Precision, E: Scale<P>>(axis: u8, c: P::U, s: P::U, v: Vec3<E>) -> Vec3<E> {
-    let (b, d) = cyclic(axis);
-    let tb = v[b].scale(s);
-    let td = v[d].scale(s);
-    let db = td.scale(c) + tb.scale(s);
-    let dd = tb.scale(c) - td.scale(s);
-    let mut r = v;
-    r[b] = v[b] - (db + db);
-    r[d] = v[d] + (dd + dd);
-    r
-}
-
-/// Rotation by `quadrant` quarter turns about the coordinate axis `axis`: exact.
-#[inline(always)]
-pub fn quadrant_rotate<E: Copy + core::ops::Neg<Output = E>>(
-    axis: u8,
-    quadrant: u8,
-    v: Vec3<E>,
-) -> Vec3<E> {
-    let (b, d) = cyclic(axis);
-    let mut r = v;
-    match quadrant & 3 {
-        0 => {}
-        1 => {
-            r[b] = -v[d];
-            r[d] = v[b];
-        }
-        2 => {
-            r[b] = -v[b];
-            r[d] = -v[d];
-        }
-        _ => {
-            r[b] = v[d];
-            r[d] = -v[b];
-        }
-    }
-    r
-}
-
-/// Rotation by a small angle e about the coordinate axis `axis`, to second order
-/// (h = e²/2): v_b' = v_b − e·v_d − h·v_b, v_d' = v_d + e·v_b − h·v_d. For |e| ≤ 1e-3 the
-/// neglected third-order term is below 1.7e-10 rad.
-#[inline(always)]
-pub fn small_rotate<P: Precision, E: Scale<P>>(axis: u8, e: P::U, h: P::U, v: Vec3<E>) -> Vec3<E> {
-    let (b, d) = cyclic(axis);
-    let mut r = v;
-    r[b] = v[b] - (v[d].scale(e) + v[b].scale(h));
-    r[d] = v[d] + (v[b].scale(e) - v[d].scale(h));
-    r
 }
 
 #[cfg(test)]
@@ -131,55 +134,41 @@ mod tests {
     }
 
     #[test]
-    fn quarter_turns_follow_the_right_hand() {
-        // About z: x → y.
-        assert_eq!(quadrant_rotate(2, 1, [1.0f32, 0.0, 0.0]), [0.0, 1.0, 0.0]);
-        // About x: y → z.
-        assert_eq!(quadrant_rotate(0, 1, [0.0f32, 1.0, 0.0]), [0.0, 0.0, 1.0]);
-        // About y: z → x.
-        assert_eq!(quadrant_rotate(1, 1, [0.0f32, 0.0, 1.0]), [1.0, 0.0, 0.0]);
-        assert_eq!(quadrant_rotate(1, 3, [1.0f32, 0.0, 0.0]), [0.0, 0.0, 1.0]);
+    fn turn_about_z_follows_the_right_hand() {
+        // 90° about z: x → y.
+        let h = core::f32::consts::FRAC_1_SQRT_2;
+        let q = Quat::<F32>::new([1.0, 0.0, 0.0, 0.0]).mul_z(h, h);
+        let r = q.rotate(&[1.0f32, 0.0, 0.0], q.rotation_factor());
+        assert!(close(r, [0.0, 1.0, 0.0], 1e-6), "{r:?}");
+        assert!(close(q.z_axis(), [0.0, 0.0, 1.0], 1e-6));
     }
 
     #[test]
-    fn axis_rotation_matches_quaternion_rotation() {
-        let x = 0.3f64; // half angle
-        let (c, s) = (x.cos() as f32, x.sin() as f32);
-        let v = [1.0f32, 2.0, 3.0];
-        for axis in 0..3u8 {
-            let mut q = Quat::<F32> { w: c, v: [0.0; 3] };
-            q.v[axis as usize] = s;
-            let a = axis_rotate::<F32, f32>(axis, c, s, v);
-            let b = q.rotate(v);
-            let b64 = [f64::from(b[0]), f64::from(b[1]), f64::from(b[2])];
-            assert!(close(a, b64, 1e-5), "{a:?} {b:?}");
-        }
-        // About z by 0.6 rad.
-        let r = axis_rotate::<F32, f32>(2, c, s, [1.0, 0.0, 0.0]);
-        assert!(close(r, [0.6f64.cos(), 0.6f64.sin(), 0.0], 1e-6));
+    fn product_composes_rotations() {
+        // 120° about (1,1,1): x → y → z → x.
+        let p = Quat::<F32>::new([0.5, 0.5, 0.5, 0.5]);
+        let one = 1.0f32;
+        assert!(close(p.rotate(&[one, 0.0, 0.0], None), [0.0, 1.0, 0.0], 1e-6));
+        assert!(close(p.z_axis(), [1.0, 0.0, 0.0], 1e-6));
+        // p ⊗ p: 240°, x → z.
+        let pp = p.mul(&p);
+        assert!(close(pp.rotate(&[one, 0.0, 0.0], None), [0.0, 0.0, 1.0], 1e-6));
+        // (p ⊗ p) ⊗ p: identity.
+        let ppp = pp.mul(&p);
+        assert!((f64::from(ppp.w).abs() - 1.0).abs() < 1e-6);
     }
 
     #[test]
-    fn small_rotation_is_second_order_accurate() {
-        let e = 1e-3f64;
-        let r = small_rotate::<F32, f32>(0, e as f32, (e * e / 2.0) as f32, [0.0, 1000.0, 0.0]);
-        assert!(
-            close(r, [0.0, 1000.0 * e.cos(), 1000.0 * e.sin()], 1e-4),
-            "{r:?}"
-        );
-    }
-
-    #[test]
-    fn inverse_undoes_rotation() {
-        let q = Quat::<F32> {
-            w: 0.5,
-            v: [0.5, -0.5, 0.5],
-        };
-        let v = [3.0f32, -1.0, 2.0];
-        let back = q.rotate_inverse(q.rotate(v));
-        assert!(close(back, [3.0, -1.0, 2.0], 1e-6));
-        // First column of q's rotation matrix: (1 − 2(y²+z²), 2(xy + wz), 2(xz − wy)) = z.
-        let r = q.rotate([1.0f32, 0.0, 0.0]);
-        assert!(close(r, [0.0, 0.0, 1.0], 1e-6), "{r:?}");
+    fn non_unit_quaternion_rotates_as_its_unit() {
+        let s = 1.0 + 3e-7f32;
+        let q = Quat::<F32>::new([0.6 * s, 0.0, 0.8 * s, 0.0]);
+        let v = [1000.0f32, -200.0, 300.0];
+        let unit = Quat::<F32>::new([0.6, 0.0, 0.8, 0.0]);
+        let want = unit.rotate(&v, None);
+        let got = q.rotate(&v, q.rotation_factor());
+        let plain = q.rotate(&v, None);
+        let err = |a: Vec3<f32>| (0..3).map(|i| (a[i] - want[i]).abs()).fold(0.0, f32::max);
+        assert!(err(got) < 2e-4, "{got:?} vs {want:?}");
+        assert!(err(plain) > 5e-4, "the uncorrected rotation should scale");
     }
 }

@@ -38,26 +38,32 @@ pub trait Precision: Copy + Default + Debug + 'static {
     type L: Scale<Self>;
     /// Gravity compliance coefficient (rad/mm).
     type G: Copy + Default + Debug;
-    /// Thermal expansion coefficient, per milli-degree Celsius.
-    type K: Copy + Default + Debug;
+    /// A length's thermal expansion rate: mm per milli-degree Celsius.
+    type R: Copy + Default + Debug;
+    /// A temperature offset from 20 °C, converted once per reading.
+    type T: Copy + Default + Debug;
 
     /// Short name, for reports.
     const NAME: &'static str;
     /// 1.
     const ONE: Self::U;
-    /// Taylor coefficients of sin x / x in x²: −1/3!, 1/5!, −1/7!, 1/9!.
-    const SIN: [Self::U; 4];
-    /// Taylor coefficients of cos x in x²: −1/2!, 1/4!, −1/6!, 1/8!.
-    const COS: [Self::U; 4];
+    /// Minimax coefficients of (sin x − x) / x³ in x² on |x| ≤ π/8.
+    const SIN: [Self::U; 3];
+    /// Minimax coefficients of (cos x − 1) / x² in x² on |x| ≤ π/8.
+    const COS: [Self::U; 3];
+    /// √½.
+    const SQRT_HALF: Self::U;
 
-    /// Half of the angle of a binary remainder: `r · π / 2^32` rad (|r| ≤ 2^29, so ≤ π/8).
-    fn half_angle(r: i32) -> Self::U;
+    /// The angle of a binary remainder: `r · π / 2^32` rad (|r| ≤ 2^29, so ≤ π/8).
+    fn angle(r: i32) -> Self::U;
     /// `a / 2`.
     fn half(a: Self::U) -> Self::U;
     /// Gravity deflection angle `g · x` for a lever term x (mm).
     fn gravity(g: Self::G, x: Self::L) -> Self::U;
-    /// Thermal strain `κ · ΔT` for ΔT in milli-degrees Celsius.
-    fn thermal(k: Self::K, dt_mc: i32) -> Self::U;
+    /// A temperature offset ΔT (milli-degrees Celsius, |ΔT| ≤ 10^5) in evaluator form.
+    fn temperature(dt_mc: i32) -> Self::T;
+    /// The thermal expansion `rate · ΔT` of a length (mm).
+    fn expansion(rate: Self::R, dt: Self::T) -> Self::L;
 
     /// Conversion of a dimensionless table value; `None` where it does not fit.
     fn u_from_f64(x: f64) -> Option<Self::U>;
@@ -65,8 +71,8 @@ pub trait Precision: Copy + Default + Debug + 'static {
     fn l_from_f64(x: f64) -> Option<Self::L>;
     /// Conversion of a gravity coefficient (rad/mm); `None` where it does not fit.
     fn g_from_f64(g: f64) -> Option<Self::G>;
-    /// Conversion of a thermal coefficient (1/°C); `None` where it does not fit.
-    fn k_from_f64(kappa: f64) -> Option<Self::K>;
+    /// Conversion of an expansion rate (mm/°C); `None` where it does not fit.
+    fn r_from_f64(mm_per_degc: f64) -> Option<Self::R>;
 
     /// A length in integer nanometres, rounded to nearest (ties away from zero), saturating.
     fn l_to_nm(x: Self::L) -> i32;
@@ -79,7 +85,26 @@ pub trait Precision: Copy + Default + Debug + 'static {
     /// Largest absolute length (mm) that the chain may meet anywhere; the table must keep the
     /// arm's reach below it.
     const MAX_REACH_MM: f64;
+    /// Whether products drift |q| enough to matter, so that the quaternion chain divides the
+    /// norm out of every rotation (f32: some 1e-7 per product, 0.3 µm at the tip) rather than
+    /// trusting |q| = 1 (fixed point: 1e-9 per product, under a nanometre).
+    const DIVIDE_NORM: bool;
 }
+
+/// Minimax sin x = x + x³(S1 + x²(S2 + x² S3)) on |x| ≤ π/8: absolute error 3.6e-12
+/// (fitted for this chain; Taylor would leave 6e-10).
+const SIN_F64: [f64; 3] = [
+    -0.166_666_664_143_413_52,
+    0.008_333_247_965_370_043,
+    -0.000_197_543_313_478_740_45,
+];
+/// Minimax cos x − 1 = x²(C1 + x²(C2 + x² C3)) on |x| ≤ π/8: absolute error 1.3e-10
+/// (Taylor would leave 1.4e-8).
+const COS_F64: [f64; 3] = [
+    -0.499_999_983_375_524_2,
+    0.041_666_012_107_547_654,
+    -0.001_381_560_031_694_282_4,
+];
 
 // ---------------------------------------------------------------------------------------------
 // f32
@@ -102,25 +127,18 @@ impl Precision for F32 {
     type U = f32;
     type L = f32;
     type G = f32;
-    type K = f32;
+    type R = f32;
+    type T = f32;
     const NAME: &'static str = "f32";
     const ONE: f32 = 1.0;
-    const SIN: [f32; 4] = [
-        (-1.0 / 6.0) as f32,
-        (1.0 / 120.0) as f32,
-        (-1.0 / 5040.0) as f32,
-        (1.0 / 362880.0) as f32,
-    ];
-    const COS: [f32; 4] = [
-        -0.5,
-        (1.0 / 24.0) as f32,
-        (-1.0 / 720.0) as f32,
-        (1.0 / 40320.0) as f32,
-    ];
+    const SIN: [f32; 3] = [SIN_F64[0] as f32, SIN_F64[1] as f32, SIN_F64[2] as f32];
+    const COS: [f32; 3] = [COS_F64[0] as f32, COS_F64[1] as f32, COS_F64[2] as f32];
+    const SQRT_HALF: f32 = core::f32::consts::FRAC_1_SQRT_2;
     const MAX_REACH_MM: f64 = 1.0e6;
+    const DIVIDE_NORM: bool = true;
 
     #[inline(always)]
-    fn half_angle(r: i32) -> f32 {
+    fn angle(r: i32) -> f32 {
         // r has at most 30 significant bits (18 for a 2^20-count encoder, exact in f32); the
         // conversion rounds it to 24, a relative error of at most 6e-8.
         const K: f32 = (core::f64::consts::PI / 4_294_967_296.0) as f32;
@@ -135,8 +153,13 @@ impl Precision for F32 {
         g * x
     }
     #[inline(always)]
-    fn thermal(k: f32, dt_mc: i32) -> f32 {
-        k * dt_mc as f32
+    fn temperature(dt_mc: i32) -> f32 {
+        // Exact: |ΔT| ≤ 10^5 < 2^24.
+        dt_mc as f32
+    }
+    #[inline(always)]
+    fn expansion(rate: f32, dt: f32) -> f32 {
+        rate * dt
     }
     fn u_from_f64(x: f64) -> Option<f32> {
         finite_below(x, 2.0).map(|x| x as f32)
@@ -147,8 +170,8 @@ impl Precision for F32 {
     fn g_from_f64(g: f64) -> Option<f32> {
         finite_below(g, 1.0).map(|x| x as f32)
     }
-    fn k_from_f64(kappa: f64) -> Option<f32> {
-        finite_below(kappa, 1.0).map(|x| (x / 1000.0) as f32)
+    fn r_from_f64(mm_per_degc: f64) -> Option<f32> {
+        finite_below(mm_per_degc, 1.0e3).map(|x| (x / 1000.0) as f32)
     }
     fn l_to_nm(x: f32) -> i32 {
         f32_scaled(x, 1_000_000)
@@ -311,6 +334,31 @@ pub fn mul_wide_u(a: u32, b: u32) -> u64 {
     }
 }
 
+/// `a·b / 2^30` rounded to nearest (ties up): the product of two fixed-point numbers with 30
+/// fractional bits in one of them, the chain's most frequent operation.
+///
+/// Built from the four 16×16-bit partial products in 32-bit arithmetic only, the same on
+/// every target so that host and firmware agree bit for bit. With a = aₕ2¹⁶ + aₗ,
+/// a·b/2³⁰ = 4aₕbₕ + ((aₕbₗ + aₗbₕ)/2 + aₗbₗ/2¹⁷)/2¹³; the three terms are floored to units
+/// of 2¹⁷ before the sum (which keeps it within 32 bits), so the result is round-to-nearest
+/// of a value at most 2⁻¹² of a unit below the exact product: it differs from exact rounding
+/// only within 2⁻¹² of a tie. On ARMv6-M this is ~20 instructions where the 64-bit product
+/// and shift took ~35.
+#[inline(always)]
+pub fn mul_q30(a: i32, b: i32) -> i32 {
+    let (ah, al) = (a >> 16, (a as u32) & 0xffff);
+    let (bh, bl) = (b >> 16, (b as u32) & 0xffff);
+    let hh = ah.wrapping_mul(bh); // |.| ≤ 2^30
+    let hl = ah.wrapping_mul(bl as i32); // |.| < 2^31
+    let lh = (al as i32).wrapping_mul(bh);
+    let ll = al.wrapping_mul(bl); // < 2^32
+    let mid = (hl >> 1)
+        .wrapping_add(lh >> 1)
+        .wrapping_add((ll >> 17) as i32)
+        .wrapping_add(1 << 12);
+    (hh << 2).wrapping_add(mid >> 13)
+}
+
 /// `(a·b) >> s`, rounded to nearest, truncated to 32 bits.
 #[inline(always)]
 fn mul_shift(a: i32, b: i32, s: u32) -> i32 {
@@ -328,21 +376,21 @@ const fn q30(x: f64) -> Unit {
 
 /// Fractional bits of the gravity coefficient: g·2^50 in an i32 (|g| < 1.9e-6 rad/mm).
 const G_FRAC: u32 = 50;
-/// Fractional bits of the thermal coefficient per milli-degree: (κ/1000)·2^52 in an i32
-/// (|κ| < 4.7e-4 /°C).
-const K_FRAC: u32 = 52;
+/// Fractional bits of an expansion rate in mm per milli-degree: 2^40 (|rate| < 1.9e-3 mm/m°C,
+/// where 2 m at κ = 4e-4 /°C needs 8e-4; resolution 0.1 nm over 100 °C).
+const R_FRAC: u32 = 40;
 
 impl Scale<Fixed> for Unit {
     #[inline(always)]
     fn scale(self, u: Unit) -> Unit {
-        Unit::from_bits(mul_shift(self.bits(), u.bits(), 30))
+        Unit::from_bits(mul_q30(self.bits(), u.bits()))
     }
 }
 
 impl Scale<Fixed> for Len {
     #[inline(always)]
     fn scale(self, u: Unit) -> Len {
-        Len::from_bits(mul_shift(self.bits(), u.bits(), 30))
+        Len::from_bits(mul_q30(self.bits(), u.bits()))
     }
 }
 
@@ -350,27 +398,20 @@ impl Precision for Fixed {
     type U = Unit;
     type L = Len;
     type G = i32;
-    type K = i32;
+    type R = i32;
+    type T = i32;
     const NAME: &'static str = "fixed";
     const ONE: Unit = Unit::from_bits(1 << 30);
-    const SIN: [Unit; 4] = [
-        q30(-1.0 / 6.0),
-        q30(1.0 / 120.0),
-        q30(-1.0 / 5040.0),
-        q30(1.0 / 362880.0),
-    ];
-    const COS: [Unit; 4] = [
-        q30(-0.5),
-        q30(1.0 / 24.0),
-        q30(-1.0 / 720.0),
-        q30(1.0 / 40320.0),
-    ];
+    const SIN: [Unit; 3] = [q30(SIN_F64[0]), q30(SIN_F64[1]), q30(SIN_F64[2])];
+    const COS: [Unit; 3] = [q30(COS_F64[0]), q30(COS_F64[1]), q30(COS_F64[2])];
+    const SQRT_HALF: Unit = q30(core::f64::consts::FRAC_1_SQRT_2);
     /// Positions are I12F20: keep 48 mm of the ±2048 mm range as margin for rounding.
     const MAX_REACH_MM: f64 = 2000.0;
+    const DIVIDE_NORM: bool = false;
 
     #[inline(always)]
-    fn half_angle(r: i32) -> Unit {
-        // x = r·π/2^32 in F30 = r·(π/4)·2^-30·... : multiply by round(π/4 · 2^31), shift 31.
+    fn angle(r: i32) -> Unit {
+        // x = r·π/2^32 in F30 is r·π/4: multiply by round(π/4 · 2^31), shift 31.
         const PI_4_Q31: i32 = 1_686_629_713;
         Unit::from_bits(mul_shift(r, PI_4_Q31, 31))
     }
@@ -384,8 +425,12 @@ impl Precision for Fixed {
         Unit::from_bits(mul_shift(g, x.bits(), G_FRAC + 20 - 30))
     }
     #[inline(always)]
-    fn thermal(k: i32, dt_mc: i32) -> Unit {
-        Unit::from_bits(mul_shift(k, dt_mc, K_FRAC - 30))
+    fn temperature(dt_mc: i32) -> i32 {
+        dt_mc
+    }
+    #[inline(always)]
+    fn expansion(rate: i32, dt_mc: i32) -> Len {
+        Len::from_bits(mul_shift(rate, dt_mc, R_FRAC - 20))
     }
     fn u_from_f64(x: f64) -> Option<Unit> {
         I2F30::checked_from_num(x).map(Unit)
@@ -400,18 +445,9 @@ impl Precision for Fixed {
         // Through an I14F50 in an i64 so that no f64 arithmetic is needed on the target.
         fixed::types::I14F50::checked_from_num(g).and_then(|v| i32::try_from(v.to_bits()).ok())
     }
-    fn k_from_f64(kappa: f64) -> Option<i32> {
-        // κ/1000 · 2^52 = κ · 2^52 / 1000: take κ·2^52 as I12F52 bits, then divide in integers.
-        let v = fixed::types::I12F52::checked_from_num(kappa)?.to_bits();
-        let q = v / 1000
-            + if v % 1000 >= 500 {
-                1
-            } else if v % 1000 <= -500 {
-                -1
-            } else {
-                0
-            };
-        i32::try_from(q).ok()
+    fn r_from_f64(mm_per_degc: f64) -> Option<i32> {
+        let v = mm_per_degc / 1000.0;
+        fixed::types::I24F40::checked_from_num(v).and_then(|v| i32::try_from(v.to_bits()).ok())
     }
     fn l_to_nm(x: Len) -> i32 {
         // bits·10^6 / 2^20, rounded (ties up).
@@ -453,6 +489,41 @@ mod tests {
     }
 
     #[test]
+    fn q30_products_round_to_nearest() {
+        // Against the exact product: equal, except one unit low within 2^-12 of a tie.
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x as i32
+        };
+        let edges = [0, 1, -1, i32::MAX, i32::MIN, 1 << 30, -(1 << 30), 0xffff, -0x10000];
+        let mut pairs: Vec<(i32, i32)> = edges
+            .iter()
+            .flat_map(|&a| edges.iter().map(move |&b| (a, b)))
+            .collect();
+        for _ in 0..2_000_000 {
+            // Operands of the chain's size: |a|, |b| ≤ 2^31 with |a·b| < 2^61.
+            let (a, b) = (next(), next() >> (next() as u32 & 3));
+            pairs.push((a, b));
+        }
+        for (a, b) in pairs {
+            let p = a as i128 * b as i128;
+            if (p >> 30) > i32::MAX as i128 || (p >> 30) < i32::MIN as i128 {
+                continue;
+            }
+            let exact = ((p + (1 << 29)) >> 30) as i32;
+            let got = mul_q30(a, b);
+            let frac = (p & ((1 << 30) - 1)) as f64 / (1u64 << 30) as f64;
+            assert!(
+                got == exact || (got == exact - 1 && (frac - 0.5).abs() < 1.0 / 4096.0),
+                "{a} * {b}: {got} vs {exact}"
+            );
+        }
+    }
+
+    #[test]
     fn f32_scaling_is_exact() {
         // 1234.5678 mm is not representable; the f32 nearest is converted exactly.
         let x = 1234.5678f32;
@@ -480,9 +551,10 @@ mod tests {
         let g = Fixed::g_from_f64(5e-8).unwrap();
         let e = Fixed::gravity(g, Fixed::l_from_f64(1000.0).unwrap());
         assert!((Fixed::u_to_f64(e) - 5e-5).abs() < 2e-9);
-        let k = Fixed::k_from_f64(2.3e-5).unwrap();
-        let s = Fixed::thermal(k, 15_000);
-        assert!((Fixed::u_to_f64(s) - 2.3e-5 * 15.0).abs() < 2e-9);
+        let r = Fixed::r_from_f64(300.0 * 2.3e-5).unwrap();
+        let x = Fixed::expansion(r, 15_000);
+        assert!((Fixed::l_to_f64(x) - 300.0 * 2.3e-5 * 15.0).abs() < 1e-6);
+        assert!(Fixed::r_from_f64(2.0).is_none());
         assert!(Fixed::g_from_f64(1e-3).is_none());
         assert!(Fixed::l_from_f64(3000.0).is_none());
         assert!(Fixed::u_from_f64(f64::NAN).is_none());
