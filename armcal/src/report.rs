@@ -460,15 +460,8 @@ impl Report {
                 let _ = writeln!(s, "  {}: {}", h.description, h.explanation);
             }
         }
-        if self.output.calibration.is_some() || self.output.table.is_some() {
-            let _ = writeln!(s);
-            if let Some(c) = &self.output.calibration {
-                let _ = writeln!(s, "wrote {c}");
-            }
-            if let Some(t) = &self.output.table {
-                let _ = writeln!(s, "wrote {t}");
-            }
-        }
+        let o = &self.output;
+        wrote(&mut s, o.calibration.iter().chain(&o.table));
         for w in &self.warnings {
             let _ = writeln!(s, "warning: {w}");
         }
@@ -477,6 +470,23 @@ impl Report {
 
     /// The report as JSON.
     pub fn json(&self) -> String {
-        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+        pretty_json(self)
+    }
+}
+
+/// A report as pretty JSON; should serialising fail, a JSON object saying why, so that a
+/// program reading stdout still gets JSON.
+pub(crate) fn pretty_json(report: &impl Serialize) -> String {
+    serde_json::to_string_pretty(report).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+}
+
+/// The "wrote <file>" lines that close a report, set off by a blank line when there are any.
+pub(crate) fn wrote<'a>(s: &mut String, files: impl IntoIterator<Item = &'a String>) {
+    let mut files = files.into_iter().peekable();
+    if files.peek().is_some() {
+        let _ = writeln!(s);
+    }
+    for f in files {
+        let _ = writeln!(s, "wrote {f}");
     }
 }

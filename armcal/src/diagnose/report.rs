@@ -19,6 +19,7 @@ use super::patterns::Figure;
 use super::{Diagnosis, Model};
 use crate::data::{Dataset, Kind};
 use crate::params::{Effect, Link};
+use crate::report::{pretty_json, wrote};
 use serde::Serialize;
 use serde_json::Value;
 use std::fmt::Write as _;
@@ -732,18 +733,7 @@ impl Report {
             let _ = writeln!(s, "  held-out fold not fitted: {f}");
         }
         let o = &self.output;
-        if o.calibration.is_some() || o.table.is_some() || !o.plots.is_empty() {
-            let _ = writeln!(s);
-        }
-        if let Some(c) = &o.calibration {
-            let _ = writeln!(s, "wrote {c}");
-        }
-        if let Some(t) = &o.table {
-            let _ = writeln!(s, "wrote {t}");
-        }
-        for p in &o.plots {
-            let _ = writeln!(s, "wrote {p}");
-        }
+        wrote(&mut s, o.calibration.iter().chain(&o.table).chain(&o.plots));
         if let Some(e) = &o.table_error {
             let _ = writeln!(s, "binary table NOT written: {e}");
         }
@@ -755,6 +745,6 @@ impl Report {
 
     /// The report as JSON.
     pub fn json(&self) -> String {
-        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+        pretty_json(self)
     }
 }
