@@ -253,7 +253,10 @@ mod tests {
             let (c, s) = (P::u_to_f64(c), P::u_to_f64(s));
             let (hc, hs) = ((theta / 2.0).cos(), (theta / 2.0).sin());
             let sign = if c * hc + s * hs < 0.0 { -1.0 } else { 1.0 };
-            worst.1 = worst.1.max((sign * c - hc).abs()).max((sign * s - hs).abs());
+            worst.1 = worst
+                .1
+                .max((sign * c - hc).abs())
+                .max((sign * s - hs).abs());
         }
         worst
     }
@@ -288,7 +291,16 @@ mod tests {
 
     #[test]
     fn odd_counts_per_revolution() {
-        for n in [2u32, 3, 360, 14_400, 1_000_000, (1 << 31) - 1, 1 << 24, 1 << 20] {
+        for n in [
+            2u32,
+            3,
+            360,
+            14_400,
+            1_000_000,
+            (1 << 31) - 1,
+            1 << 24,
+            1 << 20,
+        ] {
             let scale = CountScale::new(n).unwrap();
             for count in [0, 1, n / 3, n / 2, n - 1] {
                 let want = count as f64 / n as f64 * 4_294_967_296.0;

@@ -138,14 +138,10 @@ impl<P: Precision> Chain<P> {
         let mut steps = [const { MaybeUninit::<Step<P>>::uninit() }; MAX_JOINTS];
         let mut frames = [const { MaybeUninit::<Frame<P>>::uninit() }; MAX_JOINTS];
         let mut q = Quat::<P>::default();
-        for (i, (((j, r), &count), (step, frame))) in m
-            .joints
-            .iter()
-            .zip(&self.rotation)
-            .zip(counts)
-            .zip(steps.iter_mut().zip(frames.iter_mut()))
-            .enumerate()
-        {
+        // `check` made counts.len() = n ≤ MAX_JOINTS.
+        let n = counts.len().min(MAX_JOINTS);
+        for i in 0..n {
+            let (j, r, count) = (&m.joints[i], &self.rotation[i], counts[i]);
             let jr = j.reading(i, count, dt, false)?;
             let mut angle = jr.angle;
             if j.harmonic_count > 0 {
@@ -155,37 +151,31 @@ impl<P: Precision> Chain<P> {
             q = if i == 0 { r.full } else { q.mul(&r.full) };
             q = q.mul_z(c, s);
             if j.has_gravity {
-                frame.write(Frame {
+                frames[i].write(Frame {
                     vertical: q.z_row(),
                     axis: q.z_axis(),
                 });
             }
-            step.write(Step {
+            steps[i].write(Step {
                 angle,
                 link: jr.link,
             });
         }
 
         // Tip to base.
-        let n = m.n;
         let mut w: Vec3<P::L> = [P::L::default(); 3];
         let mut omega = [zero; 3];
-        for ((j, r), (step, frame)) in m
-            .joints
-            .iter()
-            .zip(&self.rotation)
-            .zip(steps.iter().zip(frames.iter()))
-            .take(n)
-            .rev()
-        {
+        let mut deflected = false;
+        for i in (0..n).rev() {
+            let (j, r) = (&m.joints[i], &self.rotation[i]);
             // SAFETY: the first pass wrote `steps[i]` for every i < n (it returns early only
             // with an error, before this pass).
-            let st = unsafe { step.assume_init_read() };
+            let st = unsafe { steps[i].assume_init_read() };
             w = [w[0] + st.link[0], w[1] + st.link[1], w[2] + st.link[2]];
             let mut a = st.angle;
             if j.has_gravity {
                 // SAFETY: the first pass wrote `frames[i]` exactly where `has_gravity`.
-                let f = unsafe { frame.assume_init_read() };
+                let f = unsafe { frames[i].assume_init_read() };
                 let lever = w[0].scale(f.vertical[1]) - w[1].scale(f.vertical[0]);
                 let eg = P::gravity(j.gravity, lever);
                 a = a.turned(P::half(eg));
@@ -194,6 +184,7 @@ impl<P: Precision> Chain<P> {
                     omega[1] + f.axis[1].scale(eg),
                     omega[2] + f.axis[2].scale(eg),
                 ];
+                deflected = true;
             }
             let (x, y) = quarter_turns(a.q, (w[0], w[1]));
             let (sin2, omc) = a.double();
@@ -207,7 +198,7 @@ impl<P: Precision> Chain<P> {
         }
 
         let mut dir = q.rotate(&m.probe_dir, q.rotation_factor());
-        if m.joints.iter().take(n).any(|j| j.has_gravity) {
+        if deflected {
             // The deflections turn the probe about the joint axes: Δn = (Σ e_k a_k) × n.
             let d = dir;
             dir = [

@@ -104,7 +104,12 @@ impl<P: Precision> MatrixChain<P> {
                 next
             };
             if j.has_gravity {
-                gravity.push(&mut gravity_count, j.gravity, [r[0][2], r[1][2], r[2][2]], o);
+                gravity.push(
+                    &mut gravity_count,
+                    j.gravity,
+                    [r[0][2], r[1][2], r[2][2]],
+                    o,
+                );
             }
             let v = mat_vec::<P, P::L>(&r, &jr.link);
             o = [o[0] + v[0], o[1] + v[1], o[2] + v[2]];

@@ -355,7 +355,6 @@ impl<P: Precision> Model<P> {
         }
         Ok(P::temperature(dt))
     }
-
 }
 
 impl<P: Precision> JointModel<P> {
@@ -469,7 +468,11 @@ impl<P: Precision> Gravity<P> {
         let (mut w, mut dp) = ([zero; 3], [P::L::default(); 3]);
         for slot in self.terms.iter().take(count.0) {
             // SAFETY: `push` wrote every slot below `count` before counting it.
-            let GravityTerm { g, axis: a, origin: o } = unsafe { slot.assume_init_read() };
+            let GravityTerm {
+                g,
+                axis: a,
+                origin: o,
+            } = unsafe { slot.assume_init_read() };
             let d = [p[0] - o[0], p[1] - o[1], p[2] - o[2]];
             let e = P::gravity(g, d[1].scale(a[0]) - d[0].scale(a[1]));
             let b = [a[0].scale(e), a[1].scale(e), a[2].scale(e)];

@@ -61,7 +61,9 @@ impl<P: Precision> Quat<P> {
         if !P::DIVIDE_NORM {
             return None;
         }
-        let n = self.w.scale(self.w) + self.x.scale(self.x) + self.y.scale(self.y)
+        let n = self.w.scale(self.w)
+            + self.x.scale(self.x)
+            + self.y.scale(self.y)
             + self.z.scale(self.z);
         let k = (P::ONE + P::ONE) - n;
         Some(k + k)
@@ -148,11 +150,19 @@ mod tests {
         // 120° about (1,1,1): x → y → z → x.
         let p = Quat::<F32>::new([0.5, 0.5, 0.5, 0.5]);
         let one = 1.0f32;
-        assert!(close(p.rotate(&[one, 0.0, 0.0], None), [0.0, 1.0, 0.0], 1e-6));
+        assert!(close(
+            p.rotate(&[one, 0.0, 0.0], None),
+            [0.0, 1.0, 0.0],
+            1e-6
+        ));
         assert!(close(p.z_axis(), [1.0, 0.0, 0.0], 1e-6));
         // p ⊗ p: 240°, x → z.
         let pp = p.mul(&p);
-        assert!(close(pp.rotate(&[one, 0.0, 0.0], None), [0.0, 0.0, 1.0], 1e-6));
+        assert!(close(
+            pp.rotate(&[one, 0.0, 0.0], None),
+            [0.0, 0.0, 1.0],
+            1e-6
+        ));
         // (p ⊗ p) ⊗ p: identity.
         let ppp = pp.mul(&p);
         assert!((f64::from(ppp.w).abs() - 1.0).abs() < 1e-6);

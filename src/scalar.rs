@@ -498,7 +498,17 @@ mod tests {
             x ^= x << 17;
             x as i32
         };
-        let edges = [0, 1, -1, i32::MAX, i32::MIN, 1 << 30, -(1 << 30), 0xffff, -0x10000];
+        let edges = [
+            0,
+            1,
+            -1,
+            i32::MAX,
+            i32::MIN,
+            1 << 30,
+            -(1 << 30),
+            0xffff,
+            -0x10000,
+        ];
         let mut pairs: Vec<(i32, i32)> = edges
             .iter()
             .flat_map(|&a| edges.iter().map(move |&b| (a, b)))
