@@ -1,43 +1,25 @@
 //! `armcal simulate` and `armcal calibrate` end to end, as a user runs them.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn armcal(args: &[&str], dir: &Path) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_armcal"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run armcal")
-}
+use common::{armcal, armcal_ok, workdir, write_truth};
 
-fn workdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("armcal-calib-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn write_truth(dir: &Path) {
-    let truth = armcal::sim::perturb(
+/// The virtual arm the simulations measure.
+fn truth() -> quatarm_ref::Arm {
+    armcal::sim::perturb(
         &quatarm_ref::Arm::default6(),
         3e-4,
         0.3,
         &mut armcal::sim::rng(3),
-    );
-    std::fs::write(
-        dir.join("truth.toml"),
-        quatarm_ref::calfile::write(&truth, &["truth"]),
     )
-    .unwrap();
 }
 
 #[test]
 fn simulate_is_deterministic() {
     let d = workdir("det");
-    write_truth(&d);
+    write_truth(&d, &truth());
     for out in ["a.csv", "b.csv"] {
-        let o = armcal(
+        armcal_ok(
             &[
                 "simulate",
                 "--truth",
@@ -55,7 +37,6 @@ fn simulate_is_deterministic() {
             ],
             &d,
         );
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
     let a = std::fs::read(d.join("a.csv")).unwrap();
     assert_eq!(a, std::fs::read(d.join("b.csv")).unwrap());
@@ -69,8 +50,8 @@ fn simulate_is_deterministic() {
 #[test]
 fn calibrate_writes_file_table_and_json() {
     let d = workdir("json");
-    write_truth(&d);
-    let o = armcal(
+    write_truth(&d, &truth());
+    armcal_ok(
         &[
             "simulate",
             "--truth",
@@ -86,8 +67,7 @@ fn calibrate_writes_file_table_and_json() {
         ],
         &d,
     );
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let o = armcal(
+    let o = armcal_ok(
         &[
             "calibrate",
             "pts.csv",
@@ -99,7 +79,6 @@ fn calibrate_writes_file_table_and_json() {
         ],
         &d,
     );
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON on stdout");
     let after = j["residuals"]["after"]["all"]["rms_um"].as_f64().unwrap();
     let before = j["residuals"]["before"]["all"]["rms_um"].as_f64().unwrap();
@@ -160,12 +139,12 @@ fn bad_data_is_refused_with_file_line_and_column() {
 #[test]
 fn spat_and_length_calibrate_without_an_instrument() {
     let d = workdir("spat");
-    write_truth(&d);
+    write_truth(&d, &truth());
     for (kind, count, seed, out) in [
         ("spat", "160", "5", "s.csv"),
         ("length", "80", "6", "l.csv"),
     ] {
-        let o = armcal(
+        armcal_ok(
             &[
                 "simulate",
                 "--truth",
@@ -181,7 +160,6 @@ fn spat_and_length_calibrate_without_an_instrument() {
             ],
             &d,
         );
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
     // One file: length groups renumbered after the spat ones, without the second header.
     let s = std::fs::read_to_string(d.join("s.csv")).unwrap();
@@ -197,8 +175,7 @@ fn spat_and_length_calibrate_without_an_instrument() {
         text.push('\n');
     }
     std::fs::write(d.join("sl.csv"), text).unwrap();
-    let o = armcal(&["calibrate", "sl.csv", "-o", "cal.toml"], &d);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = armcal_ok(&["calibrate", "sl.csv", "-o", "cal.toml"], &d);
     let report = String::from_utf8_lossy(&o.stdout);
     assert!(
         report.contains("a rotation of the whole arm about the base z axis"),

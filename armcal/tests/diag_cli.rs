@@ -3,32 +3,16 @@
 
 use quatarm_ref::arm::{Arm, Harmonic};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
-fn armcal(args: &[&str], dir: &Path) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_armcal"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run armcal")
-}
+mod common;
 
-fn workdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("armcal-diag-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use common::{armcal, armcal_ok, workdir, write_truth};
 
 /// Writes a truth file and simulates 600 point readings of it at 16–28 °C into `points.csv`.
 fn simulate(dir: &Path, truth: &Arm, seed: &str) {
-    std::fs::write(
-        dir.join("truth.toml"),
-        quatarm_ref::calfile::write(truth, &["truth"]),
-    )
-    .unwrap();
-    let o = armcal(
+    write_truth(dir, truth);
+    armcal_ok(
         &[
             "simulate",
             "--truth",
@@ -46,7 +30,6 @@ fn simulate(dir: &Path, truth: &Arm, seed: &str) {
         ],
         dir,
     );
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
 fn truth() -> Arm {
@@ -79,7 +62,7 @@ fn png_size(path: &Path) -> (u32, u32) {
 fn diagnose_prints_the_issue_json_and_writes_file_table_and_figures() {
     let d = workdir("json");
     simulate(&d, &truth(), "22");
-    let o = armcal(
+    let o = armcal_ok(
         &[
             "diagnose",
             "points.csv",
@@ -91,7 +74,6 @@ fn diagnose_prints_the_issue_json_and_writes_file_table_and_figures() {
         ],
         &d,
     );
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let j: Value = serde_json::from_slice(&o.stdout).expect("JSON on stdout");
     // The issue's shape.
     assert_eq!(j["baseline"]["model"], "geometric");
@@ -160,8 +142,7 @@ fn diagnose_prints_the_issue_json_and_writes_file_table_and_figures() {
 fn the_text_report_says_what_it_found() {
     let d = workdir("text");
     simulate(&d, &truth(), "23");
-    let o = armcal(&["diagnose", "points.csv"], &d);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = armcal_ok(&["diagnose", "points.csv"], &d);
     let text = String::from_utf8(o.stdout).unwrap();
     for want in [
         "what the model gets wrong",
@@ -182,8 +163,7 @@ fn noise_alone_is_reported_as_none() {
     let d = workdir("none");
     let t = armcal::sim::perturb(&Arm::default6(), 3e-4, 0.3, &mut armcal::sim::rng(24));
     simulate(&d, &t, "25");
-    let o = armcal(&["diagnose", "points.csv", "--json", "-o", "ext.toml"], &d);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = armcal_ok(&["diagnose", "points.csv", "--json", "-o", "ext.toml"], &d);
     let j: Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(j["causes"], serde_json::json!([]));
     assert_eq!(j["gain_percent"], 0.0);
@@ -200,8 +180,7 @@ fn a_term_beyond_the_table_is_reported_and_no_table_is_written() {
     t.joints[1].gravity = 2e-6; // beyond the table's 1e-6 rad/mm
     simulate(&d, &t, "27");
     std::fs::write(d.join("ext.bin"), b"stale").unwrap();
-    let o = armcal(&["diagnose", "points.csv", "--json", "-o", "ext.toml"], &d);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = armcal_ok(&["diagnose", "points.csv", "--json", "-o", "ext.toml"], &d);
     let j: Value = serde_json::from_slice(&o.stdout).unwrap();
     let causes = j["causes"].as_array().unwrap();
     assert!(

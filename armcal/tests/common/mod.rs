@@ -1,0 +1,42 @@
+//! What the CLI tests share: running the `armcal` binary of this build as a user does, each
+//! test in a folder of its own.
+
+use quatarm_ref::arm::Arm;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Runs `armcal args…` in `dir`.
+pub fn armcal(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_armcal"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run armcal")
+}
+
+/// Runs `armcal args…` in `dir` and requires it to succeed; a failure shows armcal's stderr.
+#[track_caller]
+pub fn armcal_ok(args: &[&str], dir: &Path) -> Output {
+    let o = armcal(args, dir);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    o
+}
+
+/// A fresh, empty folder for the test `name` of this test binary (the binary's name and the
+/// process id keep suites and concurrent runs apart).
+pub fn workdir(name: &str) -> PathBuf {
+    let suite = env!("CARGO_CRATE_NAME").replace('_', "-");
+    let d = std::env::temp_dir().join(format!("armcal-{suite}-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Writes `truth` to `dir/truth.toml`, the file the tests' `armcal simulate --truth` reads.
+pub fn write_truth(dir: &Path, truth: &Arm) {
+    std::fs::write(
+        dir.join("truth.toml"),
+        quatarm_ref::calfile::write(truth, &["truth"]),
+    )
+    .unwrap();
+}
