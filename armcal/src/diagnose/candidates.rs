@@ -17,7 +17,7 @@
 
 use crate::calib::{structural, unknowns};
 use crate::data::Dataset;
-use crate::ident::Why;
+use crate::ident::{Fixed, Identifiability, Why};
 use crate::params::{Effect, Link, Param, Terms};
 use quatarm_ref::arm::Arm;
 
@@ -114,11 +114,7 @@ pub fn candidates(start: &Arm, data: &Dataset) -> Candidates {
     };
     // Effects of which some unknown is held, and why.
     for e in &vocab {
-        let held: Vec<_> = id
-            .fixed
-            .iter()
-            .filter(|f| effect_of(all[f.index]) == Some(*e))
-            .collect();
+        let held = held_of(&id, &all, *e);
         if held.is_empty() {
             out.testable.push(Candidate {
                 effect: *e,
@@ -158,11 +154,7 @@ pub fn candidates(start: &Arm, data: &Dataset) -> Candidates {
         // geometric model it may still be testable.
         let alone = unknowns(&Terms::with(&[*e]), data);
         let (id1, _) = structural(start, data, &alone, 1e-8);
-        let blocked: Vec<_> = id1
-            .fixed
-            .iter()
-            .filter(|f| effect_of(alone[f.index]) == Some(*e))
-            .collect();
+        let blocked = held_of(&id1, &alone, *e);
         if blocked.is_empty() {
             out.testable.push(Candidate {
                 effect: *e,
@@ -186,6 +178,14 @@ pub fn candidates(start: &Arm, data: &Dataset) -> Candidates {
         }
     }
     out
+}
+
+/// The unknowns of effect `e` that the identifiability analysis `id` of `unknowns` held.
+fn held_of<'a>(id: &'a Identifiability, unknowns: &[Param], e: Effect) -> Vec<&'a Fixed> {
+    id.fixed
+        .iter()
+        .filter(|f| effect_of(unknowns[f.index]) == Some(e))
+        .collect()
 }
 
 fn no_effect_reason(arm: &Arm, e: Effect, thermal: bool) -> String {
