@@ -3,7 +3,7 @@
 //! `cargo bench -p armcal --bench calibration [-- speed|roundtrip|mukca …]` (all by default).
 //! Single-threaded throughout: the times are one core's.
 
-use armcal::calib::{calibrate, Options};
+use armcal::calib::{calibrate, Options, Ridge};
 use armcal::data::{Dataset, Kind, Row};
 use armcal::mukca;
 use armcal::residuals::compare_aligned;
@@ -139,52 +139,115 @@ fn roundtrip() {
 
 fn mukca_tables() {
     let dir = mukca::default_dir();
-    let opts = Options {
-        allow_degenerate: true,
-        ..Options::default()
-    };
+    let modes = [
+        ("least squares (default)", mukca::options(None)),
+        (
+            "MUKCa's ridge, lambda 1e-4 (--ridge)",
+            mukca::options(Some(Ridge::MUKCA)),
+        ),
+    ];
     println!("## MUKCa, the authors' protocol (panda_2: fit front_center, score the other sessions but high)");
-    match mukca::authors_protocol(&dir, &opts) {
-        Ok(t) => {
-            println!(
-                "train {:.3} -> {:.3} mm (authors 8.28 -> 0.168); test {:.3} -> {:.3} mm (authors 7.79 -> 0.347)",
-                t.train_before, t.train_after, t.test_before, t.test_after
-            );
-            for (s, b, a) in &t.per_session {
-                println!("  {s:<14} {b:>7.3} -> {a:.3}");
+    for (label, opts) in &modes {
+        match mukca::authors_protocol(&dir, opts) {
+            Ok(t) => {
+                println!(
+                    "{label}: train {:.4} -> {:.4} mm (authors 8.28 -> 0.168); test {:.4} -> {:.4} mm (authors 7.79 -> 0.347)",
+                    t.train_before, t.train_after, t.test_before, t.test_after
+                );
+                for (s, b, a) in &t.per_session {
+                    println!("  {s:<14} {b:>7.3} -> {a:.3}");
+                }
             }
+            Err(e) => println!("{label}: failed: {e}"),
         }
-        Err(e) => println!("failed: {e}"),
     }
-    println!("## MUKCa, leave one session out (fit all other sessions, score the one left out)");
-    println!("| unit | sessions | nominal (mm) | calibrated (mm) | per session (nominal -> calibrated) |");
+    println!("## MUKCa, the ridge's lambda against the test figure (panda_2 protocol; other units: the same one-session protocol)");
+    let others: Vec<mukca::Unit> = ["panda_3", "panda_3_bis", "panda_4", "panda_6", "panda_7"]
+        .iter()
+        .map(|n| mukca::load(&dir, n).expect("unit"))
+        .collect();
+    let plain: Vec<f64> = others
+        .iter()
+        .map(|u| one_session(u, &mukca::options(None)).1)
+        .collect();
+    for lambda in [1e-5, 3e-5, 5e-5, 1e-4, 2e-4] {
+        let opts = mukca::options(Some(Ridge { lambda }));
+        let t = mukca::authors_protocol(&dir, &opts).expect("protocol");
+        let rel: Vec<f64> = others
+            .iter()
+            .zip(&plain)
+            .map(|(u, p)| one_session(u, &opts).1 / p)
+            .collect();
+        println!(
+            "lambda {lambda:.0e}: panda_2 train {:.4} test {:.4} | other Pandas, test relative to least squares: mean {:.4} ({})",
+            t.train_after,
+            t.test_after,
+            rel.iter().sum::<f64>() / rel.len() as f64,
+            rel.iter().map(|r| format!("{r:.3}")).collect::<Vec<_>>().join(" ")
+        );
+    }
+    println!("## MUKCa, one session at a time (fit one session, score all the others; mean over the sessions fitted)");
+    println!("| unit | sessions | nominal (mm) | least squares (mm) | ridge (mm) |");
     println!("|---|---|---|---|---|");
     for (name, _) in mukca::unit_names(&dir).expect("units") {
         let unit = mukca::load(&dir, &name).expect("unit");
-        let l = mukca::loso(&unit, &opts);
-        if l.sessions.is_empty() {
-            println!(
-                "| {name} | 1 | {:.3} | – | one session only: nothing to leave out |",
-                mukca::score(&unit.arm, &unit, &unit.groups())
-            );
+        if unit.groups().len() < 2 {
             continue;
         }
-        let per: Vec<String> = l
-            .sessions
-            .iter()
-            .map(|(s, r)| match r {
-                Ok((b, a)) => format!("{s} {b:.2}→{a:.3}"),
-                Err(e) => format!("{s}: {e}"),
-            })
-            .collect();
-        println!(
-            "| {name} | {} | {:.3} | {:.3} | {} |",
-            l.sessions.len(),
-            l.mean_before,
-            l.mean_after,
-            per.join(", ")
-        );
+        let (b, a, k) = one_session(&unit, &modes[0].1);
+        let (_, r, _) = one_session(&unit, &modes[1].1);
+        println!("| {name} | {k} | {b:.3} | {a:.3} | {r:.3} |");
     }
+    for (label, opts) in &modes {
+        println!("## MUKCa, leave one session out, {label} (fit all other sessions, score the one left out)");
+        println!("| unit | sessions | nominal (mm) | calibrated (mm) | per session (nominal -> calibrated) |");
+        println!("|---|---|---|---|---|");
+        for (name, _) in mukca::unit_names(&dir).expect("units") {
+            let unit = mukca::load(&dir, &name).expect("unit");
+            let l = mukca::loso(&unit, opts);
+            if l.sessions.is_empty() {
+                println!(
+                    "| {name} | 1 | {:.3} | – | one session only: nothing to leave out |",
+                    mukca::score(&unit.arm, &unit, &unit.groups())
+                );
+                continue;
+            }
+            let per: Vec<String> = l
+                .sessions
+                .iter()
+                .map(|(s, r)| match r {
+                    Ok((b, a)) => format!("{s} {b:.2}→{a:.3}"),
+                    Err(e) => format!("{s}: {e}"),
+                })
+                .collect();
+            println!(
+                "| {name} | {} | {:.3} | {:.3} | {} |",
+                l.sessions.len(),
+                l.mean_before,
+                l.mean_after,
+                per.join(", ")
+            );
+        }
+    }
+}
+
+/// Fits each session of a unit alone and scores the unit's other sessions (panda_2 without
+/// `high`, as the authors): (mean nominal, mean calibrated) over the sessions fitted.
+fn one_session(unit: &mukca::Unit, opts: &Options) -> (f64, f64, usize) {
+    let mut groups = unit.groups();
+    if unit.name == "panda_2" {
+        groups.retain(|g| unit.sessions.get(g).map(String::as_str) != Some("high"));
+    }
+    let (mut b, mut a, mut k) = (0.0, 0.0, 0);
+    for &g in &groups {
+        let test: Vec<i64> = groups.iter().copied().filter(|x| *x != g).collect();
+        if let Ok((t, _)) = mukca::trial(unit, &[g], &test, opts) {
+            b += t.test_before;
+            a += t.test_after;
+            k += 1;
+        }
+    }
+    (b / k as f64, a / k as f64, k)
 }
 
 fn main() {

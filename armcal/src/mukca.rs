@@ -9,7 +9,7 @@
 //! utils.py`); over several sessions they take the plain mean of the session scores. Nothing
 //! of a test session is fitted but what the metric itself defines: its two centres.
 
-use crate::calib::{calibrate, CalibError, Fit, Options};
+use crate::calib::{calibrate, CalibError, Fit, Options, Ridge};
 use crate::data::{self, Dataset};
 use crate::residuals::residuals;
 use quatarm_ref::arm::Arm;
@@ -181,6 +181,17 @@ pub fn trial(
     ))
 }
 
+/// The settings for MUKCa recordings: a session is a degenerate pose set (one artefact
+/// position leaves some directions undetermined), so what it cannot determine is held, or
+/// with `ridge` shared out by MUKCa's own regulariser ([`Ridge`]).
+pub fn options(ridge: Option<Ridge>) -> Options {
+    Options {
+        allow_degenerate: true,
+        ridge,
+        ..Options::default()
+    }
+}
+
 /// The authors' published protocol: panda_2, fit on `front_center`, score every other
 /// session but `high`.
 pub fn authors_protocol(dir: &Path, opts: &Options) -> Result<Trial, String> {
@@ -240,5 +251,31 @@ pub fn loso(unit: &Unit, opts: &Options) -> Loso {
         sessions,
         mean_before: if k > 0 { b / k as f64 } else { f64::NAN },
         mean_after: if k > 0 { a / k as f64 } else { f64::NAN },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// MUKCa's regulariser at the authors' default λ reproduces their published figures for
+    /// panda_2 (train 0.168, test 0.347 mm): measured 0.1679 and 0.3460.
+    #[test]
+    fn the_authors_regulariser_matches_their_published_figures() {
+        let t = authors_protocol(&default_dir(), &options(Some(Ridge::MUKCA))).unwrap();
+        assert!((t.train_after - 0.168).abs() < 0.001, "{}", t.train_after);
+        assert!(t.test_after <= 0.347, "{}", t.test_after);
+        // Plain least squares fits the session more closely and carries over less well.
+        let plain = authors_protocol(&default_dir(), &options(None)).unwrap();
+        assert!(
+            plain.train_after < t.train_after - 0.002,
+            "{}",
+            plain.train_after
+        );
+        assert!(
+            plain.test_after > t.test_after + 0.02,
+            "{}",
+            plain.test_after
+        );
     }
 }

@@ -52,6 +52,12 @@ pub struct Args {
     /// Prior standard deviation of link and probe errors (mm).
     #[arg(long, requires = "prior_angle")]
     prior_length: Option<f64>,
+    /// MUKCa's regulariser: a ridge λ·Σ Δp² (metres, radians) on every joint's geometric
+    /// errors, the probe free: `--ridge` is MUKCa's default λ = 1e-4, `--ridge=3e-5` another. For
+    /// data from few artefact positions (one MUKCa session), where some directions are barely
+    /// determined.
+    #[arg(long, num_args = 0..=1, require_equals = true, default_missing_value = "1e-4", value_name = "LAMBDA")]
+    ridge: Option<f64>,
 }
 
 /// Reads the start arm: a file, or `default-6`.
@@ -93,6 +99,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             length_mm,
             noise_mm: None,
         });
+    }
+    if let Some(lambda) = a.ridge {
+        if !(lambda > 0.0 && lambda.is_finite()) {
+            bail!("the ridge weight must be positive");
+        }
+        opts.ridge = Some(calib::Ridge { lambda });
     }
     let fit = calib::calibrate(&start, &data, &opts)
         .with_context(|| format!("cannot calibrate from {}", a.data.display()))?;
