@@ -1,50 +1,14 @@
-//! qemu-m0 (microbit, Cortex-M0, fixed-point chain) end to end under QEMU.
+//! qemu-m0 (microbit, Cortex-M0, fixed-point chain) end to end under QEMU: the cases of
+//! `common`, the full recording within 0.1 µm and 1e-7 of the f64 reference.
 //! Run by `cargo xtask test`, which builds the board first.
 
 mod common;
 
-use common::Bounds;
-
-const BOARD: &str = "qemu-m0";
-
-#[test]
-#[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
-fn replays_the_recording_bit_identical_to_the_host_and_within_0_1um() {
-    common::full_recording(
-        BOARD,
-        Bounds {
-            tip_um: 0.1,
-            dir: 1e-7,
-        },
-    );
-}
-
-#[test]
-#[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
-fn a_flipped_bit_in_an_incoming_frame_gives_input_error_and_no_coordinates() {
-    common::flipped_bit_in_an_incoming_frame(BOARD);
-}
-
-#[test]
-#[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
-fn an_encoder_fault_gives_its_joint_bit_and_no_coordinates() {
-    common::encoder_fault(BOARD);
-}
-
-#[test]
-#[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
-fn bad_tables_are_reported_and_give_no_coordinates() {
-    common::bad_tables(BOARD);
-}
-
-#[test]
-#[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
-fn text_mode_prints_the_same_numbers() {
-    common::text_mode(BOARD);
-}
-
-#[test]
-#[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
-fn the_defmt_log_decodes_on_the_host() {
-    common::defmt_log(BOARD);
+common::board_tests! {
+    board: "qemu-m0",
+    bounds: common::Bounds {
+        tip_um: 0.1,
+        dir: 1e-7,
+    },
+    full_recording: replays_the_recording_bit_identical_to_the_host_and_within_0_1um,
 }

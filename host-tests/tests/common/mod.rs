@@ -1,8 +1,7 @@
-//! The end-to-end cases every QEMU board must pass; `qemu_m4f.rs` and `qemu_m0.rs` run them
-//! on their board with their bounds. They need the board built (`cargo xtask build`) and
-//! `qemu-system-arm`: a missing one fails the test, it is never skipped.
-
-#![allow(dead_code)]
+//! The end-to-end cases every QEMU board must pass; `qemu_m4f.rs` and `qemu_m0.rs` declare
+//! them for their board and bounds with [`board_tests!`]. They need the board built
+//! (`cargo xtask build`) and `qemu-system-arm`: a missing one fails the test, it is never
+//! skipped.
 
 use host_tests::boards::{board, Board};
 use host_tests::e2e::{
@@ -10,7 +9,53 @@ use host_tests::e2e::{
     direction_deviation, host_points, reference, replay,
 };
 use host_tests::recording::{self, frame, replay_bytes};
-use quatarm::stream::{Counts, Mode, Reading, Status, TableState, ToDevice, CSV_HEADER};
+use quatarm::stream::{Mode, Reading, Status, TableState, ToDevice, CSV_HEADER};
+
+/// Declares every case of this module as a test of one board: `board` (a name of
+/// `host_tests::boards`), `bounds` for its full recording, and `full_recording`, the name of
+/// that test (it says the bound). They are `#[ignore]`d for plain `cargo test`, which has
+/// neither QEMU nor the cross-built board; `cargo xtask test` builds the boards and runs them
+/// with `--include-ignored`.
+macro_rules! board_tests {
+    (board: $board:literal, bounds: $bounds:expr, full_recording: $full:ident $(,)?) => {
+        #[test]
+        #[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
+        fn $full() {
+            $crate::common::full_recording($board, $bounds);
+        }
+
+        #[test]
+        #[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
+        fn a_flipped_bit_in_an_incoming_frame_gives_input_error_and_no_coordinates() {
+            $crate::common::flipped_bit_in_an_incoming_frame($board);
+        }
+
+        #[test]
+        #[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
+        fn an_encoder_fault_gives_its_joint_bit_and_no_coordinates() {
+            $crate::common::encoder_fault($board);
+        }
+
+        #[test]
+        #[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
+        fn bad_tables_are_reported_and_give_no_coordinates() {
+            $crate::common::bad_tables($board);
+        }
+
+        #[test]
+        #[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
+        fn text_mode_prints_the_same_numbers() {
+            $crate::common::text_mode($board);
+        }
+
+        #[test]
+        #[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
+        fn the_defmt_log_decodes_on_the_host() {
+            $crate::common::defmt_log($board);
+        }
+    };
+}
+pub(crate) use board_tests;
 
 /// What a board's path must achieve against the f64 reference.
 pub struct Bounds {
@@ -264,7 +309,6 @@ pub fn text_mode(name: &str) {
             );
         }
     }
-    let _ = Counts::default();
 }
 
 /// The defmt log, a channel apart from the data stream, decodes on the host and tells the
