@@ -116,16 +116,7 @@ pub fn solve<P: Problem>(
             break (true, "exact fit");
         }
         // Scale to a unit diagonal; an unknown with no effect (zero column) stays put.
-        let scale: Vec<f64> = (0..n)
-            .map(|i| {
-                let d = normal.jtj[(i, i)];
-                if d > 0.0 {
-                    1.0 / d.sqrt()
-                } else {
-                    0.0
-                }
-            })
-            .collect();
+        let (a, scale) = unit_diagonal(&normal.jtj);
         let g: DVector<f64> = DVector::from_fn(n, |i, _| -normal.jtr[i] * scale[i]);
         let rnorm = (2.0 * normal.cost).sqrt();
         // First-order optimality: the residual is orthogonal to every column.
@@ -136,7 +127,6 @@ pub fn solve<P: Problem>(
             exhausted = true;
             break (false, "still improving");
         }
-        let a = DMatrix::from_fn(n, n, |i, j| normal.jtj[(i, j)] * scale[i] * scale[j]);
         // Try damped steps until one lowers the cost.
         loop {
             let mut m = a.clone();
@@ -209,6 +199,24 @@ pub fn solve<P: Problem>(
         exhausted,
         reason: reason.into(),
     }
+}
+
+/// Marquardt's scaling of a symmetric positive semi-definite matrix `a`: the factors
+/// sᵢ = 1/√aᵢᵢ (0 where aᵢᵢ = 0, an unknown with no effect) and the scaled matrix sᵢ aᵢⱼ sⱼ,
+/// whose diagonal is 1 wherever aᵢᵢ > 0.
+pub fn unit_diagonal(a: &DMatrix<f64>) -> (DMatrix<f64>, Vec<f64>) {
+    let n = a.nrows();
+    let s: Vec<f64> = (0..n)
+        .map(|i| {
+            let d = a[(i, i)];
+            if d > 0.0 {
+                1.0 / d.sqrt()
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    (DMatrix::from_fn(n, n, |i, j| a[(i, j)] * s[i] * s[j]), s)
 }
 
 #[cfg(test)]

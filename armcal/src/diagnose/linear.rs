@@ -19,6 +19,7 @@
 use crate::calib::{Fit, Problem, State};
 use crate::data::Dataset;
 use crate::holdout::Folds;
+use crate::lm::unit_diagonal;
 use crate::params::Param;
 use crate::residuals::Rigid;
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
@@ -307,17 +308,7 @@ pub fn solve_spd(a: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
     if k == 0 {
         return DVector::zeros(0);
     }
-    let s: Vec<f64> = (0..k)
-        .map(|i| {
-            let d = a[(i, i)];
-            if d > 0.0 {
-                1.0 / d.sqrt()
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    let m = DMatrix::from_fn(k, k, |i, j| a[(i, j)] * s[i] * s[j]);
+    let (m, s) = unit_diagonal(a);
     let bs = DVector::from_fn(k, |i, _| b[i] * s[i]);
     let y = match m.clone().cholesky() {
         Some(ch) if min_pivot_ok(&ch.l()) => ch.solve(&bs),
