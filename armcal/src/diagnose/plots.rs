@@ -88,35 +88,29 @@ type DrawResult =
 
 fn legend(area: &Area, x: i32, y: i32) -> DrawResult {
     let font = (FAMILY, 16).into_font().color(&BLACK);
+    // A line entry: a 28 px stroke of its colour, then its label.
+    let line = |x: i32, y: i32, colour: RGBColor, label: &str| -> DrawResult {
+        area.draw(&PathElement::new(
+            vec![(x, y + 8), (x + 28, y + 8)],
+            colour.stroke_width(3),
+        ))?;
+        area.draw_text(label, &font, (x + 36, y))
+    };
     area.draw(&Circle::new((x + 6, y + 8), 3, GREY.mix(0.7).filled()))?;
     area.draw_text("geometric model, held-out residuals", &font, (x + 18, y))?;
-    let x2 = x + 330;
-    area.draw(&PathElement::new(
-        vec![(x2, y + 8), (x2 + 28, y + 8)],
-        GEOMETRIC.stroke_width(3),
-    ))?;
-    area.draw_text("their binned mean", &font, (x2 + 36, y))?;
-    let x3 = x2 + 200;
-    area.draw(&PathElement::new(
-        vec![(x3, y + 8), (x3 + 28, y + 8)],
-        EXTENDED.stroke_width(3),
-    ))?;
-    area.draw_text(
+    line(x + 330, y, GEOMETRIC, "their binned mean")?;
+    line(
+        x + 530,
+        y,
+        EXTENDED,
         "binned mean with the named causes (held out)",
-        &font,
-        (x3 + 36, y),
     )?;
-    let y2 = y + 24;
-    area.draw(&PathElement::new(
-        vec![(x, y2 + 8), (x + 28, y2 + 8)],
-        OWN.stroke_width(3),
-    ))?;
-    area.draw_text(
+    line(
+        x,
+        y + 24,
+        OWN,
         "a named cause's own part: its term's displacement plus what is left (binned mean)",
-        &font,
-        (x + 36, y2),
-    )?;
-    Ok(())
+    )
 }
 
 fn panel(area: &Area, p: &Panel) -> DrawResult {
