@@ -70,7 +70,9 @@ impl<P: Precision> MatrixChain<P> {
         let mut o: Vec3<P::L> = [P::L::default(); 3];
         let mut gravity = Gravity::<P>::default();
         let mut gravity_count = GravityCount::default();
-        for (i, ((j, mj), &count)) in m.joints.iter().zip(&self.rotation).zip(counts).enumerate() {
+        // `check` made counts.len() = n ≤ MAX_JOINTS.
+        for (i, &count) in counts.iter().enumerate().take(MAX_JOINTS) {
+            let (j, mj) = (&m.joints[i], &self.rotation[i]);
             let jr = j.reading(i, count, dt, true)?;
             let (mut c, mut sn) = jr.full.unwrap_or((P::ONE, zero));
             if j.harmonic_count > 0 {

@@ -1,9 +1,10 @@
 //! What both chains share: the calibrated model converted to one evaluator's numbers, each
-//! joint's part of a reading (angle, encoder-harmonic error, link at temperature), the
-//! first-order gravity correction, and the output point.
+//! joint's part of a reading (angle, encoder-harmonic error, link at temperature), the gravity
+//! coefficients, and the output point.
 //!
-//! The chains differ only in how they represent and compose rotations ([`crate::chain`]:
-//! quaternions; [`crate::matrix`]: 3×3 matrices), both base to tip.
+//! The chains differ in how they represent rotations and sum the position ([`crate::chain`]:
+//! quaternions, orientation base to tip and position tip to base; [`crate::matrix`]: 3×3
+//! matrices, base to tip with the spec's first-order gravity sum, [`Gravity`]).
 //!
 //! **Every joint turns about z.** A joint about x or y is rewritten at boot with the cyclic
 //! permutation P_a of the coordinates that takes z to its axis: R(u_a, θ) = P_a R(z, θ) P_a⁻¹,
@@ -13,6 +14,10 @@
 //! rounded once, like any table value). The per-point code then has one shape, no branches or
 //! indexed loads for the axis, and the axis of joint k in the base frame is always the third
 //! column of its accumulated rotation.
+//!
+//! The table is built in f64 on the host; everything here that needs arithmetic beyond a
+//! conversion (the permuted rotations, link expansion rates, the probe folded into the last
+//! link) is computed in f64 at boot and rounded once.
 
 use crate::angle::{CountScale, Multiples, Quarter};
 use crate::rotate::Vec3;
@@ -415,7 +420,8 @@ impl<P: Precision> JointModel<P> {
     }
 }
 
-/// The spec's first-order gravity correction, gathered base to tip and applied at the end:
+/// The spec's first-order gravity correction (the matrix chain's), gathered base to tip and
+/// applied at the end:
 /// with d_k = p − o_k and e_k = g_k a_k · (d_k × ẑ) = g_k (a_kx d_ky − a_ky d_kx),
 /// Δp = Σ e_k a_k × d_k, Δn = (Σ e_k a_k) × n. It agrees with the exactly deflected chain to
 /// a few nanometres (`armcal accuracy`, last row).

@@ -4,11 +4,13 @@
 //!
 //! - [`F32`]: IEEE-754 single precision for FPU targets (Cortex-M4F). Only `+ - *` in a
 //!   fixed order, never a fused multiply-add, `sqrt`, division or a libm call in the per-point
-//!   path, so that host and target give bit-identical results.
+//!   path, so that host and target give bit-identical results. (The M4F's VMLA/VMLS round the
+//!   product before the sum: they are a multiply and an add, not a fused operation.)
 //! - [`Fixed`]: 32-bit fixed point from crate `fixed` for targets without an FPU (Cortex-M0).
 //!   Dimensionless numbers (sines, quaternion and direction components) are I2F30, resolution
 //!   9.3e-10; lengths are I12F20 mm, resolution 0.95 nm, range ±2048 mm. Every product is
-//!   rounded to nearest. Sums wrap instead of panicking; the table's range checks and
+//!   rounded to nearest (to within 2^-12 of a unit at ties, [`mul_q30`]). Sums wrap instead
+//!   of panicking; the table's range checks and
 //!   [`crate::model::Model::new`] guarantee that no sum of a valid table can overflow.
 //!
 //! Two kinds of number are kept apart even though f32 uses one type for both: fixed point
