@@ -376,8 +376,9 @@ const fn q30(x: f64) -> Unit {
     })
 }
 
-/// Fractional bits of the gravity coefficient: g·2^50 in an i32 (|g| < 1.9e-6 rad/mm).
-const G_FRAC: u32 = 50;
+/// Fractional bits of the gravity coefficient: g·2^48 in an i32 (|g| < 7.6e-6 rad/mm,
+/// resolution 3.6e-15 rad/mm: 7e-12 rad over a 2 m lever).
+const G_FRAC: u32 = 48;
 /// Fractional bits of an expansion rate in mm per milli-degree: 2^40 (|rate| < 1.9e-3 mm/m°C,
 /// where 2 m at κ = 4e-4 /°C needs 8e-4; resolution 0.1 nm over 100 °C).
 const R_FRAC: u32 = 40;
@@ -423,7 +424,7 @@ impl Precision for Fixed {
     }
     #[inline(always)]
     fn gravity(g: i32, x: Len) -> Unit {
-        // g·2^50 · x·2^20 → ·2^30: shift 40.
+        // g·2^48 · x·2^20 → ·2^30: shift 38.
         Unit::from_bits(mul_shift(g, x.bits(), G_FRAC + 20 - 30))
     }
     #[inline(always)]
@@ -444,8 +445,8 @@ impl Precision for Fixed {
         I12F20::checked_from_num(x).map(Len)
     }
     fn g_from_f64(g: f64) -> Option<i32> {
-        // Through an I14F50 in an i64 so that no f64 arithmetic is needed on the target.
-        fixed::types::I14F50::checked_from_num(g).and_then(|v| i32::try_from(v.to_bits()).ok())
+        // Through an I16F48 in an i64 so that no f64 arithmetic is needed on the target.
+        fixed::types::I16F48::checked_from_num(g).and_then(|v| i32::try_from(v.to_bits()).ok())
     }
     fn r_from_f64(mm_per_degc: f64) -> Option<i32> {
         let v = mm_per_degc / 1000.0;

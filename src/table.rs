@@ -116,8 +116,10 @@ pub mod limits {
     pub const LENGTH_MM: f64 = 5000.0;
     /// |κ| (1/°C).
     pub const THERMAL: f64 = 4.0e-4;
-    /// |g| (rad/mm).
-    pub const GRAVITY: f64 = 1.0e-6;
+    /// |g| (rad/mm). A hub-class arm deflects 2–4e-8; the light robots of the MUKCa data fit
+    /// up to ~2e-6. At the limit, a deflection over a 1.5 m lever is 7.5 mrad, where the
+    /// chains' second-order small turn is still exact to 2e-8 rad.
+    pub const GRAVITY: f64 = 5.0e-6;
     /// Σ |sin| + |cos| of a joint's harmonics (rad): the small-angle rotation stays
     /// second-order exact.
     pub const HARMONIC_SUM: f64 = 1.0e-3;
@@ -334,25 +336,41 @@ pub struct TableData {
     pub probe: ProbeData,
 }
 
-impl TableData {
-    /// The flags that the contents call for (geometric errors are the builder's to set).
+impl JointData {
+    /// The effect flags this joint calls for.
     pub fn content_flags(&self) -> u8 {
         let mut flags = 0;
-        for j in &self.joints[..usize::from(self.joint_count).min(MAX_JOINTS)] {
-            if j.harmonic_count > 0 {
-                flags |= FLAG_HARMONICS;
-            }
-            if j.gravity != 0.0 {
-                flags |= FLAG_GRAVITY;
-            }
-            if j.thermal != 0.0 {
-                flags |= FLAG_THERMAL;
-            }
+        if self.harmonic_count > 0 {
+            flags |= FLAG_HARMONICS;
         }
-        if self.probe.thermal != 0.0 {
+        if self.gravity != 0.0 {
+            flags |= FLAG_GRAVITY;
+        }
+        if self.thermal != 0.0 {
             flags |= FLAG_THERMAL;
         }
         flags
+    }
+}
+
+impl ProbeData {
+    /// The effect flags the probe calls for.
+    pub fn content_flags(&self) -> u8 {
+        if self.thermal != 0.0 {
+            FLAG_THERMAL
+        } else {
+            0
+        }
+    }
+}
+
+impl TableData {
+    /// The flags that the contents call for (geometric errors are the builder's to set).
+    pub fn content_flags(&self) -> u8 {
+        let joints = &self.joints[..usize::from(self.joint_count).min(MAX_JOINTS)];
+        joints
+            .iter()
+            .fold(self.probe.content_flags(), |f, j| f | j.content_flags())
     }
 
     /// Writes the table into `out`; returns its length. Fails only if `out` is too short or
@@ -540,15 +558,18 @@ impl<'a> Table<'a> {
         if core::str::from_utf8(self.serial()).is_err() {
             return Err(invalid(0, Field::Serial));
         }
-        let data = self.data();
-        let flags = b[off::FLAGS];
-        if flags & !FLAGS_KNOWN != 0 || flags & !FLAG_GEOMETRIC != data.content_flags() {
-            return Err(invalid(0, Field::Flags));
-        }
+        // One joint at a time, not `self.data()`: on a target without an FPU every f64 here
+        // is soft-float, and a whole TableData on the boot stack would cost kilobytes.
+        let mut content = 0;
         for i in 0..self.joint_count() {
-            let r = &b[HEADER_LEN + i * JOINT_LEN..HEADER_LEN + (i + 1) * JOINT_LEN];
-            let j = &data.joints[i];
             let no = i + 1;
+            let (Some(r), Some(j)) = (
+                b.get(HEADER_LEN + i * JOINT_LEN..HEADER_LEN + (i + 1) * JOINT_LEN),
+                self.joint(i),
+            ) else {
+                return Err(invalid(no, Field::Reserved));
+            };
+            content |= j.content_flags();
             if rd_u16(r, off::J_RESERVED) != 0 {
                 return Err(invalid(no, Field::Reserved));
             }
@@ -596,7 +617,12 @@ impl<'a> Table<'a> {
                 return Err(invalid(no, Field::Harmonic));
             }
         }
-        let p = &data.probe;
+        let p = self.probe();
+        content |= p.content_flags();
+        let flags = b[off::FLAGS];
+        if flags & !FLAGS_KNOWN != 0 || flags & !FLAG_GEOMETRIC != content {
+            return Err(invalid(0, Field::Flags));
+        }
         let ok = p.vector.iter().all(|&x| within(x, limits::LENGTH_MM))
             && p.direction
                 .iter()
