@@ -517,10 +517,10 @@ fn verdict(d: &Diagnosis) -> String {
     }
 }
 
-/// The terms of `arm` the firmware's binary table cannot hold, in words (its limits, as
-/// `docs/spec-reading.md` lists them: at most 4 harmonic terms per joint and Σ|coefficients|
-/// ≤ 1e-3 rad, |κ| ≤ 4e-4 /°C, |g| ≤ 1e-6 rad/mm).
+/// The terms of `arm` the firmware's binary table cannot hold, in words (its limits,
+/// `quatarm::table::limits`, as `docs/spec-reading.md` lists them).
 pub fn beyond_table(arm: &quatarm_ref::arm::Arm) -> Vec<String> {
+    use quatarm::table::limits::{GRAVITY, HARMONIC_SUM, THERMAL};
     let mut out = Vec::new();
     for (k, j) in arm.joints.iter().enumerate() {
         let n = j
@@ -536,30 +536,30 @@ pub fn beyond_table(arm: &quatarm_ref::arm::Arm) -> Vec<String> {
             ));
         }
         let sum: f64 = j.harmonics.iter().map(|h| h.sin.abs() + h.cos.abs()).sum();
-        if sum > 1e-3 {
+        if sum > HARMONIC_SUM {
             out.push(format!(
-                "joint {} harmonics: Σ|coefficients| = {sum:.3e} rad; the table holds 1e-3 rad",
+                "joint {} harmonics: Σ|coefficients| = {sum:.3e} rad; the table holds {HARMONIC_SUM:e} rad",
                 k + 1
             ));
         }
-        if j.gravity.abs() > 1e-6 {
+        if j.gravity.abs() > GRAVITY {
             out.push(format!(
-                "joint {} gravity compliance g = {:.3e} rad/mm; the table holds |g| ≤ 1e-6 rad/mm",
+                "joint {} gravity compliance g = {:.3e} rad/mm; the table holds |g| ≤ {GRAVITY:e} rad/mm",
                 k + 1,
                 j.gravity
             ));
         }
-        if j.thermal.abs() > 4e-4 {
+        if j.thermal.abs() > THERMAL {
             out.push(format!(
-                "link {} thermal expansion κ = {:.3e} /°C; the table holds |κ| ≤ 4e-4 /°C",
+                "link {} thermal expansion κ = {:.3e} /°C; the table holds |κ| ≤ {THERMAL:e} /°C",
                 k + 1,
                 j.thermal
             ));
         }
     }
-    if arm.probe.thermal.abs() > 4e-4 {
+    if arm.probe.thermal.abs() > THERMAL {
         out.push(format!(
-            "probe thermal expansion κ = {:.3e} /°C; the table holds |κ| ≤ 4e-4 /°C",
+            "probe thermal expansion κ = {:.3e} /°C; the table holds |κ| ≤ {THERMAL:e} /°C",
             arm.probe.thermal
         ));
     }
