@@ -34,12 +34,13 @@ use core::mem::MaybeUninit;
 /// One joint's constants in the quaternion chain.
 #[derive(Clone, Copy, Debug, Default)]
 struct JointRotation<P: Precision> {
-    /// M̃_i, for the orientation.
-    full: Quat<P>,
-    /// M''_i = C_i⁻¹ M̃_i, near the identity, for the position.
-    near: Quat<P>,
-    /// 2/|M''_i|² as stored (rounding leaves |M''_i| ≠ 1 by up to 1e-7 in f32).
-    near_factor: Option<P::U>,
+    /// M̃_i ⊗ (cos qπ/4, sin qπ/4 ẑ) for the quadrant q = 0..3 of the reading, for the
+    /// orientation: the quarter turns' half angles taken in f64 at boot, so that the per-point
+    /// product needs only the remainder's half angle (no branch, no √½ rounding).
+    full: [Quat<P>; 4],
+    /// E_i = M''_i − I (row-major), M''_i = C_i⁻¹ M̃_i near the identity, for the position:
+    /// w + E_i w is M''_i w with a small correction, computed in f64 at boot and rounded once.
+    near: [P::U; 9],
     /// C_i as a vector permutation: component k of C_i v is component (k + shift) mod 3 of v.
     shift: u8,
 }
@@ -81,6 +82,36 @@ fn relabel<E: Copy>(v: Vec3<E>, shift: u8) -> Vec3<E> {
     }
 }
 
+/// m ⊗ (cos qπ/4, 0, 0, sin qπ/4), in f64 (q = 0..3).
+fn quarter_half_turns(m: [f64; 4], q: usize) -> [f64; 4] {
+    let h = core::f64::consts::FRAC_1_SQRT_2;
+    let (c, s) = [(1.0, 0.0), (h, h), (0.0, 1.0), (-h, h)][q & 3];
+    [
+        m[0] * c - m[3] * s,
+        m[1] * c + m[2] * s,
+        m[2] * c - m[1] * s,
+        m[3] * c + m[0] * s,
+    ]
+}
+
+/// R(q) − I for a quaternion q (any length: divided out), row-major, each entry formed
+/// directly rather than as a difference from 1, so that a near-identity rotation keeps the
+/// relative accuracy of its small entries.
+fn near_matrix([w, x, y, z]: [f64; 4]) -> [f64; 9] {
+    let k = 2.0 / (w * w + x * x + y * y + z * z);
+    [
+        -k * (y * y + z * z),
+        k * (x * y - w * z),
+        k * (x * z + w * y),
+        k * (x * y + w * z),
+        -k * (x * x + z * z),
+        k * (y * z - w * x),
+        k * (x * z - w * y),
+        k * (y * z + w * x),
+        -k * (x * x + y * y),
+    ]
+}
+
 impl<P: Precision> Chain<P> {
     /// Builds the chain from a validated table.
     pub fn new(table: &Table<'_>) -> Result<Chain<P>, ChainError> {
@@ -92,22 +123,14 @@ impl<P: Precision> Chain<P> {
                 .joint(i)
                 .ok_or(ChainError::Range { joint: i as u8 + 1 })?;
             let full = crate::model::z_frame_quat(j.rotation, prev, j.axis);
-            let near = crate::model::near_quat(j.rotation, j.axis);
-            let near_p = Quat::new(units::<P, 4>(near, i + 1)?);
-            let n2 = [near_p.w, near_p.x, near_p.y, near_p.z]
-                .map(P::u_to_f64)
-                .iter()
-                .map(|x| x * x)
-                .sum::<f64>();
+            let mut full_q = [Quat::<P>::default(); 4];
+            for (q, f) in full_q.iter_mut().enumerate() {
+                *f = Quat::new(units::<P, 4>(quarter_half_turns(full, q), i + 1)?);
+            }
+            let near = near_matrix(crate::model::near_quat(j.rotation, j.axis));
             *r = JointRotation {
-                full: Quat::new(units::<P, 4>(full, i + 1)?),
-                near: near_p,
-                near_factor: if P::DIVIDE_NORM {
-                    let k = units::<P, 1>([1.0 / n2], i + 1)?[0];
-                    Some(k + k)
-                } else {
-                    None
-                },
+                full: full_q,
+                near: units::<P, 9>(near, i + 1)?,
                 shift: (prev + 3 - j.axis) % 3,
             };
             prev = j.axis;
@@ -147,9 +170,11 @@ impl<P: Precision> Chain<P> {
             if j.harmonic_count > 0 {
                 angle = angle.turned(P::half(jr.e));
             }
-            let (c, s) = angle.half();
-            q = if i == 0 { r.full } else { q.mul(&r.full) };
-            q = q.mul_z(c, s);
+            // θ/2 = q·π/4 + x: the quadrant's half turn is in the table, the remainder's is
+            // (cos x, sin x).
+            let fq = &r.full[usize::from(angle.q & 3)];
+            q = if i == 0 { *fq } else { q.mul(fq) };
+            q = q.mul_z(P::ONE + angle.cm1, angle.s);
             if j.has_gravity {
                 frames[i].write(Frame {
                     vertical: q.z_row(),
@@ -193,7 +218,12 @@ impl<P: Precision> Chain<P> {
                 y + (x.scale(sin2) - y.scale(omc)),
                 w[2],
             ];
-            w = r.near.rotate(&w, r.near_factor);
+            let e = &r.near;
+            w = [
+                w[0] + (w[0].scale(e[0]) + w[1].scale(e[1]) + w[2].scale(e[2])),
+                w[1] + (w[0].scale(e[3]) + w[1].scale(e[4]) + w[2].scale(e[5])),
+                w[2] + (w[0].scale(e[6]) + w[1].scale(e[7]) + w[2].scale(e[8])),
+            ];
             w = relabel(w, r.shift);
         }
 
