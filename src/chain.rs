@@ -57,14 +57,6 @@ pub type ChainF32 = Chain<F32>;
 /// The fixed-point quaternion chain (targets without FPU).
 pub type ChainFixed = Chain<Fixed>;
 
-/// What the tip-to-base pass needs of each joint.
-#[derive(Clone, Copy)]
-struct Step<P: Precision> {
-    /// The joint's angle with its harmonic error.
-    angle: Quarter<P>,
-    link: Vec3<P::L>,
-}
-
 /// The base frame's vertical and the joint's axis, for a compliant joint.
 #[derive(Clone, Copy)]
 struct Frame<P: Precision> {
@@ -158,7 +150,7 @@ impl<P: Precision> Chain<P> {
         // Base to tip. The per-joint records are written here and read below, joint for
         // joint; left uninitialised, since zeroing them per reading would cost more than the
         // records themselves.
-        let mut steps = [const { MaybeUninit::<Step<P>>::uninit() }; MAX_JOINTS];
+        let mut steps = [const { MaybeUninit::<Quarter<P>>::uninit() }; MAX_JOINTS];
         let mut frames = [const { MaybeUninit::<Frame<P>>::uninit() }; MAX_JOINTS];
         let mut q = Quat::<P>::default();
         // `check` made counts.len() = n ≤ MAX_JOINTS.
@@ -181,10 +173,9 @@ impl<P: Precision> Chain<P> {
                     axis: q.z_axis(),
                 });
             }
-            steps[i].write(Step {
-                angle,
-                link: jr.link,
-            });
+            // The link at temperature is formed in the second pass, where it is used: cheaper
+            // than a record.
+            steps[i].write(angle);
         }
 
         // Tip to base.
@@ -195,9 +186,9 @@ impl<P: Precision> Chain<P> {
             let (j, r) = (&m.joints[i], &self.rotation[i]);
             // SAFETY: the first pass wrote `steps[i]` for every i < n (it returns early only
             // with an error, before this pass).
-            let st = unsafe { steps[i].assume_init_read() };
-            w = [w[0] + st.link[0], w[1] + st.link[1], w[2] + st.link[2]];
-            let mut a = st.angle;
+            let mut a = unsafe { steps[i].assume_init_read() };
+            let link = j.link_at(dt);
+            w = [w[0] + link[0], w[1] + link[1], w[2] + link[2]];
             if j.has_gravity {
                 // SAFETY: the first pass wrote `frames[i]` exactly where `has_gravity`.
                 let f = unsafe { frames[i].assume_init_read() };
