@@ -10,6 +10,7 @@ pub mod rotate;
 pub mod scalar;
 pub mod stream;
 pub mod table;
+pub mod temperature;
 
 pub use chain::{Chain, ChainF32, ChainFixed};
 pub use matrix::{MatrixChain, MatrixChainF32, MatrixChainFixed};

@@ -95,22 +95,57 @@ impl Hub {
         reading: Result<&Reading, FrameError>,
         eval: impl FnOnce(&[u32], i32) -> Result<Coordinates, E>,
     ) -> Report {
-        let mut status = self.base;
         match reading {
-            Err(_) => status = status.with(Status::INPUT_ERROR),
-            Ok(r) => {
-                status = status.with_encoder_faults(r.faults);
-                if !RATED_TEMP_MC.contains(&r.temp_mc) {
-                    status = status.with(Status::OVER_TEMPERATURE);
-                }
-                if usize::from(self.joints) != r.counts.as_slice().len() && status.table_valid() {
-                    status = status.with(Status::CHAIN_ERROR);
-                }
-            }
+            Err(_) => self.finish(time_us, self.base.with(Status::INPUT_ERROR), None, eval),
+            Ok(r) => self.report_sample(
+                time_us,
+                r.counts.as_slice(),
+                r.faults,
+                Some(r.temp_mc),
+                eval,
+            ),
         }
+    }
+
+    /// The report for one sample of the hub's own sensors: encoder `counts` with their
+    /// `faults` (bit j for joint j + 1) and the arm temperature in m°C, `None` when the
+    /// temperature sensor gave no valid reading. Without a temperature the report carries
+    /// `TEMP_SENSOR_FAULT` and no coordinates: the hub never evaluates the chain at a
+    /// temperature it made up. Otherwise as [`Hub::report`].
+    pub fn report_sample<E>(
+        &mut self,
+        time_us: u64,
+        counts: &[u32],
+        faults: u8,
+        temp_mc: Option<i32>,
+        eval: impl FnOnce(&[u32], i32) -> Result<Coordinates, E>,
+    ) -> Report {
+        let mut status = self.base.with_encoder_faults(faults);
+        match temp_mc {
+            None => status = status.with(Status::TEMP_SENSOR_FAULT),
+            Some(t) if !RATED_TEMP_MC.contains(&t) => {
+                status = status.with(Status::OVER_TEMPERATURE)
+            }
+            Some(_) => {}
+        }
+        if usize::from(self.joints) != counts.len() && status.table_valid() {
+            status = status.with(Status::CHAIN_ERROR);
+        }
+        let input = temp_mc.map(|t| (counts, t));
+        self.finish(time_us, status, input, eval)
+    }
+
+    /// Runs the chain if `status` allows a measurement, numbers and returns the report.
+    fn finish<E>(
+        &mut self,
+        time_us: u64,
+        mut status: Status,
+        input: Option<(&[u32], i32)>,
+        eval: impl FnOnce(&[u32], i32) -> Result<Coordinates, E>,
+    ) -> Report {
         let mut point = None;
-        if let (true, Ok(r)) = (status.is_measurement(), reading) {
-            match eval(r.counts.as_slice(), r.temp_mc) {
+        if let (true, Some((counts, temp_mc))) = (status.is_measurement(), input) {
+            match eval(counts, temp_mc) {
                 Ok(c) => point = Some(c),
                 Err(_) => status = status.with(Status::CHAIN_ERROR),
             }
@@ -216,6 +251,38 @@ mod tests {
         assert!(r.point.is_none() && r.status.has(Status::CHAIN_ERROR));
         // Every one of them still took a sequence number: the host sees no gap.
         assert_eq!(hub.report(0, Ok(&reading(0, 20_000)), ok_eval).seq, 5);
+    }
+
+    #[test]
+    fn without_a_temperature_there_are_no_coordinates() {
+        let mut hub = Hub::new(TableState::Valid, 6, Precision::F32);
+        let counts = [1, 2, 3, 4, 5, 6];
+        let r = hub.report_sample(0, &counts, 0, None, must_not_run);
+        assert_eq!(r.point, None);
+        assert_eq!(
+            r.status,
+            Status(Status::TABLE_VALID | Status::TEMP_SENSOR_FAULT)
+        );
+        // Beside an encoder fault both are reported.
+        let r = hub.report_sample(0, &counts, 0b1, None, must_not_run);
+        assert!(r.status.has(Status::TEMP_SENSOR_FAULT) && r.status.encoder_faults() == 1);
+        // A working sensor: the chain runs at the measured temperature.
+        let r = hub.report_sample(0, &counts, 0, Some(23_456), |c, t| {
+            assert_eq!((c, t), (&counts[..], 23_456));
+            Ok::<_, ()>(POINT)
+        });
+        assert_eq!(
+            (r.point, r.status),
+            (Some(POINT), Status(Status::TABLE_VALID))
+        );
+        // Out of the rated range it is over-temperature, not a sensor fault.
+        let r = hub.report_sample(0, &counts, 0, Some(45_000), must_not_run);
+        assert!(r.status.has(Status::OVER_TEMPERATURE) && !r.status.has(Status::TEMP_SENSOR_FAULT));
+        assert_eq!(r.seq, 3);
+        // Without a valid table the sensor fault is still reported.
+        let mut bad = Hub::new(TableState::Corrupt, 6, Precision::F32);
+        let r = bad.report_sample(0, &counts, 0, None, must_not_run);
+        assert!(r.status.has(Status::TEMP_SENSOR_FAULT) && r.point.is_none());
     }
 
     #[test]

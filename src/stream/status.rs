@@ -1,15 +1,16 @@
 //! The status word of every report: why a reading does or does not carry coordinates.
 //!
 //! ```text
-//!  bit  15 14 13 12 11 10  9  8 | 7  6  5  4 | 3  2  1  0
-//!       -- encoder fault, joint  | table state| .  T  I  V
-//!          7  6  5  4  3  2  1   | (code)     |
+//!  bit  15 | 14 13 12 11 10  9  8 | 7  6  5  4 | 3  2  1  0
+//!       S  | encoder fault, joint  | table state| C  T  I  V
+//!          |  7  6  5  4  3  2  1  | (code)     |
 //!  V  TABLE_VALID        the calibration table passed every check at boot
 //!  I  INPUT_ERROR        the replay frame for this slot failed COBS/CRC/decoding: dropped
 //!  T  OVER_TEMPERATURE   temperature outside the rated range: no coordinates
-//!  bit 3 CHAIN_ERROR     the chain refused the reading (count out of range, wrong joint count)
+//!  C  CHAIN_ERROR        the chain refused the reading (count out of range, wrong joint count)
 //!  bits 4..7             TableState code (0 when the table is valid)
 //!  bits 8..14            ENCODER_FAULT of joint 1..7 (parity, error flag, magnet, timeout)
+//!  S  TEMP_SENSOR_FAULT  the arm's temperature sensor gave no valid reading: no coordinates
 //! ```
 //!
 //! A report carries coordinates exactly when [`Status::is_measurement`] holds: a valid table
@@ -100,6 +101,10 @@ impl Status {
     pub const OVER_TEMPERATURE: u16 = 1 << 2;
     /// The chain refused the reading.
     pub const CHAIN_ERROR: u16 = 1 << 3;
+    /// The hub's temperature sensor gave no valid reading (bus error, wrong part, no or a
+    /// stale conversion): without the arm's temperature the thermal terms cannot be applied,
+    /// and a point corrected for a temperature the hub made up would look measured.
+    pub const TEMP_SENSOR_FAULT: u16 = 1 << 15;
     const TABLE_SHIFT: u16 = 4;
     const TABLE_MASK: u16 = 0xF << Self::TABLE_SHIFT;
     const FAULT_SHIFT: u16 = 8;
@@ -150,7 +155,12 @@ impl Status {
     /// True if a report with this status may carry coordinates: a valid table and no fault.
     pub const fn is_measurement(self) -> bool {
         self.table_valid()
-            && self.0 & (Self::INPUT_ERROR | Self::OVER_TEMPERATURE | Self::CHAIN_ERROR) == 0
+            && self.0
+                & (Self::INPUT_ERROR
+                    | Self::OVER_TEMPERATURE
+                    | Self::CHAIN_ERROR
+                    | Self::TEMP_SENSOR_FAULT)
+                == 0
             && self.encoder_faults() == 0
     }
 }
@@ -179,6 +189,7 @@ mod tests {
             Status::INPUT_ERROR,
             Status::OVER_TEMPERATURE,
             Status::CHAIN_ERROR,
+            Status::TEMP_SENSOR_FAULT,
         ] {
             assert!(!ok.with(flag).is_measurement());
             assert!(ok.with(flag).has(flag));
@@ -188,6 +199,7 @@ mod tests {
             assert!(!s.is_measurement());
             assert_eq!(s.encoder_faults(), 1 << joint);
             assert!(s.table_valid(), "fault bits must not touch the table bits");
+            assert!(!s.has(Status::TEMP_SENSOR_FAULT), "nor the sensor bit");
         }
         assert_eq!(ok.with_encoder_faults(0x80).encoder_faults(), 0);
     }
