@@ -6,23 +6,28 @@
 //! vectors) and M''_i = R(e1, δα) R(e2, δβ) R(z, Δθ) is within a few mrad of the identity on
 //! a real arm. Two passes:
 //!
-//! 1. **Base to tip**: each joint's reading (quarter turns, remainder, harmonic error, link at
-//!    temperature) and the orientation Q_0i = Q_0(i−1) ⊗ M̃_i ⊗ (cos θ_i/2, sin θ_i/2 ẑ), 24
-//!    products a joint (8 for the first). Q is used where rounding does not reach the
-//!    position: the vertical seen by each compliant joint, the joint axes for the direction's
-//!    gravity correction, and the probe direction n = Q v̂_p Q*, which divides |Q|² out rather
-//!    than renormalising Q.
-//! 2. **Tip to base** (Horner form): w = v_N + v_p, then w ← v_(i−1) + C_i M''_i R(z, θ_i) w.
-//!    Each step adds a *small* correction to w — the quarter turns are exact, the remainder
-//!    turn is at most π/4, M''_i is near the identity — so the large partial sums (1.5 m,
-//!    ulp 0.12 µm) are rounded about once per joint, and no orientation error accumulates
-//!    into the position. The gravity deflection e_k = g_k (u_k × w_k)·z_k, with w_k the tip
-//!    seen from joint k, joins the joint's angle before its turn, like the exactly deflected
-//!    reference.
+//! 1. **Base to tip**: each joint's angle (quarter turns q, remainder 2x, harmonic error) and
+//!    the orientation Q_0i = Q_0(i−1) ⊗ M̃_i ⊗ (cos θ_i/2, sin θ_i/2 ẑ), 24 products a joint
+//!    (8 for the first). θ_i/2 = q·π/4 + x: the table keeps M̃_i ⊗ (cos qπ/4, sin qπ/4 ẑ) for
+//!    each quadrant (formed in f64 at boot), so the product takes (cos x, sin x) as they come
+//!    from the polynomial. Q is used where rounding does not reach the position: the vertical
+//!    seen by each compliant joint, the joint axes for the direction's gravity correction, and
+//!    the probe direction n = Q v̂_p Q*, which divides |Q|² out rather than renormalising Q.
+//!    Only the angle is recorded for the second pass.
+//! 2. **Tip to base** (Horner form): w = v_N + v_p, then w ← v_(i−1) + C_i M''_i R(z, θ_i) w,
+//!    with the link at temperature formed here. Each step adds a *small* correction to w — the
+//!    quarter turns are exact, the remainder turn is at most π/4, M''_i is applied as
+//!    w + E_i w with E_i = M''_i − I (entries of a few mrad, formed in f64 at boot) — so the
+//!    large partial sums (1.5 m, ulp 0.12 µm) are rounded about once per joint, and no
+//!    orientation error accumulates into the position. The gravity deflection
+//!    e_k = g_k (u_k × w_k)·z_k, with w_k the tip seen from joint k, joins the joint's angle
+//!    before its turn, like the exactly deflected reference.
 //!
 //! A matrix chain could not be written this way for the same price: it would still have to
 //! compose its matrices for the direction and the verticals, and a composed 3×3 matrix costs
-//! 27 products a joint where a quaternion costs 16.
+//! 27 products a joint where a quaternion costs 16. (Measured cost: `docs/results/chain.md`;
+//! on the Cortex-M4F this chain still takes more instructions than the straightforward matrix
+//! chain, on the Cortex-M0 fewer.)
 
 use crate::angle::{quarter_turns, Quarter};
 use crate::model::{units, ChainError, Model, Point, BASE_AXIS};
