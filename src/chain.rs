@@ -62,11 +62,27 @@ pub type ChainF32 = Chain<F32>;
 /// The fixed-point quaternion chain (targets without FPU).
 pub type ChainFixed = Chain<Fixed>;
 
-/// The base frame's vertical and the joint's axis, for a compliant joint.
+/// The base frame's vertical (its x and y, all the lever needs) and the joint's axis, for a
+/// compliant joint.
 #[derive(Clone, Copy)]
 struct Frame<P: Precision> {
-    vertical: Vec3<P::U>,
+    vertical: [P::U; 2],
     axis: Vec3<P::U>,
+}
+
+/// What the first pass leaves for the second, per joint: the angle, and the frame where the
+/// joint is compliant. One record per joint, so both share one address; left uninitialised,
+/// since zeroing them per reading would cost more than the records themselves.
+struct Record<P: Precision> {
+    angle: MaybeUninit<Quarter<P>>,
+    frame: MaybeUninit<Frame<P>>,
+}
+
+impl<P: Precision> Record<P> {
+    const UNINIT: Record<P> = Record {
+        angle: MaybeUninit::uninit(),
+        frame: MaybeUninit::uninit(),
+    };
 }
 
 /// Cyclic relabelling of a vector's components (exact).
@@ -152,11 +168,8 @@ impl<P: Precision> Chain<P> {
         let dt = m.check(counts, temp_mc)?;
         let zero = P::U::default();
 
-        // Base to tip. The per-joint records are written here and read below, joint for
-        // joint; left uninitialised, since zeroing them per reading would cost more than the
-        // records themselves.
-        let mut steps = [const { MaybeUninit::<Quarter<P>>::uninit() }; MAX_JOINTS];
-        let mut frames = [const { MaybeUninit::<Frame<P>>::uninit() }; MAX_JOINTS];
+        // Base to tip.
+        let mut records = [Record::<P>::UNINIT; MAX_JOINTS];
         let mut q = Quat::<P>::default();
         // `check` made counts.len() = n ≤ MAX_JOINTS.
         let n = counts.len().min(MAX_JOINTS);
@@ -172,15 +185,17 @@ impl<P: Precision> Chain<P> {
             let fq = &r.full[usize::from(angle.q & 3)];
             q = if i == 0 { *fq } else { q.mul(fq) };
             q = q.mul_z(P::ONE + angle.cm1, angle.s);
+            let rec = &mut records[i];
             if j.has_gravity {
-                frames[i].write(Frame {
-                    vertical: q.z_row(),
+                let v = q.z_row();
+                rec.frame.write(Frame {
+                    vertical: [v[0], v[1]],
                     axis: q.z_axis(),
                 });
             }
             // The link at temperature is formed in the second pass, where it is used: cheaper
             // than a record.
-            steps[i].write(angle);
+            rec.angle.write(angle);
         }
 
         // Tip to base.
@@ -189,14 +204,15 @@ impl<P: Precision> Chain<P> {
         let mut deflected = false;
         for i in (0..n).rev() {
             let (j, r) = (&m.joints[i], &self.rotation[i]);
-            // SAFETY: the first pass wrote `steps[i]` for every i < n (it returns early only
+            let rec = &records[i];
+            // SAFETY: the first pass wrote every angle below n (it returns early only
             // with an error, before this pass).
-            let mut a = unsafe { steps[i].assume_init_read() };
+            let mut a = unsafe { rec.angle.assume_init_read() };
             let link = j.link_at(dt);
             w = [w[0] + link[0], w[1] + link[1], w[2] + link[2]];
             if j.has_gravity {
-                // SAFETY: the first pass wrote `frames[i]` exactly where `has_gravity`.
-                let f = unsafe { frames[i].assume_init_read() };
+                // SAFETY: the first pass wrote the frame exactly where `has_gravity`.
+                let f = unsafe { rec.frame.assume_init_read() };
                 let lever = w[0].scale(f.vertical[1]) - w[1].scale(f.vertical[0]);
                 let eg = P::gravity(j.gravity, lever);
                 a = a.turned(P::half(eg));
