@@ -117,10 +117,12 @@ impl<P: Precision> Quat<P> {
     /// base frame, for gravity; |q| ≠ 1 scales it by |q|², which gravity does not notice).
     #[inline(always)]
     pub fn z_axis(&self) -> Vec3<P::U> {
-        let (x2, y2, z2) = (self.x + self.x, self.y + self.y, self.z + self.z);
+        // The same products as `z_row` (z·2x, not x·2z), so that a caller taking both
+        // computes them once.
+        let (x2, y2) = (self.x + self.x, self.y + self.y);
         [
-            self.x.scale(z2) + self.w.scale(y2),
-            self.y.scale(z2) - self.w.scale(x2),
+            self.z.scale(x2) + self.w.scale(y2),
+            self.z.scale(y2) - self.w.scale(x2),
             P::ONE - self.x.scale(x2) - self.y.scale(y2),
         ]
     }
