@@ -1,8 +1,23 @@
-//! The loop of a real hub: its own encoders sampled at a fixed period, and a replay taking
-//! over whenever the host sends recorded readings (hardware-in-the-loop runs) until its `End`.
+//! The loop of a real hub: its own encoders sampled at a fixed period with the arm's
+//! temperature, and a replay taking over whenever the host sends recorded readings
+//! (hardware-in-the-loop runs) until its `End`.
+//!
+//! The temperature sensor is polled every [`TEMP_PERIOD_US`], not at every sample: the arm's
+//! structure changes temperature over minutes, the sensor converts once a second, and an I2C
+//! poll costs a few hundred µs of the 1 ms sample period. Between polls every sample uses the
+//! last poll's outcome; a failed poll gives `TEMP_SENSOR_FAULT` and no coordinates until a
+//! poll succeeds again (`Hub::report_sample`).
 
 use quatarm::encoder::{read_joints, AbsoluteEncoder, Event, Replay};
-use quatarm::stream::{Coordinates, Counts, Hub, Reading, ToHost, MAX_OUTPUT};
+use quatarm::stream::{Coordinates, Hub, ToHost, MAX_OUTPUT};
+use quatarm::temperature::TemperatureSensor;
+
+/// How often the temperature sensor is polled.
+pub const TEMP_PERIOD_US: u64 = 250_000;
+
+/// Polls in a row that may find no new conversion of a sensor converting once a second
+/// before its reading counts as stale: two seconds' worth (see `Tmp117::new`).
+pub const TEMP_STALE_POLLS: u16 = (2_000_000 / TEMP_PERIOD_US) as u16;
 
 /// A byte link that can be polled without blocking (a UART with a receive flag).
 pub trait PollLink {
@@ -13,14 +28,14 @@ pub trait PollLink {
 }
 
 /// Runs the hub for ever: a report every `period_us` from `encoders` (joint 1 first) and
-/// `temp_mc`, or one per replayed reading while a replay is under way.
-pub fn serve_live<L: PollLink, E: AbsoluteEncoder, X>(
+/// `thermometer`, or one per replayed reading while a replay is under way.
+pub fn serve_live<L: PollLink, E: AbsoluteEncoder, T: TemperatureSensor, X>(
     link: &mut L,
     hub: &mut Hub,
     encoders: &mut [E],
     period_us: u64,
     mut now_us: impl FnMut() -> u64,
-    mut temp_mc: impl FnMut() -> i32,
+    thermometer: &mut T,
     mut eval: impl FnMut(&[u32], i32) -> Result<Coordinates, X>,
 ) -> ! {
     let mut out = [0u8; MAX_OUTPUT];
@@ -36,6 +51,9 @@ pub fn serve_live<L: PollLink, E: AbsoluteEncoder, X>(
     let mut replay = Replay::new();
     let mut replaying = false;
     let mut next = now_us();
+    let mut next_temp = next;
+    let mut temp_mc: Option<i32> = None;
+    let mut temp_ok = true; // only changes of the sensor's state are logged
     let mut counts = [0u32; 7];
     let joints = encoders.len().min(counts.len());
     loop {
@@ -63,17 +81,18 @@ pub fn serve_live<L: PollLink, E: AbsoluteEncoder, X>(
             }
         } else if !replaying && now_us() >= next {
             next += period_us;
+            if now_us() >= next_temp {
+                next_temp += TEMP_PERIOD_US;
+                temp_mc = thermometer.read_mc().ok();
+                match (temp_mc, temp_ok) {
+                    (None, true) => defmt::warn!("temperature sensor: no valid reading"),
+                    (Some(t), false) => defmt::info!("temperature sensor back: {=i32} mC", t),
+                    _ => {}
+                }
+                temp_ok = temp_mc.is_some();
+            }
             let faults = read_joints(&mut encoders[..joints], &mut counts[..joints]);
-            let Some(c) = Counts::new(&counts[..joints]) else {
-                continue;
-            };
-            let reading = Reading {
-                seq: 0,
-                counts: c,
-                temp_mc: temp_mc(),
-                faults,
-            };
-            hub.report(now_us(), Ok(&reading), &mut eval)
+            hub.report_sample(now_us(), &counts[..joints], faults, temp_mc, &mut eval)
         } else {
             continue;
         };

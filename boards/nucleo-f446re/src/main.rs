@@ -8,8 +8,11 @@
 //! - Replay: frames from the host take over from the encoders until the host's `End`
 //!   (hardware-in-the-loop runs with a recording).
 //! - Log: defmt over RTT, read by a debug probe, apart from the stream.
-//! - Temperature: this board has no arm temperature sensor; it reports the reference
-//!   20.000 °C, at which the thermal terms vanish. A hub with a sensor passes its reading.
+//! - Temperature: a TI TMP117 on the arm's structure, on I2C1 (PB8 SCL = Arduino D15, PB9 SDA
+//!   = D14, 400 kHz, address 0x48: ADD0 to GND), polled every 250 ms. The NUCLEO has no
+//!   pull-ups on D14/D15: the sensor's breakout board provides them (or fit 2.2 kΩ to 3.3 V).
+//!   Without a valid reading (sensor missing, wrong part, bus error, no conversion yet in
+//!   the first second after boot) the reports carry `TEMP_SENSOR_FAULT` and no coordinates.
 #![no_std]
 #![no_main]
 
@@ -17,13 +20,15 @@ use core::cell::RefCell;
 
 use board_common::calibration;
 use board_common::clock;
-use board_common::live::{serve_live, PollLink};
+use board_common::live::{self, serve_live, PollLink};
 use cortex_m_rt::{entry, exception};
 use embedded_hal_bus::spi::RefCellDevice;
 use embedded_hal_nb::serial::{Read, Write};
 use quatarm::encoder::{AbsoluteEncoder, As5047p};
 use quatarm::stream::{Hub, Precision};
+use quatarm::temperature::{Address, Tmp117};
 use stm32f4xx_hal::{
+    i2c::I2cExt,
     pac,
     prelude::*,
     rcc::Config,
@@ -35,8 +40,6 @@ use stm32f4xx_hal::{
 const CORE_HZ: u32 = 168_000_000;
 /// Encoder sampling period.
 const PERIOD_US: u64 = 1_000;
-/// The thermal model's reference temperature, reported for want of a sensor.
-const TEMP_MC: i32 = 20_000;
 
 struct Usart2(Serial<pac::USART2, u8>);
 
@@ -97,6 +100,12 @@ fn main() -> ! {
         As5047p::new(dev)
     });
 
+    let i2c = dp.I2C1.i2c((gpiob.pb8, gpiob.pb9), 400.kHz(), &mut rcc);
+    let mut thermometer = Tmp117::new(i2c, Address::Gnd, live::TEMP_STALE_POLLS);
+    if thermometer.init().is_err() {
+        defmt::warn!("TMP117 not found on I2C1 at 0x48: no coordinates until it answers");
+    }
+
     let resolution = encoders.each_ref().map(|e| e.counts_per_rev());
     let cal = calibration::load_for_encoders::<quatarm::F32>(
         board_common::table_region::bytes(),
@@ -109,7 +118,7 @@ fn main() -> ! {
         &mut encoders,
         PERIOD_US,
         || clock::now_us(CORE_HZ),
-        || TEMP_MC,
+        &mut thermometer,
         |counts, temp_mc| cal.eval(counts, temp_mc),
     )
 }

@@ -7,8 +7,12 @@
 //!   calibration table built with `encoder_counts = 16384` (checked at boot).
 //! - Replay: frames from the host take over from the encoders until the host's `End`.
 //! - Log: defmt over RTT, read by a debug probe, apart from the stream.
-//! - Temperature: the Pico has no arm temperature sensor; it reports the reference 20.000 °C,
-//!   at which the thermal terms vanish. A hub with a sensor passes its reading.
+//! - Temperature: a TI TMP117 on the arm's structure, on I2C0 (GP16 SDA, GP17 SCL, 400 kHz,
+//!   address 0x48: ADD0 to GND), polled every 250 ms. GP4/GP5, I2C0's first pin pair, are
+//!   taken by SPI0 MISO and joint 1's chip select. The RP2040's internal pull-ups are
+//!   enabled but weak for 400 kHz: the sensor's breakout board provides proper ones.
+//!   Without a valid reading (sensor missing, wrong part, bus error, no conversion yet in
+//!   the first second after boot) the reports carry `TEMP_SENSOR_FAULT` and no coordinates.
 #![no_std]
 #![no_main]
 
@@ -16,16 +20,18 @@ use core::cell::RefCell;
 
 use board_common::calibration;
 use board_common::clock;
-use board_common::live::{serve_live, PollLink};
+use board_common::live::{self, serve_live, PollLink};
 use cortex_m_rt::{entry, exception};
 use embedded_hal_bus::spi::RefCellDevice;
 use embedded_hal_nb::serial::{Read, Write};
 use fugit::RateExtU32;
 use quatarm::encoder::{AbsoluteEncoder, As5047p};
 use quatarm::stream::{Hub, Precision};
+use quatarm::temperature::{Address, Tmp117};
 use rp2040_hal::{
     clocks::init_clocks_and_plls,
-    gpio::{FunctionSpi, FunctionUart, Pins},
+    gpio::{FunctionI2c, FunctionSpi, FunctionUart, Pin, Pins, PullUp},
+    i2c::I2C,
     pac,
     sio::Sio,
     spi::Spi,
@@ -46,8 +52,6 @@ const XOSC_HZ: u32 = 12_000_000;
 const CORE_HZ: u32 = 125_000_000;
 /// Encoder sampling period.
 const PERIOD_US: u64 = 1_000;
-/// The thermal model's reference temperature, reported for want of a sensor.
-const TEMP_MC: i32 = 20_000;
 
 struct Uart0<D: UartDevice, P: ValidUartPinout<D>>(UartPeripheral<rp2040_hal::uart::Enabled, D, P>);
 
@@ -121,6 +125,21 @@ fn main() -> ! {
         As5047p::new(dev)
     });
 
+    let sda: Pin<_, FunctionI2c, PullUp> = pins.gpio16.reconfigure();
+    let scl: Pin<_, FunctionI2c, PullUp> = pins.gpio17.reconfigure();
+    let i2c = I2C::i2c0(
+        dp.I2C0,
+        sda,
+        scl,
+        400.kHz(),
+        &mut dp.RESETS,
+        clocks.system_clock.freq(),
+    );
+    let mut thermometer = Tmp117::new(i2c, Address::Gnd, live::TEMP_STALE_POLLS);
+    if thermometer.init().is_err() {
+        defmt::warn!("TMP117 not found on I2C0 at 0x48: no coordinates until it answers");
+    }
+
     let resolution = encoders.each_ref().map(|e| e.counts_per_rev());
     let cal = calibration::load_for_encoders::<quatarm::Fixed>(
         board_common::table_region::bytes(),
@@ -133,7 +152,7 @@ fn main() -> ! {
         &mut encoders,
         PERIOD_US,
         || clock::now_us(CORE_HZ),
-        || TEMP_MC,
+        &mut thermometer,
         |counts, temp_mc| cal.eval(counts, temp_mc),
     )
 }
