@@ -128,6 +128,16 @@ impl<P: Precision> Quat<P> {
     }
 }
 
+/// a × b of two dimensionless vectors (small rotation vectors, directions).
+#[inline(always)]
+pub fn cross<P: Precision>(a: &Vec3<P::U>, b: &Vec3<P::U>) -> Vec3<P::U> {
+    [
+        a[1].scale(b[2]) - a[2].scale(b[1]),
+        a[2].scale(b[0]) - a[0].scale(b[2]),
+        a[0].scale(b[1]) - a[1].scale(b[0]),
+    ]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

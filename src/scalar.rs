@@ -91,6 +91,10 @@ pub trait Precision: Copy + Default + Debug + 'static {
     /// norm out of every rotation (f32: some 1e-7 per product, 0.3 µm at the tip) rather than
     /// trusting |q| = 1 (fixed point: 1e-9 per product, under a nanometre).
     const DIVIDE_NORM: bool;
+    /// Whether the chains may spend flash on a second copy of a hot path to save instructions
+    /// per point (f32: the FPU targets have flash to spare; fixed point: the Cortex-M0 hub's
+    /// image must stay within 32 KiB).
+    const SPEND_FLASH: bool;
 }
 
 /// Minimax sin x = x + x³(S1 + x²(S2 + x² S3)) on |x| ≤ π/8: absolute error 3.6e-12
@@ -138,6 +142,7 @@ impl Precision for F32 {
     const SQRT_HALF: f32 = core::f32::consts::FRAC_1_SQRT_2;
     const MAX_REACH_MM: f64 = 1.0e6;
     const DIVIDE_NORM: bool = true;
+    const SPEND_FLASH: bool = true;
 
     #[inline(always)]
     fn angle(r: i32) -> f32 {
@@ -410,6 +415,7 @@ impl Precision for Fixed {
     const SQRT_HALF: Unit = q30(core::f64::consts::FRAC_1_SQRT_2);
     /// Positions are I12F20: keep 48 mm of the ±2048 mm range as margin for rounding.
     const MAX_REACH_MM: f64 = 2000.0;
+    const SPEND_FLASH: bool = false;
     const DIVIDE_NORM: bool = false;
 
     #[inline(always)]

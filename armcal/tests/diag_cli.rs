@@ -177,7 +177,7 @@ fn noise_alone_is_reported_as_none() {
 fn a_term_beyond_the_table_is_reported_and_no_table_is_written() {
     let d = workdir("table");
     let mut t = armcal::sim::perturb(&Arm::default6(), 3e-4, 0.3, &mut armcal::sim::rng(26));
-    t.joints[1].gravity = 8e-6; // beyond the table's 5e-6 rad/mm
+    t.joints[1].gravity = 8e-6; // beyond the table's 3e-6 rad/mm
     simulate(&d, &t, "27");
     std::fs::write(d.join("ext.bin"), b"stale").unwrap();
     let o = armcal_ok(&["diagnose", "points.csv", "--json", "-o", "ext.toml"], &d);
@@ -191,7 +191,7 @@ fn a_term_beyond_the_table_is_reported_and_no_table_is_written() {
     );
     let err = j["output"]["table_error"].as_str().expect("table_error");
     assert!(err.contains("joint 2 gravity compliance"), "{err}");
-    assert!(err.contains("≤ 5e-6 rad/mm"), "{err}");
+    assert!(err.contains("≤ 3e-6 rad/mm"), "{err}");
     assert!(j["output"]["table"].is_null());
     assert!(!d.join("ext.bin").exists(), "a stale table must not stay");
     assert!(d.join("ext.toml").exists());

@@ -59,6 +59,36 @@ fn the_shipped_calibration_file_is_the_built_in_one() {
     assert_eq!(parsed.arm, full_calibration());
 }
 
+/// The quaternion chains' bounds (the matrix chain takes the spec's first-order gravity sum,
+/// which is micrometres off at such compliances: a comparison, not a firmware path).
+fn check_quaternion(rep: &Report) {
+    let [qf, qx, ..] = rep.stats;
+    assert!(qf.max_um <= F32_TIP_UM, "f32 tip {} um", qf.max_um);
+    assert!(qf.max_dir <= F32_DIR, "f32 dir {}", qf.max_dir);
+    assert!(qx.max_um <= FIXED_TIP_UM, "fixed tip {} um", qx.max_um);
+    assert!(qx.max_dir <= FIXED_DIR, "fixed dir {}", qx.max_dir);
+}
+
+/// Large gravity compliances on every hinge, with the full calibration: the largest a table
+/// holds (deflections of several mrad, where first-order gravity would miss by micrometres
+/// and 1e-5), and the largest for which the chain leaves the second-order terms out.
+#[test]
+fn large_gravity_compliance_within_bounds() {
+    for g in [
+        quatarm::table::limits::GRAVITY,
+        quatarm::chain::SECOND_ORDER_GRAVITY,
+    ] {
+        for signs in [[1.0, 1.0, 1.0], [1.0, -1.0, 1.0]] {
+            let mut arm = full_calibration();
+            for (k, sign) in [1, 3, 5].into_iter().zip(signs) {
+                arm.joints[k].gravity = sign * g;
+            }
+            let rep = measure(&arm, 20_000, 11, 2, &|_| {}).unwrap();
+            check_quaternion(&rep);
+        }
+    }
+}
+
 fn arm_strategy() -> impl Strategy<Value = Arm> {
     let joint = (
         -5e-3..5e-3f64,
