@@ -157,9 +157,10 @@ pub fn table(rows: &[Row]) -> String {
 }
 
 /// `cargo xtask bench-target`.
-pub fn run(only: Option<&str>) -> Result<()> {
+pub fn run(only: Option<&str>, calib: Option<&std::path::Path>) -> Result<()> {
     setup::ensure()?;
-    let (_, table_bytes) = calibration(&default_calibration_path())?;
+    let path = calib.map_or_else(default_calibration_path, std::path::Path::to_path_buf);
+    let (_, table_bytes) = calibration(&path)?;
     let mut rows = Vec::new();
     for b in BOARDS.iter().filter(|b| only.is_none_or(|o| o == b.name)) {
         build_board(b)?;
@@ -167,8 +168,9 @@ pub fn run(only: Option<&str>) -> Result<()> {
     }
     println!("\n{}", table(&rows));
     println!(
-        "(instructions under qemu-system-arm -icount shift=0, mean over {POINTS} recorded readings, default full calibration; \
-         the real boards share the cores of qemu-m4f (Cortex-M4F) and qemu-m0 (Cortex-M0; the RP2040 is an M0+))"
+        "(instructions under qemu-system-arm -icount shift=0, mean over {POINTS} recorded readings, calibration {}; \
+         the real boards share the cores of qemu-m4f (Cortex-M4F) and qemu-m0 (Cortex-M0; the RP2040 is an M0+))",
+        path.display()
     );
     Ok(())
 }

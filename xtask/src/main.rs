@@ -49,6 +49,9 @@ enum Cmd {
         /// Only this board.
         #[arg(long)]
         board: Option<String>,
+        /// Calibration file to measure with (default: data/default-6-full.toml).
+        #[arg(long)]
+        calib: Option<std::path::PathBuf>,
     },
     /// Regenerate the shipped recording data/recordings/default-6-session.csv.
     #[command(hide = true)]
@@ -61,7 +64,7 @@ fn main() -> Result<()> {
         Cmd::Build { board } => build::run(board.as_deref()),
         Cmd::Test => test::run(),
         Cmd::Demo { all } => demo::run(all),
-        Cmd::BenchTarget { board } => bench::run(board.as_deref()),
+        Cmd::BenchTarget { board, calib } => bench::run(board.as_deref(), calib.as_deref()),
         Cmd::MakeRecording => make_recording::run(),
     }
 }
