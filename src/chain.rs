@@ -34,7 +34,7 @@
 
 use crate::angle::{quarter_turns, Quarter};
 use crate::model::{units, ChainError, Model, Point, BASE_AXIS};
-use crate::rotate::{cross, Quat, Vec3};
+use crate::rotate::{add_half_cross, cross, Quat, Vec3};
 use crate::scalar::{Fixed, Precision, Scale, F32};
 use crate::table::{Table, MAX_JOINTS};
 use core::mem::MaybeUninit;
@@ -277,12 +277,7 @@ impl<P: Precision> Chain<P> {
                 // largest compliance (e ≈ 5 mrad) a first-order sum would be 1e-5 off.
                 let wk = f.axis.map(|x| x.scale(eg));
                 if second_order {
-                    let c = cross::<P>(&wk, &omega);
-                    omega = [
-                        omega[0] + P::half(c[0]),
-                        omega[1] + P::half(c[1]),
-                        omega[2] + P::half(c[2]),
-                    ];
+                    omega = add_half_cross::<P>(omega, &wk, &omega);
                 }
                 omega = [omega[0] + wk[0], omega[1] + wk[1], omega[2] + wk[2]];
                 deflected = true;
@@ -320,12 +315,7 @@ impl<P: Precision> Chain<P> {
             // only where it matters.
             let mut t = cross::<P>(&omega, &dir);
             if second_order {
-                let t2 = cross::<P>(&omega, &t);
-                t = [
-                    t[0] + P::half(t2[0]),
-                    t[1] + P::half(t2[1]),
-                    t[2] + P::half(t2[2]),
-                ];
+                t = add_half_cross::<P>(t, &omega, &t);
             }
             dir = [dir[0] + t[0], dir[1] + t[1], dir[2] + t[2]];
         }
