@@ -4,11 +4,26 @@
 //! (`Table::parse_for`); any refusal of the parser or of the chain's constructor becomes the
 //! [`TableState`] every report then carries, and no chain exists to produce coordinates.
 
-use quatarm::stream::{Coordinates, TableState};
+use quatarm::stream::{self, Coordinates, Hub, TableState};
 use quatarm::{Chain, ChainError, Precision, Table};
 
 /// Joints of the arms these hubs drive.
 pub const JOINTS: usize = 6;
+
+/// A chain arithmetic a hub can run, with the name its hello message gives it: the type picks
+/// the arithmetic, so the announced precision cannot disagree with the one evaluated.
+pub trait HubPrecision: Precision {
+    /// What the hub announces.
+    const STREAM: stream::Precision;
+}
+
+impl HubPrecision for quatarm::F32 {
+    const STREAM: stream::Precision = stream::Precision::F32;
+}
+
+impl HubPrecision for quatarm::Fixed {
+    const STREAM: stream::Precision = stream::Precision::Fixed;
+}
 
 /// The boot check's outcome: a chain, or why there is none.
 pub struct Calibration<P: Precision> {
@@ -49,6 +64,13 @@ fn validate(region: &[u8]) -> Result<Table<'_>, TableState> {
 #[inline(never)]
 fn build<P: Precision>(table: Table<'_>) -> Result<Chain<P>, TableState> {
     Chain::<P>::new(&table).map_err(|_| TableState::Malformed)
+}
+
+impl<P: HubPrecision> Calibration<P> {
+    /// A hub that reports this calibration's state, joints and precision.
+    pub fn hub(&self) -> Hub {
+        Hub::new(self.state(), self.joints(), P::STREAM)
+    }
 }
 
 impl<P: Precision> Calibration<P> {

@@ -8,7 +8,8 @@ use cortex_m::peripheral::{syst::SystClkSource, SYST};
 static WRAPS: AtomicU32 = AtomicU32::new(0);
 const RELOAD: u32 = 0x00FF_FFFF;
 
-/// Starts SysTick free-running on the core clock, interrupting at every wrap.
+/// Starts SysTick free-running on the core clock, interrupting at every wrap (the handler is
+/// this module's: a board defines no `SysTick` of its own).
 pub fn start(mut syst: SYST) {
     syst.set_clock_source(SystClkSource::Core);
     syst.set_reload(RELOAD);
@@ -17,8 +18,9 @@ pub fn start(mut syst: SYST) {
     syst.enable_counter();
 }
 
-/// Call from the board's `SysTick` exception handler.
-pub fn on_wrap() {
+/// Counts a wrap. The clock owns SysTick, so its handler lives here rather than in each board.
+#[cortex_m_rt::exception]
+fn SysTick() {
     // Only this handler writes WRAPS, so load + store is enough (the M0 has no atomic add).
     WRAPS.store(
         WRAPS.load(Ordering::Relaxed).wrapping_add(1),

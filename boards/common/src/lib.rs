@@ -3,11 +3,13 @@
 //! - [`bench`]: instructions per point of the quaternion and matrix chains, on target.
 //! - [`calibration`]: the table validated at boot and the chain built from it.
 //! - [`stack`]: stack high-water mark by painting.
-//! - [`clock`]: microseconds since boot from SysTick.
+//! - [`clock`]: microseconds since boot from SysTick, whose handler it defines.
 //! - [`table_region`]: the calibration table's flash region, as `memory.x` reserves it.
 //! - [`live`]: a real hub's loop: encoders at a fixed period, replay when the host sends one.
 //! - [`serve`]: the replay loop: bytes in, [`quatarm::stream::Hub`] reports out.
-//! - [`qemu`] (feature `qemu`): exit codes through semihosting, the panic and fault handlers.
+//! - [`qemu`] (feature `qemu`): the QEMU images' runs, exit codes through semihosting, the
+//!   panic and fault handlers.
+//! - `rtt` (feature `rtt`): the real boards' log transport and panic handler.
 //!
 //! Logs go through defmt, apart from the data stream: semihosting under QEMU (feature
 //! `qemu`), RTT on real boards (feature `rtt`).
@@ -20,14 +22,14 @@ pub mod clock;
 pub mod live;
 #[cfg(feature = "qemu")]
 pub mod qemu;
+#[cfg(feature = "rtt")]
+mod rtt;
 mod serve;
 pub mod stack;
 pub mod table_region;
 
 pub use serve::{serve, Link, Served};
 
-// The defmt transport: a channel apart from the data stream.
-#[cfg(feature = "rtt")]
-use defmt_rtt as _;
+// The defmt transport under QEMU: a channel apart from the data stream.
 #[cfg(feature = "qemu")]
 use defmt_semihosting as _;

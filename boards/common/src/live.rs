@@ -12,6 +12,9 @@ use quatarm::encoder::{read_joints, AbsoluteEncoder, Event, Replay};
 use quatarm::stream::{Coordinates, Hub, ToHost, MAX_OUTPUT};
 use quatarm::temperature::TemperatureSensor;
 
+use crate::calibration::{self, HubPrecision, JOINTS};
+use crate::{clock, table_region};
+
 /// How often the temperature sensor is polled.
 pub const TEMP_PERIOD_US: u64 = 250_000;
 
@@ -25,6 +28,31 @@ pub trait PollLink {
     fn try_read(&mut self) -> Option<u8>;
     /// Sends all of `bytes`.
     fn write(&mut self, bytes: &[u8]);
+}
+
+/// The whole run of a real hub once its board has set up the link, the encoders (joint 1
+/// first, one per joint of the table) and the thermometer: the table checked against the encoders' resolution, then
+/// [`serve_live`] in precision `P` with a report every `period_us`, timed by a core clock of
+/// `core_hz`.
+pub fn run<P: HubPrecision>(
+    link: &mut impl PollLink,
+    encoders: &mut [impl AbsoluteEncoder; JOINTS],
+    thermometer: &mut impl TemperatureSensor,
+    period_us: u64,
+    core_hz: u32,
+) -> ! {
+    let resolution = encoders.each_ref().map(|e| e.counts_per_rev());
+    let cal = calibration::load_for_encoders::<P>(table_region::bytes(), &resolution);
+    let mut hub = cal.hub();
+    serve_live(
+        link,
+        &mut hub,
+        encoders,
+        period_us,
+        || clock::now_us(core_hz),
+        thermometer,
+        |counts, temp_mc| cal.eval(counts, temp_mc),
+    )
 }
 
 /// Runs the hub for ever: a report every `period_us` from `encoders` (joint 1 first) and

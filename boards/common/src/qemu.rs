@@ -1,7 +1,55 @@
-//! Leaving QEMU: semihosting's exit call becomes the QEMU process's exit code, so a test run
-//! fails loudly on a panic instead of hanging.
+//! What the QEMU boards share: the hub's and the benchmark's whole runs (the boards differ
+//! only in their UART and core clock), and leaving QEMU: semihosting's exit call becomes the
+//! QEMU process's exit code, so a test run fails loudly on a panic instead of hanging.
 
 use cortex_m_semihosting::debug::{self, EXIT_FAILURE, EXIT_SUCCESS};
+
+use crate::calibration::{self, HubPrecision};
+use crate::{bench, clock, serve, stack, table_region, Link};
+
+/// The whole run of a QEMU hub image: replay the recording that arrives on the link until the
+/// host's `End`, log the stack's peak and the statics' size, exit with success.
+///
+/// `open_link` sets up the board's UART; it runs after the clock has started, so that report
+/// times count from the same point on every board. `ram_start` is where `memory.x` puts RAM.
+pub fn hub_main<P: HubPrecision, L: Link>(
+    core_hz: u32,
+    ram_start: usize,
+    open_link: impl FnOnce() -> L,
+) -> ! {
+    stack::paint();
+    let Some(cp) = cortex_m::Peripherals::take() else {
+        exit_failure()
+    };
+    clock::start(cp.SYST);
+    let mut link = open_link();
+    let cal = calibration::load::<P>(table_region::bytes());
+    let mut hub = cal.hub();
+    serve(
+        &mut link,
+        &mut hub,
+        || clock::now_us(core_hz),
+        |counts, temp_mc| cal.eval(counts, temp_mc),
+    );
+    defmt::info!(
+        "stack peak {=u32} bytes, statics {=u32} bytes",
+        stack::peak() as u32,
+        stack::statics(ram_start) as u32
+    );
+    exit_success()
+}
+
+/// The whole run of a QEMU benchmark image ([`bench::run`] in precision `P`), then exit with
+/// success. `open_link` as for [`hub_main`].
+pub fn bench_main<P: quatarm::Precision, L: Link>(open_link: impl FnOnce() -> L) -> ! {
+    let Some(cp) = cortex_m::Peripherals::take() else {
+        exit_failure()
+    };
+    clock::start(cp.SYST);
+    let mut link = open_link();
+    bench::run::<_, P>(&mut link, table_region::bytes());
+    exit_success()
+}
 
 /// Ends the QEMU run with success.
 pub fn exit_success() -> ! {

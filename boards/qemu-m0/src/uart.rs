@@ -4,6 +4,8 @@
 
 use core::ptr::{read_volatile, write_volatile};
 
+use board_common::Link;
+
 const BASE: usize = 0x4000_2000;
 const TASKS_STARTRX: usize = 0x000;
 const TASKS_STARTTX: usize = 0x008;
@@ -34,9 +36,11 @@ impl Uart {
         write_volatile(reg(TASKS_STARTRX), 1);
         Uart(())
     }
+}
 
+impl Link for Uart {
     /// Sends every byte, one at a time.
-    pub fn write(&mut self, bytes: &[u8]) {
+    fn write(&mut self, bytes: &[u8]) {
         for &b in bytes {
             // SAFETY: the registers of the UART this value owns.
             unsafe {
@@ -48,7 +52,7 @@ impl Uart {
     }
 
     /// Waits for one received byte.
-    pub fn read(&mut self) -> u8 {
+    fn read(&mut self) -> u8 {
         // SAFETY: the registers of the UART this value owns.
         unsafe {
             while read_volatile(reg(EVENTS_RXDRDY)) == 0 {}

@@ -8,9 +8,8 @@
 
 mod uart;
 
-use board_common::{calibration, clock, qemu, serve, stack, Link};
-use cortex_m_rt::{entry, exception};
-use quatarm::stream::Hub;
+use board_common::qemu;
+use cortex_m_rt::entry;
 
 /// mps2-an386 core clock: 25 MHz.
 const CORE_HZ: u32 = 25_000_000;
@@ -20,43 +19,10 @@ const BAUDDIV: u32 = CORE_HZ / 115_200;
 /// Start of RAM in `memory.x`.
 const RAM_START: usize = 0x2000_0000;
 
-struct Uart0(uart::Uart);
-
-impl Link for Uart0 {
-    fn read(&mut self) -> u8 {
-        self.0.read()
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        self.0.write(bytes)
-    }
-}
-
 #[entry]
 fn main() -> ! {
-    stack::paint();
-    let Some(cp) = cortex_m::Peripherals::take() else {
-        qemu::exit_failure()
-    };
-    clock::start(cp.SYST);
-    // SAFETY: UART0 is used by nothing else.
-    let mut link = Uart0(unsafe { uart::Uart::new(uart::Uart::UART0, BAUDDIV) });
-    let cal = calibration::load::<quatarm::F32>(board_common::table_region::bytes());
-    let mut hub = Hub::new(cal.state(), cal.joints(), quatarm::stream::Precision::F32);
-    serve(
-        &mut link,
-        &mut hub,
-        || clock::now_us(CORE_HZ),
-        |counts, temp_mc| cal.eval(counts, temp_mc),
-    );
-    defmt::info!(
-        "stack peak {=u32} bytes, statics {=u32} bytes",
-        stack::peak() as u32,
-        stack::statics(RAM_START) as u32
-    );
-    qemu::exit_success()
-}
-
-#[exception]
-fn SysTick() {
-    clock::on_wrap();
+    qemu::hub_main::<quatarm::F32, _>(CORE_HZ, RAM_START, || {
+        // SAFETY: UART0 is used by nothing else.
+        unsafe { uart::Uart::new(uart::Uart::UART0, BAUDDIV) }
+    })
 }

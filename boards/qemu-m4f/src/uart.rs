@@ -2,6 +2,8 @@
 
 use core::ptr::{read_volatile, write_volatile};
 
+use board_common::Link;
+
 const DATA: usize = 0x00;
 const STATE: usize = 0x04;
 const CTRL: usize = 0x08;
@@ -33,9 +35,11 @@ impl Uart {
     fn reg(&self, off: usize) -> *mut u32 {
         (self.base + off) as *mut u32
     }
+}
 
+impl Link for Uart {
     /// Sends every byte, waiting while the transmit buffer is full.
-    pub fn write(&mut self, bytes: &[u8]) {
+    fn write(&mut self, bytes: &[u8]) {
         for &b in bytes {
             // SAFETY: registers of the UART this value owns (see `new`).
             unsafe {
@@ -46,7 +50,7 @@ impl Uart {
     }
 
     /// Waits for one received byte.
-    pub fn read(&mut self) -> u8 {
+    fn read(&mut self) -> u8 {
         // SAFETY: registers of the UART this value owns (see `new`).
         unsafe {
             while read_volatile(self.reg(STATE)) & STATE_RX_FULL == 0 {}

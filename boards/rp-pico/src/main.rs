@@ -18,15 +18,13 @@
 
 use core::cell::RefCell;
 
-use board_common::calibration;
 use board_common::clock;
-use board_common::live::{self, serve_live, PollLink};
-use cortex_m_rt::{entry, exception};
+use board_common::live::{self, PollLink};
+use cortex_m_rt::entry;
 use embedded_hal_bus::spi::RefCellDevice;
 use embedded_hal_nb::serial::{Read, Write};
 use fugit::RateExtU32;
-use quatarm::encoder::{AbsoluteEncoder, As5047p};
-use quatarm::stream::{Hub, Precision};
+use quatarm::encoder::As5047p;
 use quatarm::temperature::{Address, Tmp117};
 use rp2040_hal::{
     clocks::init_clocks_and_plls,
@@ -140,32 +138,11 @@ fn main() -> ! {
         defmt::warn!("TMP117 not found on I2C0 at 0x48: no coordinates until it answers");
     }
 
-    let resolution = encoders.each_ref().map(|e| e.counts_per_rev());
-    let cal = calibration::load_for_encoders::<quatarm::Fixed>(
-        board_common::table_region::bytes(),
-        &resolution,
-    );
-    let mut hub = Hub::new(cal.state(), cal.joints(), Precision::Fixed);
-    serve_live(
+    live::run::<quatarm::Fixed>(
         &mut link,
-        &mut hub,
         &mut encoders,
-        PERIOD_US,
-        || clock::now_us(CORE_HZ),
         &mut thermometer,
-        |counts, temp_mc| cal.eval(counts, temp_mc),
+        PERIOD_US,
+        CORE_HZ,
     )
-}
-
-#[exception]
-fn SysTick() {
-    clock::on_wrap();
-}
-
-/// No message (no `core::fmt`), just a stop a debug probe sees: the stream falls silent, which
-/// a host notices as missing reports.
-#[panic_handler]
-fn panic(_: &core::panic::PanicInfo) -> ! {
-    defmt::error!("panic");
-    cortex_m::asm::udf()
 }

@@ -6,33 +6,13 @@
 #[path = "../uart.rs"]
 mod uart;
 
-use board_common::{bench, clock, qemu, table_region, Link};
-use cortex_m_rt::{entry, exception};
-
-struct Uart0(uart::Uart);
-
-impl Link for Uart0 {
-    fn read(&mut self) -> u8 {
-        self.0.read()
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        self.0.write(bytes)
-    }
-}
+use board_common::qemu;
+use cortex_m_rt::entry;
 
 #[entry]
 fn main() -> ! {
-    let Some(cp) = cortex_m::Peripherals::take() else {
-        qemu::exit_failure()
-    };
-    clock::start(cp.SYST);
-    // SAFETY: the only UART of the image.
-    let mut link = Uart0(unsafe { uart::Uart::take() });
-    bench::run::<_, quatarm::Fixed>(&mut link, table_region::bytes());
-    qemu::exit_success()
-}
-
-#[exception]
-fn SysTick() {
-    clock::on_wrap();
+    qemu::bench_main::<quatarm::Fixed, _>(|| {
+        // SAFETY: the only UART of the image.
+        unsafe { uart::Uart::take() }
+    })
 }

@@ -6,33 +6,13 @@
 #[path = "../uart.rs"]
 mod uart;
 
-use board_common::{bench, clock, qemu, table_region, Link};
-use cortex_m_rt::{entry, exception};
-
-struct Uart0(uart::Uart);
-
-impl Link for Uart0 {
-    fn read(&mut self) -> u8 {
-        self.0.read()
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        self.0.write(bytes)
-    }
-}
+use board_common::qemu;
+use cortex_m_rt::entry;
 
 #[entry]
 fn main() -> ! {
-    let Some(cp) = cortex_m::Peripherals::take() else {
-        qemu::exit_failure()
-    };
-    clock::start(cp.SYST);
-    // SAFETY: UART0 is used by nothing else.
-    let mut link = Uart0(unsafe { uart::Uart::new(uart::Uart::UART0, 217) });
-    bench::run::<_, quatarm::F32>(&mut link, table_region::bytes());
-    qemu::exit_success()
-}
-
-#[exception]
-fn SysTick() {
-    clock::on_wrap();
+    qemu::bench_main::<quatarm::F32, _>(|| {
+        // SAFETY: UART0 is used by nothing else.
+        unsafe { uart::Uart::new(uart::Uart::UART0, 217) }
+    })
 }
