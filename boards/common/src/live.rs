@@ -33,13 +33,13 @@ pub trait PollLink {
 /// The whole run of a real hub once its board has set up the link, the encoders (joint 1
 /// first, one per joint of the table) and the thermometer: the table checked against the encoders' resolution, then
 /// [`serve_live`] in precision `P` with a report every `period_us`, timed by a core clock of
-/// `core_hz`.
-pub fn run<P: HubPrecision>(
+/// `CORE_HZ` (a constant parameter so that the ticks-to-µs divisions, several per sample,
+/// compile to multiplications).
+pub fn run<P: HubPrecision, const CORE_HZ: u32>(
     link: &mut impl PollLink,
     encoders: &mut [impl AbsoluteEncoder; JOINTS],
     thermometer: &mut impl TemperatureSensor,
     period_us: u64,
-    core_hz: u32,
 ) -> ! {
     let resolution = encoders.each_ref().map(|e| e.counts_per_rev());
     let cal = calibration::load_for_encoders::<P>(table_region::bytes(), &resolution);
@@ -49,7 +49,7 @@ pub fn run<P: HubPrecision>(
         &mut hub,
         encoders,
         period_us,
-        || clock::now_us(core_hz),
+        || clock::now_us(CORE_HZ),
         thermometer,
         |counts, temp_mc| cal.eval(counts, temp_mc),
     )

@@ -10,10 +10,13 @@ use crate::{bench, clock, serve, stack, table_region, Link};
 /// The whole run of a QEMU hub image: replay the recording that arrives on the link until the
 /// host's `End`, log the stack's peak and the statics' size, exit with success.
 ///
+/// The core clock is a constant parameter, not an argument: the ticks-to-µs division of every
+/// report then compiles to a multiplication (a runtime u64 division costs hundreds of
+/// instructions on the M0, and flash).
+///
 /// `open_link` sets up the board's UART; it runs after the clock has started, so that report
 /// times count from the same point on every board. `ram_start` is where `memory.x` puts RAM.
-pub fn hub_main<P: HubPrecision, L: Link>(
-    core_hz: u32,
+pub fn hub_main<P: HubPrecision, const CORE_HZ: u32, L: Link>(
     ram_start: usize,
     open_link: impl FnOnce() -> L,
 ) -> ! {
@@ -28,7 +31,7 @@ pub fn hub_main<P: HubPrecision, L: Link>(
     serve(
         &mut link,
         &mut hub,
-        || clock::now_us(core_hz),
+        || clock::now_us(CORE_HZ),
         |counts, temp_mc| cal.eval(counts, temp_mc),
     );
     defmt::info!(

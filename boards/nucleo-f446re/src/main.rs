@@ -104,11 +104,5 @@ fn main() -> ! {
         defmt::warn!("TMP117 not found on I2C1 at 0x48: no coordinates until it answers");
     }
 
-    live::run::<quatarm::F32>(
-        &mut link,
-        &mut encoders,
-        &mut thermometer,
-        PERIOD_US,
-        CORE_HZ,
-    )
+    live::run::<quatarm::F32, CORE_HZ>(&mut link, &mut encoders, &mut thermometer, PERIOD_US)
 }

@@ -21,7 +21,7 @@ const RAM_START: usize = 0x2000_0000;
 
 #[entry]
 fn main() -> ! {
-    qemu::hub_main::<quatarm::F32, _>(CORE_HZ, RAM_START, || {
+    qemu::hub_main::<quatarm::F32, CORE_HZ, _>(RAM_START, || {
         // SAFETY: UART0 is used by nothing else.
         unsafe { uart::Uart::new(uart::Uart::UART0, BAUDDIV) }
     })

@@ -138,11 +138,5 @@ fn main() -> ! {
         defmt::warn!("TMP117 not found on I2C0 at 0x48: no coordinates until it answers");
     }
 
-    live::run::<quatarm::Fixed>(
-        &mut link,
-        &mut encoders,
-        &mut thermometer,
-        PERIOD_US,
-        CORE_HZ,
-    )
+    live::run::<quatarm::Fixed, CORE_HZ>(&mut link, &mut encoders, &mut thermometer, PERIOD_US)
 }
