@@ -1,13 +1,6 @@
-//! Puts `memory.x` where the linker finds it and passes cortex-m-rt's `link.x` and defmt's
-//! `defmt.x` (the table of interned log strings).
-use std::{env, fs, path::PathBuf};
+//! The linker scripts: `memory.x`, cortex-m-rt's `link.x`, defmt's `defmt.x`.
+include!("../common/build_link.rs");
 
 fn main() {
-    let out = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
-    fs::copy("memory.x", out.join("memory.x")).expect("copy memory.x");
-    println!("cargo:rustc-link-search={}", out.display());
-    println!("cargo:rerun-if-changed=memory.x");
-    println!("cargo:rerun-if-changed=build.rs");
-    println!("cargo:rustc-link-arg=-Tlink.x");
-    println!("cargo:rustc-link-arg=-Tdefmt.x");
+    link_scripts(&["memory.x"]);
 }
