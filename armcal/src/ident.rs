@@ -381,20 +381,10 @@ pub fn weakest(
 /// σ² (JᵀJ)⁻¹, computed with unit-diagonal scaling; `None` when JᵀJ is singular.
 pub fn covariance(jtj: &DMatrix<f64>, sigma: f64) -> Option<DMatrix<f64>> {
     let k = jtj.nrows();
-    let s: Vec<f64> = (0..k)
-        .map(|i| {
-            let d = jtj[(i, i)];
-            if d > 0.0 {
-                1.0 / d.sqrt()
-            } else {
-                0.0
-            }
-        })
-        .collect();
+    let (a, s) = crate::lm::unit_diagonal(jtj);
     if s.contains(&0.0) {
         return None;
     }
-    let a = DMatrix::from_fn(k, k, |i, j| jtj[(i, j)] * s[i] * s[j]);
     let inv = a.cholesky()?.inverse();
     Some(DMatrix::from_fn(k, k, |i, j| {
         sigma * sigma * inv[(i, j)] * s[i] * s[j]
