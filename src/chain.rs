@@ -144,10 +144,12 @@ impl<P: Precision> Chain<P> {
         let model = Model::<P>::new(table)?;
         let mut rotation = [JointRotation::<P>::default(); MAX_JOINTS];
         let mut prev = BASE_AXIS;
+        let mut second_order = false;
         for (i, r) in rotation.iter_mut().enumerate().take(model.n) {
             let j = table
                 .joint(i)
                 .ok_or(ChainError::Range { joint: i as u8 + 1 })?;
+            second_order |= j.gravity.abs() > SECOND_ORDER_GRAVITY;
             let full = crate::model::z_frame_quat(j.rotation, prev, j.axis);
             let mut full_q = [Quat::<P>::default(); 4];
             for (q, f) in full_q.iter_mut().enumerate() {
@@ -161,9 +163,6 @@ impl<P: Precision> Chain<P> {
             };
             prev = j.axis;
         }
-        let second_order = (0..model.n)
-            .filter_map(|i| table.joint(i))
-            .any(|j| j.gravity.abs() > SECOND_ORDER_GRAVITY);
         Ok(Chain {
             model,
             rotation,
@@ -290,6 +289,8 @@ impl<P: Precision> Chain<P> {
                 w[2],
             ];
             if deflected && second_order {
+                // The same turn as w's, written out again: a shared helper moved LLVM's code
+                // layout by +340 bytes of the Cortex-M0 image, whose budget is 32 KiB.
                 let (x, y) = quarter_turns(a.q, (shift[0], shift[1]));
                 shift = relabel(
                     [
