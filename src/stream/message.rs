@@ -7,9 +7,7 @@ use serde::de::{Error as _, SeqAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::Status;
-
-/// Largest joint count a reading carries (the model takes 6 or 7).
-pub const MAX_JOINTS: usize = 7;
+use crate::table::MAX_JOINTS;
 
 /// Firmware to host.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -105,8 +103,8 @@ pub struct Reading {
     pub faults: u8,
 }
 
-/// Up to [`MAX_JOINTS`] encoder counts. On the wire it is a postcard sequence (varint length,
-/// then the counts), exactly like a slice; decoding refuses more than [`MAX_JOINTS`].
+/// Up to [`MAX_JOINTS`](crate::table::MAX_JOINTS) encoder counts. On the wire it is a postcard sequence (varint length,
+/// then the counts), exactly like a slice; decoding refuses more than that.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Counts {
@@ -115,7 +113,8 @@ pub struct Counts {
 }
 
 impl Counts {
-    /// The counts of `values`; `None` if there are more than [`MAX_JOINTS`].
+    /// The counts of `values`; `None` if there are more than
+    /// [`MAX_JOINTS`](crate::table::MAX_JOINTS).
     pub fn new(values: &[u32]) -> Option<Counts> {
         if values.len() > MAX_JOINTS {
             return None;

@@ -82,7 +82,7 @@ pub fn serve_live<L: PollLink, E: AbsoluteEncoder, T: TemperatureSensor, X>(
     let mut next_temp = next;
     let mut temp_mc: Option<i32> = None;
     let mut temp_ok = true; // only changes of the sensor's state are logged
-    let mut counts = [0u32; 7];
+    let mut counts = [0u32; quatarm::table::MAX_JOINTS];
     let joints = encoders.len().min(counts.len());
     loop {
         let report = if let Some(byte) = link.try_read() {
