@@ -215,6 +215,19 @@ fn abs(x: f64) -> f64 {
     }
 }
 
+/// Orders a joint's harmonic terms by order, in place: an insertion sort, since there are at
+/// most [`MAX_HARMONICS`] of them and `core`'s `sort_unstable` brings about 2 KB of general
+/// sorting code into the M0 image at `opt-level = "z"`.
+fn sort_by_order<P: Precision>(terms: &mut [HarmonicTerm<P>]) {
+    for i in 1..terms.len() {
+        let mut k = i;
+        while k > 0 && terms[k - 1].order > terms[k].order {
+            terms.swap(k - 1, k);
+            k -= 1;
+        }
+    }
+}
+
 /// Component k of P_a⁻¹ v is component (k + a + 1) mod 3 of v (a = 2, z: the identity).
 fn unpermute(v: [f64; 3], axis: u8) -> [f64; 3] {
     let a = usize::from(axis % 3);
@@ -291,7 +304,7 @@ impl<P: Precision> Model<P> {
                     cos: conv(P::u_from_f64(src.cos), no)?,
                 };
             }
-            harmonics[..count].sort_unstable_by_key(|h| h.order);
+            sort_by_order(&mut harmonics[..count]);
             let mut h12 = [0.0f64; 4]; // s1, c1, s2, c2
             let mut low = count > 0;
             for src in &j.harmonics[..count] {

@@ -381,6 +381,55 @@ const fn q30(x: f64) -> Unit {
     })
 }
 
+/// `x·2^frac` rounded to the nearest integer (ties to even, as `fixed`'s `from_num`), if `x`
+/// is finite and the result fits an `i32`: the one float-to-fixed conversion of the boot path.
+///
+/// Written on the f64's bits and kept out of line because on the M0 every f64 operation is a
+/// soft-float call: `fixed`'s generic conversion, inlined at four call sites with four target
+/// formats, cost about 1.6 KB of the qemu-m0 image's 32 KiB; this is one copy in integers.
+#[inline(never)]
+fn fixed_bits(x: f64, frac: u32) -> Option<i32> {
+    const MANT_BITS: u32 = 52;
+    let bits = x.to_bits();
+    let exp = ((bits >> MANT_BITS) & 0x7ff) as i32;
+    if exp == 0x7ff {
+        return None; // infinity or NaN
+    }
+    let mut mant = bits & ((1 << MANT_BITS) - 1);
+    if exp != 0 {
+        mant |= 1 << MANT_BITS;
+    }
+    // |x| = mant · 2^(max(exp, 1) − 1075); scaled by 2^frac.
+    let shift = exp.max(1) - 1075 + frac as i32;
+    let magnitude = if shift >= 0 {
+        let s = shift as u32;
+        if mant == 0 {
+            0
+        } else if s >= 32 || mant > u64::from(u32::MAX) >> s {
+            return None;
+        } else {
+            mant << s
+        }
+    } else {
+        let s = shift.unsigned_abs();
+        if s > MANT_BITS + 1 {
+            0 // below half a unit of the result
+        } else {
+            let q = mant >> s;
+            let rest = mant & ((1 << s) - 1);
+            let half = 1 << (s - 1);
+            q + u64::from(rest > half || (rest == half && q & 1 == 1))
+        }
+    };
+    if bits >> 63 == 0 {
+        i32::try_from(magnitude).ok()
+    } else if magnitude <= 1 << 31 {
+        Some((magnitude as i64).wrapping_neg() as i32)
+    } else {
+        None
+    }
+}
+
 /// Fractional bits of the gravity coefficient: g·2^48 in an i32 (|g| < 7.6e-6 rad/mm,
 /// resolution 3.6e-15 rad/mm: 7e-12 rad over a 2 m lever).
 const G_FRAC: u32 = 48;
@@ -442,21 +491,20 @@ impl Precision for Fixed {
         Len::from_bits(mul_shift(rate, dt_mc, R_FRAC - 20))
     }
     fn u_from_f64(x: f64) -> Option<Unit> {
-        I2F30::checked_from_num(x).map(Unit)
+        fixed_bits(x, 30).map(Unit::from_bits)
     }
     fn l_from_f64(x: f64) -> Option<Len> {
-        if !(x.is_finite() && x.abs() < Self::MAX_REACH_MM) {
-            return None;
-        }
-        I12F20::checked_from_num(x).map(Len)
+        // MAX_REACH_MM (2000) in I12F20 bits: the reach check in integers, no soft-float compare.
+        const LIMIT: u32 = (Fixed::MAX_REACH_MM as u32) << 20;
+        fixed_bits(x, 20)
+            .filter(|b| b.unsigned_abs() < LIMIT)
+            .map(Len::from_bits)
     }
     fn g_from_f64(g: f64) -> Option<i32> {
-        // Through an I16F48 in an i64 so that no f64 arithmetic is needed on the target.
-        fixed::types::I16F48::checked_from_num(g).and_then(|v| i32::try_from(v.to_bits()).ok())
+        fixed_bits(g, G_FRAC)
     }
     fn r_from_f64(mm_per_degc: f64) -> Option<i32> {
-        let v = mm_per_degc / 1000.0;
-        fixed::types::I24F40::checked_from_num(v).and_then(|v| i32::try_from(v.to_bits()).ok())
+        fixed_bits(mm_per_degc / 1000.0, R_FRAC)
     }
     fn l_to_nm(x: Len) -> i32 {
         // bits·10^6 / 2^20, rounded (ties up).
@@ -476,6 +524,65 @@ impl Precision for Fixed {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The integer conversion gives exactly what `fixed`'s own `checked_from_num` gives, on
+    /// ties, subnormals, the edges of the i32 range and values that do not fit.
+    #[test]
+    fn fixed_bits_is_fixed_from_num() {
+        use fixed::types::{I16F48, I24F40};
+        fn via_fixed(x: f64, frac: u32) -> Option<i32> {
+            let bits = match frac {
+                20 => I12F20::checked_from_num(x).map(|v| i64::from(v.to_bits())),
+                30 => I2F30::checked_from_num(x).map(|v| i64::from(v.to_bits())),
+                40 => I24F40::checked_from_num(x).map(|v| v.to_bits()),
+                48 => I16F48::checked_from_num(x).map(|v| v.to_bits()),
+                _ => unreachable!(),
+            };
+            bits.and_then(|b| i32::try_from(b).ok())
+        }
+        let mut vals = vec![
+            0.0,
+            -0.0,
+            f64::MIN_POSITIVE,
+            5e-324,
+            f64::MAX,
+            f64::INFINITY,
+            f64::NAN,
+            2.0,
+            -2.0,
+            1.999_999_999,
+            2_047.999_999,
+            -2048.0,
+        ];
+        for frac in [20u32, 30, 40, 48] {
+            let unit = 2f64.powi(-(frac as i32));
+            for k in [0.5, 1.5, 2.5, -0.5, -1.5, 3.5] {
+                vals.push(k * unit); // exact ties
+            }
+            vals.push(2147483647.0 * unit);
+            vals.push(2147483648.0 * unit);
+            vals.push(-2147483648.0 * unit);
+            vals.push(-2147483649.0 * unit);
+        }
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        for _ in 0..20_000 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let mag = (state >> 11) as f64 / (1u64 << 53) as f64;
+            let e = (state % 64) as i32 - 50;
+            vals.push(if state & 1 == 0 { mag } else { -mag } * 2f64.powi(e));
+        }
+        for &x in &vals {
+            for frac in [20u32, 30, 40, 48] {
+                assert_eq!(
+                    fixed_bits(x, frac),
+                    via_fixed(x, frac),
+                    "x = {x:e}, frac {frac}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn wide_products_are_exact() {

@@ -82,12 +82,69 @@ impl Board {
         root().join("boards").join(self.name)
     }
 
-    /// A release binary of the board, as `cargo xtask build` leaves it.
+    /// A release binary of the board as `cargo xtask build` leaves it, built by the tool
+    /// chain [`Toolchain::current`] names.
     pub fn elf(&self, bin: &str) -> PathBuf {
-        self.dir()
-            .join("target")
+        self.elf_by(Toolchain::current(self), bin)
+    }
+
+    /// A release binary of the board built by `toolchain`.
+    pub fn elf_by(&self, toolchain: Toolchain, bin: &str) -> PathBuf {
+        toolchain
+            .target_dir(&self.dir())
             .join(self.target)
             .join("release")
             .join(bin)
+    }
+}
+
+/// The environment variable that names the firmware tool chain (`rustup` or `debian`) the
+/// QEMU tests run and single-board commands build with; `cargo xtask test` sets it for each
+/// tool chain in turn.
+pub const TOOLCHAIN_ENV: &str = "QUATARM_FIRMWARE";
+
+/// A kind of compiler that builds the firmware. Each builds a board into its own folder, so
+/// that the images of both stand side by side.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Toolchain {
+    /// rustup's compiler with the thumb targets.
+    Rustup,
+    /// Debian's `rustc-web` with `-Z build-std=core`.
+    Debian,
+}
+
+impl Toolchain {
+    /// Both kinds, in the order they are preferred.
+    pub const ALL: [Toolchain; 2] = [Toolchain::Rustup, Toolchain::Debian];
+
+    /// Its name, as [`TOOLCHAIN_ENV`] takes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Toolchain::Rustup => "rustup",
+            Toolchain::Debian => "debian",
+        }
+    }
+
+    /// The folder it builds a board crate in `dir` into.
+    pub fn target_dir(self, dir: &Path) -> PathBuf {
+        dir.join("target").join(self.name())
+    }
+
+    /// The tool chain named by [`TOOLCHAIN_ENV`]; unset, the first kind that has built `board`
+    /// (rustup's first).
+    pub fn current(board: &Board) -> Toolchain {
+        let named = std::env::var(TOOLCHAIN_ENV).ok();
+        Self::ALL
+            .into_iter()
+            .find(|t| match named.as_deref() {
+                Some(n) => t.name() == n,
+                None => t
+                    .target_dir(&board.dir())
+                    .join(board.target)
+                    .join("release")
+                    .join(board.name)
+                    .exists(),
+            })
+            .unwrap_or(Toolchain::Rustup)
     }
 }

@@ -18,8 +18,9 @@ use host_tests::qemu::{self, Options};
 use host_tests::recording::{self, replay_bytes};
 use object::{Object, ObjectSegment};
 
-use crate::build::build_board;
+use crate::build::build_board_with;
 use crate::setup;
+use crate::toolchain::{self, Toolchain};
 
 /// Readings timed per chain.
 const POINTS: usize = 2_000;
@@ -43,6 +44,8 @@ pub fn sizes(elf: &std::path::Path) -> Result<(u64, u64)> {
 pub struct Row {
     /// The board.
     pub board: Board,
+    /// The compiler that built it (`rustc --version`'s number, and its kind).
+    pub compiler: String,
     /// Flash bytes of the hub image.
     pub flash: u64,
     /// RAM statics of the hub image.
@@ -112,7 +115,7 @@ fn instructions(b: &Board, table: &[u8]) -> Result<(f64, f64)> {
     ))
 }
 
-fn measure(b: &Board, table: &[u8]) -> Result<Row> {
+fn measure(b: &Board, tc: &Toolchain, table: &[u8]) -> Result<Row> {
     let (flash, statics) = sizes(&b.elf(b.name))?;
     let (mut stack, mut instr) = (None, None);
     if b.qemu.is_some() {
@@ -127,6 +130,11 @@ fn measure(b: &Board, table: &[u8]) -> Result<Row> {
     }
     Ok(Row {
         board: *b,
+        compiler: format!(
+            "{} {}",
+            tc.kind.name(),
+            tc.version.split_whitespace().nth(1).unwrap_or("?")
+        ),
         flash,
         statics,
         stack,
@@ -137,7 +145,7 @@ fn measure(b: &Board, table: &[u8]) -> Result<Row> {
 /// The table, as markdown.
 pub fn table(rows: &[Row]) -> String {
     let mut s = String::from(
-        "| board | target | chain | flash (bytes) | RAM: statics + stack peak (bytes) | quaternion chain (instr/point) | 3×4 matrix chain (instr/point) |\n|---|---|---|---|---|---|---|\n",
+        "| board | compiler | chain | flash (bytes) | RAM: statics + stack peak (bytes) | quaternion chain (instr/point) | 3×4 matrix chain (instr/point) |\n|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let ram = match r.stack {
@@ -150,21 +158,31 @@ pub fn table(rows: &[Row]) -> String {
         };
         s.push_str(&format!(
             "| {} | {} | {} | {} | {} | {} | {} |\n",
-            r.board.name, r.board.target, r.board.precision, r.flash, ram, q, m
+            r.board.name, r.compiler, r.board.precision, r.flash, ram, q, m
         ));
     }
     s
 }
 
-/// `cargo xtask bench-target`.
+/// `cargo xtask bench-target`: every board with every firmware tool chain this machine has
+/// (or only the one `QUATARM_FIRMWARE` names).
 pub fn run(only: Option<&str>, calib: Option<&std::path::Path>) -> Result<()> {
     setup::ensure()?;
     let path = calib.map_or_else(default_calibration_path, std::path::Path::to_path_buf);
     let (_, table_bytes) = calibration(&path)?;
+    let survey = toolchain::survey();
+    let chains: Vec<&Toolchain> = match std::env::var(toolchain::TOOLCHAIN_ENV) {
+        Ok(_) => vec![survey.primary()?],
+        Err(_) => survey.available.iter().collect(),
+    };
     let mut rows = Vec::new();
-    for b in BOARDS.iter().filter(|b| only.is_none_or(|o| o == b.name)) {
-        build_board(b)?;
-        rows.push(measure(b, &table_bytes)?);
+    for tc in chains {
+        // The QEMU runs below find each board's image by this variable.
+        std::env::set_var(toolchain::TOOLCHAIN_ENV, tc.kind.name());
+        for b in BOARDS.iter().filter(|b| only.is_none_or(|o| o == b.name)) {
+            build_board_with(b, tc)?;
+            rows.push(measure(b, tc, &table_bytes)?);
+        }
     }
     println!("\n{}", table(&rows));
     println!(
@@ -172,5 +190,8 @@ pub fn run(only: Option<&str>, calib: Option<&std::path::Path>) -> Result<()> {
          the real boards share the cores of qemu-m4f (Cortex-M4F) and qemu-m0 (Cortex-M0; the RP2040 is an M0+))",
         path.display()
     );
+    for (k, why) in &survey.missing {
+        println!("(not measured with {}: {why})", k.name());
+    }
     Ok(())
 }

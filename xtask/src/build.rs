@@ -5,7 +5,8 @@ use std::process::Command;
 use anyhow::{bail, Context, Result};
 use host_tests::boards::{board, Board, BOARDS};
 
-use crate::{setup, toolchain};
+use crate::setup;
+use crate::toolchain::{self, Toolchain};
 
 /// Runs a command, failing with its description if it fails.
 pub fn check(cmd: &mut Command, what: &str) -> Result<()> {
@@ -16,13 +17,23 @@ pub fn check(cmd: &mut Command, what: &str) -> Result<()> {
     Ok(())
 }
 
-/// Builds one board's release binaries.
-pub fn build_board(b: &Board) -> Result<()> {
-    let tc = toolchain::detect()?;
-    eprintln!("xtask: building {} ({})", b.name, b.target);
+/// Builds one board's release binaries with `tc`.
+pub fn build_board_with(b: &Board, tc: &Toolchain) -> Result<()> {
+    eprintln!(
+        "xtask: building {} ({}) with {}",
+        b.name, b.target, tc.version
+    );
     let mut cmd = tc.cargo(&b.dir(), b.target, "build");
     cmd.args(["--release", "--locked", "--bins"]);
-    check(&mut cmd, &format!("building {}", b.name))
+    check(
+        &mut cmd,
+        &format!("building {} with {}", b.name, tc.kind.name()),
+    )
+}
+
+/// Builds one board's release binaries with this machine's primary tool chain.
+pub fn build_board(b: &Board) -> Result<()> {
+    build_board_with(b, toolchain::survey().primary()?)
 }
 
 /// `cargo xtask build [--board NAME]`.

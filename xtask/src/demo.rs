@@ -14,8 +14,9 @@ use host_tests::e2e::{
 };
 use host_tests::recording::{self, replay_bytes};
 
-use crate::build::build_board;
+use crate::build::build_board_with;
 use crate::setup;
+use crate::toolchain;
 
 /// Every how many points a sample line is printed (all with `--all`).
 const SAMPLE: usize = 500;
@@ -26,7 +27,11 @@ pub fn run(all: bool) -> Result<()> {
     let Some(b) = board("qemu-m4f") else {
         bail!("qemu-m4f is not in the board list");
     };
-    build_board(&b)?;
+    let survey = toolchain::survey();
+    let tc = survey.primary()?;
+    // The QEMU run below finds the image by this variable.
+    std::env::set_var(toolchain::TOOLCHAIN_ENV, tc.kind.name());
+    build_board_with(&b, tc)?;
     let cal_path = default_calibration_path();
     let (arm, table) = calibration(&cal_path)?;
     let readings = recording::read(&default_recording_path())?;

@@ -28,8 +28,13 @@ struct Cli {
 #[derive(Subcommand)]
 enum Cmd {
     /// Install the thumb tool chain (rustup targets, else Debian's rustc-web with build-std)
-    /// and qemu-system-arm, where missing.
-    Setup,
+    /// and qemu-system-arm, where missing. Never removes a package.
+    Setup {
+        /// Also install Debian's tool chain where rustup has the targets, so that the firmware
+        /// is built and tested with both compilers (what CI does).
+        #[arg(long)]
+        every_compiler: bool,
+    },
     /// Cross-build the boards (release).
     Build {
         /// Only this board.
@@ -60,7 +65,7 @@ enum Cmd {
 
 fn main() -> Result<()> {
     match Cli::parse().command {
-        Cmd::Setup => setup::run(),
+        Cmd::Setup { every_compiler } => setup::run(every_compiler),
         Cmd::Build { board } => build::run(board.as_deref()),
         Cmd::Test => test::run(),
         Cmd::Demo { all } => demo::run(all),

@@ -6,8 +6,9 @@ use std::time::Instant;
 use anyhow::Result;
 use host_tests::boards::{root, BOARDS};
 
-use crate::build::{build_board, check};
+use crate::build::{build_board_with, check};
 use crate::setup;
+use crate::toolchain::{self, TOOLCHAIN_ENV};
 
 fn cargo() -> Command {
     let mut c = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
@@ -59,9 +60,16 @@ pub fn run() -> Result<()> {
         "cargo test --workspace",
     )?;
 
-    step("board builds");
-    for b in &BOARDS {
-        build_board(b)?;
+    // Every firmware tool chain this machine has: the images differ (rustup links a prebuilt
+    // compiler_builtins, Debian's builds it from source), so each must meet the budgets.
+    let survey = toolchain::survey();
+    survey.primary()?;
+    eprintln!("\nxtask test: firmware tool chains\n{}", survey.describe());
+    for tc in &survey.available {
+        step(&format!("board builds ({})", tc.version));
+        for b in &BOARDS {
+            build_board_with(b, tc)?;
+        }
     }
 
     step("QEMU end-to-end");
@@ -70,17 +78,28 @@ pub fn run() -> Result<()> {
         cargo().args(["build", "-p", "armcal"]),
         "cargo build -p armcal",
     )?;
-    let mut e2e = cargo();
-    e2e.args(["test", "-p", "host-tests"]);
-    for b in BOARDS.iter().filter(|b| b.qemu.is_some()) {
-        e2e.args([
-            "--test",
-            &format!("qemu_{}", b.name.trim_start_matches("qemu-")),
-        ]);
+    for tc in &survey.available {
+        step(&format!("QEMU end-to-end ({})", tc.version));
+        let mut e2e = cargo();
+        e2e.env(TOOLCHAIN_ENV, tc.kind.name())
+            .args(["test", "-p", "host-tests"]);
+        for b in BOARDS.iter().filter(|b| b.qemu.is_some()) {
+            e2e.args([
+                "--test",
+                &format!("qemu_{}", b.name.trim_start_matches("qemu-")),
+            ]);
+        }
+        e2e.args(["--", "--include-ignored"]);
+        check(
+            &mut e2e,
+            &format!("QEMU end-to-end tests ({})", tc.kind.name()),
+        )?;
     }
-    e2e.args(["--", "--include-ignored"]);
-    check(&mut e2e, "QEMU end-to-end tests")?;
 
-    eprintln!("\nxtask test: all passed in {:.0?}", start.elapsed());
+    eprintln!(
+        "\nxtask test: all passed in {:.0?}; firmware tool chains:\n{}",
+        start.elapsed(),
+        survey.describe()
+    );
     Ok(())
 }
