@@ -9,6 +9,9 @@ use crate::arm::{Arm, Axis, Frame, Harmonic, Joint, Probe, DEFAULT_COUNTS, JOINT
 use std::fmt::Write as _;
 use toml::{Table, Value};
 
+/// The highest `harmonics[].order` a file holds.
+pub const MAX_HARMONIC_ORDER: u32 = u16::MAX as u32;
+
 /// A calibration file that cannot be used, with the key path at fault.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{path}: {message}")]
@@ -205,10 +208,19 @@ fn bounded(x: f64, limit: f64, path: &str, what: &str) -> Result<f64, CalFileErr
     if x.abs() > limit {
         return Err(err(
             path,
-            format!("{x} is beyond the {what} limit of ±{limit}"),
+            format!("{} is beyond the {what} limit of ±{limit}", short(x)),
         ));
     }
     Ok(x)
+}
+
+/// 1e300 rather than its 301 digits.
+fn short(x: f64) -> String {
+    if x == 0.0 || (1e-4..1e7).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
 }
 
 fn bounded_all(xs: &[f64], limit: f64, path: &str, what: &str) -> Result<(), CalFileError> {
@@ -328,11 +340,11 @@ fn harmonic(v: &Value, path: &str, unknown: &mut Vec<String>) -> Result<Harmonic
     note_unknown(t, &["order", "sin", "cos"], path, unknown);
     let order = match t.get("order") {
         None => return Err(err(format!("{path}.order"), "missing")),
-        Some(Value::Integer(h)) if (1..=i64::from(u16::MAX)).contains(h) => *h as u32,
+        Some(Value::Integer(h)) if (1..=i64::from(MAX_HARMONIC_ORDER)).contains(h) => *h as u32,
         Some(Value::Integer(h)) => {
             return Err(err(
                 format!("{path}.order"),
-                format!("{h} is not an order: an integer from 1"),
+                format!("{h} is not an order: an integer from 1 to {MAX_HARMONIC_ORDER}"),
             ))
         }
         Some(_) => return Err(err(format!("{path}.order"), "must be an integer ≥ 1")),
