@@ -34,8 +34,10 @@
 use crate::data::{Dataset, Layout};
 use crate::ident::{self, Fixed, Identifiability, RFactor, Why};
 use crate::jacobian::tip_jacobian;
+use crate::kinds;
 use crate::lm::{self, Normal};
 use crate::params::{apply, frame_params, Param, Terms};
+use crate::progress::{Observer, Silent};
 use crate::residuals::{best_rigid, Rigid};
 use crate::sim;
 use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, Vector3};
@@ -65,8 +67,6 @@ pub struct Options {
     /// Proceed on a degenerate pose set, holding what it cannot determine (instead of an
     /// error).
     pub allow_degenerate: bool,
-    /// Show a progress bar on stderr for large fits.
-    pub progress: bool,
     /// A Gaussian prior on the geometric errors, centred on the start arm (`None`: plain
     /// least squares).
     pub prior: Option<Prior>,
@@ -154,7 +154,6 @@ impl Default for Options {
             weak_threshold: 1.0,
             design_check: true,
             allow_degenerate: false,
-            progress: false,
             prior: None,
             hold: Vec::new(),
             significance: 0.0,
@@ -207,6 +206,14 @@ pub enum CalibError {
     /// The data and the arm do not fit together.
     #[error("{0}")]
     Mismatch(String),
+    /// The data's kinds cannot fix something the unknowns would change ([`crate::kinds`]).
+    #[error("these data cannot fix {what}: {why}")]
+    Unfixable {
+        /// What is not fixed.
+        what: String,
+        /// Why, and what to record.
+        why: String,
+    },
 }
 
 /// The state the solver moves: increments of the arm unknowns and the instrument frame.
@@ -703,6 +710,16 @@ impl Fit {
 
 /// Calibrates `start` on `data`.
 pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, CalibError> {
+    calibrate_observed(start, data, opts, &mut Silent)
+}
+
+/// Calibrates `start` on `data`, telling `observer` what it is doing.
+pub fn calibrate_observed(
+    start: &Arm,
+    data: &Dataset,
+    opts: &Options,
+    observer: &mut dyn Observer,
+) -> Result<Fit, CalibError> {
     let t0 = Instant::now();
     if data.dof != start.dof() {
         return Err(CalibError::Mismatch(format!(
@@ -715,13 +732,30 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
     let all = unknowns(&opts.terms, data);
     let base = with_entries(start, &all);
     let eqs = equations(&layout);
-    if all.is_empty() {
+    if opts.terms.params(data.dof).is_empty() {
         return Err(CalibError::Mismatch(
-            "nothing to fit: no terms requested".into(),
+            "nothing to fit: no terms requested (`only` needs an effect, e.g. \
+             `only,+gravity_compliance:*`)"
+                .into(),
         ));
+    }
+    // 0. What the data's kinds cannot fix, before anything is computed on them.
+    let requested: Vec<usize> = (0..all.len())
+        .filter(|&i| !all[i].is_frame() && !opts.hold.contains(&all[i]))
+        .collect();
+    if let Some(r) = kinds::check(&layout, &base, &all, &requested) {
+        return Err(CalibError::Unfixable {
+            what: r.what,
+            why: r.why,
+        });
     }
 
     // 1. Structural identifiability, and the design it is compared with.
+    observer.stage(&format!(
+        "identifiability of {} unknowns on {} rows",
+        all.len(),
+        data.rows.len()
+    ));
     let (mut id, r_skel) = structural(&base, data, &all, opts.structural_tol);
     for p in &opts.hold {
         if let Some(i) = all.iter().position(|q| q == p) {
@@ -737,6 +771,7 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
         }
     }
     if opts.design_check {
+        observer.stage("comparing with a well-spread design");
         let design = sim::design_like(&skeleton(&base), data, 0x5eed);
         let (id_design, _) = structural(&base, &design, &all, opts.structural_tol);
         let need = id_design.kept.len();
@@ -768,6 +803,12 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
         });
     }
 
+    if !id.kept.iter().any(|&i| !all[i].is_frame()) {
+        return Err(CalibError::Mismatch(
+            "nothing to fit: these data determine none of the unknowns requested".into(),
+        ));
+    }
+
     // Under a ridge, what the data cannot separate is shared out by the penalty instead of held
     // (the frame's rotations without an instrument are a symmetry, never unknowns).
     let mut shared: Vec<usize> = Vec::new();
@@ -790,11 +831,18 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
         frame: start_frame(&base, data, &layout),
     };
     let mut iterations = 0;
-    let progress = opts.progress.then(|| progress_bar(data.rows.len()));
     let rms_before = {
         let p = Problem::new(data, &layout, &base, &all, &id.kept);
         (2.0 * lm::Problem::cost(&p, &state) / eqs as f64).sqrt()
     };
+    if !rms_before.is_finite() {
+        // The loaders bound every value, so this is an arm made in memory; a solver given NaN
+        // would only report "did not converge" after its whole budget.
+        return Err(CalibError::Mismatch(format!(
+            "the start arm puts the ball at a non-finite position (RMS residual {rms_before}): \
+             its values are beyond what can be evaluated"
+        )));
+    }
     let mut prior_noise = opts.prior.and_then(|p| p.noise_mm);
     let mut passes = 0;
     let mut model_iterations = 0;
@@ -814,15 +862,13 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
             })
             .collect();
         let problem = Problem::new(data, &layout, &base, &all, &id.kept).with_prior(weights);
+        observer.stage(&format!(
+            "fitting {} unknowns (pass {})",
+            id.kept.len(),
+            passes + 1
+        ));
         let mut report = |it: usize, cost: f64| {
-            if let Some(pb) = &progress {
-                pb.set_message(format!(
-                    "iteration {}, RMS {:.4} mm",
-                    iterations + it,
-                    (2.0 * cost / eqs as f64).sqrt()
-                ));
-                pb.tick();
-            }
+            observer.iteration(iterations + it, (2.0 * cost / eqs as f64).sqrt());
         };
         // A first pass gets a short budget: a direction the data barely determine makes the
         // solver crawl along its valley, and the statistical test below removes it sooner.
@@ -842,9 +888,6 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
         model_iterations += out.iterations;
         let unfinished = !out.converged;
         if unfinished && (!out.exhausted || model_iterations >= opts.lm.max_iterations) {
-            if let Some(pb) = &progress {
-                pb.finish_and_clear();
-            }
             return Err(CalibError::NotConverged {
                 iterations: model_iterations,
                 reason: out.reason,
@@ -903,9 +946,6 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
         }
         if unfinished {
             continue;
-        }
-        if let Some(pb) = &progress {
-            pb.finish_and_clear();
         }
         // Singular values and condition number are the data's own: of the unknowns they
         // determine, without those the ridge shares out.
@@ -1069,19 +1109,6 @@ fn degenerate_hint(data: &Dataset) -> String {
             if still.len() == 1 { "it" } else { "them" }
         )
     }
-}
-
-fn progress_bar(rows: usize) -> indicatif::ProgressBar {
-    let pb = if rows >= 20_000 {
-        indicatif::ProgressBar::new_spinner()
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    pb.set_style(
-        indicatif::ProgressStyle::with_template("{spinner} calibrating: {msg} [{elapsed}]")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
-    );
-    pb
 }
 
 /// Rotation matrices are compared by their angle; a small helper for tests and reports.

@@ -5,6 +5,7 @@
 //! Rows keep their line number so that later stages (calibration, diagnosis) can point back
 //! into the file too.
 
+use crate::limits::{number, shown};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
@@ -153,36 +154,33 @@ pub fn parse(text: &str, file: &str, dof: usize) -> Result<Dataset, DataError> {
         column: column.to_string(),
         message,
     };
+    let cleaned = without_comments(text);
+    let lines = Lines::new(&cleaned);
     let mut reader = csv::ReaderBuilder::new()
-        .comment(Some(b'#'))
         .trim(csv::Trim::All)
         .flexible(true)
-        .from_reader(text.as_bytes());
+        .from_reader(cleaned.as_bytes());
     let header_line = reader
         .headers()
-        .map_err(|e| err(csv_line(&e), "(header)", format!("not CSV: {e}")))?
+        .map_err(|e| err(lines.of_error(&e), "(header)", format!("not CSV: {e}")))?
         .clone();
     if header_line.is_empty() || header_line.iter().all(str::is_empty) {
         return Err(err(1, "(header)", "no header row".into()));
     }
-    let hline = reader.position().line().max(1) as usize;
-    let hline = first_content_line(text).unwrap_or(hline);
+    let hline = first_content_line(text).unwrap_or(1);
     let names: Vec<String> = header_line.iter().map(|s| s.to_string()).collect();
+    let header_err = |h: HeaderProblem| err(hline, &h.column, h.message);
+    let seen = unique_columns(&names).map_err(header_err)?;
     let mut warnings = Vec::new();
-    let mut seen: BTreeMap<&str, usize> = BTreeMap::new();
-    let mut joint_cols: BTreeMap<usize, usize> = BTreeMap::new();
-    for (i, n) in names.iter().enumerate() {
-        if seen.insert(n.as_str(), i).is_some() {
-            return Err(err(hline, n, "column appears twice".into()));
-        }
-        if let Some(k) = joint_index(n) {
-            joint_cols.insert(k, i);
-        } else if !matches!(
+    for n in &names {
+        let known = matches!(
             n.as_str(),
             "kind" | "group" | "x" | "y" | "z" | "end" | "length_mm" | "temp_c"
-        ) {
+        );
+        if !known && joint_index(n, "j").is_none() {
             warnings.push(format!(
-                "{file}: line {hline}: unknown column `{n}` ignored"
+                "{file}: line {hline}: unknown column `{}` ignored",
+                shown(n)
             ));
         }
     }
@@ -191,27 +189,14 @@ pub fn parse(text: &str, file: &str, dof: usize) -> Result<Dataset, DataError> {
             .copied()
             .ok_or_else(|| err(hline, name, "missing column".into()))
     };
-    let file_dof = joint_cols.keys().next_back().copied().unwrap_or(0);
-    for k in 1..=file_dof.max(dof) {
-        if !joint_cols.contains_key(&k) {
-            return Err(err(
-                hline,
-                &format!("j{k}"),
-                missing_joint(k, file_dof, dof),
-            ));
-        }
-    }
-    if file_dof != dof {
-        return Err(err(
-            hline,
-            &format!("j{file_dof}"),
-            format!("the data has {file_dof} joint columns, the arm has {dof} joints"),
-        ));
-    }
+    let joints = match joint_columns(&names, "j", dof).map_err(header_err)? {
+        Some(j) => j,
+        None => return Err(err(hline, "j1", missing_joint(1, 0, dof))),
+    };
     let columns = Columns {
         kind: need("kind")?,
         group: need("group")?,
-        joints: (1..=dof).map(|k| joint_cols[&k]).collect(),
+        joints,
         xyz: match (seen.get("x"), seen.get("y"), seen.get("z")) {
             (Some(&x), Some(&y), Some(&z)) => Some([x, y, z]),
             _ => None,
@@ -223,8 +208,9 @@ pub fn parse(text: &str, file: &str, dof: usize) -> Result<Dataset, DataError> {
 
     let mut rows = Vec::new();
     for record in reader.records() {
-        let record = record.map_err(|e| err(csv_line(&e), "(row)", format!("not CSV: {e}")))?;
-        let line = record.position().map_or(0, |p| p.line() as usize);
+        let record =
+            record.map_err(|e| err(lines.of_error(&e), "(row)", format!("not CSV: {e}")))?;
+        let line = lines.of_record(&record);
         if record.iter().all(str::is_empty) {
             continue;
         }
@@ -251,6 +237,192 @@ pub fn parse(text: &str, file: &str, dof: usize) -> Result<Dataset, DataError> {
     Ok(data)
 }
 
+/// A header that breaks the column rules, with the column at fault.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HeaderProblem {
+    /// The column (as the message shows it).
+    pub column: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+/// Every column name once: positions by name, or the first name that appears twice. Every CSV
+/// reader of armcal applies this rule (measured data, `eval`'s readings): a second `j1` is
+/// refused, never read in place of the first.
+pub fn unique_columns(names: &[String]) -> Result<BTreeMap<&str, usize>, HeaderProblem> {
+    let mut seen = BTreeMap::new();
+    for (i, n) in names.iter().enumerate() {
+        if seen.insert(n.as_str(), i).is_some() {
+            return Err(HeaderProblem {
+                column: shown(n),
+                message: "column appears twice".into(),
+            });
+        }
+    }
+    Ok(seen)
+}
+
+/// Positions of the joint columns `{prefix}1..{prefix}N` for an arm of `dof` joints, `None`
+/// when the header has no column of that prefix. Refused: a gap (`j1, j3`), a joint the arm
+/// does not have (`j7` for six joints), too few. The same rule for measured data (`j`) and
+/// for `eval` (`j` radians, `c` counts).
+pub fn joint_columns(
+    names: &[String],
+    prefix: &str,
+    dof: usize,
+) -> Result<Option<Vec<usize>>, HeaderProblem> {
+    let cols: BTreeMap<usize, usize> = names
+        .iter()
+        .enumerate()
+        .filter_map(|(i, n)| joint_index(n, prefix).map(|k| (k, i)))
+        .collect();
+    let Some(&file_dof) = cols.keys().next_back() else {
+        return Ok(None);
+    };
+    let problem = |k: usize, message: String| HeaderProblem {
+        column: format!("{prefix}{k}"),
+        message,
+    };
+    for k in 1..=file_dof.max(dof) {
+        if !cols.contains_key(&k) {
+            return Err(problem(k, missing_joint(k, file_dof, dof)));
+        }
+    }
+    if file_dof != dof {
+        return Err(problem(
+            file_dof,
+            format!("the data has {file_dof} joint columns, the arm has {dof} joints"),
+        ));
+    }
+    Ok(Some((1..=dof).map(|k| cols[&k]).collect()))
+}
+
+/// Where the csv reader's records are, as a person sees them in an editor.
+///
+/// The csv reader gives a record the position where it stopped after the record before: the
+/// blank lines it skipped in between, and the comment lines, are not counted (a bad value
+/// after a mid-file comment was reported one line early). So comments are emptied first
+/// ([`without_comments`], which keeps every newline), and a record's line is counted here
+/// from the first byte after the newlines that follow that position.
+pub struct Lines<'a> {
+    text: &'a [u8],
+    starts: Vec<u64>,
+}
+
+impl<'a> Lines<'a> {
+    /// The lines of `text` (comments already emptied).
+    pub fn new(text: &'a str) -> Lines<'a> {
+        let starts = std::iter::once(0)
+            .chain(
+                text.bytes()
+                    .enumerate()
+                    .filter(|(_, b)| *b == b'\n')
+                    .map(|(i, _)| i as u64 + 1),
+            )
+            .collect();
+        Lines {
+            text: text.as_bytes(),
+            starts,
+        }
+    }
+
+    /// The 1-based line of what starts at byte `at`, blank lines skipped.
+    pub fn of(&self, at: u64) -> usize {
+        let mut i = at as usize;
+        while i < self.text.len() && matches!(self.text[i], b'\n' | b'\r') {
+            i += 1;
+        }
+        self.starts.partition_point(|&s| s <= i as u64).max(1)
+    }
+
+    /// The line of a record.
+    pub fn of_record(&self, r: &csv::StringRecord) -> usize {
+        r.position().map_or(0, |p| self.of(p.byte()))
+    }
+
+    /// The line of a csv error (0 where it has none).
+    pub fn of_error(&self, e: &csv::Error) -> usize {
+        e.position().map_or(0, |p| self.of(p.byte()))
+    }
+}
+
+/// The text with every comment line (`#` first, after any blanks) emptied, its newline kept,
+/// so that the csv reader skips it as a blank line and line numbers stay those of the file.
+pub fn without_comments(text: &str) -> std::borrow::Cow<'_, str> {
+    let is_comment = |l: &str| l.trim_start().starts_with('#');
+    if !text.lines().any(is_comment) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len());
+    for piece in text.split_inclusive('\n') {
+        if is_comment(piece) {
+            if piece.ends_with('\n') {
+                out.push('\n');
+            }
+        } else {
+            out.push_str(piece);
+        }
+    }
+    std::borrow::Cow::Owned(out)
+}
+
+/// What a numeric cell must hold.
+#[derive(Clone, Debug)]
+pub enum Bound {
+    /// |x| ≤ the value; the text names the quantity and its unit, e.g. "mm (a coordinate)".
+    Abs(f64, &'static str),
+    /// x within the range; the text names the quantity and its unit.
+    Within(std::ops::RangeInclusive<f64>, &'static str),
+}
+
+impl Bound {
+    /// A joint reading (rad).
+    pub fn joint() -> Bound {
+        Bound::Abs(
+            crate::limits::JOINT_RAD,
+            "rad (a joint reading: a thousand turns)",
+        )
+    }
+
+    /// A coordinate or a distance of the world (mm).
+    pub fn coordinate() -> Bound {
+        Bound::Abs(
+            crate::limits::COORDINATE_MM,
+            "mm (any coordinate or length)",
+        )
+    }
+
+    /// The arm's temperature (°C).
+    pub fn temperature() -> Bound {
+        Bound::Within(
+            crate::limits::temp_range_c(),
+            "°C (the temperatures the firmware accepts)",
+        )
+    }
+}
+
+/// A numeric cell: a finite number within `bound`, or why not.
+pub fn number_cell(s: &str, bound: &Bound) -> Result<f64, String> {
+    let x = match s.parse::<f64>() {
+        Ok(x) if x.is_finite() => x,
+        Ok(_) => return Err(format!("`{}` is not a finite number", shown(s))),
+        Err(_) if s.is_empty() => return Err("empty: a number is needed".into()),
+        Err(_) => return Err(format!("`{}` is not a number", shown(s))),
+    };
+    match bound {
+        Bound::Abs(limit, what) if x.abs() > *limit => {
+            Err(format!("{} is beyond ±{limit} {what}", number(x)))
+        }
+        Bound::Within(range, what) if !range.contains(&x) => Err(format!(
+            "{} is outside {}..{} {what}",
+            number(x),
+            range.start(),
+            range.end()
+        )),
+        _ => Ok(x),
+    }
+}
+
 fn missing_joint(k: usize, file_dof: usize, dof: usize) -> String {
     if k > file_dof {
         format!("missing column: the arm has {dof} joints, the data has {file_dof} joint columns")
@@ -269,12 +441,8 @@ fn first_content_line(text: &str) -> Option<usize> {
         .map(|i| i + 1)
 }
 
-fn csv_line(e: &csv::Error) -> usize {
-    e.position().map_or(0, |p| p.line() as usize)
-}
-
-fn joint_index(name: &str) -> Option<usize> {
-    let digits = name.strip_prefix('j')?;
+fn joint_index(name: &str, prefix: &str) -> Option<usize> {
+    let digits = name.strip_prefix(prefix)?;
     if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
         return None;
     }
@@ -289,18 +457,8 @@ fn parse_row(
     err: &dyn Fn(usize, &str, String) -> DataError,
 ) -> Result<Row, DataError> {
     let cell = |i: usize| record.get(i).unwrap_or("");
-    let number = |i: usize| -> Result<f64, DataError> {
-        let s = cell(i);
-        match s.parse::<f64>() {
-            Ok(x) if x.is_finite() => Ok(x),
-            Ok(_) => Err(err(
-                line,
-                &names[i],
-                format!("`{s}` is not a finite number"),
-            )),
-            Err(_) if s.is_empty() => Err(err(line, &names[i], "empty: a number is needed".into())),
-            Err(_) => Err(err(line, &names[i], format!("`{s}` is not a number"))),
-        }
+    let number = |i: usize, bound: Bound| -> Result<f64, DataError> {
+        number_cell(cell(i), &bound).map_err(|m| err(line, &shown(&names[i]), m))
     };
     let kind = match cell(c.kind) {
         "point" => Kind::Point,
@@ -310,7 +468,7 @@ fn parse_row(
             return Err(err(
                 line,
                 "kind",
-                format!("unknown kind `{other}`: point, spat or length"),
+                format!("unknown kind `{}`: point, spat or length", shown(other)),
             ))
         }
     };
@@ -320,14 +478,20 @@ fn parse_row(
             Ok(g) => g,
             Err(_) => match s.parse::<f64>() {
                 Ok(f) if f.is_finite() && f.fract() == 0.0 && f.abs() < 9e15 => f as i64,
-                _ => return Err(err(line, "group", format!("`{s}` is not an integer"))),
+                _ => {
+                    return Err(err(
+                        line,
+                        "group",
+                        format!("`{}` is not an integer", shown(s)),
+                    ))
+                }
             },
         }
     };
     let theta = c
         .joints
         .iter()
-        .map(|&i| number(i))
+        .map(|&i| number(i, Bound::joint()))
         .collect::<Result<Vec<_>, _>>()?;
     let xyz = if kind == Kind::Point {
         let Some(cols) = c.xyz else {
@@ -341,7 +505,11 @@ fn parse_row(
                 "missing column: `point` rows need x, y and z".into(),
             ));
         };
-        Some([number(cols[0])?, number(cols[1])?, number(cols[2])?])
+        Some([
+            number(cols[0], Bound::coordinate())?,
+            number(cols[1], Bound::coordinate())?,
+            number(cols[2], Bound::coordinate())?,
+        ])
     } else {
         None
     };
@@ -363,9 +531,15 @@ fn parse_row(
         let end = match cell(ce) {
             "a" | "A" => End::A,
             "b" | "B" => End::B,
-            other => return Err(err(line, "end", format!("`{other}` is not an end: a or b"))),
+            other => {
+                return Err(err(
+                    line,
+                    "end",
+                    format!("`{}` is not an end: a or b", shown(other)),
+                ))
+            }
         };
-        let l = number(cl)?;
+        let l = number(cl, Bound::coordinate())?;
         if l <= 0.0 {
             return Err(err(
                 line,
@@ -378,7 +552,7 @@ fn parse_row(
         (None, None)
     };
     let temp_c = match c.temp {
-        Some(i) if !cell(i).is_empty() => number(i)?,
+        Some(i) if !cell(i).is_empty() => number(i, Bound::temperature())?,
         _ => quatarm_ref::forward::REFERENCE_TEMP_C,
     };
     Ok(Row {

@@ -8,6 +8,10 @@
 //! (nm, 1e-9) scaled, so they compare bit for bit with a board's stream. The whole input is
 //! evaluated before anything is written: a bad row gives an error and no partial output.
 
+use crate::data::{
+    joint_columns, number_cell, unique_columns, without_comments, Bound, HeaderProblem, Lines,
+};
+use crate::limits::shown;
 use quatarm::{Chain, Fixed, Precision, Table, F32};
 use quatarm_ref::Arm;
 use std::fmt::Write as _;
@@ -29,7 +33,7 @@ pub enum Evaluator {
 pub struct RowError {
     /// 1-based line of the input (the header is line 1).
     pub line: u64,
-    /// 1-based column, or the column's name where it is missing.
+    /// The column's name (`(header)`, `(row)` for the whole).
     pub column: String,
     /// Why.
     pub message: String,
@@ -47,88 +51,83 @@ pub enum Reading {
 /// Parsed input: readings with their temperature (°C).
 pub type Rows = Vec<(Reading, f64)>;
 
-/// Reads the CSV input for an arm.
-pub fn read_rows(arm: &Arm, input: impl std::io::Read) -> Result<Rows, RowError> {
+/// Reads the CSV input for an arm. The header follows the measured data's rule
+/// ([`crate::data::unique_columns`], [`crate::data::joint_columns`]): every name once, the
+/// joint columns exactly the arm's; numbers within the same bounds ([`Bound`]).
+pub fn read_rows(arm: &Arm, mut input: impl std::io::Read) -> Result<Rows, RowError> {
     let n = arm.dof();
+    let mut text = String::new();
+    input.read_to_string(&mut text).map_err(|e| RowError {
+        line: 0,
+        column: "(input)".into(),
+        message: format!("cannot read: {e}"),
+    })?;
+    let text = without_comments(&text);
+    let lines = Lines::new(&text);
     let mut rdr = csv::ReaderBuilder::new()
         .has_headers(true)
         .trim(csv::Trim::All)
-        .from_reader(input);
-    let headers = rdr
-        .headers()
-        .map_err(|e| RowError {
-            line: 1,
-            column: "1".into(),
-            message: format!("cannot read the header: {e}"),
-        })?
-        .clone();
-    let find = |name: &str| headers.iter().position(|h| h == name);
-    let j: Vec<Option<usize>> = (1..=n).map(|k| find(&format!("j{k}"))).collect();
-    let c: Vec<Option<usize>> = (1..=n).map(|k| find(&format!("c{k}"))).collect();
-    let temp = find("temp_c");
+        .from_reader(text.as_bytes());
     let header_err = |column: String, message: String| RowError {
         line: 1,
         column,
         message,
     };
-    let radians = if j.iter().all(Option::is_some) && c.iter().all(Option::is_none) {
-        true
-    } else if c.iter().all(Option::is_some) && j.iter().all(Option::is_none) {
-        false
-    } else {
-        return Err(header_err(
-            "header".into(),
-            format!("need columns j1..j{n} (radians) or c1..c{n} (counts), not both or a part"),
-        ));
-    };
-    let cols: Vec<usize> = if radians { &j } else { &c }
+    let headers: Vec<String> = rdr
+        .headers()
+        .map_err(|e| header_err("(header)".into(), format!("cannot read the header: {e}")))?
         .iter()
-        .flatten()
-        .copied()
+        .map(str::to_string)
         .collect();
+    let problem = |p: HeaderProblem| header_err(p.column, p.message);
+    let seen = unique_columns(&headers).map_err(problem)?;
+    let j = joint_columns(&headers, "j", n).map_err(problem)?;
+    let c = joint_columns(&headers, "c", n).map_err(problem)?;
+    let temp = seen.get("temp_c").copied();
+    let (cols, radians) = match (j, c) {
+        (Some(j), None) => (j, true),
+        (None, Some(c)) => (c, false),
+        _ => {
+            return Err(header_err(
+                "(header)".into(),
+                format!("need columns j1..j{n} (radians) or c1..c{n} (counts), not both"),
+            ))
+        }
+    };
+    let name = |col: usize| shown(&headers[col]);
     let mut rows = Vec::new();
     for rec in rdr.records() {
-        let rec = rec.map_err(|e| {
-            let line = e.position().map_or(0, |p| p.line());
-            RowError {
-                line,
-                column: "-".into(),
-                message: e.to_string(),
-            }
+        let rec = rec.map_err(|e| RowError {
+            line: lines.of_error(&e) as u64,
+            column: "(row)".into(),
+            message: e.to_string(),
         })?;
-        let line = rec.position().map_or(0, |p| p.line());
+        let line = lines.of_record(&rec) as u64;
         let field = |col: usize| -> Result<&str, RowError> {
             rec.get(col).ok_or_else(|| RowError {
                 line,
-                column: (col + 1).to_string(),
+                column: name(col),
                 message: "missing field".into(),
             })
         };
         let bad = |col: usize, message: String| RowError {
             line,
-            column: (col + 1).to_string(),
+            column: name(col),
             message,
         };
         let reading = if radians {
             let mut v = Vec::with_capacity(n);
             for &col in &cols {
-                let s = field(col)?;
-                let x: f64 = s
-                    .parse()
-                    .map_err(|_| bad(col, format!("{s:?} is not a number")))?;
-                if !x.is_finite() {
-                    return Err(bad(col, format!("{s:?} is not finite")));
-                }
-                v.push(x);
+                v.push(number_cell(field(col)?, &Bound::joint()).map_err(|m| bad(col, m))?);
             }
             Reading::Radians(v)
         } else {
             let mut v = Vec::with_capacity(n);
             for (k, &col) in cols.iter().enumerate() {
                 let s = field(col)?;
-                let x: u32 = s
-                    .parse()
-                    .map_err(|_| bad(col, format!("{s:?} is not a count (integer ≥ 0)")))?;
+                let x: u32 = s.parse().map_err(|_| {
+                    bad(col, format!("`{}` is not a count (integer ≥ 0)", shown(s)))
+                })?;
                 let per_rev = arm.joints[k].encoder_counts;
                 if x >= per_rev {
                     return Err(bad(
@@ -141,21 +140,10 @@ pub fn read_rows(arm: &Arm, input: impl std::io::Read) -> Result<Rows, RowError>
             Reading::Counts(v)
         };
         let t = match temp {
-            Some(col) => {
-                let s = field(col)?;
-                if s.is_empty() {
-                    20.0
-                } else {
-                    let t: f64 = s
-                        .parse()
-                        .map_err(|_| bad(col, format!("{s:?} is not a temperature")))?;
-                    if !(-80.0..=120.0).contains(&t) {
-                        return Err(bad(col, format!("{t} degC is outside -80..120")));
-                    }
-                    t
-                }
+            Some(col) if !field(col)?.is_empty() => {
+                number_cell(field(col)?, &Bound::temperature()).map_err(|m| bad(col, m))?
             }
-            None => 20.0,
+            _ => quatarm_ref::forward::REFERENCE_TEMP_C,
         };
         rows.push((reading, t));
     }

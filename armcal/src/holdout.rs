@@ -71,19 +71,34 @@ pub struct Holdout {
 
 /// Fits `start` on all folds but one and judges the one left out, for every fold.
 pub fn validate(start: &Arm, data: &Dataset, opts: &Options, folds: &Folds) -> Holdout {
+    validate_observed(start, data, opts, folds, &mut crate::progress::Silent)
+}
+
+/// [`validate`], telling `observer` which fold it fits.
+pub fn validate_observed(
+    start: &Arm,
+    data: &Dataset,
+    opts: &Options,
+    folds: &Folds,
+    observer: &mut dyn crate::progress::Observer,
+) -> Holdout {
     let n = data.rows.len();
     let mut rows = vec![Vector3::zeros(); n];
     let mut judged = vec![false; n];
     let mut lengths = Vec::new();
     let mut failed = Vec::new();
     let mut opts = opts.clone();
-    opts.progress = false;
     opts.design_check = false;
     opts.allow_degenerate = true;
     for (f, out) in folds.iter().enumerate() {
         let mut left = vec![false; n];
         out.iter().for_each(|&i| left[i] = true);
         let train: Vec<usize> = (0..n).filter(|&i| !left[i]).collect();
+        observer.stage(&format!(
+            "held-out validation, fold {} of {}",
+            f + 1,
+            folds.len()
+        ));
         let fit = match calibrate(start, &data.subset(&train), &opts) {
             Ok(fit) => fit,
             Err(e) => {

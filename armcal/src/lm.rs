@@ -81,13 +81,25 @@ pub struct Outcome<S> {
     pub reason: String,
 }
 
-/// Minimises ½‖r‖² from `start`; `progress` is called after every linearisation with the
-/// iteration number and the cost.
+/// What watches the solver: told after every linearisation the iteration number and the
+/// cost. The solver knows nothing of terminals or progress bars; a closure is an observer.
+pub trait Observer {
+    /// Iteration `iteration` has cost `cost`.
+    fn iteration(&mut self, iteration: usize, cost: f64);
+}
+
+impl<F: FnMut(usize, f64)> Observer for F {
+    fn iteration(&mut self, iteration: usize, cost: f64) {
+        self(iteration, cost)
+    }
+}
+
+/// Minimises ½‖r‖² from `start`, telling `observer` of every iteration.
 pub fn solve<P: Problem>(
     problem: &P,
     start: P::State,
     options: &Options,
-    progress: &mut dyn FnMut(usize, f64),
+    observer: &mut dyn Observer,
 ) -> Outcome<P::State> {
     let n = problem.dim();
     let mut state = start;
@@ -108,12 +120,15 @@ pub fn solve<P: Problem>(
     let mut lambda = 1e-4;
     let mut iterations = 1;
     let mut exhausted = false;
-    progress(iterations, normal.cost);
+    observer.iteration(iterations, normal.cost);
     // Every way out of the iteration says whether it converged and why; the outcome is the
     // state and normal equations it leaves.
     let (converged, reason) = 'solve: loop {
         if normal.cost == 0.0 {
             break (true, "exact fit");
+        }
+        if !normal.cost.is_finite() {
+            break (false, "the residuals are not finite numbers");
         }
         // Scale to a unit diagonal; an unknown with no effect (zero column) stays put.
         let (a, scale) = unit_diagonal(&normal.jtj);
@@ -170,7 +185,7 @@ pub fn solve<P: Problem>(
                 state = trial;
                 normal = problem.normal(&state);
                 iterations += 1;
-                progress(iterations, normal.cost);
+                observer.iteration(iterations, normal.cost);
                 if step_small {
                     break 'solve (true, "step below tolerance");
                 }

@@ -65,7 +65,7 @@ pub fn load(dir: &Path, name: &str) -> Result<Unit, String> {
         .find(|(u, _)| u == name)
         .map(|(_, s)| s)
         .ok_or_else(|| format!("no MUKCa unit `{name}`"))?;
-    let arm = calfile::read(&dir.join(format!("{stem}.toml")))
+    let arm = calfile::read_with(&dir.join(format!("{stem}.toml")), &crate::limits::CALFILE)
         .map_err(|e| e.to_string())?
         .arm;
     let data =

@@ -285,6 +285,9 @@ impl Effect {
     }
 }
 
+/// The highest harmonic order a calibration file holds (`harmonics[].order`).
+pub const MAX_ORDER: u32 = quatarm_ref::calfile::MAX_HARMONIC_ORDER;
+
 /// What a calibration fits: the geometric model (or not) and any extended effects.
 ///
 /// Text form (`--terms`): comma-separated items. `geometric` is the 6N + 3 geometric
@@ -376,7 +379,13 @@ impl Terms {
             match name {
                 "encoder_harmonic" => {
                     let order = match args.get(1).map(|s| s.parse::<u32>()) {
-                        Some(Ok(h)) if h >= 1 => h,
+                        Some(Ok(h)) if (1..=MAX_ORDER).contains(&h) => h,
+                        Some(Ok(h)) => {
+                            return Err(format!(
+                                "`{item}`: order {h} is beyond {MAX_ORDER}, the highest a \
+                                 calibration file holds"
+                            ))
+                        }
                         _ => {
                             return Err(format!(
                                 "`{item}`: give the order, e.g. `+encoder_harmonic:2:1` (joint 2, order 1)"
@@ -409,6 +418,13 @@ impl Terms {
             }
         }
         if only {
+            if t.effects.is_empty() {
+                return Err(
+                    "`only` fits the listed effects alone, and none is listed: nothing to fit \
+                     (e.g. `only,+gravity_compliance:*`)"
+                        .into(),
+                );
+            }
             t.geometric = false;
         }
         Ok(t)

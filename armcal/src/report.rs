@@ -156,6 +156,9 @@ pub struct Report {
     pub frame: Option<FrameReport>,
     /// What the data could not determine.
     pub not_identifiable: Vec<HeldReport>,
+    /// What the data's kinds leave to the start arm or the instrument frame
+    /// ([`crate::kinds::notes`]).
+    pub data_kinds: Vec<String>,
     /// Files written.
     pub output: OutputReport,
     /// Warnings (unknown columns, keys, a table not written…).
@@ -314,6 +317,7 @@ pub fn build(
             translation: f.translation,
         }),
         not_identifiable: held,
+        data_kinds: crate::kinds::notes(&layout),
         output: OutputReport::default(),
         warnings: data.warnings.clone(),
     }
@@ -396,6 +400,9 @@ impl Report {
             kinds.join(", "),
             d.equations
         );
+        for note in &self.data_kinds {
+            let _ = writeln!(s, "  ({note})");
+        }
         let _ = writeln!(
             s,
             "  model: {} ({} joints); fitted {} of {} unknowns in {} iterations, {:.1} ms ({})",

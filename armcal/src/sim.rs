@@ -116,8 +116,13 @@ pub fn frame_matrix(f: &Frame) -> Matrix3<f64> {
 }
 
 /// A frame from a rotation matrix and a translation.
+///
+/// The nearest rotation by at most 100 iterations: nalgebra's `from_matrix` iterates until
+/// convergence, which a matrix holding NaN never reaches (a start arm with a 1e300 link hung
+/// `calibrate` here). A non-finite matrix gives a non-finite frame, which the calibration
+/// file's reader refuses.
 pub fn frame_from(r: &Matrix3<f64>, t: &Vector3<f64>) -> Frame {
-    let q = UnitQuaternion::from_matrix(r);
+    let q = UnitQuaternion::from_matrix_eps(r, f64::EPSILON, 100, UnitQuaternion::identity());
     let mut c = [q.w, q.i, q.j, q.k];
     if c[0] < 0.0 {
         c = c.map(|v| -v);

@@ -61,7 +61,17 @@ pub fn table_data(arm: &Arm) -> Result<TableData, BuildError> {
         ..TableData::default()
     };
     if let Some(s) = &arm.serial {
-        if s.len() > SERIAL_LEN || s.as_bytes().contains(&0) {
+        if let Some(at) = s.bytes().position(|b| b == 0) {
+            // The table pads the serial with NULs: one inside it would cut it short.
+            return Err(err(
+                "serial",
+                format!(
+                    "has a NUL character (byte {}), which the table uses as padding",
+                    at + 1
+                ),
+            ));
+        }
+        if s.len() > SERIAL_LEN {
             return Err(err(
                 "serial",
                 format!("{} bytes; the table holds at most {SERIAL_LEN}", s.len()),

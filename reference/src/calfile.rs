@@ -9,6 +9,9 @@ use crate::arm::{Arm, Axis, Frame, Harmonic, Joint, Probe, DEFAULT_COUNTS, JOINT
 use std::fmt::Write as _;
 use toml::{Table, Value};
 
+/// The highest `harmonics[].order` a file holds.
+pub const MAX_HARMONIC_ORDER: u32 = u16::MAX as u32;
+
 /// A calibration file that cannot be used, with the key path at fault.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{path}: {message}")]
@@ -28,6 +31,40 @@ pub struct Parsed {
     pub unknown_keys: Vec<String>,
 }
 
+/// Physical bounds on a file's values, beyond the format's own checks (numbers finite, counts
+/// in range). The reference has no opinion on them: a tool passes the bounds its evaluators
+/// and its hardware set (`armcal::limits::CALFILE`, from the firmware table's limits), so
+/// that a value such as `link = [0, 0, 1e300]` is refused on reading, with its key, instead of
+/// turning into inf and NaN in every later computation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limits {
+    /// |component| of `link`, `link_error`, their sum, and of the probe's `vector`, `error`
+    /// and their sum (mm).
+    pub length_mm: f64,
+    /// |`zero_offset`| and |`tilt` component| (rad).
+    pub angle_rad: f64,
+    /// |`sin`| and |`cos`| of a harmonic (rad).
+    pub harmonic_rad: f64,
+    /// |`gravity`| (rad/mm).
+    pub gravity: f64,
+    /// |`thermal`| of a link or the probe (1/°C).
+    pub thermal: f64,
+    /// |component| of `reference_frame.translation` (mm).
+    pub translation_mm: f64,
+}
+
+impl Limits {
+    /// No bounds beyond the format's: every finite number passes.
+    pub const NONE: Limits = Limits {
+        length_mm: f64::MAX,
+        angle_rad: f64::MAX,
+        harmonic_rad: f64::MAX,
+        gravity: f64::MAX,
+        thermal: f64::MAX,
+        translation_mm: f64::MAX,
+    };
+}
+
 fn err(path: impl Into<String>, message: impl Into<String>) -> CalFileError {
     CalFileError {
         path: path.into(),
@@ -35,11 +72,16 @@ fn err(path: impl Into<String>, message: impl Into<String>) -> CalFileError {
     }
 }
 
-/// Reads a calibration file from its text.
+/// Reads a calibration file from its text, with the format's checks only ([`Limits::NONE`]).
 pub fn parse(text: &str) -> Result<Parsed, CalFileError> {
+    parse_with(text, &Limits::NONE)
+}
+
+/// Reads a calibration file from its text, refusing values beyond `limits` (with their key).
+pub fn parse_with(text: &str, limits: &Limits) -> Result<Parsed, CalFileError> {
     let root: Table = text
         .parse()
-        .map_err(|e: toml::de::Error| err("(file)", format!("not valid TOML: {}", e.message())))?;
+        .map_err(|e: toml::de::Error| syntax(text, &e))?;
     let mut unknown = Vec::new();
     for key in root.keys() {
         if !matches!(
@@ -51,6 +93,18 @@ pub fn parse(text: &str) -> Result<Parsed, CalFileError> {
     }
     let name = opt_string(&root, "name", "name")?;
     let serial = opt_string(&root, "serial", "serial")?;
+    if let Some(at) = serial
+        .as_deref()
+        .and_then(|s| s.bytes().position(|b| b == 0))
+    {
+        return Err(err(
+            "serial",
+            format!(
+                "has a NUL character (byte {}): a serial is printable text",
+                at + 1
+            ),
+        ));
+    }
 
     let joint_values = match root.get("joint") {
         Some(Value::Array(a)) => a,
@@ -73,15 +127,15 @@ pub fn parse(text: &str) -> Result<Parsed, CalFileError> {
     for (i, v) in joint_values.iter().enumerate() {
         let path = format!("joint[{}]", i + 1);
         let t = v.as_table().ok_or_else(|| err(&path, "must be a table"))?;
-        joints.push(joint(t, &path, counts[i], &mut unknown)?);
+        joints.push(joint(t, &path, counts[i], &mut unknown, limits)?);
     }
     let probe = match root.get("probe") {
-        Some(Value::Table(t)) => probe(t, &mut unknown)?,
+        Some(Value::Table(t)) => probe(t, &mut unknown, limits)?,
         Some(_) => return Err(err("probe", "must be a table")),
         None => return Err(err("probe", "missing: the [probe] table with its vector")),
     };
     let reference_frame = match root.get("reference_frame") {
-        Some(Value::Table(t)) => Some(frame(t, &mut unknown)?),
+        Some(Value::Table(t)) => Some(frame(t, &mut unknown, limits)?),
         Some(_) => return Err(err("reference_frame", "must be a table")),
         None => None,
     };
@@ -97,11 +151,83 @@ pub fn parse(text: &str) -> Result<Parsed, CalFileError> {
     })
 }
 
-/// Reads a calibration file from disk; errors carry the file name in front of the key path.
+/// Reads a calibration file from disk ([`Limits::NONE`]); errors carry the file name in front
+/// of the key path.
 pub fn read(path: &std::path::Path) -> Result<Parsed, CalFileError> {
+    read_with(path, &Limits::NONE)
+}
+
+/// Reads a calibration file from disk, refusing values beyond `limits`.
+pub fn read_with(path: &std::path::Path, limits: &Limits) -> Result<Parsed, CalFileError> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| err(path.display().to_string(), format!("cannot read: {e}")))?;
-    parse(&text).map_err(|e| err(format!("{}: {}", path.display(), e.path), e.message))
+    parse_with(&text, limits).map_err(|e| err(format!("{}: {}", path.display(), e.path), e.message))
+}
+
+/// A TOML syntax error with its line and column (1-based), and for an error inside an array
+/// of tables (a duplicate key in the third `[[joint]]`) which table it is in: the parser's own
+/// message names the key but not the table's index.
+fn syntax(text: &str, e: &toml::de::Error) -> CalFileError {
+    let message = e.message().trim_end();
+    let Some(at) = e.span().map(|s| s.start.min(text.len())) else {
+        return err("(file)", format!("not valid TOML: {message}"));
+    };
+    let before = &text[..at];
+    let line = before.matches('\n').count() + 1;
+    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    let table = enclosing_table(before)
+        .map(|t| format!(" (in {t})"))
+        .unwrap_or_default();
+    err(
+        format!("line {line}, column {column}"),
+        format!("not valid TOML: {message}{table}"),
+    )
+}
+
+/// The table a position of the text is in, from the headers before it: `joint[3]` for the
+/// third `[[joint]]`, `probe` for `[probe]`; `None` at the top level.
+fn enclosing_table(before: &str) -> Option<String> {
+    let mut current: Option<String> = None;
+    let mut counts: std::collections::BTreeMap<String, usize> = Default::default();
+    for line in before.lines() {
+        let l = line.split('#').next().unwrap_or("").trim();
+        if let Some(name) = l.strip_prefix("[[").and_then(|r| r.strip_suffix("]]")) {
+            let name = name.trim().to_string();
+            let k = counts.entry(name.clone()).or_insert(0);
+            *k += 1;
+            current = Some(format!("{name}[{k}]"));
+        } else if let Some(name) = l.strip_prefix('[').and_then(|r| r.strip_suffix(']')) {
+            current = Some(name.trim().to_string());
+        }
+    }
+    current
+}
+
+/// Refuses |x| > `limit` at `path`, saying what the bound is for.
+fn bounded(x: f64, limit: f64, path: &str, what: &str) -> Result<f64, CalFileError> {
+    if x.abs() > limit {
+        return Err(err(
+            path,
+            format!("{} is beyond the {what} limit of ±{limit}", short(x)),
+        ));
+    }
+    Ok(x)
+}
+
+/// 1e300 rather than its 301 digits.
+fn short(x: f64) -> String {
+    if x == 0.0 || (1e-4..1e7).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+fn bounded_all(xs: &[f64], limit: f64, path: &str, what: &str) -> Result<(), CalFileError> {
+    for (k, &x) in xs.iter().enumerate() {
+        bounded(x, limit, &format!("{path}[{k}]"), what)?;
+    }
+    Ok(())
 }
 
 fn joint(
@@ -109,6 +235,7 @@ fn joint(
     path: &str,
     counts: u32,
     unknown: &mut Vec<String>,
+    limits: &Limits,
 ) -> Result<Joint, CalFileError> {
     const KEYS: &[&str] = &[
         "axis",
@@ -154,7 +281,7 @@ fn joint(
             ))
         }
     };
-    Ok(Joint {
+    let j = Joint {
         axis,
         link,
         zero_offset: opt_number(t, "zero_offset", path)?,
@@ -164,7 +291,46 @@ fn joint(
         gravity: opt_number(t, "gravity", path)?,
         thermal: opt_number(t, "thermal", path)?,
         encoder_counts: counts,
-    })
+    };
+    let length = "link length";
+    bounded_all(&j.link, limits.length_mm, &format!("{path}.link"), length)?;
+    bounded_all(
+        &j.link_error,
+        limits.length_mm,
+        &format!("{path}.link_error"),
+        length,
+    )?;
+    bounded_all(
+        &j.actual_link(),
+        limits.length_mm,
+        &format!("{path}.link + link_error"),
+        length,
+    )?;
+    bounded(
+        j.zero_offset,
+        limits.angle_rad,
+        &format!("{path}.zero_offset"),
+        "angle",
+    )?;
+    bounded_all(&j.tilt, limits.angle_rad, &format!("{path}.tilt"), "angle")?;
+    for (k, h) in j.harmonics.iter().enumerate() {
+        let hp = format!("{path}.harmonics[{}]", k + 1);
+        bounded(h.sin, limits.harmonic_rad, &format!("{hp}.sin"), "harmonic")?;
+        bounded(h.cos, limits.harmonic_rad, &format!("{hp}.cos"), "harmonic")?;
+    }
+    bounded(
+        j.gravity,
+        limits.gravity,
+        &format!("{path}.gravity"),
+        "gravity compliance",
+    )?;
+    bounded(
+        j.thermal,
+        limits.thermal,
+        &format!("{path}.thermal"),
+        "thermal expansion",
+    )?;
+    Ok(j)
 }
 
 fn harmonic(v: &Value, path: &str, unknown: &mut Vec<String>) -> Result<Harmonic, CalFileError> {
@@ -174,11 +340,11 @@ fn harmonic(v: &Value, path: &str, unknown: &mut Vec<String>) -> Result<Harmonic
     note_unknown(t, &["order", "sin", "cos"], path, unknown);
     let order = match t.get("order") {
         None => return Err(err(format!("{path}.order"), "missing")),
-        Some(Value::Integer(h)) if (1..=i64::from(u16::MAX)).contains(h) => *h as u32,
+        Some(Value::Integer(h)) if (1..=i64::from(MAX_HARMONIC_ORDER)).contains(h) => *h as u32,
         Some(Value::Integer(h)) => {
             return Err(err(
                 format!("{path}.order"),
-                format!("{h} is not an order: an integer from 1"),
+                format!("{h} is not an order: an integer from 1 to {MAX_HARMONIC_ORDER}"),
             ))
         }
         Some(_) => return Err(err(format!("{path}.order"), "must be an integer ≥ 1")),
@@ -190,7 +356,7 @@ fn harmonic(v: &Value, path: &str, unknown: &mut Vec<String>) -> Result<Harmonic
     })
 }
 
-fn probe(t: &Table, unknown: &mut Vec<String>) -> Result<Probe, CalFileError> {
+fn probe(t: &Table, unknown: &mut Vec<String>, limits: &Limits) -> Result<Probe, CalFileError> {
     note_unknown(t, &["vector", "error", "thermal"], "probe", unknown);
     let vector = match t.get("vector") {
         None => return Err(err("probe.vector", "missing")),
@@ -201,6 +367,21 @@ fn probe(t: &Table, unknown: &mut Vec<String>) -> Result<Probe, CalFileError> {
         error: opt_array::<3>(t, "error", "probe")?,
         thermal: opt_number(t, "thermal", "probe")?,
     };
+    let length = "probe length";
+    bounded_all(&p.vector, limits.length_mm, "probe.vector", length)?;
+    bounded_all(&p.error, limits.length_mm, "probe.error", length)?;
+    bounded_all(
+        &p.actual(),
+        limits.length_mm,
+        "probe.vector + error",
+        length,
+    )?;
+    bounded(
+        p.thermal,
+        limits.thermal,
+        "probe.thermal",
+        "thermal expansion",
+    )?;
     let a = p.actual();
     if a.iter().all(|c| *c == 0.0) {
         return Err(err(
@@ -211,7 +392,7 @@ fn probe(t: &Table, unknown: &mut Vec<String>) -> Result<Probe, CalFileError> {
     Ok(p)
 }
 
-fn frame(t: &Table, unknown: &mut Vec<String>) -> Result<Frame, CalFileError> {
+fn frame(t: &Table, unknown: &mut Vec<String>, limits: &Limits) -> Result<Frame, CalFileError> {
     note_unknown(t, &["rotation", "translation"], "reference_frame", unknown);
     let rotation = match t.get("rotation") {
         None => [1.0, 0.0, 0.0, 0.0],
@@ -224,9 +405,16 @@ fn frame(t: &Table, unknown: &mut Vec<String>) -> Result<Frame, CalFileError> {
             format!("not a unit quaternion (norm {norm})"),
         ));
     }
+    let translation = opt_array::<3>(t, "translation", "reference_frame")?;
+    bounded_all(
+        &translation,
+        limits.translation_mm,
+        "reference_frame.translation",
+        "instrument distance",
+    )?;
     Ok(Frame {
         rotation: rotation.map(|c| c / norm),
-        translation: opt_array::<3>(t, "translation", "reference_frame")?,
+        translation,
     })
 }
 
@@ -481,7 +669,7 @@ translation = [10.0, 20.0, 30.0]
                 FULL.replace("order = 3", "order = 0"),
                 "joint[1].harmonics[2].order",
             ),
-            ("name = ".to_string(), "(file)"),
+            ("name = ".to_string(), "line 1, column 8"),
         ];
         for (text, path) in cases {
             let e = parse(&text).unwrap_err();
@@ -505,5 +693,90 @@ translation = [10.0, 20.0, 30.0]
         );
         let a = parse(&per_joint).unwrap().arm;
         assert_eq!(a.joints[5].encoder_counts, 65536);
+    }
+
+    #[test]
+    fn syntax_errors_have_a_line_and_a_table() {
+        let e = parse("name = \"a\"\nserial = \n").unwrap_err();
+        assert_eq!(e.path, "line 2, column 10", "{e}");
+        // A duplicate key: the parser names the key, the reader adds which joint.
+        let text = FULL.replace("link = [0, 0, 250]", "link = [0, 0, 250]\nlink = [0, 0, 1]");
+        let e = parse(&text).unwrap_err();
+        assert!(e.path.starts_with("line "), "{e}");
+        assert!(e.message.contains("duplicate key"), "{e}");
+        assert!(e.message.contains("(in joint[4])"), "{e}");
+    }
+
+    #[test]
+    fn a_serial_with_a_nul_is_refused() {
+        let e = parse(&FULL.replace("\"SN-7\"", "\"SN\\u0000\"")).unwrap_err();
+        assert_eq!(e.path, "serial");
+        assert!(e.message.contains("NUL"), "{e}");
+    }
+
+    #[test]
+    fn limits_refuse_absurd_values_with_their_key() {
+        let l = Limits {
+            length_mm: 5000.0,
+            angle_rad: 7.0,
+            harmonic_rad: 0.1,
+            gravity: 1e-4,
+            thermal: 4e-4,
+            translation_mm: 1e5,
+        };
+        let cases = [
+            (
+                "link = [0, 0, 300]",
+                "link = [0, 0, 1e300]",
+                "joint[2].link[2]",
+            ),
+            (
+                "link_error = [0.1, -0.2, 0.3]",
+                "link_error = [0.1, -0.2, 1e308]",
+                "joint[1].link_error[2]",
+            ),
+            (
+                "link = [0, 0, 250]",
+                "link = [0, 0, 250]\nlink_error = [0, 0, 4900]",
+                "joint[4].link + link_error[2]",
+            ),
+            (
+                "zero_offset = 1e-3",
+                "zero_offset = 1e300",
+                "joint[1].zero_offset",
+            ),
+            (
+                "tilt = [2e-4, -3e-4]",
+                "tilt = [2e-4, 30]",
+                "joint[1].tilt[1]",
+            ),
+            ("sin = 5e-5", "sin = 2", "joint[1].harmonics[1].sin"),
+            ("gravity = 3e-8", "gravity = 1", "joint[1].gravity"),
+            ("thermal = 2.3e-5", "thermal = 1e300", "joint[1].thermal"),
+            (
+                "vector = [0.0, 0.0, 120.0]",
+                "vector = [1e308, 1e308, 1e308]",
+                "probe.vector[0]",
+            ),
+            (
+                "error = [0.01, 0.0, -0.02]",
+                "error = [1e308, 0.0, 0.0]",
+                "probe.error[0]",
+            ),
+            (
+                "translation = [10.0, 20.0, 30.0]",
+                "translation = [1e300, 20.0, 30.0]",
+                "reference_frame.translation[0]",
+            ),
+        ];
+        for (from, to, path) in cases {
+            let text = FULL.replace(from, to);
+            assert_ne!(text, FULL, "{from}");
+            assert!(parse(&text).is_ok(), "the format alone accepts {to}");
+            let e = parse_with(&text, &l).unwrap_err();
+            assert_eq!(e.path, path, "{e}");
+            assert!(e.message.contains("limit"), "{e}");
+        }
+        assert!(parse_with(FULL, &l).is_ok());
     }
 }

@@ -42,13 +42,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         return Ok(());
     }
     let arm = match &args.calib {
-        Some(p) => {
-            let parsed = quatarm_ref::calfile::read(p)?;
-            for k in &parsed.unknown_keys {
-                eprintln!("armcal: warning: unknown key {k} ignored");
-            }
-            parsed.arm
-        }
+        Some(p) => armcal::load::arm(p)?,
         None => full_calibration(),
     };
     let bar = indicatif::ProgressBar::new(args.poses);

@@ -31,69 +31,74 @@ pub struct Args {
     #[arg(long)]
     json: bool,
     /// Folds of held-out validation (0: none).
-    #[arg(long, default_value_t = 5)]
-    folds: usize,
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(0..=1000))]
+    folds: u32,
     /// Hold out whole groups (sessions, artefact positions) instead of k folds.
     #[arg(long)]
     by_group: bool,
     /// Iterations before a fit is declared not converging.
-    #[arg(long, default_value_t = 100)]
-    max_iter: usize,
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    max_iter: u32,
     /// Fit a degenerate pose set anyway, holding what it cannot determine.
     #[arg(long)]
     allow_degenerate: bool,
     /// Keep an extended effect only if it is significant at this many standard
     /// uncertainties (backward elimination; 0 keeps every effect requested).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = super::args::non_negative)]
     significance: f64,
     /// Prior standard deviation of zero offsets and tilts (rad), regularising weak directions.
-    #[arg(long, requires = "prior_length")]
+    #[arg(long, requires = "prior_length", value_parser = super::args::positive)]
     prior_angle: Option<f64>,
     /// Prior standard deviation of link and probe errors (mm).
-    #[arg(long, requires = "prior_angle")]
+    #[arg(long, requires = "prior_angle", value_parser = super::args::positive)]
     prior_length: Option<f64>,
     /// MUKCa's regulariser: a ridge λ·Σ Δp² (metres, radians) on every joint's geometric
     /// errors, the probe free: `--ridge` is MUKCa's default λ = 1e-4, `--ridge=3e-5` another. For
     /// data from few artefact positions (one MUKCa session), where some directions are barely
     /// determined.
-    #[arg(long, num_args = 0..=1, require_equals = true, default_missing_value = "1e-4", value_name = "LAMBDA")]
+    #[arg(long, num_args = 0..=1, require_equals = true, default_missing_value = "1e-4", value_name = "LAMBDA", value_parser = super::args::positive)]
     ridge: Option<f64>,
+    /// Show progress on stderr even when it is not a terminal.
+    #[arg(long)]
+    progress: bool,
 }
 
 /// Reads the start arm: a file, or `default-6`.
 pub fn start_arm(path: Option<&Path>) -> anyhow::Result<Arm> {
     match path {
         None => Ok(Arm::default6()),
-        Some(p) => {
-            let parsed = calfile::read(p)?;
-            for k in &parsed.unknown_keys {
-                eprintln!("armcal: warning: {}: unknown key {k} ignored", p.display());
-            }
-            Ok(parsed.arm)
-        }
+        Some(p) => Ok(armcal::load::arm(p)?),
     }
 }
 
-/// Runs the subcommand.
+/// Runs the subcommand. Everything that can be refused without a fit (the start arm, the
+/// terms, the output's name, the data) is checked before the fit; the files are written
+/// together at the end, or none of them.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let start = start_arm(a.arm.as_deref())?;
+    let terms = Terms::parse(&a.terms, start.dof()).map_err(anyhow::Error::msg)?;
+    let table = a.output.with_extension("bin");
+    let mut inputs = vec![(a.data.as_path(), "data")];
+    if let Some(arm) = &a.arm {
+        inputs.push((arm.as_path(), "start arm"));
+    }
+    armcal::output::check(
+        &[(&a.output, "calibration file"), (&table, "binary table")],
+        &inputs,
+    )
+    .map_err(anyhow::Error::msg)?;
     let data = armcal::data::read(&a.data, start.dof())?;
     for w in &data.warnings {
         eprintln!("armcal: warning: {w}");
     }
-    let terms = Terms::parse(&a.terms, start.dof()).map_err(anyhow::Error::msg)?;
     let mut opts = calib::Options {
         terms: terms.clone(),
         allow_degenerate: a.allow_degenerate,
         significance: a.significance,
-        progress: !a.json,
         ..calib::Options::default()
     };
-    opts.lm.max_iterations = a.max_iter;
+    opts.lm.max_iterations = a.max_iter as usize;
     if let (Some(angle_rad), Some(length_mm)) = (a.prior_angle, a.prior_length) {
-        if !(angle_rad > 0.0 && length_mm > 0.0) {
-            bail!("prior standard deviations must be positive");
-        }
         opts.prior = Some(Prior {
             angle_rad,
             length_mm,
@@ -101,26 +106,24 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         });
     }
     if let Some(lambda) = a.ridge {
-        if !(lambda > 0.0 && lambda.is_finite()) {
-            bail!("the ridge weight must be positive");
-        }
         opts.ridge = Some(calib::Ridge { lambda });
     }
-    let fit = calib::calibrate(&start, &data, &opts)
+    let mut observer = armcal::progress::for_command(a.progress, "calibrating");
+    let fit = calib::calibrate_observed(&start, &data, &opts, observer.as_mut())
         .with_context(|| format!("cannot calibrate from {}", a.data.display()))?;
 
     let before = summarise(&residuals(&fit.start, &data, None), &data);
     let after = summarise(&residuals(&fit.arm, &data, fit.frame), &data);
+    let k = a.folds as usize;
     let (folds, method) = if a.by_group {
         (holdout::by_group(&data), "one group at a time".to_string())
     } else {
-        (
-            holdout::kfold(&data, a.folds, 0x0f01d),
-            format!("{}-fold", a.folds),
-        )
+        (holdout::kfold(&data, k, 0x0f01d), format!("{k}-fold"))
     };
-    let held = (a.folds > 0 || a.by_group) && folds.len() > 1;
-    let validation = held.then(|| holdout::validate(&start, &data, &opts, &folds));
+    let held = (k > 0 || a.by_group) && folds.len() > 1;
+    let validation =
+        held.then(|| holdout::validate_observed(&start, &data, &opts, &folds, observer.as_mut()));
+    drop(observer);
     let mut rep = report::build(
         &fit,
         &data,
@@ -129,7 +132,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         validation.as_ref().map(|h| (method.as_str(), h)),
     );
     rep.terms = terms.spec();
-    if !held && (a.folds > 0 || a.by_group) {
+    if !held && (k > 0 || a.by_group) {
         rep.residuals.holdout_note = Some(
             "none: the data are a single unit (one group) that cannot be split into folds".into(),
         );
@@ -149,9 +152,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     ];
     let refs: Vec<&str> = header.iter().map(String::as_str).collect();
     let text = calfile::write(&fit.arm, &refs);
-    let back = calfile::parse(&text)
-        .map_err(|e| anyhow::anyhow!("the calibration file written does not read back: {e}"))?
-        .arm;
+    let back = armcal::load::written(&text)
+        .map_err(|e| anyhow::anyhow!("the calibration file written does not read back: {e}"))?;
     for r in data.rows.iter().take(50) {
         let d = (forward::forward(&back, &r.theta, r.temp_c).p
             - forward::forward(&fit.arm, &r.theta, r.temp_c).p)
@@ -160,16 +162,23 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             bail!("the calibration file written evaluates {d} mm away from the fit (a bug)");
         }
     }
-    std::fs::write(&a.output, &text).with_context(|| a.output.display().to_string())?;
+    let mut files = armcal::output::Staged::new();
+    files
+        .write(&a.output, text.as_bytes())
+        .map_err(anyhow::Error::msg)?;
     rep.output.calibration = Some(a.output.display().to_string());
-    let table = a.output.with_extension("bin");
     match armcal::tablebuild::build(&fit.arm) {
         Ok(bytes) => {
-            std::fs::write(&table, bytes).with_context(|| table.display().to_string())?;
+            files.write(&table, &bytes).map_err(anyhow::Error::msg)?;
             rep.output.table = Some(table.display().to_string());
         }
-        Err(e) => rep.warnings.push(format!("binary table not written: {e}")),
+        Err(e) => {
+            // A stale table beside the file would describe another model.
+            files.remove_at_commit(&table);
+            rep.warnings.push(format!("binary table not written: {e}"));
+        }
     }
+    files.commit().map_err(anyhow::Error::msg)?;
     if a.json {
         println!("{}", rep.json());
     } else {

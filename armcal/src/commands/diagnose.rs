@@ -25,49 +25,69 @@ pub struct Args {
     #[arg(short, long, value_name = "EXTENDED.toml")]
     output: Option<PathBuf>,
     /// Folds of held-out validation (units: a point row, a spat or length group whole).
-    #[arg(long, default_value_t = 5)]
-    folds: usize,
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(0..=1000))]
+    folds: u32,
     /// Hold out one group at a time (whole sessions, artefact positions) instead of k folds.
     #[arg(long)]
     by_group: bool,
     /// Family-wise level of the in-sample test at each selection step (Bonferroni over the
     /// candidates).
-    #[arg(long, default_value_t = 1e-3)]
+    #[arg(long, default_value_t = 1e-3, value_parser = super::args::probability)]
     alpha: f64,
     /// Standard errors by which a cause must lower the held-out error.
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = 2.0, value_parser = super::args::non_negative)]
     z: f64,
     /// Iterations before a fit is declared not converging.
-    #[arg(long, default_value_t = 100)]
-    max_iter: usize,
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    max_iter: u32,
 }
 
-/// Runs the subcommand.
+/// Runs the subcommand. Arguments, the start arm, the outputs' names and the data are
+/// checked before any fit; the files (calibration, table, figures) are written together at
+/// the end, or none of them.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    let start = super::calibrate::start_arm(a.arm.as_deref())?;
-    let data = armcal::data::read(&a.data, start.dof())?;
-    for w in &data.warnings {
-        eprintln!("armcal: warning: {w}");
-    }
     if a.folds < 2 && !a.by_group {
         bail!("--folds must be 2 or more: a diagnosis needs held-out data");
     }
-    let valid = a.alpha > 0.0 && a.alpha < 1.0 && a.z >= 0.0;
-    if !valid {
-        bail!("--alpha must be in (0, 1) and --z at least 0");
+    let start = super::calibrate::start_arm(a.arm.as_deref())?;
+    let mut inputs = vec![(a.data.as_path(), "data")];
+    if let Some(arm) = &a.arm {
+        inputs.push((arm.as_path(), "start arm"));
+    }
+    if let Some(out) = &a.output {
+        armcal::output::check(
+            &[
+                (out, "extended calibration file"),
+                (&out.with_extension("bin"), "binary table"),
+            ],
+            &inputs,
+        )
+        .map_err(anyhow::Error::msg)?;
+    }
+    if let Some(dir) = &a.plots {
+        if dir.is_file() {
+            bail!(
+                "{}: --plots names a folder, and this is a file",
+                dir.display()
+            );
+        }
+    }
+    let data = armcal::data::read(&a.data, start.dof())?;
+    for w in &data.warnings {
+        eprintln!("armcal: warning: {w}");
     }
     let mut opts = diagnose::Options {
         folds: if a.by_group {
             FoldChoice::ByGroup
         } else {
             FoldChoice::KFold {
-                k: a.folds,
+                k: a.folds as usize,
                 seed: 0x0f01d,
             }
         },
         ..diagnose::Options::default()
     };
-    opts.calib.lm.max_iterations = a.max_iter;
+    opts.calib.lm.max_iterations = a.max_iter as usize;
     opts.select.alpha = a.alpha;
     opts.select.z = a.z;
     let spinner = (!a.json).then(|| {
@@ -85,9 +105,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let figures = patterns::figures(&d, &data);
     let mut rep = report::build(&d, &data, &figures);
 
+    let mut files = armcal::output::Staged::new();
     if let Some(dir) = &a.plots {
-        let files = plots::write_all(&figures, dir).map_err(anyhow::Error::msg)?;
-        rep.output.plots = files.iter().map(|p| p.display().to_string()).collect();
+        let pictures = plots::write_all(&figures, dir, &mut files).map_err(anyhow::Error::msg)?;
+        rep.output.plots = pictures.iter().map(|p| p.display().to_string()).collect();
         if !d.candidates.thermal {
             rep.warnings
                 .push("no figure against temperature: the data have no temperature spread".into());
@@ -105,9 +126,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         ];
         let refs: Vec<&str> = header.iter().map(String::as_str).collect();
         let text = calfile::write(arm, &refs);
-        let back = calfile::parse(&text)
-            .map_err(|e| anyhow::anyhow!("the calibration file written does not read back: {e}"))?
-            .arm;
+        let back = armcal::load::written(&text)
+            .map_err(|e| anyhow::anyhow!("the calibration file written does not read back: {e}"))?;
         for r in data.rows.iter().take(50) {
             let dist = (forward::forward(&back, &r.theta, r.temp_c).p
                 - forward::forward(arm, &r.theta, r.temp_c).p)
@@ -116,19 +136,19 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 bail!("the calibration file written evaluates {dist} mm away from the fit (a bug)");
             }
         }
-        std::fs::write(out, &text).with_context(|| out.display().to_string())?;
+        files
+            .write(out, text.as_bytes())
+            .map_err(anyhow::Error::msg)?;
         rep.output.calibration = Some(out.display().to_string());
         let table = out.with_extension("bin");
         match armcal::tablebuild::build(arm) {
             Ok(bytes) => {
-                std::fs::write(&table, bytes).with_context(|| table.display().to_string())?;
+                files.write(&table, &bytes).map_err(anyhow::Error::msg)?;
                 rep.output.table = Some(table.display().to_string());
             }
             Err(e) => {
                 // A stale table beside the file would describe another model.
-                if table.exists() {
-                    let _ = std::fs::remove_file(&table);
-                }
+                files.remove_at_commit(&table);
                 let why = report::beyond_table(arm);
                 rep.output.table_error = Some(format!(
                     "{e}{}: the firmware could not apply {}; the calibration file is \
@@ -147,6 +167,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             }
         }
     }
+    files.commit().map_err(anyhow::Error::msg)?;
     if a.json {
         println!("{}", rep.json());
     } else {

@@ -21,14 +21,7 @@ pub struct Args {
 
 /// Runs the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let parsed = quatarm_ref::calfile::read(&args.calib)?;
-    for k in &parsed.unknown_keys {
-        eprintln!(
-            "armcal: warning: {}: unknown key {k} ignored",
-            args.calib.display()
-        );
-    }
-    let arm = parsed.arm;
+    let arm = armcal::load::arm(&args.calib)?;
     let (rows, name) = match &args.input {
         Some(p) => {
             let f = std::fs::File::open(p).with_context(|| format!("{}", p.display()))?;

@@ -1,6 +1,7 @@
 //! One module per subcommand.
 
 pub mod accuracy;
+pub mod args;
 pub mod calibrate;
 pub mod decode;
 pub mod diagnose;

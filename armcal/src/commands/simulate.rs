@@ -3,7 +3,6 @@
 use anyhow::{bail, Context};
 use armcal::data::Kind;
 use armcal::sim::{self, FrameChoice};
-use quatarm_ref::calfile;
 use std::path::PathBuf;
 
 /// Arguments of `armcal simulate`.
@@ -18,15 +17,16 @@ pub struct Args {
     /// Kind of data: point, spat or length.
     #[arg(long, value_parser = parse_kind)]
     kind: Kind,
-    /// Rows to record.
-    #[arg(long)]
-    count: usize,
+    /// Rows to record (at most 1,000,000: the whole file is made and checked in memory
+    /// before it is written).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=MAX_ROWS))]
+    count: u64,
     /// Seed of the random generator: the same seed gives the same file.
     #[arg(long)]
     seed: u64,
     /// Noise per axis (µm, standard deviation): the instrument's for point data, the ball's
     /// seating for spat and length data.
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, default_value_t = 5.0, value_parser = super::args::non_negative)]
     noise_um: f64,
     /// Arm temperature range (°C), e.g. 16..28: each reading is drawn uniformly in it and
     /// recorded in `temp_c`.
@@ -39,11 +39,26 @@ pub struct Args {
     #[arg(long)]
     group_size: Option<usize>,
     /// Ball-bar length for length data (mm; default 40 % of the arm's reach).
-    #[arg(long)]
+    #[arg(long, value_parser = parse_bar)]
     bar_mm: Option<f64>,
     /// Output file (CSV of `spec/measured-data.md`).
     #[arg(short, long)]
     output: PathBuf,
+}
+
+/// Most rows one file gets: a calibration needs thousands, and the file is made whole in
+/// memory (a count of 10^11 was a 10 TB allocation).
+const MAX_ROWS: u64 = 1_000_000;
+
+fn parse_bar(s: &str) -> Result<f64, String> {
+    let l = super::args::positive(s)?;
+    let max = armcal::limits::COORDINATE_MM;
+    if l > max {
+        return Err(format!(
+            "{l} mm is beyond {max} mm, the longest length data may hold"
+        ));
+    }
+    Ok(l)
 }
 
 fn parse_kind(s: &str) -> Result<Kind, String> {
@@ -71,21 +86,27 @@ fn parse_range(s: &str) -> Result<(f64, f64), String> {
     if !(lo.is_finite() && hi.is_finite()) || hi < lo {
         return Err(bad());
     }
+    let r = armcal::limits::temp_range_c();
+    if !(r.contains(&lo) && r.contains(&hi)) {
+        return Err(format!(
+            "`{s}` is outside {}..{} °C, the temperatures the firmware (and the data reader) accept",
+            r.start(),
+            r.end()
+        ));
+    }
     Ok((lo, hi))
 }
 
 /// Runs the subcommand.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    let parsed = calfile::read(&a.truth)?;
-    for k in &parsed.unknown_keys {
-        eprintln!(
-            "armcal: warning: {}: unknown key {k} ignored",
-            a.truth.display()
-        );
+    let mut inputs = vec![(a.truth.as_path(), "truth")];
+    if let Some(arm) = &a.arm {
+        inputs.push((arm.as_path(), "nominal arm"));
     }
-    let truth = parsed.arm;
+    armcal::output::check(&[(&a.output, "simulated data")], &inputs).map_err(anyhow::Error::msg)?;
+    let truth = armcal::load::arm(&a.truth)?;
     if let Some(path) = &a.arm {
-        let nominal = calfile::read(path)?.arm;
+        let nominal = armcal::load::arm(path)?;
         if nominal.dof() != truth.dof() {
             bail!(
                 "{}: {} joints, the truth {} has {}",
@@ -109,10 +130,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             }
         }
     }
-    if !(a.noise_um.is_finite() && a.noise_um >= 0.0) {
-        bail!("--noise-um must be a non-negative number");
-    }
-    let mut opts = sim::Options::new(a.kind, a.count);
+    let mut opts = sim::Options::new(a.kind, a.count as usize);
     opts.noise_mm = a.noise_um * 1e-3;
     opts.temp = a.temp;
     opts.frame = a.frame;
@@ -142,8 +160,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         ),
     ];
     let refs: Vec<&str> = comments.iter().map(String::as_str).collect();
-    std::fs::write(&a.output, s.data.to_csv(&refs))
-        .with_context(|| a.output.display().to_string())?;
+    let text = s.data.to_csv(&refs);
+    // What is written must read back: a truth or a bar whose rows the reader refuses is
+    // refused here, with the reader's reason, instead of writing a file nothing can use.
+    let name = a.output.display().to_string();
+    armcal::data::parse(&text, &name, truth.dof())
+        .map_err(|e| anyhow::anyhow!("the simulated rows would not read back: {e}"))?;
+    std::fs::write(&a.output, text).with_context(|| name.clone())?;
     eprintln!(
         "armcal: wrote {} ({} {} rows)",
         a.output.display(),

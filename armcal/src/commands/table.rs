@@ -26,15 +26,9 @@ pub enum Command {
 pub fn run(command: Command) -> anyhow::Result<()> {
     match command {
         Command::Build { calib, output } => {
-            let parsed = quatarm_ref::calfile::read(&calib)?;
-            for k in &parsed.unknown_keys {
-                eprintln!(
-                    "armcal: warning: {}: unknown key {k} ignored",
-                    calib.display()
-                );
-            }
-            let bytes = armcal::tablebuild::build(&parsed.arm)
-                .with_context(|| calib.display().to_string())?;
+            let arm = armcal::load::arm(&calib)?;
+            let bytes =
+                armcal::tablebuild::build(&arm).with_context(|| calib.display().to_string())?;
             std::fs::write(&output, &bytes).with_context(|| output.display().to_string())?;
             let t = Table::parse(&bytes)?;
             println!(

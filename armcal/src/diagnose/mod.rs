@@ -186,7 +186,6 @@ pub fn diagnose(start: &Arm, data: &Dataset, opts: &Options) -> Result<Diagnosis
     let inner = calib::Options {
         design_check: false,
         allow_degenerate: true,
-        progress: false,
         ..geometric.clone()
     };
     let base_holdout = holdout::validate(start, data, &inner, &folds);

@@ -32,16 +32,22 @@ const OWN: RGBColor = RGBColor(20, 150, 60);
 /// Most points drawn per panel (evenly thinned beyond).
 const MAX_POINTS: usize = 4000;
 
-/// Writes every figure into `dir` (created if needed); returns the files written.
-pub fn write_all(figures: &[Figure], dir: &Path) -> Result<Vec<PathBuf>, String> {
-    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+/// Draws every figure for `dir` (created if needed) into `stage`, which puts them in place
+/// when the command's other files are written too; returns the files' final paths.
+pub fn write_all(
+    figures: &[Figure],
+    dir: &Path,
+    stage: &mut crate::output::Staged,
+) -> Result<Vec<PathBuf>, String> {
+    stage.create_dir(dir)?;
     let mut out = Vec::new();
     for f in figures {
         if f.panels.is_empty() {
             continue;
         }
         let path = dir.join(&f.file);
-        draw(f, &path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let tmp = stage.path_for(&path);
+        draw(f, &tmp).map_err(|e| format!("{}: {e}", path.display()))?;
         out.push(path);
     }
     Ok(out)
