@@ -1,4 +1,5 @@
-//! `cargo xtask setup`: installs what the firmware builds and QEMU runs need, and only that.
+//! `cargo xtask setup`: installs what the firmware builds, QEMU runs and fuzz runs need, and only
+//! that.
 
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -103,13 +104,15 @@ pub fn run() -> Result<()> {
     if !which("qemu-system-arm") {
         apt.install(&["qemu-system-arm"])?;
     }
-    eprintln!("xtask setup: firmware tool chain {tc:?}; qemu-system-arm present");
+    crate::fuzz::ensure_cargo_fuzz()?;
+    eprintln!("xtask setup: firmware tool chain {tc:?}; qemu-system-arm and cargo-fuzz present");
     Ok(())
 }
 
 /// Runs [`run`] only if something is missing (the other commands call this first).
 pub fn ensure() -> Result<()> {
-    if toolchain::detect().is_ok() && which("qemu-system-arm") {
+    if toolchain::detect().is_ok() && which("qemu-system-arm") && crate::fuzz::cargo_fuzz_present()
+    {
         return Ok(());
     }
     run()

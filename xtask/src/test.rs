@@ -7,7 +7,7 @@ use anyhow::Result;
 use host_tests::boards::{root, BOARDS};
 
 use crate::build::{build_board, check};
-use crate::setup;
+use crate::{fuzz, setup};
 
 fn cargo() -> Command {
     let mut c = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
@@ -58,6 +58,18 @@ pub fn run() -> Result<()> {
         cargo().args(["test", "--workspace"]),
         "cargo test --workspace",
     )?;
+
+    step("fuzz smoke run");
+    // Each target for a few seconds from the committed corpus: a target that no longer builds
+    // or an input of the corpus that now crashes fails the run. Long runs: `cargo xtask fuzz`.
+    check(
+        cargo()
+            .args(["fmt", "--manifest-path"])
+            .arg(root().join("fuzz/Cargo.toml"))
+            .args(["--", "--check"]),
+        "cargo fmt --check in fuzz",
+    )?;
+    fuzz::smoke()?;
 
     step("board builds");
     for b in &BOARDS {
