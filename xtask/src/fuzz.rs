@@ -29,7 +29,7 @@ pub const TARGETS: [&str; 6] = [
 ];
 
 /// Seconds of each target's smoke run in `cargo xtask test`.
-pub const SMOKE_SECONDS: u32 = 10;
+pub const SMOKE_SECONDS: u32 = 5;
 
 fn fuzz_dir() -> PathBuf {
     root().join("fuzz")
