@@ -1,49 +1,104 @@
 //! Reading a hub's stream on the host: frames to messages, with the counts a person needs to
-//! trust it (sequence gaps, damaged frames). `armcal decode`, `cargo xtask demo` and the QEMU
-//! end-to-end tests all read streams through this one decoder.
+//! trust it (sequence gaps, damaged frames, frames that came twice or out of order, reports
+//! that break the protocol's rule on coordinates). `armcal decode`, `cargo xtask demo` and the
+//! QEMU end-to-end tests all read streams through this one decoder.
+//!
+//! The decoder's promise is the product's: it never hands out coordinates it cannot vouch
+//! for. A report whose status carries a fault but which holds coordinates anyway (a hub never
+//! sends one; a broken or foreign hub might) is handed out without them.
 
 use quatarm::stream::{FrameError, FrameReader, Hello, Report, ToHost, MAX_FRAME};
+
+/// A forward jump of the sequence number up to this size is a gap (lost reports); a larger
+/// one is a step backwards modulo 2^32 (at ~1,700 reports/s, 2^31 reports are two weeks).
+const MAX_FORWARD_GAP: u32 = 1 << 31;
 
 /// One item of a decoded stream.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Item {
     /// A boot or mode-change announcement.
     Hello(Hello),
-    /// A report.
+    /// A report, in sequence (perhaps after a gap, counted as lost).
     Report(Report),
+    /// A report whose sequence number went backwards without a `Hello` (a hub reset whose
+    /// announcement was lost, or frames reordered on the way): the numbering restarts from
+    /// it; nothing is counted lost.
+    Backward {
+        /// The report.
+        report: Report,
+        /// The sequence number that was due.
+        expected: u32,
+    },
+    /// The same report as the one before it, byte for byte (a frame repeated on the way):
+    /// not a new reading, so not to be written again.
+    Repeated(Report),
+    /// A report whose coordinates and status disagree: coordinates beside a fault bit or an
+    /// invalid table (here without them, as the status demands), or no coordinates without a
+    /// reason.
+    Inconsistent(Report),
     /// A frame that failed its checks.
     Damaged(FrameError),
+}
+
+impl Item {
+    /// The report to write out for this item, if any: every report except a repeated one.
+    pub fn report(&self) -> Option<&Report> {
+        match self {
+            Item::Report(r) | Item::Backward { report: r, .. } | Item::Inconsistent(r) => Some(r),
+            Item::Hello(_) | Item::Repeated(_) | Item::Damaged(_) => None,
+        }
+    }
 }
 
 /// What a decoder has seen so far.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Stats {
-    /// Reports decoded.
+    /// `Hello` announcements decoded.
+    pub hellos: u64,
+    /// Reports decoded (repeated ones not included).
     pub reports: u64,
-    /// Reports that carried coordinates.
+    /// Reports that carried coordinates, as handed out.
     pub points: u64,
     /// Reports missing between consecutive sequence numbers (a restart, seq back to 0 after a
-    /// `Hello`, is not a gap).
+    /// `Hello`, is not a gap). A damaged report frame shows up here too, as the gap it left.
     pub lost: u64,
+    /// Reports whose sequence number went backwards without a `Hello`.
+    pub backward: u64,
+    /// Reports that repeated the one before them exactly.
+    pub repeated: u64,
+    /// Reports whose coordinates and status disagreed (see [`Item::Inconsistent`]).
+    pub inconsistent: u64,
     /// Frames whose CRC did not match.
     pub crc_errors: u64,
     /// Frames refused for another reason (COBS, length, undecodable after a good CRC).
     pub other_errors: u64,
     /// Bytes skipped before the first delimiter (joining a running stream).
     pub skipped_bytes: u64,
+    /// Bytes after the last delimiter that never closed a frame, at the end of the input
+    /// (counted by [`Decoder::finish`]).
+    pub unterminated_bytes: u64,
 }
 
 impl Stats {
-    /// Every damaged frame, whatever the check that caught it.
+    /// Every damaged frame, whatever the check that caught it; an unterminated tail counts
+    /// as one.
     pub fn damaged(&self) -> u64 {
-        self.crc_errors + self.other_errors
+        self.crc_errors + self.other_errors + u64::from(self.unterminated_bytes > 0)
+    }
+
+    /// Frames that passed every check.
+    pub fn valid_frames(&self) -> u64 {
+        self.hellos + self.reports + self.repeated
     }
 }
 
 /// A stream decoder: feed bytes, get items.
 pub struct Decoder {
     reader: FrameReader<MAX_FRAME>,
-    next_seq: Option<u32>,
+    /// The last report handed out since the last `Hello` (for gaps and repeats).
+    last: Option<Report>,
+    /// Bytes since the last delimiter (after the first one when joining).
+    open: u64,
     stats: Stats,
 }
 
@@ -52,7 +107,8 @@ impl Decoder {
     pub fn from_start() -> Decoder {
         Decoder {
             reader: FrameReader::new(),
-            next_seq: None,
+            last: None,
+            open: 0,
             stats: Stats::default(),
         }
     }
@@ -66,7 +122,7 @@ impl Decoder {
         }
     }
 
-    /// The counts so far.
+    /// The counts so far (without the unterminated tail, which only the end of input tells).
     pub fn stats(&self) -> Stats {
         Stats {
             skipped_bytes: self.reader.skipped() as u64,
@@ -74,23 +130,32 @@ impl Decoder {
         }
     }
 
+    /// The counts at the end of the input: bytes after the last delimiter are an
+    /// unterminated frame (a capture cut mid-frame, line noise, or a text-mode capture,
+    /// which has no delimiter at all), not silence.
+    pub fn finish(&self) -> Stats {
+        let joined_before = self.reader.skipped() as u64;
+        Stats {
+            unterminated_bytes: self.open.saturating_sub(joined_before),
+            ..self.stats()
+        }
+    }
+
     /// Feeds one byte.
     pub fn push(&mut self, byte: u8) -> Option<Item> {
+        if byte == 0 {
+            self.open = 0;
+        } else {
+            self.open += 1;
+        }
         let item = match self.reader.push::<ToHost>(byte)? {
             Ok(ToHost::Hello(h)) => {
                 // A hub that (re)boots numbers from 0 again.
-                self.next_seq = None;
+                self.last = None;
+                self.stats.hellos += 1;
                 Item::Hello(h)
             }
-            Ok(ToHost::Report(r)) => {
-                if let Some(expected) = self.next_seq {
-                    self.stats.lost += u64::from(r.seq.wrapping_sub(expected));
-                }
-                self.next_seq = Some(r.seq.wrapping_add(1));
-                self.stats.reports += 1;
-                self.stats.points += u64::from(r.point.is_some());
-                Item::Report(r)
-            }
+            Ok(ToHost::Report(r)) => self.report(r),
             Err(e) => {
                 match e {
                     FrameError::Crc => self.stats.crc_errors += 1,
@@ -100,6 +165,40 @@ impl Decoder {
             }
         };
         Some(item)
+    }
+
+    /// Places a decoded report in the sequence and checks it against the coordinates rule.
+    fn report(&mut self, mut r: Report) -> Item {
+        if self.last == Some(r) {
+            self.stats.repeated += 1;
+            return Item::Repeated(r);
+        }
+        let mut backward = None;
+        if let Some(prev) = self.last {
+            let expected = prev.seq.wrapping_add(1);
+            let gap = r.seq.wrapping_sub(expected);
+            if gap < MAX_FORWARD_GAP {
+                self.stats.lost += u64::from(gap);
+            } else {
+                self.stats.backward += 1;
+                backward = Some(expected);
+            }
+        }
+        self.last = Some(r);
+        self.stats.reports += 1;
+        if r.point.is_some() != r.status.is_measurement() {
+            self.stats.inconsistent += 1;
+            r.point = None;
+            return Item::Inconsistent(r);
+        }
+        self.stats.points += u64::from(r.point.is_some());
+        match backward {
+            Some(expected) => Item::Backward {
+                report: r,
+                expected,
+            },
+            None => Item::Report(r),
+        }
     }
 
     /// Feeds a buffer; returns the items it completed.
@@ -113,19 +212,28 @@ mod tests {
     use super::*;
     use quatarm::stream::{encode, Coordinates, Status};
 
-    fn frame(seq: u32) -> Vec<u8> {
-        let msg = ToHost::Report(Report {
+    const POINT: Coordinates = Coordinates {
+        xyz_nm: [1, 2, 3],
+        dir_e9: [0, 0, 1_000_000_000],
+    };
+
+    fn report(seq: u32) -> Report {
+        Report {
             seq,
             time_us: u64::from(seq) * 1000,
             status: Status(Status::TABLE_VALID),
-            point: Some(Coordinates {
-                xyz_nm: [1, 2, 3],
-                dir_e9: [0, 0, 1_000_000_000],
-            }),
-        });
+            point: Some(POINT),
+        }
+    }
+
+    fn frame_of(r: Report) -> Vec<u8> {
         let mut out = [0u8; MAX_FRAME];
-        let n = encode(&msg, &mut out).unwrap();
+        let n = encode(&ToHost::Report(r), &mut out).unwrap();
         out[..n].to_vec()
+    }
+
+    fn frame(seq: u32) -> Vec<u8> {
+        frame_of(report(seq))
     }
 
     #[test]
@@ -141,7 +249,7 @@ mod tests {
         let mut d = Decoder::from_start();
         let items = d.push_all(&bytes);
         assert_eq!(items.len(), 7);
-        let s = d.stats();
+        let s = d.finish();
         assert_eq!(
             (s.reports, s.points, s.lost),
             (6, 6, 3),
@@ -157,7 +265,103 @@ mod tests {
         let mut d = Decoder::joining();
         let items = d.push_all(&bytes[4..]);
         assert_eq!(items.len(), 1);
-        assert_eq!(d.stats().damaged(), 0);
+        assert_eq!(d.finish().damaged(), 0);
         assert_eq!(d.stats().skipped_bytes as usize, frame(0).len() - 5);
+    }
+
+    #[test]
+    fn a_repeated_frame_is_one_repeat_not_four_billion_lost() {
+        // The shape of ../shared/repro/s-dup.bin: report 1 twice.
+        let mut bytes = frame(0);
+        bytes.extend(frame(1));
+        bytes.extend(frame(1));
+        bytes.extend(frame(2));
+        let mut d = Decoder::from_start();
+        let items = d.push_all(&bytes);
+        assert_eq!(items[2], Item::Repeated(report(1)));
+        assert_eq!(items.iter().filter_map(Item::report).count(), 3);
+        let s = d.finish();
+        assert_eq!((s.reports, s.repeated, s.lost, s.backward), (3, 1, 0, 0));
+    }
+
+    #[test]
+    fn a_backward_step_restarts_the_numbering_and_loses_nothing() {
+        let mut bytes = Vec::new();
+        for seq in [10, 11, 3, 4, 6] {
+            bytes.extend(frame(seq));
+        }
+        let mut d = Decoder::from_start();
+        let items = d.push_all(&bytes);
+        assert_eq!(
+            items[2],
+            Item::Backward {
+                report: report(3),
+                expected: 12
+            }
+        );
+        let s = d.finish();
+        assert_eq!((s.reports, s.backward, s.lost, s.repeated), (5, 1, 1, 0));
+        // The same sequence number with other content is a step back, not a repeat.
+        let mut other = report(11);
+        other.time_us += 1;
+        let mut d = Decoder::from_start();
+        d.push_all(&[frame(11), frame_of(other)].concat());
+        assert_eq!((d.stats().backward, d.stats().repeated), (1, 0));
+        // Wrapping at 2^32 is a step forward.
+        let mut d = Decoder::from_start();
+        d.push_all(&[frame(u32::MAX - 1), frame(1)].concat());
+        assert_eq!((d.stats().lost, d.stats().backward), (2, 0));
+    }
+
+    #[test]
+    fn coordinates_beside_a_fault_are_never_handed_out() {
+        let mut faulted = report(1);
+        faulted.status = Status(Status::TABLE_VALID | Status::OVER_TEMPERATURE);
+        let mut no_table = report(2);
+        no_table.status = Status(0x0010); // table missing, yet coordinates
+        let mut missing = report(3);
+        missing.point = None; // no fault, no coordinates
+        let bytes = [
+            frame(0),
+            frame_of(faulted),
+            frame_of(no_table),
+            frame_of(missing),
+        ]
+        .concat();
+        let mut d = Decoder::from_start();
+        let items = d.push_all(&bytes);
+        for item in &items[1..] {
+            match item {
+                Item::Inconsistent(r) => assert_eq!(r.point, None),
+                other => panic!("{other:?}"),
+            }
+        }
+        let s = d.finish();
+        assert_eq!((s.reports, s.points, s.inconsistent), (4, 1, 3));
+    }
+
+    #[test]
+    fn bytes_that_never_reach_a_delimiter_are_counted() {
+        let mut d = Decoder::from_start();
+        d.push_all(b"seq,time_us,status\n0,1,0x0001\n");
+        let s = d.finish();
+        assert_eq!(
+            (s.unterminated_bytes, s.damaged(), s.valid_frames()),
+            (30, 1, 0)
+        );
+        // A frame cut at the end of a capture.
+        let mut d = Decoder::from_start();
+        let f = frame(0);
+        d.push_all(&[&f[..], &f[..10]].concat());
+        assert_eq!((d.finish().unterminated_bytes, d.finish().reports), (10, 1));
+        // Joining: bytes before the first delimiter are skipped, not unterminated.
+        let mut d = Decoder::joining();
+        d.push_all(&[0x55; 100]);
+        let s = d.finish();
+        assert_eq!((s.skipped_bytes, s.unterminated_bytes), (100, 0));
+        // An idle line of delimiters is nothing at all.
+        let mut d = Decoder::from_start();
+        d.push_all(&[0; 5]);
+        assert_eq!(d.finish(), Stats::default());
     }
 }

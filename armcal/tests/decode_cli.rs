@@ -2,7 +2,8 @@
 //! that tell whether the capture can be trusted on stderr.
 
 use std::io::Write;
-use std::process::{Command, Stdio};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
 
 use quatarm::stream::{encode, Coordinates, Report, Status, ToHost, MAX_FRAME};
 
@@ -24,6 +25,147 @@ fn report(seq: u32, point: bool) -> ToHost {
     })
 }
 
+/// `armcal decode` with `args`, `stdin` piped in.
+fn decode(args: &[&std::ffi::OsStr], stdin: &[u8]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_armcal"))
+        .arg("decode")
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut pipe = child.stdin.take().unwrap();
+    let input = stdin.to_vec();
+    // A thread, so that a large input cannot dead-lock against a full stderr pipe.
+    let writer = std::thread::spawn(move || {
+        let _ = pipe.write_all(&input);
+    });
+    let out = child.wait_with_output().unwrap();
+    writer.join().unwrap();
+    out
+}
+
+fn stream_file(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/streams")
+        .join(name)
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// The run failed with `what` in its message and wrote nothing to stdout.
+fn assert_refused(out: &Output, what: &str) {
+    let err = text(&out.stderr);
+    assert!(!out.status.success(), "exit 0: {err}");
+    assert!(
+        out.stdout.is_empty(),
+        "partial output: {}",
+        text(&out.stdout)
+    );
+    assert!(err.contains(what), "{err}");
+}
+
+#[test]
+fn a_repeated_frame_is_written_once_and_loses_nothing() {
+    // ../shared/repro/s-dup.bin: reports 0, 1, 1, 2. It was "4294967295 lost".
+    let out = decode(&[stream_file("s-dup.bin").as_os_str()], &[]);
+    assert!(out.status.success());
+    let csv = text(&out.stdout);
+    let seqs: Vec<&str> = csv.lines().skip(1).map(|l| &l[..2]).collect();
+    assert_eq!(seqs, ["0,", "1,", "2,"], "{csv}");
+    let err = text(&out.stderr);
+    assert!(
+        err.contains("decode: 3 reports (3 with coordinates), 0 lost,")
+            && err.contains(" 1 repeated, 0 backward,"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_backward_step_is_not_counted_as_lost() {
+    let bytes = [0, 5, 6, 2, 3]
+        .iter()
+        .flat_map(|&s| frame(&report(s, true)))
+        .collect::<Vec<u8>>();
+    let out = decode(&[], &bytes);
+    assert!(out.status.success());
+    let err = text(&out.stderr);
+    assert!(
+        err.contains("5 reports (5 with coordinates), 4 lost,"),
+        "{err}"
+    );
+    assert!(err.contains(" 1 backward,"), "{err}");
+    assert!(err.contains("report 2 where 7 was due"), "{err}");
+}
+
+#[test]
+fn coordinates_beside_a_fault_are_not_written_as_points() {
+    // ../shared/repro/s-fault-with-point.bin: statuses 0x0009 (chain error), 0x0020 (table
+    // corrupt) and 0x0101 (joint 1 encoder fault), each with coordinates.
+    let out = decode(&[stream_file("s-fault-with-point.bin").as_os_str()], &[]);
+    assert!(out.status.success());
+    let csv = text(&out.stdout);
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(
+        rows,
+        ["0,0,0x0009,,,,,,", "1,0,0x0020,,,,,,", "2,0,0x0101,,,,,,"]
+    );
+    let err = text(&out.stderr);
+    assert!(err.contains("3 reports (0 with coordinates)"), "{err}");
+    assert!(err.contains(" 3 inconsistent,"), "{err}");
+}
+
+#[test]
+fn bytes_without_a_delimiter_are_refused_not_dropped() {
+    // 50 MB of line noise that never reaches a 0x00 (it was "0 reports, 0 damaged", exit 0).
+    let out = decode(&[], &vec![b'U'; 50_000_000]);
+    assert_refused(
+        &out,
+        "no valid frame in the 50000000 bytes of stdin (1 damaged)",
+    );
+    assert!(text(&out.stderr).contains("50000000 unterminated bytes"));
+}
+
+#[test]
+fn a_text_mode_capture_is_named_as_such() {
+    let capture = "seq,time_us,status,x_mm,y_mm,z_mm,nx,ny,nz\n\
+                   0,1000,0x0001,1.000000,2.000000,3.000000,0.000000000,0.000000000,1.000000000\n";
+    let out = decode(&[], capture.as_bytes());
+    assert_refused(&out, "looks like the hub's text mode");
+    // Rows without the header too.
+    let out = decode(&[], b"42,1000001,0x0401,,,,,,\n43,1001001,0x0401,,,,,,\n");
+    assert_refused(&out, "looks like the hub's text mode");
+}
+
+#[test]
+fn a_capture_of_damaged_frames_only_fails() {
+    let mut bytes = vec![0u8];
+    for seq in 0..5 {
+        let mut f = frame(&report(seq, true));
+        f[4] = f[4].wrapping_add(1).max(1); // changed, and still not a delimiter
+        bytes.extend(f);
+    }
+    let out = decode(&[], &bytes);
+    assert_refused(&out, "no valid frame in the");
+    let err = text(&out.stderr);
+    assert!(err.contains("(5 damaged)"), "{err}");
+}
+
+#[test]
+fn bad_inputs_leave_no_partial_output() {
+    let dir = stream_file("");
+    let out = decode(&[dir.as_os_str()], &[]);
+    assert_refused(&out, "is a directory, not a captured stream");
+    let out = decode(&[], &[]);
+    assert_refused(&out, "stdin is empty");
+    let missing = stream_file("nothing.bin");
+    let out = decode(&[missing.as_os_str()], &[]);
+    assert_refused(&out, "nothing.bin");
+}
+
 #[test]
 fn decodes_a_capture_counting_gaps_and_damage() {
     let mut bytes = vec![0u8];
@@ -35,15 +177,7 @@ fn decodes_a_capture_counting_gaps_and_damage() {
     bytes.extend(damaged);
     bytes.extend(frame(&report(6, true)));
 
-    let mut child = Command::new(env!("CARGO_BIN_EXE_armcal"))
-        .arg("decode")
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    child.stdin.take().unwrap().write_all(&bytes).unwrap();
-    let out = child.wait_with_output().unwrap();
+    let out = decode(&[], &bytes);
     assert!(out.status.success());
     let csv = String::from_utf8(out.stdout).unwrap();
     let lines: Vec<&str> = csv.lines().collect();

@@ -138,16 +138,15 @@ pub fn replay(board: &Board, table: Option<&[u8]>, input: &[u8]) -> Result<Outco
     let mut hellos = Vec::new();
     let mut reports = Vec::new();
     for item in decoder.push_all(&run.stream) {
-        match item {
-            Item::Hello(h) => hellos.push(h),
-            Item::Report(r) => reports.push(r),
-            Item::Damaged(_) => {}
+        if let Item::Hello(h) = item {
+            hellos.push(h);
         }
+        reports.extend(item.report());
     }
     Ok(Outcome {
         hellos,
         reports,
-        stats: decoder.stats(),
+        stats: decoder.finish(),
         run,
     })
 }

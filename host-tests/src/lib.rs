@@ -6,3 +6,4 @@ pub mod defmt_log;
 pub mod e2e;
 pub mod qemu;
 pub mod recording;
+pub mod soak;

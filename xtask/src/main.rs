@@ -6,12 +6,17 @@
 //! - `test`: fmt, clippy, workspace tests, board builds, QEMU end-to-end runs.
 //! - `demo`: the main job: qemu-m4f replays a recording; XYZ beside the f64 reference.
 //! - `bench-target`: flash, RAM and instructions per point of every board and chain.
+//! - `fuzz`: long runs of the libFuzzer targets of `fuzz/`.
+//! - `soak`: 10^6 corrupted frames into each QEMU hub, every one accounted for.
 
 mod bench;
 mod build;
 mod demo;
+mod fuzz;
+mod fuzz_seeds;
 mod make_recording;
 mod setup;
+mod soak;
 mod test;
 mod toolchain;
 
@@ -58,9 +63,34 @@ enum Cmd {
         #[arg(long)]
         calib: Option<std::path::PathBuf>,
     },
+    /// Run the fuzz targets of fuzz/ (libFuzzer, cargo-fuzz), each for a while.
+    Fuzz {
+        /// Only this target.
+        #[arg(long)]
+        target: Option<String>,
+        /// Seconds per target.
+        #[arg(long, default_value_t = 300)]
+        seconds: u32,
+    },
+    /// Soak each QEMU hub: frames with random corruption both ways, every one accounted for.
+    Soak {
+        /// Only this board.
+        #[arg(long)]
+        board: Option<String>,
+        /// Readings sent.
+        #[arg(long, default_value_t = 1_000_000)]
+        frames: usize,
+        /// Seed of the corruption.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
     /// Regenerate the shipped recording data/recordings/default-6-session.csv.
     #[command(hide = true)]
     MakeRecording,
+    /// Regenerate the seed files of the fuzz corpora (fuzz/corpus/*/seed-*) from data/ and
+    /// the tests' streams.
+    #[command(hide = true)]
+    FuzzSeeds,
 }
 
 fn main() -> Result<()> {
@@ -70,6 +100,13 @@ fn main() -> Result<()> {
         Cmd::Test => test::run(),
         Cmd::Demo { all } => demo::run(all),
         Cmd::BenchTarget { board, calib } => bench::run(board.as_deref(), calib.as_deref()),
+        Cmd::Fuzz { target, seconds } => fuzz::run(target.as_deref(), seconds),
+        Cmd::Soak {
+            board,
+            frames,
+            seed,
+        } => soak::run(board.as_deref(), frames, seed),
         Cmd::MakeRecording => make_recording::run(),
+        Cmd::FuzzSeeds => fuzz_seeds::run(),
     }
 }

@@ -1,4 +1,4 @@
-//! `cargo xtask setup`: installs what the firmware builds and QEMU runs need, and only that.
+//! `cargo xtask setup`: installs what the firmware builds, QEMU runs and fuzz runs need, and only that.
 //!
 //! It asks nothing and removes nothing: every `apt-get install` runs with `--no-remove`, so a
 //! package that could only go in by replacing one the machine has (a newer backport of
@@ -239,16 +239,19 @@ pub fn run(every_compiler: bool) -> Result<()> {
     if !which("qemu-system-arm") {
         install_qemu(&mut apt)?;
     }
+    crate::fuzz::ensure_cargo_fuzz()?;
     let survey = toolchain::survey();
     survey.primary()?;
     eprintln!(
-        "xtask setup: firmware tool chains:\n{}\nxtask setup: qemu-system-arm present",
+        "xtask setup: firmware tool chains:\n{}\nxtask setup: qemu-system-arm and cargo-fuzz present",
         survey.describe()
     );
     Ok(())
 }
 
-/// Runs [`run`] only if something is missing (the other commands call this first).
+/// Runs [`run`] only if a firmware tool chain or QEMU is missing (the other commands call
+/// this first; cargo-fuzz is installed by the fuzz commands themselves when they need it, so
+/// that `cargo xtask demo` does not wait for it).
 pub fn ensure() -> Result<()> {
     if toolchain::survey().primary().is_ok() && which("qemu-system-arm") {
         return Ok(());

@@ -7,8 +7,8 @@ use anyhow::Result;
 use host_tests::boards::{root, BOARDS};
 
 use crate::build::{build_board_with, check};
-use crate::setup;
 use crate::toolchain::{self, TOOLCHAIN_ENV};
+use crate::{fuzz, setup};
 
 fn cargo() -> Command {
     let mut c = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
@@ -59,6 +59,18 @@ pub fn run() -> Result<()> {
         cargo().args(["test", "--workspace"]),
         "cargo test --workspace",
     )?;
+
+    step("fuzz smoke run");
+    // Each target for a few seconds from the committed corpus: a target that no longer builds
+    // or an input of the corpus that now crashes fails the run. Long runs: `cargo xtask fuzz`.
+    check(
+        cargo()
+            .args(["fmt", "--manifest-path"])
+            .arg(root().join("fuzz/Cargo.toml"))
+            .args(["--", "--check"]),
+        "cargo fmt --check in fuzz",
+    )?;
+    fuzz::smoke()?;
 
     // Every firmware tool chain this machine has: the images differ (rustup links a prebuilt
     // compiler_builtins, Debian's builds it from source), so each must meet the budgets.

@@ -9,7 +9,7 @@ use std::io::{BufWriter, Read, Write};
 use std::path::PathBuf;
 use std::time::Duration;
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use armcal::stream_decode::{Decoder, Item};
 use quatarm::stream::{write_csv_line, CSV_HEADER, MAX_CSV_LINE};
 
@@ -34,6 +34,9 @@ pub struct Args {
 }
 
 /// Runs the subcommand.
+///
+/// Nothing goes to stdout until the first report: a run that fails (an unreadable input, a
+/// capture in which no frame passed its checks) leaves no partial CSV behind.
 pub fn run(args: Args) -> Result<()> {
     let (mut source, joining): (Box<dyn Read>, bool) = match (&args.port, &args.input) {
         (Some(port), _) => {
@@ -44,11 +47,19 @@ pub fn run(args: Args) -> Result<()> {
             (Box::new(p), !args.from_start)
         }
         (None, Some(path)) if path.as_os_str() != "-" => {
+            if path.is_dir() {
+                bail!("{} is a directory, not a captured stream", path.display());
+            }
             let f =
                 std::fs::File::open(path).with_context(|| format!("opening {}", path.display()))?;
             (Box::new(std::io::BufReader::new(f)), false)
         }
         _ => (Box::new(std::io::stdin().lock()), false),
+    };
+    let name = match (&args.port, &args.input) {
+        (Some(port), _) => port.clone(),
+        (None, Some(path)) if path.as_os_str() != "-" => path.display().to_string(),
+        _ => "stdin".to_owned(),
     };
     let mut decoder = if joining {
         Decoder::joining()
@@ -57,54 +68,123 @@ pub fn run(args: Args) -> Result<()> {
     };
     let stdout = std::io::stdout();
     let mut out = BufWriter::new(stdout.lock());
-    out.write_all(CSV_HEADER.as_bytes())?;
+    let mut header_written = false;
     let mut buf = [0u8; 4096];
     let mut line = [0u8; MAX_CSV_LINE];
+    let mut total = 0u64;
+    // The first bytes, to tell a text-mode capture from noise when no frame decodes.
+    let mut head = Vec::new();
     'read: loop {
         let n = match source.read(&mut buf) {
             Ok(0) => break,
             Ok(n) => n,
             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
             Err(e) if e.kind() == std::io::ErrorKind::TimedOut => continue,
-            Err(e) => return Err(e).context("reading the stream"),
+            Err(e) => return Err(e).with_context(|| format!("reading {name}")),
         };
+        total += n as u64;
+        if head.len() < CSV_HEADER.len() {
+            head.extend_from_slice(&buf[..n.min(CSV_HEADER.len() - head.len())]);
+        }
         for &b in &buf[..n] {
-            match decoder.push(b) {
-                Some(Item::Report(r)) => {
-                    let len = write_csv_line(&r, &mut line);
-                    out.write_all(&line[..len])?;
-                    if args
-                        .max_reports
-                        .is_some_and(|m| decoder.stats().reports >= m)
-                    {
-                        break 'read;
-                    }
-                }
-                Some(Item::Hello(h)) => eprintln!(
+            let Some(item) = decoder.push(b) else {
+                continue;
+            };
+            match item {
+                Item::Hello(h) => eprintln!(
                     "# hub: protocol {}, {:?}, {} joints, table {}",
                     h.protocol,
                     h.precision,
                     h.joints,
                     h.status.table().name()
                 ),
-                Some(Item::Damaged(e)) => eprintln!("# damaged frame: {e}"),
-                None => {}
+                Item::Damaged(e) => eprintln!("# damaged frame: {e}"),
+                Item::Repeated(r) => {
+                    eprintln!("# report {} repeated: not written again", r.seq)
+                }
+                Item::Backward { report, expected } => eprintln!(
+                    "# report {} where {expected} was due, without a hub restart: numbering restarts from it",
+                    report.seq
+                ),
+                Item::Inconsistent(r) if r.status.is_measurement() => eprintln!(
+                    "# report {} has no coordinates although its status {:#06x} has no fault",
+                    r.seq, r.status.0
+                ),
+                Item::Inconsistent(r) => eprintln!(
+                    "# report {} carries coordinates beside status {:#06x}, which forbids them: written without them",
+                    r.seq, r.status.0
+                ),
+                Item::Report(_) => {}
+            }
+            if let Some(r) = item.report() {
+                if !header_written {
+                    out.write_all(CSV_HEADER.as_bytes())?;
+                    header_written = true;
+                }
+                let len = write_csv_line(r, &mut line);
+                out.write_all(&line[..len])?;
+                if args
+                    .max_reports
+                    .is_some_and(|m| decoder.stats().reports >= m)
+                {
+                    break 'read;
+                }
             }
         }
         if args.port.is_some() {
             out.flush()?;
         }
     }
-    out.flush()?;
-    let s = decoder.stats();
+    let s = decoder.finish();
     eprintln!(
-        "decode: {} reports ({} with coordinates), {} lost, {} crc errors, {} other damaged frames, {} bytes skipped",
+        "decode: {} reports ({} with coordinates), {} lost, {} crc errors, {} other damaged frames, {} bytes skipped, {} repeated, {} backward, {} inconsistent, {} unterminated bytes",
         s.reports,
         s.points,
         s.lost,
         s.crc_errors,
         s.other_errors,
-        s.skipped_bytes
+        s.skipped_bytes,
+        s.repeated,
+        s.backward,
+        s.inconsistent,
+        s.unterminated_bytes
     );
+    if s.unterminated_bytes > 0 {
+        eprintln!(
+            "# {} bytes at the end of {name} never reached a frame delimiter (0x00)",
+            s.unterminated_bytes
+        );
+    }
+    if total == 0 {
+        bail!("{name} is empty: no stream to decode");
+    }
+    if s.valid_frames() == 0 {
+        let hint = if looks_like_text_mode(&head) {
+            ": it looks like the hub's text mode (CSV), which is already readable and needs no decoding"
+        } else {
+            ""
+        };
+        bail!(
+            "no valid frame in the {total} bytes of {name} ({} damaged){hint}",
+            s.damaged()
+        );
+    }
+    if !header_written {
+        out.write_all(CSV_HEADER.as_bytes())?;
+    }
+    out.flush()?;
     Ok(())
+}
+
+/// True if a capture starts like the hub's text mode: its header, or a CSV row of it.
+fn looks_like_text_mode(head: &[u8]) -> bool {
+    let first_line = head.split(|&b| b == b'\n').next().unwrap_or_default();
+    let header_line = CSV_HEADER.trim_end().as_bytes();
+    let header_like = first_line.len() >= 3 && header_line.starts_with(first_line)
+        || first_line.starts_with(header_line);
+    let row_like = first_line.contains(&b',')
+        && first_line
+            .iter()
+            .all(|&b| b.is_ascii_hexdigit() || b",x.-".contains(&b));
+    header_like || row_like
 }

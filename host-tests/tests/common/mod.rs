@@ -53,6 +53,12 @@ macro_rules! board_tests {
         fn the_defmt_log_decodes_on_the_host() {
             $crate::common::defmt_log($board);
         }
+
+        #[test]
+        #[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
+        fn a_soak_of_25_000_corrupted_frames_accounts_for_every_one() {
+            $crate::common::soak($board);
+        }
     };
 }
 pub(crate) use board_tests;
@@ -338,4 +344,18 @@ pub fn defmt_log(name: &str) {
     assert_eq!(lines[2], "replay done: 5 reports, 1 damaged input frames");
     let stack = host_tests::defmt_log::number_after(&lines, "stack peak").unwrap();
     assert!(stack > 0 && stack < 64 * 1024, "{stack}");
+}
+
+/// The soak's short version (`cargo xtask soak` runs 10^6): 25,000 readings in (about 40 s
+/// under QEMU, whose UART model moves ~60 kB/s), one frame in 50 damaged each way (flips, drops, bursts, garbage), every frame accounted for on both sides
+/// (`host_tests::soak`).
+pub fn soak(name: &str) {
+    let b = the_board(name);
+    let c = host_tests::soak::run(&b, 25_000, 50, 7).unwrap();
+    eprintln!("{name} soak: {c:#?}");
+    assert_eq!(c.hub_reports, c.hub_points + c.hub_rejected);
+    assert!(
+        c.damage_in.total() > 300 && c.damage_out.total() > 300,
+        "{c:?}"
+    );
 }

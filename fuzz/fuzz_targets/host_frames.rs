@@ -1,0 +1,38 @@
+//! The host's decoder of hub→host `ToHost` frames (`armcal::stream_decode`, what `armcal
+//! decode` runs): any bytes, read from the start and joined mid-stream. Never a panic; no
+//! report handed out with coordinates its status forbids; every frame accounted for in the
+//! counts.
+#![no_main]
+
+use armcal::stream_decode::{Decoder, Item};
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|bytes: &[u8]| {
+    for mut decoder in [Decoder::from_start(), Decoder::joining()] {
+        let items = decoder.push_all(bytes);
+        let s = decoder.finish();
+        let (mut reports, mut points, mut damaged, mut hellos) = (0u64, 0u64, 0u64, 0u64);
+        for item in &items {
+            match item {
+                Item::Damaged(_) => damaged += 1,
+                Item::Hello(_) => hellos += 1,
+                _ => {}
+            }
+            if let Some(r) = item.report() {
+                reports += 1;
+                if r.point.is_some() {
+                    points += 1;
+                    assert!(
+                        r.status.is_measurement(),
+                        "coordinates beside {:?}",
+                        r.status
+                    );
+                }
+            }
+        }
+        assert_eq!((s.reports, s.points, s.hellos), (reports, points, hellos));
+        assert_eq!(s.crc_errors + s.other_errors, damaged);
+        assert_eq!(s.valid_frames() + damaged, items.len() as u64);
+        assert!(s.skipped_bytes + s.unterminated_bytes <= bytes.len() as u64);
+    }
+});

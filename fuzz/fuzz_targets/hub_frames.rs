@@ -1,0 +1,88 @@
+//! The hub's receive side: any bytes on the UART into `quatarm::encoder::Replay` (the decoder
+//! of host→hub `ToDevice` frames) and the `Hub` that turns each event into a report, as a
+//! board's replay loop (`board_common::serve`) does. Never a panic; coordinates exactly when
+//! the report's status allows them, never for a damaged frame; every report rendered in the
+//! hub's mode reads back as itself.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use quatarm::encoder::{Event, Replay};
+use quatarm::stream::{
+    Coordinates, FrameReader, Hub, Mode, Precision, Status, TableState, ToHost, MAX_FRAME,
+    MAX_OUTPUT,
+};
+use quatarm_fuzz::chains;
+
+fuzz_target!(|bytes: &[u8]| {
+    let Some((&pick, stream)) = bytes.split_first() else {
+        return;
+    };
+    let (f32_chain, fixed_chain) = &chains()[usize::from(pick & 0x3) % chains().len()];
+    let fixed = pick & 0x4 != 0;
+    let state = if pick & 0x8 != 0 {
+        TableState::Corrupt
+    } else {
+        TableState::Valid
+    };
+    let precision = if fixed {
+        Precision::Fixed
+    } else {
+        Precision::F32
+    };
+    let mut hub = Hub::new(state, f32_chain.joint_count() as u8, precision);
+    let eval = |counts: &[u32], temp_mc: i32| {
+        let p = if fixed {
+            fixed_chain
+                .eval(counts, temp_mc)
+                .map(|p| (p.xyz_nm(), p.dir_e9()))
+        } else {
+            f32_chain
+                .eval(counts, temp_mc)
+                .map(|p| (p.xyz_nm(), p.dir_e9()))
+        };
+        p.map(|(xyz_nm, dir_e9)| Coordinates { xyz_nm, dir_e9 })
+    };
+    let mut replay = Replay::new();
+    let mut out = [0u8; MAX_OUTPUT];
+    let mut time = 0u64;
+    for &b in stream {
+        let Some(event) = replay.push(b) else {
+            continue;
+        };
+        time += 1;
+        let (report, damaged) = match event {
+            Event::Reading(r) => (hub.report(time, Ok(&r), eval), false),
+            Event::InputError(e) => (hub.report(time, Err(e), eval), true),
+            Event::SetMode(m) => {
+                hub.set_mode(m);
+                let _ = hub.render(&hub.hello(), &mut out);
+                continue;
+            }
+            Event::End => break,
+        };
+        assert_eq!(report.point.is_some(), report.status.is_measurement());
+        if damaged {
+            assert!(report.status.has(Status::INPUT_ERROR) && report.point.is_none());
+        }
+        if state != TableState::Valid {
+            assert!(report.point.is_none(), "coordinates from a bad table");
+        }
+        let msg = ToHost::Report(report);
+        let rendered = hub.render(&msg, &mut out);
+        match hub.mode() {
+            Mode::Binary => {
+                let mut reader = FrameReader::<MAX_FRAME>::new();
+                let back: Vec<_> = rendered
+                    .iter()
+                    .filter_map(|&x| reader.push::<ToHost>(x))
+                    .collect();
+                assert_eq!(back, [Ok(msg)], "a report frame does not read back");
+            }
+            Mode::Text => {
+                assert!(rendered.ends_with(b"\n") && rendered.is_ascii());
+                let seq = report.seq.to_string();
+                assert!(rendered.starts_with(seq.as_bytes()));
+            }
+        }
+    }
+});
