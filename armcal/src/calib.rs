@@ -32,6 +32,7 @@
 //! shares out what the data cannot separate), and JᵀJ in step 4 includes the penalty.
 
 use crate::data::{Dataset, Layout};
+use crate::effects::FAMILIES;
 use crate::ident::{self, Fixed, Identifiability, RFactor, Why};
 use crate::jacobian::tip_jacobian;
 use crate::kinds;
@@ -40,6 +41,7 @@ use crate::params::{apply, frame_params, Param, Terms};
 use crate::progress::{Observer, Silent};
 use crate::residuals::{best_rigid, Rigid};
 use crate::sim;
+use crate::stats::{chi2_tail, normal_tail_two_sided};
 use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, Vector3};
 use quatarm_ref::arm::{Arm, Frame};
 use quatarm_ref::forward;
@@ -198,8 +200,8 @@ pub enum CalibError {
     NotConverged {
         /// Iterations done.
         iterations: usize,
-        /// The solver's reason.
-        reason: String,
+        /// Why the solver stopped.
+        reason: lm::Termination,
         /// RMS residual where it stopped (mm).
         rms_mm: f64,
     },
@@ -558,15 +560,11 @@ pub fn skeleton(arm: &Arm) -> Arm {
                 *t = q;
             }
         }
-        for h in &mut j.harmonics {
-            h.sin = 0.0;
-            h.cos = 0.0;
-        }
-        j.gravity = 0.0;
-        j.thermal = 0.0;
     }
     a.probe.error = [0.0; 3];
-    a.probe.thermal = 0.0;
+    for f in FAMILIES {
+        f.clear(&mut a);
+    }
     a
 }
 
@@ -575,8 +573,8 @@ pub fn skeleton(arm: &Arm) -> Arm {
 fn with_entries(start: &Arm, params: &[Param]) -> Arm {
     let mut a = start.clone();
     for p in params {
-        if matches!(p, Param::Harmonic { .. }) {
-            p.add_to(&mut a, 0.0);
+        if let Some((e, _)) = p.effect() {
+            e.with(|t| t.add_entry(&mut a));
         }
     }
     a
@@ -675,7 +673,7 @@ pub struct Fit {
     /// Solver iterations over all passes.
     pub iterations: usize,
     /// How the solver stopped.
-    pub solver: String,
+    pub solver: lm::Termination,
     /// RMS of the equations before and after (mm).
     pub rms_before_mm: f64,
     /// RMS of the equations after (mm).
@@ -713,7 +711,9 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
     calibrate_observed(start, data, opts, &mut Silent)
 }
 
-/// Calibrates `start` on `data`, telling `observer` what it is doing.
+/// Calibrates `start` on `data`, telling `observer` what it is doing: the structural check
+/// (`check_structure`), then fits ([`lm::solve`]) until the pruning policy (`prune`, saying
+/// [`Next`]) accepts the model, then the uncertainties of what was kept (`finish`).
 pub fn calibrate_observed(
     start: &Arm,
     data: &Dataset,
@@ -721,6 +721,103 @@ pub fn calibrate_observed(
     observer: &mut dyn Observer,
 ) -> Result<Fit, CalibError> {
     let t0 = Instant::now();
+    let mut s = check_structure(start, data, opts, observer)?;
+    let (all, layout, eqs) = (&s.all, &s.layout, s.eqs);
+    let mut state = State {
+        x: vec![0.0; all.len()],
+        frame: start_frame(&s.base, data, layout),
+    };
+    let rms_before = {
+        let p = Problem::new(data, layout, &s.base, all, &s.id.kept);
+        (2.0 * lm::Problem::cost(&p, &state) / eqs as f64).sqrt()
+    };
+    if !rms_before.is_finite() {
+        // The loaders bound every value, so this is an arm made in memory; a solver given NaN
+        // would only report "did not converge" after its whole budget.
+        return Err(CalibError::Mismatch(format!(
+            "the start arm puts the ball at a non-finite position (RMS residual {rms_before}): \
+             its values are beyond what can be evaluated"
+        )));
+    }
+    let mut run = Run {
+        iterations: 0,
+        passes: 0,
+        model_iterations: 0,
+        prior_noise: opts.prior.and_then(|p| p.noise_mm),
+    };
+    loop {
+        let problem = Problem::new(data, layout, &s.base, all, &s.id.kept)
+            .with_prior(prior_weights(opts, all, &s.id.kept, run.prior_noise, data));
+        observer.stage(&format!(
+            "fitting {} unknowns (pass {})",
+            s.id.kept.len(),
+            run.passes + 1
+        ));
+        let out = run.pass(&problem, state, opts, eqs, observer)?;
+        let unfinished = !out.converged;
+        state = out.state;
+        let normal = lm::Problem::normal(&problem, &state);
+        let data_cost = problem.data_cost(&state);
+        let dof = eqs.saturating_sub(s.id.kept.len()).max(1);
+        let sigma = (2.0 * data_cost / dof as f64).sqrt();
+        if opts.prior.is_some() && run.prior_noise.is_none() {
+            run.prior_noise = Some(sigma);
+            run.model_iterations = 0;
+            continue;
+        }
+        match prune(
+            opts,
+            all,
+            &mut s.id,
+            &mut state.x,
+            &normal.jtj,
+            sigma,
+            unfinished,
+        ) {
+            Next::Refit => {
+                run.model_iterations = 0;
+                continue;
+            }
+            Next::Continue => continue,
+            Next::Accept => {}
+        }
+        let fitted = Fitted {
+            arm: problem.arm(&state),
+            state,
+            jtj: normal.jtj,
+            sigma,
+            data_cost,
+            solver: out.reason,
+        };
+        return Ok(finish(s, fitted, run.iterations, rms_before, t0));
+    }
+}
+
+/// What the structural check leaves for the fit.
+struct Structure {
+    layout: Layout,
+    /// Every unknown considered.
+    all: Vec<Param>,
+    /// The start arm with an entry for each term to fit.
+    base: Arm,
+    /// Equations the data give.
+    eqs: usize,
+    /// What the data can fix.
+    id: Identifiability,
+    /// The R factor of the structural analysis.
+    r_skel: DMatrix<f64>,
+    /// Unknowns a ridge shares out instead of holding.
+    shared: Vec<usize>,
+}
+
+/// What can be fitted before any fit: the data's kinds, the structural identifiability at the
+/// skeleton, the comparison with a well-spread design, and what a ridge shares out.
+fn check_structure(
+    start: &Arm,
+    data: &Dataset,
+    opts: &Options,
+    observer: &mut dyn Observer,
+) -> Result<Structure, CalibError> {
     if data.dof != start.dof() {
         return Err(CalibError::Mismatch(format!(
             "the data have {} joints, the arm {}",
@@ -733,11 +830,10 @@ pub fn calibrate_observed(
     let base = with_entries(start, &all);
     let eqs = equations(&layout);
     if opts.terms.params(data.dof).is_empty() {
-        return Err(CalibError::Mismatch(
-            "nothing to fit: no terms requested (`only` needs an effect, e.g. \
-             `only,+gravity_compliance:*`)"
-                .into(),
-        ));
+        return Err(CalibError::Mismatch(format!(
+            "nothing to fit: no terms requested (`only` needs an effect, e.g. `only,+{}:*`)",
+            crate::effects::gravity::KEY
+        )));
     }
     // 0. What the data's kinds cannot fix, before anything is computed on them.
     let requested: Vec<usize> = (0..all.len())
@@ -749,7 +845,6 @@ pub fn calibrate_observed(
             why: r.why,
         });
     }
-
     // 1. Structural identifiability, and the design it is compared with.
     observer.stage(&format!(
         "identifiability of {} unknowns on {} rows",
@@ -757,58 +852,13 @@ pub fn calibrate_observed(
         data.rows.len()
     ));
     let (mut id, r_skel) = structural(&base, data, &all, opts.structural_tol);
-    for p in &opts.hold {
-        if let Some(i) = all.iter().position(|q| q == p) {
-            if id.is_kept(i) {
-                id.kept.retain(|&k| k != i);
-                id.fixed.push(Fixed {
-                    index: i,
-                    why: Why::Requested,
-                    absorbed_by: Vec::new(),
-                    unexplained: 1.0,
-                });
-            }
-        }
-    }
-    if opts.design_check {
-        observer.stage("comparing with a well-spread design");
-        let design = sim::design_like(&skeleton(&base), data, 0x5eed);
-        let (id_design, _) = structural(&base, &design, &all, opts.structural_tol);
-        let need = id_design.kept.len();
-        if eqs <= need {
-            return Err(CalibError::TooFewRows {
-                equations: eqs,
-                parameters: need,
-                detail: equations_detail(&layout),
-            });
-        }
-        let lost: Vec<usize> = id_design
-            .kept
-            .iter()
-            .copied()
-            .filter(|i| !id.is_kept(*i))
-            .collect();
-        if id.kept.len() < need && !opts.allow_degenerate {
-            let words: Vec<String> = lost.iter().map(|&i| all[i].describe(&base)).collect();
-            return Err(CalibError::Degenerate {
-                lost: words,
-                hint: degenerate_hint(data),
-            });
-        }
-    } else if eqs <= id.kept.len() {
-        return Err(CalibError::TooFewRows {
-            equations: eqs,
-            parameters: id.kept.len(),
-            detail: equations_detail(&layout),
-        });
-    }
-
+    hold_requested(&mut id, &all, &opts.hold);
+    compare_design(&base, data, &layout, &all, &id, opts, observer)?;
     if !id.kept.iter().any(|&i| !all[i].is_frame()) {
         return Err(CalibError::Mismatch(
             "nothing to fit: these data determine none of the unknowns requested".into(),
         ));
     }
-
     // Under a ridge, what the data cannot separate is shared out by the penalty instead of held
     // (the frame's rotations without an instrument are a symmetry, never unknowns).
     let mut shared: Vec<usize> = Vec::new();
@@ -824,176 +874,286 @@ pub fn calibrate_observed(
         id.kept.extend(&shared);
         id.kept.sort_unstable();
     }
+    Ok(Structure {
+        layout,
+        all,
+        base,
+        eqs,
+        id,
+        r_skel,
+        shared,
+    })
+}
 
-    // 2. The fit, repeated while the statistical test holds a direction.
-    let mut state = State {
-        x: vec![0.0; all.len()],
-        frame: start_frame(&base, data, &layout),
-    };
-    let mut iterations = 0;
-    let rms_before = {
-        let p = Problem::new(data, &layout, &base, &all, &id.kept);
-        (2.0 * lm::Problem::cost(&p, &state) / eqs as f64).sqrt()
-    };
-    if !rms_before.is_finite() {
-        // The loaders bound every value, so this is an arm made in memory; a solver given NaN
-        // would only report "did not converge" after its whole budget.
-        return Err(CalibError::Mismatch(format!(
-            "the start arm puts the ball at a non-finite position (RMS residual {rms_before}): \
-             its values are beyond what can be evaluated"
-        )));
+/// Holds the unknowns `--hold` names.
+fn hold_requested(id: &mut Identifiability, all: &[Param], hold: &[Param]) {
+    for p in hold {
+        if let Some(i) = all.iter().position(|q| q == p) {
+            if id.is_kept(i) {
+                id.kept.retain(|&k| k != i);
+                id.fixed.push(Fixed {
+                    index: i,
+                    why: Why::Requested,
+                    absorbed_by: Vec::new(),
+                    unexplained: 1.0,
+                });
+            }
+        }
     }
-    let mut prior_noise = opts.prior.and_then(|p| p.noise_mm);
-    let mut passes = 0;
-    let mut model_iterations = 0;
-    loop {
-        let weights: Vec<f64> = id
-            .kept
-            .iter()
-            .map(|&i| {
-                let prior = match (opts.prior, prior_noise) {
-                    (Some(p), Some(noise)) => p.sd(all[i]).map_or(0.0, |sd| noise / sd),
-                    _ => 0.0,
-                };
-                let ridge = opts
-                    .ridge
-                    .map_or(0.0, |r| r.weight(all[i], data.rows.len()));
-                prior.hypot(ridge)
-            })
-            .collect();
-        let problem = Problem::new(data, &layout, &base, &all, &id.kept).with_prior(weights);
-        observer.stage(&format!(
-            "fitting {} unknowns (pass {})",
-            id.kept.len(),
-            passes + 1
-        ));
+}
+
+/// Refuses data with too few equations, or (with the design check) data that fix less than a
+/// well-spread design of the same size would.
+fn compare_design(
+    base: &Arm,
+    data: &Dataset,
+    layout: &Layout,
+    all: &[Param],
+    id: &Identifiability,
+    opts: &Options,
+    observer: &mut dyn Observer,
+) -> Result<(), CalibError> {
+    let eqs = equations(layout);
+    if !opts.design_check {
+        if eqs <= id.kept.len() {
+            return Err(CalibError::TooFewRows {
+                equations: eqs,
+                parameters: id.kept.len(),
+                detail: equations_detail(layout),
+            });
+        }
+        return Ok(());
+    }
+    observer.stage("comparing with a well-spread design");
+    let design = sim::design_like(&skeleton(base), data, 0x5eed);
+    let (id_design, _) = structural(base, &design, all, opts.structural_tol);
+    let need = id_design.kept.len();
+    if eqs <= need {
+        return Err(CalibError::TooFewRows {
+            equations: eqs,
+            parameters: need,
+            detail: equations_detail(layout),
+        });
+    }
+    if id.kept.len() < need && !opts.allow_degenerate {
+        let lost = id_design.kept.iter().filter(|i| !id.is_kept(**i));
+        return Err(CalibError::Degenerate {
+            lost: lost.map(|&i| all[i].describe(base)).collect(),
+            hint: degenerate_hint(data),
+        });
+    }
+    Ok(())
+}
+
+/// The weights of the Gaussian prior and the ridge on each kept unknown.
+fn prior_weights(
+    opts: &Options,
+    all: &[Param],
+    kept: &[usize],
+    prior_noise: Option<f64>,
+    data: &Dataset,
+) -> Vec<f64> {
+    kept.iter()
+        .map(|&i| {
+            let prior = match (opts.prior, prior_noise) {
+                (Some(p), Some(noise)) => p.sd(all[i]).map_or(0.0, |sd| noise / sd),
+                _ => 0.0,
+            };
+            let ridge = opts
+                .ridge
+                .map_or(0.0, |r| r.weight(all[i], data.rows.len()));
+            prior.hypot(ridge)
+        })
+        .collect()
+}
+
+/// The fit's passes: iterations in all and per model, and the prior's noise once estimated.
+struct Run {
+    iterations: usize,
+    passes: usize,
+    /// Iterations since the model last changed: the budget is per model.
+    model_iterations: usize,
+    prior_noise: Option<f64>,
+}
+
+impl Run {
+    /// One pass of the solver, its iterations told to `observer`. Refused when it stopped
+    /// without converging for another reason than its budget, or with the model's budget spent.
+    fn pass(
+        &mut self,
+        problem: &Problem,
+        state: State,
+        opts: &Options,
+        eqs: usize,
+        observer: &mut dyn Observer,
+    ) -> Result<lm::Outcome<State>, CalibError> {
+        let done = self.iterations;
         let mut report = |it: usize, cost: f64| {
-            observer.iteration(iterations + it, (2.0 * cost / eqs as f64).sqrt());
+            observer.iteration(done + it, (2.0 * cost / eqs as f64).sqrt());
         };
         // A first pass gets a short budget: a direction the data barely determine makes the
-        // solver crawl along its valley, and the statistical test below removes it sooner.
-        // The budget is per model: holding an unknown starts a new fit.
+        // solver crawl along its valley, and the statistical test removes it sooner.
         let budget = opts
             .lm
             .max_iterations
-            .saturating_sub(model_iterations)
+            .saturating_sub(self.model_iterations)
             .max(1);
         let pass = lm::Options {
-            max_iterations: if passes == 0 { budget.min(12) } else { budget },
+            max_iterations: if self.passes == 0 {
+                budget.min(12)
+            } else {
+                budget
+            },
             ..opts.lm.clone()
         };
-        passes += 1;
-        let out = lm::solve(&problem, state, &pass, &mut report);
-        iterations += out.iterations;
-        model_iterations += out.iterations;
-        let unfinished = !out.converged;
-        if unfinished && (!out.exhausted || model_iterations >= opts.lm.max_iterations) {
+        self.passes += 1;
+        let out = lm::solve(problem, state, &pass, &mut report);
+        self.iterations += out.iterations;
+        self.model_iterations += out.iterations;
+        if !out.converged && (!out.exhausted || self.model_iterations >= opts.lm.max_iterations) {
             return Err(CalibError::NotConverged {
-                iterations: model_iterations,
+                iterations: self.model_iterations,
                 reason: out.reason,
                 rms_mm: (2.0 * problem.data_cost(&out.state) / eqs as f64).sqrt(),
             });
         }
-        state = out.state;
-        let normal = lm::Problem::normal(&problem, &state);
-        let data_cost = problem.data_cost(&state);
-        let dof = eqs.saturating_sub(id.kept.len()).max(1);
-        let sigma = (2.0 * data_cost / dof as f64).sqrt();
-        if opts.prior.is_some() && prior_noise.is_none() {
-            prior_noise = Some(sigma);
-            model_iterations = 0;
-            continue;
+        Ok(out)
+    }
+}
+
+/// What the pruning policy says after a pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Next {
+    /// An unknown was held: fit the smaller model, with a fresh budget.
+    Refit,
+    /// The same model, further: the pass ran out of its budget while still improving.
+    Continue,
+    /// The model stands.
+    Accept,
+}
+
+/// The pruning policy: holds the weakest unknown (`weak_check`), else the least significant
+/// effect (`significance`, only on a converged pass), and says what to do next.
+fn prune(
+    opts: &Options,
+    all: &[Param],
+    id: &mut Identifiability,
+    x: &mut [f64],
+    jtj: &DMatrix<f64>,
+    sigma: f64,
+    unfinished: bool,
+) -> Next {
+    if opts.weak_check {
+        if let Some((pos, u)) = ident::weakest(jtj, sigma, all, &id.kept, opts.weak_threshold) {
+            let index = id.kept.remove(pos);
+            x[index] = 0.0;
+            id.fixed.push(Fixed {
+                index,
+                why: Why::Weak { uncertainty: u },
+                absorbed_by: Vec::new(),
+                unexplained: 1.0,
+            });
+            return Next::Refit;
         }
-        if opts.weak_check {
-            if let Some((pos, u)) =
-                ident::weakest(&normal.jtj, sigma, &all, &id.kept, opts.weak_threshold)
-            {
-                let index = id.kept.remove(pos);
-                state.x[index] = 0.0;
-                model_iterations = 0;
-                id.fixed.push(Fixed {
-                    index,
-                    why: Why::Weak { uncertainty: u },
-                    absorbed_by: Vec::new(),
-                    unexplained: 1.0,
-                });
-                continue;
-            }
-        }
-        if opts.significance > 0.0 && !unfinished {
-            if let Some(c) = ident::covariance(&normal.jtj, sigma) {
-                if let Some((held, _)) =
-                    least_significant(&all, &id.kept, &state.x, &c, opts.significance)
-                {
-                    for i in held {
-                        let pos = id.kept.iter().position(|&k| k == i).expect("kept");
-                        id.fixed.push(Fixed {
-                            index: i,
-                            why: Why::Insignificant {
-                                value: state.x[i],
-                                uncertainty: c[(pos, pos)].sqrt(),
-                            },
-                            absorbed_by: Vec::new(),
-                            unexplained: 1.0,
-                        });
-                        state.x[i] = 0.0;
-                    }
-                    id.kept.retain(|k| !id.fixed.iter().any(|f| f.index == *k));
-                    model_iterations = 0;
-                    continue;
+    }
+    if opts.significance > 0.0 && !unfinished {
+        if let Some(c) = ident::covariance(jtj, sigma) {
+            if let Some((held, _)) = least_significant(all, &id.kept, x, &c, opts.significance) {
+                for i in held {
+                    let Some(pos) = id.kept.iter().position(|&k| k == i) else {
+                        continue;
+                    };
+                    id.fixed.push(Fixed {
+                        index: i,
+                        why: Why::Insignificant {
+                            value: x[i],
+                            uncertainty: c[(pos, pos)].sqrt(),
+                        },
+                        absorbed_by: Vec::new(),
+                        unexplained: 1.0,
+                    });
+                    x[i] = 0.0;
                 }
+                id.kept.retain(|k| !id.fixed.iter().any(|f| f.index == *k));
+                return Next::Refit;
             }
         }
-        if unfinished {
-            continue;
+    }
+    if unfinished {
+        Next::Continue
+    } else {
+        Next::Accept
+    }
+}
+
+/// The accepted pass.
+struct Fitted {
+    state: State,
+    arm: Arm,
+    jtj: DMatrix<f64>,
+    sigma: f64,
+    data_cost: f64,
+    solver: lm::Termination,
+}
+
+/// The fit of the accepted model: the data's own singular values, the uncertainties and
+/// correlations of what was kept, the calibrated arm and frame.
+fn finish(s: Structure, f: Fitted, iterations: usize, rms_before: f64, t0: Instant) -> Fit {
+    let Structure {
+        layout,
+        all,
+        base,
+        eqs,
+        mut id,
+        r_skel,
+        mut shared,
+    } = s;
+    // Singular values and condition number are the data's own: of the unknowns they
+    // determine, without those the ridge shares out.
+    shared.retain(|i| id.kept.contains(i));
+    id.kept.retain(|i| !shared.contains(i));
+    ident::refresh(&r_skel, &mut id);
+    id.kept.extend(&shared);
+    id.kept.sort_unstable();
+    let cov = ident::covariance(&f.jtj, f.sigma);
+    let mut uncertainty = vec![None; all.len()];
+    let k = id.kept.len();
+    let mut correlation = DMatrix::identity(k, k);
+    if let Some(c) = &cov {
+        for (pos, &i) in id.kept.iter().enumerate() {
+            uncertainty[i] = Some(c[(pos, pos)].sqrt());
         }
-        // Singular values and condition number are the data's own: of the unknowns they
-        // determine, without those the ridge shares out.
-        shared.retain(|i| id.kept.contains(i));
-        id.kept.retain(|i| !shared.contains(i));
-        ident::refresh(&r_skel, &mut id);
-        id.kept.extend(&shared);
-        id.kept.sort_unstable();
-        let cov = ident::covariance(&normal.jtj, sigma);
-        let mut uncertainty = vec![None; all.len()];
-        let k = id.kept.len();
-        let mut correlation = DMatrix::identity(k, k);
-        if let Some(c) = &cov {
-            for (pos, &i) in id.kept.iter().enumerate() {
-                uncertainty[i] = Some(c[(pos, pos)].sqrt());
-            }
-            for a in 0..k {
-                for b in 0..k {
-                    correlation[(a, b)] = c[(a, b)] / (c[(a, a)] * c[(b, b)]).sqrt();
-                }
+        for a in 0..k {
+            for b in 0..k {
+                correlation[(a, b)] = c[(a, b)] / (c[(a, a)] * c[(b, b)]).sqrt();
             }
         }
-        let mut arm = problem.arm(&state);
-        let frame = (!layout.points.is_empty()).then_some(state.frame);
-        arm.reference_frame = frame.map(|f| sim::frame_from(&f.rot, &f.trans));
-        let mut values = state.x.clone();
-        for (i, p) in all.iter().enumerate() {
-            if p.is_frame() {
-                values[i] = 0.0;
-            }
+    }
+    let mut arm = f.arm;
+    let frame = (!layout.points.is_empty()).then_some(f.state.frame);
+    arm.reference_frame = frame.map(|f| sim::frame_from(&f.rot, &f.trans));
+    let mut values = f.state.x.clone();
+    for (i, p) in all.iter().enumerate() {
+        if p.is_frame() {
+            values[i] = 0.0;
         }
-        return Ok(Fit {
-            start: base,
-            arm,
-            params: all,
-            values,
-            uncertainty,
-            ident: id,
-            frame,
-            sigma_mm: sigma,
-            equations: eqs,
-            iterations,
-            solver: out.reason,
-            rms_before_mm: rms_before,
-            rms_after_mm: (2.0 * data_cost / eqs as f64).sqrt(),
-            elapsed: t0.elapsed(),
-            correlation,
-        });
+    }
+    Fit {
+        start: base,
+        arm,
+        params: all,
+        values,
+        uncertainty,
+        ident: id,
+        frame,
+        sigma_mm: f.sigma,
+        equations: eqs,
+        iterations,
+        solver: f.solver,
+        rms_before_mm: rms_before,
+        rms_after_mm: (2.0 * f.data_cost / eqs as f64).sqrt(),
+        elapsed: t0.elapsed(),
+        correlation,
     }
 }
 
@@ -1017,7 +1177,7 @@ fn least_significant(
         }
         let same = effects.iter_mut().find(|e| {
             let q = all[kept[e[0]]];
-            matches!((p, q), (Param::Harmonic { joint: a, order: h, .. }, Param::Harmonic { joint: b, order: g, .. }) if a == b && h == g)
+            p.effect().map(|(e, _)| e) == q.effect().map(|(e, _)| e)
         });
         match same {
             Some(e) => e.push(pos),
@@ -1039,46 +1199,6 @@ fn least_significant(
         }
     }
     worst
-}
-
-/// P(|Z| > t) for a standard normal Z.
-fn normal_tail_two_sided(t: f64) -> f64 {
-    erfc(t / std::f64::consts::SQRT_2)
-}
-
-/// P(χ²_k > w) for k = 1 or 2 (and a Wilson–Hilferty approximation beyond).
-fn chi2_tail(w: f64, k: usize) -> f64 {
-    match k {
-        1 => erfc((w / 2.0).sqrt()),
-        2 => (-w / 2.0).exp(),
-        _ => {
-            let k = k as f64;
-            let z = ((w / k).cbrt() - (1.0 - 2.0 / (9.0 * k))) / (2.0 / (9.0 * k)).sqrt();
-            0.5 * erfc(z / std::f64::consts::SQRT_2)
-        }
-    }
-}
-
-/// The complementary error function (Numerical Recipes' erfcc, relative error below 1.2e-7).
-fn erfc(x: f64) -> f64 {
-    let z = x.abs();
-    let t = 1.0 / (1.0 + 0.5 * z);
-    let r = t
-        * (-z * z - 1.265_512_23
-            + t * (1.000_023_68
-                + t * (0.374_091_96
-                    + t * (0.096_784_18
-                        + t * (-0.186_288_06
-                            + t * (0.278_868_07
-                                + t * (-1.135_203_98
-                                    + t * (1.488_515_87
-                                        + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
-            .exp();
-    if x >= 0.0 {
-        r
-    } else {
-        2.0 - r
-    }
 }
 
 /// Which joints hardly move in the data, to say what a degenerate pose set lacks.

@@ -16,10 +16,11 @@
 //! of relative size g·L (≈ 3e-5): they change how fast a fit converges, never where it
 //! converges, because residuals are always evaluated exactly.
 
-use crate::params::{Link, Param};
+use crate::effects::TipPoint;
+use crate::params::Param;
 use nalgebra::{Matrix3, Vector3};
 use quatarm_ref::arm::Arm;
-use quatarm_ref::forward::{self, axis_vector, rotation, thermal_scale, REFERENCE_TEMP_C};
+use quatarm_ref::forward::{self, axis_vector, rotation, thermal_scale};
 
 /// The tip p at readings `theta` and temperature `temp_c`, with ∂p/∂param written into
 /// `cols` (one 3-vector per entry of `params`; zero for frame parameters).
@@ -41,7 +42,17 @@ pub fn tip_jacobian(
         }
     };
     let turn = |j: usize| -> Vector3<f64> { c.axes[j].cross(&(p - c.origins[j])) };
+    let at = TipPoint {
+        arm,
+        chain: &c,
+        theta,
+        temp_c,
+    };
     for (param, col) in params.iter().zip(cols.iter_mut()) {
+        if let Some((e, k)) = param.effect() {
+            *col = e.with(|t| t.column(k, &at));
+            continue;
+        }
         *col = match *param {
             Param::ZeroOffset(j) => turn(j),
             Param::Tilt(j, k) => {
@@ -60,23 +71,7 @@ pub fn tip_jacobian(
             Param::ProbeError(k) => {
                 c.rotations[n - 1].column(k) * thermal_scale(arm.probe.thermal, temp_c)
             }
-            Param::Harmonic { joint, order, cos } => {
-                let a = f64::from(order) * theta[joint];
-                turn(joint) * if cos { a.cos() } else { a.sin() }
-            }
-            Param::Gravity(j) => {
-                let lever = c.axes[j].dot(&(p - c.origins[j]).cross(&Vector3::z()));
-                turn(j) * lever
-            }
-            Param::Thermal(Link::Joint(j)) => {
-                c.rotations[j]
-                    * Vector3::from(arm.joints[j].actual_link())
-                    * (temp_c - REFERENCE_TEMP_C)
-            }
-            Param::Thermal(Link::Probe) => {
-                c.rotations[n - 1] * Vector3::from(arm.probe.actual()) * (temp_c - REFERENCE_TEMP_C)
-            }
-            Param::FrameRotation(_) | Param::FrameTranslation(_) => Vector3::zeros(),
+            _ => Vector3::zeros(),
         };
     }
     p
@@ -85,7 +80,7 @@ pub fn tip_jacobian(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::params::{apply, Terms};
+    use crate::params::{apply, Effect, Link, Terms};
     use quatarm_ref::arm::Harmonic;
 
     fn check(arm: &Arm, params: &[Param], theta: &[f64], temp: f64, rel_tol: f64) {
@@ -118,12 +113,13 @@ mod tests {
     }
 
     fn every_term(dof: usize) -> Vec<Param> {
-        Terms::parse(
-            "+encoder_harmonic:*:1,+encoder_harmonic:*:2,+thermal_expansion:*",
-            dof,
-        )
-        .unwrap()
-        .params(dof)
+        let harmonics =
+            (1..=2).flat_map(|order| (0..dof).map(move |joint| Effect::Harmonic { joint, order }));
+        let thermal = (0..dof)
+            .map(Link::Joint)
+            .chain([Link::Probe])
+            .map(Effect::Thermal);
+        Terms::with(&harmonics.chain(thermal).collect::<Vec<_>>()).params(dof)
     }
 
     #[test]
@@ -158,9 +154,7 @@ mod tests {
         let mut arm = Arm::default6();
         arm.joints[1].gravity = 3e-8;
         arm.joints[3].gravity = 2e-8;
-        let params = Terms::parse("+gravity_compliance:2,+gravity_compliance:4", 6)
-            .unwrap()
-            .params(6);
+        let params = Terms::with(&[Effect::Gravity(1), Effect::Gravity(3)]).params(6);
         let theta = [0.3, 0.9, 0.1, -0.8, 0.5, 0.6];
         check(&arm, &params, &theta, 20.0, 2e-4);
     }

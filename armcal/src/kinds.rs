@@ -145,9 +145,7 @@ mod tests {
         });
         assert!(check(&with_bar, &arm, &params, &all).is_none());
         // Effects alone on a given geometry cannot scale the arm.
-        let gravity = Terms::parse("only,+gravity_compliance:*", 6)
-            .unwrap()
-            .params(6);
+        let gravity: Vec<Param> = (0..6).map(Param::Gravity).collect();
         let g: Vec<usize> = (0..gravity.len()).collect();
         assert!(check(&spat_only(), &arm, &gravity, &g).is_none());
         // Holding one link error that is part of the scale is enough too.

@@ -12,6 +12,7 @@
 //! can be updated on its manifold while lengths and angles are simply added.
 
 use nalgebra::{Cholesky, DMatrix, DVector};
+use std::fmt;
 
 /// Normal equations at a state: cost = ½‖r‖², JᵀJ and Jᵀr.
 #[derive(Clone, Debug)]
@@ -62,6 +63,63 @@ impl Default for Options {
     }
 }
 
+/// Why a solve stopped. The words ([`fmt::Display`]) are the reports'.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Termination {
+    /// No unknowns.
+    NothingToFit,
+    /// The residuals are zero.
+    ExactFit,
+    /// The residuals are not finite numbers.
+    NotFinite,
+    /// First-order optimality: the residual is orthogonal to every column.
+    GradientVanished,
+    /// The iteration budget ran out while the cost was still falling.
+    Budget,
+    /// The damped normal equations could not be factored at any damping.
+    Unfactorable,
+    /// The last step was below the step tolerance.
+    StepTolerance,
+    /// The last step lowered the cost by less than the cost tolerance.
+    CostStalled,
+    /// No step lowers the cost, and the steps tried were already negligible.
+    RoundingFloor,
+    /// No step lowers the cost at any damping.
+    NoDescent,
+}
+
+impl Termination {
+    /// Whether it is a convergence test that was met.
+    pub fn converged(self) -> bool {
+        matches!(
+            self,
+            Termination::NothingToFit
+                | Termination::ExactFit
+                | Termination::GradientVanished
+                | Termination::StepTolerance
+                | Termination::CostStalled
+                | Termination::RoundingFloor
+        )
+    }
+}
+
+impl fmt::Display for Termination {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Termination::NothingToFit => "nothing to fit",
+            Termination::ExactFit => "exact fit",
+            Termination::NotFinite => "the residuals are not finite numbers",
+            Termination::GradientVanished => "gradient vanished",
+            Termination::Budget => "still improving",
+            Termination::Unfactorable => "the normal equations cannot be factored",
+            Termination::StepTolerance => "step below tolerance",
+            Termination::CostStalled => "cost no longer decreasing",
+            Termination::RoundingFloor => "no smaller cost within rounding",
+            Termination::NoDescent => "no step lowers the cost",
+        })
+    }
+}
+
 /// How a solve ended.
 #[derive(Clone, Debug)]
 pub struct Outcome<S> {
@@ -77,8 +135,8 @@ pub struct Outcome<S> {
     pub converged: bool,
     /// Whether it stopped only because the iteration budget ran out (still improving).
     pub exhausted: bool,
-    /// Why it stopped, in words.
-    pub reason: String,
+    /// Why it stopped.
+    pub reason: Termination,
 }
 
 /// What watches the solver: told after every linearisation the iteration number and the
@@ -112,23 +170,22 @@ pub fn solve<P: Problem>(
             iterations: 0,
             converged: true,
             exhausted: false,
-            reason: "nothing to fit".into(),
+            reason: Termination::NothingToFit,
         };
     }
     let mut normal = problem.normal(&state);
     let start_cost = normal.cost;
     let mut lambda = 1e-4;
     let mut iterations = 1;
-    let mut exhausted = false;
     observer.iteration(iterations, normal.cost);
     // Every way out of the iteration says whether it converged and why; the outcome is the
     // state and normal equations it leaves.
-    let (converged, reason) = 'solve: loop {
+    let reason = 'solve: loop {
         if normal.cost == 0.0 {
-            break (true, "exact fit");
+            break Termination::ExactFit;
         }
         if !normal.cost.is_finite() {
-            break (false, "the residuals are not finite numbers");
+            break Termination::NotFinite;
         }
         // Scale to a unit diagonal; an unknown with no effect (zero column) stays put.
         let (a, scale) = unit_diagonal(&normal.jtj);
@@ -136,11 +193,10 @@ pub fn solve<P: Problem>(
         let rnorm = (2.0 * normal.cost).sqrt();
         // First-order optimality: the residual is orthogonal to every column.
         if g.amax() <= 1e-13 * rnorm {
-            break (true, "gradient vanished");
+            break Termination::GradientVanished;
         }
         if iterations >= options.max_iterations {
-            exhausted = true;
-            break (false, "still improving");
+            break Termination::Budget;
         }
         // Try damped steps until one lowers the cost.
         loop {
@@ -155,7 +211,7 @@ pub fn solve<P: Problem>(
             let Some(ch) = Cholesky::new(m) else {
                 lambda *= 10.0;
                 if lambda > 1e16 {
-                    break 'solve (false, "the normal equations cannot be factored");
+                    break 'solve Termination::Unfactorable;
                 }
                 continue;
             };
@@ -187,21 +243,21 @@ pub fn solve<P: Problem>(
                 iterations += 1;
                 observer.iteration(iterations, normal.cost);
                 if step_small {
-                    break 'solve (true, "step below tolerance");
+                    break 'solve Termination::StepTolerance;
                 }
                 if cost_small {
-                    break 'solve (true, "cost no longer decreasing");
+                    break 'solve Termination::CostStalled;
                 }
                 break;
             }
             // The step does not lower the cost. If it is already negligible we are at the
             // minimum to rounding; otherwise damp harder.
             if step_small {
-                break 'solve (true, "no smaller cost within rounding");
+                break 'solve Termination::RoundingFloor;
             }
             lambda *= 8.0;
             if lambda > 1e16 {
-                break 'solve (false, "no step lowers the cost");
+                break 'solve Termination::NoDescent;
             }
         }
     };
@@ -210,9 +266,9 @@ pub fn solve<P: Problem>(
         cost: normal.cost,
         start_cost,
         iterations,
-        converged,
-        exhausted,
-        reason: reason.into(),
+        converged: reason.converged(),
+        exhausted: reason == Termination::Budget,
+        reason,
     }
 }
 
@@ -285,6 +341,10 @@ mod tests {
         let out = solve(&Rosen, [-1.2, 1.0], &opts, &mut |_, _| {});
         assert!(!out.converged && out.exhausted);
         assert_eq!(out.iterations, 3);
-        assert!(out.reason.contains("still improving"), "{}", out.reason);
+        assert!(
+            out.reason.to_string().contains("still improving"),
+            "{}",
+            out.reason
+        );
     }
 }

@@ -4,7 +4,7 @@
 use crate::calib::Fit;
 use crate::data::{Dataset, Kind};
 use crate::holdout::Holdout;
-use crate::ident::Why;
+use crate::ident::{Fixed, Why};
 use crate::params::Param;
 use crate::residuals::Summary;
 use serde::Serialize;
@@ -185,6 +185,69 @@ fn unit_ratio(num: &str, den: &str) -> String {
     }
 }
 
+/// A held unknown as the report gives it: why it was held, and what carries its effect.
+fn held_report(f: &Fixed, fit: &Fit, has_points: bool) -> HeldReport {
+    let p = fit.params[f.index];
+    let absorbed_by: Vec<Absorbed> = f
+        .absorbed_by
+        .iter()
+        .map(|&(k, c)| Absorbed {
+            key: fit.params[k].key(),
+            description: words(fit.params[k], fit, has_points),
+            coefficient: c,
+            unit: unit_ratio(fit.params[k].unit(), p.unit()),
+        })
+        .collect();
+    let (reason, explanation) = match &f.why {
+        Why::NoEffect => (
+            "no_effect",
+            "it does not change any residual of these data".to_string(),
+        ),
+        Why::Inseparable => (
+            "inseparable",
+            if absorbed_by.is_empty() {
+                "its effect on these data equals a combination of the fitted parameters'".into()
+            } else {
+                format!(
+                    "its effect on these data is exactly that of {}",
+                    absorbed_by
+                        .iter()
+                        .map(|a| format!("{} (×{})", a.description, coef(a.coefficient, &a.unit)))
+                        .collect::<Vec<_>>()
+                        .join(" and ")
+                )
+            },
+        ),
+        Why::Weak { uncertainty } => (
+            "weak",
+            format!(
+                "these data determine it only to ±{} {} (more than a plausible size, {} {})",
+                sig(*uncertainty),
+                p.unit(),
+                sig(p.plausible()),
+                p.unit()
+            ),
+        ),
+        Why::Requested => ("requested", "held on request".to_string()),
+        Why::Insignificant { value, uncertainty } => (
+            "insignificant",
+            format!(
+                "its estimate {} ± {} {} does not differ significantly from its start value",
+                sig(*value),
+                sig(*uncertainty),
+                p.unit()
+            ),
+        ),
+    };
+    HeldReport {
+        key: p.key(),
+        description: p.describe(&fit.start),
+        reason: reason.into(),
+        explanation,
+        absorbed_by,
+    }
+}
+
 /// Builds the report of a fit.
 pub fn build(
     fit: &Fit,
@@ -213,72 +276,12 @@ pub fn build(
             uncertainty: fit.uncertainty[k].unwrap_or(f64::NAN),
         });
     }
-    let mut held = Vec::new();
-    for f in &fit.ident.fixed {
-        let p = fit.params[f.index];
-        let absorbed_by: Vec<Absorbed> = f
-            .absorbed_by
-            .iter()
-            .map(|&(k, c)| Absorbed {
-                key: fit.params[k].key(),
-                description: words(fit.params[k], fit, has_points),
-                coefficient: c,
-                unit: unit_ratio(fit.params[k].unit(), p.unit()),
-            })
-            .collect();
-        let (reason, explanation) = match &f.why {
-            Why::NoEffect => (
-                "no_effect",
-                "it does not change any residual of these data".to_string(),
-            ),
-            Why::Inseparable => (
-                "inseparable",
-                if absorbed_by.is_empty() {
-                    "its effect on these data equals a combination of the fitted parameters'".into()
-                } else {
-                    format!(
-                        "its effect on these data is exactly that of {}",
-                        absorbed_by
-                            .iter()
-                            .map(|a| format!(
-                                "{} (×{})",
-                                a.description,
-                                coef(a.coefficient, &a.unit)
-                            ))
-                            .collect::<Vec<_>>()
-                            .join(" and ")
-                    )
-                },
-            ),
-            Why::Weak { uncertainty } => (
-                "weak",
-                format!(
-                    "these data determine it only to ±{} {} (more than a plausible size, {} {})",
-                    sig(*uncertainty),
-                    p.unit(),
-                    sig(p.plausible()),
-                    p.unit()
-                ),
-            ),
-            Why::Requested => ("requested", "held on request".to_string()),
-            Why::Insignificant { value, uncertainty } => (
-                "insignificant",
-                format!(
-                    "its estimate {} ± {} {} does not differ significantly from its start value",
-                    sig(*value),
-                    sig(*uncertainty),
-                    p.unit()
-                ),
-            ),
-        };
-        held.push(HeldReport {
-            key: p.key(),
-            description: p.describe(&fit.start),
-            reason: reason.into(),
-            explanation,
-            absorbed_by,
-        });
-    }
+    let held = fit
+        .ident
+        .fixed
+        .iter()
+        .map(|f| held_report(f, fit, has_points))
+        .collect();
     Report {
         data: DataInfo {
             file: data.source.clone(),
@@ -294,7 +297,7 @@ pub fn build(
         joints: fit.start.dof(),
         terms: String::new(),
         iterations: fit.iterations,
-        solver: fit.solver.clone(),
+        solver: fit.solver.to_string(),
         fit_ms: fit.elapsed.as_secs_f64() * 1e3,
         noise_um: fit.sigma_mm * 1e3,
         condition_number: fit.ident.condition_number,

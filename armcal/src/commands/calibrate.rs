@@ -19,10 +19,7 @@ pub struct Args {
     /// spec's `default-6`.
     #[arg(long)]
     arm: Option<PathBuf>,
-    /// What to fit: `geometric` (the 6N + 3 parameters), plus effects such as
-    /// `+encoder_harmonic:2:1,+gravity_compliance:4,+thermal_expansion:probe` (joint numbers
-    /// 1-based, `*` for all), or `only,+…` for the effects alone.
-    #[arg(long, default_value = "geometric")]
+    #[arg(long, default_value = "geometric", help = terms_help())]
     terms: String,
     /// The calibration file to write; the firmware's binary table goes beside it (`.bin`).
     #[arg(short, long)]
@@ -185,4 +182,19 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         print!("{}", rep.text());
     }
     Ok(())
+}
+
+/// The help of `--terms`, with an example of every effect from the registry.
+fn terms_help() -> String {
+    use armcal::params::{Effect, Link};
+    let example = [
+        Effect::Harmonic { joint: 1, order: 1 },
+        Effect::Gravity(3),
+        Effect::Thermal(Link::Probe),
+    ];
+    format!(
+        "What to fit: `geometric` (the 6N + 3 parameters), plus effects such as `{}` (joint \
+         numbers 1-based, `*` for all), or `only,+…` for the effects alone",
+        example.map(|e| e.spec()).join(",")
+    )
 }

@@ -2,9 +2,13 @@
 //! the model with it and measure the gain on data it did not fit.
 
 use anyhow::{bail, Context};
+use armcal::data::Dataset;
+use armcal::diagnose::report::Report;
+use armcal::diagnose::Diagnosis;
 use armcal::diagnose::{self, patterns, plots, report, FoldChoice};
+use armcal::output::Staged;
 use quatarm_ref::{calfile, forward};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `armcal diagnose`.
 #[derive(clap::Args)]
@@ -116,62 +120,76 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
 
     if let Some(out) = &a.output {
-        let arm = &d.extended.fit.arm;
-        let header = [
-            format!(
-                "extended calibration by armcal diagnose from {}",
-                a.data.display()
-            ),
-            format!("model {}; {}", rep.extended.model, rep.verdict),
-        ];
-        let refs: Vec<&str> = header.iter().map(String::as_str).collect();
-        let text = calfile::write(arm, &refs);
-        let back = armcal::load::written(&text)
-            .map_err(|e| anyhow::anyhow!("the calibration file written does not read back: {e}"))?;
-        for r in data.rows.iter().take(50) {
-            let dist = (forward::forward(&back, &r.theta, r.temp_c).p
-                - forward::forward(arm, &r.theta, r.temp_c).p)
-                .norm();
-            if dist > 1e-9 {
-                bail!("the calibration file written evaluates {dist} mm away from the fit (a bug)");
-            }
-        }
-        files
-            .write(out, text.as_bytes())
-            .map_err(anyhow::Error::msg)?;
-        rep.output.calibration = Some(out.display().to_string());
-        let table = out.with_extension("bin");
-        match armcal::tablebuild::build(arm) {
-            Ok(bytes) => {
-                files.write(&table, &bytes).map_err(anyhow::Error::msg)?;
-                rep.output.table = Some(table.display().to_string());
-            }
-            Err(e) => {
-                // A stale table beside the file would describe another model.
-                files.remove_at_commit(&table);
-                let why = report::beyond_table(arm);
-                rep.output.table_error = Some(format!(
-                    "{e}{}: the firmware could not apply {}; the calibration file is \
-                     written and the host evaluates every term",
-                    if why.is_empty() {
-                        String::new()
-                    } else {
-                        format!(" ({})", why.join("; "))
-                    },
-                    if why.len() == 1 {
-                        "this term"
-                    } else {
-                        "these terms"
-                    }
-                ));
-            }
-        }
+        stage_extended(&a, out, &d, &data, &mut rep, &mut files)?;
     }
     files.commit().map_err(anyhow::Error::msg)?;
     if a.json {
         println!("{}", rep.json());
     } else {
         print!("{}", rep.text());
+    }
+    Ok(())
+}
+
+/// Stages the extended calibration file `out` and its binary table beside it (or says in the
+/// report why the firmware cannot hold the model, and removes a stale table at commit).
+fn stage_extended(
+    a: &Args,
+    out: &Path,
+    d: &Diagnosis,
+    data: &Dataset,
+    rep: &mut Report,
+    files: &mut Staged,
+) -> anyhow::Result<()> {
+    let arm = &d.extended.fit.arm;
+    let header = [
+        format!(
+            "extended calibration by armcal diagnose from {}",
+            a.data.display()
+        ),
+        format!("model {}; {}", rep.extended.model, rep.verdict),
+    ];
+    let refs: Vec<&str> = header.iter().map(String::as_str).collect();
+    let text = calfile::write(arm, &refs);
+    let back = armcal::load::written(&text)
+        .map_err(|e| anyhow::anyhow!("the calibration file written does not read back: {e}"))?;
+    for r in data.rows.iter().take(50) {
+        let dist = (forward::forward(&back, &r.theta, r.temp_c).p
+            - forward::forward(arm, &r.theta, r.temp_c).p)
+            .norm();
+        if dist > 1e-9 {
+            bail!("the calibration file written evaluates {dist} mm away from the fit (a bug)");
+        }
+    }
+    files
+        .write(out, text.as_bytes())
+        .map_err(anyhow::Error::msg)?;
+    rep.output.calibration = Some(out.display().to_string());
+    let table = out.with_extension("bin");
+    match armcal::tablebuild::build(arm) {
+        Ok(bytes) => {
+            files.write(&table, &bytes).map_err(anyhow::Error::msg)?;
+            rep.output.table = Some(table.display().to_string());
+        }
+        Err(e) => {
+            // A stale table beside the file would describe another model.
+            files.remove_at_commit(&table);
+            let why = report::beyond_table(arm);
+            rep.output.table_error = Some(format!(
+                "{e}{}: the firmware could not apply {}; the calibration file is \
+                 written and the host evaluates every term",
+                if why.is_empty() {
+                    String::new()
+                } else {
+                    format!(" ({})", why.join("; "))
+                },
+                if why.len() == 1 {
+                    "this term"
+                } else {
+                    "these terms"
+                }
+            ));
+        }
     }
     Ok(())
 }

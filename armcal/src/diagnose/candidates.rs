@@ -1,9 +1,9 @@
 //! The candidate causes: every term of the spec's vocabulary, and which of them these data can
 //! see at all.
 //!
-//! Candidates are `encoder_harmonic` of every joint and orders 1–4, `gravity_compliance` of
-//! every joint, and `thermal_expansion` of every link and the probe when the data have a
-//! temperature spread. Before any is tested, the structural identifiability of the geometric
+//! Candidates are every effect's vocabulary ([`crate::effects::Family::vocabulary`]): the
+//! encoder harmonics of every joint and orders 1–4, the gravity compliance of every joint, and
+//! the thermal expansion of every link and the probe when the data have a temperature spread. Before any is tested, the structural identifiability of the geometric
 //! model with all of them (the calibration's own analysis, at the arm's nominal skeleton) sorts
 //! them:
 //! - no effect on these data: gravity on a joint whose axis stays vertical (joint 1 of
@@ -18,11 +18,11 @@
 use crate::calib::{structural, unknowns};
 use crate::data::Dataset;
 use crate::ident::{Fixed, Identifiability, Why};
-use crate::params::{Effect, Link, Param, Terms};
+use crate::params::{Effect, Param, Terms};
 use quatarm_ref::arm::Arm;
 
 /// Highest harmonic order tried.
-pub const MAX_ORDER: u32 = 4;
+pub const MAX_ORDER: u32 = crate::effects::harmonic::DIAGNOSIS_MAX_ORDER;
 
 /// Smallest temperature spread (°C, max − min) for which thermal terms are candidates.
 pub const MIN_TEMP_SPREAD_C: f64 = 1.0;
@@ -59,30 +59,11 @@ pub struct Candidates {
     pub temp_range: Option<(f64, f64)>,
 }
 
-/// Every effect of the vocabulary for `dof` joints, thermal ones when `thermal`.
-pub fn vocabulary(dof: usize, thermal: bool) -> Vec<Effect> {
-    let mut v = Vec::new();
-    for joint in 0..dof {
-        for order in 1..=MAX_ORDER {
-            v.push(Effect::Harmonic { joint, order });
-        }
-    }
-    v.extend((0..dof).map(Effect::Gravity));
-    if thermal {
-        v.extend((0..dof).map(|j| Effect::Thermal(Link::Joint(j))));
-        v.push(Effect::Thermal(Link::Probe));
-    }
-    v
-}
+pub use crate::effects::vocabulary;
 
 /// The effect a calibration unknown belongs to.
 pub fn effect_of(p: Param) -> Option<Effect> {
-    match p {
-        Param::Harmonic { joint, order, .. } => Some(Effect::Harmonic { joint, order }),
-        Param::Gravity(j) => Some(Effect::Gravity(j)),
-        Param::Thermal(l) => Some(Effect::Thermal(l)),
-        _ => None,
-    }
+    p.effect().map(|(e, _)| e)
 }
 
 /// The data's temperature range, when they record temperatures.
@@ -189,33 +170,16 @@ fn held_of<'a>(id: &'a Identifiability, unknowns: &[Param], e: Effect) -> Vec<&'
 }
 
 fn no_effect_reason(arm: &Arm, e: Effect, thermal: bool) -> String {
-    match e {
-        Effect::Gravity(j) => format!(
-            "joint {} has no gravity lever on these poses (its axis stays vertical, so \
-             a · ((p − o) × ẑ) = 0)",
-            j + 1
-        ),
-        Effect::Thermal(_) if !thermal => "the data have no temperature spread".into(),
-        Effect::Thermal(Link::Joint(j))
-            if arm.joints[j].actual_link().iter().all(|c| c.abs() < 1e-9) =>
-        {
-            format!("link {} has no length: nothing to expand", j + 1)
-        }
-        _ => format!(
-            "{} does not change any residual of these data",
-            describe_effect(arm, e)
-        ),
-    }
+    e.with(|t| t.no_effect_reason(arm, thermal))
+        .unwrap_or_else(|| {
+            format!(
+                "{} does not change any residual of these data",
+                e.describe()
+            )
+        })
 }
 
 /// An effect in words, joints 1-based.
 pub fn describe_effect(_arm: &Arm, e: Effect) -> String {
-    match e {
-        Effect::Harmonic { joint, order } => {
-            format!("joint {} encoder harmonic of order {order}", joint + 1)
-        }
-        Effect::Gravity(j) => format!("joint {} gravity compliance", j + 1),
-        Effect::Thermal(Link::Joint(j)) => format!("link {} thermal expansion", j + 1),
-        Effect::Thermal(Link::Probe) => "probe thermal expansion".into(),
-    }
+    e.describe()
 }

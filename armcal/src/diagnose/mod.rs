@@ -23,7 +23,7 @@ pub mod plots;
 pub mod report;
 pub mod scenario;
 pub mod select;
-pub mod stats;
+pub use crate::stats;
 
 use crate::calib::{self, CalibError, Fit};
 use crate::data::Dataset;
@@ -309,19 +309,17 @@ fn cause(
             )
         })
         .collect();
-    let (magnitude, magnitude_uncertainty, unit) = match c.effect {
-        Effect::Harmonic { .. } => {
-            let (s, us) = (values[0].1, values[0].2.unwrap_or(f64::NAN));
-            let (co, uc) = (values[1].1, values[1].2.unwrap_or(f64::NAN));
-            let a = s.hypot(co);
-            let rho = correlation(fit, &params[0], &params[1]);
-            let var = (s * s * us * us + co * co * uc * uc + 2.0 * s * co * rho * us * uc)
-                / (a * a).max(1e-300);
-            (a, var.max(0.0).sqrt(), "rad")
-        }
-        Effect::Gravity(_) => (values[0].1, values[0].2.unwrap_or(f64::NAN), "rad/mm"),
-        Effect::Thermal(_) => (values[0].1, values[0].2.unwrap_or(f64::NAN), "1/°C"),
+    let rho = if params.len() == 2 {
+        correlation(fit, &params[0], &params[1])
+    } else {
+        0.0
     };
+    let sized: Vec<(f64, f64)> = values
+        .iter()
+        .map(|(_, v, u)| (*v, u.unwrap_or(f64::NAN)))
+        .collect();
+    let ((magnitude, magnitude_uncertainty), unit) =
+        c.effect.with(|t| (t.magnitude(&sized, rho), t.unit()));
     // What the term moves the ball by: the arm with and without it.
     let mut without = fit.arm.clone();
     for (p, v, _) in &values {

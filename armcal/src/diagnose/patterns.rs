@@ -22,7 +22,7 @@
 
 use super::Diagnosis;
 use crate::data::{Dataset, Kind};
-use crate::params::Effect;
+use crate::effects::{Effect, FAMILIES};
 use crate::residuals::Rigid;
 use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;
@@ -149,216 +149,152 @@ pub struct Figure {
 }
 
 /// A panel's point for a row and its miss vector (`None`: the row says nothing here).
-type RowPoint<'a> = dyn Fn(usize, &Vector3<f64>) -> Option<(f64, f64)> + 'a;
+pub type RowPoint<'a> = dyn Fn(usize, &Vector3<f64>) -> Option<(f64, f64)> + 'a;
 
 /// Bins of a panel's x axis.
 const BINS: usize = 24;
 
-/// The figures of a diagnosis: residuals against each joint's reading, against each joint's
-/// gravity lever, against temperature (when the data have a spread).
-pub fn figures(d: &Diagnosis, data: &Dataset) -> Vec<Figure> {
-    let arm = &d.baseline.fit.arm;
-    let geo = geometry(arm, data);
-    let frame = d.baseline.fit.frame;
-    let before_all = missing(&d.baseline.holdout.residuals.rows, frame.as_ref(), data);
-    let after_all = (!d.causes.is_empty())
-        .then(|| missing(&d.extended.holdout.residuals.rows, frame.as_ref(), data));
-    let judged: Vec<bool> = d
-        .baseline
-        .holdout
-        .judged
-        .iter()
-        .zip(&d.extended.holdout.judged)
-        .map(|(a, b)| *a && *b)
-        .collect();
-    let named = |e: Effect| d.causes.iter().any(|c| c.effect == e);
-    let n = data.dof;
-    // Each named cause's own part at every row: the extended model's held-out miss plus the
-    // displacement its term makes (the extended arm with and without the term, base frame).
-    let own_parts: Vec<(Effect, Vec<Vector3<f64>>)> = match &after_all {
-        None => Vec::new(),
-        Some(after) => d
-            .causes
+/// What every effect's figure is drawn from: the diagnosis, its data, the geometry of each
+/// row and what the models miss there.
+pub struct Patterns<'a> {
+    /// The diagnosis.
+    pub d: &'a Diagnosis,
+    /// Its data.
+    pub data: &'a Dataset,
+    /// The geometry of each row under the geometric model's arm.
+    pub geo: Vec<RowGeometry>,
+    /// Hinge or swivel, where the arm's frames say it (not for D–H style twisted frames).
+    pub plain: bool,
+    before_all: Vec<Vector3<f64>>,
+    after_all: Option<Vec<Vector3<f64>>>,
+    judged: Vec<bool>,
+    own_parts: Vec<(Effect, Vec<Vector3<f64>>)>,
+    reach: f64,
+}
+
+impl<'a> Patterns<'a> {
+    /// The patterns of diagnosis `d` on `data`.
+    pub fn new(d: &'a Diagnosis, data: &'a Dataset) -> Patterns<'a> {
+        let arm = &d.baseline.fit.arm;
+        let frame = d.baseline.fit.frame;
+        let before_all = missing(&d.baseline.holdout.residuals.rows, frame.as_ref(), data);
+        let after_all = (!d.causes.is_empty())
+            .then(|| missing(&d.extended.holdout.residuals.rows, frame.as_ref(), data));
+        let judged = d
+            .baseline
+            .holdout
+            .judged
             .iter()
-            .map(|c| {
-                let ext = &d.extended.fit.arm;
-                let mut without = ext.clone();
-                for (p, v, _) in &c.values {
-                    p.add_to(&mut without, p.value(&d.extended.fit.start) - v);
-                }
-                let part = data
-                    .rows
-                    .iter()
-                    .zip(after)
-                    .map(|(r, m)| {
-                        m + forward::forward(ext, &r.theta, r.temp_c).p
-                            - forward::forward(&without, &r.theta, r.temp_c).p
-                    })
-                    .collect();
-                (c.effect, part)
-            })
-            .collect(),
-    };
-    let own_of = |e: Option<Effect>| -> Option<&Vec<Vector3<f64>>> {
-        Some(&own_parts.iter().find(|(x, _)| Some(*x) == e)?.1)
-    };
-    // A panel from a per-row (x, y) function; `y` gets the miss vector and returns None to skip.
-    let panel =
-        |title: String, x_label: String, y_label: String, cause: Option<Effect>, f: &RowPoint| {
-            let pts = |m: &[Vector3<f64>]| -> Vec<(f64, f64)> {
-                (0..data.rows.len())
-                    .filter(|&i| judged[i])
-                    .filter_map(|i| f(i, &m[i]))
-                    .collect()
-            };
-            let points = pts(&before_all);
-            let before = binned(&points, BINS, 4);
-            let after = after_all.as_ref().map(|m| binned(&pts(m), BINS, 4));
-            let own = own_of(cause).map(|m| binned(&pts(m), BINS, 4));
-            Panel {
-                title,
-                x_label,
-                y_label,
-                points,
-                before,
-                after,
-                own,
-                named: cause.is_some(),
-            }
-        };
-    let mut figs = Vec::new();
-
-    // Rows where joint k's angle can be read from the ball: its lever |t_k| at least half
-    // the median and 2 % of the arm's reach (the last joint of a Panda turns the ball about
-    // an axis 0.1 mm away: nothing to read). `None`: too few such rows for a panel.
-    let reach = crate::sim::reach(arm);
-    let cut_of = |k: usize| -> Option<f64> {
-        let levers: Vec<f64> = geo.iter().map(|g| g.turn[k].norm()).collect();
-        let cut = (0.5 * median(levers.clone())).max(0.02 * reach);
-        let enough = levers.iter().filter(|l| **l >= cut).count() * 10 >= levers.len();
-        enough.then_some(cut)
-    };
-    // Hinge or swivel, where the arm's frames say it (not for D–H style twisted frames).
-    let plain = arm
-        .joints
-        .iter()
-        .all(|j| j.tilt.iter().all(|t| t.abs() < 1e-3));
-    let mut skipped = Vec::new();
-
-    // Against each joint's reading.
-    let mut panels = Vec::new();
-    for k in 0..n {
-        let Some(cut) = cut_of(k) else {
-            skipped.push(k + 1);
-            continue;
-        };
-        let kind = match (plain, arm.is_hinge(k)) {
-            (false, _) => String::new(),
-            (true, true) => " (hinge)".to_string(),
-            (true, false) => " (swivel)".to_string(),
-        };
-        let harmonic = (1..=super::candidates::MAX_ORDER)
-            .map(|order| Effect::Harmonic { joint: k, order })
-            .find(|e| named(*e));
-        panels.push(panel(
-            format!("joint {}{kind}", k + 1),
-            format!("joint {} reading θ{} (deg)", k + 1, k + 1),
-            "apparent angle error (µrad)".into(),
-            harmonic,
-            &|i, m| {
-                let t = geo[i].turn[k];
-                let t2 = t.norm_squared();
-                (t2.sqrt() >= cut && t2 > 0.0)
-                    .then(|| (data.rows[i].theta[k].to_degrees(), 1e6 * t.dot(m) / t2))
-            },
-        ));
-    }
-    let mut caption =
-        "An encoder harmonic shows as a wave of its order (cycles per turn)".to_string();
-    if !skipped.is_empty() {
-        caption += &format!(
-            "; no panel for joint {}: the ball passes too close to its axis to show its angle",
-            skipped
-                .iter()
-                .map(|k| k.to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-    }
-    figs.push(Figure {
-        file: "residuals_vs_joint_angle.png".into(),
-        title: "What the model misses, as each joint's angle error, against the joint's reading"
-            .into(),
-        caption,
-        panels,
-    });
-
-    // Against each joint's gravity lever.
-    let mut panels = Vec::new();
-    for k in 0..n {
-        let span = geo.iter().map(|g| g.lever[k].abs()).fold(0.0, f64::max);
-        if span < 1.0 {
-            continue;
-        }
-        let Some(cut) = cut_of(k) else { continue };
-        panels.push(panel(
-            format!("joint {}", k + 1),
-            format!("joint {} gravity lever a·((p − o) × z) (mm)", k + 1),
-            "apparent angle error (µrad)".into(),
-            Some(Effect::Gravity(k)).filter(|e| named(*e)),
-            &|i, m| {
-                let t = geo[i].turn[k];
-                let t2 = t.norm_squared();
-                (t2.sqrt() >= cut && t2 > 0.0).then(|| (geo[i].lever[k], 1e6 * t.dot(m) / t2))
-            },
-        ));
-    }
-    figs.push(Figure {
-        file: "residuals_vs_gravity_lever.png".into(),
-        title: "What the model misses, as each joint's angle error, against its gravity lever"
-            .into(),
-        caption: "A gravity compliance shows as a straight line through 0 (slope g in µrad/mm)"
-            .into(),
-        panels,
-    });
-
-    // Against temperature.
-    if d.candidates.thermal {
-        let mut panels = Vec::new();
-        for l in 0..=n {
-            if geo.iter().all(|g| g.links[l].is_none()) {
-                continue;
-            }
-            let (name, link) = if l == n {
-                ("probe".to_string(), crate::params::Link::Probe)
-            } else {
-                (format!("link {}", l + 1), crate::params::Link::Joint(l))
-            };
-            let cause = d
+            .zip(&d.extended.holdout.judged)
+            .map(|(a, b)| *a && *b)
+            .collect();
+        let own_parts = match &after_all {
+            None => Vec::new(),
+            Some(after) => d
                 .causes
                 .iter()
-                .find(|c| {
-                    c.effect == Effect::Thermal(link)
-                        || c.indistinguishable.contains(&Effect::Thermal(link))
-                })
-                .map(|c| c.effect);
-            panels.push(panel(
-                name.clone(),
-                "temperature (°C)".into(),
-                format!("apparent {name} elongation (µm)"),
-                cause,
-                &|i, m| geo[i].links[l].map(|dir| (data.rows[i].temp_c, 1e3 * dir.dot(m))),
-            ));
+                .map(|c| own_part(d, c, data, after))
+                .collect(),
+        };
+        Patterns {
+            d,
+            data,
+            geo: geometry(arm, data),
+            plain: arm
+                .joints
+                .iter()
+                .all(|j| j.tilt.iter().all(|t| t.abs() < 1e-3)),
+            before_all,
+            after_all,
+            judged,
+            own_parts,
+            reach: crate::sim::reach(arm),
         }
-        figs.push(Figure {
-            file: "residuals_vs_temperature.png".into(),
-            title: "What the model misses, as each link's elongation, against temperature".into(),
-            caption: "A thermal expansion shows as a line rising with temperature (slope κ·L)"
-                .into(),
-            panels,
-        });
     }
-    figs
+
+    /// The geometric model's arm.
+    pub fn arm(&self) -> &Arm {
+        &self.d.baseline.fit.arm
+    }
+
+    /// Whether `e` is a named cause.
+    pub fn named(&self, e: Effect) -> bool {
+        self.d.causes.iter().any(|c| c.effect == e)
+    }
+
+    /// The lever below which joint k's angle cannot be read from the ball: its |t_k| at least
+    /// half the median and 2 % of the arm's reach (the last joint of a Panda turns the ball
+    /// about an axis 0.1 mm away: nothing to read). `None`: too few rows above it for a panel.
+    pub fn cut_of(&self, k: usize) -> Option<f64> {
+        let levers: Vec<f64> = self.geo.iter().map(|g| g.turn[k].norm()).collect();
+        let cut = (0.5 * median(levers.clone())).max(0.02 * self.reach);
+        let enough = levers.iter().filter(|l| **l >= cut).count() * 10 >= levers.len();
+        enough.then_some(cut)
+    }
+
+    /// A panel from a per-row (x, y) function `f`, which gets the miss vector and returns
+    /// `None` to skip the row; `cause` is the named cause the panel belongs to.
+    pub fn panel(
+        &self,
+        title: String,
+        x_label: String,
+        y_label: String,
+        cause: Option<Effect>,
+        f: &RowPoint,
+    ) -> Panel {
+        let pts = |m: &[Vector3<f64>]| -> Vec<(f64, f64)> {
+            (0..self.data.rows.len())
+                .filter(|&i| self.judged[i])
+                .filter_map(|i| f(i, &m[i]))
+                .collect()
+        };
+        let own = cause
+            .and_then(|e| self.own_parts.iter().find(|(x, _)| *x == e))
+            .map(|(_, m)| binned(&pts(m), BINS, 4));
+        let points = pts(&self.before_all);
+        Panel {
+            title,
+            x_label,
+            y_label,
+            before: binned(&points, BINS, 4),
+            points,
+            after: self.after_all.as_ref().map(|m| binned(&pts(m), BINS, 4)),
+            own,
+            named: cause.is_some(),
+        }
+    }
+}
+
+/// A named cause's own part at every row: the extended model's held-out miss plus the
+/// displacement its term makes (the extended arm with and without the term, base frame).
+fn own_part(
+    d: &Diagnosis,
+    c: &super::Cause,
+    data: &Dataset,
+    after: &[Vector3<f64>],
+) -> (Effect, Vec<Vector3<f64>>) {
+    let ext = &d.extended.fit.arm;
+    let mut without = ext.clone();
+    for (p, v, _) in &c.values {
+        p.add_to(&mut without, p.value(&d.extended.fit.start) - v);
+    }
+    let part = data
+        .rows
+        .iter()
+        .zip(after)
+        .map(|(r, m)| {
+            m + forward::forward(ext, &r.theta, r.temp_c).p
+                - forward::forward(&without, &r.theta, r.temp_c).p
+        })
+        .collect();
+    (c.effect, part)
+}
+
+/// The figures of a diagnosis, one per effect that has one for these data (residuals against
+/// each joint's reading, against each joint's gravity lever, against temperature).
+pub fn figures(d: &Diagnosis, data: &Dataset) -> Vec<Figure> {
+    let at = Patterns::new(d, data);
+    FAMILIES.iter().filter_map(|f| f.figure(&at)).collect()
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

@@ -2,23 +2,24 @@
 //!
 //! ```json
 //! {"baseline": {"model": "geometric", "rms_um", "holdout_rms_um", "max_um"},
-//!  "causes": [{"effect": "encoder_harmonic", "joint": 2, "order": 1, "magnitude",
+//!  "causes": [{"effect": "<key>", "joint": 2, "order": 1, "magnitude",
 //!              "unit": "rad", "holdout_rms_um_after"}],
 //!  "extended": {"rms_um", "holdout_rms_um", "max_um"},
 //!  "gain_percent"}
 //! ```
 //!
-//! with more keys. `joint` is 1-based; for `thermal_expansion` it is the link's joint or
+//! with more keys. `effect` is the spec's key of the effect's family ([`crate::effects`]).
+//! `joint` is 1-based; for a thermal expansion it is the link's joint or
 //! `"probe"`, and a link whose expansion the data cannot tell from another's lists that one in
 //! `indistinguishable_from`. `magnitude` is a harmonic's amplitude √(s² + c²) (rad), a
 //! compliance g (rad/mm) or an expansion coefficient κ (1/°C), as the extended calibration file
 //! holds it (for an indistinguishable pair: the named link carrying the pair's expansion).
 
-use super::candidates::describe_effect;
 use super::patterns::Figure;
 use super::{Diagnosis, Model};
 use crate::data::{Dataset, Kind};
-use crate::params::{Effect, Link};
+use crate::effects::{Effect, FAMILIES};
+use crate::params::Link;
 use crate::report::{pretty_json, wrote};
 use serde::Serialize;
 use serde_json::Value;
@@ -65,7 +66,7 @@ pub struct Evidence {
 /// A named cause.
 #[derive(Clone, Debug, Serialize)]
 pub struct CauseReport {
-    /// `encoder_harmonic`, `gravity_compliance` or `thermal_expansion`.
+    /// The spec's key of the effect ([`crate::effects::Family::key`]).
     pub effect: String,
     /// 1-based joint; for thermal expansion the link's joint or `"probe"`.
     pub joint: Value,
@@ -266,21 +267,8 @@ pub struct Report {
     pub warnings: Vec<String>,
 }
 
-fn effect_name(e: Effect) -> &'static str {
-    match e {
-        Effect::Harmonic { .. } => "encoder_harmonic",
-        Effect::Gravity(_) => "gravity_compliance",
-        Effect::Thermal(_) => "thermal_expansion",
-    }
-}
-
-fn joint_value(e: Effect) -> Value {
-    match e {
-        Effect::Harmonic { joint, .. } => Value::from(joint + 1),
-        Effect::Gravity(j) => Value::from(j + 1),
-        Effect::Thermal(Link::Joint(j)) => Value::from(j + 1),
-        Effect::Thermal(Link::Probe) => Value::from("probe"),
-    }
+fn location(e: Effect) -> Value {
+    e.with(|t| t.location())
 }
 
 /// The `--terms` spelling of a model's effects.
@@ -315,74 +303,10 @@ fn score_report(s: &super::select::Score) -> ScoreReport {
     }
 }
 
-fn explain(e: Effect) -> &'static str {
-    match e {
-        Effect::Harmonic { order: 1, .. } => " (encoder disc eccentricity)",
-        Effect::Harmonic { order: 2, .. } => " (encoder disc ellipticity)",
-        Effect::Harmonic { .. } => "",
-        Effect::Gravity(_) => " (the joint bends under the weight beyond it)",
-        Effect::Thermal(_) => " (the link lengthens with temperature)",
-    }
-}
-
 /// Builds the report of a diagnosis.
 pub fn build(d: &Diagnosis, data: &Dataset, figures: &[Figure]) -> Report {
     let arm = &d.baseline.fit.start;
-    let causes: Vec<CauseReport> = d
-        .causes
-        .iter()
-        .map(|c| {
-            let harmonic = matches!(c.effect, Effect::Harmonic { .. });
-            let (s, co) = if harmonic {
-                (Some(c.values[0].1), Some(c.values[1].1))
-            } else {
-                (None, None)
-            };
-            let mut description = describe_effect(arm, c.effect) + explain(c.effect);
-            if !c.indistinguishable.is_empty() {
-                description += &format!(
-                    "; indistinguishable from {} (collinear: the data see only their combined \
-                     expansion, carried here by the named link)",
-                    c.indistinguishable
-                        .iter()
-                        .map(|e| describe_effect(arm, *e))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                );
-            }
-            CauseReport {
-                effect: effect_name(c.effect).into(),
-                joint: joint_value(c.effect),
-                order: match c.effect {
-                    Effect::Harmonic { order, .. } => Some(order),
-                    _ => None,
-                },
-                magnitude: c.magnitude,
-                uncertainty: c.magnitude_uncertainty,
-                unit: c.unit.into(),
-                holdout_rms_um_after: c.holdout_rms_um_after,
-                holdout_rms_um_without: c.without.as_ref().map(|h| h.summary.all.rms_um),
-                indistinguishable_from: c
-                    .indistinguishable
-                    .iter()
-                    .map(|e| joint_value(*e))
-                    .collect(),
-                term: c.effect.spec(),
-                description,
-                sin: s,
-                cos: co,
-                phase_rad: s.zip(co).map(|(s, c)| c.atan2(s)),
-                rms_effect_um: c.rms_effect_um,
-                evidence: Evidence {
-                    f_statistic: c.score.as_ref().map_or(f64::NAN, |s| s.f),
-                    p_value: c.score.as_ref().map_or(f64::NAN, |s| s.p),
-                    holdout_z_linearised: c.score.as_ref().map_or(f64::NAN, |s| s.z),
-                    holdout_z: c.paired.z(),
-                    holdout_p_value: c.paired.p_value(),
-                },
-            }
-        })
-        .collect();
+    let causes: Vec<CauseReport> = d.causes.iter().map(cause_report).collect();
     let rejected = d
         .confirmations
         .iter()
@@ -405,26 +329,7 @@ pub fn build(d: &Diagnosis, data: &Dataset, figures: &[Figure]) -> Report {
                 .map(|f| format!("extended model, {f}")),
         );
     }
-    let patterns = figures
-        .iter()
-        .flat_map(|f| {
-            f.panels.iter().map(move |p| {
-                let (before, after) = p.pattern();
-                let unit = if p.y_label.contains("µrad") {
-                    "µrad"
-                } else {
-                    "µm"
-                };
-                PatternReport {
-                    figure: f.file.clone(),
-                    panel: p.title.clone(),
-                    unit: unit.into(),
-                    before,
-                    after,
-                }
-            })
-        })
-        .collect();
+    let patterns = pattern_reports(figures);
     let b = &d.baseline;
     let verdict = verdict(d);
     Report {
@@ -448,30 +353,7 @@ pub fn build(d: &Diagnosis, data: &Dataset, figures: &[Figure]) -> Report {
             folds: d.folds.len(),
             failed,
         },
-        selection: SelectionReport {
-            candidates: d.candidates.testable.len(),
-            alpha: d.settings.alpha,
-            p_cut: d.selection.p_cut,
-            z: d.settings.z,
-            holdout_p_cut: super::stats::normal_tail(d.settings.z),
-            steps: d
-                .selection
-                .steps
-                .iter()
-                .map(|s| StepReport {
-                    action: if s.added { "add" } else { "remove" }.into(),
-                    score: score_report(&s.score),
-                })
-                .collect(),
-            strongest_left_out: d
-                .selection
-                .left_out
-                .iter()
-                .filter(|s| s.separable)
-                .take(5)
-                .map(score_report)
-                .collect(),
-        },
+        selection: selection_report(d),
         rejected,
         not_testable: d
             .candidates
@@ -485,6 +367,101 @@ pub fn build(d: &Diagnosis, data: &Dataset, figures: &[Figure]) -> Report {
         patterns,
         output: OutputReport::default(),
         warnings: data.warnings.clone(),
+    }
+}
+
+/// A named cause as the report gives it.
+fn cause_report(c: &super::Cause) -> CauseReport {
+    let coefficients: Vec<f64> = c.values.iter().map(|v| v.1).collect();
+    let phasor = c.effect.with(|t| t.phasor(&coefficients));
+    let (s, co) = (phasor.map(|p| p.0), phasor.map(|p| p.1));
+    let mut description = c.effect.describe() + c.effect.with(|t| t.physical());
+    if !c.indistinguishable.is_empty() {
+        description += &format!(
+            "; indistinguishable from {} (collinear: the data see only their combined \
+             expansion, carried here by the named link)",
+            c.indistinguishable
+                .iter()
+                .map(|e| e.describe())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    CauseReport {
+        effect: c.effect.key().into(),
+        joint: location(c.effect),
+        order: c.effect.with(|t| t.order()),
+        magnitude: c.magnitude,
+        uncertainty: c.magnitude_uncertainty,
+        unit: c.unit.into(),
+        holdout_rms_um_after: c.holdout_rms_um_after,
+        holdout_rms_um_without: c.without.as_ref().map(|h| h.summary.all.rms_um),
+        indistinguishable_from: c.indistinguishable.iter().map(|e| location(*e)).collect(),
+        term: c.effect.spec(),
+        description,
+        sin: s,
+        cos: co,
+        phase_rad: s.zip(co).map(|(s, c)| c.atan2(s)),
+        rms_effect_um: c.rms_effect_um,
+        evidence: Evidence {
+            f_statistic: c.score.as_ref().map_or(f64::NAN, |s| s.f),
+            p_value: c.score.as_ref().map_or(f64::NAN, |s| s.p),
+            holdout_z_linearised: c.score.as_ref().map_or(f64::NAN, |s| s.z),
+            holdout_z: c.paired.z(),
+            holdout_p_value: c.paired.p_value(),
+        },
+    }
+}
+
+/// The size of the pattern in every panel of the figures.
+fn pattern_reports(figures: &[Figure]) -> Vec<PatternReport> {
+    figures
+        .iter()
+        .flat_map(|f| {
+            f.panels.iter().map(move |p| {
+                let (before, after) = p.pattern();
+                let unit = if p.y_label.contains("µrad") {
+                    "µrad"
+                } else {
+                    "µm"
+                };
+                PatternReport {
+                    figure: f.file.clone(),
+                    panel: p.title.clone(),
+                    unit: unit.into(),
+                    before,
+                    after,
+                }
+            })
+        })
+        .collect()
+}
+
+/// How the causes were chosen.
+fn selection_report(d: &Diagnosis) -> SelectionReport {
+    SelectionReport {
+        candidates: d.candidates.testable.len(),
+        alpha: d.settings.alpha,
+        p_cut: d.selection.p_cut,
+        z: d.settings.z,
+        holdout_p_cut: super::stats::normal_tail(d.settings.z),
+        steps: d
+            .selection
+            .steps
+            .iter()
+            .map(|s| StepReport {
+                action: if s.added { "add" } else { "remove" }.into(),
+                score: score_report(&s.score),
+            })
+            .collect(),
+        strongest_left_out: d
+            .selection
+            .left_out
+            .iter()
+            .filter(|s| s.separable)
+            .take(5)
+            .map(score_report)
+            .collect(),
     }
 }
 
@@ -520,50 +497,9 @@ fn verdict(d: &Diagnosis) -> String {
 /// The terms of `arm` the firmware's binary table cannot hold, in words (its limits,
 /// `quatarm::table::limits`, as `docs/spec-reading.md` lists them).
 pub fn beyond_table(arm: &quatarm_ref::arm::Arm) -> Vec<String> {
-    use quatarm::table::limits::{GRAVITY, HARMONIC_SUM, THERMAL};
-    let mut out = Vec::new();
-    for (k, j) in arm.joints.iter().enumerate() {
-        let n = j
-            .harmonics
-            .iter()
-            .filter(|h| h.sin != 0.0 || h.cos != 0.0)
-            .count();
-        if n > quatarm::table::MAX_HARMONICS {
-            out.push(format!(
-                "joint {} has {n} harmonic terms; the table holds {}",
-                k + 1,
-                quatarm::table::MAX_HARMONICS
-            ));
-        }
-        let sum: f64 = j.harmonics.iter().map(|h| h.sin.abs() + h.cos.abs()).sum();
-        if sum > HARMONIC_SUM {
-            out.push(format!(
-                "joint {} harmonics: Σ|coefficients| = {sum:.3e} rad; the table holds {HARMONIC_SUM:e} rad",
-                k + 1
-            ));
-        }
-        if j.gravity.abs() > GRAVITY {
-            out.push(format!(
-                "joint {} gravity compliance g = {:.3e} rad/mm; the table holds |g| ≤ {GRAVITY:e} rad/mm",
-                k + 1,
-                j.gravity
-            ));
-        }
-        if j.thermal.abs() > THERMAL {
-            out.push(format!(
-                "link {} thermal expansion κ = {:.3e} /°C; the table holds |κ| ≤ {THERMAL:e} /°C",
-                k + 1,
-                j.thermal
-            ));
-        }
-    }
-    if arm.probe.thermal.abs() > THERMAL {
-        out.push(format!(
-            "probe thermal expansion κ = {:.3e} /°C; the table holds |κ| ≤ {THERMAL:e} /°C",
-            arm.probe.thermal
-        ));
-    }
-    out
+    let at = (0..arm.dof()).map(Link::Joint).chain([Link::Probe]);
+    at.flat_map(|l| FAMILIES.iter().flat_map(move |f| f.beyond_table(arm, l)))
+        .collect()
 }
 
 fn sig(x: f64) -> String {
@@ -580,6 +516,32 @@ impl Report {
     /// The report as text.
     pub fn text(&self) -> String {
         let mut s = String::new();
+        self.write_data(&mut s);
+        self.write_models(&mut s);
+        self.write_causes(&mut s);
+        self.write_selection(&mut s);
+        if !self.not_testable.is_empty() {
+            let _ = writeln!(s, "\nnot testable on these data");
+            for n in &self.not_testable {
+                let _ = writeln!(s, "  {}: {}", n.term, n.reason);
+            }
+        }
+        for f in &self.holdout.failed {
+            let _ = writeln!(s, "  held-out fold not fitted: {f}");
+        }
+        let o = &self.output;
+        wrote(&mut s, o.calibration.iter().chain(&o.table).chain(&o.plots));
+        if let Some(e) = &o.table_error {
+            let _ = writeln!(s, "binary table NOT written: {e}");
+        }
+        for w in &self.warnings {
+            let _ = writeln!(s, "warning: {w}");
+        }
+        s
+    }
+
+    /// The data and how they were held out.
+    fn write_data(&self, s: &mut String) {
         let d = &self.data;
         let mut kinds = Vec::new();
         if d.point_rows > 0 {
@@ -609,6 +571,10 @@ impl Report {
             "  held out: {} ({} folds)",
             self.holdout.method, self.holdout.folds
         );
+    }
+
+    /// The models' residuals and the residual patterns.
+    fn write_models(&self, s: &mut String) {
         let _ = writeln!(
             s,
             "\nwhat the model gets wrong (µm, distance of the ball from where it should be)"
@@ -649,6 +615,10 @@ impl Report {
                 );
             }
         }
+    }
+
+    /// The causes named, with their evidence, and the verdict.
+    fn write_causes(&self, s: &mut String) {
         let _ = writeln!(s, "\ncauses");
         if self.causes.is_empty() {
             let _ = writeln!(s, "  none");
@@ -687,6 +657,10 @@ impl Report {
             "  gain on held-out data: {:.1} % ({:.2} → {:.2} µm RMS)",
             self.gain_percent, self.baseline.holdout_rms_um, self.extended.holdout_rms_um
         );
+    }
+
+    /// The selection's steps, the strongest left out and the rejected.
+    fn write_selection(&self, s: &mut String) {
         let sel = &self.selection;
         let _ = writeln!(
             s,
@@ -723,24 +697,6 @@ impl Report {
                 r.term, r.holdout_z, r.holdout_p_value
             );
         }
-        if !self.not_testable.is_empty() {
-            let _ = writeln!(s, "\nnot testable on these data");
-            for n in &self.not_testable {
-                let _ = writeln!(s, "  {}: {}", n.term, n.reason);
-            }
-        }
-        for f in &self.holdout.failed {
-            let _ = writeln!(s, "  held-out fold not fitted: {f}");
-        }
-        let o = &self.output;
-        wrote(&mut s, o.calibration.iter().chain(&o.table).chain(&o.plots));
-        if let Some(e) = &o.table_error {
-            let _ = writeln!(s, "binary table NOT written: {e}");
-        }
-        for w in &self.warnings {
-            let _ = writeln!(s, "warning: {w}");
-        }
-        s
     }
 
     /// The report as JSON.

@@ -2,15 +2,17 @@
 //! extended effects of random family and joint, drawn from a seed, for the tests and the
 //! benchmark of the diagnosis.
 //!
-//! - `encoder_harmonic`: any joint, order 1–3, amplitude 25–120 µrad, random phase;
-//! - `gravity_compliance`: 2–4e-8 rad/mm on hinge 2 or 4. The wrist hinge (6) is left out:
+//! - encoder harmonic: any joint, order 1–3, amplitude 25–120 µrad, random phase;
+//! - gravity compliance: 2–4e-8 rad/mm on hinge 2 or 4. The wrist hinge (6) is left out:
 //!   its lever is at most the 200 mm from its axis to the ball, so 4e-8 rad/mm moves the ball
 //!   by at most 1.6 µm, under the 5 µm noise. Measured over 40 seeds at 2–4e-8 rad/mm, 600
 //!   point readings name it 3 times and never name anything else; the geometric model alone
 //!   already predicts such an arm to about 1.2 µm RMS (the test
 //!   `a_wrist_compliance_below_the_noise_is_not_misnamed` checks one case);
-//! - `thermal_expansion`: 1.5–2.5e-5 /°C on one of the six links or the probe; readings at
+//! - thermal expansion: 1.5–2.5e-5 /°C on one of the six links or the probe; readings at
 //!   16–28 °C.
+//!
+//! The sizes are each effect's [`crate::effects::Term::set_typical`].
 //!
 //! Two effects never share a family and joint, nor a collinear thermal pair (which would be one
 //! cause).
@@ -18,17 +20,17 @@
 use crate::data::Kind;
 use crate::params::{Effect, Link};
 use crate::sim::{self, SimRng};
-use quatarm_ref::arm::{Arm, Harmonic};
+use quatarm_ref::arm::Arm;
 use rand::Rng;
 
 /// A family of extended effects.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Family {
-    /// `encoder_harmonic`.
+    /// Encoder harmonics ([`crate::effects::harmonic`]).
     Harmonic,
-    /// `gravity_compliance`.
+    /// Gravity compliances ([`crate::effects::gravity`]).
     Gravity,
-    /// `thermal_expansion`.
+    /// Thermal expansions ([`crate::effects::thermal`]).
     Thermal,
 }
 
@@ -89,20 +91,7 @@ fn clash(a: Effect, b: Effect) -> bool {
 
 /// Sets an effect in `arm` with a random size in the scenario's ranges.
 fn set(arm: &mut Arm, e: Effect, rng: &mut SimRng) {
-    match e {
-        Effect::Harmonic { joint, order } => {
-            let amp = rng.gen_range(25e-6..120e-6);
-            let phase = rng.gen_range(0.0..std::f64::consts::TAU);
-            arm.joints[joint].harmonics.push(Harmonic {
-                order,
-                sin: amp * phase.cos(),
-                cos: amp * phase.sin(),
-            });
-        }
-        Effect::Gravity(j) => arm.joints[j].gravity = rng.gen_range(2e-8..4e-8),
-        Effect::Thermal(Link::Joint(j)) => arm.joints[j].thermal = rng.gen_range(1.5e-5..2.5e-5),
-        Effect::Thermal(Link::Probe) => arm.probe.thermal = rng.gen_range(1.5e-5..2.5e-5),
-    }
+    e.with(|t| t.set_typical(arm, rng));
 }
 
 /// A scenario with effects of the given families (empty: the null case).

@@ -126,6 +126,103 @@ fn params_of(effects: &[Effect]) -> Vec<Param> {
     effects.iter().flat_map(|e| e.params()).collect()
 }
 
+/// What one step's candidate sets are scored from: the linearisation, the sets (0 is the
+/// current model), their per-unit held-out errors, the model's RSS and the equations.
+struct Scoring<'a> {
+    lin: &'a Linearisation,
+    sets: &'a [Set],
+    held: &'a [Vec<f64>],
+    rss_m: f64,
+    n_eq: f64,
+}
+
+impl Scoring<'_> {
+    /// Cross-validated RMS (µm) of set `k`.
+    fn cv_rms(&self, k: usize) -> f64 {
+        let ss: f64 = self.held[k].iter().sum();
+        1e3 * (ss / self.lin.equations.max(1) as f64).sqrt()
+    }
+
+    /// The support of chosen effect `e` (`q` unknowns), set `k` being the model without it.
+    fn removal(&self, e: Effect, q: usize, k: usize, model_len: usize) -> Score {
+        let rss_s = self.lin.rss(&self.sets[k]);
+        let dof = self.n_eq - model_len as f64;
+        let f = ((rss_s - self.rss_m) / q as f64) / (self.rss_m / dof);
+        let paired = Paired::of(&self.held[k], &self.held[0]);
+        Score {
+            effect: e,
+            f,
+            p: f_tail(f, q as f64, dof),
+            z: paired.z(),
+            p_holdout: paired.p_value(),
+            cv_rms_um: self.cv_rms(k),
+            separable: true,
+        }
+    }
+
+    /// The gain of candidate `e` (`q` unknowns), set `k` being the model with it.
+    fn addition(&self, e: Effect, q: usize, k: usize, separable: bool) -> Score {
+        let rss_s = self.lin.rss(&self.sets[k]);
+        let dof = self.n_eq - self.sets[k].free.len() as f64;
+        let f = if separable && q > 0 {
+            ((self.rss_m - rss_s) / q as f64) / (rss_s / dof)
+        } else {
+            0.0
+        };
+        let paired = Paired::of(&self.held[0], &self.held[k]);
+        Score {
+            effect: e,
+            f,
+            p: f_tail(f, q.max(1) as f64, dof),
+            z: paired.z(),
+            p_holdout: paired.p_value(),
+            cv_rms_um: self.cv_rms(k),
+            separable,
+        }
+    }
+}
+
+/// A chosen effect's removal: (effect, unknowns, position of the set without it).
+type Back = (Effect, usize, usize);
+/// A candidate's addition: (effect, unknowns, position of the set with it, separable).
+type Forward = (Effect, usize, usize, bool);
+
+/// The sets one step scores: the model (position 0), the model without each chosen effect,
+/// with each remaining candidate.
+fn candidate_sets(
+    lin: &Linearisation,
+    fit: &Fit,
+    model: &[usize],
+    chosen: &[Effect],
+    remaining: &[&Candidate],
+) -> (Vec<Set>, Vec<Back>, Vec<Forward>) {
+    let mut sets = vec![Set::of(model.to_vec())];
+    let mut back = Vec::new();
+    for e in chosen {
+        let cols = lin.positions(&e.params());
+        let without = Set {
+            free: model
+                .iter()
+                .copied()
+                .filter(|c| !cols.contains(c))
+                .collect(),
+            fixed: lin.removal(fit, &e.params()),
+        };
+        back.push((*e, cols.len(), sets.len()));
+        sets.push(without);
+    }
+    let mut fwd = Vec::new();
+    for c in remaining {
+        let cols = lin.positions(&c.effect.params());
+        let separable = !cols.is_empty() && lin.unexplained(&cols, model) > 1e-3;
+        let mut with = model.to_vec();
+        with.extend(&cols);
+        fwd.push((c.effect, cols.len(), sets.len(), separable));
+        sets.push(Set::of(with));
+    }
+    (sets, back, fwd)
+}
+
 /// Stepwise selection from the geometric fit `baseline` (see the module's text).
 pub fn select(
     start: &Arm,
@@ -157,53 +254,20 @@ pub fn select(
         let rss_m = lin.rss(&Set::of(model.clone()));
         let n_eq = lin.equations as f64;
 
-        // Sets: the model, the model without each chosen effect, with each remaining one.
-        let mut sets = vec![Set::of(model.clone())];
-        let mut back = Vec::new();
-        for e in &chosen {
-            let cols = lin.positions(&e.params());
-            let without = Set {
-                free: model
-                    .iter()
-                    .copied()
-                    .filter(|c| !cols.contains(c))
-                    .collect(),
-                fixed: lin.removal(&fit, &e.params()),
-            };
-            back.push((*e, cols.len(), sets.len()));
-            sets.push(without);
-        }
-        let mut fwd = Vec::new();
-        for c in &remaining {
-            let cols = lin.positions(&c.effect.params());
-            let separable = !cols.is_empty() && lin.unexplained(&cols, &model) > 1e-3;
-            let mut with = model.clone();
-            with.extend(&cols);
-            fwd.push((c.effect, cols.len(), sets.len(), separable));
-            sets.push(Set::of(with));
-        }
+        let (sets, back, fwd) = candidate_sets(&lin, &fit, &model, &chosen, &remaining);
         let held = lin.heldout(data, &sets);
-        let cv_rms = |k: usize| {
-            let ss: f64 = held[k].iter().sum();
-            1e3 * (ss / lin.equations.max(1) as f64).sqrt()
+        let scoring = Scoring {
+            lin: &lin,
+            sets: &sets,
+            held: &held,
+            rss_m,
+            n_eq,
         };
 
         // Removal: the chosen effect with the least support, if it no longer passes.
         let mut worst: Option<Score> = None;
         for &(e, q, k) in &back {
-            let rss_s = lin.rss(&sets[k]);
-            let dof = n_eq - model.len() as f64;
-            let f = ((rss_s - rss_m) / q as f64) / (rss_m / dof);
-            let paired = Paired::of(&held[k], &held[0]);
-            let score = Score {
-                effect: e,
-                f,
-                p: f_tail(f, q as f64, dof),
-                z: paired.z(),
-                p_holdout: paired.p_value(),
-                cv_rms_um: cv_rms(k),
-                separable: true,
-            };
+            let score = scoring.removal(e, q, k, model.len());
             if !score.passes(p_cut, p_level) && worst.as_ref().is_none_or(|w| score.p > w.p) {
                 worst = Some(score);
             }
@@ -222,25 +286,7 @@ pub fn select(
         // Addition: the passing candidate with the lowest cross-validated error.
         let mut scores: Vec<Score> = fwd
             .iter()
-            .map(|&(e, q, k, separable)| {
-                let rss_s = lin.rss(&sets[k]);
-                let dof = n_eq - sets[k].free.len() as f64;
-                let f = if separable && q > 0 {
-                    ((rss_m - rss_s) / q as f64) / (rss_s / dof)
-                } else {
-                    0.0
-                };
-                let paired = Paired::of(&held[0], &held[k]);
-                Score {
-                    effect: e,
-                    f,
-                    p: f_tail(f, q.max(1) as f64, dof),
-                    z: paired.z(),
-                    p_holdout: paired.p_value(),
-                    cv_rms_um: cv_rms(k),
-                    separable,
-                }
-            })
+            .map(|&(e, q, k, separable)| scoring.addition(e, q, k, separable))
             .collect();
         scores.sort_by(|a, b| a.cv_rms_um.total_cmp(&b.cv_rms_um));
         let Some(best) = scores.iter().find(|c| c.passes(p_cut, p_level)).cloned() else {

@@ -1,5 +1,6 @@
-//! The statistics that decide whether a cause is named: the F distribution's tail for the
-//! in-sample test, and a paired comparison of held-out errors for the out-of-sample one.
+//! Every distribution the tool uses, in one place: the F, t, normal and χ² tails (a cause's
+//! in-sample test, a calibration's significance test), and the paired comparison of held-out
+//! errors a diagnosis's out-of-sample test rests on.
 
 /// ln Γ(x) for x > 0 (Lanczos, g = 7, nine terms; relative error below 1e-14).
 pub fn ln_gamma(x: f64) -> f64 {
@@ -108,6 +109,48 @@ pub fn t_tail(t: f64, df: f64) -> f64 {
 /// P(Z > z) for a standard normal Z (the t tail with unbounded degrees of freedom).
 pub fn normal_tail(z: f64) -> f64 {
     t_tail(z, 1e12)
+}
+
+/// P(|Z| > t) for a standard normal Z, through [`erfc`]. The calibration's significance test
+/// uses it; kept beside [`normal_tail`] (which is exact to rounding) because the calibration's
+/// figures were measured with it.
+pub fn normal_tail_two_sided(t: f64) -> f64 {
+    erfc(t / std::f64::consts::SQRT_2)
+}
+
+/// P(χ²_k > w) for k = 1 or 2 (and a Wilson–Hilferty approximation beyond).
+pub fn chi2_tail(w: f64, k: usize) -> f64 {
+    match k {
+        1 => erfc((w / 2.0).sqrt()),
+        2 => (-w / 2.0).exp(),
+        _ => {
+            let k = k as f64;
+            let z = ((w / k).cbrt() - (1.0 - 2.0 / (9.0 * k))) / (2.0 / (9.0 * k)).sqrt();
+            0.5 * erfc(z / std::f64::consts::SQRT_2)
+        }
+    }
+}
+
+/// The complementary error function (Numerical Recipes' erfcc, relative error below 1.2e-7).
+pub fn erfc(x: f64) -> f64 {
+    let z = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let r = t
+        * (-z * z - 1.265_512_23
+            + t * (1.000_023_68
+                + t * (0.374_091_96
+                    + t * (0.096_784_18
+                        + t * (-0.186_288_06
+                            + t * (0.278_868_07
+                                + t * (-1.135_203_98
+                                    + t * (1.488_515_87
+                                        + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
+            .exp();
+    if x >= 0.0 {
+        r
+    } else {
+        2.0 - r
+    }
 }
 
 /// Fewest held-out units for held-out evidence.

@@ -1,0 +1,308 @@
+//! `encoder_harmonic`: an error of a joint's encoder periodic in its reading,
+//! e(θ) = s·sin(hθ) + c·cos(hθ) (rad), added to the joint's angle. Order 1 is the disc's
+//! eccentricity, order 2 its ellipticity. Two unknowns per term: s (0) and c (1).
+
+use super::{joint_args, joints_of, Effect, Family, Term, TermsError, TipPoint};
+use crate::diagnose::patterns::{Figure, Patterns};
+use crate::params::{Link, Param, MAX_ORDER};
+use crate::sim::SimRng;
+use nalgebra::Vector3;
+use quatarm::table::limits::HARMONIC_SUM;
+use quatarm_ref::arm::{Arm, Harmonic as Entry};
+use rand::Rng;
+use serde_json::Value;
+
+/// The spec's key.
+pub const KEY: &str = "encoder_harmonic";
+
+/// Highest harmonic order a diagnosis tries.
+pub const DIAGNOSIS_MAX_ORDER: u32 = 4;
+
+/// The family of encoder harmonics.
+pub struct Harmonics;
+
+/// Its registration.
+pub static FAMILY: Harmonics = Harmonics;
+
+/// Joint `joint`'s (0-based) harmonic of order `order`.
+#[derive(Clone, Copy, Debug)]
+pub struct Harmonic {
+    /// Joint, 0-based.
+    pub joint: usize,
+    /// Order h ≥ 1.
+    pub order: u32,
+}
+
+impl Family for Harmonics {
+    fn key(&self) -> &'static str {
+        KEY
+    }
+
+    fn usage(&self) -> &'static str {
+        "+encoder_harmonic:J:H"
+    }
+
+    fn parse(&self, item: &str, args: &[&str], dof: usize) -> Result<Vec<Effect>, TermsError> {
+        let order = match args.get(1).map(|s| s.parse::<u32>()) {
+            Some(Ok(h)) if (1..=MAX_ORDER).contains(&h) => h,
+            Some(Ok(h)) => {
+                return Err(TermsError(format!(
+                    "`{item}`: order {h} is beyond {MAX_ORDER}, the highest a calibration file \
+                     holds"
+                )))
+            }
+            _ => {
+                return Err(TermsError(format!(
+                    "`{item}`: give the order, e.g. `+encoder_harmonic:2:1` (joint 2, order 1)"
+                )))
+            }
+        };
+        let links = joint_args(item, KEY, args.first(), dof, false)?;
+        Ok(joints_of(links)
+            .map(|joint| Effect::Harmonic { joint, order })
+            .collect())
+    }
+
+    fn vocabulary(&self, dof: usize, _thermal: bool) -> Vec<Effect> {
+        (0..dof)
+            .flat_map(|joint| {
+                (1..=DIAGNOSIS_MAX_ORDER).map(move |order| Effect::Harmonic { joint, order })
+            })
+            .collect()
+    }
+
+    fn figure(&self, at: &Patterns) -> Option<Figure> {
+        let (data, geo) = (at.data, &at.geo);
+        let mut skipped = Vec::new();
+        let mut panels = Vec::new();
+        for k in 0..data.dof {
+            let Some(cut) = at.cut_of(k) else {
+                skipped.push(k + 1);
+                continue;
+            };
+            let kind = match (at.plain, at.arm().is_hinge(k)) {
+                (false, _) => String::new(),
+                (true, true) => " (hinge)".to_string(),
+                (true, false) => " (swivel)".to_string(),
+            };
+            let harmonic = (1..=DIAGNOSIS_MAX_ORDER)
+                .map(|order| Effect::Harmonic { joint: k, order })
+                .find(|e| at.named(*e));
+            panels.push(at.panel(
+                format!("joint {}{kind}", k + 1),
+                format!("joint {} reading θ{} (deg)", k + 1, k + 1),
+                "apparent angle error (µrad)".into(),
+                harmonic,
+                &|i, m| {
+                    let t = geo[i].turn[k];
+                    let t2 = t.norm_squared();
+                    (t2.sqrt() >= cut && t2 > 0.0)
+                        .then(|| (data.rows[i].theta[k].to_degrees(), 1e6 * t.dot(m) / t2))
+                },
+            ));
+        }
+        let mut caption =
+            "An encoder harmonic shows as a wave of its order (cycles per turn)".to_string();
+        if !skipped.is_empty() {
+            caption += &format!(
+                "; no panel for joint {}: the ball passes too close to its axis to show its angle",
+                skipped
+                    .iter()
+                    .map(|k| k.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+        Some(Figure {
+            file: "residuals_vs_joint_angle.png".into(),
+            title:
+                "What the model misses, as each joint's angle error, against the joint's reading"
+                    .into(),
+            caption,
+            panels,
+        })
+    }
+
+    fn beyond_table(&self, arm: &Arm, at: Link) -> Vec<String> {
+        let Link::Joint(k) = at else {
+            return Vec::new();
+        };
+        let j = &arm.joints[k];
+        let mut out = Vec::new();
+        let n = j
+            .harmonics
+            .iter()
+            .filter(|h| h.sin != 0.0 || h.cos != 0.0)
+            .count();
+        if n > quatarm::table::MAX_HARMONICS {
+            out.push(format!(
+                "joint {} has {n} harmonic terms; the table holds {}",
+                k + 1,
+                quatarm::table::MAX_HARMONICS
+            ));
+        }
+        let sum: f64 = j.harmonics.iter().map(|h| h.sin.abs() + h.cos.abs()).sum();
+        if sum > HARMONIC_SUM {
+            out.push(format!(
+                "joint {} harmonics: Σ|coefficients| = {sum:.3e} rad; the table holds {HARMONIC_SUM:e} rad",
+                k + 1
+            ));
+        }
+        out
+    }
+
+    fn clear(&self, arm: &mut Arm) {
+        for h in arm.joints.iter_mut().flat_map(|j| &mut j.harmonics) {
+            h.sin = 0.0;
+            h.cos = 0.0;
+        }
+    }
+}
+
+impl Term for Harmonic {
+    fn family(&self) -> &'static dyn Family {
+        &FAMILY
+    }
+
+    fn spec(&self) -> String {
+        format!("+{KEY}:{}:{}", self.joint + 1, self.order)
+    }
+
+    fn describe(&self) -> String {
+        format!(
+            "joint {} encoder harmonic of order {}",
+            self.joint + 1,
+            self.order
+        )
+    }
+
+    fn physical(&self) -> &'static str {
+        match self.order {
+            1 => " (encoder disc eccentricity)",
+            2 => " (encoder disc ellipticity)",
+            _ => "",
+        }
+    }
+
+    fn location(&self) -> Value {
+        Value::from(self.joint + 1)
+    }
+
+    fn order(&self) -> Option<u32> {
+        Some(self.order)
+    }
+
+    fn coefficients(&self) -> usize {
+        2
+    }
+
+    fn param(&self, c: usize) -> Param {
+        Param::Harmonic {
+            joint: self.joint,
+            order: self.order,
+            cos: c == 1,
+        }
+    }
+
+    fn key(&self, c: usize) -> String {
+        format!(
+            "joint[{}].harmonics(order={}).{}",
+            self.joint + 1,
+            self.order,
+            sin_cos(c)
+        )
+    }
+
+    fn describe_param(&self, c: usize) -> String {
+        format!(
+            "joint {} encoder harmonic order {} ({})",
+            self.joint + 1,
+            self.order,
+            sin_cos(c)
+        )
+    }
+
+    fn unit(&self) -> &'static str {
+        "rad"
+    }
+
+    fn plausible(&self) -> f64 {
+        0.01
+    }
+
+    fn priority(&self) -> u32 {
+        5
+    }
+
+    fn value(&self, arm: &Arm, c: usize) -> f64 {
+        arm.joints[self.joint]
+            .harmonics
+            .iter()
+            .filter(|h| h.order == self.order)
+            .map(|h| if c == 1 { h.cos } else { h.sin })
+            .sum()
+    }
+
+    fn add_to(&self, arm: &mut Arm, c: usize, dx: f64) {
+        let hs = &mut arm.joints[self.joint].harmonics;
+        let i = match hs.iter().position(|h| h.order == self.order) {
+            Some(i) => i,
+            None => {
+                hs.push(Entry {
+                    order: self.order,
+                    sin: 0.0,
+                    cos: 0.0,
+                });
+                hs.len() - 1
+            }
+        };
+        if c == 1 {
+            hs[i].cos += dx;
+        } else {
+            hs[i].sin += dx;
+        }
+    }
+
+    fn add_entry(&self, arm: &mut Arm) {
+        self.add_to(arm, 0, 0.0);
+    }
+
+    fn column(&self, c: usize, at: &TipPoint) -> Vector3<f64> {
+        let a = f64::from(self.order) * at.theta[self.joint];
+        at.turn(self.joint) * if c == 1 { a.cos() } else { a.sin() }
+    }
+
+    fn magnitude(&self, values: &[(f64, f64)], rho: f64) -> (f64, f64) {
+        let ((s, us), (co, uc)) = (values[0], values[1]);
+        let a = s.hypot(co);
+        let var = (s * s * us * us + co * co * uc * uc + 2.0 * s * co * rho * us * uc)
+            / (a * a).max(1e-300);
+        (a, var.max(0.0).sqrt())
+    }
+
+    fn phasor(&self, values: &[f64]) -> Option<(f64, f64)> {
+        Some((values[0], values[1]))
+    }
+
+    fn no_effect_reason(&self, _arm: &Arm, _thermal: bool) -> Option<String> {
+        None
+    }
+
+    fn set_typical(&self, arm: &mut Arm, rng: &mut SimRng) {
+        let amp = rng.gen_range(25e-6..120e-6);
+        let phase = rng.gen_range(0.0..std::f64::consts::TAU);
+        arm.joints[self.joint].harmonics.push(Entry {
+            order: self.order,
+            sin: amp * phase.cos(),
+            cos: amp * phase.sin(),
+        });
+    }
+}
+
+fn sin_cos(c: usize) -> &'static str {
+    if c == 1 {
+        "cos"
+    } else {
+        "sin"
+    }
+}

@@ -1,0 +1,270 @@
+//! The extended effects of the model, each a unit of its own, and the one registry the rest of
+//! the tool iterates over.
+//!
+//! An effect is a family of terms of `spec/arm-model.md` beyond the geometric model (an encoder
+//! harmonic, a gravity compliance, a thermal expansion). Each lives in one module that
+//! implements two traits:
+//! - [`Family`]: what holds for every term of the effect — its key, how `--terms` spells it,
+//!   the candidates a diagnosis tries, the figure its residual pattern shows in, the firmware
+//!   table's limits, how a skeleton arm clears it;
+//! - [`Term`]: one term (joint 2's harmonic of order 1) — its unknowns with their keys, units,
+//!   plausible sizes and Jacobian columns, its description, its magnitude in a report.
+//!
+//! Neither trait has default methods, so a new effect must answer every question; and the only
+//! exhaustive matches over [`Effect`] and the effect unknowns of [`Param`] are in this file, so
+//! a new variant that is not registered here does not compile. `docs/adding-an-effect.md` lists
+//! the steps.
+
+pub mod gravity;
+pub mod harmonic;
+pub mod thermal;
+
+use crate::diagnose::patterns::{Figure, Patterns};
+use crate::params::{Link, Param};
+use crate::sim::SimRng;
+use nalgebra::{Matrix3, Vector3};
+use quatarm_ref::arm::Arm;
+use quatarm_ref::forward::Chain;
+use serde_json::Value;
+use std::fmt;
+
+/// An extended effect of the spec's vocabulary: one term, as `--terms` names it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Effect {
+    /// An encoder harmonic of a joint (0-based) and order: two coefficients (sin, cos);
+    /// [`harmonic`].
+    Harmonic {
+        /// Joint, 0-based.
+        joint: usize,
+        /// Order h ≥ 1.
+        order: u32,
+    },
+    /// A gravity compliance of a joint (0-based); [`gravity`].
+    Gravity(usize),
+    /// A thermal expansion of a link or the probe; [`thermal`].
+    Thermal(Link),
+}
+
+/// Why a `--terms` item was refused, in words naming the item.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct TermsError(pub String);
+
+/// What holds for every term of one effect. Implemented by a unit struct per effect module and
+/// registered once in [`FAMILIES`].
+pub trait Family: Sync {
+    /// The spec's key, as `--terms` and the diagnosis report spell it.
+    fn key(&self) -> &'static str;
+    /// The `--terms` form, for the list of known terms (e.g. `+KEY:J`).
+    fn usage(&self) -> &'static str;
+    /// The terms of `+KEY:ARGS…` (`args` split at `:`) for an arm of `dof` joints. `item` is the
+    /// whole text, for messages.
+    fn parse(&self, item: &str, args: &[&str], dof: usize) -> Result<Vec<Effect>, TermsError>;
+    /// Every term a diagnosis tries for `dof` joints; `thermal`: the data have a temperature
+    /// spread.
+    fn vocabulary(&self, dof: usize, thermal: bool) -> Vec<Effect>;
+    /// The figure of the diagnosis in which the effect's residual pattern shows (`None`: none
+    /// for these data).
+    fn figure(&self, at: &Patterns) -> Option<Figure>;
+    /// What of `arm` at joint `at` (or the probe) the firmware's binary table cannot hold, in
+    /// words, from `quatarm::table`'s own limits.
+    fn beyond_table(&self, arm: &Arm, at: Link) -> Vec<String>;
+    /// Clears the effect's values in `arm` (the skeleton a structural analysis runs at).
+    fn clear(&self, arm: &mut Arm);
+}
+
+/// One term of an effect. Its unknowns are numbered 0..[`Term::coefficients`].
+pub trait Term {
+    /// Its family.
+    fn family(&self) -> &'static dyn Family;
+    /// The `--terms` spelling, e.g. `+KEY:4` (joint 1-based).
+    fn spec(&self) -> String;
+    /// In words, joints 1-based.
+    fn describe(&self) -> String;
+    /// Its physical cause in a few words, with a leading space and in parentheses (or empty).
+    fn physical(&self) -> &'static str;
+    /// Where it acts, for the report: the 1-based joint, or `"probe"`.
+    fn location(&self) -> Value;
+    /// The order of a periodic term (`None` for others).
+    fn order(&self) -> Option<u32>;
+    /// How many unknowns it adds.
+    fn coefficients(&self) -> usize;
+    /// Its unknown `c`.
+    fn param(&self, c: usize) -> Param;
+    /// The calibration-file key unknown `c` adjusts (joints 1-based).
+    fn key(&self, c: usize) -> String;
+    /// Unknown `c` in words.
+    fn describe_param(&self, c: usize) -> String;
+    /// Unit of its unknowns' values.
+    fn unit(&self) -> &'static str;
+    /// A size beyond which a value is not physically plausible.
+    fn plausible(&self) -> f64;
+    /// Which unknown to keep when the data cannot separate two: lower keeps first (the
+    /// geometric model's are 1–4, the frame's 0).
+    fn priority(&self) -> u32;
+    /// Unknown `c`'s current value in `arm`.
+    fn value(&self, arm: &Arm, c: usize) -> f64;
+    /// Adds `dx` to unknown `c` in `arm`.
+    fn add_to(&self, arm: &mut Arm, c: usize, dx: f64);
+    /// Gives `arm` the entry the term needs in a calibration file (a harmonic's order), with
+    /// value 0, if it has none.
+    fn add_entry(&self, arm: &mut Arm);
+    /// ∂p/∂(unknown `c`) at one point of the chain.
+    fn column(&self, c: usize, at: &TipPoint) -> Vector3<f64>;
+    /// Its magnitude and standard uncertainty from its unknowns' (value, uncertainty) and, for
+    /// two unknowns, their correlation `rho`.
+    fn magnitude(&self, values: &[(f64, f64)], rho: f64) -> (f64, f64);
+    /// The (sin, cos) coefficients of a single sinusoid, for the report (`None`: not one).
+    fn phasor(&self, values: &[f64]) -> Option<(f64, f64)>;
+    /// Why it cannot change any residual, when the structural analysis says so and the effect
+    /// knows a specific reason (`None`: the generic one).
+    fn no_effect_reason(&self, arm: &Arm, thermal: bool) -> Option<String>;
+    /// Sets it in `arm` to a random size of the kind a hub-class arm shows (the diagnosis
+    /// scenarios).
+    fn set_typical(&self, arm: &mut Arm, rng: &mut SimRng);
+}
+
+/// Every effect, in report order (figures, candidates, table limits follow it).
+pub static FAMILIES: [&dyn Family; 3] = [&harmonic::FAMILY, &gravity::FAMILY, &thermal::FAMILY];
+
+impl Effect {
+    /// The term's unit, to ask it anything.
+    pub fn with<R>(self, f: impl FnOnce(&dyn Term) -> R) -> R {
+        match self {
+            Effect::Harmonic { joint, order } => f(&harmonic::Harmonic { joint, order }),
+            Effect::Gravity(joint) => f(&gravity::Gravity { joint }),
+            Effect::Thermal(link) => f(&thermal::Thermal { link }),
+        }
+    }
+
+    /// The unknowns the effect adds.
+    pub fn params(self) -> Vec<Param> {
+        self.with(|t| (0..t.coefficients()).map(|c| t.param(c)).collect())
+    }
+
+    /// The `--terms` spelling, e.g. `+KEY:4` (joint 1-based).
+    pub fn spec(self) -> String {
+        self.with(|t| t.spec())
+    }
+
+    /// The effect in words, joints 1-based.
+    pub fn describe(self) -> String {
+        self.with(|t| t.describe())
+    }
+
+    /// The spec's key of its family.
+    pub fn key(self) -> &'static str {
+        self.with(|t| t.family().key())
+    }
+}
+
+impl fmt::Display for Effect {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.spec())
+    }
+}
+
+impl Param {
+    /// The effect an unknown belongs to and its number within it (`None`: a geometric or frame
+    /// unknown).
+    pub fn effect(self) -> Option<(Effect, usize)> {
+        match self {
+            Param::Harmonic { joint, order, cos } => {
+                Some((Effect::Harmonic { joint, order }, usize::from(cos)))
+            }
+            Param::Gravity(j) => Some((Effect::Gravity(j), 0)),
+            Param::Thermal(l) => Some((Effect::Thermal(l), 0)),
+            Param::ZeroOffset(_)
+            | Param::Tilt(..)
+            | Param::LinkError(..)
+            | Param::ProbeError(_)
+            | Param::FrameRotation(_)
+            | Param::FrameTranslation(_) => None,
+        }
+    }
+}
+
+/// The family whose key is `key`.
+pub fn family(key: &str) -> Option<&'static dyn Family> {
+    FAMILIES.iter().copied().find(|f| f.key() == key)
+}
+
+/// Every effect's `--terms` form, comma-separated, for messages.
+pub fn usages() -> String {
+    FAMILIES
+        .iter()
+        .map(|f| f.usage())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Every term a diagnosis tries for `dof` joints, family by family.
+pub fn vocabulary(dof: usize, thermal: bool) -> Vec<Effect> {
+    FAMILIES
+        .iter()
+        .flat_map(|f| f.vocabulary(dof, thermal))
+        .collect()
+}
+
+/// One point of the chain, for the Jacobian columns: the arm, its evaluated chain and the
+/// reading.
+pub struct TipPoint<'a> {
+    /// The arm.
+    pub arm: &'a Arm,
+    /// Its chain at the reading.
+    pub chain: &'a Chain,
+    /// Joint readings (rad).
+    pub theta: &'a [f64],
+    /// Temperature (°C).
+    pub temp_c: f64,
+}
+
+impl TipPoint<'_> {
+    /// t_j = a_j × (p − o_j): the ball's motion per radian turned at joint j.
+    pub fn turn(&self, j: usize) -> Vector3<f64> {
+        self.chain.axes[j].cross(&(self.chain.p - self.chain.origins[j]))
+    }
+
+    /// The rotation from the base to the frame after joint j.
+    pub fn after(&self, j: usize) -> Matrix3<f64> {
+        self.chain.rotations[j]
+    }
+}
+
+/// "joint J" with J 1-based, or the probe, as messages name a link.
+pub fn joint_args(
+    item: &str,
+    key: &str,
+    arg: Option<&&str>,
+    dof: usize,
+    probe_ok: bool,
+) -> Result<Vec<Link>, TermsError> {
+    match arg.copied() {
+        None => Err(TermsError(format!(
+            "`{item}`: which joint? e.g. `{key}:2` or `{key}:*`"
+        ))),
+        Some("*") => {
+            let mut v: Vec<Link> = (0..dof).map(Link::Joint).collect();
+            if probe_ok {
+                v.push(Link::Probe);
+            }
+            Ok(v)
+        }
+        Some("probe") if probe_ok => Ok(vec![Link::Probe]),
+        Some(j) => match j.parse::<usize>() {
+            Ok(k) if (1..=dof).contains(&k) => Ok(vec![Link::Joint(k - 1)]),
+            _ => Err(TermsError(format!(
+                "`{item}`: `{j}` is not a joint of this arm (1..={dof}{})",
+                if probe_ok { ", probe or *" } else { " or *" }
+            ))),
+        },
+    }
+}
+
+/// The joints of `+KEY:J` (links other than joints cannot occur: `probe_ok` was false).
+pub fn joints_of(links: Vec<Link>) -> impl Iterator<Item = usize> {
+    links.into_iter().map(|l| match l {
+        Link::Joint(j) => j,
+        Link::Probe => 0,
+    })
+}
