@@ -504,6 +504,22 @@ impl<P: Precision> Gravity<P> {
         }
     }
 
+    /// The deflections e_k = g_k a_k · ((p − o_k) × ẑ) of the recorded joints at the
+    /// undeflected tip p, in the order they were pushed.
+    #[inline(always)]
+    pub fn deflections(&self, count: GravityCount, p: Vec3<P::L>, out: &mut [P::U; MAX_JOINTS]) {
+        for (slot, e) in self.terms.iter().take(count.0).zip(out.iter_mut()) {
+            // SAFETY: `push` wrote every slot below `count` before counting it.
+            let GravityTerm {
+                g,
+                axis: a,
+                origin: o,
+            } = unsafe { slot.assume_init_read() };
+            let d = [p[0] - o[0], p[1] - o[1]];
+            *e = P::gravity(g, d[1].scale(a[0]) - d[0].scale(a[1]));
+        }
+    }
+
     /// The corrected tip and direction.
     #[inline(always)]
     pub fn apply(

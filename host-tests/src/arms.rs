@@ -12,12 +12,13 @@
 //! the gravity terms are largest.
 //!
 //! [`check`] then asks of every arm: either a table refuses it (the host's builder, the
-//! table's validation or `Chain::new`, each with a named error), or both quaternion chains
-//! meet the firmware's bounds on every reading.
+//! table's validation or `Chain::new`, each with a named error), or every chain — the
+//! quaternion chains of the firmware and the matrix chains they are compared with, f32 and
+//! fixed point — meets the firmware's bounds on every reading.
 
 use arbitrary::{Result as ArbResult, Unstructured};
 use quatarm::table::limits;
-use quatarm::{Chain, ChainError, Fixed, Point, Precision, Table, F32};
+use quatarm::{Chain, ChainError, Fixed, MatrixChain, Point, Precision, Table, F32};
 use quatarm_ref::{Arm, Axis, Harmonic, Joint, Probe};
 use std::f64::consts::PI;
 
@@ -226,14 +227,16 @@ pub struct Worst {
     pub dir: f64,
 }
 
-/// Evaluates every reading with one chain against the reference.
-pub fn worst<P: Precision>(chain: &Chain<P>, case: &Case) -> Result<Worst, String> {
+/// Evaluates every reading with one chain (its `eval`) against the reference.
+pub fn worst<P: Precision>(
+    eval: impl Fn(&[u32], i32) -> Result<Point<P>, ChainError>,
+    case: &Case,
+) -> Result<Worst, String> {
     let mut w = Worst::default();
     for (counts, temp_mc) in &case.readings {
         let theta = armcal::accuracy::counts_to_rad(&case.arm, counts);
         let r = quatarm_ref::forward::forward(&case.arm, &theta, f64::from(*temp_mc) / 1000.0);
-        let p: Point<P> = chain
-            .eval(counts, *temp_mc)
+        let p: Point<P> = eval(counts, *temp_mc)
             .map_err(|e| format!("{}: a valid reading refused: {e}", P::NAME))?;
         let x = p.xyz_f64();
         let d = p.dir_f64();
@@ -265,8 +268,38 @@ fn named(e: &ChainError) -> bool {
     matches!(e, ChainError::Range { .. } | ChainError::Reach { .. })
 }
 
-/// Checks a case: a named refusal, or both quaternion chains within their bounds. `Err`
-/// describes the failure.
+/// One precision's chains (quaternion and matrix) on a table: a named refusal, or both
+/// within the bounds.
+fn check_precision<P: Precision>(
+    table: &Table,
+    case: &Case,
+    (tip_um, dir): (f64, f64),
+) -> Result<Option<ChainError>, String> {
+    let (quat, matrix) = match (Chain::<P>::new(table), MatrixChain::<P>::new(table)) {
+        (Ok(q), Ok(m)) => (q, m),
+        (Err(e), Err(f)) if e == f && named(&e) => return Ok(Some(e)),
+        (q, m) => {
+            return Err(format!(
+                "{}: refused without a named limit, or by one chain only: {:?} {:?}",
+                P::NAME,
+                q.err(),
+                m.err()
+            ))
+        }
+    };
+    for (name, w) in [
+        ("quaternion", worst(|c, t| quat.eval(c, t), case)?),
+        ("matrix", worst(|c, t| matrix.eval(c, t), case)?),
+    ] {
+        if w.tip_um > tip_um || w.dir > dir {
+            return Err(format!("{} {name}: {w:?}", P::NAME));
+        }
+    }
+    Ok(None)
+}
+
+/// Checks a case: a named refusal, or every chain (quaternion and matrix, f32 and fixed
+/// point) within its bounds. `Err` describes the failure.
 pub fn check(case: &Case) -> Result<Verdict, String> {
     let Ok(bytes) = armcal::tablebuild::build(&case.arm) else {
         return Ok(Verdict::RefusedTable);
@@ -274,29 +307,10 @@ pub fn check(case: &Case) -> Result<Verdict, String> {
     let Ok(table) = Table::parse(&bytes) else {
         return Ok(Verdict::RefusedTable);
     };
-    let qf = Chain::<F32>::new(&table);
-    let qx = Chain::<Fixed>::new(&table);
-    let mut refused = (None, None);
-    match &qf {
-        Ok(c) => {
-            let w = worst(c, case)?;
-            if w.tip_um > F32_TIP_UM || w.dir > F32_DIR {
-                return Err(format!("f32: {w:?}"));
-            }
-        }
-        Err(e) if named(e) => refused.0 = Some(*e),
-        Err(e) => return Err(format!("f32 refused without a named limit: {e}")),
-    }
-    match &qx {
-        Ok(c) => {
-            let w = worst(c, case)?;
-            if w.tip_um > FIXED_TIP_UM || w.dir > FIXED_DIR {
-                return Err(format!("fixed: {w:?}"));
-            }
-        }
-        Err(e) if named(e) => refused.1 = Some(*e),
-        Err(e) => return Err(format!("fixed refused without a named limit: {e}")),
-    }
+    let refused = (
+        check_precision::<F32>(&table, case, (F32_TIP_UM, F32_DIR))?,
+        check_precision::<Fixed>(&table, case, (FIXED_TIP_UM, FIXED_DIR))?,
+    );
     Ok(match refused {
         (None, None) => Verdict::Accurate,
         (f32, fixed) => Verdict::RefusedChain { f32, fixed },

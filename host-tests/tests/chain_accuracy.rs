@@ -16,6 +16,8 @@ const FIXED_DIR: f64 = 1e-7;
 
 fn check(rep: &Report) {
     let [qf, qx, mf, mx, _] = rep.stats;
+    assert!(mf.max_dir <= F32_DIR, "f32 matrix dir {}", mf.max_dir);
+    assert!(mx.max_dir <= FIXED_DIR, "fixed matrix dir {}", mx.max_dir);
     assert!(
         qf.max_um <= F32_TIP_UM,
         "f32 quaternion tip {} um",
@@ -59,16 +61,6 @@ fn the_shipped_calibration_file_is_the_built_in_one() {
     assert_eq!(parsed.arm, full_calibration());
 }
 
-/// The quaternion chains' bounds (the matrix chain takes the spec's first-order gravity sum,
-/// which is micrometres off at such compliances: a comparison, not a firmware path).
-fn check_quaternion(rep: &Report) {
-    let [qf, qx, ..] = rep.stats;
-    assert!(qf.max_um <= F32_TIP_UM, "f32 tip {} um", qf.max_um);
-    assert!(qf.max_dir <= F32_DIR, "f32 dir {}", qf.max_dir);
-    assert!(qx.max_um <= FIXED_TIP_UM, "fixed tip {} um", qx.max_um);
-    assert!(qx.max_dir <= FIXED_DIR, "fixed dir {}", qx.max_dir);
-}
-
 /// Large gravity compliances on every hinge, with the full calibration: the largest a table
 /// holds (deflections of several mrad, where first-order gravity would miss by micrometres
 /// and 1e-5), the MUKCa robots' 1e-6, and compliances around where the chain starts taking
@@ -82,7 +74,7 @@ fn large_gravity_compliance_within_bounds() {
                 arm.joints[k].gravity = sign * g;
             }
             let rep = measure(&arm, 20_000, 11, 2, &|_| {}).unwrap();
-            check_quaternion(&rep);
+            check(&rep);
         }
     }
 }
