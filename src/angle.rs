@@ -106,12 +106,17 @@ impl<P: Precision> Quarter<P> {
     /// deflections, |h| ≤ 1e-3), to second order: x → x + h.
     #[inline(always)]
     pub fn turned(self, h: P::U) -> Quarter<P> {
+        self.turned_by(h, P::half(h.scale(h)))
+    }
+
+    /// The same remainder turned by a small angle h given as sin h and 1 − cos h: x → x + h.
+    #[inline(always)]
+    pub fn turned_by(self, sin: P::U, omc: P::U) -> Quarter<P> {
         let c = P::ONE + self.cm1;
-        let g = P::half(h.scale(h));
         Quarter {
             q: self.q,
-            cm1: self.cm1 - (self.s.scale(h) + c.scale(g)),
-            s: self.s + (c.scale(h) - self.s.scale(g)),
+            cm1: self.cm1 - (self.s.scale(sin) + c.scale(omc)),
+            s: self.s + (c.scale(sin) - self.s.scale(omc)),
         }
     }
 

@@ -3,8 +3,9 @@
 //!
 //! Joint i turns about z of its own frame ([`crate::model`]); its fixed rotation is
 //! M̃_i = C_i ⊗ M''_i, where C_i only relabels the axes (a cyclic permutation, exact on
-//! vectors) and M''_i = R(e1, δα) R(e2, δβ) R(z, Δθ) is within a few mrad of the identity on
-//! a real arm. Two passes:
+//! vectors) and M''_i = R(e1, δα) R(e2, δβ) R(z, Δθ) is any rotation the table holds (a few
+//! mrad from the identity on a CMM hub, a D–H twist of π/2 or a zero offset of a radian on a
+//! robot). Two passes:
 //!
 //! 1. **Base to tip**: each joint's angle (quarter turns q, remainder 2x, harmonic error) and
 //!    the orientation Q_0i = Q_0(i−1) ⊗ M̃_i ⊗ (cos θ_i/2, sin θ_i/2 ẑ), 24 products a joint
@@ -17,14 +18,21 @@
 //! 2. **Tip to base** (Horner form): w = v_N + v_p, then w ← v_(i−1) + C_i M''_i R(z, θ_i) w,
 //!    with the link at temperature formed here. Each step adds a *small* correction to w — the
 //!    quarter turns are exact, the remainder turn is at most π/4, M''_i is applied as
-//!    w + E_i w with E_i = M''_i − I (entries of a few mrad, formed in f64 at boot) — so the
-//!    large partial sums (1.5 m, ulp 0.12 µm) are rounded about once per joint, and no
-//!    orientation error accumulates into the position. The gravity deflection
-//!    e_k = g_k (u_k × w_k)·z_k, with w_k the tip seen from joint k (less the shift that the
-//!    deflections of the joints beyond k have already made, since the spec takes e_k on the
-//!    undeflected chain), joins the joint's angle before its turn, like the exactly deflected
-//!    reference. The deflections turn the probe direction by their composed rotation vector,
-//!    to second order.
+//!    w + E_i w with E_i = M''_i − I (formed in f64 at boot; entries of a few mrad on a hub,
+//!    a plain rotation on a twisted arm) — so the large partial sums (1.5 m, ulp 0.12 µm) are
+//!    rounded about once per joint, and no orientation error accumulates into the position.
+//!    The gravity deflection e_k = g_k (u_k × w_k)·z_k, with w_k the tip seen from joint k,
+//!    joins the joint's angle before its turn, like the exactly deflected reference.
+//!
+//! Where the arm's deflections are large enough to matter at second order (decided at boot,
+//! [`crate::model::SECOND_ORDER_DEFLECTION`]), two more vectors ride the tip-to-base pass
+//! through the same code: the *shift* the deflections beyond joint k have made, so that e_k
+//! takes its lever on the undeflected chain as the spec says (grown exactly by each
+//! deflection, and carried through every turn, fixed rotation and relabelling — it once
+//! skipped M''_i, which cost 5.4–15.8 µm on arms with large zero offsets or twists, issue 15),
+//! and the probe direction as a 1024 mm vector, which so comes out of the deflected chain
+//! itself. Below the threshold the lever is taken as it stands and the direction from Q turned
+//! by Σ e_k a_k, to first order.
 //!
 //! A matrix chain could not be written this way for the same price: it would still have to
 //! compose its matrices for the direction and the verticals, and a composed 3×3 matrix costs
@@ -34,7 +42,7 @@
 
 use crate::angle::{quarter_turns, Quarter};
 use crate::model::{units, ChainError, Model, Point, BASE_AXIS};
-use crate::rotate::{add_half_cross, cross, Quat, Vec3};
+use crate::rotate::{cross, Quat, Vec3};
 use crate::scalar::{Fixed, Precision, Scale, F32};
 use crate::table::{Table, MAX_JOINTS};
 use core::mem::MaybeUninit;
@@ -58,19 +66,10 @@ struct JointRotation<P: Precision> {
 pub struct Chain<P: Precision> {
     model: Model<P>,
     rotation: [JointRotation<P>; MAX_JOINTS],
-    /// Some joint is compliant enough for the second-order gravity terms to matter
-    /// ([`SECOND_ORDER_GRAVITY`]).
+    /// The arm's compliances are large enough for the second-order gravity terms to matter
+    /// ([`crate::model::SECOND_ORDER_DEFLECTION`]).
     second_order: bool,
 }
-
-/// Compliance (rad/mm) above which the chain takes the second-order gravity terms: the
-/// levers on the undeflected chain and the composed rotation of the direction. They are
-/// quadratic in g: at 1e-6 rad/mm on three hinges of `default-6` leaving them out cost
-/// 0.33 µm and 2.9e-7 (measured), so at this threshold about 3 nm and 3e-9 (within every
-/// bound; `armcal accuracy` at the threshold: fixed point 0.017 µm against its 0.014 µm
-/// floor), and at the 2–4e-8 of a hub-class arm under a nanometre — such arms do not pay
-/// for them.
-pub const SECOND_ORDER_GRAVITY: f64 = 1.0e-7;
 
 /// The f32 quaternion chain (FPU targets).
 pub type ChainF32 = Chain<F32>;
@@ -146,12 +145,10 @@ impl<P: Precision> Chain<P> {
         let model = Model::<P>::new(table)?;
         let mut rotation = [JointRotation::<P>::default(); MAX_JOINTS];
         let mut prev = BASE_AXIS;
-        let mut second_order = false;
         for (i, r) in rotation.iter_mut().enumerate().take(model.n) {
             let j = table
                 .joint(i)
                 .ok_or(ChainError::Range { joint: i as u8 + 1 })?;
-            second_order |= j.gravity.abs() > SECOND_ORDER_GRAVITY;
             let full = crate::model::z_frame_quat(j.rotation, prev, j.axis);
             let mut full_q = [Quat::<P>::default(); 4];
             for (q, f) in full_q.iter_mut().enumerate() {
@@ -165,6 +162,7 @@ impl<P: Precision> Chain<P> {
             };
             prev = j.axis;
         }
+        let second_order = model.second_order_gravity;
         Ok(Chain {
             model,
             rotation,
@@ -175,6 +173,12 @@ impl<P: Precision> Chain<P> {
     /// Number of joints.
     pub fn joint_count(&self) -> usize {
         self.model.n
+    }
+
+    /// Whether this arm's compliances call for the second-order gravity terms (decided at
+    /// boot, [`crate::model::SECOND_ORDER_DEFLECTION`]).
+    pub fn second_order_gravity(&self) -> bool {
+        self.second_order
     }
 
     /// The model this chain evaluates.
@@ -240,16 +244,24 @@ impl<P: Precision> Chain<P> {
             rec.angle.write(angle);
         }
 
-        // Tip to base.
-        let mut w: Vec3<P::L> = [P::L::default(); 3];
+        // Tip to base. Three vectors share the pass, each turned, rotated and relabelled
+        // joint by joint (one copy of that code: the Cortex-M0 image's budget is 32 KiB):
+        // the tip w; with the second-order gravity terms also the shift (how far the
+        // deflections of the joints already passed have moved the tip: the spec's e_k is taken
+        // on the chain *without* gravity, so joint k's lever uses the undeflected tip
+        // u = w − shift), and the probe direction as a 1024 mm vector (the deflected chain's
+        // own direction, every deflection in its joint's angle).
+        const TIP: usize = 0;
+        const DIR: usize = 2;
+        let carried = if second_order { 3 } else { 1 };
+        // The tip, the shift, the direction.
+        let mut v: [Vec3<P::L>; 3] = [[P::L::default(); 3]; 3];
+        v[DIR] = m.probe_dir.map(P::u_as_l1024);
+        // Without the second-order terms: Ω = Σ e_k a_k, the first-order turn of the
+        // direction by the deflections (the deflected orientation is R(ω_1) … R(ω_N) Q with
+        // ω_k = e_k a_k about the undeflected axes).
         let mut omega = [zero; 3];
         let mut deflected = false;
-        // How far the deflections of the joints already passed have moved the tip, in the
-        // current frame: the spec's e_k is taken on the chain *without* gravity, so joint k's
-        // lever uses w − shift. Carried to first order (the turn and the relabelling, not the
-        // few-mrad E_i): what it corrects is second order in g — 0.3 µm at 1e-6 rad/mm on three
-        // hinges, micrometres at the table's limit — and the approximation leaves nanometres.
-        let mut shift: Vec3<P::L> = [P::L::default(); 3];
         for i in (0..n).rev() {
             let (j, r) = (&m.joints[i], &self.rotation[i]);
             let rec = &records[i];
@@ -257,71 +269,77 @@ impl<P: Precision> Chain<P> {
             // with an error, before this pass).
             let mut a = unsafe { rec.angle.assume_init_read() };
             let link = j.link_at(dt);
-            w = [w[0] + link[0], w[1] + link[1], w[2] + link[2]];
+            let w = &mut v[TIP];
+            *w = [w[0] + link[0], w[1] + link[1], w[2] + link[2]];
             if j.has_gravity {
                 // SAFETY: the first pass wrote the frame exactly where `has_gravity`.
                 let f = unsafe { rec.frame.assume_init_read() };
+                let [w, shift, _] = &mut v;
                 let (ux, uy) = (w[0] - shift[0], w[1] - shift[1]);
                 let lever = ux.scale(f.vertical[1]) - uy.scale(f.vertical[0]);
                 let eg = P::gravity(j.gravity, lever);
-                a = a.turned(P::half(eg));
                 if second_order {
-                    shift = [
-                        shift[0] - w[1].scale(eg),
-                        shift[1] + w[0].scale(eg),
+                    // The half angle h = e/2 of the deflection: sin h to third order, 1 − cos h
+                    // to second (errors h⁵/120 and h⁴/24: under 1e-12 at the table's largest
+                    // deflection, e ≈ 6.2e-3 on a 2064 mm lever); the joint turns by it.
+                    let h = P::half(eg);
+                    let h2 = h.scale(h);
+                    let sh = h + h.scale(h2).scale(P::SIN[0]);
+                    let ch = P::half(h2);
+                    a = a.turned_by(sh, ch);
+                    // The full deflection: sin e = 2 sin h (1 − (1 − cos h)), 1 − cos e = 2 sin² h.
+                    let se = sh - sh.scale(ch);
+                    let se = se + se;
+                    let ce = sh.scale(sh);
+                    let ce = ce + ce;
+                    // The deflected joint sees the undeflected tip at R(−e) u, the deflected at
+                    // w = u + shift: the shift grows by (I − R(−e)) u.
+                    *shift = [
+                        shift[0] + (ux.scale(ce) - uy.scale(se)),
+                        shift[1] + (uy.scale(ce) + ux.scale(se)),
                         shift[2],
                     ];
+                } else {
+                    a = a.turned(P::half(eg));
+                    let wk = f.axis.map(|x| x.scale(eg));
+                    omega = [omega[0] + wk[0], omega[1] + wk[1], omega[2] + wk[2]];
+                    deflected = true;
                 }
-                // The deflected orientation is R(ω_1) R(ω_2) … R(ω_N) Q with ω_k = e_k a_k
-                // about the undeflected axes; composed tip to base to second order
-                // (Baker–Campbell–Hausdorff): Ω ← ω_k + Ω + ½ ω_k × Ω. At the table's
-                // largest compliance (e ≈ 5 mrad) a first-order sum would be 1e-5 off.
-                let wk = f.axis.map(|x| x.scale(eg));
-                if second_order {
-                    omega = add_half_cross::<P>(omega, &wk, &omega);
-                }
-                omega = [omega[0] + wk[0], omega[1] + wk[1], omega[2] + wk[2]];
-                deflected = true;
             }
-            let (x, y) = quarter_turns(a.q, (w[0], w[1]));
             let (sin2, omc) = a.double();
-            w = [
-                x - (y.scale(sin2) + x.scale(omc)),
-                y + (x.scale(sin2) - y.scale(omc)),
-                w[2],
-            ];
-            if deflected && second_order {
-                // The same turn as w's, written out again: a shared helper moved LLVM's code
-                // layout by +340 bytes of the Cortex-M0 image, whose budget is 32 KiB.
-                let (x, y) = quarter_turns(a.q, (shift[0], shift[1]));
-                shift = relabel(
+            let e = &r.near;
+            for x in v.iter_mut().take(carried) {
+                // The remainder turn as a correction, M''_i as x + E_i x, the relabelling.
+                let (p, q) = quarter_turns(a.q, (x[0], x[1]));
+                let t = [
+                    p - (q.scale(sin2) + p.scale(omc)),
+                    q + (p.scale(sin2) - q.scale(omc)),
+                    x[2],
+                ];
+                *x = relabel(
                     [
-                        x - (y.scale(sin2) + x.scale(omc)),
-                        y + (x.scale(sin2) - y.scale(omc)),
-                        shift[2],
+                        t[0] + (t[0].scale(e[0]) + t[1].scale(e[1]) + t[2].scale(e[2])),
+                        t[1] + (t[0].scale(e[3]) + t[1].scale(e[4]) + t[2].scale(e[5])),
+                        t[2] + (t[0].scale(e[6]) + t[1].scale(e[7]) + t[2].scale(e[8])),
                     ],
                     r.shift,
                 );
             }
-            let e = &r.near;
-            w = [
-                w[0] + (w[0].scale(e[0]) + w[1].scale(e[1]) + w[2].scale(e[2])),
-                w[1] + (w[0].scale(e[3]) + w[1].scale(e[4]) + w[2].scale(e[5])),
-                w[2] + (w[0].scale(e[6]) + w[1].scale(e[7]) + w[2].scale(e[8])),
-            ];
-            w = relabel(w, r.shift);
         }
 
-        let mut dir = q.rotate(&m.probe_dir, q.rotation_factor());
-        if deflected {
-            // The deflections turn the probe by Ω: n + Ω × n + ½ Ω × (Ω × n), the last term
-            // only where it matters.
-            let mut t = cross::<P>(&omega, &dir);
-            if second_order {
-                t = add_half_cross::<P>(t, &omega, &t);
+        let dir = if second_order {
+            v[DIR].map(P::l1024_as_u)
+        } else {
+            // n = Q v̂_p Q*, turned by Ω to first order.
+            let n = q.rotate(&m.probe_dir, q.rotation_factor());
+            if deflected {
+                let t = cross::<P>(&omega, &n);
+                [n[0] + t[0], n[1] + t[1], n[2] + t[2]]
+            } else {
+                n
             }
-            dir = [dir[0] + t[0], dir[1] + t[1], dir[2] + t[2]];
-        }
+        };
+        let w = v[TIP];
         Ok(Point { xyz: w, dir })
     }
 }

@@ -56,6 +56,14 @@ pub enum ChainError {
         /// The joint (1..=N), or 0.
         joint: u8,
     },
+    /// The arm's reach (Σ |components| of links and probe, +4 % for thermal expansion)
+    /// exceeds what this evaluator's numbers hold (fixed point: I12F20 millimetres).
+    Reach {
+        /// The reach with its thermal margin, whole mm rounded up.
+        reach_mm: u32,
+        /// The evaluator's limit, mm.
+        limit_mm: u32,
+    },
 }
 
 impl fmt::Display for ChainError {
@@ -68,9 +76,11 @@ impl fmt::Display for ChainError {
                 write!(f, "joint {joint}: count not below counts per revolution")
             }
             ChainError::Temperature => f.write_str("temperature outside -80..120 degC"),
-            ChainError::Range { joint: 0 } => {
-                f.write_str("probe or reach does not fit this evaluator")
-            }
+            ChainError::Range { joint: 0 } => f.write_str("probe does not fit this evaluator"),
+            ChainError::Reach { reach_mm, limit_mm } => write!(
+                f,
+                "reach {reach_mm} mm (links and probe, +4 % thermal) exceeds this evaluator's {limit_mm} mm"
+            ),
             ChainError::Range { joint } => {
                 write!(f, "joint {joint}: table value does not fit this evaluator")
             }
@@ -160,6 +170,9 @@ pub struct Model<P: Precision> {
     pub joints: [JointModel<P>; MAX_JOINTS],
     /// Unit direction of the probe vector, in the z-axis frame of the last joint.
     pub probe_dir: Vec3<P::U>,
+    /// Whether the arm's deflections call for the second-order gravity terms
+    /// ([`SECOND_ORDER_DEFLECTION`]).
+    pub second_order_gravity: bool,
 }
 
 /// Joint i's part of one reading.
@@ -207,7 +220,7 @@ pub(crate) fn units<P: Precision, const K: usize>(
     Ok(out)
 }
 
-fn abs(x: f64) -> f64 {
+pub(crate) fn abs(x: f64) -> f64 {
     if x < 0.0 {
         -x
     } else {
@@ -227,6 +240,29 @@ fn sort_by_order<P: Precision>(terms: &mut [HarmonicTerm<P>]) {
         }
     }
 }
+
+/// Σ |components| of a vector: a bound on its length that needs no square root.
+fn l1(v: [f64; 3]) -> f64 {
+    abs(v[0]) + abs(v[1]) + abs(v[2])
+}
+
+/// Thermal expansion over the accepted temperatures stretches every link by at most
+/// |κ| ΔT = 4e-4 · 100 = 4 % ([`crate::table::limits::THERMAL`], [`TEMP_RANGE_MC`]).
+const THERMAL_MARGIN: f64 = 1.04;
+
+/// The bound on the arm's gravity deflections, G·R = Σ_k |g_k| · reach (rad), above which the
+/// chains take the second-order gravity terms (the levers on the undeflected chain, the
+/// deflections in the direction exactly).
+///
+/// Leaving them out costs at most (G R)² in the direction (the deflections' rotations summed
+/// to first order, |Ω| ≤ G R) and (G R)² R / 2 at the tip (joint k's lever taken on the
+/// deflected chain is off by at most Σ_{j>k} |g_j| R², its angle by |g_k| times that, the tip
+/// by R times that again): at this threshold 2e-8 and, at the largest reach a table holds
+/// (2147 mm with the thermal margin), 21 nm — within fixed point's bounds (1e-7 and 0.1 µm)
+/// with its own floor (4e-8, 0.014 µm). Hub-class arms stay below it and do not pay for the
+/// terms: `default-6-full` (4, 3 and 1e-8 rad/mm on its hinges, 1.57 m) is at 1.26e-4. The
+/// MUKCa robots' 1e-6 rad/mm is far above.
+pub const SECOND_ORDER_DEFLECTION: f64 = 1.4e-4;
 
 /// Component k of P_a⁻¹ v is component (k + a + 1) mod 3 of v (a = 2, z: the identity).
 fn unpermute(v: [f64; 3], axis: u8) -> [f64; 3] {
@@ -289,6 +325,7 @@ impl<P: Precision> Model<P> {
         let n = table.joint_count();
         let mut joints = [JointModel::<P>::default(); MAX_JOINTS];
         let mut reach = 0.0;
+        let mut gravity = 0.0;
         let mut last_axis = BASE_AXIS;
         for (i, jm) in joints.iter_mut().enumerate().take(n) {
             let j = table
@@ -320,11 +357,12 @@ impl<P: Precision> Model<P> {
             } else {
                 None
             };
-            reach += abs(j.link[0]) + abs(j.link[1]) + abs(j.link[2]);
+            reach += l1(j.link);
+            gravity += abs(j.gravity);
             let (mut link, mut rate) = (j.link, j.link.map(|x| x * j.thermal));
             if i + 1 == n {
                 let p = table.probe();
-                reach += abs(p.vector[0]) + abs(p.vector[1]) + abs(p.vector[2]);
+                reach += l1(p.vector);
                 for k in 0..3 {
                     link[k] += p.vector[k];
                     rate[k] += p.vector[k] * p.thermal;
@@ -344,17 +382,21 @@ impl<P: Precision> Model<P> {
             };
             last_axis = j.axis;
         }
-        // Thermal expansion over the accepted temperatures stretches every link by at most
-        // 4e-4 · 100 = 4 %.
         // Finite by the table's checks; written so that NaN would be refused too.
-        let fits = reach * 1.04 < P::MAX_REACH_MM;
+        let reach = reach * THERMAL_MARGIN;
+        let fits = reach < P::MAX_REACH_MM;
         if !fits {
-            return Err(ChainError::Range { joint: 0 });
+            // Saturating conversions: the table's limits keep both far inside u32.
+            return Err(ChainError::Reach {
+                reach_mm: reach as u32 + 1,
+                limit_mm: P::MAX_REACH_MM as u32,
+            });
         }
         Ok(Model {
             n,
             joints,
             probe_dir: units::<P, 3>(unpermute(table.probe().direction, last_axis), 0)?,
+            second_order_gravity: gravity * reach > SECOND_ORDER_DEFLECTION,
         })
     }
 
@@ -472,6 +514,22 @@ impl<P: Precision> Gravity<P> {
         if let Some(slot) = self.terms.get_mut(n.0) {
             slot.write(GravityTerm { g, axis, origin });
             n.0 += 1;
+        }
+    }
+
+    /// The deflections e_k = g_k a_k · ((p − o_k) × ẑ) of the recorded joints at the
+    /// undeflected tip p, in the order they were pushed.
+    #[inline(always)]
+    pub fn deflections(&self, count: GravityCount, p: Vec3<P::L>, out: &mut [P::U; MAX_JOINTS]) {
+        for (slot, e) in self.terms.iter().take(count.0).zip(out.iter_mut()) {
+            // SAFETY: `push` wrote every slot below `count` before counting it.
+            let GravityTerm {
+                g,
+                axis: a,
+                origin: o,
+            } = unsafe { slot.assume_init_read() };
+            let d = [p[0] - o[0], p[1] - o[1]];
+            *e = P::gravity(g, d[1].scale(a[0]) - d[0].scale(a[1]));
         }
     }
 

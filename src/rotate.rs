@@ -138,17 +138,6 @@ pub fn cross<P: Precision>(a: &Vec3<P::U>, b: &Vec3<P::U>) -> Vec3<P::U> {
     ]
 }
 
-/// v + ½ a × b: the second-order term of a composition of small rotations.
-#[inline(always)]
-pub fn add_half_cross<P: Precision>(v: Vec3<P::U>, a: &Vec3<P::U>, b: &Vec3<P::U>) -> Vec3<P::U> {
-    let c = cross::<P>(a, b);
-    [
-        v[0] + P::half(c[0]),
-        v[1] + P::half(c[1]),
-        v[2] + P::half(c[2]),
-    ]
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -163,10 +152,6 @@ mod tests {
         let (x, y) = ([1.0f32, 0.0, 0.0], [0.0f32, 1.0, 0.0]);
         assert_eq!(cross::<F32>(&x, &y), [0.0, 0.0, 1.0]);
         assert_eq!(cross::<F32>(&y, &x), [0.0, 0.0, -1.0]);
-        assert_eq!(
-            add_half_cross::<F32>([1.0, 2.0, 3.0], &x, &y),
-            [1.0, 2.0, 3.5]
-        );
     }
 
     #[test]

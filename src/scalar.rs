@@ -84,6 +84,11 @@ pub trait Precision: Copy + Default + Debug + 'static {
     fn l_to_f64(x: Self::L) -> f64;
     /// Exact value of a dimensionless number, for host-side comparisons.
     fn u_to_f64(x: Self::U) -> f64;
+    /// A dimensionless number as a length of `x` · 1024 mm, exactly: a unit vector carried
+    /// through the chain's position code (fixed point: the same bits, I2F30 read as I12F20).
+    fn u_as_l1024(x: Self::U) -> Self::L;
+    /// The inverse of [`Precision::u_as_l1024`], exact.
+    fn l1024_as_u(x: Self::L) -> Self::U;
     /// Largest absolute length (mm) that the chain may meet anywhere; the table must keep the
     /// arm's reach below it.
     const MAX_REACH_MM: f64;
@@ -140,7 +145,10 @@ impl Precision for F32 {
     const SIN: [f32; 3] = [SIN_F64[0] as f32, SIN_F64[1] as f32, SIN_F64[2] as f32];
     const COS: [f32; 3] = [COS_F64[0] as f32, COS_F64[1] as f32, COS_F64[2] as f32];
     const SQRT_HALF: f32 = core::f32::consts::FRAC_1_SQRT_2;
-    const MAX_REACH_MM: f64 = 1.0e6;
+    /// Not the format's (f32 holds far more) but the output's: the stream's i32 nanometres
+    /// end at 2147.483647 mm ([`crate::table::limits::REACH_MM`]), and a coordinate beyond
+    /// would be clipped.
+    const MAX_REACH_MM: f64 = 2147.0;
     const DIVIDE_NORM: bool = true;
     const SPEND_FLASH: bool = true;
 
@@ -169,7 +177,9 @@ impl Precision for F32 {
         rate * dt
     }
     fn u_from_f64(x: f64) -> Option<f32> {
-        finite_below(x, 2.0).map(|x| x as f32)
+        // |x| = 2 included: E_i = M''_i − I of a half turn (a zero offset of π) has −2 on
+        // its diagonal, which fixed point's I2F30 holds too.
+        (x.is_finite() && x.abs() <= 2.0).then_some(x as f32)
     }
     fn l_from_f64(x: f64) -> Option<f32> {
         finite_below(x, Self::MAX_REACH_MM).map(|x| x as f32)
@@ -191,6 +201,14 @@ impl Precision for F32 {
     }
     fn u_to_f64(x: f32) -> f64 {
         f64::from(x)
+    }
+    #[inline(always)]
+    fn u_as_l1024(x: f32) -> f32 {
+        x * 1024.0
+    }
+    #[inline(always)]
+    fn l1024_as_u(x: f32) -> f32 {
+        x * (1.0 / 1024.0)
     }
 }
 
@@ -494,11 +512,9 @@ impl Precision for Fixed {
         fixed_bits(x, 30).map(Unit::from_bits)
     }
     fn l_from_f64(x: f64) -> Option<Len> {
-        // MAX_REACH_MM (2000) in I12F20 bits: the reach check in integers, no soft-float compare.
-        const LIMIT: u32 = (Fixed::MAX_REACH_MM as u32) << 20;
-        fixed_bits(x, 20)
-            .filter(|b| b.unsigned_abs() < LIMIT)
-            .map(Len::from_bits)
+        // Any value the format holds: the arm's reach, which bounds every sum, is checked
+        // against MAX_REACH_MM as a whole ([`crate::model::Model::new`]).
+        fixed_bits(x, 20).map(Len::from_bits)
     }
     fn g_from_f64(g: f64) -> Option<i32> {
         fixed_bits(g, G_FRAC)
@@ -518,6 +534,15 @@ impl Precision for Fixed {
     }
     fn u_to_f64(x: Unit) -> f64 {
         x.bits() as f64 / 1_073_741_824.0
+    }
+    #[inline(always)]
+    fn u_as_l1024(x: Unit) -> Len {
+        // 30 fractional bits of a unit are 20 of a millimetre and 10 of 1024.
+        Len::from_bits(x.bits())
+    }
+    #[inline(always)]
+    fn l1024_as_u(x: Len) -> Unit {
+        Unit::from_bits(x.bits())
     }
 }
 

@@ -127,6 +127,16 @@ pub mod limits {
     pub const HARMONIC_SUM: f64 = 1.0e-3;
     /// How far a stored rotation may be from unit length / orthonormal.
     pub const UNIT_TOLERANCE: f64 = 1.0e-9;
+    /// The arm's reach: Σ |components| of the links and the probe (mm), a bound on every
+    /// coordinate the chain can produce. Every board streams XYZ as i32 nanometres, whose
+    /// range is ±2147.483647 mm; thermal expansion at the accepted temperatures (|κ| ≤ 4e-4
+    /// over 100 °C) stretches the arm by at most 4 %, to 2146.6 mm here. A longer arm would be
+    /// clipped in the stream: the host's table builder refuses it, and on the board
+    /// `Chain::new` refuses any table whose reach with that margin leaves its evaluator's
+    /// range ([`crate::ChainError::Reach`]; f32 2147 mm, the stream's; fixed point 2000 mm, its
+    /// I12F20's). (The check lives there rather than in [`super::Table::parse`] because the
+    /// chain sums the reach anyway, and the Cortex-M0 image has no flash for a second sum.)
+    pub const REACH_MM: f64 = 2064.0;
 }
 
 /// Why a table cannot be used. The firmware streams no coordinates while it has one.

@@ -12,6 +12,7 @@ use crate::data::{
     joint_columns, number_cell, unique_columns, without_comments, Bound, HeaderProblem, Lines,
 };
 use crate::limits::shown;
+use anyhow::Context as _;
 use quatarm::{Chain, Fixed, Precision, Table, F32};
 use quatarm_ref::Arm;
 use std::fmt::Write as _;
@@ -186,10 +187,21 @@ fn counts_of(arm: &Arm, r: &Reading) -> Vec<u32> {
     }
 }
 
-fn firmware<P: Precision>(arm: &Arm, rows: &Rows, out: &mut String) -> anyhow::Result<()> {
-    let bytes = crate::tablebuild::build(arm)?;
-    let table = Table::parse(&bytes)?;
-    let chain = Chain::<P>::new(&table)?;
+/// The firmware path `P` on the table a board would load; `calib` names the calibration in
+/// errors about it (a table it cannot become, an arm the evaluator cannot hold).
+fn firmware<P: Precision>(
+    arm: &Arm,
+    rows: &Rows,
+    calib: &str,
+    out: &mut String,
+) -> anyhow::Result<()> {
+    let chain = crate::tablebuild::build(arm)
+        .map_err(anyhow::Error::from)
+        .and_then(|bytes| {
+            let table = Table::parse(&bytes)?;
+            Ok(Chain::<P>::new(&table)?)
+        })
+        .with_context(|| format!("{calib}: no {} evaluator for this arm", P::NAME))?;
     for (r, t) in rows {
         let counts = counts_of(arm, r);
         let pt = chain.eval(&counts, temp_mc(*t))?;
@@ -209,8 +221,14 @@ fn firmware<P: Precision>(arm: &Arm, rows: &Rows, out: &mut String) -> anyhow::R
     Ok(())
 }
 
-/// Evaluates every row; returns the whole output CSV.
-pub fn evaluate(arm: &Arm, rows: &Rows, evaluator: Evaluator) -> anyhow::Result<String> {
+/// Evaluates every row; returns the whole output CSV. `calib` names the calibration in
+/// errors about the arm itself.
+pub fn evaluate(
+    arm: &Arm,
+    rows: &Rows,
+    evaluator: Evaluator,
+    calib: &str,
+) -> anyhow::Result<String> {
     let mut out = String::from("x,y,z,nx,ny,nz\n");
     match evaluator {
         Evaluator::F64 => {
@@ -231,8 +249,8 @@ pub fn evaluate(arm: &Arm, rows: &Rows, evaluator: Evaluator) -> anyhow::Result<
                 );
             }
         }
-        Evaluator::F32 => firmware::<F32>(arm, rows, &mut out)?,
-        Evaluator::Fixed => firmware::<Fixed>(arm, rows, &mut out)?,
+        Evaluator::F32 => firmware::<F32>(arm, rows, calib, &mut out)?,
+        Evaluator::Fixed => firmware::<Fixed>(arm, rows, calib, &mut out)?,
     }
     Ok(out)
 }

@@ -145,9 +145,33 @@ pub fn table_data(arm: &Arm) -> Result<TableData, BuildError> {
     Ok(d)
 }
 
+/// Σ |components| of the links and the probe: the reach the table limits.
+fn reach_mm(d: &TableData) -> f64 {
+    let l1 = |v: &[f64; 3]| v.iter().map(|x| x.abs()).sum::<f64>();
+    d.joints[..usize::from(d.joint_count)]
+        .iter()
+        .map(|j| l1(&j.link))
+        .sum::<f64>()
+        + l1(&d.probe.vector)
+}
+
 /// The table bytes for an arm, checked by the firmware's own parser before they are returned.
 pub fn build(arm: &Arm) -> Result<Vec<u8>, BuildError> {
     let data = table_data(arm)?;
+    let reach = reach_mm(&data);
+    // Finite by `table_data`'s checks; written so that NaN would be refused too.
+    let fits = reach <= quatarm::table::limits::REACH_MM;
+    if !fits {
+        return Err(err(
+            "joint.link",
+            format!(
+                "the arm reaches {reach:.1} mm (sum of |components| of the links and the \
+                 probe); a table holds at most {} mm, since the stream's coordinates end at \
+                 2147.48 mm and heat may stretch the arm by 4 %",
+                quatarm::table::limits::REACH_MM
+            ),
+        ));
+    }
     let mut buf = vec![0u8; MAX_TABLE_LEN];
     let len = data
         .encode(&mut buf)

@@ -1,6 +1,8 @@
-//! Tests live in `tests/`. The library holds what they share with `cargo xtask`: the board
-//! list, the QEMU runner and the recordings a replay sends.
+//! Tests live in `tests/`. The library holds what they share with `cargo xtask` and the fuzz
+//! targets: the board list, the QEMU runner, the recordings a replay sends and the generator
+//! of arms inside the table's limits.
 
+pub mod arms;
 pub mod boards;
 pub mod defmt_log;
 pub mod e2e;

@@ -16,6 +16,8 @@ const FIXED_DIR: f64 = 1e-7;
 
 fn check(rep: &Report) {
     let [qf, qx, mf, mx, _] = rep.stats;
+    assert!(mf.max_dir <= F32_DIR, "f32 matrix dir {}", mf.max_dir);
+    assert!(mx.max_dir <= FIXED_DIR, "fixed matrix dir {}", mx.max_dir);
     assert!(
         qf.max_um <= F32_TIP_UM,
         "f32 quaternion tip {} um",
@@ -59,34 +61,36 @@ fn the_shipped_calibration_file_is_the_built_in_one() {
     assert_eq!(parsed.arm, full_calibration());
 }
 
-/// The quaternion chains' bounds (the matrix chain takes the spec's first-order gravity sum,
-/// which is micrometres off at such compliances: a comparison, not a firmware path).
-fn check_quaternion(rep: &Report) {
-    let [qf, qx, ..] = rep.stats;
-    assert!(qf.max_um <= F32_TIP_UM, "f32 tip {} um", qf.max_um);
-    assert!(qf.max_dir <= F32_DIR, "f32 dir {}", qf.max_dir);
-    assert!(qx.max_um <= FIXED_TIP_UM, "fixed tip {} um", qx.max_um);
-    assert!(qx.max_dir <= FIXED_DIR, "fixed dir {}", qx.max_dir);
-}
-
 /// Large gravity compliances on every hinge, with the full calibration: the largest a table
 /// holds (deflections of several mrad, where first-order gravity would miss by micrometres
-/// and 1e-5), and the largest for which the chain leaves the second-order terms out.
+/// and 1e-5), the MUKCa robots' 1e-6, and compliances around where the chain starts taking
+/// the second-order terms (`chain::gravity_bounds`).
 #[test]
 fn large_gravity_compliance_within_bounds() {
-    for g in [
-        quatarm::table::limits::GRAVITY,
-        quatarm::chain::SECOND_ORDER_GRAVITY,
-    ] {
+    for g in [quatarm::table::limits::GRAVITY, 1e-6, 1e-7, 5e-8] {
         for signs in [[1.0, 1.0, 1.0], [1.0, -1.0, 1.0]] {
             let mut arm = full_calibration();
             for (k, sign) in [1, 3, 5].into_iter().zip(signs) {
                 arm.joints[k].gravity = sign * g;
             }
             let rep = measure(&arm, 20_000, 11, 2, &|_| {}).unwrap();
-            check_quaternion(&rep);
+            check(&rep);
         }
     }
+}
+
+/// Hub-class compliances keep the first-order path (no instructions spent on the terms
+/// they do not need); the MUKCa robots' take the second-order one.
+#[test]
+fn second_order_gravity_is_taken_where_it_matters() {
+    let chain = |arm: &Arm| {
+        let bytes = armcal::tablebuild::build(arm).unwrap();
+        Chain::<Fixed>::new(&Table::parse(&bytes).unwrap()).unwrap()
+    };
+    assert!(!chain(&full_calibration()).second_order_gravity());
+    let mut arm = full_calibration();
+    arm.joints[1].gravity = 1.32e-6;
+    assert!(chain(&arm).second_order_gravity());
 }
 
 fn arm_strategy() -> impl Strategy<Value = Arm> {
@@ -212,12 +216,137 @@ fn nominal_arm_straight_up_is_exact() {
 #[test]
 fn a_table_too_long_for_fixed_point_is_refused_not_wrapped() {
     let mut arm = Arm::default6();
-    arm.joints[2].link = [0.0, 0.0, 900.0];
+    // Reach 1980 mm, 2059 mm with the thermal margin: over fixed point's 2000 mm, inside the
+    // table's 2064 mm and f32's 2147 mm.
+    arm.joints[2].link = [0.0, 0.0, 780.0];
     let bytes = armcal::tablebuild::build(&arm).unwrap();
     let t = Table::parse(&bytes).unwrap();
     assert_eq!(
         Chain::<Fixed>::new(&t).unwrap_err(),
-        ChainError::Range { joint: 0 }
+        ChainError::Reach {
+            reach_mm: 2060,
+            limit_mm: 2000
+        }
     );
     assert!(Chain::<F32>::new(&t).is_ok());
+}
+
+fn repro(name: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/repro")
+        .join(name)
+}
+
+fn repro_arm(name: &str) -> Arm {
+    quatarm_ref::calfile::read(&repro(name)).unwrap().arm
+}
+
+/// Issue 15's arms: large compliances behind a large zero offset (`g-ur-zo3`, 5.4 µm before
+/// the fix), behind D–H twists (`p3-grav`, the MUKCa Panda with 2e-6 rad/mm, 2.0 µm) and the
+/// worst arm the generator had found (`fuzz-worst-fixed`, 15.8 µm). The fault: the shift of
+/// the deflections beyond a joint was turned with each joint but not carried through its
+/// fixed rotation M''_i, which such arms take far from the identity.
+#[test]
+fn issue_15_arms_within_bounds() {
+    for name in [
+        "g-ur.toml",
+        "g-ur-zo3.toml",
+        "p3-grav.toml",
+        "fuzz-worst-fixed.toml",
+    ] {
+        let arm = repro_arm(name);
+        let rep = measure(&arm, 20_000, 3, 2, &|_| {}).unwrap();
+        let [qf, qx, ..] = rep.stats;
+        assert!(qf.max_um <= F32_TIP_UM, "{name}: f32 tip {} um", qf.max_um);
+        assert!(qf.max_dir <= F32_DIR, "{name}: f32 dir {}", qf.max_dir);
+        assert!(
+            qx.max_um <= FIXED_TIP_UM,
+            "{name}: fixed tip {} um",
+            qx.max_um
+        );
+        assert!(qx.max_dir <= FIXED_DIR, "{name}: fixed dir {}", qx.max_dir);
+    }
+}
+
+/// An arm reaching 2.3 m (`c-reach-2p3m`): the f32 chain used to stream 2147.483647 mm, the
+/// end of the i32 nanometre range, for its 2300 mm straight up. The table now refuses any arm
+/// whose reach could leave that range, naming the limit; a table built by other means is
+/// refused by the firmware's own parser.
+#[test]
+fn an_arm_beyond_the_streams_range_is_refused() {
+    let arm = repro_arm("c-reach-2p3m.toml");
+    let e = armcal::tablebuild::build(&arm).unwrap_err();
+    assert!(e.message.contains("2300.0 mm"), "{e}");
+    assert!(e.message.contains("2064 mm"), "{e}");
+    // The same table built without the host's check: the firmware's parser takes it (its
+    // values are each in range), and both chains refuse it, naming the reach.
+    let data = armcal::tablebuild::table_data(&arm).unwrap();
+    let mut buf = vec![0u8; quatarm::table::MAX_TABLE_LEN];
+    let len = data.encode(&mut buf).unwrap();
+    let t = Table::parse(&buf[..len]).unwrap();
+    // 2300 mm · 1.04 = 2392 mm.
+    assert_eq!(
+        Chain::<F32>::new(&t).unwrap_err(),
+        ChainError::Reach {
+            reach_mm: 2393,
+            limit_mm: 2147
+        }
+    );
+    assert_eq!(
+        Chain::<Fixed>::new(&t).unwrap_err(),
+        ChainError::Reach {
+            reach_mm: 2393,
+            limit_mm: 2000
+        }
+    );
+}
+
+/// An arm just inside the table's reach, straight up and stretched by the hottest accepted
+/// temperature: every coordinate the chains stream is the exact rounding of their value.
+#[test]
+fn the_longest_arm_the_table_takes_streams_unclipped() {
+    let mut arm = Arm::default6();
+    // 200 + 300 + 300 + 250 + 250 + 80 + 120 = 1500; + 564 = 2064, the limit.
+    arm.joints[2].link = [0.0, 0.0, 864.0];
+    for j in &mut arm.joints {
+        j.thermal = quatarm::table::limits::THERMAL;
+    }
+    arm.probe.thermal = quatarm::table::limits::THERMAL;
+    let bytes = armcal::tablebuild::build(&arm).unwrap();
+    let t = Table::parse(&bytes).unwrap();
+    let p = Chain::<F32>::new(&t)
+        .unwrap()
+        .eval(&[0; 6], 120_000)
+        .unwrap();
+    // 2064 mm · (1 + 4e-4 · 100) = 2146.56 mm.
+    assert_eq!((p.xyz_nm()[2] + 500) / 1000, 2_146_560);
+    assert!(Chain::<Fixed>::new(&t).is_err());
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    /// Arms anywhere inside the table's limits (`host_tests::arms`, the generator the
+    /// `chain_arm_accuracy` fuzz target runs for as long as it is given): a named refusal, or
+    /// both quaternion chains within their bounds on every reading.
+    #[test]
+    fn arms_inside_the_tables_limits_are_refused_or_within_bounds(
+        bytes in prop::collection::vec(any::<u8>(), 64..4096),
+    ) {
+        if let Err(e) = host_tests::arms::check_bytes(&bytes) {
+            return Err(TestCaseError::fail(e));
+        }
+    }
+}
+
+/// A zero offset of a half turn (common in D–H tables) puts −2 on the diagonal of
+/// E_i = M''_i − I: both chains hold it (f32 refused it once, as "does not fit") and stay
+/// within their bounds.
+#[test]
+fn a_half_turn_zero_offset_is_served() {
+    let mut arm = full_calibration();
+    arm.joints[2].zero_offset = std::f64::consts::PI;
+    arm.joints[3].tilt[0] = std::f64::consts::PI;
+    let rep = measure(&arm, 20_000, 5, 2, &|_| {}).unwrap();
+    check(&rep);
 }

@@ -19,11 +19,12 @@ use host_tests::boards::root;
 use crate::build::check;
 
 /// Every fuzz target, as `fuzz/Cargo.toml` declares them.
-pub const TARGETS: [&str; 6] = [
+pub const TARGETS: [&str; 7] = [
     "table_parse",
     "hub_frames",
     "host_frames",
     "chain_eval",
+    "chain_arm_accuracy",
     "data_csv",
     "calfile_toml",
 ];

@@ -33,7 +33,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ),
     };
     let rows = rows.with_context(|| name.clone())?;
-    let out = evaluate(&arm, &rows, args.precision)?;
+    let out = evaluate(
+        &arm,
+        &rows,
+        args.precision,
+        &args.calib.display().to_string(),
+    )?;
     let mut stdout = std::io::stdout().lock();
     stdout.write_all(out.as_bytes())?;
     stdout.flush()?;
