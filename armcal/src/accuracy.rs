@@ -4,7 +4,7 @@
 //! load. Also the arm used for it: `default-6` with a calibration that uses every term.
 
 use nalgebra::Vector3;
-use quatarm::{Chain, Fixed, MatrixChain, Point, Precision, Table, F32};
+use quatarm::{Chain, ChainError, Fixed, MatrixChain, Point, Precision, Table, F32};
 use quatarm_ref::{Arm, Harmonic};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -131,6 +131,9 @@ pub const PATHS: [&str; 5] = [
 pub struct Report {
     /// One entry per [`PATHS`] name.
     pub stats: [Stats; 5],
+    /// Why a firmware path (the first four of [`PATHS`]) has no chain for this arm (its
+    /// `stats` are then empty).
+    pub refused: [Option<ChainError>; 4],
 }
 
 fn errors<P: Precision>(pt: &Point<P>, p: &Vector3<f64>, n: &Vector3<f64>) -> (f64, f64) {
@@ -157,16 +160,17 @@ pub fn first_order_gravity(arm: &Arm, theta: &[f64], temp_c: f64) -> (Vector3<f6
     (p, n)
 }
 
-/// The four firmware chains built from one table.
+/// The four firmware chains built from one table, each or the evaluator's refusal of the
+/// arm (a reach beyond its range, a value it cannot hold).
 pub struct Paths {
     /// f32 quaternion chain.
-    pub qf: Chain<F32>,
+    pub qf: Result<Chain<F32>, ChainError>,
     /// Fixed quaternion chain.
-    pub qx: Chain<Fixed>,
+    pub qx: Result<Chain<Fixed>, ChainError>,
     /// f32 matrix chain.
-    pub mf: MatrixChain<F32>,
+    pub mf: Result<MatrixChain<F32>, ChainError>,
     /// Fixed matrix chain.
-    pub mx: MatrixChain<Fixed>,
+    pub mx: Result<MatrixChain<Fixed>, ChainError>,
 }
 
 impl Paths {
@@ -175,11 +179,21 @@ impl Paths {
         let bytes = crate::tablebuild::build(arm)?;
         let t = Table::parse(&bytes)?;
         Ok(Paths {
-            qf: Chain::new(&t)?,
-            qx: Chain::new(&t)?,
-            mf: MatrixChain::new(&t)?,
-            mx: MatrixChain::new(&t)?,
+            qf: Chain::new(&t),
+            qx: Chain::new(&t),
+            mf: MatrixChain::new(&t),
+            mx: MatrixChain::new(&t),
         })
+    }
+
+    /// Each path's refusal, in [`PATHS`] order.
+    pub fn refused(&self) -> [Option<ChainError>; 4] {
+        [
+            self.qf.as_ref().err().copied(),
+            self.qx.as_ref().err().copied(),
+            self.mf.as_ref().err().copied(),
+            self.mx.as_ref().err().copied(),
+        ]
     }
 }
 
@@ -224,7 +238,10 @@ pub fn measure(
             .map(|h| h.join().expect("worker thread"))
             .collect()
     });
-    let mut total = Report::default();
+    let mut total = Report {
+        refused: paths.refused(),
+        ..Report::default()
+    };
     for r in results {
         let r = r?;
         for (a, b) in total.stats.iter_mut().zip(&r.stats) {
@@ -245,14 +262,22 @@ pub fn one(
     let theta = counts_to_rad(arm, counts);
     let temp_c = f64::from(temp_mc) / 1000.0;
     let r = quatarm_ref::forward::forward(arm, &theta, temp_c);
-    let e = errors(&paths.qf.eval(counts, temp_mc)?, &r.p, &r.n);
-    rep.stats[0].add(e.0, e.1);
-    let e = errors(&paths.qx.eval(counts, temp_mc)?, &r.p, &r.n);
-    rep.stats[1].add(e.0, e.1);
-    let e = errors(&paths.mf.eval(counts, temp_mc)?, &r.p, &r.n);
-    rep.stats[2].add(e.0, e.1);
-    let e = errors(&paths.mx.eval(counts, temp_mc)?, &r.p, &r.n);
-    rep.stats[3].add(e.0, e.1);
+    if let Ok(c) = &paths.qf {
+        let e = errors(&c.eval(counts, temp_mc)?, &r.p, &r.n);
+        rep.stats[0].add(e.0, e.1);
+    }
+    if let Ok(c) = &paths.qx {
+        let e = errors(&c.eval(counts, temp_mc)?, &r.p, &r.n);
+        rep.stats[1].add(e.0, e.1);
+    }
+    if let Ok(c) = &paths.mf {
+        let e = errors(&c.eval(counts, temp_mc)?, &r.p, &r.n);
+        rep.stats[2].add(e.0, e.1);
+    }
+    if let Ok(c) = &paths.mx {
+        let e = errors(&c.eval(counts, temp_mc)?, &r.p, &r.n);
+        rep.stats[3].add(e.0, e.1);
+    }
     let (p1, n1) = first_order_gravity(arm, &theta, temp_c);
     rep.stats[4].add((p1 - r.p).norm() * 1000.0, (n1 - r.n).norm());
     Ok(())

@@ -15,6 +15,7 @@ const F32_DIR: f64 = 1e-6;
 const FIXED_DIR: f64 = 1e-7;
 
 fn check(rep: &Report) {
+    assert_eq!(rep.refused, [None; 4], "a chain refused the arm");
     let [qf, qx, mf, mx, _] = rep.stats;
     assert!(mf.max_dir <= F32_DIR, "f32 matrix dir {}", mf.max_dir);
     assert!(mx.max_dir <= FIXED_DIR, "fixed matrix dir {}", mx.max_dir);
@@ -216,8 +217,8 @@ fn nominal_arm_straight_up_is_exact() {
 #[test]
 fn a_table_too_long_for_fixed_point_is_refused_not_wrapped() {
     let mut arm = Arm::default6();
-    // Reach 1980 mm, 2059 mm with the thermal margin: over fixed point's 2000 mm, inside the
-    // table's 2064 mm and f32's 2147 mm.
+    // Reach 1980 mm, 2059 mm with the thermal margin: over fixed point's 2000 mm (and f32's
+    // 1700 mm), inside the table's 2064 mm.
     arm.joints[2].link = [0.0, 0.0, 780.0];
     let bytes = armcal::tablebuild::build(&arm).unwrap();
     let t = Table::parse(&bytes).unwrap();
@@ -228,7 +229,18 @@ fn a_table_too_long_for_fixed_point_is_refused_not_wrapped() {
             limit_mm: 2000
         }
     );
-    assert!(Chain::<F32>::new(&t).is_ok());
+    // Reach 1900 mm, 1976 with the margin: fixed point takes it, f32 does not.
+    arm.joints[2].link = [0.0, 0.0, 700.0];
+    let t = armcal::tablebuild::build(&arm).unwrap();
+    let t = Table::parse(&t).unwrap();
+    assert!(Chain::<Fixed>::new(&t).is_ok());
+    assert_eq!(
+        Chain::<F32>::new(&t).unwrap_err(),
+        ChainError::Reach {
+            reach_mm: 1977,
+            limit_mm: 1700
+        }
+    );
 }
 
 fn repro(name: &str) -> std::path::PathBuf {
@@ -257,8 +269,19 @@ fn issue_15_arms_within_bounds() {
         let arm = repro_arm(name);
         let rep = measure(&arm, 20_000, 3, 2, &|_| {}).unwrap();
         let [qf, qx, ..] = rep.stats;
-        assert!(qf.max_um <= F32_TIP_UM, "{name}: f32 tip {} um", qf.max_um);
-        assert!(qf.max_dir <= F32_DIR, "{name}: f32 dir {}", qf.max_dir);
+        if name == "fuzz-worst-fixed.toml" {
+            // Its 1640 mm reach (1706 mm with the thermal margin) is beyond f32's 1700 mm.
+            assert_eq!(
+                rep.refused[0],
+                Some(ChainError::Reach {
+                    reach_mm: 1706,
+                    limit_mm: 1700
+                })
+            );
+        } else {
+            assert!(qf.max_um <= F32_TIP_UM, "{name}: f32 tip {} um", qf.max_um);
+            assert!(qf.max_dir <= F32_DIR, "{name}: f32 dir {}", qf.max_dir);
+        }
         assert!(
             qx.max_um <= FIXED_TIP_UM,
             "{name}: fixed tip {} um",
@@ -289,7 +312,7 @@ fn an_arm_beyond_the_streams_range_is_refused() {
         Chain::<F32>::new(&t).unwrap_err(),
         ChainError::Reach {
             reach_mm: 2393,
-            limit_mm: 2147
+            limit_mm: 1700
         }
     );
     assert_eq!(
@@ -301,13 +324,13 @@ fn an_arm_beyond_the_streams_range_is_refused() {
     );
 }
 
-/// An arm just inside the table's reach, straight up and stretched by the hottest accepted
-/// temperature: every coordinate the chains stream is the exact rounding of their value.
+/// The longest arm each evaluator takes, straight up and stretched by the hottest accepted
+/// temperature: the coordinate is streamed as the exact rounding of the value, not clipped.
 #[test]
 fn the_longest_arm_the_table_takes_streams_unclipped() {
     let mut arm = Arm::default6();
-    // 200 + 300 + 300 + 250 + 250 + 80 + 120 = 1500; + 564 = 2064, the limit.
-    arm.joints[2].link = [0.0, 0.0, 864.0];
+    // 200 + 300 + 300 + 250 + 250 + 80 + 120 = 1500; + 134 = 1634, 1699.4 with the margin.
+    arm.joints[2].link = [0.0, 0.0, 434.0];
     for j in &mut arm.joints {
         j.thermal = quatarm::table::limits::THERMAL;
     }
@@ -318,9 +341,16 @@ fn the_longest_arm_the_table_takes_streams_unclipped() {
         .unwrap()
         .eval(&[0; 6], 120_000)
         .unwrap();
-    // 2064 mm · (1 + 4e-4 · 100) = 2146.56 mm.
-    assert_eq!((p.xyz_nm()[2] + 500) / 1000, 2_146_560);
-    assert!(Chain::<Fixed>::new(&t).is_err());
+    // 1634 mm · (1 + 4e-4 · 100) = 1699.36 mm.
+    assert_eq!((p.xyz_nm()[2] + 500) / 1000, 1_699_360);
+    // Fixed point to 2000 mm: 1923 · 1.04 = 1999.92.
+    arm.joints[2].link = [0.0, 0.0, 723.0];
+    let t = armcal::tablebuild::build(&arm).unwrap();
+    let p = Chain::<Fixed>::new(&Table::parse(&t).unwrap())
+        .unwrap()
+        .eval(&[0; 6], 120_000)
+        .unwrap();
+    assert_eq!((p.xyz_nm()[2] + 500) / 1000, 1_999_920);
 }
 
 proptest! {
@@ -348,5 +378,64 @@ fn a_half_turn_zero_offset_is_served() {
     arm.joints[2].zero_offset = std::f64::consts::PI;
     arm.joints[3].tilt[0] = std::f64::consts::PI;
     let rep = measure(&arm, 20_000, 5, 2, &|_| {}).unwrap();
+    check(&rep);
+}
+
+/// The fuzz target's second finding after the fix: all seven fixed rotations large (tilts of
+/// 1.4 rad), no links, a 1923 mm probe: the f32 quaternion chain's rounding reached 1.125 µm.
+/// f32's reach limit (1700 mm with the thermal margin) now refuses it, naming the limit;
+/// fixed point serves it within its bound.
+#[test]
+fn the_fuzz_finding_on_f32_reach() {
+    let bytes = std::fs::read(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/fuzz/f32-reach-1923mm-1.125um.bin"),
+    )
+    .unwrap();
+    let v = host_tests::arms::check_bytes(&bytes).unwrap();
+    assert!(
+        matches!(
+            v,
+            Some(host_tests::arms::Verdict::RefusedChain {
+                f32: Some(ChainError::Reach { limit_mm: 1700, .. }),
+                fixed: None
+            })
+        ),
+        "{v:?}"
+    );
+}
+
+/// The fuzz target's finding after the fix (`chain_arm_accuracy`): a long arm with 3e-6
+/// rad/mm where the f32 *matrix* chain's rounding reached 1.04 µm. Not an error of method (the
+/// quaternion chains are within their bounds on it); the generator holds the comparison chain
+/// to `MATRIX_F32_TIP_UM`.
+#[test]
+fn the_fuzz_finding_on_the_f32_matrix_chain() {
+    let bytes = std::fs::read(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/fuzz/f32-matrix-1.04um.bin"),
+    )
+    .unwrap();
+    // Now refused by f32 (reach over 1700 mm), within the bounds in fixed point.
+    let v = host_tests::arms::check_bytes(&bytes);
+    assert!(matches!(v, Ok(Some(_))), "{v:?}");
+}
+
+/// OPEN (the fuzz target's third finding after the fix, not yet understood): joint 1 about z
+/// tilted by π about y and turned by −π (both 1e-5 short), g = 3e-6 rad/mm, a 1451 mm link
+/// across it, nothing else. The whole gravity effect is under 73 nm (the axis is vertical to
+/// 1.2e-5), yet the fixed-point quaternion chain misses by up to 0.167 µm on rare poses (RMS
+/// 0.003 µm); with g = 0 or 1e-7 it is within 0.007 µm, and f32 and the matrix chains are
+/// within their bounds. Kept as a failing check to be fixed, not hidden.
+#[test]
+#[ignore = "open defect: fixed-point chain 0.167 um on this arm (docs/results/chain.md)"]
+fn open_fixed_point_finding_on_a_flipped_vertical_joint() {
+    let arm = quatarm_ref::calfile::read(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/fuzz/fixed-vertical-flip-0.167um.toml"),
+    )
+    .unwrap()
+    .arm;
+    let rep = measure(&arm, 20_000, 20_260_426, 1, &|_| {}).unwrap();
     check(&rep);
 }

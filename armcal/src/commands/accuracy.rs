@@ -65,7 +65,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "{:<26} {:>12} {:>12} {:>14} {:>14}",
         "path", "tip max um", "tip RMS um", "dir max", "dir RMS"
     );
-    for (name, s) in PATHS.iter().zip(&report.stats) {
+    for (i, (name, s)) in PATHS.iter().zip(&report.stats).enumerate() {
+        if let Some(e) = report.refused.get(i).copied().flatten() {
+            println!("{name:<26} refused: {e}");
+            continue;
+        }
         println!(
             "{:<26} {:>12.4} {:>12.4} {:>14.3e} {:>14.3e}",
             name,
