@@ -18,6 +18,8 @@ pub enum Kind {
     Spat,
     /// A ball bar: rows probe ball `a` or `b`, whose centres are `length_mm` apart.
     Length,
+    /// The ball touches a calibrated test sphere of `diameter_mm` (acceptance tests).
+    Sphere,
 }
 
 impl Kind {
@@ -27,6 +29,7 @@ impl Kind {
             Kind::Point => "point",
             Kind::Spat => "spat",
             Kind::Length => "length",
+            Kind::Sphere => "sphere",
         }
     }
 }
@@ -55,10 +58,32 @@ pub struct Row {
     pub end: Option<End>,
     /// `length` rows: the calibrated distance between the two ball centres (mm).
     pub length_mm: Option<f64>,
+    /// `sphere` rows: the test sphere touched.
+    pub sphere: Option<Touch>,
     /// Arm temperature at the reading (°C); 20 where the file records none.
     pub temp_c: f64,
     /// 1-based line of the row in its file (0 for rows made in memory).
     pub line: usize,
+}
+
+/// What a `sphere` row touches.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Touch {
+    /// The test sphere's calibrated diameter D (mm).
+    pub diameter_mm: f64,
+    /// Which articulation of an L_Dia test the row belongs to, where the file says.
+    pub articulation: Option<i64>,
+}
+
+/// A `sphere` group: one position of a test sphere.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SphereGroup {
+    /// The group number of the file.
+    pub group: i64,
+    /// Indices into [`Dataset::rows`].
+    pub rows: Vec<usize>,
+    /// The sphere's diameter D (mm).
+    pub diameter_mm: f64,
 }
 
 /// A `spat` group: the rows that probe one fixed, unknown point.
@@ -92,6 +117,8 @@ pub struct Layout {
     pub spat: Vec<SpatGroup>,
     /// `length` groups, by group number.
     pub length: Vec<LengthGroup>,
+    /// `sphere` groups, by group number.
+    pub sphere: Vec<SphereGroup>,
 }
 
 /// A whole data file.
@@ -143,6 +170,8 @@ struct Columns {
     xyz: Option<[usize; 3]>,
     end: Option<usize>,
     length: Option<usize>,
+    diameter: Option<usize>,
+    articulation: Option<usize>,
     temp: Option<usize>,
 }
 
@@ -175,7 +204,17 @@ pub fn parse(text: &str, file: &str, dof: usize) -> Result<Dataset, DataError> {
     for n in &names {
         let known = matches!(
             n.as_str(),
-            "kind" | "group" | "x" | "y" | "z" | "end" | "length_mm" | "temp_c"
+            "kind"
+                | "group"
+                | "x"
+                | "y"
+                | "z"
+                | "end"
+                | "length_mm"
+                | "diameter_mm"
+                | "articulation"
+                | "session"
+                | "temp_c"
         );
         if !known && joint_index(n, "j").is_none() {
             warnings.push(format!(
@@ -203,6 +242,8 @@ pub fn parse(text: &str, file: &str, dof: usize) -> Result<Dataset, DataError> {
         },
         end: seen.get("end").copied(),
         length: seen.get("length_mm").copied(),
+        diameter: seen.get("diameter_mm").copied(),
+        articulation: seen.get("articulation").copied(),
         temp: seen.get("temp_c").copied(),
     };
 
@@ -495,30 +536,33 @@ fn parse_row(
         "point" => Kind::Point,
         "spat" => Kind::Spat,
         "length" => Kind::Length,
+        "sphere" => Kind::Sphere,
         other => {
             return Err(err(
                 line,
                 "kind",
-                format!("unknown kind `{}`: point, spat or length", shown(other)),
+                format!(
+                    "unknown kind `{}`: point, spat, length or sphere",
+                    shown(other)
+                ),
             ))
         }
     };
-    let group = {
-        let s = cell(c.group);
+    let integer = |i: usize, column: &str| -> Result<i64, DataError> {
+        let s = cell(i);
         match s.parse::<i64>() {
-            Ok(g) => g,
+            Ok(g) => Ok(g),
             Err(_) => match s.parse::<f64>() {
-                Ok(f) if f.is_finite() && f.fract() == 0.0 && f.abs() < 9e15 => f as i64,
-                _ => {
-                    return Err(err(
-                        line,
-                        "group",
-                        format!("`{}` is not an integer", shown(s)),
-                    ))
-                }
+                Ok(f) if f.is_finite() && f.fract() == 0.0 && f.abs() < 9e15 => Ok(f as i64),
+                _ => Err(err(
+                    line,
+                    column,
+                    format!("`{}` is not an integer", shown(s)),
+                )),
             },
         }
     };
+    let group = integer(c.group, "group")?;
     let theta = c
         .joints
         .iter()
@@ -582,6 +626,33 @@ fn parse_row(
     } else {
         (None, None)
     };
+    let sphere = if kind == Kind::Sphere {
+        let Some(cd) = c.diameter else {
+            return Err(err(
+                line,
+                "diameter_mm",
+                "missing column: `sphere` rows need it".into(),
+            ));
+        };
+        let diameter_mm = number(cd, Bound::coordinate())?;
+        if diameter_mm <= 0.0 {
+            return Err(err(
+                line,
+                "diameter_mm",
+                format!("{diameter_mm} is not a positive diameter"),
+            ));
+        }
+        let articulation = match c.articulation {
+            Some(i) if !cell(i).is_empty() => Some(integer(i, "articulation")?),
+            _ => None,
+        };
+        Some(Touch {
+            diameter_mm,
+            articulation,
+        })
+    } else {
+        None
+    };
     let temp_c = match c.temp {
         Some(i) if !cell(i).is_empty() => number(i, Bound::temperature())?,
         _ => quatarm_ref::forward::REFERENCE_TEMP_C,
@@ -593,6 +664,7 @@ fn parse_row(
         xyz,
         end,
         length_mm,
+        sphere,
         temp_c,
         line,
     })
@@ -644,6 +716,37 @@ fn check_groups(data: &Dataset) -> Result<(), DataError> {
                     g.group
                 ),
             ));
+        }
+    }
+    for g in &layout.sphere {
+        let first = &data.rows[g.rows[0]];
+        let articulated = first.sphere.and_then(|t| t.articulation).is_some();
+        for &i in &g.rows {
+            let r = &data.rows[i];
+            let t = r.sphere.unwrap_or(Touch {
+                diameter_mm: f64::NAN,
+                articulation: None,
+            });
+            if t.diameter_mm != g.diameter_mm {
+                return Err(err(
+                    r,
+                    "diameter_mm",
+                    format!(
+                        "sphere group {} has two diameters: {} (line {}) and {}",
+                        g.group, g.diameter_mm, first.line, t.diameter_mm
+                    ),
+                ));
+            }
+            if t.articulation.is_some() != articulated {
+                return Err(err(
+                    r,
+                    "articulation",
+                    format!(
+                        "sphere group {} has rows with and without an articulation (line {} and this one): a group is one test",
+                        g.group, first.line
+                    ),
+                ));
+            }
         }
     }
     for g in &layout.length {
@@ -711,10 +814,12 @@ impl Dataset {
         let mut layout = Layout::default();
         let mut spat: BTreeMap<i64, Vec<usize>> = BTreeMap::new();
         let mut length: BTreeMap<i64, (Vec<usize>, Vec<usize>, f64)> = BTreeMap::new();
+        let mut sphere: BTreeMap<i64, Vec<usize>> = BTreeMap::new();
         for (i, r) in self.rows.iter().enumerate() {
             match r.kind {
                 Kind::Point => layout.points.push(i),
                 Kind::Spat => spat.entry(r.group).or_default().push(i),
+                Kind::Sphere => sphere.entry(r.group).or_default().push(i),
                 Kind::Length => {
                     let e = length.entry(r.group).or_insert_with(|| {
                         (Vec::new(), Vec::new(), r.length_mm.unwrap_or(f64::NAN))
@@ -737,6 +842,16 @@ impl Dataset {
                 a,
                 b,
                 length_mm,
+            })
+            .collect();
+        layout.sphere = sphere
+            .into_iter()
+            .map(|(group, rows)| SphereGroup {
+                group,
+                diameter_mm: self.rows[rows[0]]
+                    .sphere
+                    .map_or(f64::NAN, |t| t.diameter_mm),
+                rows,
             })
             .collect();
         layout
@@ -767,6 +882,7 @@ impl Dataset {
         }
         let has_point = self.rows.iter().any(|r| r.kind == Kind::Point);
         let has_length = self.rows.iter().any(|r| r.kind == Kind::Length);
+        let has_sphere = self.rows.iter().any(|r| r.kind == Kind::Sphere);
         let mut header = vec!["kind".to_string(), "group".to_string()];
         header.extend((1..=self.dof).map(|k| format!("j{k}")));
         if has_point {
@@ -774,6 +890,9 @@ impl Dataset {
         }
         if has_length {
             header.extend(["end", "length_mm"].map(String::from));
+        }
+        if has_sphere {
+            header.extend(["diameter_mm", "articulation"].map(String::from));
         }
         if self.has_temperature {
             header.push("temp_c".into());
@@ -795,6 +914,17 @@ impl Dataset {
                     None => String::new(),
                 });
                 f.push(r.length_mm.map_or(String::new(), |l| l.to_string()));
+            }
+            if has_sphere {
+                f.push(
+                    r.sphere
+                        .map_or(String::new(), |t| t.diameter_mm.to_string()),
+                );
+                f.push(
+                    r.sphere
+                        .and_then(|t| t.articulation)
+                        .map_or(String::new(), |a| a.to_string()),
+                );
             }
             if self.has_temperature {
                 f.push(r.temp_c.to_string());

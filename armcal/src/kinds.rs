@@ -67,6 +67,15 @@ pub fn can_scale(arm: &Arm, params: &[Param], fitted: &[usize]) -> bool {
 
 /// The refusal for data whose kinds cannot fix what the unknowns `fitted` would change.
 pub fn check(layout: &Layout, arm: &Arm, params: &[Param], fitted: &[usize]) -> Option<Refusal> {
+    if let Some(g) = layout.sphere.first() {
+        return Some(Refusal {
+            what: format!("the sphere rows (group {} and any others)", g.group),
+            why: "sphere rows are acceptance-test data, for `armcal check`; the fit does not \
+                  take them yet (a sphere of known diameter would constrain the arm like a \
+                  spat cone with a known radius): calibrate from the other rows"
+                .into(),
+        });
+    }
     let has_length = !layout.length.is_empty();
     let has_points = !layout.points.is_empty();
     if !has_length && !has_points && can_scale(arm, params, fitted) {
@@ -125,6 +134,7 @@ mod tests {
                 rows: vec![0, 1],
             }],
             length: vec![],
+            sphere: vec![],
         }
     }
 

@@ -2,6 +2,7 @@
 //!
 //! Modules are added by the work that needs them; each has one job.
 
+pub mod acceptance;
 pub mod accuracy;
 pub mod eval;
 /// The table builder and stream decoder live in `quatarm-wire`, which the QEMU tests and

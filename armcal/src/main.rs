@@ -20,7 +20,7 @@ struct Cli {
 enum Command {
     /// Evaluate the arm model on joint readings: CSV in, XYZ and probe direction out.
     Eval(commands::eval::Args),
-    /// Simulate measurements of a virtual arm (point, spat or length data).
+    /// Simulate measurements of a virtual arm (point, spat, length or sphere data).
     Simulate(commands::simulate::Args),
     /// Identify the arm's parameters from measured data.
     Calibrate(commands::calibrate::Args),
@@ -33,6 +33,8 @@ enum Command {
     Decode(commands::decode::Args),
     /// Measure the firmware paths against the f64 reference over random poses.
     Accuracy(commands::accuracy::Args),
+    /// Acceptance tests (ISO 10360-12, ASME B89.4.22) on measured data, with the decision.
+    Check(commands::check::Args),
 }
 
 fn main() {
@@ -45,6 +47,7 @@ fn main() {
         Command::Table(c) => commands::table::run(c),
         Command::Decode(a) => commands::decode::run(a),
         Command::Accuracy(a) => commands::accuracy::run(a),
+        Command::Check(a) => commands::check::run(a),
     };
     if let Err(e) = result {
         eprintln!("armcal: error: {e:#}");

@@ -25,6 +25,13 @@ use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use std::f64::consts::PI;
 
+mod sphere;
+
+/// The touch directions of a `sphere` group of `n` points (upper hemisphere).
+pub fn sphere_directions(n: usize) -> Vec<Vector3<f64>> {
+    sphere::directions(n, 0.0)
+}
+
 /// The generator every simulation uses.
 pub type SimRng = ChaCha8Rng;
 
@@ -223,6 +230,10 @@ pub struct Options {
     pub group_size: usize,
     /// Ball-bar length (mm); `None` is 40 % of the arm's reach.
     pub bar_mm: Option<f64>,
+    /// Test sphere diameter D for `sphere` data (mm).
+    pub sphere_mm: f64,
+    /// `sphere` data: articulations per group (L_Dia: 5), `None` for one (P_Size, P_Form).
+    pub articulations: Option<usize>,
 }
 
 impl Options {
@@ -235,8 +246,14 @@ impl Options {
             noise_mm: 0.005,
             temp: None,
             frame: FrameChoice::Random,
-            group_size: if kind == Kind::Length { 10 } else { 8 },
+            group_size: match kind {
+                Kind::Length => 10,
+                Kind::Sphere => 25,
+                _ => 8,
+            },
             bar_mm: None,
+            sphere_mm: 25.0,
+            articulations: None,
         }
     }
 }
@@ -316,20 +333,35 @@ pub fn simulate(truth: &Arm, opts: &Options, rng: &mut SimRng) -> Result<Simulat
                     xyz: Some([x.x, x.y, x.z]),
                     end: None,
                     length_mm: None,
+                    sphere: None,
                     temp_c: tc,
                     line: 0,
                 });
             }
         }
-        Kind::Spat | Kind::Length => {
+        Kind::Spat | Kind::Length | Kind::Sphere => {
             let sizes = group_sizes(opts.count, opts.group_size.max(2));
             let bar = opts.bar_mm.unwrap_or(0.4 * reach(truth));
             for (g, size) in sizes.into_iter().enumerate() {
                 let group = g as i64 + 1;
-                let made = if opts.kind == Kind::Spat {
-                    spat_group(truth, &lim, size, opts.noise_mm, group, &mut temp, rng)
-                } else {
-                    length_group(truth, &lim, size, bar, opts.noise_mm, group, &mut temp, rng)
+                let made = match opts.kind {
+                    Kind::Spat => {
+                        spat_group(truth, &lim, size, opts.noise_mm, group, &mut temp, rng)
+                    }
+                    Kind::Sphere => sphere::group(
+                        truth,
+                        &lim,
+                        &sphere::Test {
+                            points: size,
+                            diameter_mm: opts.sphere_mm,
+                            articulations: opts.articulations,
+                            noise_mm: opts.noise_mm,
+                        },
+                        group,
+                        &mut temp,
+                        rng,
+                    ),
+                    _ => length_group(truth, &lim, size, bar, opts.noise_mm, group, &mut temp, rng),
                 };
                 rows.extend(made.ok_or(SimError::Unreachable(group))?);
             }
@@ -350,7 +382,7 @@ fn group_sizes(count: usize, size: usize) -> Vec<usize> {
 
 /// Poses putting the ball on `target` (missed by the noise), from random starts.
 #[allow(clippy::too_many_arguments)]
-fn probe_point(
+pub(crate) fn probe_point(
     truth: &Arm,
     lim: &Limits,
     target: &Vector3<f64>,
@@ -424,7 +456,14 @@ fn length_group(
     None
 }
 
-fn row(truth: &Arm, kind: Kind, group: i64, th: &[f64], end: Option<End>, tc: f64) -> Row {
+pub(crate) fn row(
+    truth: &Arm,
+    kind: Kind,
+    group: i64,
+    th: &[f64],
+    end: Option<End>,
+    tc: f64,
+) -> Row {
     Row {
         kind,
         group,
@@ -432,6 +471,7 @@ fn row(truth: &Arm, kind: Kind, group: i64, th: &[f64], end: Option<End>, tc: f6
         xyz: None,
         end,
         length_mm: None,
+        sphere: None,
         temp_c: tc,
         line: 0,
     }
@@ -462,6 +502,7 @@ pub fn design_like(arm: &Arm, like: &Dataset, seed: u64) -> Dataset {
                 xyz: Some([p.x, p.y, p.z]),
                 end: None,
                 length_mm: None,
+                sphere: None,
                 temp_c: tc,
                 line: 0,
             });

@@ -50,6 +50,7 @@ fn joint3_still(n: usize) -> Dataset {
                 xyz: Some([p.x, p.y, p.z]),
                 end: None,
                 length_mm: None,
+                sphere: None,
                 temp_c: 20.0,
                 line: 0,
             }

@@ -164,6 +164,7 @@ pub fn case(u: &mut Unstructured) -> ArbResult<Case> {
         vector: vector(u, limits::LENGTH_MM)?,
         error: vector(u, 1.0)?,
         thermal: value(u, limits::THERMAL)?,
+        ball_diameter: 0.0,
     };
     if probe.actual().iter().all(|&x| x == 0.0) {
         probe.vector = [0.0, 0.0, 100.0];

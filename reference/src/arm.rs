@@ -125,6 +125,9 @@ pub struct Probe {
     pub error: [f64; 3],
     /// Thermal expansion κ_p (1/°C).
     pub thermal: f64,
+    /// Diameter of the stylus ball (mm; 0 where the file gives none). The chain gives the
+    /// ball's centre and needs none of it; tests that touch a surface (a sphere's size) do.
+    pub ball_diameter: f64,
 }
 
 impl Probe {
@@ -194,6 +197,7 @@ impl Arm {
                 vector: [0.0, 0.0, 120.0],
                 error: [0.0; 3],
                 thermal: 0.0,
+                ball_diameter: 0.0,
             },
             reference_frame: None,
         }

@@ -357,7 +357,12 @@ fn harmonic(v: &Value, path: &str, unknown: &mut Vec<String>) -> Result<Harmonic
 }
 
 fn probe(t: &Table, unknown: &mut Vec<String>, limits: &Limits) -> Result<Probe, CalFileError> {
-    note_unknown(t, &["vector", "error", "thermal"], "probe", unknown);
+    note_unknown(
+        t,
+        &["vector", "error", "thermal", "ball_diameter"],
+        "probe",
+        unknown,
+    );
     let vector = match t.get("vector") {
         None => return Err(err("probe.vector", "missing")),
         Some(v) => array::<3>(v, "probe.vector")?,
@@ -366,7 +371,17 @@ fn probe(t: &Table, unknown: &mut Vec<String>, limits: &Limits) -> Result<Probe,
         vector,
         error: opt_array::<3>(t, "error", "probe")?,
         thermal: opt_number(t, "thermal", "probe")?,
+        ball_diameter: opt_number(t, "ball_diameter", "probe")?,
     };
+    if !(0.0..=limits.length_mm).contains(&p.ball_diameter) {
+        return Err(err(
+            "probe.ball_diameter",
+            format!(
+                "{} mm is not a ball diameter: 0 to {} mm",
+                p.ball_diameter, limits.length_mm
+            ),
+        ));
+    }
     let length = "probe length";
     bounded_all(&p.vector, limits.length_mm, "probe.vector", length)?;
     bounded_all(&p.error, limits.length_mm, "probe.error", length)?;
@@ -549,6 +564,9 @@ pub fn write(arm: &Arm, header: &[&str]) -> String {
     let _ = writeln!(s, "vector = {}", arr(&arm.probe.vector));
     let _ = writeln!(s, "error = {}", arr(&arm.probe.error));
     let _ = writeln!(s, "thermal = {}", num(arm.probe.thermal));
+    if arm.probe.ball_diameter != 0.0 {
+        let _ = writeln!(s, "ball_diameter = {}", num(arm.probe.ball_diameter));
+    }
     if let Some(f) = &arm.reference_frame {
         let _ = writeln!(s, "\n[reference_frame]");
         let _ = writeln!(s, "rotation = {}", arr(&f.rotation));

@@ -3,6 +3,7 @@
 pub mod accuracy;
 pub mod args;
 pub mod calibrate;
+pub mod check;
 pub mod decode;
 pub mod diagnose;
 pub mod eval;

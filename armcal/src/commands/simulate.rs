@@ -15,7 +15,8 @@ pub struct Args {
     /// The nominal arm the data are meant for; checked to have the truth's joints and axes.
     #[arg(long)]
     arm: Option<PathBuf>,
-    /// Kind of data: point, spat or length.
+    /// Kind of data: point, spat, length or sphere (a test sphere's surface, 25 points per
+    /// group over the upper hemisphere; `--articulations 5` for an L_Dia group).
     #[arg(long, value_parser = parse_kind)]
     kind: Kind,
     /// Rows to record (at most 1,000,000: the whole file is made and checked in memory
@@ -36,12 +37,20 @@ pub struct Args {
     /// Instrument frame of point data: random (an unknown rigid transform) or identity.
     #[arg(long, default_value = "random", value_parser = parse_frame)]
     frame: FrameChoice,
-    /// Rows per spat group or bar position (default 8 for spat, 10 for length).
+    /// Rows per spat group, bar position or sphere (default 8 for spat, 10 for length, 25 for
+    /// sphere).
     #[arg(long)]
     group_size: Option<usize>,
     /// Ball-bar length for length data (mm; default 40 % of the arm's reach).
     #[arg(long, value_parser = parse_bar)]
     bar_mm: Option<f64>,
+    /// Test sphere diameter for sphere data (mm).
+    #[arg(long, default_value_t = 25.0, value_parser = parse_bar)]
+    sphere_mm: f64,
+    /// Sphere data: articulations per group (L_Dia: 5 sets of 5 points, each set in one arm
+    /// posture); absent: one set (P_Size, P_Form).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(2..=25))]
+    articulations: Option<u32>,
     /// Output file (CSV of `spec/measured-data.md`).
     #[arg(short, long)]
     output: PathBuf,
@@ -65,10 +74,11 @@ fn parse_kind(s: &str) -> Result<Kind, ArgError> {
         "point" => Ok(Kind::Point),
         "spat" => Ok(Kind::Spat),
         "length" => Ok(Kind::Length),
+        "sphere" => Ok(Kind::Sphere),
         _ => Err(ArgError::NotOneOf {
             given: s.to_string(),
             what: "a kind",
-            choices: "point, spat or length",
+            choices: "point, spat, length or sphere",
         }),
     }
 }
@@ -148,6 +158,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         opts.group_size = g;
     }
     opts.bar_mm = a.bar_mm;
+    opts.sphere_mm = a.sphere_mm;
+    opts.articulations = a.articulations.map(|k| k as usize);
     let mut rng = sim::rng(a.seed);
     let s = sim::simulate(&truth, &opts, &mut rng)?;
     let f = &s.frame;

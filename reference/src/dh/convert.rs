@@ -171,6 +171,7 @@ fn build(dh: &DhArm, nf: &Normal, r: &Matrix3<f64>, along: f64) -> Arm {
             vector: probe.into(),
             error: [0.0; 3],
             thermal: 0.0,
+            ball_diameter: 0.0,
         },
         reference_frame: None,
     }

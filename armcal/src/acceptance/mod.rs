@@ -1,0 +1,173 @@
+//! Acceptance and reverification tests (`spec/acceptance-tests.md`): ISO 10360-12's P_Size,
+//! P_Form and L_Dia, the length error E_Uni, and ASME B89.4.22's single-point articulation,
+//! computed from the ball centres the calibrated model gives for measured rows, with the
+//! ISO 14253-1 decision against maximum permissible errors.
+//!
+//! - [`fit`]: least-squares spheres (free, and with a known radius).
+//! - [`statistics`]: each test's value per group and the test's result.
+//! - [`mpe`]: the MPE file and the decision rule.
+
+pub mod fit;
+pub mod mpe;
+pub mod statistics;
+
+use crate::data::Dataset;
+use mpe::{Decision, Mpe};
+use nalgebra::Vector3;
+use quatarm_ref::arm::Arm;
+use quatarm_ref::forward;
+use statistics::{StatError, Test, Value};
+use std::collections::BTreeMap;
+
+/// One group's test in the report (µm).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Row {
+    /// The test.
+    pub test: Test,
+    /// The data's group.
+    pub group: i64,
+    /// The value (µm).
+    pub value_um: f64,
+    /// The bar length of an E_Uni value (mm).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub length_mm: Option<f64>,
+    /// The MPE (µm), where given.
+    pub mpe_um: Option<f64>,
+    /// The value's expanded uncertainty U (k = 2, µm).
+    #[serde(rename = "U_um")]
+    pub u_um: f64,
+    /// Where U comes from.
+    pub u_source: &'static str,
+    /// The decision, where an MPE is given.
+    pub decision: Option<Decision>,
+}
+
+/// A whole check.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Check {
+    /// Each test's result (µm): the worst group, sign kept for P_Size and E_Uni.
+    pub results: BTreeMap<&'static str, f64>,
+    /// The group each result comes from.
+    pub worst_group: BTreeMap<&'static str, i64>,
+    /// Every group's value.
+    pub tests: Vec<Row>,
+    /// The stylus ball diameter used (mm).
+    pub ball_diameter_mm: f64,
+}
+
+/// The ball centres of every row by the calibrated model (the f64 reference, as
+/// `armcal eval` gives them).
+pub fn centres(arm: &Arm, data: &Dataset) -> Vec<Vector3<f64>> {
+    data.rows
+        .iter()
+        .map(|r| forward::forward(arm, &r.theta, r.temp_c).p)
+        .collect()
+}
+
+/// Runs every test the data supports. U is the MPE file's `test_uncertainty` where it gives
+/// one; otherwise 0, said as such (`u_source`), until the calibration's budget is propagated.
+pub fn check(arm: &Arm, data: &Dataset, mpe: Option<&Mpe>) -> Result<Check, StatError> {
+    let d = arm.probe.ball_diameter;
+    let values = statistics::values(data, &centres(arm, data), d)?;
+    let mut results = BTreeMap::new();
+    let mut worst_group = BTreeMap::new();
+    for t in Test::ALL {
+        if let Some(v) = statistics::result(&values, t) {
+            results.insert(t.key(), v.value_mm * 1e3);
+            worst_group.insert(t.key(), v.group);
+        }
+    }
+    let tests = values.iter().map(|v| row(v, mpe)).collect();
+    Ok(Check {
+        results,
+        worst_group,
+        tests,
+        ball_diameter_mm: d,
+    })
+}
+
+fn row(v: &Value, mpe: Option<&Mpe>) -> Row {
+    let limit = mpe.and_then(|m| m.of(v));
+    let given = mpe.and_then(|m| m.test_uncertainty(v.test));
+    let (u, source) = match given {
+        Some(u) => (u, "test_uncertainty of the MPE file"),
+        None => (0.0, "none given: U = 0"),
+    };
+    Row {
+        test: v.test,
+        group: v.group,
+        value_um: v.value_mm * 1e3,
+        length_mm: v.length_mm,
+        mpe_um: limit.map(|l| l * 1e3),
+        u_um: u * 1e3,
+        u_source: source,
+        decision: limit.map(|l| Decision::of(v.value_mm, u, l)),
+    }
+}
+
+impl Check {
+    /// The report a metrologist reads: the tests by their standard names, each group's value
+    /// with the MPE and the decision, then each test's result and its worst group.
+    pub fn text(&self) -> String {
+        use std::fmt::Write as _;
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "acceptance tests (spec/acceptance-tests.md), stylus ball {} mm",
+            self.ball_diameter_mm
+        );
+        let _ = writeln!(
+            s,
+            "{:<9} {:>6} {:>11} {:>9} {:>8}  decision",
+            "test", "group", "value µm", "MPE µm", "U µm"
+        );
+        for r in &self.tests {
+            let mpe = r.mpe_um.map_or("-".to_string(), |m| format!("{m:.2}"));
+            let decision = r.decision.map_or("-", Decision::name);
+            let _ = writeln!(
+                s,
+                "{:<9} {:>6} {:>11.2} {:>9} {:>8.2}  {decision}",
+                r.test.key(),
+                r.group,
+                r.value_um,
+                mpe,
+                r.u_um
+            );
+        }
+        let _ = writeln!(s, "results:");
+        for (k, v) in &self.results {
+            let decisions: Vec<&str> = self
+                .tests
+                .iter()
+                .filter(|r| r.test.key() == *k)
+                .filter_map(|r| r.decision.map(Decision::name))
+                .collect();
+            let overall = if decisions.is_empty() {
+                "no MPE"
+            } else if decisions.contains(&"fail") {
+                "fail"
+            } else if decisions.contains(&"cannot decide") {
+                "cannot decide"
+            } else {
+                "pass"
+            };
+            let _ = writeln!(
+                s,
+                "  {k:<9} {v:>10.2} µm (worst group {}): {overall}",
+                self.worst_group[k]
+            );
+        }
+        if self
+            .tests
+            .iter()
+            .any(|r| r.decision.is_some() && r.u_um == 0.0)
+        {
+            let _ = writeln!(
+                s,
+                "note: U = 0 where the MPE file gives no test_uncertainty: the decision then \
+                 takes the value as exact"
+            );
+        }
+        s
+    }
+}

@@ -1,0 +1,164 @@
+//! `armcal check` as a metrologist runs it: simulated sphere, bar and SPAT tests of a known
+//! arm, checked with the right calibration, with a wrong ball diameter, and against MPEs.
+
+mod common;
+
+use common::{armcal, armcal_ok, workdir, write_truth};
+use quatarm_ref::arm::Arm;
+use std::path::Path;
+
+fn truth() -> Arm {
+    let mut a = Arm::default6();
+    a.probe.ball_diameter = 3.0;
+    a
+}
+
+fn simulate(dir: &Path, kind: &str, count: &str, extra: &[&str], out: &str) {
+    let mut args = vec![
+        "simulate",
+        "--truth",
+        "truth.toml",
+        "--kind",
+        kind,
+        "--count",
+        count,
+        "--seed",
+        "7",
+        "--noise-um",
+        "0",
+        "-o",
+        out,
+    ];
+    args.extend_from_slice(extra);
+    armcal_ok(&args, dir);
+}
+
+fn json(dir: &Path, args: &[&str]) -> serde_json::Value {
+    let o = armcal_ok(args, dir);
+    serde_json::from_slice(&o.stdout).expect("check --json prints JSON")
+}
+
+#[test]
+fn the_true_arm_passes_and_a_wrong_ball_diameter_shows_in_p_size() {
+    let dir = workdir("true-arm");
+    write_truth(&dir, &truth());
+    simulate(&dir, "sphere", "50", &[], "sphere.csv");
+    simulate(&dir, "sphere", "25", &["--articulations", "5"], "ldia.csv");
+    simulate(&dir, "length", "20", &[], "bar.csv");
+    simulate(&dir, "spat", "16", &[], "spat.csv");
+    let v = json(
+        &dir,
+        &["check", "sphere.csv", "--calib", "truth.toml", "--json"],
+    );
+    // Noise-free rows, quantised to 2^20 counts a turn: a few µm at most.
+    let p_size = v["results"]["P_Size"].as_f64().unwrap();
+    let p_form = v["results"]["P_Form"].as_f64().unwrap();
+    assert!(p_size.abs() < 5.0 && p_form < 15.0, "{v}");
+    assert_eq!(
+        v["tests"].as_array().unwrap().len(),
+        4,
+        "two groups, two tests each"
+    );
+    assert_eq!(v["tests"][0]["test"], "P_Size");
+    for (file, key, bound) in [
+        ("ldia.csv", "L_Dia", 15.0),
+        ("bar.csv", "E_Uni", 5.0),
+        ("spat.csv", "SPAT_max", 15.0),
+    ] {
+        let v = json(&dir, &["check", file, "--calib", "truth.toml", "--json"]);
+        let x = v["results"][key].as_f64().unwrap();
+        assert!(x.abs() < bound, "{file}: {key} = {x} µm");
+    }
+    // The same data checked with a calibration that says the ball has no diameter: the
+    // fitted sphere is the ball's 3 mm larger.
+    let mut wrong = truth();
+    wrong.probe.ball_diameter = 0.0;
+    std::fs::write(
+        dir.join("wrong.toml"),
+        quatarm_ref::calfile::write(&wrong, &["no ball"]),
+    )
+    .unwrap();
+    let v = json(
+        &dir,
+        &["check", "sphere.csv", "--calib", "wrong.toml", "--json"],
+    );
+    let p = v["results"]["P_Size"].as_f64().unwrap();
+    assert!((p - 3000.0).abs() < 5.0, "P_Size {p} µm");
+}
+
+#[test]
+fn decisions_follow_iso_14253_1() {
+    let dir = workdir("decisions");
+    write_truth(&dir, &truth());
+    simulate(&dir, "length", "20", &[], "bar.csv");
+    let decide = |mpe: &str| -> Vec<String> {
+        std::fs::write(dir.join("mpe.toml"), mpe).unwrap();
+        let v = json(
+            &dir,
+            &[
+                "check",
+                "bar.csv",
+                "--calib",
+                "truth.toml",
+                "--mpe",
+                "mpe.toml",
+                "--json",
+            ],
+        );
+        v["tests"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|t| t["decision"].as_str().unwrap().to_string())
+            .collect()
+    };
+    assert!(decide("E_Uni = { a = 0.010, per_m = 0.005 }\n")
+        .iter()
+        .all(|d| d == "pass"));
+    assert!(decide("E_Uni = 0.0\ntest_uncertainty = { E_Uni = 0.0 }\n")
+        .iter()
+        .all(|d| d == "fail"));
+    assert!(
+        decide("E_Uni = 0.010\ntest_uncertainty = { E_Uni = 0.020 }\n")
+            .iter()
+            .all(|d| d == "cannot decide")
+    );
+}
+
+#[test]
+fn bad_input_is_refused_with_its_place() {
+    let dir = workdir("bad");
+    write_truth(&dir, &truth());
+    simulate(&dir, "sphere", "25", &[], "sphere.csv");
+    std::fs::write(dir.join("mpe.toml"), "P_Size = 0.016\nP_Sise = 0.1\n").unwrap();
+    let o = armcal(
+        &[
+            "check",
+            "sphere.csv",
+            "--calib",
+            "truth.toml",
+            "--mpe",
+            "mpe.toml",
+        ],
+        &dir,
+    );
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && o.stdout.is_empty());
+    assert!(e.contains("mpe.toml") && e.contains("P_Sise"), "{e}");
+    // 24 points where P_Size needs 25: refused, naming the group.
+    let text = std::fs::read_to_string(dir.join("sphere.csv")).unwrap();
+    let short: Vec<&str> = text.lines().take(text.lines().count() - 1).collect();
+    std::fs::write(dir.join("short.csv"), short.join("\n")).unwrap();
+    let o = armcal(&["check", "short.csv", "--calib", "truth.toml"], &dir);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && o.stdout.is_empty());
+    assert!(
+        e.contains("short.csv") && e.contains("group 1") && e.contains("24 points"),
+        "{e}"
+    );
+    // Sphere rows are not calibration data (yet): said before any fit.
+    let o = armcal(&["calibrate", "sphere.csv", "-o", "cal.toml"], &dir);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("sphere rows"), "{e}");
+    assert!(!dir.join("cal.toml").exists());
+}
