@@ -25,6 +25,7 @@ use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use std::f64::consts::PI;
 
+pub mod protocol;
 mod sphere;
 
 /// The touch directions of a `sphere` group of `n` points (upper hemisphere).

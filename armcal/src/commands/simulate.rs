@@ -17,12 +17,17 @@ pub struct Args {
     arm: Option<PathBuf>,
     /// Kind of data: point, spat, length or sphere (a test sphere's surface, 25 points per
     /// group over the upper hemisphere; `--articulations 5` for an L_Dia group).
-    #[arg(long, value_parser = parse_kind)]
-    kind: Kind,
+    #[arg(long, value_parser = parse_kind, required_unless_present = "test")]
+    kind: Option<Kind>,
     /// Rows to record (at most 1,000,000: the whole file is made and checked in memory
     /// before it is written).
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=MAX_ROWS))]
-    count: u64,
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=MAX_ROWS), required_unless_present = "test")]
+    count: Option<u64>,
+    /// A complete test set in place of one kind: `iso10360-12` (two spheres of 25 points, a
+    /// 5×5 articulation test, ball bars of three lengths in five positions each, three SPAT
+    /// cones; the positions are documented in `armcal::sim::protocol`).
+    #[arg(long, value_parser = ["iso10360-12"], conflicts_with_all = ["kind", "count", "group_size", "articulations"])]
+    test: Option<String>,
     /// Seed of the random generator: the same seed gives the same file.
     #[arg(long)]
     seed: u64,
@@ -147,7 +152,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             }
         }
     }
-    let mut opts = sim::Options::new(a.kind, a.count as usize);
+    let kind = a.kind.unwrap_or(Kind::Point);
+    let mut opts = sim::Options::new(kind, a.count.unwrap_or(1) as usize);
     opts.noise_mm = a.noise_um * 1e-3;
     opts.temp = a.temp;
     opts.frame = a.frame;
@@ -161,14 +167,20 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     opts.sphere_mm = a.sphere_mm;
     opts.articulations = a.articulations.map(|k| k as usize);
     let mut rng = sim::rng(a.seed);
-    let s = sim::simulate(&truth, &opts, &mut rng)?;
+    let s = match a.test {
+        Some(_) => sim::protocol::iso_10360_12(&truth, &opts, &mut rng)?,
+        None => sim::simulate(&truth, &opts, &mut rng)?,
+    };
+    let what = match &a.test {
+        Some(t) => format!("test set {t}"),
+        None => format!("kind {}", kind.name()),
+    };
     let f = &s.frame;
     let comments = [
         format!(
-            "simulated by armcal simulate: truth {}, kind {}, {} rows, seed {}, noise {} µm per axis",
+            "simulated by armcal simulate: truth {}, {what}, {} rows, seed {}, noise {} µm per axis",
             a.truth.display(),
-            a.kind.name(),
-            a.count,
+            s.data.rows.len(),
             a.seed,
             a.noise_um
         ),
@@ -187,10 +199,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         .map_err(|e| anyhow::anyhow!("the simulated rows would not read back: {e}"))?;
     std::fs::write(&a.output, text).with_context(|| name.clone())?;
     eprintln!(
-        "armcal: wrote {} ({} {} rows)",
+        "armcal: wrote {} ({} rows, {what})",
         a.output.display(),
         s.data.rows.len(),
-        a.kind.name()
     );
     Ok(())
 }
