@@ -3,13 +3,13 @@
 //! [`AbsoluteEncoder`] is what the hub needs of one joint's encoder: its resolution and one
 //! reading, or an error. [`read_joints`] reads a whole arm and turns every error into a fault
 //! bit of that joint, which the stream carries (`Status::with_encoder_faults`): a hub never
-//! guesses a count. [`As5047p`] is a driver for a real part; [`Replay`] takes recorded readings
-//! from the UART's receive side, for the QEMU boards and for hardware-in-the-loop runs.
+//! guesses a count. The driver for a real part (AMS AS5047P on SPI) is
+//! `quatarm_drivers::As5047p`, in a crate of its own so that a user of the chain alone does not
+//! pull in embedded-hal; [`Replay`] takes recorded readings from the UART's receive side, for
+//! the QEMU boards and for hardware-in-the-loop runs.
 
-mod as5047p;
 mod replay;
 
-pub use as5047p::{As5047p, Diagnostics, Error as As5047pError, ErrorFlags, Register};
 pub use replay::{Event, Replay};
 
 /// An absolute rotary encoder: every reading is the shaft angle in counts, no homing needed.
