@@ -14,8 +14,7 @@
 
 use anyhow::{bail, ensure, Context, Result};
 use armcal::stream_decode::{Decoder, Item};
-use quatarm::encoder::{Event, Replay};
-use quatarm::stream::{Coordinates, Reading, Report, Status, ToDevice};
+use quatarm::stream::{Coordinates, Event, Reading, Replay, Report, Status, ToDevice};
 
 use crate::boards::Board;
 use crate::e2e::{calibration, default_calibration_path, default_recording_path, host_points};

@@ -8,7 +8,7 @@
 //! start, gives the instructions per tick instead of trusting the machine's nominal clock.
 //! Results go to the defmt log (`cargo xtask bench-target` decodes it).
 
-use quatarm::encoder::{Event, Replay};
+use quatarm::stream::{Event, Replay};
 use quatarm::{Chain, MatrixChain, Precision, Table};
 
 use crate::calibration::JOINTS;

@@ -8,8 +8,8 @@
 //! last poll's outcome; a failed poll gives `TEMP_SENSOR_FAULT` and no coordinates until a
 //! poll succeeds again (`Hub::report_sample`).
 
-use quatarm::encoder::{read_joints, AbsoluteEncoder, Event, Replay};
-use quatarm::stream::{Coordinates, Hub, ToHost, MAX_OUTPUT};
+use quatarm::encoder::{read_joints, AbsoluteEncoder};
+use quatarm::stream::{Coordinates, Event, Hub, Replay, ToHost, MAX_OUTPUT};
 use quatarm::temperature::TemperatureSensor;
 
 use crate::calibration::{self, HubPrecision, JOINTS};
