@@ -7,7 +7,7 @@
 
 use libfuzzer_sys::fuzz_target;
 use quatarm::stream::{
-    Coordinates, Event, FrameReader, Hub, Mode, Precision, Replay, Status, TableState, ToHost,
+    Coordinates, Event, FrameReader, Hub, Mode, NumberFormat, Replay, Status, TableState, ToHost,
     MAX_FRAME, MAX_OUTPUT,
 };
 use quatarm_fuzz::chains;
@@ -24,9 +24,9 @@ fuzz_target!(|bytes: &[u8]| {
         TableState::Valid
     };
     let precision = if fixed {
-        Precision::Fixed
+        NumberFormat::Fixed
     } else {
-        Precision::F32
+        NumberFormat::F32
     };
     let mut hub = Hub::new(state, f32_chain.joint_count() as u8, precision);
     let eval = |counts: &[u32], temp_mc: i32| {
