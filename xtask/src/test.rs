@@ -60,6 +60,16 @@ pub fn run() -> Result<()> {
         "cargo test --workspace",
     )?;
 
+    step("rustdoc");
+    // Broken intra-doc links, private items linked from public docs, bad code-block syntax:
+    // rustdoc only warns, so a warning fails here. (The doctests ran with the tests above.)
+    check(
+        cargo()
+            .env("RUSTDOCFLAGS", "-D warnings")
+            .args(["doc", "--workspace", "--no-deps"]),
+        "RUSTDOCFLAGS=\"-D warnings\" cargo doc --workspace --no-deps",
+    )?;
+
     step("fuzz smoke run");
     // Each target for a few seconds from the committed corpus: a target that no longer builds
     // or an input of the corpus that now crashes fails the run. Long runs: `cargo xtask fuzz`.
