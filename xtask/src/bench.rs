@@ -4,7 +4,7 @@
 //! Instructions: the board's benchmark image runs under `qemu-system-arm -icount shift=0`
 //! (one instruction per nanosecond of virtual time; SysTick counts that clock), timing each
 //! evaluation of both chains on the first readings of the shipped recording with the default
-//! full calibration (`../shared/notes/numerics.md` has the method). Flash and RAM: the hub
+//! full calibration (`docs/benchmark-method.md` has the method). Flash and RAM: the hub
 //! image's loadable segments (flash: every byte stored; RAM: statics), plus the stack's peak
 //! measured by painting during a replay. Boards QEMU does not model are only measured for size.
 
