@@ -4,7 +4,7 @@ use std::process::Command;
 use std::time::Instant;
 
 use anyhow::Result;
-use host_tests::boards::{root, BOARDS};
+use host_tests::boards::{boards, root};
 
 use crate::build::{build_board_with, check};
 use crate::toolchain::{self, TOOLCHAIN_ENV};
@@ -27,7 +27,7 @@ pub fn run() -> Result<()> {
         cargo().args(["fmt", "--all", "--", "--check"]),
         "cargo fmt --check",
     )?;
-    for b in BOARDS
+    for b in boards()?
         .iter()
         .map(|b| b.dir())
         .chain([root().join("boards/common")])
@@ -89,7 +89,7 @@ pub fn run() -> Result<()> {
     eprintln!("\nxtask test: firmware tool chains\n{}", survey.describe());
     for tc in &survey.available {
         step(&format!("board builds ({})", tc.version));
-        for b in &BOARDS {
+        for b in boards()? {
             build_board_with(b, tc)?;
         }
     }
@@ -105,7 +105,7 @@ pub fn run() -> Result<()> {
         let mut e2e = cargo();
         e2e.env(TOOLCHAIN_ENV, tc.kind.name())
             .args(["test", "-p", "host-tests"]);
-        for b in BOARDS.iter().filter(|b| b.qemu.is_some()) {
+        for b in boards()?.iter().filter(|b| b.qemu.is_some()) {
             e2e.args([
                 "--test",
                 &format!("qemu_{}", b.name.trim_start_matches("qemu-")),
