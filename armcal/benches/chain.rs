@@ -1,7 +1,7 @@
 //! Evaluations per second of each path on the host: `cargo bench -p armcal --bench chain`.
 //! (On-target instruction counts: `cargo xtask bench-target`.)
 
-use armcal::accuracy::{counts_to_rad, full_calibration, random_reading, Paths};
+use armcal::accuracy::{full_calibration, random_reading, Paths};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use rand::SeedableRng;
 use std::hint::black_box;
@@ -17,7 +17,7 @@ fn bench(c: &mut Criterion) {
         (0..1000).map(|_| random_reading(&mut rng, &arm)).collect();
     let radians: Vec<(Vec<f64>, f64)> = readings
         .iter()
-        .map(|(c, t)| (counts_to_rad(&arm, c), f64::from(*t) / 1000.0))
+        .map(|(c, t)| (arm.counts_to_rad(c), f64::from(*t) / 1000.0))
         .collect();
     let mut g = c.benchmark_group("eval");
     g.throughput(Throughput::Elements(readings.len() as u64));

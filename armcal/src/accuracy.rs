@@ -68,15 +68,6 @@ pub fn random_reading(rng: &mut impl Rng, arm: &Arm) -> (Vec<u32>, i32) {
     (counts, rng.gen_range(10_000..=35_000))
 }
 
-/// The raw readings in radians for the reference.
-pub fn counts_to_rad(arm: &Arm, counts: &[u32]) -> Vec<f64> {
-    counts
-        .iter()
-        .zip(&arm.joints)
-        .map(|(&c, j)| j.count_to_rad(i64::from(c)))
-        .collect()
-}
-
 /// Error statistics of one path.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Stats {
@@ -259,7 +250,7 @@ pub fn one(
     temp_mc: i32,
     rep: &mut Report,
 ) -> anyhow::Result<()> {
-    let theta = counts_to_rad(arm, counts);
+    let theta = arm.counts_to_rad(counts);
     let temp_c = f64::from(temp_mc) / 1000.0;
     let r = quatarm_ref::forward::forward(arm, &theta, temp_c);
     if let Ok(c) = &paths.qf {

@@ -401,24 +401,55 @@ impl Bound {
     }
 }
 
+/// Why a numeric cell was refused (the caller adds the file, line and column).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum CellError {
+    /// Parsed, but infinite or NaN.
+    #[error("`{0}` is not a finite number")]
+    NotFinite(String),
+    /// Nothing in the cell.
+    #[error("empty: a number is needed")]
+    Empty,
+    /// Not a number at all.
+    #[error("`{0}` is not a number")]
+    NotNumber(String),
+    /// Beyond a symmetric bound.
+    #[error("{value} is beyond ±{limit} {what}")]
+    Beyond {
+        value: String,
+        limit: f64,
+        what: &'static str,
+    },
+    /// Outside a range.
+    #[error("{value} is outside {lo}..{hi} {what}")]
+    Outside {
+        value: String,
+        lo: f64,
+        hi: f64,
+        what: &'static str,
+    },
+}
+
 /// A numeric cell: a finite number within `bound`, or why not.
-pub fn number_cell(s: &str, bound: &Bound) -> Result<f64, String> {
+pub fn number_cell(s: &str, bound: &Bound) -> Result<f64, CellError> {
     let x = match s.parse::<f64>() {
         Ok(x) if x.is_finite() => x,
-        Ok(_) => return Err(format!("`{}` is not a finite number", shown(s))),
-        Err(_) if s.is_empty() => return Err("empty: a number is needed".into()),
-        Err(_) => return Err(format!("`{}` is not a number", shown(s))),
+        Ok(_) => return Err(CellError::NotFinite(shown(s))),
+        Err(_) if s.is_empty() => return Err(CellError::Empty),
+        Err(_) => return Err(CellError::NotNumber(shown(s))),
     };
     match bound {
-        Bound::Abs(limit, what) if x.abs() > *limit => {
-            Err(format!("{} is beyond ±{limit} {what}", number(x)))
-        }
-        Bound::Within(range, what) if !range.contains(&x) => Err(format!(
-            "{} is outside {}..{} {what}",
-            number(x),
-            range.start(),
-            range.end()
-        )),
+        Bound::Abs(limit, what) if x.abs() > *limit => Err(CellError::Beyond {
+            value: number(x),
+            limit: *limit,
+            what,
+        }),
+        Bound::Within(range, what) if !range.contains(&x) => Err(CellError::Outside {
+            value: number(x),
+            lo: *range.start(),
+            hi: *range.end(),
+            what,
+        }),
         _ => Ok(x),
     }
 }
@@ -458,7 +489,7 @@ fn parse_row(
 ) -> Result<Row, DataError> {
     let cell = |i: usize| record.get(i).unwrap_or("");
     let number = |i: usize, bound: Bound| -> Result<f64, DataError> {
-        number_cell(cell(i), &bound).map_err(|m| err(line, &shown(&names[i]), m))
+        number_cell(cell(i), &bound).map_err(|m| err(line, &shown(&names[i]), m.to_string()))
     };
     let kind = match cell(c.kind) {
         "point" => Kind::Point,

@@ -119,7 +119,10 @@ pub fn read_rows(arm: &Arm, mut input: impl std::io::Read) -> Result<Rows, RowEr
         let reading = if radians {
             let mut v = Vec::with_capacity(n);
             for &col in &cols {
-                v.push(number_cell(field(col)?, &Bound::joint()).map_err(|m| bad(col, m))?);
+                v.push(
+                    number_cell(field(col)?, &Bound::joint())
+                        .map_err(|m| bad(col, m.to_string()))?,
+                );
             }
             Reading::Radians(v)
         } else {
@@ -141,9 +144,8 @@ pub fn read_rows(arm: &Arm, mut input: impl std::io::Read) -> Result<Rows, RowEr
             Reading::Counts(v)
         };
         let t = match temp {
-            Some(col) if !field(col)?.is_empty() => {
-                number_cell(field(col)?, &Bound::temperature()).map_err(|m| bad(col, m))?
-            }
+            Some(col) if !field(col)?.is_empty() => number_cell(field(col)?, &Bound::temperature())
+                .map_err(|m| bad(col, m.to_string()))?,
             _ => quatarm_ref::forward::REFERENCE_TEMP_C,
         };
         rows.push((reading, t));

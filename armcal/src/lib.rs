@@ -3,10 +3,10 @@
 //! The `armcal` binary (`src/main.rs`, one file per subcommand in `src/commands/`) is a thin
 //! layer over this library: calibrating an arm from measured data ([`calib`], [`lm`],
 //! [`jacobian`], [`ident`]), diagnosing what a residual pattern points to ([`diagnose`]),
-//! simulating measurements ([`sim`]), building the firmware's binary table ([`tablebuild`]),
-//! evaluating readings with the f64 reference or the firmware's chains ([`eval`],
-//! [`accuracy`]) and decoding a hub's stream ([`stream_decode`]). The arm model itself is
-//! `quatarm-ref`'s; the chains are `quatarm`'s.
+//! simulating measurements ([`sim`]) and evaluating readings with the f64 reference or the
+//! firmware's chains ([`eval`], [`accuracy`]). Building the firmware's binary table
+//! ([`tablebuild`]) and decoding a hub's stream ([`stream_decode`]) are `quatarm-wire`'s,
+//! re-exported here. The arm model itself is `quatarm-ref`'s; the chains are `quatarm`'s.
 //!
 //! # Example
 //!
@@ -58,8 +58,9 @@
 
 pub mod accuracy;
 pub mod eval;
-pub mod stream_decode;
-pub mod tablebuild;
+/// The table builder and stream decoder live in `quatarm-wire`, which the QEMU tests and
+/// `cargo xtask demo` use without the rest of the host tool.
+pub use quatarm_wire::{stream_decode, tablebuild};
 
 pub mod calib;
 pub mod data;

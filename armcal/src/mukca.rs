@@ -38,13 +38,54 @@ pub fn default_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/mukca")
 }
 
+/// Why the MUKCa files could not be read or its protocol run.
+#[derive(Debug, thiserror::Error)]
+pub enum MukcaError {
+    /// `mukca-groups.csv` is missing or malformed.
+    #[error("{}: {source}", .path.display())]
+    Groups {
+        /// The groups file.
+        path: PathBuf,
+        /// The CSV reader's reason.
+        source: csv::Error,
+    },
+    /// No unit of that name in the groups file.
+    #[error("no MUKCa unit `{0}`")]
+    NoUnit(String),
+    /// The unit has no session of that name.
+    #[error("{unit}: no session {session}")]
+    NoSession {
+        /// The unit.
+        unit: String,
+        /// The missing session.
+        session: String,
+    },
+    /// A unit's nominal calibration file.
+    #[error(transparent)]
+    Calfile(#[from] quatarm_ref::calfile::CalFileError),
+    /// A unit's data file.
+    #[error(transparent)]
+    Data(#[from] data::DataError),
+    /// The protocol's fit.
+    #[error(transparent)]
+    Fit(#[from] CalibError),
+}
+
+/// The groups file's error on `path`.
+fn groups_error(path: &Path) -> impl Fn(csv::Error) -> MukcaError + '_ {
+    move |source| MukcaError::Groups {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
 /// Every unit listed in `mukca-groups.csv`, in file order, with its file stem.
-pub fn unit_names(dir: &Path) -> Result<Vec<(String, String)>, String> {
+pub fn unit_names(dir: &Path) -> Result<Vec<(String, String)>, MukcaError> {
     let path = dir.join("mukca-groups.csv");
-    let mut r = csv::Reader::from_path(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut r = csv::Reader::from_path(&path).map_err(groups_error(&path))?;
     let mut out: Vec<(String, String)> = Vec::new();
     for rec in r.records() {
-        let rec = rec.map_err(|e| format!("{}: {e}", path.display()))?;
+        let rec = rec.map_err(groups_error(&path))?;
         let file = rec
             .get(0)
             .unwrap_or("")
@@ -59,22 +100,19 @@ pub fn unit_names(dir: &Path) -> Result<Vec<(String, String)>, String> {
 }
 
 /// Loads a unit by name (`panda_2`).
-pub fn load(dir: &Path, name: &str) -> Result<Unit, String> {
+pub fn load(dir: &Path, name: &str) -> Result<Unit, MukcaError> {
     let stem = unit_names(dir)?
         .into_iter()
         .find(|(u, _)| u == name)
         .map(|(_, s)| s)
-        .ok_or_else(|| format!("no MUKCa unit `{name}`"))?;
-    let arm = calfile::read_with(&dir.join(format!("{stem}.toml")), &crate::limits::CALFILE)
-        .map_err(|e| e.to_string())?
-        .arm;
-    let data =
-        data::read(&dir.join(format!("{stem}.csv")), arm.dof()).map_err(|e| e.to_string())?;
+        .ok_or_else(|| MukcaError::NoUnit(name.to_string()))?;
+    let arm = calfile::read_with(&dir.join(format!("{stem}.toml")), &crate::limits::CALFILE)?.arm;
+    let data = data::read(&dir.join(format!("{stem}.csv")), arm.dof())?;
     let mut sessions = BTreeMap::new();
     let path = dir.join("mukca-groups.csv");
-    let mut r = csv::Reader::from_path(&path).map_err(|e| e.to_string())?;
+    let mut r = csv::Reader::from_path(&path).map_err(groups_error(&path))?;
     for rec in r.records() {
-        let rec = rec.map_err(|e| e.to_string())?;
+        let rec = rec.map_err(groups_error(&path))?;
         if rec.get(1) == Some(name) {
             let g: i64 = rec.get(2).and_then(|s| s.parse().ok()).unwrap_or(0);
             sessions.insert(g, rec.get(3).unwrap_or("").to_string());
@@ -194,27 +232,29 @@ pub fn options(ridge: Option<Ridge>) -> Options {
 
 /// The authors' published protocol: panda_2, fit on `front_center`, score every other
 /// session but `high`.
-pub fn authors_protocol(dir: &Path, opts: &Options) -> Result<Trial, String> {
+pub fn authors_protocol(dir: &Path, opts: &Options) -> Result<Trial, MukcaError> {
     let unit = load(dir, "panda_2")?;
-    let train = unit
-        .group("front_center")
-        .ok_or("no session front_center")?;
-    let high = unit.group("high").ok_or("no session high")?;
+    let session = |s: &str| {
+        unit.group(s).ok_or_else(|| MukcaError::NoSession {
+            unit: unit.name.clone(),
+            session: s.to_string(),
+        })
+    };
+    let train = session("front_center")?;
+    let high = session("high")?;
     let test: Vec<i64> = unit
         .groups()
         .into_iter()
         .filter(|g| *g != train && *g != high)
         .collect();
-    trial(&unit, &[train], &test, opts)
-        .map(|(t, _)| t)
-        .map_err(|e| e.to_string())
+    Ok(trial(&unit, &[train], &test, opts)?.0)
 }
 
 /// A session's (nominal, calibrated) scores, or why it could not be fitted.
-pub type SessionScore = Result<(f64, f64), String>;
+pub type SessionScore = Result<(f64, f64), CalibError>;
 
 /// Leave-one-session-out: for each session, fit on all others and score it.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Debug)]
 pub struct Loso {
     /// The unit.
     pub unit: String,
@@ -242,7 +282,7 @@ pub fn loso(unit: &Unit, opts: &Options) -> Loso {
                     k += 1;
                     sessions.push((name, Ok((t.test_before, t.test_after))));
                 }
-                Err(e) => sessions.push((name, Err(e.to_string()))),
+                Err(e) => sessions.push((name, Err(e))),
             }
         }
     }

@@ -9,6 +9,59 @@
 
 use std::path::{Path, PathBuf};
 
+/// Why a command's outputs were refused or could not be written; each names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// An output names one of the command's inputs.
+    #[error("{}: the {what} would overwrite the {their} it is made from; name another file", .path.display())]
+    OverwritesInput {
+        /// The output's path.
+        path: PathBuf,
+        /// What the output is.
+        what: String,
+        /// What the input is.
+        their: String,
+    },
+    /// Two outputs name the same file.
+    #[error(
+        "{}: the {what} and the {their} would be the same file; name the output another way \
+         (the table goes beside the calibration file, with `.bin`)",
+        .path.display()
+    )]
+    SameFile {
+        /// The later output's path.
+        path: PathBuf,
+        /// What the later output is.
+        what: String,
+        /// What the earlier output is.
+        their: String,
+    },
+    /// An output's folder does not exist.
+    #[error("{}: the folder {} does not exist", .path.display(), .dir.display())]
+    NoFolder {
+        /// The output's path.
+        path: PathBuf,
+        /// Its missing folder.
+        dir: PathBuf,
+    },
+    /// The file system refused a write, rename, removal or folder.
+    #[error("{}: {source}", .path.display())]
+    Io {
+        /// The file or folder concerned.
+        path: PathBuf,
+        /// The system's reason.
+        source: std::io::Error,
+    },
+}
+
+/// The file system's error on `path`.
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> OutputError + '_ {
+    move |source| OutputError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
 /// Whether two paths name the same file (existing files by identity, others by their
 /// absolute, normalised form).
 fn same(a: &Path, b: &Path) -> bool {
@@ -32,32 +85,32 @@ fn same(a: &Path, b: &Path) -> bool {
 
 /// Refuses outputs that would overwrite an input or another output, or whose folder does
 /// not exist. `outputs` are (path, what it is) pairs, `inputs` likewise.
-pub fn check(outputs: &[(&Path, &str)], inputs: &[(&Path, &str)]) -> Result<(), String> {
+pub fn check(outputs: &[(&Path, &str)], inputs: &[(&Path, &str)]) -> Result<(), OutputError> {
     for (i, (out, what)) in outputs.iter().enumerate() {
         for (inp, their) in inputs {
             if same(out, inp) {
-                return Err(format!(
-                    "{}: the {what} would overwrite the {their} it is made from; name another file",
-                    out.display()
-                ));
+                return Err(OutputError::OverwritesInput {
+                    path: out.to_path_buf(),
+                    what: what.to_string(),
+                    their: their.to_string(),
+                });
             }
         }
         for (other, their) in &outputs[..i] {
             if same(out, other) {
-                return Err(format!(
-                    "{}: the {what} and the {their} would be the same file; name the output \
-                     another way (the table goes beside the calibration file, with `.bin`)",
-                    out.display()
-                ));
+                return Err(OutputError::SameFile {
+                    path: out.to_path_buf(),
+                    what: what.to_string(),
+                    their: their.to_string(),
+                });
             }
         }
         if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
             if !dir.is_dir() {
-                return Err(format!(
-                    "{}: the folder {} does not exist",
-                    out.display(),
-                    dir.display()
-                ));
+                return Err(OutputError::NoFolder {
+                    path: out.to_path_buf(),
+                    dir: dir.to_path_buf(),
+                });
             }
         }
     }
@@ -99,21 +152,21 @@ impl Staged {
     }
 
     /// Stages `bytes` for `dest`.
-    pub fn write(&mut self, dest: &Path, bytes: &[u8]) -> Result<(), String> {
+    pub fn write(&mut self, dest: &Path, bytes: &[u8]) -> Result<(), OutputError> {
         let tmp = self.path_for(dest);
-        std::fs::write(&tmp, bytes).map_err(|e| format!("{}: {e}", dest.display()))
+        std::fs::write(&tmp, bytes).map_err(io(dest))
     }
 
     /// Creates `dir` (and its parents) if needed; a folder created here is removed again if
     /// the files are never committed.
-    pub fn create_dir(&mut self, dir: &Path) -> Result<(), String> {
+    pub fn create_dir(&mut self, dir: &Path) -> Result<(), OutputError> {
         let mut missing = Vec::new();
         let mut d = Some(dir);
         while let Some(p) = d.filter(|p| !p.as_os_str().is_empty() && !p.exists()) {
             missing.push(p.to_path_buf());
             d = p.parent();
         }
-        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        std::fs::create_dir_all(dir).map_err(io(dir))?;
         self.created_dirs.extend(missing);
         Ok(())
     }
@@ -124,17 +177,17 @@ impl Staged {
     }
 
     /// Renames every staged file onto its destination and removes what was asked.
-    pub fn commit(mut self) -> Result<(), String> {
+    pub fn commit(mut self) -> Result<(), OutputError> {
         let pending = std::mem::take(&mut self.pending);
         for (i, (tmp, dest)) in pending.iter().enumerate() {
             if let Err(e) = std::fs::rename(tmp, dest) {
                 self.pending = pending[i..].to_vec();
-                return Err(format!("{}: {e}", dest.display()));
+                return Err(io(dest)(e));
             }
         }
         for p in std::mem::take(&mut self.remove) {
             if p.exists() {
-                std::fs::remove_file(&p).map_err(|e| format!("{}: {e}", p.display()))?;
+                std::fs::remove_file(&p).map_err(io(&p))?;
             }
         }
         self.created_dirs.clear();
@@ -173,11 +226,11 @@ mod tests {
             &[(&data, "data")],
         )
         .unwrap_err();
-        assert!(e.contains("would be the same file"), "{e}");
+        assert!(e.to_string().contains("would be the same file"), "{e}");
         let e = check(&[(&data, "calibration file")], &[(&data, "data")]).unwrap_err();
-        assert!(e.contains("overwrite the data"), "{e}");
+        assert!(e.to_string().contains("overwrite the data"), "{e}");
         let e = check(&[(&d.join("no/such/x.toml"), "calibration file")], &[]).unwrap_err();
-        assert!(e.contains("does not exist"), "{e}");
+        assert!(e.to_string().contains("does not exist"), "{e}");
         assert!(check(
             &[(&d.join("x.toml"), "calibration file")],
             &[(&data, "data")]

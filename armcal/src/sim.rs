@@ -259,13 +259,30 @@ pub fn reach(arm: &Arm) -> f64 {
         + Vector3::from(arm.probe.actual()).norm()
 }
 
+/// Why a simulation made no data.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    /// `--count 0`.
+    #[error("nothing to simulate: --count is 0")]
+    NoRows,
+    /// A spat or length group needs two rows.
+    #[error("{0} data need two rows or more")]
+    TooFewRows(&'static str),
+    /// No pose tried puts the probe on the group's target.
+    #[error("could not place group {0}: the arm does not reach it from any pose tried")]
+    Unreachable(i64),
+    /// The rows made do not form valid data (the reader's own checks).
+    #[error(transparent)]
+    Data(#[from] crate::data::DataError),
+}
+
 /// Records `opts.count` rows of the truth arm.
-pub fn simulate(truth: &Arm, opts: &Options, rng: &mut SimRng) -> Result<Simulated, String> {
+pub fn simulate(truth: &Arm, opts: &Options, rng: &mut SimRng) -> Result<Simulated, SimError> {
     if opts.count == 0 {
-        return Err("nothing to simulate: --count is 0".into());
+        return Err(SimError::NoRows);
     }
     if opts.kind != Kind::Point && opts.count < 2 {
-        return Err(format!("{} data need two rows or more", opts.kind.name()));
+        return Err(SimError::TooFewRows(opts.kind.name()));
     }
     let lim = limits(truth);
     let identity = Frame {
@@ -314,14 +331,11 @@ pub fn simulate(truth: &Arm, opts: &Options, rng: &mut SimRng) -> Result<Simulat
                 } else {
                     length_group(truth, &lim, size, bar, opts.noise_mm, group, &mut temp, rng)
                 };
-                rows.extend(made.ok_or_else(|| {
-                    format!("could not place group {group}: the arm does not reach it from any pose tried")
-                })?);
+                rows.extend(made.ok_or(SimError::Unreachable(group))?);
             }
         }
     }
-    let data = Dataset::from_rows(rows, truth.dof(), opts.temp.is_some(), "(simulated)")
-        .map_err(|e| e.to_string())?;
+    let data = Dataset::from_rows(rows, truth.dof(), opts.temp.is_some(), "(simulated)")?;
     Ok(Simulated { data, frame })
 }
 

@@ -242,7 +242,7 @@ pub fn worst<P: Arithmetic>(
 ) -> Result<Worst, String> {
     let mut w = Worst::default();
     for (counts, temp_mc) in &case.readings {
-        let theta = armcal::accuracy::counts_to_rad(&case.arm, counts);
+        let theta = case.arm.counts_to_rad(counts);
         let r = quatarm_ref::forward::forward(&case.arm, &theta, f64::from(*temp_mc) / 1000.0);
         let p: Point<P> = eval(counts, *temp_mc)
             .map_err(|e| format!("{}: a valid reading refused: {e}", P::NAME))?;
@@ -314,7 +314,7 @@ fn check_precision<P: Evaluator>(
 /// Checks a case: a named refusal, or every chain (quaternion and matrix, f32 and fixed
 /// point) within its bounds. `Err` describes the failure.
 pub fn check(case: &Case) -> Result<Verdict, String> {
-    let Ok(bytes) = armcal::tablebuild::build(&case.arm) else {
+    let Ok(bytes) = quatarm_wire::tablebuild::build(&case.arm) else {
         return Ok(Verdict::RefusedTable);
     };
     let Ok(table) = Table::parse(&bytes) else {

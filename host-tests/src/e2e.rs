@@ -5,10 +5,10 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use armcal::stream_decode::{Decoder, Item, Stats};
 use quatarm::stream::{Coordinates, Hello, Reading, Report};
 use quatarm::{Chain, ChainError, Evaluator, Fixed, Table, F32};
 use quatarm_ref::arm::Arm;
+use quatarm_wire::stream_decode::{Decoder, Item, Stats};
 
 use crate::boards::{root, Board};
 use crate::qemu::{self, Options, Run};
@@ -32,7 +32,7 @@ pub fn calibration(path: &Path) -> Result<(Arm, Vec<u8>)> {
     let arm = quatarm_ref::calfile::read(path)
         .with_context(|| format!("reading {}", path.display()))?
         .arm;
-    let table = armcal::tablebuild::build(&arm)
+    let table = quatarm_wire::tablebuild::build(&arm)
         .map_err(|e| anyhow::anyhow!("building the table of {}: {e}", path.display()))?;
     Ok((arm, table))
 }

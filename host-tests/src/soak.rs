@@ -13,8 +13,8 @@
 //!   every report it hands out is, bit for bit, one the hub sent.
 
 use anyhow::{bail, ensure, Context, Result};
-use armcal::stream_decode::{Decoder, Item};
 use quatarm::stream::{Coordinates, Event, Reading, Replay, Report, Status, ToDevice};
+use quatarm_wire::stream_decode::{Decoder, Item};
 
 use crate::boards::Board;
 use crate::e2e::{calibration, default_calibration_path, default_recording_path, host_points};

@@ -166,6 +166,16 @@ pub const DEFAULT_COUNTS: u32 = 1 << 20;
 pub const JOINT_COUNTS: std::ops::RangeInclusive<usize> = 6..=7;
 
 impl Arm {
+    /// A whole reading (one count per joint) in radians, joint by joint as
+    /// [`Joint::count_to_rad`] (extra counts beyond the arm's joints are ignored).
+    pub fn counts_to_rad(&self, counts: &[u32]) -> Vec<f64> {
+        counts
+            .iter()
+            .zip(&self.joints)
+            .map(|(&c, j)| j.count_to_rad(i64::from(c)))
+            .collect()
+    }
+
     /// The spec's `default-6`: a 2.6 m class arm, straight up at θ = 0.
     pub fn default6() -> Arm {
         let j = |axis, z| Joint::nominal(axis, [0.0, 0.0, z]);

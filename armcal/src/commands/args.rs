@@ -1,30 +1,52 @@
 //! Value parsers shared by the subcommands' arguments: a bad number is refused by clap, with
 //! the argument named, before any file is read or any fit is run.
 
+/// Why an argument's value was refused (clap prints it after the argument's name).
+#[derive(Debug, PartialEq, thiserror::Error)]
+pub enum ArgError {
+    #[error("`{0}` is not a finite number ≥ 0")]
+    NotNonNegative(String),
+    #[error("`{0}` is not a finite number > 0")]
+    NotPositive(String),
+    #[error("`{0}` is not a number strictly between 0 and 1")]
+    NotProbability(String),
+    #[error("{value} mm is beyond {max} mm, the longest length data may hold")]
+    TooLong { value: f64, max: f64 },
+    #[error("`{given}` is not {what}: {choices}")]
+    NotOneOf {
+        given: String,
+        what: &'static str,
+        choices: &'static str,
+    },
+    #[error("`{0}` is not a range: e.g. 16..28")]
+    NotRange(String),
+    #[error("`{given}` is outside {lo}..{hi} °C, the temperatures the firmware (and the data reader) accept")]
+    TemperatureOutside { given: String, lo: f64, hi: f64 },
+}
+
 /// A finite number ≥ 0.
-pub fn non_negative(s: &str) -> Result<f64, String> {
+pub fn non_negative(s: &str) -> Result<f64, ArgError> {
     match s.parse::<f64>() {
         Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
-        _ => Err(format!("`{s}` is not a finite number ≥ 0")),
+        _ => Err(ArgError::NotNonNegative(s.to_string())),
     }
 }
 
 /// A finite number > 0.
-pub fn positive(s: &str) -> Result<f64, String> {
+pub fn positive(s: &str) -> Result<f64, ArgError> {
     match s.parse::<f64>() {
         Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
-        _ => Err(format!("`{s}` is not a finite number > 0")),
+        _ => Err(ArgError::NotPositive(s.to_string())),
     }
 }
 
 /// A probability strictly between 0 and 1.
-pub fn probability(s: &str) -> Result<f64, String> {
+pub fn probability(s: &str) -> Result<f64, ArgError> {
     match s.parse::<f64>() {
         Ok(x) if x > 0.0 && x < 1.0 => Ok(x),
-        _ => Err(format!("`{s}` is not a number strictly between 0 and 1")),
+        _ => Err(ArgError::NotProbability(s.to_string())),
     }
 }
-
 #[cfg(test)]
 mod tests {
     use super::*;

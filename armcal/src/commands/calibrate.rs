@@ -73,7 +73,7 @@ pub fn start_arm(path: Option<&Path>) -> anyhow::Result<Arm> {
 /// together at the end, or none of them.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let start = start_arm(a.arm.as_deref())?;
-    let terms = Terms::parse(&a.terms, start.dof()).map_err(anyhow::Error::msg)?;
+    let terms = Terms::parse(&a.terms, start.dof())?;
     let table = a.output.with_extension("bin");
     let mut inputs = vec![(a.data.as_path(), "data")];
     if let Some(arm) = &a.arm {
@@ -82,8 +82,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     armcal::output::check(
         &[(&a.output, "calibration file"), (&table, "binary table")],
         &inputs,
-    )
-    .map_err(anyhow::Error::msg)?;
+    )?;
     let data = armcal::data::read(&a.data, start.dof())?;
     for w in &data.warnings {
         eprintln!("armcal: warning: {w}");
@@ -160,13 +159,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         }
     }
     let mut files = armcal::output::Staged::new();
-    files
-        .write(&a.output, text.as_bytes())
-        .map_err(anyhow::Error::msg)?;
+    files.write(&a.output, text.as_bytes())?;
     rep.output.calibration = Some(a.output.display().to_string());
     match armcal::tablebuild::build(&fit.arm) {
         Ok(bytes) => {
-            files.write(&table, &bytes).map_err(anyhow::Error::msg)?;
+            files.write(&table, &bytes)?;
             rep.output.table = Some(table.display().to_string());
         }
         Err(e) => {
@@ -175,7 +172,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             rep.warnings.push(format!("binary table not written: {e}"));
         }
     }
-    files.commit().map_err(anyhow::Error::msg)?;
+    files.commit()?;
     if a.json {
         println!("{}", rep.json());
     } else {

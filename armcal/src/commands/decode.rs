@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
-use armcal::stream_decode::{Decoder, Item};
+use armcal::stream_decode::{Decoder, Item, Stats};
 use quatarm::stream::{write_csv_line, CSV_HEADER, MAX_CSV_LINE};
 
 /// Arguments of `armcal decode`.
@@ -38,29 +38,7 @@ pub struct Args {
 /// Nothing goes to stdout until the first report: a run that fails (an unreadable input, a
 /// capture in which no frame passed its checks) leaves no partial CSV behind.
 pub fn run(args: Args) -> Result<()> {
-    let (mut source, joining): (Box<dyn Read>, bool) = match (&args.port, &args.input) {
-        (Some(port), _) => {
-            let p = serialport::new(port, args.baud)
-                .timeout(Duration::from_secs(3600))
-                .open()
-                .with_context(|| format!("opening serial port {port}"))?;
-            (Box::new(p), !args.from_start)
-        }
-        (None, Some(path)) if path.as_os_str() != "-" => {
-            if path.is_dir() {
-                bail!("{} is a directory, not a captured stream", path.display());
-            }
-            let f =
-                std::fs::File::open(path).with_context(|| format!("opening {}", path.display()))?;
-            (Box::new(std::io::BufReader::new(f)), false)
-        }
-        _ => (Box::new(std::io::stdin().lock()), false),
-    };
-    let name = match (&args.port, &args.input) {
-        (Some(port), _) => port.clone(),
-        (None, Some(path)) if path.as_os_str() != "-" => path.display().to_string(),
-        _ => "stdin".to_owned(),
-    };
+    let (mut source, joining, name) = open(&args)?;
     let mut decoder = if joining {
         Decoder::joining()
     } else {
@@ -90,32 +68,7 @@ pub fn run(args: Args) -> Result<()> {
             let Some(item) = decoder.push(b) else {
                 continue;
             };
-            match item {
-                Item::Hello(h) => eprintln!(
-                    "# hub: protocol {}, {:?}, {} joints, table {}",
-                    h.protocol,
-                    h.precision,
-                    h.joints,
-                    h.status.table().name()
-                ),
-                Item::Damaged(e) => eprintln!("# damaged frame: {e}"),
-                Item::Repeated(r) => {
-                    eprintln!("# report {} repeated: not written again", r.seq)
-                }
-                Item::Backward { report, expected } => eprintln!(
-                    "# report {} where {expected} was due, without a hub restart: numbering restarts from it",
-                    report.seq
-                ),
-                Item::Inconsistent(r) if r.status.is_measurement() => eprintln!(
-                    "# report {} has no coordinates although its status {:#06x} has no fault",
-                    r.seq, r.status.0
-                ),
-                Item::Inconsistent(r) => eprintln!(
-                    "# report {} carries coordinates beside status {:#06x}, which forbids them: written without them",
-                    r.seq, r.status.0
-                ),
-                Item::Report(_) => {}
-            }
+            note(&item);
             if let Some(r) = item.report() {
                 if !header_written {
                     out.write_all(CSV_HEADER.as_bytes())?;
@@ -135,7 +88,71 @@ pub fn run(args: Args) -> Result<()> {
             out.flush()?;
         }
     }
-    let s = decoder.finish();
+    summarise(&decoder.finish(), &name, total, &head)?;
+    if !header_written {
+        out.write_all(CSV_HEADER.as_bytes())?;
+    }
+    out.flush()?;
+    Ok(())
+}
+
+/// The stream to read, whether the decoder joins it mid-stream (a live port, unless
+/// `--from-start`), and its name for messages.
+fn open(args: &Args) -> Result<(Box<dyn Read>, bool, String)> {
+    Ok(match (&args.port, &args.input) {
+        (Some(port), _) => {
+            let p = serialport::new(port, args.baud)
+                .timeout(Duration::from_secs(3600))
+                .open()
+                .with_context(|| format!("opening serial port {port}"))?;
+            (Box::new(p), !args.from_start, port.clone())
+        }
+        (None, Some(path)) if path.as_os_str() != "-" => {
+            if path.is_dir() {
+                bail!("{} is a directory, not a captured stream", path.display());
+            }
+            let f =
+                std::fs::File::open(path).with_context(|| format!("opening {}", path.display()))?;
+            let name = path.display().to_string();
+            (Box::new(std::io::BufReader::new(f)), false, name)
+        }
+        _ => (Box::new(std::io::stdin().lock()), false, "stdin".to_owned()),
+    })
+}
+
+/// Says on stderr what a decoded item other than a plain report means.
+fn note(item: &Item) {
+    match item {
+        Item::Hello(h) => eprintln!(
+            "# hub: protocol {}, {:?}, {} joints, table {}",
+            h.protocol,
+            h.precision,
+            h.joints,
+            h.status.table().name()
+        ),
+        Item::Damaged(e) => eprintln!("# damaged frame: {e}"),
+        Item::Repeated(r) => {
+            eprintln!("# report {} repeated: not written again", r.seq)
+        }
+        Item::Backward { report, expected } => eprintln!(
+            "# report {} where {expected} was due, without a hub restart: numbering restarts from it",
+            report.seq
+        ),
+        Item::Inconsistent(r) if r.status.is_measurement() => eprintln!(
+            "# report {} has no coordinates although its status {:#06x} has no fault",
+            r.seq, r.status.0
+        ),
+        Item::Inconsistent(r) => eprintln!(
+            "# report {} carries coordinates beside status {:#06x}, which forbids them: written without them",
+            r.seq, r.status.0
+        ),
+        Item::Report(_) => {}
+    }
+}
+
+/// Prints the decoder's counts; an empty stream, or one without a single valid frame, is an
+/// error (with a hint when it looks like the hub's text mode).
+fn summarise(s: &Stats, name: &str, total: u64, head: &[u8]) -> Result<()> {
     eprintln!(
         "decode: {} reports ({} with coordinates), {} lost, {} crc errors, {} other damaged frames, {} bytes skipped, {} repeated, {} backward, {} inconsistent, {} unterminated bytes",
         s.reports,
@@ -159,7 +176,7 @@ pub fn run(args: Args) -> Result<()> {
         bail!("{name} is empty: no stream to decode");
     }
     if s.valid_frames() == 0 {
-        let hint = if looks_like_text_mode(&head) {
+        let hint = if looks_like_text_mode(head) {
             ": it looks like the hub's text mode (CSV), which is already readable and needs no decoding"
         } else {
             ""
@@ -169,10 +186,6 @@ pub fn run(args: Args) -> Result<()> {
             s.damaged()
         );
     }
-    if !header_written {
-        out.write_all(CSV_HEADER.as_bytes())?;
-    }
-    out.flush()?;
     Ok(())
 }
 

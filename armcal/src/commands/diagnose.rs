@@ -65,8 +65,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 (&out.with_extension("bin"), "binary table"),
             ],
             &inputs,
-        )
-        .map_err(anyhow::Error::msg)?;
+        )?;
     }
     if let Some(dir) = &a.plots {
         if dir.is_file() {
@@ -111,7 +110,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 
     let mut files = armcal::output::Staged::new();
     if let Some(dir) = &a.plots {
-        let pictures = plots::write_all(&figures, dir, &mut files).map_err(anyhow::Error::msg)?;
+        let pictures = plots::write_all(&figures, dir, &mut files)?;
         rep.output.plots = pictures.iter().map(|p| p.display().to_string()).collect();
         if !d.candidates.thermal {
             rep.warnings
@@ -122,7 +121,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if let Some(out) = &a.output {
         stage_extended(&a, out, &d, &data, &mut rep, &mut files)?;
     }
-    files.commit().map_err(anyhow::Error::msg)?;
+    files.commit()?;
     if a.json {
         println!("{}", rep.json());
     } else {
@@ -161,14 +160,12 @@ fn stage_extended(
             bail!("the calibration file written evaluates {dist} mm away from the fit (a bug)");
         }
     }
-    files
-        .write(out, text.as_bytes())
-        .map_err(anyhow::Error::msg)?;
+    files.write(out, text.as_bytes())?;
     rep.output.calibration = Some(out.display().to_string());
     let table = out.with_extension("bin");
     match armcal::tablebuild::build(arm) {
         Ok(bytes) => {
-            files.write(&table, &bytes).map_err(anyhow::Error::msg)?;
+            files.write(&table, &bytes)?;
             rep.output.table = Some(table.display().to_string());
         }
         Err(e) => {

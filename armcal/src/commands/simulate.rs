@@ -1,5 +1,6 @@
 //! `armcal simulate`: measurements of a virtual arm (`point`, `spat` or `length` data).
 
+use super::args::ArgError;
 use anyhow::{bail, Context};
 use armcal::data::Kind;
 use armcal::sim::{self, FrameChoice};
@@ -50,36 +51,42 @@ pub struct Args {
 /// memory (a count of 10^11 was a 10 TB allocation).
 const MAX_ROWS: u64 = 1_000_000;
 
-fn parse_bar(s: &str) -> Result<f64, String> {
-    let l = super::args::positive(s)?;
+fn parse_bar(s: &str) -> Result<f64, ArgError> {
+    let value = super::args::positive(s)?;
     let max = armcal::limits::COORDINATE_MM;
-    if l > max {
-        return Err(format!(
-            "{l} mm is beyond {max} mm, the longest length data may hold"
-        ));
+    if value > max {
+        return Err(ArgError::TooLong { value, max });
     }
-    Ok(l)
+    Ok(value)
 }
 
-fn parse_kind(s: &str) -> Result<Kind, String> {
+fn parse_kind(s: &str) -> Result<Kind, ArgError> {
     match s {
         "point" => Ok(Kind::Point),
         "spat" => Ok(Kind::Spat),
         "length" => Ok(Kind::Length),
-        _ => Err(format!("`{s}` is not a kind: point, spat or length")),
+        _ => Err(ArgError::NotOneOf {
+            given: s.to_string(),
+            what: "a kind",
+            choices: "point, spat or length",
+        }),
     }
 }
 
-fn parse_frame(s: &str) -> Result<FrameChoice, String> {
+fn parse_frame(s: &str) -> Result<FrameChoice, ArgError> {
     match s {
         "random" => Ok(FrameChoice::Random),
         "identity" => Ok(FrameChoice::Identity),
-        _ => Err(format!("`{s}` is not a frame: random or identity")),
+        _ => Err(ArgError::NotOneOf {
+            given: s.to_string(),
+            what: "a frame",
+            choices: "random or identity",
+        }),
     }
 }
 
-fn parse_range(s: &str) -> Result<(f64, f64), String> {
-    let bad = || format!("`{s}` is not a range: e.g. 16..28");
+fn parse_range(s: &str) -> Result<(f64, f64), ArgError> {
+    let bad = || ArgError::NotRange(s.to_string());
     let (a, b) = s.split_once("..").ok_or_else(bad)?;
     let lo: f64 = a.trim().parse().map_err(|_| bad())?;
     let hi: f64 = b.trim().parse().map_err(|_| bad())?;
@@ -88,11 +95,11 @@ fn parse_range(s: &str) -> Result<(f64, f64), String> {
     }
     let r = armcal::limits::temp_range_c();
     if !(r.contains(&lo) && r.contains(&hi)) {
-        return Err(format!(
-            "`{s}` is outside {}..{} °C, the temperatures the firmware (and the data reader) accept",
-            r.start(),
-            r.end()
-        ));
+        return Err(ArgError::TemperatureOutside {
+            given: s.to_string(),
+            lo: *r.start(),
+            hi: *r.end(),
+        });
     }
     Ok((lo, hi))
 }
@@ -103,7 +110,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if let Some(arm) = &a.arm {
         inputs.push((arm.as_path(), "nominal arm"));
     }
-    armcal::output::check(&[(&a.output, "simulated data")], &inputs).map_err(anyhow::Error::msg)?;
+    armcal::output::check(&[(&a.output, "simulated data")], &inputs)?;
     let truth = armcal::load::arm(&a.truth)?;
     if let Some(path) = &a.arm {
         let nominal = armcal::load::arm(path)?;
@@ -142,7 +149,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     opts.bar_mm = a.bar_mm;
     let mut rng = sim::rng(a.seed);
-    let s = sim::simulate(&truth, &opts, &mut rng).map_err(anyhow::Error::msg)?;
+    let s = sim::simulate(&truth, &opts, &mut rng)?;
     let f = &s.frame;
     let comments = [
         format!(

@@ -15,12 +15,31 @@ use std::sync::Once;
 const FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans-subset.ttf");
 const FAMILY: &str = "sans-serif";
 
-fn register_font() -> Result<(), String> {
+/// Why a figure was not drawn.
+#[derive(Debug, thiserror::Error)]
+pub enum PlotError {
+    /// The font compiled into the program did not load (a broken build).
+    #[error("the embedded font does not load")]
+    Font,
+    /// The drawing backend failed on a file (plotters' own message).
+    #[error("{}: {message}", .path.display())]
+    Draw {
+        /// The figure's file.
+        path: PathBuf,
+        /// What plotters said.
+        message: String,
+    },
+    /// Its folder or file could not be staged.
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
+}
+
+fn register_font() -> Result<(), PlotError> {
     static ONCE: Once = Once::new();
     let mut result = Ok(());
     ONCE.call_once(|| {
         result = plotters::style::register_font(FAMILY, FontStyle::Normal, FONT)
-            .map_err(|_| "the embedded font does not load".to_string());
+            .map_err(|_| PlotError::Font);
     });
     result
 }
@@ -38,7 +57,7 @@ pub fn write_all(
     figures: &[Figure],
     dir: &Path,
     stage: &mut crate::output::Staged,
-) -> Result<Vec<PathBuf>, String> {
+) -> Result<Vec<PathBuf>, PlotError> {
     stage.create_dir(dir)?;
     let mut out = Vec::new();
     for f in figures {
@@ -47,14 +66,20 @@ pub fn write_all(
         }
         let path = dir.join(&f.file);
         let tmp = stage.path_for(&path);
-        draw(f, &tmp).map_err(|e| format!("{}: {e}", path.display()))?;
+        draw(f, &tmp).map_err(|e| match e {
+            PlotError::Draw { message, .. } => PlotError::Draw {
+                path: path.clone(),
+                message,
+            },
+            other => other,
+        })?;
         out.push(path);
     }
     Ok(out)
 }
 
 /// Draws one figure.
-pub fn draw(fig: &Figure, path: &Path) -> Result<(), String> {
+pub fn draw(fig: &Figure, path: &Path) -> Result<(), PlotError> {
     register_font()?;
     let n = fig.panels.len();
     let cols = if n <= 3 { n } else { n.div_ceil(2) };
@@ -64,7 +89,10 @@ pub fn draw(fig: &Figure, path: &Path) -> Result<(), String> {
         (130 + 330 * rows) as u32,
     );
     let root = BitMapBackend::new(path, (w, h)).into_drawing_area();
-    let e = |e: &dyn std::fmt::Display| e.to_string();
+    let e = |e: &dyn std::fmt::Display| PlotError::Draw {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
     root.fill(&WHITE).map_err(|x| e(&x))?;
     let (head, body) = root.split_vertically(130);
     head.draw_text(
