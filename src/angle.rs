@@ -14,7 +14,7 @@
 //! 1.3e-10, under an eighth of the fixed-point resolution). Computing cos x − 1 directly keeps
 //! its relative accuracy where it is small, which the correction form needs.
 
-use crate::scalar::{mul_wide_u, Precision, Scale};
+use crate::scalar::{mul_wide_u, Arithmetic, Scale};
 
 /// Converts counts of one joint into 32-bit binary angles (one turn = 2^32).
 ///
@@ -78,7 +78,7 @@ impl CountScale {
 
 /// A joint's raw reading split as θ = q·π/2 + 2x, |x| ≤ π/8.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct Quarter<P: Precision> {
+pub struct Quarter<P: Arithmetic> {
     /// Quadrant q, 0..=3: whole quarter turns.
     pub q: u8,
     /// cos x − 1.
@@ -87,7 +87,7 @@ pub struct Quarter<P: Precision> {
     pub s: P::U,
 }
 
-impl<P: Precision> Quarter<P> {
+impl<P: Arithmetic> Quarter<P> {
     /// Splits a binary angle (one turn = 2^32) and evaluates the remainder's sine and cosine.
     #[inline(always)]
     pub fn from_binary(t: u32) -> Quarter<P> {
@@ -164,7 +164,7 @@ pub fn quarter_turns<E: Copy + core::ops::Neg<Output = E>>(q: u8, (x, y): (E, E)
 /// the next wanted order, else one angle-addition step — a complex product instead of a sine
 /// and cosine each.
 #[derive(Clone, Copy, Debug)]
-pub struct Multiples<P: Precision> {
+pub struct Multiples<P: Arithmetic> {
     c1: P::U,
     s1: P::U,
     /// cos(hθ) of the current order.
@@ -175,7 +175,7 @@ pub struct Multiples<P: Precision> {
     pub order: u32,
 }
 
-impl<P: Precision> Multiples<P> {
+impl<P: Arithmetic> Multiples<P> {
     /// Starts at order 1.
     #[inline(always)]
     pub fn new(cos: P::U, sin: P::U) -> Multiples<P> {
@@ -213,7 +213,7 @@ mod tests {
     use super::*;
     use crate::scalar::{Fixed, F32};
 
-    fn check_remainder<P: Precision>(step: usize, tol: f64) -> f64 {
+    fn check_remainder<P: Arithmetic>(step: usize, tol: f64) -> f64 {
         let mut worst = 0.0f64;
         for r in (-(1i64 << 29)..=(1i64 << 29)).step_by(step) {
             let a = Quarter::<P>::from_binary(r as u32);
@@ -241,7 +241,7 @@ mod tests {
 
     /// Largest errors over every count of a 2^20 encoder: (cos θ, sin θ) and the half angle
     /// (sign-aligned).
-    fn every_count<P: Precision>() -> (f64, f64) {
+    fn every_count<P: Arithmetic>() -> (f64, f64) {
         let scale = CountScale::new(1 << 20).unwrap();
         let mut worst = (0.0f64, 0.0f64);
         for count in 0..1u32 << 20 {

@@ -42,14 +42,33 @@
 
 use crate::angle::{quarter_turns, Quarter};
 use crate::model::{units, ChainError, Model, Point, BASE_AXIS};
+use crate::physics::Physics;
 use crate::rotate::{cross, Quat, Vec3};
-use crate::scalar::{Fixed, Precision, Scale, F32};
+use crate::scalar::{Fixed, Scale, F32};
 use crate::table::{Table, MAX_JOINTS};
 use core::mem::MaybeUninit;
 
+/// What the quaternion chain is evaluated in: a number format with the physical effects' terms
+/// in it ([`Physics`]), and what the targets that use the format may spend on the chain.
+pub trait Evaluator: Physics {
+    /// Whether the chain may spend flash on a second copy of a hot path to save instructions
+    /// per point (f32: the FPU targets have flash to spare; fixed point: the Cortex-M0 hub's
+    /// image must stay within 32 KiB). A build policy, not a property of the numbers: it
+    /// changes no result, only size and speed.
+    const SPEND_FLASH: bool;
+}
+
+impl Evaluator for F32 {
+    const SPEND_FLASH: bool = true;
+}
+
+impl Evaluator for Fixed {
+    const SPEND_FLASH: bool = false;
+}
+
 /// One joint's constants in the quaternion chain.
 #[derive(Clone, Copy, Debug, Default)]
-struct JointRotation<P: Precision> {
+struct JointRotation<P: Physics> {
     /// M̃_i ⊗ (cos qπ/4, sin qπ/4 ẑ) for the quadrant q = 0..3 of the reading, for the
     /// orientation: the quarter turns' half angles taken in f64 at boot, so that the per-point
     /// product needs only the remainder's half angle (no branch, no √½ rounding).
@@ -63,7 +82,7 @@ struct JointRotation<P: Precision> {
 
 /// The quaternion chain of one evaluator.
 #[derive(Clone, Copy, Debug)]
-pub struct Chain<P: Precision> {
+pub struct Chain<P: Evaluator> {
     model: Model<P>,
     rotation: [JointRotation<P>; MAX_JOINTS],
     /// The arm's compliances are large enough for the second-order gravity terms to matter
@@ -79,7 +98,7 @@ pub type ChainFixed = Chain<Fixed>;
 /// The base frame's vertical (its x and y, all the lever needs) and the joint's axis, for a
 /// compliant joint.
 #[derive(Clone, Copy)]
-struct Frame<P: Precision> {
+struct Frame<P: Physics> {
     vertical: [P::U; 2],
     axis: Vec3<P::U>,
 }
@@ -87,12 +106,12 @@ struct Frame<P: Precision> {
 /// What the first pass leaves for the second, per joint: the angle, and the frame where the
 /// joint is compliant. One record per joint, so both share one address; left uninitialised,
 /// since zeroing them per reading would cost more than the records themselves.
-struct Record<P: Precision> {
+struct Record<P: Physics> {
     angle: MaybeUninit<Quarter<P>>,
     frame: MaybeUninit<Frame<P>>,
 }
 
-impl<P: Precision> Record<P> {
+impl<P: Physics> Record<P> {
     const UNINIT: Record<P> = Record {
         angle: MaybeUninit::uninit(),
         frame: MaybeUninit::uninit(),
@@ -139,7 +158,7 @@ fn near_matrix([w, x, y, z]: [f64; 4]) -> [f64; 9] {
     ]
 }
 
-impl<P: Precision> Chain<P> {
+impl<P: Evaluator> Chain<P> {
     /// Builds the chain from a validated table.
     pub fn new(table: &Table<'_>) -> Result<Chain<P>, ChainError> {
         let model = Model::<P>::new(table)?;

@@ -1,16 +1,13 @@
-//! Where joint readings come from: absolute encoders on the hub, or a replay over the UART.
+//! Where a hub's own joint readings come from: absolute encoders.
 //!
 //! [`AbsoluteEncoder`] is what the hub needs of one joint's encoder: its resolution and one
 //! reading, or an error. [`read_joints`] reads a whole arm and turns every error into a fault
 //! bit of that joint, which the stream carries (`Status::with_encoder_faults`): a hub never
-//! guesses a count. [`As5047p`] is a driver for a real part; [`Replay`] takes recorded readings
-//! from the UART's receive side, for the QEMU boards and for hardware-in-the-loop runs.
-
-mod as5047p;
-mod replay;
-
-pub use as5047p::{As5047p, Diagnostics, Error as As5047pError, ErrorFlags, Register};
-pub use replay::{Event, Replay};
+//! guesses a count. The driver for a real part (AMS AS5047P on SPI) is
+//! `quatarm_drivers::As5047p`, in a crate of its own so that a user of the chain alone does not
+//! pull in embedded-hal. Recorded readings replayed over the UART (the QEMU boards,
+//! hardware-in-the-loop runs) arrive through [`crate::stream::Replay`] instead, the decoder of
+//! the stream's receive side.
 
 /// An absolute rotary encoder: every reading is the shaft angle in counts, no homing needed.
 pub trait AbsoluteEncoder {

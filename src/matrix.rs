@@ -14,15 +14,16 @@
 //! as accurate and as cheap (`armcal accuracy`, `cargo xtask bench-target`).
 
 use crate::model::{units, ChainError, Gravity, GravityCount, Model, Point, BASE_AXIS};
+use crate::physics::Physics;
 use crate::rotate::Vec3;
-use crate::scalar::{Fixed, Precision, Scale, F32};
+use crate::scalar::{Arithmetic, Fixed, Scale, F32};
 use crate::table::{Table, MAX_JOINTS};
 
-type Mat<P> = [[<P as Precision>::U; 3]; 3];
+type Mat<P> = [[<P as Arithmetic>::U; 3]; 3];
 
 /// The 3×4 matrix chain of one evaluator.
 #[derive(Clone, Copy, Debug)]
-pub struct MatrixChain<P: Precision> {
+pub struct MatrixChain<P: Physics> {
     model: Model<P>,
     rotation: [Mat<P>; MAX_JOINTS],
 }
@@ -33,12 +34,12 @@ pub type MatrixChainF32 = MatrixChain<F32>;
 pub type MatrixChainFixed = MatrixChain<Fixed>;
 
 #[inline(always)]
-fn mat_vec<P: Precision, E: Scale<P>>(m: &Mat<P>, v: &Vec3<E>) -> Vec3<E> {
+fn mat_vec<P: Arithmetic, E: Scale<P>>(m: &Mat<P>, v: &Vec3<E>) -> Vec3<E> {
     let row = |r: &[P::U; 3]| v[0].scale(r[0]) + v[1].scale(r[1]) + v[2].scale(r[2]);
     [row(&m[0]), row(&m[1]), row(&m[2])]
 }
 
-impl<P: Precision> MatrixChain<P> {
+impl<P: Physics> MatrixChain<P> {
     /// Builds the chain from a validated table.
     pub fn new(table: &Table<'_>) -> Result<MatrixChain<P>, ChainError> {
         let model = Model::<P>::new(table)?;

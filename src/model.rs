@@ -20,8 +20,9 @@
 //! link) is computed in f64 at boot and rounded once.
 
 use crate::angle::{CountScale, Multiples, Quarter};
+use crate::physics::Physics;
 use crate::rotate::Vec3;
-use crate::scalar::{Precision, Scale};
+use crate::scalar::{Arithmetic, Scale};
 use crate::table::{Table, MAX_HARMONICS, MAX_JOINTS};
 use core::fmt;
 use core::mem::MaybeUninit;
@@ -92,14 +93,14 @@ impl core::error::Error for ChainError {}
 
 /// A probe-ball centre and probe direction in one evaluator's numbers.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Point<P: Precision> {
+pub struct Point<P: Arithmetic> {
     /// Probe-ball centre, base frame (mm).
     pub xyz: Vec3<P::L>,
     /// Probe direction, unit vector.
     pub dir: Vec3<P::U>,
 }
 
-impl<P: Precision> Point<P> {
+impl<P: Arithmetic> Point<P> {
     /// XYZ in integer nanometres, exactly rounded from the evaluator's value: the firmware's
     /// output format.
     pub fn xyz_nm(&self) -> [i32; 3] {
@@ -124,7 +125,7 @@ impl<P: Precision> Point<P> {
 
 /// One harmonic term in evaluator numbers.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct HarmonicTerm<P: Precision> {
+pub struct HarmonicTerm<P: Arithmetic> {
     /// Order h.
     pub order: u32,
     /// Coefficient of sin(hθ).
@@ -135,7 +136,7 @@ pub struct HarmonicTerm<P: Precision> {
 
 /// One joint's constants, except its fixed rotation (the chains keep that in their own form).
 #[derive(Clone, Copy, Debug, Default)]
-pub struct JointModel<P: Precision> {
+pub struct JointModel<P: Physics> {
     /// The joint's axis in the table: 0 = x, 1 = y, 2 = z (the chain turns about z, see the
     /// module docs).
     pub axis: u8,
@@ -163,7 +164,7 @@ pub struct JointModel<P: Precision> {
 
 /// The calibrated model in one evaluator's numbers.
 #[derive(Clone, Copy, Debug)]
-pub struct Model<P: Precision> {
+pub struct Model<P: Physics> {
     /// Number of joints.
     pub n: usize,
     /// Joints, base first.
@@ -177,7 +178,7 @@ pub struct Model<P: Precision> {
 
 /// Joint i's part of one reading.
 #[derive(Clone, Copy, Debug)]
-pub struct JointReading<P: Precision> {
+pub struct JointReading<P: Physics> {
     /// The raw reading θ as quarter turns and a small remainder.
     pub angle: Quarter<P>,
     /// cos θ and sin θ of the raw reading, where the harmonics or the caller needed them.
@@ -192,7 +193,7 @@ fn conv<T>(x: Option<T>, joint: usize) -> Result<T, ChainError> {
     x.ok_or(ChainError::Range { joint: joint as u8 })
 }
 
-fn vec3<P: Precision>(v: [f64; 3], joint: usize) -> Result<Vec3<P::L>, ChainError> {
+fn vec3<P: Arithmetic>(v: [f64; 3], joint: usize) -> Result<Vec3<P::L>, ChainError> {
     Ok([
         conv(P::l_from_f64(v[0]), joint)?,
         conv(P::l_from_f64(v[1]), joint)?,
@@ -200,7 +201,7 @@ fn vec3<P: Precision>(v: [f64; 3], joint: usize) -> Result<Vec3<P::L>, ChainErro
     ])
 }
 
-fn rates<P: Precision>(v: [f64; 3], joint: usize) -> Result<Vec3<P::R>, ChainError> {
+fn rates<P: Physics>(v: [f64; 3], joint: usize) -> Result<Vec3<P::R>, ChainError> {
     Ok([
         conv(P::r_from_f64(v[0]), joint)?,
         conv(P::r_from_f64(v[1]), joint)?,
@@ -209,7 +210,7 @@ fn rates<P: Precision>(v: [f64; 3], joint: usize) -> Result<Vec3<P::R>, ChainErr
 }
 
 /// Converts a dimensionless f64 triple or quadruple.
-pub(crate) fn units<P: Precision, const K: usize>(
+pub(crate) fn units<P: Arithmetic, const K: usize>(
     v: [f64; K],
     joint: usize,
 ) -> Result<[P::U; K], ChainError> {
@@ -231,7 +232,7 @@ pub(crate) fn abs(x: f64) -> f64 {
 /// Orders a joint's harmonic terms by order, in place: an insertion sort, since there are at
 /// most [`MAX_HARMONICS`] of them and `core`'s `sort_unstable` brings about 2 KB of general
 /// sorting code into the M0 image at `opt-level = "z"`.
-fn sort_by_order<P: Precision>(terms: &mut [HarmonicTerm<P>]) {
+fn sort_by_order<P: Arithmetic>(terms: &mut [HarmonicTerm<P>]) {
     for i in 1..terms.len() {
         let mut k = i;
         while k > 0 && terms[k - 1].order > terms[k].order {
@@ -318,7 +319,7 @@ pub(crate) fn z_frame_matrix(m: [[f64; 3]; 3], prev_axis: u8, axis: u8) -> [[f64
 /// The axis the base frame stands for before joint 1: z (no permutation).
 pub(crate) const BASE_AXIS: u8 = 2;
 
-impl<P: Precision> Model<P> {
+impl<P: Physics> Model<P> {
     /// Converts a validated table; fails if a value does not fit this evaluator (for fixed
     /// point: the arm's reach, over ±100 °C of thermal expansion, must stay within 2 m).
     pub fn new(table: &Table<'_>) -> Result<Model<P>, ChainError> {
@@ -417,7 +418,7 @@ impl<P: Precision> Model<P> {
     }
 }
 
-impl<P: Precision> JointModel<P> {
+impl<P: Physics> JointModel<P> {
     /// The link at temperature: v (1 + κ ΔT) = v + (κ v) ΔT.
     #[inline(always)]
     pub fn link_at(&self, dt: P::T) -> Vec3<P::L> {
@@ -480,7 +481,7 @@ impl<P: Precision> JointModel<P> {
 /// with d_k = p − o_k and e_k = g_k a_k · (d_k × ẑ) = g_k (a_kx d_ky − a_ky d_kx),
 /// Δp = Σ e_k a_k × d_k, Δn = (Σ e_k a_k) × n. It agrees with the exactly deflected chain to
 /// a few nanometres (`armcal accuracy`, last row).
-pub struct Gravity<P: Precision> {
+pub struct Gravity<P: Physics> {
     // Filled base to tip; only the first `count` are ever read. Left uninitialised because
     // zeroing seven slots per reading (a memset) cost more than the whole correction.
     terms: [MaybeUninit<GravityTerm<P>>; MAX_JOINTS],
@@ -492,13 +493,13 @@ pub struct Gravity<P: Precision> {
 pub struct GravityCount(usize);
 
 #[derive(Clone, Copy)]
-struct GravityTerm<P: Precision> {
+struct GravityTerm<P: Physics> {
     g: P::G,
     axis: Vec3<P::U>,
     origin: Vec3<P::L>,
 }
 
-impl<P: Precision> Default for Gravity<P> {
+impl<P: Physics> Default for Gravity<P> {
     #[inline(always)]
     fn default() -> Self {
         Gravity {
@@ -507,7 +508,7 @@ impl<P: Precision> Default for Gravity<P> {
     }
 }
 
-impl<P: Precision> Gravity<P> {
+impl<P: Physics> Gravity<P> {
     /// Records a compliant joint: its coefficient, its axis and its origin in the base frame.
     #[inline(always)]
     pub fn push(&mut self, n: &mut GravityCount, g: P::G, axis: Vec3<P::U>, origin: Vec3<P::L>) {

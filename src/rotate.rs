@@ -6,14 +6,14 @@
 //! component permutations. Vector functions work on lengths and on dimensionless components
 //! alike (through [`Scale`]).
 
-use crate::scalar::{Precision, Scale};
+use crate::scalar::{Arithmetic, Scale};
 
 /// A 3-vector (x, y, z).
 pub type Vec3<E> = [E; 3];
 
 /// A quaternion (w, x, y, z), Hamilton convention, scalar first.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Quat<P: Precision> {
+pub struct Quat<P: Arithmetic> {
     /// Scalar part.
     pub w: P::U,
     /// Vector part.
@@ -24,7 +24,7 @@ pub struct Quat<P: Precision> {
     pub z: P::U,
 }
 
-impl<P: Precision> Quat<P> {
+impl<P: Arithmetic> Quat<P> {
     /// From (w, x, y, z).
     pub fn new([w, x, y, z]: [P::U; 4]) -> Quat<P> {
         Quat { w, x, y, z }
@@ -55,7 +55,7 @@ impl<P: Precision> Quat<P> {
     }
 
     /// 2/|q|² ≈ 2(2 − |q|²) for |q|² = 1 + ε (error 2ε², 1e-13 for f32 rounding), where
-    /// the precision asks for it ([`Precision::DIVIDE_NORM`]); else `None`, taken as 2.
+    /// the number format asks for it ([`Arithmetic::DIVIDE_NORM`]); else `None`, taken as 2.
     #[inline(always)]
     pub fn rotation_factor(&self) -> Option<P::U> {
         if !P::DIVIDE_NORM {
@@ -130,7 +130,7 @@ impl<P: Precision> Quat<P> {
 
 /// a × b of two dimensionless vectors (small rotation vectors, directions).
 #[inline(always)]
-pub fn cross<P: Precision>(a: &Vec3<P::U>, b: &Vec3<P::U>) -> Vec3<P::U> {
+pub fn cross<P: Arithmetic>(a: &Vec3<P::U>, b: &Vec3<P::U>) -> Vec3<P::U> {
     [
         a[1].scale(b[2]) - a[2].scale(b[1]),
         a[2].scale(b[0]) - a[0].scale(b[2]),

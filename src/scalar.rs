@@ -1,6 +1,6 @@
-//! The number formats of the firmware evaluators, behind one small trait.
+//! The number formats of the firmware evaluators and their arithmetic, behind one small trait.
 //!
-//! The chain is written once, generically over [`Precision`]; two implementations exist:
+//! The chain is written once, generically over [`Arithmetic`]; two implementations exist:
 //!
 //! - [`F32`]: IEEE-754 single precision for FPU targets (Cortex-M4F). Only `+ - *` in a
 //!   fixed order, never a fused multiply-add, `sqrt`, division or a libm call in the per-point
@@ -15,6 +15,10 @@
 //!
 //! Two kinds of number are kept apart even though f32 uses one type for both: fixed point
 //! cannot hold both a 1e-9 rad rotation and a 1.5 m lever in one 32-bit format.
+//!
+//! This trait is arithmetic only. The physical effects' terms in each format (gravity
+//! deflection, thermal expansion) are [`crate::physics::Physics`]; what a target may spend on
+//! the chain (flash for speed) is [`crate::chain::Evaluator`].
 
 use core::fmt::Debug;
 use core::ops::{Add, Neg, Sub};
@@ -27,23 +31,17 @@ pub trait Scalar:
 }
 
 /// Scaling of a number by a dimensionless factor of the same precision.
-pub trait Scale<P: Precision>: Scalar {
+pub trait Scale<P: Arithmetic>: Scalar {
     /// `self · u`, rounded once.
     fn scale(self, u: P::U) -> Self;
 }
 
 /// One evaluator's number formats and the few operations that depend on them.
-pub trait Precision: Copy + Default + Debug + 'static {
+pub trait Arithmetic: Copy + Default + Debug + 'static {
     /// Dimensionless, |x| < 2: sines, cosines, quaternion and direction components.
     type U: Scale<Self>;
     /// Lengths (mm).
     type L: Scale<Self>;
-    /// Gravity compliance coefficient (rad/mm).
-    type G: Copy + Default + Debug;
-    /// A length's thermal expansion rate: mm per milli-degree Celsius.
-    type R: Copy + Default + Debug;
-    /// A temperature offset from 20 °C, converted once per reading.
-    type T: Copy + Default + Debug;
 
     /// Short name, for reports.
     const NAME: &'static str;
@@ -60,21 +58,11 @@ pub trait Precision: Copy + Default + Debug + 'static {
     fn angle(r: i32) -> Self::U;
     /// `a / 2`.
     fn half(a: Self::U) -> Self::U;
-    /// Gravity deflection angle `g · x` for a lever term x (mm).
-    fn gravity(g: Self::G, x: Self::L) -> Self::U;
-    /// A temperature offset ΔT (milli-degrees Celsius, |ΔT| ≤ 10^5) in evaluator form.
-    fn temperature(dt_mc: i32) -> Self::T;
-    /// The thermal expansion `rate · ΔT` of a length (mm).
-    fn expansion(rate: Self::R, dt: Self::T) -> Self::L;
 
     /// Conversion of a dimensionless table value; `None` where it does not fit.
     fn u_from_f64(x: f64) -> Option<Self::U>;
     /// Conversion of a length (mm); `None` where it does not fit.
     fn l_from_f64(x: f64) -> Option<Self::L>;
-    /// Conversion of a gravity coefficient (rad/mm); `None` where it does not fit.
-    fn g_from_f64(g: f64) -> Option<Self::G>;
-    /// Conversion of an expansion rate (mm/°C); `None` where it does not fit.
-    fn r_from_f64(mm_per_degc: f64) -> Option<Self::R>;
 
     /// A length in integer nanometres, rounded to nearest (ties away from zero), saturating.
     fn l_to_nm(x: Self::L) -> i32;
@@ -87,7 +75,7 @@ pub trait Precision: Copy + Default + Debug + 'static {
     /// A dimensionless number as a length of `x` · 1024 mm, exactly: a unit vector carried
     /// through the chain's position code (fixed point: the same bits, I2F30 read as I12F20).
     fn u_as_l1024(x: Self::U) -> Self::L;
-    /// The inverse of [`Precision::u_as_l1024`], exact.
+    /// The inverse of [`Arithmetic::u_as_l1024`], exact.
     fn l1024_as_u(x: Self::L) -> Self::U;
     /// Largest absolute length (mm) that the chain may meet anywhere; the table must keep the
     /// arm's reach below it.
@@ -96,10 +84,6 @@ pub trait Precision: Copy + Default + Debug + 'static {
     /// norm out of every rotation (f32: some 1e-7 per product, 0.3 µm at the tip) rather than
     /// trusting |q| = 1 (fixed point: 1e-9 per product, under a nanometre).
     const DIVIDE_NORM: bool;
-    /// Whether the chains may spend flash on a second copy of a hot path to save instructions
-    /// per point (f32: the FPU targets have flash to spare; fixed point: the Cortex-M0 hub's
-    /// image must stay within 32 KiB).
-    const SPEND_FLASH: bool;
 }
 
 /// Minimax sin x = x + x³(S1 + x²(S2 + x² S3)) on |x| ≤ π/8: absolute error 3.6e-12
@@ -134,12 +118,9 @@ impl Scale<F32> for f32 {
     }
 }
 
-impl Precision for F32 {
+impl Arithmetic for F32 {
     type U = f32;
     type L = f32;
-    type G = f32;
-    type R = f32;
-    type T = f32;
     const NAME: &'static str = "f32";
     const ONE: f32 = 1.0;
     const SIN: [f32; 3] = [SIN_F64[0] as f32, SIN_F64[1] as f32, SIN_F64[2] as f32];
@@ -154,7 +135,6 @@ impl Precision for F32 {
     /// nanometres (2147.48 mm).
     const MAX_REACH_MM: f64 = 1700.0;
     const DIVIDE_NORM: bool = true;
-    const SPEND_FLASH: bool = true;
 
     #[inline(always)]
     fn angle(r: i32) -> f32 {
@@ -167,19 +147,6 @@ impl Precision for F32 {
     fn half(a: f32) -> f32 {
         a * 0.5
     }
-    #[inline(always)]
-    fn gravity(g: f32, x: f32) -> f32 {
-        g * x
-    }
-    #[inline(always)]
-    fn temperature(dt_mc: i32) -> f32 {
-        // Exact: |ΔT| ≤ 10^5 < 2^24.
-        dt_mc as f32
-    }
-    #[inline(always)]
-    fn expansion(rate: f32, dt: f32) -> f32 {
-        rate * dt
-    }
     fn u_from_f64(x: f64) -> Option<f32> {
         // |x| = 2 included: E_i = M''_i − I of a half turn (a zero offset of π) has −2 on
         // its diagonal, which fixed point's I2F30 holds too.
@@ -189,12 +156,6 @@ impl Precision for F32 {
         // Any length the table holds: the reach as a whole is checked against MAX_REACH_MM
         // ([`crate::model::Model::new`]), which names it.
         finite_below(x, 1.0e6).map(|x| x as f32)
-    }
-    fn g_from_f64(g: f64) -> Option<f32> {
-        finite_below(g, 1.0).map(|x| x as f32)
-    }
-    fn r_from_f64(mm_per_degc: f64) -> Option<f32> {
-        finite_below(mm_per_degc, 1.0e3).map(|x| (x / 1000.0) as f32)
     }
     fn l_to_nm(x: f32) -> i32 {
         f32_scaled(x, 1_000_000)
@@ -218,7 +179,8 @@ impl Precision for F32 {
     }
 }
 
-fn finite_below(x: f64, limit: f64) -> Option<f64> {
+/// `x` if it is finite and |x| < `limit`.
+pub(crate) fn finite_below(x: f64, limit: f64) -> Option<f64> {
     if x.is_finite() && x.abs() < limit {
         Some(x)
     } else {
@@ -392,7 +354,7 @@ pub fn mul_q30(a: i32, b: i32) -> i32 {
 
 /// `(a·b) >> s`, rounded to nearest, truncated to 32 bits.
 #[inline(always)]
-fn mul_shift(a: i32, b: i32, s: u32) -> i32 {
+pub(crate) fn mul_shift(a: i32, b: i32, s: u32) -> i32 {
     ((mul_wide(a, b) + (1i64 << (s - 1))) >> s) as i32
 }
 
@@ -412,7 +374,7 @@ const fn q30(x: f64) -> Unit {
 /// soft-float call: `fixed`'s generic conversion, inlined at four call sites with four target
 /// formats, cost about 1.6 KB of the qemu-m0 image's 32 KiB; this is one copy in integers.
 #[inline(never)]
-fn fixed_bits(x: f64, frac: u32) -> Option<i32> {
+pub(crate) fn fixed_bits(x: f64, frac: u32) -> Option<i32> {
     const MANT_BITS: u32 = 52;
     let bits = x.to_bits();
     let exp = ((bits >> MANT_BITS) & 0x7ff) as i32;
@@ -454,13 +416,6 @@ fn fixed_bits(x: f64, frac: u32) -> Option<i32> {
     }
 }
 
-/// Fractional bits of the gravity coefficient: g·2^48 in an i32 (|g| < 7.6e-6 rad/mm,
-/// resolution 3.6e-15 rad/mm: 7e-12 rad over a 2 m lever).
-const G_FRAC: u32 = 48;
-/// Fractional bits of an expansion rate in mm per milli-degree: 2^40 (|rate| < 1.9e-3 mm/m°C,
-/// where 2 m at κ = 4e-4 /°C needs 8e-4; resolution 0.1 nm over 100 °C).
-const R_FRAC: u32 = 40;
-
 impl Scale<Fixed> for Unit {
     #[inline(always)]
     fn scale(self, u: Unit) -> Unit {
@@ -475,12 +430,9 @@ impl Scale<Fixed> for Len {
     }
 }
 
-impl Precision for Fixed {
+impl Arithmetic for Fixed {
     type U = Unit;
     type L = Len;
-    type G = i32;
-    type R = i32;
-    type T = i32;
     const NAME: &'static str = "fixed";
     const ONE: Unit = Unit::from_bits(1 << 30);
     const SIN: [Unit; 3] = [q30(SIN_F64[0]), q30(SIN_F64[1]), q30(SIN_F64[2])];
@@ -488,7 +440,6 @@ impl Precision for Fixed {
     const SQRT_HALF: Unit = q30(core::f64::consts::FRAC_1_SQRT_2);
     /// Positions are I12F20: keep 48 mm of the ±2048 mm range as margin for rounding.
     const MAX_REACH_MM: f64 = 2000.0;
-    const SPEND_FLASH: bool = false;
     const DIVIDE_NORM: bool = false;
 
     #[inline(always)]
@@ -501,19 +452,6 @@ impl Precision for Fixed {
     fn half(a: Unit) -> Unit {
         Unit::from_bits(a.bits() >> 1)
     }
-    #[inline(always)]
-    fn gravity(g: i32, x: Len) -> Unit {
-        // g·2^48 · x·2^20 → ·2^30: shift 38.
-        Unit::from_bits(mul_shift(g, x.bits(), G_FRAC + 20 - 30))
-    }
-    #[inline(always)]
-    fn temperature(dt_mc: i32) -> i32 {
-        dt_mc
-    }
-    #[inline(always)]
-    fn expansion(rate: i32, dt_mc: i32) -> Len {
-        Len::from_bits(mul_shift(rate, dt_mc, R_FRAC - 20))
-    }
     fn u_from_f64(x: f64) -> Option<Unit> {
         fixed_bits(x, 30).map(Unit::from_bits)
     }
@@ -521,12 +459,6 @@ impl Precision for Fixed {
         // Any value the format holds: the arm's reach, which bounds every sum, is checked
         // against MAX_REACH_MM as a whole ([`crate::model::Model::new`]).
         fixed_bits(x, 20).map(Len::from_bits)
-    }
-    fn g_from_f64(g: f64) -> Option<i32> {
-        fixed_bits(g, G_FRAC)
-    }
-    fn r_from_f64(mm_per_degc: f64) -> Option<i32> {
-        fixed_bits(mm_per_degc / 1000.0, R_FRAC)
     }
     fn l_to_nm(x: Len) -> i32 {
         // bits·10^6 / 2^20, rounded (ties up).
@@ -705,14 +637,6 @@ mod tests {
     fn fixed_conversions() {
         assert_eq!(Fixed::l_to_nm(Fixed::l_from_f64(1.5).unwrap()), 1_500_000);
         assert_eq!(Fixed::u_to_e9(Fixed::ONE), 1_000_000_000);
-        let g = Fixed::g_from_f64(5e-8).unwrap();
-        let e = Fixed::gravity(g, Fixed::l_from_f64(1000.0).unwrap());
-        assert!((Fixed::u_to_f64(e) - 5e-5).abs() < 2e-9);
-        let r = Fixed::r_from_f64(300.0 * 2.3e-5).unwrap();
-        let x = Fixed::expansion(r, 15_000);
-        assert!((Fixed::l_to_f64(x) - 300.0 * 2.3e-5 * 15.0).abs() < 1e-6);
-        assert!(Fixed::r_from_f64(2.0).is_none());
-        assert!(Fixed::g_from_f64(1e-3).is_none());
         assert!(Fixed::l_from_f64(3000.0).is_none());
         assert!(Fixed::u_from_f64(f64::NAN).is_none());
     }

@@ -34,12 +34,16 @@ mod csv;
 mod framing;
 mod hub;
 mod message;
+mod replay;
 mod status;
 
 pub use csv::{write_csv_header, write_csv_line, CSV_HEADER, MAX_CSV_LINE};
 pub use framing::{decode, encode, FrameError, FrameReader, CRC, MAX_FRAME, MAX_PAYLOAD};
 pub use hub::{Hub, MAX_OUTPUT, RATED_TEMP_MC};
-pub use message::{Coordinates, Counts, Hello, Mode, Precision, Reading, Report, ToDevice, ToHost};
+pub use message::{
+    Coordinates, Counts, Hello, Mode, NumberFormat, Reading, Report, ToDevice, ToHost,
+};
+pub use replay::{Event, Replay};
 pub use status::{Status, TableState};
 
 /// Protocol version carried in [`Hello`]; bumped on any incompatible change of a message.

@@ -3,12 +3,9 @@
 //! [`TemperatureSensor`] is what the hub needs of the sensor on the arm: the latest reading in
 //! milli-degrees Celsius, or an error. A hub never makes a temperature up: when the sensor
 //! fails, the report carries `Status::TEMP_SENSOR_FAULT` and no coordinates (see
-//! `docs/protocol.md`), exactly as an encoder fault withholds the point. [`Tmp117`] is a
-//! driver for a real part (TI TMP117, ±0.1 °C, on I2C).
-
-mod tmp117;
-
-pub use tmp117::{Address, Config, Error as Tmp117Error, Register, Tmp117};
+//! `docs/protocol.md`), exactly as an encoder fault withholds the point. The driver for a real
+//! part (TI TMP117, ±0.1 °C, on I2C) is `quatarm_drivers::Tmp117`, in a crate of its own so
+//! that a user of the chain alone does not pull in embedded-hal.
 
 /// A temperature sensor on the arm's structure.
 pub trait TemperatureSensor {

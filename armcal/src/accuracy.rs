@@ -4,7 +4,7 @@
 //! load. Also the arm used for it: `default-6` with a calibration that uses every term.
 
 use nalgebra::Vector3;
-use quatarm::{Chain, ChainError, Fixed, MatrixChain, Point, Precision, Table, F32};
+use quatarm::{Arithmetic, Chain, ChainError, Fixed, MatrixChain, Point, Table, F32};
 use quatarm_ref::{Arm, Harmonic};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -127,7 +127,7 @@ pub struct Report {
     pub refused: [Option<ChainError>; 4],
 }
 
-fn errors<P: Precision>(pt: &Point<P>, p: &Vector3<f64>, n: &Vector3<f64>) -> (f64, f64) {
+fn errors<P: Arithmetic>(pt: &Point<P>, p: &Vector3<f64>, n: &Vector3<f64>) -> (f64, f64) {
     let x = pt.xyz_f64();
     let d = pt.dir_f64();
     let tip = (Vector3::from(x) - p).norm() * 1000.0;

@@ -13,7 +13,7 @@ use crate::data::{
 };
 use crate::limits::shown;
 use anyhow::Context as _;
-use quatarm::{Chain, Fixed, Precision, Table, F32};
+use quatarm::{Chain, Fixed, Table, F32};
 use quatarm_ref::Arm;
 use std::fmt::Write as _;
 
@@ -191,7 +191,7 @@ fn counts_of(arm: &Arm, r: &Reading) -> Vec<u32> {
 
 /// The firmware path `P` on the table a board would load; `calib` names the calibration in
 /// errors about it (a table it cannot become, an arm the evaluator cannot hold).
-fn firmware<P: Precision>(
+fn firmware<P: quatarm::Evaluator>(
     arm: &Arm,
     rows: &Rows,
     calib: &str,

@@ -7,7 +7,7 @@
 use arbitrary::Arbitrary;
 use libfuzzer_sys::fuzz_target;
 use quatarm::table::{TableData, MAX_TABLE_LEN};
-use quatarm::{Chain, Fixed, MatrixChain, Point, Precision, Table, F32};
+use quatarm::{Arithmetic, Chain, Fixed, MatrixChain, Point, Table, F32};
 use quatarm_fuzz::tables;
 
 /// One value of a table replaced.
@@ -81,7 +81,7 @@ fn apply(data: &mut TableData, tweak: &Tweak) {
     }
 }
 
-fn check<P: Precision>(p: Point<P>) {
+fn check<P: Arithmetic>(p: Point<P>) {
     let xyz = p.xyz_f64();
     let dir = p.dir_f64();
     assert!(

@@ -1,4 +1,4 @@
-//! The hub's receive side: any bytes on the UART into `quatarm::encoder::Replay` (the decoder
+//! The hub's receive side: any bytes on the UART into `quatarm::stream::Replay` (the decoder
 //! of host→hub `ToDevice` frames) and the `Hub` that turns each event into a report, as a
 //! board's replay loop (`board_common::serve`) does. Never a panic; coordinates exactly when
 //! the report's status allows them, never for a damaged frame; every report rendered in the
@@ -6,10 +6,9 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use quatarm::encoder::{Event, Replay};
 use quatarm::stream::{
-    Coordinates, FrameReader, Hub, Mode, Precision, Status, TableState, ToHost, MAX_FRAME,
-    MAX_OUTPUT,
+    Coordinates, Event, FrameReader, Hub, Mode, NumberFormat, Replay, Status, TableState, ToHost,
+    MAX_FRAME, MAX_OUTPUT,
 };
 use quatarm_fuzz::chains;
 
@@ -25,9 +24,9 @@ fuzz_target!(|bytes: &[u8]| {
         TableState::Valid
     };
     let precision = if fixed {
-        Precision::Fixed
+        NumberFormat::Fixed
     } else {
-        Precision::F32
+        NumberFormat::F32
     };
     let mut hub = Hub::new(state, f32_chain.joint_count() as u8, precision);
     let eval = |counts: &[u32], temp_mc: i32| {

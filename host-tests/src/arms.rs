@@ -19,7 +19,7 @@
 
 use arbitrary::{Result as ArbResult, Unstructured};
 use quatarm::table::limits;
-use quatarm::{Chain, ChainError, Fixed, MatrixChain, Point, Precision, Table, F32};
+use quatarm::{Arithmetic, Chain, ChainError, Evaluator, Fixed, MatrixChain, Point, Table, F32};
 use quatarm_ref::{Arm, Axis, Harmonic, Joint, Probe};
 use std::f64::consts::PI;
 
@@ -237,7 +237,7 @@ pub struct Worst {
 }
 
 /// Evaluates every reading with one chain (its `eval`) against the reference.
-pub fn worst<P: Precision>(
+pub fn worst<P: Arithmetic>(
     eval: impl Fn(&[u32], i32) -> Result<Point<P>, ChainError>,
     case: &Case,
 ) -> Result<Worst, String> {
@@ -279,7 +279,7 @@ fn named(e: &ChainError) -> bool {
 
 /// One precision's chains (quaternion and matrix) on a table: a named refusal, or both
 /// within the bounds.
-fn check_precision<P: Precision>(
+fn check_precision<P: Evaluator>(
     table: &Table,
     case: &Case,
     (tip_um, dir): (f64, f64),

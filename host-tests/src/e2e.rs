@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use quatarm::stream::{Coordinates, Hello, Reading, Report};
-use quatarm::{Chain, ChainError, Fixed, Precision, Table, F32};
+use quatarm::{Chain, ChainError, Evaluator, Fixed, Table, F32};
 use quatarm_ref::arm::Arm;
 use quatarm_wire::stream_decode::{Decoder, Item, Stats};
 
@@ -37,7 +37,7 @@ pub fn calibration(path: &Path) -> Result<(Arm, Vec<u8>)> {
     Ok((arm, table))
 }
 
-fn host_chain<P: Precision>(
+fn host_chain<P: Evaluator>(
     table: &[u8],
     readings: &[Reading],
 ) -> Result<Vec<Result<Coordinates, ChainError>>> {

@@ -13,8 +13,7 @@
 //!   every report it hands out is, bit for bit, one the hub sent.
 
 use anyhow::{bail, ensure, Context, Result};
-use quatarm::encoder::{Event, Replay};
-use quatarm::stream::{Coordinates, Reading, Report, Status, ToDevice};
+use quatarm::stream::{Coordinates, Event, Reading, Replay, Report, Status, ToDevice};
 use quatarm_wire::stream_decode::{Decoder, Item};
 
 use crate::boards::Board;

@@ -3,60 +3,12 @@
 //! symbols the boards read. A board with a region too small or overlapping its code would
 //! only show on hardware; this checks it on every run.
 
-use host_tests::boards::{root, BOARDS};
+use host_tests::boards::{self, root};
 use quatarm::table::{table_len, MAX_JOINTS};
 
-/// ORIGIN and LENGTH of region `name` in a linker script's MEMORY block.
+/// ORIGIN and LENGTH of region `name` (the parser the board list uses).
 fn region(script: &str, name: &str) -> (u64, u64) {
-    let line = script
-        .lines()
-        .map(str::trim)
-        .find(|l| {
-            l.split(|c: char| c.is_whitespace() || c == ':')
-                .next()
-                .is_some_and(|w| w == name)
-        })
-        .unwrap_or_else(|| panic!("no {name} region"));
-    let value = |key: &str| -> u64 {
-        let rest = line[line.find(key).unwrap_or_else(|| panic!("{name}: no {key}"))..]
-            .split('=')
-            .nth(1)
-            .expect("key = value");
-        expr(rest.split(',').next().unwrap_or(rest))
-    };
-    (value("ORIGIN"), value("LENGTH"))
-}
-
-/// A sum of terms such as `2048K - 0x100 - 4K`, as the boards' scripts write lengths.
-fn expr(e: &str) -> u64 {
-    let e = e.replace(' ', "");
-    let mut total: i64 = 0;
-    let mut sign = 1;
-    for (i, part) in e.split_inclusive(['+', '-']).enumerate() {
-        let (term, next) = match part.strip_suffix('+') {
-            Some(t) => (t, 1),
-            None => match part.strip_suffix('-') {
-                Some(t) => (t, -1),
-                None => (part, 1),
-            },
-        };
-        assert!(i == 0 || !term.is_empty(), "bad expression {e}");
-        total += sign * term_value(term) as i64;
-        sign = next;
-    }
-    u64::try_from(total).expect("non-negative")
-}
-
-fn term_value(v: &str) -> u64 {
-    if let Some(h) = v.strip_prefix("0x") {
-        u64::from_str_radix(&h.replace('_', ""), 16).expect("hex")
-    } else if let Some(k) = v.strip_suffix('K') {
-        k.parse::<u64>().expect("length in K") * 1024
-    } else if let Some(m) = v.strip_suffix('M') {
-        m.parse::<u64>().expect("length in M") * 1024 * 1024
-    } else {
-        v.parse().expect("decimal")
-    }
+    boards::region(script, name).unwrap_or_else(|e| panic!("{e:#}"))
 }
 
 fn check(path: &std::path::Path) {
@@ -85,7 +37,7 @@ fn check(path: &std::path::Path) {
 
 #[test]
 fn every_board_reserves_a_calibration_region() {
-    for b in &BOARDS {
+    for b in boards::boards().unwrap() {
         check(&b.dir().join("memory.x"));
     }
 }
@@ -100,6 +52,12 @@ fn the_parser_reads_what_it_checks() {
     let s = "MEMORY\n{\n  FLASH : ORIGIN = 0x08000000, LENGTH = 384K\n  CALTABLE : ORIGIN = 0x0806_0000, LENGTH = 1M\n}";
     assert_eq!(region(s, "FLASH"), (0x0800_0000, 384 * 1024));
     assert_eq!(region(s, "CALTABLE"), (0x0806_0000, 1024 * 1024));
-    assert_eq!(expr("2048K - 0x100 - 4K"), 2048 * 1024 - 256 - 4096);
-    assert_eq!(expr("16K+0x10"), 16 * 1024 + 16);
+    assert_eq!(
+        boards::expr("2048K - 0x100 - 4K").unwrap(),
+        2048 * 1024 - 256 - 4096
+    );
+    assert_eq!(boards::expr("16K+0x10").unwrap(), 16 * 1024 + 16);
+    assert!(boards::expr("16K++4").is_err());
+    assert!(boards::expr("0x10 - 1M").is_err());
+    assert!(boards::region(s, "RAM").is_err());
 }

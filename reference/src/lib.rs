@@ -12,6 +12,26 @@
 //! - [`dh`]: the classic formulation (Sładek et al.): Denavit–Hartenberg arms with 4×4
 //!   matrices, published robot tables, and their conversion into the spec's model.
 //! - [`orientation`]: axis–angle of a rotation matrix and the probe-direction error (eq. 22).
+//!
+//! # Example
+//!
+//! The spec's nominal arm `default-6` stands straight up at θ = 0 (links of 200, 300, 300,
+//! 250, 250 and 80 mm and a 120 mm probe, all along z). A quarter turn of joint 2, a hinge
+//! about x, lays everything above its first link down along −y:
+//!
+//! ```
+//! use std::f64::consts::FRAC_PI_2;
+//! use quatarm_ref::forward::{forward, REFERENCE_TEMP_C};
+//! use quatarm_ref::Arm;
+//!
+//! let arm = Arm::default6();
+//! let up = forward(&arm, &[0.0; 6], REFERENCE_TEMP_C);
+//! assert!((up.p - nalgebra::Vector3::new(0.0, 0.0, 1500.0)).norm() < 1e-9);
+//!
+//! let pose = forward(&arm, &[0.0, FRAC_PI_2, 0.0, 0.0, 0.0, 0.0], REFERENCE_TEMP_C);
+//! assert!((pose.p - nalgebra::Vector3::new(0.0, -1300.0, 200.0)).norm() < 1e-9);
+//! assert!((pose.n - nalgebra::Vector3::new(0.0, -1.0, 0.0)).norm() < 1e-12);
+//! ```
 #![deny(missing_docs)]
 
 pub mod arm;

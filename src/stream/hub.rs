@@ -7,7 +7,7 @@
 //! once.
 
 use super::{
-    encode, write_csv_line, Coordinates, FrameError, Hello, Mode, Precision, Reading, Report,
+    encode, write_csv_line, Coordinates, FrameError, Hello, Mode, NumberFormat, Reading, Report,
     Status, TableState, ToHost, MAX_CSV_LINE, MAX_FRAME, PROTOCOL_VERSION,
 };
 
@@ -29,14 +29,14 @@ pub struct Hub {
     seq: u32,
     base: Status,
     joints: u8,
-    precision: Precision,
+    precision: NumberFormat,
     mode: Mode,
 }
 
 impl Hub {
     /// A hub whose boot check of the table gave `table`, for a chain of `joints` joints (0 if
     /// there is no valid table).
-    pub fn new(table: TableState, joints: u8, precision: Precision) -> Hub {
+    pub fn new(table: TableState, joints: u8, precision: NumberFormat) -> Hub {
         Hub {
             seq: 0,
             base: Status::for_table(table),
@@ -71,7 +71,7 @@ impl Hub {
     }
 
     /// The chain arithmetic of this hub.
-    pub fn precision(&self) -> Precision {
+    pub fn precision(&self) -> NumberFormat {
         self.precision
     }
 
@@ -201,7 +201,7 @@ mod tests {
 
     #[test]
     fn a_good_reading_gives_the_chain_result() {
-        let mut hub = Hub::new(TableState::Valid, 6, Precision::F32);
+        let mut hub = Hub::new(TableState::Valid, 6, NumberFormat::F32);
         let r = hub.report(5, Ok(&reading(0, 20_000)), ok_eval);
         assert_eq!(r.point, Some(POINT));
         assert_eq!(r.status, Status(Status::TABLE_VALID));
@@ -218,7 +218,7 @@ mod tests {
             TableState::WrongJointCount,
             TableState::Malformed,
         ] {
-            let mut hub = Hub::new(state, 6, Precision::Fixed);
+            let mut hub = Hub::new(state, 6, NumberFormat::Fixed);
             let r = hub.report(0, Ok(&reading(0, 20_000)), must_not_run);
             assert_eq!(r.point, None);
             assert_eq!(r.status.table(), state);
@@ -235,7 +235,7 @@ mod tests {
 
     #[test]
     fn faults_withhold_coordinates() {
-        let mut hub = Hub::new(TableState::Valid, 6, Precision::F32);
+        let mut hub = Hub::new(TableState::Valid, 6, NumberFormat::F32);
         let r = hub.report(0, Ok(&reading(0b10_0000, 20_000)), must_not_run);
         assert_eq!((r.point, r.status.encoder_faults()), (None, 0b10_0000));
         let r = hub.report(0, Err(FrameError::Crc), must_not_run);
@@ -246,7 +246,7 @@ mod tests {
         assert!(r.point.is_none() && r.status.has(Status::OVER_TEMPERATURE));
         let r = hub.report(0, Ok(&reading(0, 20_000)), |_, _| Err::<Coordinates, _>(()));
         assert!(r.point.is_none() && r.status.has(Status::CHAIN_ERROR));
-        let mut seven = Hub::new(TableState::Valid, 7, Precision::F32);
+        let mut seven = Hub::new(TableState::Valid, 7, NumberFormat::F32);
         let r = seven.report(0, Ok(&reading(0, 20_000)), must_not_run);
         assert!(r.point.is_none() && r.status.has(Status::CHAIN_ERROR));
         // Every one of them still took a sequence number: the host sees no gap.
@@ -255,7 +255,7 @@ mod tests {
 
     #[test]
     fn without_a_temperature_there_are_no_coordinates() {
-        let mut hub = Hub::new(TableState::Valid, 6, Precision::F32);
+        let mut hub = Hub::new(TableState::Valid, 6, NumberFormat::F32);
         let counts = [1, 2, 3, 4, 5, 6];
         let r = hub.report_sample(0, &counts, 0, None, must_not_run);
         assert_eq!(r.point, None);
@@ -280,14 +280,14 @@ mod tests {
         assert!(r.status.has(Status::OVER_TEMPERATURE) && !r.status.has(Status::TEMP_SENSOR_FAULT));
         assert_eq!(r.seq, 3);
         // Without a valid table the sensor fault is still reported.
-        let mut bad = Hub::new(TableState::Corrupt, 6, Precision::F32);
+        let mut bad = Hub::new(TableState::Corrupt, 6, NumberFormat::F32);
         let r = bad.report_sample(0, &counts, 0, None, must_not_run);
         assert!(r.status.has(Status::TEMP_SENSOR_FAULT) && r.point.is_none());
     }
 
     #[test]
     fn render_follows_the_mode() {
-        let mut hub = Hub::new(TableState::Valid, 6, Precision::F32);
+        let mut hub = Hub::new(TableState::Valid, 6, NumberFormat::F32);
         let report = hub.report(1, Ok(&reading(0, 20_000)), ok_eval);
         let mut out = [0u8; MAX_OUTPUT];
         let bin = hub.render(&ToHost::Report(report), &mut out).to_vec();

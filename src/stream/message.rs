@@ -25,18 +25,20 @@ pub enum ToHost {
 pub struct Hello {
     /// [`super::PROTOCOL_VERSION`] of the firmware.
     pub protocol: u16,
-    /// The arithmetic of the chain on this hub.
-    pub precision: Precision,
+    /// The number format of the chain on this hub.
+    pub precision: NumberFormat,
     /// Joint count of the loaded table (0 when there is no valid table).
     pub joints: u8,
     /// The boot check's verdict on the table (the same bits every report carries).
     pub status: Status,
 }
 
-/// The arithmetic a hub evaluates the chain in.
+/// The number format a hub evaluates the chain in, as [`Hello`] announces it (the variant
+/// index is the wire value: 0 f32, 1 fixed point). On the firmware side the formats are types
+/// ([`crate::F32`], [`crate::Fixed`]); this enum only names one on the wire.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Precision {
+pub enum NumberFormat {
     /// f32 on an FPU.
     F32,
     /// Fixed point, for cores without an FPU.
@@ -169,5 +171,31 @@ impl<'de> Deserialize<'de> for Counts {
             }
         }
         deserializer.deserialize_seq(CountsVisitor)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `docs/protocol.md`'s `Hello`: the number format is one byte after the protocol varint,
+    /// 0 for f32 and 1 for fixed point. The enum's name is not on the wire; its order is.
+    #[test]
+    fn hello_carries_the_number_format_as_documented() {
+        let hello = |precision| Hello {
+            protocol: 1,
+            precision,
+            joints: 6,
+            status: Status::default(),
+        };
+        let mut buf = [0u8; 16];
+        let f32 = postcard::to_slice(&hello(NumberFormat::F32), &mut buf)
+            .unwrap()
+            .to_vec();
+        let fixed = postcard::to_slice(&hello(NumberFormat::Fixed), &mut buf)
+            .unwrap()
+            .to_vec();
+        assert_eq!(f32, [1, 0, 6, 0]);
+        assert_eq!(fixed, [1, 1, 6, 0]);
     }
 }

@@ -4,12 +4,12 @@
 //! Instructions: the board's benchmark image runs under `qemu-system-arm -icount shift=0`
 //! (one instruction per nanosecond of virtual time; SysTick counts that clock), timing each
 //! evaluation of both chains on the first readings of the shipped recording with the default
-//! full calibration (`../shared/notes/numerics.md` has the method). Flash and RAM: the hub
+//! full calibration (`docs/benchmark-method.md` has the method). Flash and RAM: the hub
 //! image's loadable segments (flash: every byte stored; RAM: statics), plus the stack's peak
 //! measured by painting during a replay. Boards QEMU does not model are only measured for size.
 
 use anyhow::{bail, Context, Result};
-use host_tests::boards::{Board, BOARDS};
+use host_tests::boards::{boards, Board};
 use host_tests::defmt_log::{self, number_after};
 use host_tests::e2e::{
     calibration, default_calibration_path, default_recording_path, replay, table_file,
@@ -179,7 +179,10 @@ pub fn run(only: Option<&str>, calib: Option<&std::path::Path>) -> Result<()> {
     for tc in chains {
         // The QEMU runs below find each board's image by this variable.
         std::env::set_var(toolchain::TOOLCHAIN_ENV, tc.kind.name());
-        for b in BOARDS.iter().filter(|b| only.is_none_or(|o| o == b.name)) {
+        for b in boards()?
+            .iter()
+            .filter(|b| only.is_none_or(|o| o == b.name))
+        {
             build_board_with(b, tc)?;
             rows.push(measure(b, tc, &table_bytes)?);
         }

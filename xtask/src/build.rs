@@ -3,7 +3,7 @@
 use std::process::Command;
 
 use anyhow::{bail, Context, Result};
-use host_tests::boards::{board, Board, BOARDS};
+use host_tests::boards::{board, boards, Board};
 
 use crate::setup;
 use crate::toolchain::{self, Toolchain};
@@ -40,8 +40,8 @@ pub fn build_board(b: &Board) -> Result<()> {
 pub fn run(only: Option<&str>) -> Result<()> {
     setup::ensure()?;
     let boards: Vec<Board> = match only {
-        Some(name) => vec![board(name).with_context(|| format!("no board {name}"))?],
-        None => BOARDS.to_vec(),
+        Some(name) => vec![board(name)?],
+        None => boards()?.to_vec(),
     };
     for b in &boards {
         build_board(b)?;

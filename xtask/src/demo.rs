@@ -24,9 +24,7 @@ const SAMPLE: usize = 500;
 /// `cargo xtask demo [--all]`.
 pub fn run(all: bool) -> Result<()> {
     setup::ensure()?;
-    let Some(b) = board("qemu-m4f") else {
-        bail!("qemu-m4f is not in the board list");
-    };
+    let b = board("qemu-m4f")?;
     let survey = toolchain::survey();
     let tc = survey.primary()?;
     // The QEMU run below finds the image by this variable.

@@ -8,7 +8,7 @@ use host_tests::boards::root;
 use host_tests::e2e::{calibration, default_recording_path};
 use host_tests::recording::{self, frame, replay_bytes};
 use quatarm::stream::{
-    encode, Coordinates, Hello, Mode, Precision, Report, Status, ToDevice, ToHost, MAX_FRAME,
+    encode, Coordinates, Hello, Mode, NumberFormat, Report, Status, ToDevice, ToHost, MAX_FRAME,
 };
 
 fn write(target: &str, name: &str, bytes: &[u8]) -> Result<()> {
@@ -91,7 +91,7 @@ pub fn run() -> Result<()> {
     let mut session = vec![0u8];
     session.extend(host_frame(&ToHost::Hello(Hello {
         protocol: quatarm::stream::PROTOCOL_VERSION,
-        precision: Precision::F32,
+        precision: NumberFormat::F32,
         joints: 6,
         status: Status(Status::TABLE_VALID),
     })));

@@ -3,7 +3,8 @@
 //!
 //! - `setup`: installs the firmware tool chain and QEMU where missing (the others call it).
 //! - `build`: cross-builds every board (or one).
-//! - `test`: fmt, clippy, workspace tests, board builds, QEMU end-to-end runs.
+//! - `test`: fmt, clippy, workspace tests (doctests included), rustdoc with `-D warnings`,
+//!   board builds, QEMU end-to-end runs.
 //! - `demo`: the main job: qemu-m4f replays a recording; XYZ beside the f64 reference.
 //! - `bench-target`: flash, RAM and instructions per point of every board and chain.
 //! - `fuzz`: long runs of the libFuzzer targets of `fuzz/`.
@@ -46,7 +47,7 @@ enum Cmd {
         #[arg(long)]
         board: Option<String>,
     },
-    /// Everything CI checks: fmt, clippy, tests, board builds, QEMU end-to-end runs.
+    /// Everything CI checks: fmt, clippy, tests, rustdoc, board builds, QEMU end-to-end runs.
     Test,
     /// Replay the shipped recording on qemu-m4f and compare with the f64 reference.
     Demo {

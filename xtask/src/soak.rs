@@ -2,8 +2,8 @@
 //! QEMU board, with the counts on both sides. `cargo xtask test` runs a shorter one in
 //! the QEMU end-to-end tests (25,000).
 
-use anyhow::{Context, Result};
-use host_tests::boards::{board, Board, BOARDS};
+use anyhow::Result;
+use host_tests::boards::{board, boards, Board};
 use host_tests::soak;
 
 use crate::{build::build_board, setup};
@@ -15,8 +15,8 @@ pub const ONE_IN: usize = 50;
 pub fn run(only: Option<&str>, frames: usize, seed: u64) -> Result<()> {
     setup::ensure()?;
     let boards: Vec<Board> = match only {
-        Some(name) => vec![board(name).with_context(|| format!("no board {name}"))?],
-        None => BOARDS
+        Some(name) => vec![board(name)?],
+        None => boards()?
             .iter()
             .filter(|b| b.qemu.is_some())
             .copied()

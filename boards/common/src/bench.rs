@@ -8,8 +8,8 @@
 //! start, gives the instructions per tick instead of trusting the machine's nominal clock.
 //! Results go to the defmt log (`cargo xtask bench-target` decodes it).
 
-use quatarm::encoder::{Event, Replay};
-use quatarm::{Chain, MatrixChain, Precision, Table};
+use quatarm::stream::{Event, Replay};
+use quatarm::{Chain, Evaluator, MatrixChain, Table};
 
 use crate::calibration::JOINTS;
 use crate::{clock, Link};
@@ -40,7 +40,7 @@ struct Sum {
 }
 
 /// Times both chains on every reading until `End`, then logs the sums.
-pub fn run<L: Link, P: Precision>(link: &mut L, region: &[u8]) {
+pub fn run<L: Link, P: Evaluator>(link: &mut L, region: &[u8]) {
     let Ok(table) = Table::parse_for(region, JOINTS) else {
         defmt::error!("bench: no valid table");
         return;

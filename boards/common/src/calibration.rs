@@ -5,40 +5,41 @@
 //! [`TableState`] every report then carries, and no chain exists to produce coordinates.
 
 use quatarm::stream::{self, Coordinates, Hub, TableState};
-use quatarm::{Chain, ChainError, Precision, Table};
+use quatarm::{Chain, ChainError, Evaluator, Table};
 
 /// Joints of the arms these hubs drive.
 pub const JOINTS: usize = 6;
 
-/// A chain arithmetic a hub can run, with the name its hello message gives it: the type picks
-/// the arithmetic, so the announced precision cannot disagree with the one evaluated.
-pub trait HubPrecision: Precision {
+/// A chain evaluator a hub can run, with the name its hello message gives its number format:
+/// the type picks the arithmetic, so the announced format cannot disagree with the one
+/// evaluated.
+pub trait HubEvaluator: Evaluator {
     /// What the hub announces.
-    const STREAM: stream::Precision;
+    const STREAM: stream::NumberFormat;
 }
 
-impl HubPrecision for quatarm::F32 {
-    const STREAM: stream::Precision = stream::Precision::F32;
+impl HubEvaluator for quatarm::F32 {
+    const STREAM: stream::NumberFormat = stream::NumberFormat::F32;
 }
 
-impl HubPrecision for quatarm::Fixed {
-    const STREAM: stream::Precision = stream::Precision::Fixed;
+impl HubEvaluator for quatarm::Fixed {
+    const STREAM: stream::NumberFormat = stream::NumberFormat::Fixed;
 }
 
 /// The boot check's outcome: a chain, or why there is none.
-pub struct Calibration<P: Precision> {
+pub struct Calibration<P: Evaluator> {
     chain: Result<Chain<P>, TableState>,
 }
 
 /// Validates the region's bytes and builds the chain.
-pub fn load<P: Precision>(region: &[u8]) -> Calibration<P> {
+pub fn load<P: Evaluator>(region: &[u8]) -> Calibration<P> {
     let chain = validate(region).and_then(build::<P>);
     Calibration { chain }
 }
 
 /// Like [`load`], for a hub whose encoders have the given counts per revolution (joint 1
 /// first): a table made for other encoders would turn every count into a wrong angle.
-pub fn load_for_encoders<P: Precision>(region: &[u8], counts_per_rev: &[u32]) -> Calibration<P> {
+pub fn load_for_encoders<P: Evaluator>(region: &[u8], counts_per_rev: &[u32]) -> Calibration<P> {
     let chain = validate(region)
         .and_then(|t| {
             let fits =
@@ -62,11 +63,11 @@ fn validate(region: &[u8]) -> Result<Table<'_>, TableState> {
 }
 
 #[inline(never)]
-fn build<P: Precision>(table: Table<'_>) -> Result<Chain<P>, TableState> {
+fn build<P: Evaluator>(table: Table<'_>) -> Result<Chain<P>, TableState> {
     Chain::<P>::new(&table).map_err(|_| TableState::Malformed)
 }
 
-impl<P: HubPrecision> Calibration<P> {
+impl<P: HubEvaluator> Calibration<P> {
     /// A hub that reports this calibration's state, joints and precision.
     #[inline(always)] // called once per image: out of line it only adds a call (24 B on the M0)
     pub fn hub(&self) -> Hub {
@@ -74,7 +75,7 @@ impl<P: HubPrecision> Calibration<P> {
     }
 }
 
-impl<P: Precision> Calibration<P> {
+impl<P: Evaluator> Calibration<P> {
     /// What the stream reports about the table.
     pub fn state(&self) -> TableState {
         match &self.chain {

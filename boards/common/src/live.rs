@@ -8,11 +8,11 @@
 //! last poll's outcome; a failed poll gives `TEMP_SENSOR_FAULT` and no coordinates until a
 //! poll succeeds again (`Hub::report_sample`).
 
-use quatarm::encoder::{read_joints, AbsoluteEncoder, Event, Replay};
-use quatarm::stream::{Coordinates, Hub, ToHost, MAX_OUTPUT};
+use quatarm::encoder::{read_joints, AbsoluteEncoder};
+use quatarm::stream::{Coordinates, Event, Hub, Replay, ToHost, MAX_OUTPUT};
 use quatarm::temperature::TemperatureSensor;
 
-use crate::calibration::{self, HubPrecision, JOINTS};
+use crate::calibration::{self, HubEvaluator, JOINTS};
 use crate::{clock, table_region};
 
 /// How often the temperature sensor is polled.
@@ -35,7 +35,7 @@ pub trait PollLink {
 /// [`serve_live`] in precision `P` with a report every `period_us`, timed by a core clock of
 /// `CORE_HZ` (a constant parameter so that the ticks-to-µs divisions, several per sample,
 /// compile to multiplications).
-pub fn run<P: HubPrecision, const CORE_HZ: u32>(
+pub fn run<P: HubEvaluator, const CORE_HZ: u32>(
     link: &mut impl PollLink,
     encoders: &mut [impl AbsoluteEncoder; JOINTS],
     thermometer: &mut impl TemperatureSensor,

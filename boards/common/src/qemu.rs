@@ -4,7 +4,7 @@
 
 use cortex_m_semihosting::debug::{self, EXIT_FAILURE, EXIT_SUCCESS};
 
-use crate::calibration::{self, HubPrecision};
+use crate::calibration::{self, HubEvaluator};
 use crate::{bench, clock, serve, stack, table_region, Link};
 
 /// The whole run of a QEMU hub image: replay the recording that arrives on the link until the
@@ -16,7 +16,7 @@ use crate::{bench, clock, serve, stack, table_region, Link};
 ///
 /// `open_link` sets up the board's UART; it runs after the clock has started, so that report
 /// times count from the same point on every board. `ram_start` is where `memory.x` puts RAM.
-pub fn hub_main<P: HubPrecision, const CORE_HZ: u32, L: Link>(
+pub fn hub_main<P: HubEvaluator, const CORE_HZ: u32, L: Link>(
     ram_start: usize,
     open_link: impl FnOnce() -> L,
 ) -> ! {
@@ -44,7 +44,7 @@ pub fn hub_main<P: HubPrecision, const CORE_HZ: u32, L: Link>(
 
 /// The whole run of a QEMU benchmark image ([`bench::run`] in precision `P`), then exit with
 /// success. `open_link` as for [`hub_main`].
-pub fn bench_main<P: quatarm::Precision, L: Link>(open_link: impl FnOnce() -> L) -> ! {
+pub fn bench_main<P: quatarm::Evaluator, L: Link>(open_link: impl FnOnce() -> L) -> ! {
     let Some(cp) = cortex_m::Peripherals::take() else {
         exit_failure()
     };

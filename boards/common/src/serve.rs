@@ -1,7 +1,6 @@
 //! The replay loop every board runs: read bytes, evaluate readings, send reports.
 
-use quatarm::encoder::{Event, Replay};
-use quatarm::stream::{Coordinates, Hub, ToHost, MAX_OUTPUT};
+use quatarm::stream::{Coordinates, Event, Hub, Replay, ToHost, MAX_OUTPUT};
 
 /// A byte link to the host (a UART).
 pub trait Link {

@@ -23,8 +23,7 @@ use board_common::live::{self, PollLink};
 use cortex_m_rt::entry;
 use embedded_hal_bus::spi::RefCellDevice;
 use embedded_hal_nb::serial::{Read, Write};
-use quatarm::encoder::As5047p;
-use quatarm::temperature::{Address, Tmp117};
+use quatarm_drivers::{Address, As5047p, Tmp117};
 use stm32f4xx_hal::{
     i2c::I2cExt,
     pac,

@@ -24,8 +24,7 @@ use cortex_m_rt::entry;
 use embedded_hal_bus::spi::RefCellDevice;
 use embedded_hal_nb::serial::{Read, Write};
 use fugit::RateExtU32;
-use quatarm::encoder::As5047p;
-use quatarm::temperature::{Address, Tmp117};
+use quatarm_drivers::{Address, As5047p, Tmp117};
 use rp2040_hal::{
     clocks::init_clocks_and_plls,
     gpio::{FunctionI2c, FunctionSpi, FunctionUart, Pin, Pins, PullUp},

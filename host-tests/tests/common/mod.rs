@@ -72,7 +72,7 @@ pub struct Bounds {
 }
 
 fn the_board(name: &str) -> Board {
-    board(name).expect("a board of boards.rs")
+    board(name).unwrap_or_else(|e| panic!("{e:#}"))
 }
 
 /// ≥ 10,000 recorded readings in over the UART; every report back, in order, CRC-clean; XYZ

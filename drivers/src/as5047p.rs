@@ -16,7 +16,7 @@
 
 use embedded_hal::spi::SpiDevice;
 
-use super::AbsoluteEncoder;
+use quatarm::encoder::AbsoluteEncoder;
 
 /// The registers the driver uses (volatile register addresses of the datasheet, table 11).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -180,9 +180,9 @@ impl<SPI: SpiDevice<u8>> AbsoluteEncoder for As5047p<SPI> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::encoder::read_joints;
     use embedded_hal::spi::ErrorKind;
     use embedded_hal_mock::eh1::spi::{Mock, Transaction};
+    use quatarm::encoder::read_joints;
 
     /// The frames of one exchange: `sent` command, `answer` (raw word) back.
     fn frame(sent: u16, answer: u16) -> Vec<Transaction<u8>> {

@@ -33,7 +33,7 @@
 
 use embedded_hal::i2c::I2c;
 
-use super::TemperatureSensor;
+use quatarm::temperature::TemperatureSensor;
 
 /// The registers the driver uses (section 7.6).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -7,7 +7,7 @@
 //! the hub sends a report with `INPUT_ERROR` and no coordinates, so the output keeps one report
 //! per incoming reading and a host can line them up.
 
-use crate::stream::{FrameError, FrameReader, Mode, Reading, ToDevice, MAX_FRAME};
+use super::{FrameError, FrameReader, Mode, Reading, ToDevice, MAX_FRAME};
 
 /// What one incoming frame asks of the hub.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
