@@ -6,6 +6,7 @@ pub mod accuracy;
 pub mod eval;
 pub mod stream_decode;
 pub mod tablebuild;
+pub mod uncertainty;
 
 pub mod calib;
 pub mod data;

@@ -139,18 +139,40 @@ pub fn quantise(arm: &Arm, theta: &[f64]) -> Vec<f64> {
     theta
         .iter()
         .zip(&arm.joints)
+        .map(|(t, j)| count_angle(*t, j.encoder_counts, 0.0))
+        .collect()
+}
+
+/// Readings of a noisy encoder: the continuous angle plus Gaussian noise of `noise_counts`
+/// counts (standard deviation), then rounded to a whole count. The reading's error is the
+/// noise plus the quantisation, standard deviation √(noise² + 1/12) counts. With no noise
+/// the generator is not drawn from, so noise-free files stay what they were.
+pub fn read_encoders(arm: &Arm, theta: &[f64], noise_counts: f64, rng: &mut SimRng) -> Vec<f64> {
+    theta
+        .iter()
+        .zip(&arm.joints)
         .map(|(t, j)| {
-            let mut t = *t;
-            if t > PI {
-                t -= 2.0 * PI * ((t + PI) / (2.0 * PI)).floor();
-            } else if t <= -PI {
-                t += 2.0 * PI * ((PI - t) / (2.0 * PI)).floor();
-            }
-            let counts = f64::from(j.encoder_counts);
-            let c = (t * counts / (2.0 * PI)).round();
-            2.0 * PI * c / counts
+            let z = if noise_counts > 0.0 {
+                noise_counts * normal(rng)
+            } else {
+                0.0
+            };
+            count_angle(*t, j.encoder_counts, z)
         })
         .collect()
+}
+
+/// The angle of the count nearest to `t` plus `extra` counts, wrapped into (−π, π].
+fn count_angle(t: f64, counts: u32, extra: f64) -> f64 {
+    let mut t = t;
+    if t > PI {
+        t -= 2.0 * PI * ((t + PI) / (2.0 * PI)).floor();
+    } else if t <= -PI {
+        t += 2.0 * PI * ((PI - t) / (2.0 * PI)).floor();
+    }
+    let counts = f64::from(counts);
+    let c = (t * counts / (2.0 * PI) + extra).round();
+    2.0 * PI * c / counts
 }
 
 /// Joint angles that put the ball of `arm` on `target` at temperature `temp_c`, found by damped
@@ -223,6 +245,11 @@ pub struct Options {
     pub group_size: usize,
     /// Ball-bar length (mm); `None` is 40 % of the arm's reach.
     pub bar_mm: Option<f64>,
+    /// Encoder noise before quantisation (counts, standard deviation; [`read_encoders`]).
+    pub encoder_noise_counts: f64,
+    /// Error of the temperature sensor (°C, standard deviation): the recorded `temp_c` is the
+    /// arm's true temperature plus this noise.
+    pub temp_noise_c: f64,
 }
 
 impl Options {
@@ -237,6 +264,8 @@ impl Options {
             frame: FrameChoice::Random,
             group_size: if kind == Kind::Length { 10 } else { 8 },
             bar_mm: None,
+            encoder_noise_counts: 0.0,
+            temp_noise_c: 0.0,
         }
     }
 }
@@ -295,7 +324,7 @@ pub fn simulate(truth: &Arm, opts: &Options, rng: &mut SimRng) -> Result<Simulat
                 rows.push(Row {
                     kind: Kind::Point,
                     group: 1,
-                    theta: quantise(truth, &th),
+                    theta: th,
                     xyz: Some([x.x, x.y, x.z]),
                     end: None,
                     length_mm: None,
@@ -318,6 +347,13 @@ pub fn simulate(truth: &Arm, opts: &Options, rng: &mut SimRng) -> Result<Simulat
                     format!("could not place group {group}: the arm does not reach it from any pose tried")
                 })?);
             }
+        }
+    }
+    // The rows hold the continuous true angles and temperatures so far: now the readings.
+    for r in &mut rows {
+        r.theta = read_encoders(truth, &r.theta, opts.encoder_noise_counts, rng);
+        if opts.temp_noise_c > 0.0 {
+            r.temp_c += opts.temp_noise_c * normal(rng);
         }
     }
     let data = Dataset::from_rows(rows, truth.dof(), opts.temp.is_some(), "(simulated)")
@@ -371,7 +407,7 @@ fn spat_group(
             let Some(th) = probe_point(truth, lim, &centre, noise_mm, tc, rng) else {
                 continue 'placement;
             };
-            rows.push(row(truth, Kind::Spat, group, &th, None, tc));
+            rows.push(row(Kind::Spat, group, &th, None, tc));
         }
         return Some(rows);
     }
@@ -401,7 +437,7 @@ fn length_group(
             let Some(th) = probe_point(truth, lim, centre, noise_mm, tc, rng) else {
                 continue 'placement;
             };
-            let mut r = row(truth, Kind::Length, group, &th, Some(end), tc);
+            let mut r = row(Kind::Length, group, &th, Some(end), tc);
             r.length_mm = Some(bar);
             rows.push(r);
         }
@@ -410,11 +446,11 @@ fn length_group(
     None
 }
 
-fn row(truth: &Arm, kind: Kind, group: i64, th: &[f64], end: Option<End>, tc: f64) -> Row {
+fn row(kind: Kind, group: i64, th: &[f64], end: Option<End>, tc: f64) -> Row {
     Row {
         kind,
         group,
-        theta: quantise(truth, th),
+        theta: th.to_vec(),
         xyz: None,
         end,
         length_mm: None,

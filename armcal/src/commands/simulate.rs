@@ -41,6 +41,14 @@ pub struct Args {
     /// Ball-bar length for length data (mm; default 40 % of the arm's reach).
     #[arg(long, value_parser = parse_bar)]
     bar_mm: Option<f64>,
+    /// Encoder noise (counts, standard deviation) added to the continuous true angle before
+    /// it is quantised to a whole count; 0 is quantisation alone.
+    #[arg(long, default_value_t = 0.0, value_parser = super::args::non_negative)]
+    encoder_noise_counts: f64,
+    /// Error of the temperature sensor (°C, standard deviation) added to the recorded
+    /// `temp_c` (with `--temp`; the arm is at the true temperature).
+    #[arg(long, default_value_t = 0.0, requires = "temp", value_parser = super::args::non_negative)]
+    temp_noise_c: f64,
     /// Output file (CSV of `spec/measured-data.md`).
     #[arg(short, long)]
     output: PathBuf,
@@ -97,6 +105,18 @@ fn parse_range(s: &str) -> Result<(f64, f64), String> {
     Ok((lo, hi))
 }
 
+/// The noise options, when set (a file made without them reads as it always did).
+fn noise_note(encoder: f64, temp: f64) -> String {
+    let mut s = String::new();
+    if encoder > 0.0 {
+        s += &format!(", encoder noise {encoder} counts");
+    }
+    if temp > 0.0 {
+        s += &format!(", temperature sensor noise {temp} °C");
+    }
+    s
+}
+
 /// Runs the subcommand.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let mut inputs = vec![(a.truth.as_path(), "truth")];
@@ -141,17 +161,20 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         opts.group_size = g;
     }
     opts.bar_mm = a.bar_mm;
+    opts.encoder_noise_counts = a.encoder_noise_counts;
+    opts.temp_noise_c = a.temp_noise_c;
     let mut rng = sim::rng(a.seed);
     let s = sim::simulate(&truth, &opts, &mut rng).map_err(anyhow::Error::msg)?;
     let f = &s.frame;
     let comments = [
         format!(
-            "simulated by armcal simulate: truth {}, kind {}, {} rows, seed {}, noise {} µm per axis",
+            "simulated by armcal simulate: truth {}, kind {}, {} rows, seed {}, noise {} µm per axis{}",
             a.truth.display(),
             a.kind.name(),
             a.count,
             a.seed,
-            a.noise_um
+            a.noise_um,
+            noise_note(a.encoder_noise_counts, a.temp_noise_c)
         ),
         format!(
             "instrument frame (x_ref = R p + t): rotation (w, x, y, z) = [{:?}, {:?}, {:?}, {:?}], translation = [{:?}, {:?}, {:?}] mm",
