@@ -105,8 +105,21 @@ pub fn reading_sd(noise_counts: f64) -> f64 {
     (noise_counts * noise_counts + 1.0 / 12.0).sqrt()
 }
 
-/// One trial: (its tally, the calibration's RMS after, in µm).
-pub fn trial(setup: &Setup, k: usize) -> Result<Tally, String> {
+/// A calibrated simulated arm: the truth, the calibration, its budget, and the generator
+/// that made them (to go on with fresh readings).
+pub struct Calibrated {
+    /// The truth arm.
+    pub truth: Arm,
+    /// The calibrated arm.
+    pub arm: Arm,
+    /// Its budget.
+    pub budget: super::Budget,
+    /// The trial's generator.
+    pub rng: SimRng,
+}
+
+/// Calibration `k` of the setup.
+pub fn calibrated(setup: &Setup, k: usize) -> Result<Calibrated, String> {
     let mut rng = sim::rng(setup.seed.wrapping_add(k as u64));
     let nominal = Arm::default6();
     let truth = sim::perturb(&nominal, 3e-4, 0.3, &mut rng);
@@ -121,17 +134,28 @@ pub fn trial(setup: &Setup, k: usize) -> Result<Tally, String> {
         ..Settings::default()
     };
     let budget = estimate::from_fit(&fit, &data, None, 0.0, &settings)?.budget;
-    fresh(&truth, &fit.arm, &budget, setup, &mut rng)
+    Ok(Calibrated {
+        truth,
+        arm: fit.arm,
+        budget,
+        rng,
+    })
+}
+
+/// Calibration `k` and its fresh readings.
+pub fn trial(setup: &Setup, k: usize) -> Result<Tally, String> {
+    let mut c = calibrated(setup, k)?;
+    Ok(fresh(&c.truth, &c.arm, &c.budget, setup, &mut c.rng))
 }
 
 /// Fresh readings of `truth` through the calibrated `arm` and its budget.
-fn fresh(
+pub fn fresh(
     truth: &Arm,
     arm: &Arm,
     budget: &super::Budget,
     setup: &Setup,
     rng: &mut SimRng,
-) -> Result<Tally, String> {
+) -> Tally {
     let lim = sim::limits(truth);
     let t = forward::REFERENCE_TEMP_C;
     let mut reads = Vec::with_capacity(setup.readings);
@@ -164,7 +188,7 @@ fn fresh(
         tally.pairs += 1;
         tally.in_distance += usize::from(err.abs() <= 1.959_963_984_540_054 * ud);
     }
-    Ok(tally)
+    tally
 }
 
 /// Every trial: the per-trial tallies and their total.
