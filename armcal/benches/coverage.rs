@@ -6,23 +6,30 @@
 //! order against Monte Carlo on U95.
 //!
 //! `cargo bench -p armcal --bench coverage` (release), or, reusing the test profile's build,
-//! `cargo test --profile test -p armcal --bench coverage`. Arguments: calibrations, readings.
+//! `cargo test --profile test -p armcal --bench coverage`. Arguments: calibrations, readings, encoder noise (counts);
+//! or `mukca` for the real recordings, each unit's sessions held out one at a time.
 
 use armcal::uncertainty::coverage::{self, Setup};
 use armcal::uncertainty::{montecarlo, propagate, u95};
 use std::time::Instant;
 
 fn main() {
+    if std::env::args().any(|a| a == "mukca") {
+        return mukca();
+    }
     let mut setup = Setup::BENCHMARK;
-    let args: Vec<usize> = std::env::args()
+    let args: Vec<f64> = std::env::args()
         .skip(1)
         .filter_map(|a| a.parse().ok())
         .collect();
     if let Some(&c) = args.first() {
-        setup.calibrations = c;
+        setup.calibrations = c as usize;
     }
     if let Some(&r) = args.get(1) {
-        setup.readings = r;
+        setup.readings = r as usize;
+    }
+    if let Some(&e) = args.get(2) {
+        setup.encoder_noise_counts = e;
     }
     let t0 = Instant::now();
     println!(
@@ -52,15 +59,7 @@ fn main() {
             t.u95_sum / t.points as f64 * 1e3,
             t.error_sum / t.points as f64 * 1e3
         );
-        for (a, b) in [
-            (&mut total.points, t.points),
-            (&mut total.in_sphere, t.in_sphere),
-            (&mut total.in_ellipsoid, t.in_ellipsoid),
-            (&mut total.pairs, t.pairs),
-            (&mut total.in_distance, t.in_distance),
-        ] {
-            *a += b;
-        }
+        total.add(&t);
     }
     println!(
         "  all    {:>11.4}  {:>9.4}  {:>8.4}   ({} readings, {} pairs; ideal 0.95)",
@@ -101,4 +100,43 @@ fn first_order_against_monte_carlo(setup: &Setup) {
         sum / n as f64 * 100.0,
         worst * 100.0
     );
+}
+
+/// Held-out coverage on every MUKCa unit with two sessions or more.
+fn mukca() {
+    let dir = armcal::mukca::default_dir();
+    let units = match armcal::mukca::unit_names(&dir) {
+        Ok(u) => u,
+        Err(e) => return println!("MUKCa: {e}"),
+    };
+    println!("MUKCa, whole sessions held out: probings within their predicted 95 % region");
+    println!(
+        "  unit                 sessions  probings  covered  median U95 mm  RMS dev mm  probing mm"
+    );
+    for (name, _) in units {
+        let unit = match armcal::mukca::load(&dir, &name) {
+            Ok(u) => u,
+            Err(e) => {
+                println!("  {name:<20} {e}");
+                continue;
+            }
+        };
+        let Some(c) = armcal::uncertainty::realdata::unit_coverage(&unit) else {
+            println!("  {name:<20} one session: nothing to hold out");
+            continue;
+        };
+        println!(
+            "  {:<20} {:>8}  {:>8}  {:>7.3}  {:>12.4}  {:>10.4}  {:>10.4}",
+            c.unit,
+            c.sessions,
+            c.probings,
+            c.covered,
+            c.median_u95_mm,
+            c.rms_deviation_mm,
+            c.probing_mm
+        );
+        for f in &c.failed {
+            println!("    not judged: {f}");
+        }
+    }
 }

@@ -73,7 +73,8 @@ pub struct Tally {
 }
 
 impl Tally {
-    fn add(&mut self, o: &Tally) {
+    /// Adds another tally's counts.
+    pub fn add(&mut self, o: &Tally) {
         self.points += o.points;
         self.in_sphere += o.in_sphere;
         self.in_ellipsoid += o.in_ellipsoid;

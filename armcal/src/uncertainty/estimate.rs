@@ -8,9 +8,10 @@
 //!   and n equations), C is inflated by the excess: what the in-sample estimate misses.
 //! - Reading: 1/√12 counts (quantisation) unless set: the data cannot separate encoder noise
 //!   from the instrument's.
-//! - Probing: the `spat` scatter per axis, less what the reading's own uncertainty explains
-//!   of it, when there are `spat` rows; else assumed (0 unless set): `point` residuals carry
-//!   the instrument's noise and cannot tell the probing apart.
+//! - Probing: the `spat` scatter per axis (and that of each bar end of `length` data, the
+//!   same kind of repeated probing), less what the reading's own uncertainty explains of it,
+//!   when there are such rows; else assumed (0 unless set): `point` residuals carry the
+//!   instrument's noise and cannot tell the probing apart.
 //! - Model and temperature: assumed (0 unless set).
 
 use super::{propagate, Budget, QUANTISATION_COUNTS};
@@ -80,29 +81,31 @@ fn held_out_excess(fit: &Fit, holdout: &Holdout, in_sample_rms_um: f64) -> Optio
     Some(((ho / in_sample_rms_um).powi(2) / expected).max(1.0))
 }
 
-/// Per-axis probing from the `spat` scatter: (sd, rows used) less the reading's own part.
+/// Per-axis probing from the scatter of the `spat` groups and bar ends (each probing of a
+/// fixed point from another pose): (sd, rows used), less the reading's own part.
 fn spat_probing(fit: &Fit, data: &Dataset, budget: &Budget) -> Option<(f64, usize)> {
     let res = crate::residuals::residuals(&fit.arm, data, fit.frame);
     let layout = data.layout();
+    let groups = layout
+        .spat
+        .iter()
+        .map(|g| &g.rows)
+        .chain(layout.length.iter().flat_map(|g| [&g.a, &g.b]));
     let (mut ss, mut dof, mut own, mut rows) = (0.0, 0usize, 0.0, 0usize);
     let st = budget.sigma_theta(&fit.arm);
-    for g in &layout.spat {
-        for &i in &g.rows {
+    for g in groups {
+        for &i in g {
             ss += res.rows[i].norm_squared();
             let r = &data.rows[i];
             let j = propagate::jacobians(&fit.arm, budget, &r.theta, r.temp_c);
             own += propagate::own_terms(budget, &st, &j).trace();
             rows += 1;
         }
-        dof += 3 * (g.rows.len() - 1);
+        dof += 3 * g.len().saturating_sub(1);
     }
     (dof > 0).then(|| {
-        (
-            ((ss - own * dof as f64 / (3 * rows) as f64) / dof as f64)
-                .max(0.0)
-                .sqrt(),
-            rows,
-        )
+        let var = ss / dof as f64 - own / (3 * rows) as f64;
+        (var.max(0.0).sqrt(), rows)
     })
 }
 
@@ -151,7 +154,7 @@ pub fn from_fit(
             "set by the caller"
         }
     ));
-    let has_spat = data.rows.iter().any(|r| r.kind == Kind::Spat);
+    let has_spat = data.rows.iter().any(|r| r.kind != Kind::Point);
     budget.probing_mm = match (s.probing_mm, has_spat) {
         (Some(p), _) => {
             notes.push(format!(
@@ -163,16 +166,17 @@ pub fn from_fit(
         (None, true) => {
             let (p, rows) = spat_probing(fit, data, &budget).unwrap_or((0.0, 0));
             notes.push(format!(
-                "probing: {:.2} µm per axis, estimated from the scatter of {rows} spat rows \
-                 less the reading's own part",
+                "probing: {:.2} µm per axis, estimated from the scatter of {rows} spat and \
+                 length rows about their points, less the reading's own part (it holds what \
+                 the model leaves unexplained there too)",
                 p * 1e3
             ));
             p
         }
         (None, false) => {
             notes.push(
-                "probing: 0, assumed: no spat rows, and point residuals cannot tell it from \
-                 the instrument's noise (set --probing-mm)"
+                "probing: 0, assumed: no spat or length rows, and point residuals cannot \
+                 tell it from the instrument's noise (set --probing-mm)"
                     .into(),
             );
             0.0

@@ -9,12 +9,14 @@
 //! - [`report`]: the budget and a picture of U95 across the workspace, in the report.
 //! - [`columns`]: `armcal eval --uncertainty`'s columns, by either method.
 //! - [`coverage`]: simulated arms, calibrated and read afresh: how often the truth is inside.
+//! - [`realdata`]: the same question on MUKCa recordings, whole sessions held out.
 
 pub mod columns;
 pub mod coverage;
 pub mod estimate;
 pub mod montecarlo;
 pub mod propagate;
+pub mod realdata;
 pub mod report;
 pub mod u95;
 
@@ -140,5 +142,51 @@ impl Budget {
             .zip(&arm.joints)
             .map(|(c, j)| std::f64::consts::TAU * c / f64::from(j.encoder_counts))
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::{Effect, Terms};
+
+    #[test]
+    fn names_map_both_ways_and_the_file_round_trips() {
+        let effects = [
+            Effect::Harmonic { joint: 2, order: 3 },
+            Effect::Gravity(1),
+            Effect::Thermal(Link::Joint(4)),
+            Effect::Thermal(Link::Probe),
+        ];
+        let params = Terms::with(&effects).params(6);
+        let mut arm = Arm::default6();
+        // A harmonic ahead of the fitted one: the file's index (2) is not its order (3).
+        arm.joints[2].harmonics.push(quatarm_ref::arm::Harmonic {
+            order: 1,
+            sin: 0.0,
+            cos: 0.0,
+        });
+        for e in &effects {
+            e.with(|t| t.add_entry(&mut arm));
+        }
+        let n = params.len();
+        let b = Budget {
+            params: params.clone(),
+            cov: DMatrix::from_fn(n, n, |i, j| if i == j { 1e-8 } else { 1e-10 }),
+            encoder_counts: vec![QUANTISATION_COUNTS; 6],
+            probing_mm: 0.002,
+            temperature_c: 0.1,
+            model_mm: 0.0,
+        };
+        for p in &params {
+            let k = key_of(*p, &arm).unwrap();
+            assert_eq!(param_of(k, &arm), *p);
+            assert_eq!(ParamKey::parse(&k.name(), &arm), Ok(k));
+        }
+        let file = b.to_file(&arm).unwrap();
+        let text = quatarm_ref::calfile::write_with(&arm, Some(&file), &[]);
+        let back = quatarm_ref::calfile::parse(&text).unwrap();
+        assert_eq!(Budget::from_file(&back.uncertainty.unwrap(), &back.arm), b);
+        assert!(key_of(Param::FrameRotation(0), &arm).is_none());
     }
 }

@@ -121,3 +121,82 @@ pub fn entries(s: &Matrix3<f64>) -> [f64; 6] {
         s[(1, 2)],
     ]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::{Effect, Link, Terms};
+    use quatarm_ref::arm::Harmonic;
+
+    fn arm() -> Arm {
+        let mut a = Arm::default6();
+        for (k, j) in a.joints.iter_mut().enumerate() {
+            j.zero_offset = 1e-3 * k as f64;
+            j.tilt = [2e-4, -1e-4];
+            j.thermal = 1.2e-5;
+        }
+        a.joints[2].harmonics.push(Harmonic {
+            order: 2,
+            sin: 3e-5,
+            cos: 0.0,
+        });
+        a.probe.thermal = 2e-5;
+        a
+    }
+
+    #[test]
+    fn reading_and_temperature_columns_match_finite_differences() {
+        let a = arm();
+        let b = Budget::zero(6);
+        let th = [0.3, -0.7, 1.1, 0.9, -2.0, 0.4];
+        let j = jacobians(&a, &b, &th, 27.0);
+        for k in 0..6 {
+            let h = 1e-6;
+            let mut plus = th;
+            let mut minus = th;
+            plus[k] += h;
+            minus[k] -= h;
+            let fd = (forward::forward(&a, &plus, 27.0).p - forward::forward(&a, &minus, 27.0).p)
+                / (2.0 * h);
+            // The harmonic of joint 3 changes its slope by 2·3e-5 relative: neglected.
+            assert!(
+                (fd - j.theta[k]).norm() <= 1e-4 * fd.norm() + 1e-6,
+                "joint {k}"
+            );
+        }
+        let fd = (forward::forward(&a, &th, 27.5).p - forward::forward(&a, &th, 26.5).p) / 1.0;
+        assert!((fd - j.temp).norm() < 1e-9);
+        assert!(j.temp.norm() > 1e-3, "the thermal terms move the tip");
+    }
+
+    #[test]
+    fn sigma_is_the_sum_of_the_spec_terms() {
+        let a = arm();
+        let params = Terms::with(&[Effect::Thermal(Link::Probe)]).params(6);
+        let k = params.len();
+        let mut b = Budget::zero(6);
+        b.params = params;
+        b.cov = DMatrix::from_fn(k, k, |i, j| if i == j { 1e-8 } else { 0.0 });
+        b.encoder_counts = vec![0.3; 6];
+        b.temperature_c = 0.2;
+        b.probing_mm = 0.002;
+        b.model_mm = 0.001;
+        let th = [0.3, -0.7, 1.1, 0.9, -2.0, 0.4];
+        let (_, s) = point(&a, &b, &th, 25.0);
+        let j = jacobians(&a, &b, &th, 25.0);
+        let st = b.sigma_theta(&a);
+        let mut want = Matrix3::identity() * (0.002f64.powi(2) + 0.001f64.powi(2));
+        want += j.temp * j.temp.transpose() * 0.04;
+        for i in 0..6 {
+            want += j.theta[i] * j.theta[i].transpose() * st[i] * st[i];
+        }
+        for c in &j.pi {
+            want += c * c.transpose() * 1e-8;
+        }
+        assert!((s - want).norm() < 1e-15, "{s} {want}");
+        // The distance from a point to itself has only the two readings' own parts.
+        let (d, ud) = distance(&a, &b, (&th, 25.0), (&th, 25.0));
+        assert_eq!(d, 0.0);
+        assert!(ud == 0.0);
+    }
+}
