@@ -446,6 +446,7 @@ fn length_group(
     None
 }
 
+/// A row at the continuous true angles: the caller reads them through the encoders.
 fn row(kind: Kind, group: i64, th: &[f64], end: Option<End>, tc: f64) -> Row {
     Row {
         kind,
@@ -515,6 +516,11 @@ pub fn design_like(arm: &Arm, like: &Dataset, seed: u64) -> Dataset {
         ) {
             rows.extend(made);
         }
+    }
+    // Spat and length rows are read by the encoders, as `simulate` records them (point rows
+    // of the design keep their continuous angles).
+    for r in rows.iter_mut().filter(|r| r.kind != Kind::Point) {
+        r.theta = quantise(arm, &r.theta);
     }
     Dataset {
         rows,

@@ -177,8 +177,13 @@ mod tests {
     #[test]
     fn probability_matches_chi2_and_a_sampled_ellipsoid() {
         for r in [0.5, 1.0, 2.0, 3.5] {
+            // χ²(3) in closed form: P(|x| ≤ r) = erf(r/√2) − √(2/π) r e^(−r²/2).
+            let exact = 1.0 - erfc(r / SQRT_2) - (2.0 / PI).sqrt() * r * (-0.5 * r * r).exp();
             let p = probability_within([1.0; 3], r);
-            assert!((p - (1.0 - chi2_tail(r * r, 3))).abs() < 1e-6, "{r}");
+            assert!((p - exact).abs() < 1e-6, "{r}: {p} {exact}");
+            // Two equal components: 1 − e^(−r²/2).
+            let p2 = probability_within([1.0, 1.0, 0.0], r);
+            assert!((p2 - (1.0 - chi2_tail(r * r, 2))).abs() < 1e-6, "{r}: {p2}");
         }
         // An elongated Σ against a sampled estimate (200,000 draws: ±0.0005 at 95 %).
         let l = [100.0, 4.0, 0.25];
