@@ -187,8 +187,8 @@ mod tests {
         let st = b.sigma_theta(&a);
         let mut want = Matrix3::identity() * (0.002f64.powi(2) + 0.001f64.powi(2));
         want += j.temp * j.temp.transpose() * 0.04;
-        for i in 0..6 {
-            want += j.theta[i] * j.theta[i].transpose() * st[i] * st[i];
+        for (col, sd) in j.theta.iter().zip(&st) {
+            want += col * col.transpose() * (sd * sd);
         }
         for c in &j.pi {
             want += c * c.transpose() * 1e-8;
