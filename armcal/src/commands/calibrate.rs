@@ -150,17 +150,27 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         ),
     ];
     let refs: Vec<&str> = header.iter().map(String::as_str).collect();
-    let (budget, budget_report) = a.budget.budget(
+    // A fit without a covariance is still written: without a budget, and said.
+    let budget = match a.budget.budget(
         &fit,
         &data,
         validation.as_ref(),
         rep.residuals.after.all.rms_um,
-    )?;
-    rep.uncertainty = Some(budget_report);
-    let text = calfile::write_with(&fit.arm, Some(&budget), &refs);
+    ) {
+        Ok((budget, budget_report)) => {
+            rep.uncertainty = Some(budget_report);
+            Some(budget)
+        }
+        Err(e) => {
+            rep.warnings
+                .push(format!("{e}; the file has no [uncertainty] section"));
+            None
+        }
+    };
+    let text = calfile::write_with(&fit.arm, budget.as_ref(), &refs);
     let (back, back_budget) = armcal::load::written_with(&text)
         .map_err(|e| anyhow::anyhow!("the calibration file written does not read back: {e}"))?;
-    if back_budget.as_ref() != Some(&budget) {
+    if back_budget != budget {
         bail!("the [uncertainty] section written does not read back the same (a bug)");
     }
     for r in data.rows.iter().take(50) {

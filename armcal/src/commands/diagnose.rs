@@ -156,12 +156,22 @@ fn stage_extended(
     let fit = &d.extended.fit;
     let in_sample =
         armcal::residuals::summarise(&armcal::residuals::residuals(arm, data, fit.frame), data);
-    let (budget, budget_report) = a.budget.budget(fit, data, None, in_sample.all.rms_um)?;
-    rep.uncertainty = Some(budget_report);
-    let text = calfile::write_with(arm, Some(&budget), &refs);
+    // A fit without a covariance is still written: without a budget, and said.
+    let budget = match a.budget.budget(fit, data, None, in_sample.all.rms_um) {
+        Ok((budget, budget_report)) => {
+            rep.uncertainty = Some(budget_report);
+            Some(budget)
+        }
+        Err(e) => {
+            rep.warnings
+                .push(format!("{e}; the file has no [uncertainty] section"));
+            None
+        }
+    };
+    let text = calfile::write_with(arm, budget.as_ref(), &refs);
     let (back, back_budget) = armcal::load::written_with(&text)
         .map_err(|e| anyhow::anyhow!("the calibration file written does not read back: {e}"))?;
-    if back_budget.as_ref() != Some(&budget) {
+    if back_budget != budget {
         bail!("the [uncertainty] section written does not read back the same (a bug)");
     }
     for r in data.rows.iter().take(50) {
