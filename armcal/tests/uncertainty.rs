@@ -129,3 +129,30 @@ fn calibrate_writes_the_budget_and_eval_uses_it() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("no [uncertainty]"));
 }
+
+/// Length data with 5 µm seating noise and 1 count of encoder noise: the probing term the
+/// budget estimates from the bar ends' scatter is the seating noise (the reading's own part
+/// taken out), and without such rows it is assumed, not invented.
+#[test]
+fn probing_is_estimated_from_the_scatter_of_repeated_probings() {
+    use armcal::data::Kind;
+    use armcal::uncertainty::estimate::{from_fit, Settings};
+    let nominal = quatarm_ref::Arm::default6();
+    let mut rng = armcal::sim::rng(8);
+    let truth = armcal::sim::perturb(&nominal, 3e-4, 0.3, &mut rng);
+    let mut o = armcal::sim::Options::new(Kind::Length, 600);
+    o.encoder_noise_counts = 1.0;
+    let data = armcal::sim::simulate(&truth, &o, &mut rng).unwrap().data;
+    let fit = armcal::calib::calibrate(&nominal, &data, &Default::default()).unwrap();
+    let s = Settings {
+        encoder_counts: coverage::reading_sd(1.0),
+        ..Settings::default()
+    };
+    let est = from_fit(&fit, &data, None, 0.0, &s).unwrap();
+    let p = est.budget.probing_mm;
+    assert!((p - 0.005).abs() < 0.0005, "probing {p}");
+    assert!(est.notes.iter().any(|n| n.contains("estimated from the scatter")));
+    // Counted as quantisation alone, the encoder noise lands in the probing term instead.
+    let est = from_fit(&fit, &data, None, 0.0, &Settings::default()).unwrap();
+    assert!(est.budget.probing_mm > p + 0.0005, "{}", est.budget.probing_mm);
+}
