@@ -6,7 +6,8 @@
 //! order against Monte Carlo on U95.
 //!
 //! `cargo bench -p armcal --bench coverage` (release), or, reusing the test profile's build,
-//! `cargo test --profile test -p armcal --bench coverage`. Arguments: calibrations, readings, encoder noise (counts);
+//! `cargo test --profile test -p armcal --bench coverage`. Arguments: calibrations, readings, encoder noise (counts), and a temperature sensor's noise
+//! (°C) for the thermal variant;
 //! or `mukca` for the real recordings, each unit's sessions held out one at a time.
 
 use armcal::uncertainty::coverage::{self, Setup};
@@ -31,15 +32,27 @@ fn main() {
     if let Some(&e) = args.get(2) {
         setup.encoder_noise_counts = e;
     }
+    if let Some(&t) = args.get(3) {
+        setup.thermal = true;
+        setup.temp_noise_c = t;
+    }
     let t0 = Instant::now();
     println!(
         "coverage: {} calibrations × {} fresh readings; {} point rows, {} µm instrument noise, \
-         {} count encoder noise",
+         {} count encoder noise{}",
         setup.calibrations,
         setup.readings,
         setup.point_rows,
         setup.noise_mm * 1e3,
-        setup.encoder_noise_counts
+        setup.encoder_noise_counts,
+        if setup.thermal {
+            format!(
+                "; thermal arm at 15-25 °C, sensor noise {} °C",
+                setup.temp_noise_c
+            )
+        } else {
+            String::new()
+        }
     );
     println!("  trial  sphere(U95)  ellipsoid  distance  mean U95 µm  mean |error| µm");
     let mut total = coverage::Tally::default();

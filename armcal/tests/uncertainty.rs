@@ -151,8 +151,15 @@ fn probing_is_estimated_from_the_scatter_of_repeated_probings() {
     let est = from_fit(&fit, &data, None, 0.0, &s).unwrap();
     let p = est.budget.probing_mm;
     assert!((p - 0.005).abs() < 0.0005, "probing {p}");
-    assert!(est.notes.iter().any(|n| n.contains("estimated from the scatter")));
+    assert!(est
+        .notes
+        .iter()
+        .any(|n| n.contains("estimated from the scatter")));
     // Counted as quantisation alone, the encoder noise lands in the probing term instead.
     let est = from_fit(&fit, &data, None, 0.0, &Settings::default()).unwrap();
-    assert!(est.budget.probing_mm > p + 0.0005, "{}", est.budget.probing_mm);
+    assert!(
+        est.budget.probing_mm > p + 0.0005,
+        "{}",
+        est.budget.probing_mm
+    );
 }

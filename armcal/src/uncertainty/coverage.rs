@@ -23,6 +23,7 @@ use crate::sim::{self, SimRng};
 use nalgebra::{Matrix3, Vector3};
 use quatarm_ref::arm::Arm;
 use quatarm_ref::forward;
+use rand::Rng;
 
 /// What to run.
 #[derive(Clone, Copy, Debug)]
@@ -39,7 +40,16 @@ pub struct Setup {
     pub encoder_noise_counts: f64,
     /// First seed; trial k uses seed + k.
     pub seed: u64,
+    /// A thermal arm: every link and the probe expand (κ about aluminium's 2.3e-5/°C), the
+    /// readings are taken between 15 and 25 °C, and the calibration fits every κ.
+    pub thermal: bool,
+    /// Error of the temperature sensor (°C, standard deviation), in the calibration's data
+    /// and in the fresh readings alike; the budget's `temperature_c`.
+    pub temp_noise_c: f64,
 }
+
+/// The thermal variant's temperature range (°C).
+const TEMPS: (f64, f64) = (15.0, 25.0);
 
 impl Setup {
     /// The benchmark: 10 calibrations × 5,000 readings, 600 rows, 5 µm, 1 count.
@@ -50,6 +60,8 @@ impl Setup {
         noise_mm: 0.005,
         encoder_noise_counts: 1.0,
         seed: 0xc0_7e,
+        thermal: false,
+        temp_noise_c: 0.0,
     };
 }
 
@@ -123,15 +135,28 @@ pub struct Calibrated {
 pub fn calibrated(setup: &Setup, k: usize) -> Result<Calibrated, String> {
     let mut rng = sim::rng(setup.seed.wrapping_add(k as u64));
     let nominal = Arm::default6();
-    let truth = sim::perturb(&nominal, 3e-4, 0.3, &mut rng);
+    let mut truth = sim::perturb(&nominal, 3e-4, 0.3, &mut rng);
     let mut o = sim::Options::new(Kind::Point, setup.point_rows);
     o.noise_mm = setup.noise_mm;
     o.encoder_noise_counts = setup.encoder_noise_counts;
+    let mut opts = Options::default();
+    if setup.thermal {
+        for j in &mut truth.joints {
+            j.thermal = 2.3e-5 + 2e-6 * sim::normal(&mut rng);
+        }
+        truth.probe.thermal = 1e-5;
+        o.temp = Some(TEMPS);
+        o.temp_noise_c = setup.temp_noise_c;
+        let key = crate::effects::thermal::KEY;
+        opts.terms =
+            crate::params::Terms::parse(&format!("+{key}:*"), 6).map_err(|e| e.to_string())?;
+    }
     let data = sim::simulate(&truth, &o, &mut rng)?.data;
-    let fit = calib::calibrate(&nominal, &data, &Options::default()).map_err(|e| e.to_string())?;
+    let fit = calib::calibrate(&nominal, &data, &opts).map_err(|e| e.to_string())?;
     let settings = Settings {
         encoder_counts: reading_sd(setup.encoder_noise_counts),
         probing_mm: Some(0.0),
+        temperature_c: setup.temp_noise_c,
         ..Settings::default()
     };
     let budget = estimate::from_fit(&fit, &data, None, 0.0, &settings)?.budget;
@@ -158,19 +183,24 @@ pub fn fresh(
     rng: &mut SimRng,
 ) -> Tally {
     let lim = sim::limits(truth);
-    let t = forward::REFERENCE_TEMP_C;
     let mut reads = Vec::with_capacity(setup.readings);
     for _ in 0..setup.readings {
         let th = sim::random_pose(&lim, rng);
+        let (t_true, t_read) = if setup.thermal {
+            let t = rng.gen_range(TEMPS.0..TEMPS.1);
+            (t, t + setup.temp_noise_c * sim::normal(rng))
+        } else {
+            (forward::REFERENCE_TEMP_C, forward::REFERENCE_TEMP_C)
+        };
         let r = sim::read_encoders(truth, &th, setup.encoder_noise_counts, rng);
-        let (p, s) = propagate::point(arm, budget, &r, t);
-        reads.push((forward::forward(truth, &th, t).p, p, s, r));
+        let (p, s) = propagate::point(arm, budget, &r, t_read);
+        reads.push((forward::forward(truth, &th, t_true).p, p, s, r, t_read));
     }
     let est: Vec<Vector3<f64>> = reads.iter().map(|x| x.1).collect();
     let tru: Vec<Vector3<f64>> = reads.iter().map(|x| x.0).collect();
     let align = best_rigid(&est, &tru);
     let mut tally = Tally::default();
-    for (truth_p, p, s, _) in &reads {
+    for (truth_p, p, s, _, _) in &reads {
         let e = align.apply(p) - truth_p;
         let sr: Matrix3<f64> = align.rot * s * align.rot.transpose();
         let u = u95::u95(&sr);
@@ -184,7 +214,7 @@ pub fn fresh(
     }
     for pair in reads.chunks_exact(2) {
         let (a, b) = (&pair[0], &pair[1]);
-        let (d, ud) = propagate::distance(arm, budget, (&a.3, t), (&b.3, t));
+        let (d, ud) = propagate::distance(arm, budget, (&a.3, a.4), (&b.3, b.4));
         let err = d - (a.0 - b.0).norm();
         tally.pairs += 1;
         tally.in_distance += usize::from(err.abs() <= 1.959_963_984_540_054 * ud);
