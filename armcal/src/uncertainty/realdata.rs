@@ -5,16 +5,18 @@
 //! about their socket centres: on these data that also holds what the model leaves
 //! unexplained). The held-out session's probings are then compared with their socket's
 //! centre, the mean of the calibrated model's ball centres over that socket's n probings in
-//! the session (the authors' metric). A probing's deviation from a centre estimated from
-//! the same n probings has (n − 1)/n of its own variance when the probings are independent;
-//! a probing is covered when its deviation is within the U95 of Σ_p · (n − 1)/n. That treats
-//! the parameter part as independent between probings too, which it is not (probings of one
-//! socket from similar poses share it): a first reading, said as such.
+//! the session (the authors' metric). The deviation r_i = p_i − (1/n) Σ_j p_j is predicted
+//! to first order with its own covariance: the parameters' part through J_i − J̄ (what all
+//! the socket's probings share cancels), the readings' own parts as (1 − 2/n) Σ_i +
+//! (1/n²) Σ_j Σ_j. A probing is covered when |r_i| is within the U95 of that covariance.
 
 use super::estimate::{self, Settings};
-use super::{propagate, u95};
+use super::{propagate, u95, Budget};
+use crate::data::Dataset;
 use crate::mukca::{self, Unit};
 use crate::residuals::residuals;
+use nalgebra::{DVector, Matrix3, Vector3};
+use quatarm_ref::arm::Arm;
 use serde::Serialize;
 
 /// One unit's figures.
@@ -71,11 +73,7 @@ pub fn unit_coverage(unit: &Unit) -> Option<UnitCoverage> {
         let res = residuals(&fit.arm, &test, None);
         let layout = test.layout();
         for end in layout.length.iter().flat_map(|l| [&l.a, &l.b]) {
-            let n = end.len() as f64;
-            for &i in end {
-                let r = &test.rows[i];
-                let (_, s) = propagate::point(&fit.arm, &est.budget, &r.theta, r.temp_c);
-                let u = u95::u95(&(s * ((n - 1.0) / n)));
+            for (i, u) in socket_u95(&fit.arm, &est.budget, &test, end) {
                 let d = res.rows[i].norm();
                 judged += 1;
                 inside += usize::from(d <= u);
@@ -95,4 +93,35 @@ pub fn unit_coverage(unit: &Unit) -> Option<UnitCoverage> {
         rms_deviation_mm: (ss / judged.max(1) as f64).sqrt(),
         probing_mm: probing / sessions.max(1) as f64,
     })
+}
+
+/// (row, U95 of its deviation from the socket's centre) for the probings `rows` of a socket.
+fn socket_u95(arm: &Arm, b: &Budget, data: &Dataset, rows: &[usize]) -> Vec<(usize, f64)> {
+    let n = rows.len() as f64;
+    let st = b.sigma_theta(arm);
+    let js: Vec<propagate::Jacobians> = rows
+        .iter()
+        .map(|&i| propagate::jacobians(arm, b, &data.rows[i].theta, data.rows[i].temp_c))
+        .collect();
+    let own: Vec<Matrix3<f64>> = js.iter().map(|j| propagate::own_terms(b, &st, j)).collect();
+    let own_mean = own.iter().sum::<Matrix3<f64>>() / (n * n);
+    let k = b.params.len();
+    let mean_j: Vec<Vector3<f64>> = (0..k)
+        .map(|c| js.iter().map(|j| j.pi[c]).sum::<Vector3<f64>>() / n)
+        .collect();
+    rows.iter()
+        .zip(js.iter().zip(&own))
+        .map(|(&i, (j, o))| {
+            let mut s = o * (1.0 - 2.0 / n) + own_mean;
+            let g: Vec<DVector<f64>> = (0..3)
+                .map(|axis| DVector::from_fn(k, |c, _| j.pi[c][axis] - mean_j[c][axis]))
+                .collect();
+            for a in 0..3 {
+                for c in 0..3 {
+                    s[(a, c)] += (g[a].transpose() * &b.cov * &g[c])[(0, 0)];
+                }
+            }
+            (i, u95::u95(&s))
+        })
+        .collect()
 }
