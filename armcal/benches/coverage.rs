@@ -124,7 +124,8 @@ fn mukca() {
     };
     println!("MUKCa, whole sessions held out: probings within their predicted 95 % region");
     println!(
-        "  unit                 sessions  probings  covered  median U95 mm  RMS dev mm  probing mm"
+        "  unit                 sessions  probings  covered  +model  median U95 mm (+model)  \
+         RMS dev mm  probing mm  model mm"
     );
     for (name, _) in units {
         let unit = match armcal::mukca::load(&dir, &name) {
@@ -139,14 +140,17 @@ fn mukca() {
             continue;
         };
         println!(
-            "  {:<20} {:>8}  {:>8}  {:>7.3}  {:>12.4}  {:>10.4}  {:>10.4}",
+            "  {:<20} {:>8}  {:>8}  {:>7.3}  {:>6.3}  {:>8.4} ({:>8.4})     {:>10.4}  {:>10.4}  {:>8.4}",
             c.unit,
             c.sessions,
             c.probings,
             c.covered,
-            c.median_u95_mm,
+            c.covered_with_model,
+            c.median_u95_mm[0],
+            c.median_u95_mm[1],
             c.rms_deviation_mm,
-            c.probing_mm
+            c.probing_mm,
+            c.model_mm
         );
         for f in &c.failed {
             println!("    not judged: {f}");

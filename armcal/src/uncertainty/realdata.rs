@@ -30,73 +30,118 @@ pub struct UnitCoverage {
     pub failed: Vec<String>,
     /// Probings judged.
     pub probings: usize,
-    /// Fraction within their predicted 95 % region.
+    /// Fraction within their predicted 95 % region, the budget as `calibrate` writes it.
     pub covered: f64,
-    /// Median U95 of the probings (mm).
-    pub median_u95_mm: f64,
+    /// The same with a model term from the other sessions' held-out excess.
+    pub covered_with_model: f64,
+    /// Median U95 of the probings (mm), without and with the model term.
+    pub median_u95_mm: [f64; 2],
     /// RMS distance of the probings from their socket's centre (mm).
     pub rms_deviation_mm: f64,
     /// Mean probing term the training sessions gave (mm per axis).
     pub probing_mm: f64,
+    /// Mean model term the other sessions gave (mm per axis).
+    pub model_mm: f64,
 }
 
-/// Leave-one-session-out coverage of a unit (`None` with fewer than two sessions).
+/// A held-out session: its calibration, budget, data and what its probings showed.
+struct Held {
+    arm: Arm,
+    budget: Budget,
+    test: Dataset,
+    /// Per probing: (row, |deviation|, predicted U95, per-axis variance the budget missed).
+    probings: Vec<(usize, f64, f64, f64)>,
+}
+
+/// Calibrates on every session but `g` and judges `g` with the budget as written.
+fn hold_out(unit: &Unit, groups: &[i64], g: i64) -> Result<Held, String> {
+    let train: Vec<i64> = groups.iter().copied().filter(|x| *x != g).collect();
+    let train_data = unit.sessions_data(&train);
+    let fit = crate::calib::calibrate(&unit.arm, &train_data, &mukca::options(None))
+        .map_err(|e| e.to_string())?;
+    let budget = estimate::from_fit(&fit, &train_data, None, 0.0, &Settings::default())?.budget;
+    let test = unit.sessions_data(&[g]);
+    let res = residuals(&fit.arm, &test, None);
+    let mut probings = Vec::new();
+    for end in test.layout().length.iter().flat_map(|l| [&l.a, &l.b]) {
+        let n = end.len() as f64;
+        for (i, u, trace) in socket_u95(&fit.arm, &budget, &test, end) {
+            let d = res.rows[i].norm();
+            probings.push((i, d, u, (d * d - trace) / (3.0 * (1.0 - 1.0 / n))));
+        }
+    }
+    Ok(Held {
+        arm: fit.arm,
+        budget,
+        test,
+        probings,
+    })
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+/// Leave-one-session-out coverage of a unit (`None` with fewer than two sessions). The
+/// model term of session g is the mean per-axis variance the budget missed on the other
+/// sessions' held-out probings (g's own probings never set it).
 pub fn unit_coverage(unit: &Unit) -> Option<UnitCoverage> {
     let groups = unit.groups();
     if groups.len() < 2 {
         return None;
     }
-    let opts = mukca::options(None);
-    let (mut judged, mut inside, mut sessions) = (0usize, 0usize, 0usize);
-    let (mut u95s, mut ss, mut probing, mut failed) = (Vec::new(), 0.0, 0.0, Vec::new());
+    let (mut held, mut failed) = (Vec::new(), Vec::new());
     for &g in &groups {
-        let train: Vec<i64> = groups.iter().copied().filter(|x| *x != g).collect();
-        let name = unit.sessions.get(&g).cloned().unwrap_or_default();
-        let train_data = unit.sessions_data(&train);
-        let fit = match crate::calib::calibrate(&unit.arm, &train_data, &opts) {
-            Ok(f) => f,
-            Err(e) => {
-                failed.push(format!("{name}: {e}"));
-                continue;
-            }
-        };
-        let est = match estimate::from_fit(&fit, &train_data, None, 0.0, &Settings::default()) {
-            Ok(e) => e,
-            Err(e) => {
-                failed.push(format!("{name}: {e}"));
-                continue;
-            }
-        };
-        sessions += 1;
-        probing += est.budget.probing_mm;
-        let test = unit.sessions_data(&[g]);
-        let res = residuals(&fit.arm, &test, None);
-        let layout = test.layout();
-        for end in layout.length.iter().flat_map(|l| [&l.a, &l.b]) {
-            for (i, u) in socket_u95(&fit.arm, &est.budget, &test, end) {
-                let d = res.rows[i].norm();
-                judged += 1;
-                inside += usize::from(d <= u);
-                ss += d * d;
-                u95s.push(u);
+        match hold_out(unit, &groups, g) {
+            Ok(h) => held.push(h),
+            Err(e) => failed.push(format!(
+                "{}: {e}",
+                unit.sessions.get(&g).cloned().unwrap_or_default()
+            )),
+        }
+    }
+    let all: Vec<&(usize, f64, f64, f64)> = held.iter().flat_map(|h| &h.probings).collect();
+    let judged = all.len().max(1) as f64;
+    let (mut inside_model, mut u_model, mut model_sum) = (0usize, Vec::new(), 0.0);
+    for (k, h) in held.iter().enumerate() {
+        let others: Vec<f64> = held
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| *j != k)
+            .flat_map(|(_, o)| o.probings.iter().map(|p| p.3))
+            .collect();
+        let mut b = h.budget.clone();
+        b.model_mm = (others.iter().sum::<f64>() / others.len().max(1) as f64)
+            .max(0.0)
+            .sqrt();
+        model_sum += b.model_mm;
+        for end in h.test.layout().length.iter().flat_map(|l| [&l.a, &l.b]) {
+            for (i, u, _) in socket_u95(&h.arm, &b, &h.test, end) {
+                let d = h.probings.iter().find(|p| p.0 == i).map_or(0.0, |p| p.1);
+                inside_model += usize::from(d <= u);
+                u_model.push(u);
             }
         }
     }
-    u95s.sort_by(f64::total_cmp);
+    let sessions = held.len().max(1) as f64;
     Some(UnitCoverage {
         unit: unit.name.clone(),
-        sessions,
+        sessions: held.len(),
         failed,
-        probings: judged,
-        covered: inside as f64 / judged.max(1) as f64,
-        median_u95_mm: u95s.get(u95s.len() / 2).copied().unwrap_or(f64::NAN),
-        rms_deviation_mm: (ss / judged.max(1) as f64).sqrt(),
-        probing_mm: probing / sessions.max(1) as f64,
+        probings: all.len(),
+        covered: all.iter().filter(|p| p.1 <= p.2).count() as f64 / judged,
+        covered_with_model: inside_model as f64 / judged,
+        median_u95_mm: [median(all.iter().map(|p| p.2).collect()), median(u_model)],
+        rms_deviation_mm: (all.iter().map(|p| p.1 * p.1).sum::<f64>() / judged).sqrt(),
+        probing_mm: held.iter().map(|h| h.budget.probing_mm).sum::<f64>() / sessions,
+        model_mm: model_sum / sessions,
     })
 }
 
-/// (row, U95 of its deviation from the socket's centre) for the probings `rows` of a socket.
-fn socket_u95(arm: &Arm, b: &Budget, data: &Dataset, rows: &[usize]) -> Vec<(usize, f64)> {
+/// (row, U95 of its deviation from the socket's centre, trace of that deviation's
+/// covariance) for the probings `rows` of a socket.
+fn socket_u95(arm: &Arm, b: &Budget, data: &Dataset, rows: &[usize]) -> Vec<(usize, f64, f64)> {
     let n = rows.len() as f64;
     let st = b.sigma_theta(arm);
     let js: Vec<propagate::Jacobians> = rows
@@ -121,7 +166,7 @@ fn socket_u95(arm: &Arm, b: &Budget, data: &Dataset, rows: &[usize]) -> Vec<(usi
                     s[(a, c)] += (g[a].transpose() * &b.cov * &g[c])[(0, 0)];
                 }
             }
-            (i, u95::u95(&s))
+            (i, u95::u95(&s), s.trace())
         })
         .collect()
 }
