@@ -14,7 +14,10 @@ use armcal::data::Kind;
 use armcal::sim::{self, perturb, protocol, rng};
 use quatarm_ref::arm::{Arm, Harmonic};
 
-fn effects() -> Vec<(&'static str, Box<dyn Fn(&mut Arm)>)> {
+/// Adds one hidden effect to a truth arm.
+type AddEffect = Box<dyn Fn(&mut Arm)>;
+
+fn effects() -> Vec<(&'static str, AddEffect)> {
     vec![
         ("none", Box::new(|_: &mut Arm| {})),
         (
@@ -57,7 +60,9 @@ fn main() {
         add(&mut truth);
         let mut o = sim::Options::new(Kind::Point, 600);
         o.temp = Some((16.0, 28.0));
-        let points = sim::simulate(&truth, &o, &mut rng(22)).expect("points").data;
+        let points = sim::simulate(&truth, &o, &mut rng(22))
+            .expect("points")
+            .data;
         let fit = calibrate(&nominal, &points, &Options::default()).expect("calibration");
         let tests = protocol::iso_10360_12(&truth, &o, &mut rng(23))
             .expect("test set")

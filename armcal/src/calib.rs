@@ -682,6 +682,11 @@ pub struct Fit {
     pub elapsed: Duration,
     /// Correlation matrix of the fitted unknowns (kept order).
     pub correlation: DMatrix<f64>,
+    /// σ̂² (JᵀJ)⁻¹ of the accepted pass, with the unknowns (indices into `params`) its rows
+    /// are in: the frame's among them, so that a sub-block is the covariance of the arm's
+    /// unknowns marginal over the frame (`spat` points are already eliminated by the
+    /// variable projection, which is the same marginalisation). `None` when JᵀJ is singular.
+    pub covariance: Option<(Vec<usize>, DMatrix<f64>)>,
 }
 
 impl Fit {
@@ -1108,6 +1113,8 @@ fn finish(s: Structure, f: Fitted, iterations: usize, rms_before: f64, t0: Insta
         r_skel,
         mut shared,
     } = s;
+    // The rows of `f.jtj`: the kept unknowns of the accepted pass, before the reordering below.
+    let jtj_order = id.kept.clone();
     // Singular values and condition number are the data's own: of the unknowns they
     // determine, without those the ridge shares out.
     shared.retain(|i| id.kept.contains(i));
@@ -1154,6 +1161,7 @@ fn finish(s: Structure, f: Fitted, iterations: usize, rms_before: f64, t0: Insta
         rms_after_mm: (2.0 * f.data_cost / eqs as f64).sqrt(),
         elapsed: t0.elapsed(),
         correlation,
+        covariance: cov.map(|c| (jtj_order, c)),
     }
 }
 

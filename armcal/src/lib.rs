@@ -62,6 +62,7 @@ pub mod eval;
 /// The table builder and stream decoder live in `quatarm-wire`, which the QEMU tests and
 /// `cargo xtask demo` use without the rest of the host tool.
 pub use quatarm_wire::{stream_decode, tablebuild};
+pub mod uncertainty;
 
 pub mod calib;
 pub mod data;

@@ -9,6 +9,13 @@ use std::path::Path;
 
 /// Reads the calibration file at `path`, refusing values beyond [`CALFILE`] with their key.
 pub fn arm(path: &Path) -> Result<Arm, calfile::CalFileError> {
+    calibration(path).map(|(arm, _)| arm)
+}
+
+/// Reads a calibration file with its `[uncertainty]` budget (if it has one).
+pub fn calibration(
+    path: &Path,
+) -> Result<(Arm, Option<calfile::Uncertainty>), calfile::CalFileError> {
     let parsed = calfile::read_with(path, &CALFILE)?;
     for k in &parsed.unknown_keys {
         eprintln!(
@@ -17,11 +24,18 @@ pub fn arm(path: &Path) -> Result<Arm, calfile::CalFileError> {
             crate::limits::shown(k)
         );
     }
-    Ok(parsed.arm)
+    Ok((parsed.arm, parsed.uncertainty))
 }
 
 /// Reads back the text of a calibration file just written, with the same limits: a fit that
 /// wandered beyond them is refused here rather than written as a file no command reads.
 pub fn written(text: &str) -> Result<Arm, calfile::CalFileError> {
-    calfile::parse_with(text, &CALFILE).map(|p| p.arm)
+    written_with(text).map(|(arm, _)| arm)
+}
+
+/// As [`written`], with the budget read back too.
+pub fn written_with(
+    text: &str,
+) -> Result<(Arm, Option<calfile::Uncertainty>), calfile::CalFileError> {
+    calfile::parse_with(text, &CALFILE).map(|p| (p.arm, p.uncertainty))
 }

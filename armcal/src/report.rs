@@ -163,6 +163,9 @@ pub struct Report {
     pub output: OutputReport,
     /// Warnings (unknown columns, keys, a table not written…).
     pub warnings: Vec<String>,
+    /// The uncertainty budget written with the calibration (`[uncertainty]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub uncertainty: Option<crate::uncertainty::report::BudgetReport>,
 }
 
 /// A parameter in words, with the frame's rotations named for what they are without an
@@ -323,6 +326,7 @@ pub fn build(
         data_kinds: crate::kinds::notes(&layout),
         output: OutputReport::default(),
         warnings: data.warnings.clone(),
+        uncertainty: None,
     }
 }
 
@@ -469,6 +473,9 @@ impl Report {
             for h in &self.not_identifiable {
                 let _ = writeln!(s, "  {}: {}", h.description, h.explanation);
             }
+        }
+        if let Some(u) = &self.uncertainty {
+            u.text(&mut s);
         }
         let o = &self.output;
         wrote(&mut s, o.calibration.iter().chain(&o.table));

@@ -6,6 +6,7 @@
 //! person sees at a glance which terms exist.
 
 use crate::arm::{Arm, Axis, Frame, Harmonic, Joint, Probe, DEFAULT_COUNTS, JOINT_COUNTS};
+pub use crate::uncertainty::{ParamKey, Uncertainty};
 use std::fmt::Write as _;
 use toml::{Table, Value};
 
@@ -29,6 +30,8 @@ pub struct Parsed {
     pub arm: Arm,
     /// Key paths that the spec does not know; they were ignored.
     pub unknown_keys: Vec<String>,
+    /// The `[uncertainty]` budget, when the file has one.
+    pub uncertainty: Option<Uncertainty>,
 }
 
 /// Physical bounds on a file's values, beyond the format's own checks (numbers finite, counts
@@ -86,7 +89,13 @@ pub fn parse_with(text: &str, limits: &Limits) -> Result<Parsed, CalFileError> {
     for key in root.keys() {
         if !matches!(
             key.as_str(),
-            "name" | "serial" | "encoder_counts" | "joint" | "probe" | "reference_frame"
+            "name"
+                | "serial"
+                | "encoder_counts"
+                | "joint"
+                | "probe"
+                | "reference_frame"
+                | "uncertainty"
         ) {
             unknown.push(key.clone());
         }
@@ -139,15 +148,22 @@ pub fn parse_with(text: &str, limits: &Limits) -> Result<Parsed, CalFileError> {
         Some(_) => return Err(err("reference_frame", "must be a table")),
         None => None,
     };
+    let arm = Arm {
+        name,
+        serial,
+        joints,
+        probe,
+        reference_frame,
+    };
+    let uncertainty = match root.get("uncertainty") {
+        Some(Value::Table(t)) => Some(crate::uncertainty::parse(t, &arm, &mut unknown)?),
+        Some(_) => return Err(err("uncertainty", "must be a table")),
+        None => None,
+    };
     Ok(Parsed {
-        arm: Arm {
-            name,
-            serial,
-            joints,
-            probe,
-            reference_frame,
-        },
+        arm,
         unknown_keys: unknown,
+        uncertainty,
     })
 }
 
@@ -520,6 +536,11 @@ fn opt_string(t: &Table, key: &str, path: &str) -> Result<Option<String>, CalFil
 /// Numbers are written with Rust's shortest round-trip formatting, so reading the file back
 /// gives the same f64 values bit for bit.
 pub fn write(arm: &Arm, header: &[&str]) -> String {
+    write_with(arm, None, header)
+}
+
+/// Writes an arm and, when given, its `[uncertainty]` budget.
+pub fn write_with(arm: &Arm, uncertainty: Option<&Uncertainty>, header: &[&str]) -> String {
     let mut s = String::new();
     for line in header {
         let _ = writeln!(s, "# {line}");
@@ -571,6 +592,9 @@ pub fn write(arm: &Arm, header: &[&str]) -> String {
         let _ = writeln!(s, "\n[reference_frame]");
         let _ = writeln!(s, "rotation = {}", arr(&f.rotation));
         let _ = writeln!(s, "translation = {}", arr(&f.translation));
+    }
+    if let Some(u) = uncertainty {
+        crate::uncertainty::write(u, &mut s);
     }
     s
 }
@@ -796,5 +820,112 @@ translation = [10.0, 20.0, 30.0]
             assert!(e.message.contains("limit"), "{e}");
         }
         assert!(parse_with(FULL, &l).is_ok());
+    }
+
+    const BUDGET: &str = r#"
+[uncertainty]
+parameters = ["joint.1.tilt.0", "joint.2.zero_offset", "probe.error.2", "joint.1.harmonics.2.sin"]
+covariance = [4e-10, 1e-11, 0.0, 0.0,
+              1e-11, 9e-10, 0.0, 0.0,
+              0.0, 0.0, 1e-6, 0.0,
+              0.0, 0.0, 0.0, 1e-12]
+encoder_counts = 0.29
+probing_mm = 0.002
+temperature_c = 0.2
+"#;
+
+    #[test]
+    fn reads_and_round_trips_the_budget() {
+        let p = parse(&format!("{FULL}{BUDGET}")).unwrap();
+        let u = p.uncertainty.clone().unwrap();
+        assert_eq!(
+            u.parameters,
+            vec![
+                ParamKey::Tilt(0, 0),
+                ParamKey::ZeroOffset(1),
+                ParamKey::ProbeError(2),
+                ParamKey::Harmonic {
+                    joint: 0,
+                    index: 1,
+                    cos: false
+                }
+            ]
+        );
+        assert_eq!(u.encoder_counts, vec![0.29; 6]);
+        assert_eq!(u.model_mm, 0.0);
+        assert_eq!(u.matrix()[(1, 0)], 1e-11);
+        let text = write_with(&p.arm, Some(&u), &[]);
+        let back = parse(&text).unwrap();
+        assert_eq!(back.uncertainty, Some(u));
+        assert!(parse(FULL).unwrap().uncertainty.is_none());
+    }
+
+    #[test]
+    fn budget_refusals_name_the_key() {
+        let cases = [
+            (
+                "\"joint.1.tilt.0\"",
+                "\"joint.7.tilt.0\"",
+                "uncertainty.parameters[0]",
+            ),
+            (
+                "\"joint.1.tilt.0\"",
+                "\"joint.1.tilt.2\"",
+                "uncertainty.parameters[0]",
+            ),
+            (
+                "\"joint.1.harmonics.2.sin\"",
+                "\"joint.1.harmonics.3.sin\"",
+                "uncertainty.parameters[3]",
+            ),
+            (
+                "\"probe.error.2\"",
+                "\"joint.1.tilt.0\"",
+                "uncertainty.parameters[2]",
+            ),
+            (
+                "\"probe.error.2\"",
+                "\"link.1\"",
+                "uncertainty.parameters[2]",
+            ),
+            (
+                "0.0, 0.0, 0.0, 1e-12]",
+                "0.0, 0.0, 0.0]",
+                "uncertainty.covariance",
+            ),
+            (
+                "0.0, 0.0, 0.0, 1e-12]",
+                "0.0, 0.0, 0.0, -1e-12]",
+                "uncertainty.covariance[15]",
+            ),
+            ("1e-11, 9e-10", "2e-11, 9e-10", "uncertainty.covariance[4]"),
+            (
+                "probing_mm = 0.002",
+                "probing_mm = -0.002",
+                "uncertainty.probing_mm",
+            ),
+            (
+                "encoder_counts = 0.29",
+                "encoder_counts = [0.29]",
+                "uncertainty.encoder_counts",
+            ),
+        ];
+        for (from, to, path) in cases {
+            let text = format!("{FULL}{}", BUDGET.replacen(from, to, 1));
+            let e = parse(&text).unwrap_err();
+            assert_eq!(e.path, path, "{to}: {e}");
+        }
+        // The one counterexample of the PSD check is symmetric and within its diagonal bound
+        // element by element, but not as a whole.
+        let e = parse(&format!(
+            "{FULL}{}",
+            BUDGET.replacen("4e-10, 1e-11", "4e-10, 1e-9", 1).replacen(
+                "1e-11, 9e-10",
+                "1e-9, 9e-10",
+                1
+            )
+        ))
+        .unwrap_err();
+        assert!(e.message.contains("positive semi-definite"), "{e}");
     }
 }

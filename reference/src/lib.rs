@@ -11,6 +11,7 @@
 //! - [`forward`]: forward kinematics, base frame, from joint angles and a temperature.
 //! - [`dh`]: the classic formulation (Sładek et al.): Denavit–Hartenberg arms with 4×4
 //!   matrices, published robot tables, and their conversion into the spec's model.
+//! - [`uncertainty`]: the calibration file's `[uncertainty]` budget (`spec/uncertainty.md`).
 //! - [`orientation`]: axis–angle of a rotation matrix and the probe-direction error (eq. 22).
 //!
 //! # Example
@@ -39,6 +40,7 @@ pub mod calfile;
 pub mod dh;
 pub mod forward;
 pub mod orientation;
+pub mod uncertainty;
 
 pub use arm::{Arm, Axis, Frame, Harmonic, Joint, Probe};
 pub use forward::Pose;

@@ -58,6 +58,8 @@ pub struct Args {
     /// Show progress on stderr even when it is not a terminal.
     #[arg(long)]
     progress: bool,
+    #[command(flatten)]
+    budget: super::budget::BudgetArgs,
 }
 
 /// Reads the start arm: a file, or `default-6`.
@@ -147,9 +149,29 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         ),
     ];
     let refs: Vec<&str> = header.iter().map(String::as_str).collect();
-    let text = calfile::write(&fit.arm, &refs);
-    let back = armcal::load::written(&text)
+    // A fit without a covariance is still written: without a budget, and said.
+    let budget = match a.budget.budget(
+        &fit,
+        &data,
+        validation.as_ref(),
+        rep.residuals.after.all.rms_um,
+    ) {
+        Ok((budget, budget_report)) => {
+            rep.uncertainty = Some(budget_report);
+            Some(budget)
+        }
+        Err(e) => {
+            rep.warnings
+                .push(format!("{e}; the file has no [uncertainty] section"));
+            None
+        }
+    };
+    let text = calfile::write_with(&fit.arm, budget.as_ref(), &refs);
+    let (back, back_budget) = armcal::load::written_with(&text)
         .map_err(|e| anyhow::anyhow!("the calibration file written does not read back: {e}"))?;
+    if back_budget != budget {
+        bail!("the [uncertainty] section written does not read back the same (a bug)");
+    }
     for r in data.rows.iter().take(50) {
         let d = (forward::forward(&back, &r.theta, r.temp_c).p
             - forward::forward(&fit.arm, &r.theta, r.temp_c).p)

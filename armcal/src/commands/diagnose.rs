@@ -44,6 +44,8 @@ pub struct Args {
     /// Iterations before a fit is declared not converging.
     #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     max_iter: u32,
+    #[command(flatten)]
+    budget: super::budget::BudgetArgs,
 }
 
 /// Runs the subcommand. Arguments, the start arm, the outputs' names and the data are
@@ -149,9 +151,28 @@ fn stage_extended(
         format!("model {}; {}", rep.extended.model, rep.verdict),
     ];
     let refs: Vec<&str> = header.iter().map(String::as_str).collect();
-    let text = calfile::write(arm, &refs);
-    let back = armcal::load::written(&text)
+    // The diagnosis' own held-out check compares models, not this fit's σ̂: no inflation.
+    let fit = &d.extended.fit;
+    let in_sample =
+        armcal::residuals::summarise(&armcal::residuals::residuals(arm, data, fit.frame), data);
+    // A fit without a covariance is still written: without a budget, and said.
+    let budget = match a.budget.budget(fit, data, None, in_sample.all.rms_um) {
+        Ok((budget, budget_report)) => {
+            rep.uncertainty = Some(budget_report);
+            Some(budget)
+        }
+        Err(e) => {
+            rep.warnings
+                .push(format!("{e}; the file has no [uncertainty] section"));
+            None
+        }
+    };
+    let text = calfile::write_with(arm, budget.as_ref(), &refs);
+    let (back, back_budget) = armcal::load::written_with(&text)
         .map_err(|e| anyhow::anyhow!("the calibration file written does not read back: {e}"))?;
+    if back_budget != budget {
+        bail!("the [uncertainty] section written does not read back the same (a bug)");
+    }
     for r in data.rows.iter().take(50) {
         let dist = (forward::forward(&back, &r.theta, r.temp_c).p
             - forward::forward(arm, &r.theta, r.temp_c).p)

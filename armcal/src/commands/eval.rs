@@ -2,6 +2,8 @@
 
 use anyhow::Context;
 use armcal::eval::{evaluate, read_rows, Evaluator};
+use armcal::uncertainty::columns::{columns, Method, HEADER};
+use armcal::uncertainty::Budget;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -17,11 +19,33 @@ pub struct Args {
     precision: Evaluator,
     /// CSV with columns j1..jN (rad) or c1..cN (counts) and optional temp_c; stdin if absent.
     input: Option<PathBuf>,
+    /// Add each point's covariance and U95 (`cxx,cyy,czz,cxy,cxz,cyz` mm², `U95` mm) from the
+    /// calibration's `[uncertainty]` budget, computed on the f64 reference.
+    #[arg(long)]
+    uncertainty: bool,
+    /// How the uncertainty is propagated.
+    #[arg(long, value_enum, default_value_t = Method::FirstOrder, requires = "uncertainty")]
+    method: Method,
+    /// Monte Carlo draws per row.
+    #[arg(long, default_value_t = 10_000, requires = "uncertainty", value_parser = clap::value_parser!(u64).range(100..=10_000_000))]
+    draws: u64,
+    /// Seed of the Monte Carlo draws.
+    #[arg(long, default_value_t = 0x6c_75_6d, requires = "uncertainty")]
+    seed: u64,
 }
 
 /// Runs the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let arm = armcal::load::arm(&args.calib)?;
+    let (arm, file_budget) = armcal::load::calibration(&args.calib)?;
+    let budget = match (args.uncertainty, file_budget) {
+        (false, _) => None,
+        (true, Some(u)) => Some(Budget::from_file(&u, &arm)),
+        (true, None) => anyhow::bail!(
+            "{}: no [uncertainty] section, so no uncertainty to propagate (armcal calibrate \
+             writes one)",
+            args.calib.display()
+        ),
+    };
     let (rows, name) = match &args.input {
         Some(p) => {
             let f = std::fs::File::open(p).with_context(|| format!("{}", p.display()))?;
@@ -33,12 +57,24 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ),
     };
     let rows = rows.with_context(|| name.clone())?;
-    let out = evaluate(
+    let mut out = evaluate(
         &arm,
         &rows,
         args.precision,
         &args.calib.display().to_string(),
     )?;
+    if let Some(b) = &budget {
+        let extra = columns(&arm, b, &rows, args.method, args.draws as usize, args.seed);
+        let mut joined = String::with_capacity(out.len() * 2);
+        let mut lines = out.lines();
+        if let Some(h) = lines.next() {
+            joined.push_str(&format!("{h},{HEADER}\n"));
+        }
+        for (l, e) in lines.zip(&extra) {
+            joined.push_str(&format!("{l},{e}\n"));
+        }
+        out = joined;
+    }
     let mut stdout = std::io::stdout().lock();
     stdout.write_all(out.as_bytes())?;
     stdout.flush()?;

@@ -2,6 +2,7 @@
 
 pub mod accuracy;
 pub mod args;
+pub mod budget;
 pub mod calibrate;
 pub mod check;
 pub mod decode;

@@ -56,6 +56,14 @@ pub struct Args {
     /// posture); absent: one set (P_Size, P_Form).
     #[arg(long, value_parser = clap::value_parser!(u32).range(2..=25))]
     articulations: Option<u32>,
+    /// Encoder noise (counts, standard deviation) added to the continuous true angle before
+    /// it is quantised to a whole count; 0 is quantisation alone.
+    #[arg(long, default_value_t = 0.0, value_parser = super::args::non_negative)]
+    encoder_noise_counts: f64,
+    /// Error of the temperature sensor (°C, standard deviation) added to the recorded
+    /// `temp_c` (with `--temp`; the arm is at the true temperature).
+    #[arg(long, default_value_t = 0.0, requires = "temp", value_parser = super::args::non_negative)]
+    temp_noise_c: f64,
     /// Output file (CSV of `spec/measured-data.md`).
     #[arg(short, long)]
     output: PathBuf,
@@ -119,6 +127,18 @@ fn parse_range(s: &str) -> Result<(f64, f64), ArgError> {
     Ok((lo, hi))
 }
 
+/// The noise options, when set (a file made without them reads as it always did).
+fn noise_note(encoder: f64, temp: f64) -> String {
+    let mut s = String::new();
+    if encoder > 0.0 {
+        s += &format!(", encoder noise {encoder} counts");
+    }
+    if temp > 0.0 {
+        s += &format!(", temperature sensor noise {temp} °C");
+    }
+    s
+}
+
 /// Runs the subcommand.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let mut inputs = vec![(a.truth.as_path(), "truth")];
@@ -166,6 +186,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     opts.bar_mm = a.bar_mm;
     opts.sphere_mm = a.sphere_mm;
     opts.articulations = a.articulations.map(|k| k as usize);
+    opts.encoder_noise_counts = a.encoder_noise_counts;
+    opts.temp_noise_c = a.temp_noise_c;
     let mut rng = sim::rng(a.seed);
     let s = match a.test {
         Some(_) => sim::protocol::iso_10360_12(&truth, &opts, &mut rng)?,
@@ -178,11 +200,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let f = &s.frame;
     let comments = [
         format!(
-            "simulated by armcal simulate: truth {}, {what}, {} rows, seed {}, noise {} µm per axis",
+            "simulated by armcal simulate: truth {}, {what}, {} rows, seed {}, noise {} µm per axis{}",
             a.truth.display(),
             s.data.rows.len(),
             a.seed,
-            a.noise_um
+            a.noise_um,
+            noise_note(a.encoder_noise_counts, a.temp_noise_c)
         ),
         format!(
             "instrument frame (x_ref = R p + t): rotation (w, x, y, z) = [{:?}, {:?}, {:?}, {:?}], translation = [{:?}, {:?}, {:?}] mm",

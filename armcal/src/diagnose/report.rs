@@ -265,6 +265,9 @@ pub struct Report {
     pub output: OutputReport,
     /// Warnings.
     pub warnings: Vec<String>,
+    /// The uncertainty budget written with the calibration (`[uncertainty]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub uncertainty: Option<crate::uncertainty::report::BudgetReport>,
 }
 
 fn location(e: Effect) -> Value {
@@ -367,6 +370,7 @@ pub fn build(d: &Diagnosis, data: &Dataset, figures: &[Figure]) -> Report {
         patterns,
         output: OutputReport::default(),
         warnings: data.warnings.clone(),
+        uncertainty: None,
     }
 }
 
@@ -528,6 +532,9 @@ impl Report {
         }
         for f in &self.holdout.failed {
             let _ = writeln!(s, "  held-out fold not fitted: {f}");
+        }
+        if let Some(u) = &self.uncertainty {
+            u.text(&mut s);
         }
         let o = &self.output;
         wrote(&mut s, o.calibration.iter().chain(&o.table).chain(&o.plots));

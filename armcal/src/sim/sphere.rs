@@ -71,7 +71,7 @@ pub fn group(
                 let Some(th) = inverse(truth, &aim, &start, tc, lim) else {
                     continue 'placement;
                 };
-                let mut r = row(truth, Kind::Sphere, group, &th, None, tc);
+                let mut r = row(Kind::Sphere, group, &th, None, tc);
                 r.sphere = Some(Touch {
                     diameter_mm: test.diameter_mm,
                     articulation: test.articulations.map(|_| set as i64 + 1),

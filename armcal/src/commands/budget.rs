@@ -1,0 +1,57 @@
+//! The uncertainty budget options of `calibrate` and `diagnose -o`, and the budget they write.
+
+use armcal::calib::Fit;
+use armcal::data::Dataset;
+use armcal::holdout::Holdout;
+use armcal::uncertainty::estimate::{self, Settings};
+use armcal::uncertainty::report::BudgetReport;
+use armcal::uncertainty::QUANTISATION_COUNTS;
+use quatarm_ref::calfile::Uncertainty;
+
+/// What the data cannot tell: set here, stated in the report as set or assumed.
+#[derive(clap::Args, Clone, Debug)]
+pub struct BudgetArgs {
+    /// Standard uncertainty of one joint reading (counts): 1/√12 is quantisation alone; an
+    /// encoder with noise σ counts before quantisation has √(σ² + 1/12).
+    #[arg(long, default_value_t = QUANTISATION_COUNTS, value_parser = super::args::non_negative)]
+    encoder_counts: f64,
+    /// Standard uncertainty of the probing per axis (mm); default: from the spat scatter when
+    /// the data have spat rows, else 0.
+    #[arg(long, value_parser = super::args::non_negative)]
+    probing_mm: Option<f64>,
+    /// What the model leaves unexplained per axis (mm).
+    #[arg(long, default_value_t = 0.0, value_parser = super::args::non_negative)]
+    model_mm: f64,
+    /// Standard uncertainty of the temperature reading (°C).
+    #[arg(long, default_value_t = 0.0, value_parser = super::args::non_negative)]
+    temperature_c: f64,
+}
+
+impl BudgetArgs {
+    fn settings(&self) -> Settings {
+        Settings {
+            encoder_counts: self.encoder_counts,
+            probing_mm: self.probing_mm,
+            model_mm: self.model_mm,
+            temperature_c: self.temperature_c,
+        }
+    }
+
+    /// The budget of `fit` as the file holds it, and its report; `in_sample_rms_um` is the
+    /// fit's own RMS residual that the held-out one is compared with.
+    pub fn budget(
+        &self,
+        fit: &Fit,
+        data: &Dataset,
+        holdout: Option<&Holdout>,
+        in_sample_rms_um: f64,
+    ) -> anyhow::Result<(Uncertainty, BudgetReport)> {
+        let est = estimate::from_fit(fit, data, holdout, in_sample_rms_um, &self.settings())
+            .map_err(|e| anyhow::anyhow!("no uncertainty budget: {e}"))?;
+        let file = est
+            .budget
+            .to_file(&fit.arm)
+            .map_err(|e| anyhow::anyhow!("no uncertainty budget: {e}"))?;
+        Ok((file, BudgetReport::build(&est, &fit.arm)))
+    }
+}

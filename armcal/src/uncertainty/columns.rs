@@ -1,0 +1,68 @@
+//! `armcal eval --uncertainty`: the columns `cxx,cyy,czz,cxy,cxz,cyz,U95` of every row, by
+//! first-order propagation or by Monte Carlo (GUM Supplement 1) of the same budget.
+
+use super::{montecarlo, propagate, u95, Budget};
+use crate::eval::{Reading, Rows};
+use nalgebra::Matrix3;
+use quatarm_ref::arm::Arm;
+
+/// How Σ_p is obtained.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Method {
+    /// The spec's first-order formula.
+    FirstOrder,
+    /// Monte Carlo draws of every input (GUM Supplement 1).
+    MonteCarlo,
+}
+
+/// The header the columns add.
+pub const HEADER: &str = "cxx,cyy,czz,cxy,cxz,cyz,U95";
+
+/// The reading's angles (rad), as the f64 reference evaluates it.
+pub fn radians(arm: &Arm, r: &Reading) -> Vec<f64> {
+    match r {
+        Reading::Radians(v) => v.clone(),
+        Reading::Counts(c) => c
+            .iter()
+            .zip(&arm.joints)
+            .map(|(&c, j)| j.count_to_rad(i64::from(c)))
+            .collect(),
+    }
+}
+
+fn line(s: &Matrix3<f64>, u: f64) -> String {
+    let e = propagate::entries(s);
+    format!(
+        "{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.9}",
+        e[0], e[1], e[2], e[3], e[4], e[5], u
+    )
+}
+
+/// One line of columns per row (no leading comma). Monte Carlo: `draws` per row, the
+/// generator seeded once with `seed` (the same input gives the same output).
+pub fn columns(
+    arm: &Arm,
+    budget: &Budget,
+    rows: &Rows,
+    method: Method,
+    draws: usize,
+    seed: u64,
+) -> Vec<String> {
+    let root = montecarlo::sqrt_cov(&budget.cov);
+    let mut rng = crate::sim::rng(seed);
+    rows.iter()
+        .map(|(r, t)| {
+            let th = radians(arm, r);
+            match method {
+                Method::FirstOrder => {
+                    let (_, s) = propagate::point(arm, budget, &th, *t);
+                    line(&s, u95::u95(&s))
+                }
+                Method::MonteCarlo => {
+                    let o = montecarlo::point(arm, budget, &root, &th, *t, draws, &mut rng);
+                    line(&o.cov, o.u95)
+                }
+            }
+        })
+        .collect()
+}

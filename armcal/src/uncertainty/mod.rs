@@ -1,0 +1,210 @@
+//! The uncertainty of every measured point (`spec/uncertainty.md`).
+//!
+//! - [`Budget`]: the `[uncertainty]` section in armcal's vocabulary ([`Param`]), and the one
+//!   place where the file's parameter names map onto armcal's unknowns.
+//! - [`estimate`]: the budget a calibration leaves (`armcal calibrate`, `diagnose -o`).
+//! - [`propagate`]: first-order Σ_p of a reading, and of the distance between two readings.
+//! - [`u95`]: the radius of the sphere holding 95 % of N(0, Σ).
+//! - [`montecarlo`]: GUM Supplement 1 propagation of the same budget, to check the first order.
+//! - [`report`]: the budget and a picture of U95 across the workspace, in the report.
+//! - [`columns`]: `armcal eval --uncertainty`'s columns, by either method.
+//! - [`coverage`]: simulated arms, calibrated and read afresh: how often the truth is inside.
+//! - [`realdata`]: the same question on MUKCa recordings, whole sessions held out.
+
+pub mod columns;
+pub mod coverage;
+pub mod estimate;
+pub mod montecarlo;
+pub mod propagate;
+pub mod realdata;
+pub mod report;
+pub mod u95;
+
+use crate::params::{Link, Param};
+use nalgebra::DMatrix;
+use quatarm_ref::arm::Arm;
+use quatarm_ref::calfile::{ParamKey, Uncertainty};
+
+/// Why no budget (or no coverage trial) could be made.
+#[derive(Debug, thiserror::Error)]
+pub enum BudgetError {
+    /// The fit's normal matrix is singular: no covariance to write.
+    #[error("the fit's normal matrix is singular: no covariance")]
+    NoCovariance,
+    /// An unknown the calibration file has no key for.
+    #[error("{0} cannot be listed in [uncertainty]")]
+    NotListable(crate::params::Param),
+    /// The calibration behind a budget failed.
+    #[error(transparent)]
+    Fit(#[from] crate::calib::CalibError),
+    /// The simulated data of a coverage trial.
+    #[error(transparent)]
+    Sim(#[from] crate::sim::SimError),
+    /// The terms of a coverage trial.
+    #[error(transparent)]
+    Terms(#[from] crate::effects::TermsError),
+}
+
+/// Pure quantisation: the standard deviation of a uniform error of one count, 1/√12.
+pub const QUANTISATION_COUNTS: f64 = 0.288_675_134_594_812_9;
+
+/// An uncertainty budget over armcal's unknowns.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Budget {
+    /// The identified parameters (increments of the calibrated arm's keys).
+    pub params: Vec<Param>,
+    /// Their covariance (units²).
+    pub cov: DMatrix<f64>,
+    /// Standard uncertainty of each joint's reading (counts).
+    pub encoder_counts: Vec<f64>,
+    /// Probing, per axis (mm).
+    pub probing_mm: f64,
+    /// Temperature reading (°C).
+    pub temperature_c: f64,
+    /// Model, per axis (mm).
+    pub model_mm: f64,
+}
+
+/// The file's name of an armcal unknown, for `arm` (a harmonic is named by its place in the
+/// joint's list, armcal knows it by its order). `None` for the instrument frame, which a
+/// budget never lists, and for a harmonic the arm has no entry for.
+pub fn key_of(p: Param, arm: &Arm) -> Option<ParamKey> {
+    Some(match p {
+        Param::ZeroOffset(j) => ParamKey::ZeroOffset(j),
+        Param::Tilt(j, c) => ParamKey::Tilt(j, c),
+        Param::LinkError(j, c) => ParamKey::LinkError(j, c),
+        Param::ProbeError(c) => ParamKey::ProbeError(c),
+        Param::Harmonic { joint, order, cos } => ParamKey::Harmonic {
+            joint,
+            index: arm.joints[joint]
+                .harmonics
+                .iter()
+                .position(|h| h.order == order)?,
+            cos,
+        },
+        Param::Gravity(j) => ParamKey::Gravity(j),
+        Param::Thermal(Link::Joint(j)) => ParamKey::Thermal(Some(j)),
+        Param::Thermal(Link::Probe) => ParamKey::Thermal(None),
+        Param::FrameRotation(_) | Param::FrameTranslation(_) => return None,
+    })
+}
+
+/// The armcal unknown of a file's name (the reader has checked it against `arm`).
+pub fn param_of(k: ParamKey, arm: &Arm) -> Param {
+    match k {
+        ParamKey::ZeroOffset(j) => Param::ZeroOffset(j),
+        ParamKey::Tilt(j, c) => Param::Tilt(j, c),
+        ParamKey::LinkError(j, c) => Param::LinkError(j, c),
+        ParamKey::ProbeError(c) => Param::ProbeError(c),
+        ParamKey::Harmonic { joint, index, cos } => Param::Harmonic {
+            joint,
+            order: arm.joints[joint].harmonics[index].order,
+            cos,
+        },
+        ParamKey::Gravity(j) => Param::Gravity(j),
+        ParamKey::Thermal(Some(j)) => Param::Thermal(Link::Joint(j)),
+        ParamKey::Thermal(None) => Param::Thermal(Link::Probe),
+    }
+}
+
+impl Budget {
+    /// No uncertainty at all (a file without `[uncertainty]`).
+    pub fn zero(dof: usize) -> Budget {
+        Budget {
+            params: Vec::new(),
+            cov: DMatrix::zeros(0, 0),
+            encoder_counts: vec![0.0; dof],
+            probing_mm: 0.0,
+            temperature_c: 0.0,
+            model_mm: 0.0,
+        }
+    }
+
+    /// From the file's section, for the arm it was read with.
+    pub fn from_file(u: &Uncertainty, arm: &Arm) -> Budget {
+        Budget {
+            params: u.parameters.iter().map(|k| param_of(*k, arm)).collect(),
+            cov: u.matrix(),
+            encoder_counts: u.encoder_counts.clone(),
+            probing_mm: u.probing_mm,
+            temperature_c: u.temperature_c,
+            model_mm: u.model_mm,
+        }
+    }
+
+    /// The file's section; `Err` names an unknown the file cannot list.
+    pub fn to_file(&self, arm: &Arm) -> Result<Uncertainty, BudgetError> {
+        let parameters = self
+            .params
+            .iter()
+            .map(|p| key_of(*p, arm).ok_or(BudgetError::NotListable(*p)))
+            .collect::<Result<_, _>>()?;
+        let n = self.params.len();
+        Ok(Uncertainty {
+            parameters,
+            // Symmetric to the bit: a computed inverse is only symmetric to rounding.
+            covariance: (0..n * n)
+                .map(|k| 0.5 * (self.cov[(k / n, k % n)] + self.cov[(k % n, k / n)]))
+                .collect(),
+            encoder_counts: self.encoder_counts.clone(),
+            probing_mm: self.probing_mm,
+            temperature_c: self.temperature_c,
+            model_mm: self.model_mm,
+        })
+    }
+
+    /// σ_θ of each joint (rad): 2π · encoder_counts / counts per revolution.
+    pub fn sigma_theta(&self, arm: &Arm) -> Vec<f64> {
+        self.encoder_counts
+            .iter()
+            .zip(&arm.joints)
+            .map(|(c, j)| std::f64::consts::TAU * c / f64::from(j.encoder_counts))
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::{Effect, Terms};
+
+    #[test]
+    fn names_map_both_ways_and_the_file_round_trips() {
+        let effects = [
+            Effect::Harmonic { joint: 2, order: 3 },
+            Effect::Gravity(1),
+            Effect::Thermal(Link::Joint(4)),
+            Effect::Thermal(Link::Probe),
+        ];
+        let params = Terms::with(&effects).params(6);
+        let mut arm = Arm::default6();
+        // A harmonic ahead of the fitted one: the file's index (2) is not its order (3).
+        arm.joints[2].harmonics.push(quatarm_ref::arm::Harmonic {
+            order: 1,
+            sin: 0.0,
+            cos: 0.0,
+        });
+        for e in &effects {
+            e.with(|t| t.add_entry(&mut arm));
+        }
+        let n = params.len();
+        let b = Budget {
+            params: params.clone(),
+            cov: DMatrix::from_fn(n, n, |i, j| if i == j { 1e-8 } else { 1e-10 }),
+            encoder_counts: vec![QUANTISATION_COUNTS; 6],
+            probing_mm: 0.002,
+            temperature_c: 0.1,
+            model_mm: 0.0,
+        };
+        for p in &params {
+            let k = key_of(*p, &arm).unwrap();
+            assert_eq!(param_of(k, &arm), *p);
+            assert_eq!(ParamKey::parse(&k.name(), &arm), Ok(k));
+        }
+        let file = b.to_file(&arm).unwrap();
+        let text = quatarm_ref::calfile::write_with(&arm, Some(&file), &[]);
+        let back = quatarm_ref::calfile::parse(&text).unwrap();
+        assert_eq!(Budget::from_file(&back.uncertainty.unwrap(), &back.arm), b);
+        assert!(key_of(Param::FrameRotation(0), &arm).is_none());
+    }
+}

@@ -1,0 +1,81 @@
+//! Monte Carlo propagation of the same budget (GUM Supplement 1, JCGM 101:2008): draw every
+//! input from its distribution, evaluate the f64 reference exactly (no linearisation), and
+//! read the output's distribution from the draws.
+//!
+//! Inputs per draw: the parameters from N(estimate, C) (a symmetric square root of C, so a
+//! semi-definite C is fine), each joint angle from N(θ, σ_θ²), the temperature from
+//! N(T, σ_T²), and the probing and model terms as N(0, (σ_probe² + σ_model²) I₃) added to the
+//! tip. The covariance reported is the draws' about their mean; U95 is the 95th percentile of
+//! the draws' distances from the estimate p (the centre the spec's sphere is about), which is
+//! what the first-order radius predicts.
+
+use super::Budget;
+use crate::params::apply;
+use crate::sim::{normal, SimRng};
+use nalgebra::{DMatrix, DVector, Matrix3, SymmetricEigen, Vector3};
+use quatarm_ref::arm::Arm;
+use quatarm_ref::forward;
+
+/// A symmetric square root of a covariance (negative rounding eigenvalues taken as 0).
+pub fn sqrt_cov(c: &DMatrix<f64>) -> DMatrix<f64> {
+    if c.nrows() == 0 {
+        return c.clone();
+    }
+    let e = SymmetricEigen::new(c.clone());
+    let d = DMatrix::from_diagonal(&e.eigenvalues.map(|l| l.max(0.0).sqrt()));
+    &e.eigenvectors * d * e.eigenvectors.transpose()
+}
+
+/// What the draws say about one reading.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// The estimate p (no draw).
+    pub p: Vector3<f64>,
+    /// Covariance of the draws about their mean (mm²).
+    pub cov: Matrix3<f64>,
+    /// 95th percentile of |draw − p| (mm).
+    pub u95: f64,
+}
+
+/// `draws` draws for the reading (θ rad, T °C); `root` is [`sqrt_cov`] of the budget's C.
+pub fn point(
+    arm: &Arm,
+    budget: &Budget,
+    root: &DMatrix<f64>,
+    theta: &[f64],
+    temp_c: f64,
+    draws: usize,
+    rng: &mut SimRng,
+) -> Outcome {
+    let p = forward::forward(arm, theta, temp_c).p;
+    let st = budget.sigma_theta(arm);
+    let extra = (budget.probing_mm.powi(2) + budget.model_mm.powi(2)).sqrt();
+    let k = budget.params.len();
+    let mut samples = Vec::with_capacity(draws);
+    let mut th = theta.to_vec();
+    for _ in 0..draws {
+        let z = DVector::from_fn(k, |_, _| normal(rng));
+        let dx = root * z;
+        let a = apply(arm, &budget.params, dx.as_slice());
+        for (t, (t0, s)) in th.iter_mut().zip(theta.iter().zip(&st)) {
+            *t = t0 + s * normal(rng);
+        }
+        let tc = temp_c + budget.temperature_c * normal(rng);
+        let noise = Vector3::new(normal(rng), normal(rng), normal(rng)) * extra;
+        samples.push(forward::forward(&a, &th, tc).p + noise);
+    }
+    let m = draws.max(1) as f64;
+    let mean = samples.iter().sum::<Vector3<f64>>() / m;
+    let cov = samples
+        .iter()
+        .map(|s| (s - mean) * (s - mean).transpose())
+        .sum::<Matrix3<f64>>()
+        / (m - 1.0).max(1.0);
+    let mut dist: Vec<f64> = samples.iter().map(|s| (s - p).norm()).collect();
+    dist.sort_by(f64::total_cmp);
+    let u95 = dist
+        .get(((0.95 * m).ceil() as usize).saturating_sub(1))
+        .copied()
+        .unwrap_or(0.0);
+    Outcome { p, cov, u95 }
+}

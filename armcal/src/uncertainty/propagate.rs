@@ -1,0 +1,202 @@
+//! First-order propagation (GUM, JCGM 100 §5): the spec's
+//!
+//!   Σ_p = J_π C J_πᵀ + J_θ diag(σ_θ²) J_θᵀ + J_T σ_T² J_Tᵀ + (σ_probe² + σ_model²) I₃.
+//!
+//! J_π is [`tip_jacobian`]'s analytic columns for the budget's parameters. J_θ is analytic too:
+//! a reading error moves the tip as a zero offset of the same joint does, a_k × (p − o_k)
+//! (the same column; the harmonic and gravity terms change that slope by their own size,
+//! ~1e-4 relative, which is neglected). J_T is a central difference of the f64 reference
+//! over ±1 °C: the thermal model is linear in the temperature, so the difference is exact to
+//! rounding.
+
+use super::Budget;
+use crate::jacobian::tip_jacobian;
+use crate::params::Param;
+use nalgebra::{DMatrix, Matrix3, Vector3};
+use quatarm_ref::arm::Arm;
+use quatarm_ref::forward;
+
+/// A reading's tip and its Jacobians.
+#[derive(Clone, Debug)]
+pub struct Jacobians {
+    /// The tip (mm).
+    pub p: Vector3<f64>,
+    /// ∂p/∂π for each budget parameter.
+    pub pi: Vec<Vector3<f64>>,
+    /// ∂p/∂θ_k for each joint (mm/rad).
+    pub theta: Vec<Vector3<f64>>,
+    /// ∂p/∂T (mm/°C).
+    pub temp: Vector3<f64>,
+}
+
+/// The Jacobians at a reading (θ rad, T °C).
+pub fn jacobians(arm: &Arm, budget: &Budget, theta: &[f64], temp_c: f64) -> Jacobians {
+    let n = arm.dof();
+    let mut params: Vec<Param> = budget.params.clone();
+    params.extend((0..n).map(Param::ZeroOffset));
+    let mut cols = vec![Vector3::zeros(); params.len()];
+    let p = tip_jacobian(arm, &params, theta, temp_c, &mut cols);
+    let theta_cols = cols.split_off(budget.params.len());
+    let h = 1.0;
+    let temp = (forward::forward(arm, theta, temp_c + h).p
+        - forward::forward(arm, theta, temp_c - h).p)
+        / (2.0 * h);
+    Jacobians {
+        p,
+        pi: cols,
+        theta: theta_cols,
+        temp,
+    }
+}
+
+/// J C Jᵀ for columns `a` and `b` (the cross-covariance of two readings when they differ).
+fn sandwich(a: &[Vector3<f64>], c: &DMatrix<f64>, b: &[Vector3<f64>]) -> Matrix3<f64> {
+    let mut out = Matrix3::zeros();
+    for (i, ai) in a.iter().enumerate() {
+        for (j, bj) in b.iter().enumerate() {
+            let cij = c[(i, j)];
+            if cij != 0.0 {
+                out += ai * bj.transpose() * cij;
+            }
+        }
+    }
+    out
+}
+
+/// The terms of Σ_p that are the reading's own (angles, temperature, probing, model): those
+/// two readings do not share.
+pub fn own_terms(budget: &Budget, sigma_theta: &[f64], j: &Jacobians) -> Matrix3<f64> {
+    let mut s = Matrix3::identity() * (budget.probing_mm.powi(2) + budget.model_mm.powi(2));
+    for (col, sd) in j.theta.iter().zip(sigma_theta) {
+        s += col * col.transpose() * (sd * sd);
+    }
+    s + j.temp * j.temp.transpose() * budget.temperature_c.powi(2)
+}
+
+/// Σ_p of a reading, with its tip.
+pub fn point(
+    arm: &Arm,
+    budget: &Budget,
+    theta: &[f64],
+    temp_c: f64,
+) -> (Vector3<f64>, Matrix3<f64>) {
+    let j = jacobians(arm, budget, theta, temp_c);
+    let s = sandwich(&j.pi, &budget.cov, &j.pi) + own_terms(budget, &budget.sigma_theta(arm), &j);
+    (j.p, s)
+}
+
+/// The distance between two readings and its standard uncertainty: gauge-free, the
+/// parameters' part through the difference of the two Jacobians (what a rigid motion of the
+/// base does to both cancels), the readings' own terms independent.
+pub fn distance(arm: &Arm, budget: &Budget, a: (&[f64], f64), b: (&[f64], f64)) -> (f64, f64) {
+    let ja = jacobians(arm, budget, a.0, a.1);
+    let jb = jacobians(arm, budget, b.0, b.1);
+    let d = ja.p - jb.p;
+    let len = d.norm();
+    let u = if len > 0.0 { d / len } else { Vector3::zeros() };
+    let g: Vec<f64> = ja
+        .pi
+        .iter()
+        .zip(&jb.pi)
+        .map(|(x, y)| u.dot(&(x - y)))
+        .collect();
+    let gv = nalgebra::DVector::from_vec(g);
+    let params = (gv.transpose() * &budget.cov * &gv)[(0, 0)];
+    let st = budget.sigma_theta(arm);
+    let own = own_terms(budget, &st, &ja) + own_terms(budget, &st, &jb);
+    (
+        len,
+        (params + (u.transpose() * own * u)[(0, 0)]).max(0.0).sqrt(),
+    )
+}
+
+/// The six covariance entries in the output's order: cxx, cyy, czz, cxy, cxz, cyz.
+pub fn entries(s: &Matrix3<f64>) -> [f64; 6] {
+    [
+        s[(0, 0)],
+        s[(1, 1)],
+        s[(2, 2)],
+        s[(0, 1)],
+        s[(0, 2)],
+        s[(1, 2)],
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::{Effect, Link, Terms};
+    use quatarm_ref::arm::Harmonic;
+
+    fn arm() -> Arm {
+        let mut a = Arm::default6();
+        for (k, j) in a.joints.iter_mut().enumerate() {
+            j.zero_offset = 1e-3 * k as f64;
+            j.tilt = [2e-4, -1e-4];
+            j.thermal = 1.2e-5;
+        }
+        a.joints[2].harmonics.push(Harmonic {
+            order: 2,
+            sin: 3e-5,
+            cos: 0.0,
+        });
+        a.probe.thermal = 2e-5;
+        a
+    }
+
+    #[test]
+    fn reading_and_temperature_columns_match_finite_differences() {
+        let a = arm();
+        let b = Budget::zero(6);
+        let th = [0.3, -0.7, 1.1, 0.9, -2.0, 0.4];
+        let j = jacobians(&a, &b, &th, 27.0);
+        for k in 0..6 {
+            let h = 1e-6;
+            let mut plus = th;
+            let mut minus = th;
+            plus[k] += h;
+            minus[k] -= h;
+            let fd = (forward::forward(&a, &plus, 27.0).p - forward::forward(&a, &minus, 27.0).p)
+                / (2.0 * h);
+            // The harmonic of joint 3 changes its slope by 2·3e-5 relative: neglected.
+            assert!(
+                (fd - j.theta[k]).norm() <= 1e-4 * fd.norm() + 1e-6,
+                "joint {k}"
+            );
+        }
+        let fd = (forward::forward(&a, &th, 27.5).p - forward::forward(&a, &th, 26.5).p) / 1.0;
+        assert!((fd - j.temp).norm() < 1e-9);
+        assert!(j.temp.norm() > 1e-3, "the thermal terms move the tip");
+    }
+
+    #[test]
+    fn sigma_is_the_sum_of_the_spec_terms() {
+        let a = arm();
+        let params = Terms::with(&[Effect::Thermal(Link::Probe)]).params(6);
+        let k = params.len();
+        let mut b = Budget::zero(6);
+        b.params = params;
+        b.cov = DMatrix::from_fn(k, k, |i, j| if i == j { 1e-8 } else { 0.0 });
+        b.encoder_counts = vec![0.3; 6];
+        b.temperature_c = 0.2;
+        b.probing_mm = 0.002;
+        b.model_mm = 0.001;
+        let th = [0.3, -0.7, 1.1, 0.9, -2.0, 0.4];
+        let (_, s) = point(&a, &b, &th, 25.0);
+        let j = jacobians(&a, &b, &th, 25.0);
+        let st = b.sigma_theta(&a);
+        let mut want = Matrix3::identity() * (0.002f64.powi(2) + 0.001f64.powi(2));
+        want += j.temp * j.temp.transpose() * 0.04;
+        for (col, sd) in j.theta.iter().zip(&st) {
+            want += col * col.transpose() * (sd * sd);
+        }
+        for c in &j.pi {
+            want += c * c.transpose() * 1e-8;
+        }
+        assert!((s - want).norm() < 1e-15, "{s} {want}");
+        // The distance from a point to itself has only the two readings' own parts.
+        let (d, ud) = distance(&a, &b, (&th, 25.0), (&th, 25.0));
+        assert_eq!(d, 0.0);
+        assert!(ud == 0.0);
+    }
+}

@@ -1,0 +1,171 @@
+//! Coverage on real recordings (MUKCa, `data/mukca/`): whole sessions held out.
+//!
+//! For each session of a unit, the unit is calibrated on all its other sessions and the
+//! budget estimated as `armcal calibrate` does (probing from the training sessions' scatter
+//! about their socket centres: on these data that also holds what the model leaves
+//! unexplained). The held-out session's probings are then compared with their socket's
+//! centre, the mean of the calibrated model's ball centres over that socket's n probings in
+//! the session (the authors' metric). The deviation r_i = p_i − (1/n) Σ_j p_j is predicted
+//! to first order with its own covariance: the parameters' part through J_i − J̄ (what all
+//! the socket's probings share cancels), the readings' own parts as (1 − 2/n) Σ_i +
+//! (1/n²) Σ_j Σ_j. A probing is covered when |r_i| is within the U95 of that covariance.
+
+use super::estimate::{self, Settings};
+use super::{propagate, u95, Budget};
+use crate::data::Dataset;
+use crate::mukca::{self, Unit};
+use crate::residuals::residuals;
+use nalgebra::{DVector, Matrix3, Vector3};
+use quatarm_ref::arm::Arm;
+use serde::Serialize;
+
+/// One unit's figures.
+#[derive(Clone, Debug, Serialize)]
+pub struct UnitCoverage {
+    /// The unit.
+    pub unit: String,
+    /// Sessions held out and judged.
+    pub sessions: usize,
+    /// Sessions whose training fit failed, with the reason.
+    pub failed: Vec<String>,
+    /// Probings judged.
+    pub probings: usize,
+    /// Fraction within their predicted 95 % region, the budget as `calibrate` writes it.
+    pub covered: f64,
+    /// The same with a model term from the other sessions' held-out excess.
+    pub covered_with_model: f64,
+    /// Median U95 of the probings (mm), without and with the model term.
+    pub median_u95_mm: [f64; 2],
+    /// RMS distance of the probings from their socket's centre (mm).
+    pub rms_deviation_mm: f64,
+    /// Mean probing term the training sessions gave (mm per axis).
+    pub probing_mm: f64,
+    /// Mean model term the other sessions gave (mm per axis).
+    pub model_mm: f64,
+}
+
+/// A held-out session: its calibration, budget, data and what its probings showed.
+struct Held {
+    arm: Arm,
+    budget: Budget,
+    test: Dataset,
+    /// Per probing: (row, |deviation|, predicted U95, per-axis variance the budget missed).
+    probings: Vec<(usize, f64, f64, f64)>,
+}
+
+/// Calibrates on every session but `g` and judges `g` with the budget as written.
+fn hold_out(unit: &Unit, groups: &[i64], g: i64) -> Result<Held, super::BudgetError> {
+    let train: Vec<i64> = groups.iter().copied().filter(|x| *x != g).collect();
+    let train_data = unit.sessions_data(&train);
+    let fit = crate::calib::calibrate(&unit.arm, &train_data, &mukca::options(None))?;
+    let budget = estimate::from_fit(&fit, &train_data, None, 0.0, &Settings::default())?.budget;
+    let test = unit.sessions_data(&[g]);
+    let res = residuals(&fit.arm, &test, None);
+    let mut probings = Vec::new();
+    for end in test.layout().length.iter().flat_map(|l| [&l.a, &l.b]) {
+        let n = end.len() as f64;
+        for (i, u, trace) in socket_u95(&fit.arm, &budget, &test, end) {
+            let d = res.rows[i].norm();
+            probings.push((i, d, u, (d * d - trace) / (3.0 * (1.0 - 1.0 / n))));
+        }
+    }
+    Ok(Held {
+        arm: fit.arm,
+        budget,
+        test,
+        probings,
+    })
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+/// Leave-one-session-out coverage of a unit (`None` with fewer than two sessions). The
+/// model term of session g is the mean per-axis variance the budget missed on the other
+/// sessions' held-out probings (g's own probings never set it).
+pub fn unit_coverage(unit: &Unit) -> Option<UnitCoverage> {
+    let groups = unit.groups();
+    if groups.len() < 2 {
+        return None;
+    }
+    let (mut held, mut failed) = (Vec::new(), Vec::new());
+    for &g in &groups {
+        match hold_out(unit, &groups, g) {
+            Ok(h) => held.push(h),
+            Err(e) => failed.push(format!(
+                "{}: {e}",
+                unit.sessions.get(&g).cloned().unwrap_or_default()
+            )),
+        }
+    }
+    let all: Vec<&(usize, f64, f64, f64)> = held.iter().flat_map(|h| &h.probings).collect();
+    let judged = all.len().max(1) as f64;
+    let (mut inside_model, mut u_model, mut model_sum) = (0usize, Vec::new(), 0.0);
+    for (k, h) in held.iter().enumerate() {
+        let others: Vec<f64> = held
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| *j != k)
+            .flat_map(|(_, o)| o.probings.iter().map(|p| p.3))
+            .collect();
+        let mut b = h.budget.clone();
+        b.model_mm = (others.iter().sum::<f64>() / others.len().max(1) as f64)
+            .max(0.0)
+            .sqrt();
+        model_sum += b.model_mm;
+        for end in h.test.layout().length.iter().flat_map(|l| [&l.a, &l.b]) {
+            for (i, u, _) in socket_u95(&h.arm, &b, &h.test, end) {
+                let d = h.probings.iter().find(|p| p.0 == i).map_or(0.0, |p| p.1);
+                inside_model += usize::from(d <= u);
+                u_model.push(u);
+            }
+        }
+    }
+    let sessions = held.len().max(1) as f64;
+    Some(UnitCoverage {
+        unit: unit.name.clone(),
+        sessions: held.len(),
+        failed,
+        probings: all.len(),
+        covered: all.iter().filter(|p| p.1 <= p.2).count() as f64 / judged,
+        covered_with_model: inside_model as f64 / judged,
+        median_u95_mm: [median(all.iter().map(|p| p.2).collect()), median(u_model)],
+        rms_deviation_mm: (all.iter().map(|p| p.1 * p.1).sum::<f64>() / judged).sqrt(),
+        probing_mm: held.iter().map(|h| h.budget.probing_mm).sum::<f64>() / sessions,
+        model_mm: model_sum / sessions,
+    })
+}
+
+/// (row, U95 of its deviation from the socket's centre, trace of that deviation's
+/// covariance) for the probings `rows` of a socket.
+fn socket_u95(arm: &Arm, b: &Budget, data: &Dataset, rows: &[usize]) -> Vec<(usize, f64, f64)> {
+    let n = rows.len() as f64;
+    let st = b.sigma_theta(arm);
+    let js: Vec<propagate::Jacobians> = rows
+        .iter()
+        .map(|&i| propagate::jacobians(arm, b, &data.rows[i].theta, data.rows[i].temp_c))
+        .collect();
+    let own: Vec<Matrix3<f64>> = js.iter().map(|j| propagate::own_terms(b, &st, j)).collect();
+    let own_mean = own.iter().sum::<Matrix3<f64>>() / (n * n);
+    let k = b.params.len();
+    let mean_j: Vec<Vector3<f64>> = (0..k)
+        .map(|c| js.iter().map(|j| j.pi[c]).sum::<Vector3<f64>>() / n)
+        .collect();
+    rows.iter()
+        .zip(js.iter().zip(&own))
+        .map(|(&i, (j, o))| {
+            let mut s = o * (1.0 - 2.0 / n) + own_mean;
+            let g: Vec<DVector<f64>> = (0..3)
+                .map(|axis| DVector::from_fn(k, |c, _| j.pi[c][axis] - mean_j[c][axis]))
+                .collect();
+            for a in 0..3 {
+                for c in 0..3 {
+                    s[(a, c)] += (g[a].transpose() * &b.cov * &g[c])[(0, 0)];
+                }
+            }
+            (i, u95::u95(&s), s.trace())
+        })
+        .collect()
+}

@@ -1,0 +1,149 @@
+//! The budget in a calibration's report: each term, how it was obtained, and a picture of U95
+//! across the workspace (median over random poses, by reach from the base axis and height).
+
+use super::estimate::Estimated;
+use super::{propagate, u95, Budget};
+use crate::sim;
+use quatarm_ref::arm::Arm;
+use quatarm_ref::forward::REFERENCE_TEMP_C;
+use serde::Serialize;
+use std::fmt::Write as _;
+
+/// Reach bins (columns) and height bins (rows) of the workspace picture.
+const REACH_BINS: usize = 4;
+const HEIGHT_BINS: usize = 3;
+/// Random poses behind the picture.
+const POSES: usize = 400;
+
+/// The budget as reported.
+#[derive(Clone, Debug, Serialize)]
+pub struct BudgetReport {
+    /// Parameters in the covariance.
+    pub parameters: usize,
+    /// Factor applied to the covariance after the held-out check.
+    pub inflation: f64,
+    /// Reading (counts; the first joint's, all equal unless set per joint).
+    pub encoder_counts: f64,
+    /// Probing per axis (µm).
+    pub probing_um: f64,
+    /// Model per axis (µm).
+    pub model_um: f64,
+    /// Temperature (°C).
+    pub temperature_c: f64,
+    /// How each term was obtained.
+    pub notes: Vec<String>,
+    /// Median U95 (µm) per cell, rows from the highest height bin down; `None` for an
+    /// empty cell.
+    pub workspace_u95_um: Vec<Vec<Option<f64>>>,
+    /// Edges of the reach bins (mm, distance from the base z axis).
+    pub reach_edges_mm: Vec<f64>,
+    /// Edges of the height bins (mm, base z), highest first.
+    pub height_edges_mm: Vec<f64>,
+    /// Median and largest U95 over the poses (µm).
+    pub u95_median_um: f64,
+    /// Largest U95 over the poses (µm).
+    pub u95_max_um: f64,
+}
+
+fn median(v: &mut [f64]) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    Some(v[v.len() / 2])
+}
+
+fn edges(lo: f64, hi: f64, n: usize) -> Vec<f64> {
+    (0..=n)
+        .map(|k| lo + (hi - lo) * k as f64 / n as f64)
+        .collect()
+}
+
+fn bin(x: f64, e: &[f64]) -> usize {
+    let n = e.len() - 1;
+    (((x - e[0]) / (e[n] - e[0]) * n as f64) as usize).min(n - 1)
+}
+
+impl BudgetReport {
+    /// The report of an estimated budget for the calibrated `arm`.
+    pub fn build(est: &Estimated, arm: &Arm) -> BudgetReport {
+        let b: &Budget = &est.budget;
+        let lim = sim::limits(arm);
+        let mut rng = sim::rng(0x0095);
+        let pts: Vec<(f64, f64, f64)> = (0..POSES)
+            .map(|_| {
+                let th = sim::random_pose(&lim, &mut rng);
+                let (p, s) = propagate::point(arm, b, &th, REFERENCE_TEMP_C);
+                (p.x.hypot(p.y), p.z, u95::u95(&s) * 1e3)
+            })
+            .collect();
+        let max_r = pts.iter().map(|p| p.0).fold(0.0, f64::max);
+        let (zlo, zhi) = pts
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(a, c), p| (a.min(p.1), c.max(p.1)));
+        let re = edges(0.0, max_r.max(1e-9), REACH_BINS);
+        let he = edges(zlo, zhi.max(zlo + 1e-9), HEIGHT_BINS);
+        let mut cells = vec![vec![Vec::new(); REACH_BINS]; HEIGHT_BINS];
+        for (r, z, u) in &pts {
+            cells[HEIGHT_BINS - 1 - bin(*z, &he)][bin(*r, &re)].push(*u);
+        }
+        let mut all: Vec<f64> = pts.iter().map(|p| p.2).collect();
+        BudgetReport {
+            parameters: b.params.len(),
+            inflation: est.inflation,
+            encoder_counts: b.encoder_counts.first().copied().unwrap_or(0.0),
+            probing_um: b.probing_mm * 1e3,
+            model_um: b.model_mm * 1e3,
+            temperature_c: b.temperature_c,
+            notes: est.notes.clone(),
+            workspace_u95_um: cells
+                .iter_mut()
+                .map(|row| row.iter_mut().map(|c| median(c)).collect())
+                .collect(),
+            reach_edges_mm: re,
+            height_edges_mm: he.into_iter().rev().collect(),
+            u95_max_um: all.iter().copied().fold(0.0, f64::max),
+            u95_median_um: median(&mut all).unwrap_or(0.0),
+        }
+    }
+
+    /// The text section.
+    pub fn text(&self, s: &mut String) {
+        let _ = writeln!(
+            s,
+            "\nuncertainty budget ([uncertainty] of the calibration file)"
+        );
+        for n in &self.notes {
+            let _ = writeln!(s, "  {n}");
+        }
+        let _ = writeln!(
+            s,
+            "  U95 over {POSES} random poses: median {:.2} µm, largest {:.2} µm; median by \
+             height (rows) and reach from the base axis (columns), µm:",
+            self.u95_median_um, self.u95_max_um
+        );
+        let _ = write!(s, "  {:>19}", "height \\ reach (mm)");
+        for w in self.reach_edges_mm.windows(2) {
+            let _ = write!(s, " {:>11}", format!("{:.0}-{:.0}", w[0], w[1]));
+        }
+        let _ = writeln!(s);
+        for (row, h) in self
+            .workspace_u95_um
+            .iter()
+            .zip(self.height_edges_mm.windows(2))
+        {
+            let _ = write!(s, "  {:>19}", format!("{:.0} to {:.0}", h[1], h[0]));
+            for c in row {
+                match c {
+                    Some(u) => {
+                        let _ = write!(s, " {u:>11.2}");
+                    }
+                    None => {
+                        let _ = write!(s, " {:>11}", "-");
+                    }
+                }
+            }
+            let _ = writeln!(s);
+        }
+    }
+}

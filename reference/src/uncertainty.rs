@@ -1,0 +1,333 @@
+//! The `[uncertainty]` section of the calibration file (`spec/uncertainty.md`): the budget a
+//! calibration leaves for every later point.
+//!
+//! The reader owns the names' grammar (`joint.K.tilt.0`, `joint.K.harmonics.H.sin`, …) and
+//! checks every name against the arm it belongs to, so a name pointing at a joint or harmonic
+//! the file does not have is refused with its key, like any other bad value. What the names
+//! mean to a calibration tool (armcal's `Param`) is that tool's business.
+
+use crate::arm::Arm;
+use crate::calfile::CalFileError;
+use nalgebra::{DMatrix, SymmetricEigen};
+use toml::{Table, Value};
+
+/// One parameter of the budget, as the file names it. Indices are 0-based here; the text is
+/// 1-based for joints and harmonics, 0-based for vector components (the spec's convention).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ParamKey {
+    /// `joint.K.zero_offset`.
+    ZeroOffset(usize),
+    /// `joint.K.tilt.C` (C 0: δα, 1: δβ).
+    Tilt(usize, usize),
+    /// `joint.K.link_error.C`.
+    LinkError(usize, usize),
+    /// `probe.error.C`.
+    ProbeError(usize),
+    /// `joint.K.harmonics.H.sin` / `.cos`: the H-th entry of the joint's `harmonics`.
+    Harmonic {
+        /// Joint.
+        joint: usize,
+        /// Entry of the joint's `harmonics` list.
+        index: usize,
+        /// The cos coefficient (else sin).
+        cos: bool,
+    },
+    /// `joint.K.gravity`.
+    Gravity(usize),
+    /// `joint.K.thermal`, or `probe.thermal` (`None`).
+    Thermal(Option<usize>),
+}
+
+impl ParamKey {
+    /// Parses a name and checks that `arm` has what it points at.
+    pub fn parse(name: &str, arm: &Arm) -> Result<ParamKey, String> {
+        let parts: Vec<&str> = name.split('.').collect();
+        let comp = |s: &str, n: usize| -> Result<usize, String> {
+            s.parse::<usize>()
+                .ok()
+                .filter(|c| *c < n)
+                .ok_or_else(|| format!("`{s}` is not a component: 0 to {}", n - 1))
+        };
+        match parts.as_slice() {
+            ["probe", "error", c] => Ok(ParamKey::ProbeError(comp(c, 3)?)),
+            ["probe", "thermal"] => Ok(ParamKey::Thermal(None)),
+            ["joint", k, rest @ ..] => {
+                let j = k
+                    .parse::<usize>()
+                    .ok()
+                    .filter(|k| (1..=arm.dof()).contains(k))
+                    .ok_or_else(|| {
+                        format!("`{k}` is not a joint of this arm: 1 to {}", arm.dof())
+                    })?
+                    - 1;
+                match rest {
+                    ["zero_offset"] => Ok(ParamKey::ZeroOffset(j)),
+                    ["tilt", c] => Ok(ParamKey::Tilt(j, comp(c, 2)?)),
+                    ["link_error", c] => Ok(ParamKey::LinkError(j, comp(c, 3)?)),
+                    ["gravity"] => Ok(ParamKey::Gravity(j)),
+                    ["thermal"] => Ok(ParamKey::Thermal(Some(j))),
+                    ["harmonics", h, sc @ ("sin" | "cos")] => {
+                        let n = arm.joints[j].harmonics.len();
+                        let index = h
+                            .parse::<usize>()
+                            .ok()
+                            .filter(|h| (1..=n).contains(h))
+                            .ok_or_else(|| {
+                                format!("joint {} has {n} harmonics; `{h}` is not one", j + 1)
+                            })?
+                            - 1;
+                        Ok(ParamKey::Harmonic {
+                            joint: j,
+                            index,
+                            cos: *sc == "cos",
+                        })
+                    }
+                    _ => Err(unknown_name(name)),
+                }
+            }
+            _ => Err(unknown_name(name)),
+        }
+    }
+
+    /// The name as the file writes it.
+    pub fn name(&self) -> String {
+        match *self {
+            ParamKey::ZeroOffset(j) => format!("joint.{}.zero_offset", j + 1),
+            ParamKey::Tilt(j, c) => format!("joint.{}.tilt.{c}", j + 1),
+            ParamKey::LinkError(j, c) => format!("joint.{}.link_error.{c}", j + 1),
+            ParamKey::ProbeError(c) => format!("probe.error.{c}"),
+            ParamKey::Harmonic { joint, index, cos } => format!(
+                "joint.{}.harmonics.{}.{}",
+                joint + 1,
+                index + 1,
+                if cos { "cos" } else { "sin" }
+            ),
+            ParamKey::Gravity(j) => format!("joint.{}.gravity", j + 1),
+            ParamKey::Thermal(Some(j)) => format!("joint.{}.thermal", j + 1),
+            ParamKey::Thermal(None) => "probe.thermal".to_string(),
+        }
+    }
+}
+
+fn unknown_name(name: &str) -> String {
+    format!(
+        "`{name}` is not a parameter: joint.K.zero_offset, joint.K.tilt.C, \
+         joint.K.link_error.C, joint.K.harmonics.H.sin|cos, joint.K.gravity, joint.K.thermal, \
+         probe.error.C, probe.thermal"
+    )
+}
+
+/// The budget. Every term absent in the file is 0.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Uncertainty {
+    /// The identified parameters, in the covariance's order.
+    pub parameters: Vec<ParamKey>,
+    /// Their covariance, row-major, `parameters.len()²` values (units²).
+    pub covariance: Vec<f64>,
+    /// Standard uncertainty of each joint's reading (counts), one per joint.
+    pub encoder_counts: Vec<f64>,
+    /// Standard uncertainty of the probing, per axis (mm).
+    pub probing_mm: f64,
+    /// Standard uncertainty of the temperature reading (°C).
+    pub temperature_c: f64,
+    /// What the model leaves unexplained, per axis (mm).
+    pub model_mm: f64,
+}
+
+impl Uncertainty {
+    /// The covariance as a matrix.
+    pub fn matrix(&self) -> DMatrix<f64> {
+        let n = self.parameters.len();
+        DMatrix::from_row_slice(n, n, &self.covariance)
+    }
+}
+
+const KEYS: &[&str] = &[
+    "parameters",
+    "covariance",
+    "encoder_counts",
+    "probing_mm",
+    "temperature_c",
+    "model_mm",
+];
+
+fn err(path: impl Into<String>, message: impl Into<String>) -> CalFileError {
+    CalFileError {
+        path: path.into(),
+        message: message.into(),
+    }
+}
+
+fn non_negative(v: &Value, path: &str) -> Result<f64, CalFileError> {
+    let x = match v {
+        Value::Float(f) => *f,
+        Value::Integer(i) => *i as f64,
+        _ => return Err(err(path, "must be a number")),
+    };
+    if !x.is_finite() || x < 0.0 {
+        return Err(err(
+            path,
+            format!("{x} is not a standard uncertainty (finite, ≥ 0)"),
+        ));
+    }
+    Ok(x)
+}
+
+/// Reads the `[uncertainty]` table for `arm`.
+pub fn parse(t: &Table, arm: &Arm, unknown: &mut Vec<String>) -> Result<Uncertainty, CalFileError> {
+    for k in t.keys() {
+        if !KEYS.contains(&k.as_str()) {
+            unknown.push(format!("uncertainty.{k}"));
+        }
+    }
+    let parameters = parameters(t.get("parameters"), arm)?;
+    let covariance = covariance(t.get("covariance"), parameters.len())?;
+    let opt = |key: &str| -> Result<f64, CalFileError> {
+        t.get(key)
+            .map_or(Ok(0.0), |v| non_negative(v, &format!("uncertainty.{key}")))
+    };
+    let n = arm.dof();
+    let encoder_counts = match t.get("encoder_counts") {
+        None => vec![0.0; n],
+        Some(Value::Array(a)) if a.len() == n => a
+            .iter()
+            .enumerate()
+            .map(|(k, v)| non_negative(v, &format!("uncertainty.encoder_counts[{}]", k + 1)))
+            .collect::<Result<_, _>>()?,
+        Some(Value::Array(a)) => {
+            return Err(err(
+                "uncertainty.encoder_counts",
+                format!("{} values for {n} joints", a.len()),
+            ))
+        }
+        Some(v) => vec![non_negative(v, "uncertainty.encoder_counts")?; n],
+    };
+    Ok(Uncertainty {
+        parameters,
+        covariance,
+        encoder_counts,
+        probing_mm: opt("probing_mm")?,
+        temperature_c: opt("temperature_c")?,
+        model_mm: opt("model_mm")?,
+    })
+}
+
+fn parameters(v: Option<&Value>, arm: &Arm) -> Result<Vec<ParamKey>, CalFileError> {
+    let Some(v) = v else {
+        return Ok(Vec::new());
+    };
+    let a = v
+        .as_array()
+        .ok_or_else(|| err("uncertainty.parameters", "must be an array of names"))?;
+    let mut out: Vec<ParamKey> = Vec::with_capacity(a.len());
+    for (k, v) in a.iter().enumerate() {
+        let path = format!("uncertainty.parameters[{k}]");
+        let s = v.as_str().ok_or_else(|| err(&path, "must be a string"))?;
+        let p = ParamKey::parse(s, arm).map_err(|m| err(&path, m))?;
+        if out.contains(&p) {
+            return Err(err(&path, format!("`{s}` is listed twice")));
+        }
+        out.push(p);
+    }
+    Ok(out)
+}
+
+/// The covariance: n² finite numbers, symmetric, positive semi-definite to rounding.
+fn covariance(v: Option<&Value>, n: usize) -> Result<Vec<f64>, CalFileError> {
+    const PATH: &str = "uncertainty.covariance";
+    let c: Vec<f64> = match v {
+        None if n == 0 => return Ok(Vec::new()),
+        None => {
+            return Err(err(
+                PATH,
+                format!("missing: {n} parameters need {n}² values"),
+            ))
+        }
+        Some(Value::Array(a)) => a
+            .iter()
+            .enumerate()
+            .map(|(k, v)| match v {
+                Value::Float(f) if f.is_finite() => Ok(*f),
+                Value::Integer(i) => Ok(*i as f64),
+                _ => Err(err(format!("{PATH}[{k}]"), "must be a finite number")),
+            })
+            .collect::<Result<_, _>>()?,
+        Some(_) => return Err(err(PATH, "must be an array of numbers")),
+    };
+    if c.len() != n * n {
+        return Err(err(
+            PATH,
+            format!("{} values; {n} parameters need {}", c.len(), n * n),
+        ));
+    }
+    for i in 0..n {
+        if c[i * n + i] < 0.0 {
+            return Err(err(
+                format!("{PATH}[{}]", i * n + i),
+                "a variance (diagonal) is negative",
+            ));
+        }
+        for j in 0..i {
+            let (a, b) = (c[i * n + j], c[j * n + i]);
+            let scale = (c[i * n + i] * c[j * n + j]).sqrt();
+            if (a - b).abs() > 1e-9 * scale.max(f64::MIN_POSITIVE) {
+                return Err(err(
+                    format!("{PATH}[{}]", i * n + j),
+                    format!(
+                        "{a:e} differs from its mirror [{}] = {b:e}: not symmetric",
+                        j * n + i
+                    ),
+                ));
+            }
+        }
+    }
+    // Positive semi-definite, judged on the correlation matrix so units do not matter.
+    let d: Vec<f64> = (0..n).map(|i| c[i * n + i].sqrt()).collect();
+    let r = DMatrix::from_fn(n, n, |i, j| {
+        if d[i] == 0.0 || d[j] == 0.0 {
+            f64::from(u8::from(i == j))
+        } else {
+            c[i * n + j] / (d[i] * d[j])
+        }
+    });
+    if n > 0 {
+        let min = SymmetricEigen::new(r).eigenvalues.min();
+        if min < -1e-8 {
+            return Err(err(
+                PATH,
+                format!("not positive semi-definite (correlation eigenvalue {min:e})"),
+            ));
+        }
+    }
+    Ok(c)
+}
+
+/// Appends the section to a calibration file's text.
+pub fn write(u: &Uncertainty, s: &mut String) {
+    use std::fmt::Write as _;
+    let num = |x: f64| format!("{x:?}");
+    let _ = writeln!(s, "\n[uncertainty]");
+    let names: Vec<String> = u
+        .parameters
+        .iter()
+        .map(|p| format!("\"{}\"", p.name()))
+        .collect();
+    let _ = writeln!(s, "parameters = [{}]", names.join(", "));
+    let n = u.parameters.len();
+    let _ = writeln!(s, "covariance = [");
+    for row in u.covariance.chunks(n.max(1)) {
+        let vals: Vec<String> = row.iter().map(|x| num(*x)).collect();
+        let _ = writeln!(s, "  {},", vals.join(", "));
+    }
+    let _ = writeln!(s, "]");
+    let e = &u.encoder_counts;
+    if e.iter().all(|x| Some(x) == e.first()) && !e.is_empty() {
+        let _ = writeln!(s, "encoder_counts = {}", num(e[0]));
+    } else {
+        let vals: Vec<String> = e.iter().map(|x| num(*x)).collect();
+        let _ = writeln!(s, "encoder_counts = [{}]", vals.join(", "));
+    }
+    let _ = writeln!(s, "probing_mm = {}", num(u.probing_mm));
+    let _ = writeln!(s, "temperature_c = {}", num(u.temperature_c));
+    let _ = writeln!(s, "model_mm = {}", num(u.model_mm));
+}
