@@ -6,10 +6,12 @@
 //! - [`fit`]: least-squares spheres (free, and with a known radius).
 //! - [`statistics`]: each test's value per group and the test's result.
 //! - [`mpe`]: the MPE file and the decision rule.
+//! - [`virtual_test`]: each statistic predicted from the calibration's uncertainty budget.
 
 pub mod fit;
 pub mod mpe;
 pub mod statistics;
+pub mod virtual_test;
 
 use crate::data::Dataset;
 use mpe::{Decision, Mpe};
@@ -18,6 +20,7 @@ use quatarm_ref::arm::Arm;
 use quatarm_ref::forward;
 use statistics::{StatError, Test, Value};
 use std::collections::BTreeMap;
+use virtual_test::Interval;
 
 /// One group's test in the report (µm).
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -40,6 +43,9 @@ pub struct Row {
     pub u_source: &'static str,
     /// The decision, where an MPE is given.
     pub decision: Option<Decision>,
+    /// The virtual test's prediction (µm), where the calibration has a budget.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub predicted_um: Option<Interval>,
 }
 
 /// A whole check.
@@ -65,8 +71,14 @@ pub fn centres(arm: &Arm, data: &Dataset) -> Vec<Vector3<f64>> {
 }
 
 /// Runs every test the data supports. U is the MPE file's `test_uncertainty` where it gives
-/// one; otherwise 0, said as such (`u_source`), until the calibration's budget is propagated.
-pub fn check(arm: &Arm, data: &Dataset, mpe: Option<&Mpe>) -> Result<Check, StatError> {
+/// one; else, with a budget, twice the standard deviation of the value under the budget (the
+/// virtual test's spread, k = 2); else 0, said as such (`u_source`).
+pub fn check(
+    arm: &Arm,
+    data: &Dataset,
+    mpe: Option<&Mpe>,
+    prediction: Option<&BTreeMap<(Test, i64), Interval>>,
+) -> Result<Check, StatError> {
     let d = arm.probe.ball_diameter;
     let values = statistics::values(data, &centres(arm, data), d)?;
     let mut results = BTreeMap::new();
@@ -77,7 +89,10 @@ pub fn check(arm: &Arm, data: &Dataset, mpe: Option<&Mpe>) -> Result<Check, Stat
             worst_group.insert(t.key(), v.group);
         }
     }
-    let tests = values.iter().map(|v| row(v, mpe)).collect();
+    let tests = values
+        .iter()
+        .map(|v| row(v, mpe, prediction.and_then(|p| p.get(&(v.test, v.group)))))
+        .collect();
     Ok(Check {
         results,
         worst_group,
@@ -86,12 +101,22 @@ pub fn check(arm: &Arm, data: &Dataset, mpe: Option<&Mpe>) -> Result<Check, Stat
     })
 }
 
-fn row(v: &Value, mpe: Option<&Mpe>) -> Row {
+fn row(v: &Value, mpe: Option<&Mpe>, predicted: Option<&Interval>) -> Row {
     let limit = mpe.and_then(|m| m.of(v));
     let given = mpe.and_then(|m| m.test_uncertainty(v.test));
-    let (u, source) = match given {
-        Some(u) => (u, "test_uncertainty of the MPE file"),
-        None => (0.0, "none given: U = 0"),
+    let (u, source) = match (given, predicted) {
+        (Some(u), _) => (u, "test_uncertainty of the MPE file"),
+        (None, Some(p)) => (
+            2.0 * p.sd,
+            "the calibration's budget (2 sd of the virtual test)",
+        ),
+        (None, None) => (0.0, "none given: U = 0"),
+    };
+    let um = |i: &Interval| Interval {
+        mean: i.mean * 1e3,
+        lo: i.lo * 1e3,
+        hi: i.hi * 1e3,
+        sd: i.sd * 1e3,
     };
     Row {
         test: v.test,
@@ -102,6 +127,7 @@ fn row(v: &Value, mpe: Option<&Mpe>) -> Row {
         u_um: u * 1e3,
         u_source: source,
         decision: limit.map(|l| Decision::of(v.value_mm, u, l)),
+        predicted_um: predicted.map(um),
     }
 }
 
@@ -118,15 +144,18 @@ impl Check {
         );
         let _ = writeln!(
             s,
-            "{:<9} {:>6} {:>11} {:>9} {:>8}  decision",
-            "test", "group", "value µm", "MPE µm", "U µm"
+            "{:<9} {:>6} {:>11} {:>9} {:>8}  {:<14} predicted µm (95 %)",
+            "test", "group", "value µm", "MPE µm", "U µm", "decision"
         );
         for r in &self.tests {
             let mpe = r.mpe_um.map_or("-".to_string(), |m| format!("{m:.2}"));
             let decision = r.decision.map_or("-", Decision::name);
+            let predicted = r.predicted_um.map_or(String::new(), |p| {
+                format!("{:.2} [{:.2}, {:.2}]", p.mean, p.lo, p.hi)
+            });
             let _ = writeln!(
                 s,
-                "{:<9} {:>6} {:>11.2} {:>9} {:>8.2}  {decision}",
+                "{:<9} {:>6} {:>11.2} {:>9} {:>8.2}  {decision:<14} {predicted}",
                 r.test.key(),
                 r.group,
                 r.value_um,

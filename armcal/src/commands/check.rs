@@ -2,7 +2,8 @@
 //! measured data, with the calibrated model, and the ISO 14253-1 decision against an MPE file.
 
 use anyhow::Context;
-use armcal::acceptance::{self, mpe::Mpe};
+use armcal::acceptance::{self, mpe::Mpe, virtual_test};
+use armcal::uncertainty::Budget;
 use std::path::PathBuf;
 
 /// Arguments of `armcal check`.
@@ -19,18 +20,43 @@ pub struct Args {
     /// Print the result as JSON instead of the text report.
     #[arg(long)]
     json: bool,
+    /// The virtual test: predict each statistic (mean and 95 % interval) by Monte Carlo over
+    /// the calibration's `[uncertainty]` budget at the data's readings, beside the measured
+    /// value; the budget also gives U where the MPE file has no `test_uncertainty`.
+    #[arg(long)]
+    predict: bool,
+    /// Monte Carlo draws of the virtual test.
+    #[arg(long, default_value_t = 2000, value_parser = clap::value_parser!(u64).range(10..=1_000_000))]
+    draws: u64,
+    /// Seed of the virtual test's draws.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
 }
 
 /// Runs the subcommand: everything is read and checked before anything is printed.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    let arm = armcal::load::arm(&a.calib)?;
+    let (arm, file_budget) = armcal::load::calibration(&a.calib)?;
+    let budget = match (a.predict, file_budget) {
+        (false, _) => None,
+        (true, Some(u)) => Some(Budget::from_file(&u, &arm)),
+        (true, None) => anyhow::bail!(
+            "{}: no [uncertainty] section: --predict needs the calibration's budget (armcal \
+             calibrate writes one)",
+            a.calib.display()
+        ),
+    };
     let mpe = a.mpe.as_deref().map(Mpe::read).transpose()?;
     let data = armcal::data::read(&a.data, arm.dof())?;
     for w in &data.warnings {
         eprintln!("armcal: warning: {w}");
     }
-    let c = acceptance::check(&arm, &data, mpe.as_ref())
-        .with_context(|| format!("{}", a.data.display()))?;
+    let name = || a.data.display().to_string();
+    let prediction = budget
+        .as_ref()
+        .map(|b| virtual_test::predict(&arm, b, &data, a.draws as usize, a.seed))
+        .transpose()
+        .with_context(name)?;
+    let c = acceptance::check(&arm, &data, mpe.as_ref(), prediction.as_ref()).with_context(name)?;
     if c.tests.is_empty() {
         anyhow::bail!(
             "{}: no sphere, length or spat group: no acceptance test to run",

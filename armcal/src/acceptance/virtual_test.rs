@@ -1,0 +1,142 @@
+//! The virtual test (`spec/acceptance-tests.md`, Sładek's "virtual arm"): each statistic's
+//! distribution under the calibration's uncertainty budget, by Monte Carlo, at the test's own
+//! readings.
+//!
+//! The artefact is made ideal first, as the calibrated model sees it: each sphere group's
+//! centres moved radially onto a sphere of the true radius (D + d)/2 about its fitted centre,
+//! each bar's two ball centres to exactly `length_mm` apart, each SPAT group onto its mean. A
+//! draw then measures that ideal artefact with an arm drawn from the budget: a parameter error
+//! δ ~ N(0, C) shared by every reading (the arm is one arm during a test), and each reading's
+//! own angle, temperature, probing and model errors, all to first order through the reading's
+//! Jacobians (`uncertainty::propagate`). The statistics of each draw are computed exactly as
+//! the test computes them, so their non-linearity (a form is a range, a location a maximum) is
+//! kept: an expected P_Form is not zero even on a perfect model.
+
+use super::statistics::{self, StatError, Test};
+use crate::data::Dataset;
+use crate::sim::{normal, rng};
+use crate::uncertainty::montecarlo::sqrt_cov;
+use crate::uncertainty::propagate::{jacobians, Jacobians};
+use crate::uncertainty::Budget;
+use nalgebra::{DVector, Vector3};
+use quatarm_ref::arm::Arm;
+use std::collections::BTreeMap;
+
+/// A statistic's predicted distribution (mm).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Interval {
+    /// Mean over the draws.
+    pub mean: f64,
+    /// 2.5th percentile.
+    pub lo: f64,
+    /// 97.5th percentile.
+    pub hi: f64,
+    /// Standard deviation over the draws.
+    pub sd: f64,
+}
+
+/// Each (test, group)'s predicted distribution over `draws` draws (seeded).
+pub fn predict(
+    arm: &Arm,
+    budget: &Budget,
+    data: &Dataset,
+    draws: usize,
+    seed: u64,
+) -> Result<BTreeMap<(Test, i64), Interval>, StatError> {
+    let d = arm.probe.ball_diameter;
+    let ideal = ideal_centres(arm, data)?;
+    let jac: Vec<Jacobians> = data
+        .rows
+        .iter()
+        .map(|r| jacobians(arm, budget, &r.theta, r.temp_c))
+        .collect();
+    let root = sqrt_cov(&budget.cov);
+    let sigma_theta = budget.sigma_theta(arm);
+    let own = (budget.probing_mm.powi(2) + budget.model_mm.powi(2)).sqrt();
+    let mut g = rng(seed);
+    let mut samples: BTreeMap<(Test, i64), Vec<f64>> = BTreeMap::new();
+    for _ in 0..draws {
+        let z = DVector::from_fn(budget.params.len(), |_, _| normal(&mut g));
+        let delta = &root * z;
+        let p: Vec<Vector3<f64>> = ideal
+            .iter()
+            .zip(&jac)
+            .map(|(x, j)| {
+                let mut p = *x;
+                for (col, dk) in j.pi.iter().zip(delta.iter()) {
+                    p -= col * *dk;
+                }
+                for (col, s) in j.theta.iter().zip(&sigma_theta) {
+                    p += col * (s * normal(&mut g));
+                }
+                p += j.temp * (budget.temperature_c * normal(&mut g));
+                p + Vector3::new(normal(&mut g), normal(&mut g), normal(&mut g)) * own
+            })
+            .collect();
+        for v in statistics::values(data, &p, d)? {
+            samples
+                .entry((v.test, v.group))
+                .or_default()
+                .push(v.value_mm);
+        }
+    }
+    Ok(samples
+        .into_iter()
+        .map(|(k, mut v)| {
+            v.sort_by(f64::total_cmp);
+            let n = v.len() as f64;
+            let mean = v.iter().sum::<f64>() / n;
+            let sd =
+                (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0)).sqrt();
+            let at = |q: f64| v[((q * (n - 1.0)).round() as usize).min(v.len() - 1)];
+            (
+                k,
+                Interval {
+                    mean,
+                    lo: at(0.025),
+                    hi: at(0.975),
+                    sd,
+                },
+            )
+        })
+        .collect())
+}
+
+/// The model's centres of every row, moved onto the ideal artefact.
+fn ideal_centres(arm: &Arm, data: &Dataset) -> Result<Vec<Vector3<f64>>, StatError> {
+    let mut x = super::centres(arm, data);
+    let layout = data.layout();
+    let mean = |x: &[Vector3<f64>], rows: &[usize]| {
+        rows.iter().map(|&i| x[i]).sum::<Vector3<f64>>() / rows.len() as f64
+    };
+    for g in &layout.sphere {
+        let p: Vec<Vector3<f64>> = g.rows.iter().map(|&i| x[i]).collect();
+        let c = super::fit::free(&p)
+            .map_err(|source| StatError::Fit {
+                group: g.group,
+                source,
+            })?
+            .centre;
+        let r = (g.diameter_mm + arm.probe.ball_diameter) / 2.0;
+        for &i in &g.rows {
+            x[i] = c + (x[i] - c).normalize() * r;
+        }
+    }
+    for g in &layout.length {
+        let (a, b) = (mean(&x, &g.a), mean(&x, &g.b));
+        let b_ideal = a + (b - a).normalize() * g.length_mm;
+        for &i in &g.a {
+            x[i] = a;
+        }
+        for &i in &g.b {
+            x[i] = b_ideal;
+        }
+    }
+    for g in &layout.spat {
+        let m = mean(&x, &g.rows);
+        for &i in &g.rows {
+            x[i] = m;
+        }
+    }
+    Ok(x)
+}
