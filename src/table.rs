@@ -880,7 +880,8 @@ mod tests {
     #[test]
     fn full_width_serial_round_trip() {
         let mut d = sample();
-        d.serial.copy_from_slice(b"panda_1_with_sensor-0123456789ab");
+        d.serial
+            .copy_from_slice(b"panda_1_with_sensor-0123456789ab");
         let mut b = [0u8; MAX_TABLE_LEN];
         let n = d.encode(&mut b).unwrap();
         assert_eq!(n, HEADER_LEN + 6 * JOINT_LEN + PROBE_LEN + CRC_LEN);

@@ -41,7 +41,11 @@ fn a_serial_beyond_the_table_is_refused_by_length() {
     let d = workdir("longserial");
     let base = quatarm_ref::calfile::write(&quatarm_ref::Arm::default6(), &[]);
     let serial = "s".repeat(quatarm::table::SERIAL_LEN + 1);
-    std::fs::write(d.join("long.toml"), format!("serial = \"{serial}\"\n{base}")).unwrap();
+    std::fs::write(
+        d.join("long.toml"),
+        format!("serial = \"{serial}\"\n{base}"),
+    )
+    .unwrap();
     let o = armcal(&["table", "build", "long.toml", "-o", "t.bin"], &d);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
@@ -52,7 +56,11 @@ fn a_serial_beyond_the_table_is_refused_by_length() {
     assert!(!d.join("t.bin").exists());
     // 32 bytes fit.
     let serial = "s".repeat(quatarm::table::SERIAL_LEN);
-    std::fs::write(d.join("fits.toml"), format!("serial = \"{serial}\"\n{base}")).unwrap();
+    std::fs::write(
+        d.join("fits.toml"),
+        format!("serial = \"{serial}\"\n{base}"),
+    )
+    .unwrap();
     armcal_ok(&["table", "build", "fits.toml", "-o", "t.bin"], &d);
 }
 
@@ -65,8 +73,8 @@ fn every_mukca_calibration_builds_a_table() {
         let p = e.unwrap().path();
         if p.extension().is_some_and(|x| x == "toml") {
             let arm = quatarm_ref::calfile::read(&p).unwrap().arm;
-            let bytes = armcal::tablebuild::build(&arm)
-                .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            let bytes =
+                armcal::tablebuild::build(&arm).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
             let t = quatarm::Table::parse(&bytes).unwrap();
             assert_eq!(
                 t.serial(),
