@@ -136,7 +136,7 @@ pub mod limits {
     /// over 100 °C) stretches the arm by at most 4 %, to 2146.6 mm here. A longer arm would be
     /// clipped in the stream: the host's table builder refuses it, and on the board
     /// `Chain::new` refuses any table whose reach with that margin leaves its evaluator's
-    /// range ([`crate::ChainError::Reach`]; f32 1700 mm, its rounding's; fixed point 2000 mm,
+    /// range ([`crate::ChainError::Reach`]; f32 1650 mm, its rounding's; fixed point 2000 mm,
     /// its I12F20's). (The check lives there rather than in [`super::Table::parse`] because the
     /// chain sums the reach anyway, and the Cortex-M0 image has no flash for a second sum.)
     pub const REACH_MM: f64 = 2064.0;
