@@ -101,30 +101,41 @@ impl<P: Arithmetic> Quat<P> {
         }
     }
 
+    /// The products that the third row and column of q's rotation matrix share, each *half*
+    /// of its matrix term: z·x, w·y, z·y, w·x and x² + y². The doubling comes after the
+    /// product, never before it: a component of a half turn about x or y is ±1, and fixed
+    /// point's 2x would wrap at ±2 (I2F30) *before* entering a product, where wrapping is no
+    /// longer undone by the sums that follow — on an arm whose joint axis is flipped by π that
+    /// turned the gravity deflection's sign on the poses where fixed point rounded |x| to 1
+    /// (0.17 µm, issue 15). Sums alone may wrap: they come out right in the end.
+    #[inline(always)]
+    fn z_halves(&self) -> [P::U; 5] {
+        [
+            self.z.scale(self.x),
+            self.w.scale(self.y),
+            self.z.scale(self.y),
+            self.w.scale(self.x),
+            self.x.scale(self.x) + self.y.scale(self.y),
+        ]
+    }
+
     /// q* ẑ q for a unit q: the third row of its rotation matrix (the base frame's vertical
     /// seen from the rotated frame, for gravity).
     #[inline(always)]
     pub fn z_row(&self) -> Vec3<P::U> {
-        let (x2, y2) = (self.x + self.x, self.y + self.y);
-        [
-            self.z.scale(x2) - self.w.scale(y2),
-            self.z.scale(y2) + self.w.scale(x2),
-            P::ONE - self.x.scale(x2) - self.y.scale(y2),
-        ]
+        let [zx, wy, zy, wx, r2] = self.z_halves();
+        let (a, b) = (zx - wy, zy + wx);
+        [a + a, b + b, P::ONE - r2 - r2]
     }
 
     /// q ẑ q* for a unit q: the third column of its rotation matrix (the joint axis in the
     /// base frame, for gravity; |q| ≠ 1 scales it by |q|², which gravity does not notice).
     #[inline(always)]
     pub fn z_axis(&self) -> Vec3<P::U> {
-        // The same products as `z_row` (z·2x, not x·2z), so that a caller taking both
-        // computes them once.
-        let (x2, y2) = (self.x + self.x, self.y + self.y);
-        [
-            self.z.scale(x2) + self.w.scale(y2),
-            self.z.scale(y2) - self.w.scale(x2),
-            P::ONE - self.x.scale(x2) - self.y.scale(y2),
-        ]
+        // The same products as `z_row`, so that a caller taking both computes them once.
+        let [zx, wy, zy, wx, r2] = self.z_halves();
+        let (a, b) = (zx + wy, zy - wx);
+        [a + a, b + b, P::ONE - r2 - r2]
     }
 }
 
@@ -185,6 +196,35 @@ mod tests {
         // (p ⊗ p) ⊗ p: identity.
         let ppp = pp.mul(&p);
         assert!((f64::from(ppp.w).abs() - 1.0).abs() < 1e-6);
+    }
+
+    /// A half turn about x, a few µrad off, in fixed point with |x| rounded to exactly 1:
+    /// the vertical and the axis keep the sign of their small components (2x once wrapped to
+    /// −2 here and flipped them: issue 15's flipped vertical joint).
+    #[test]
+    fn fixed_point_half_turn_keeps_the_small_components() {
+        use crate::scalar::{Fixed, Unit};
+        let u = |x: f64| Unit::from_bits((x * 1_073_741_824.0).round() as i32);
+        for (w, x, y, z) in [
+            (3e-6, 1.0, 2e-6, -5e-6),
+            (-3e-6, -1.0, 2e-6, 5e-6),
+            (4e-6, 1e-6, 1.0, 7e-6),
+            (-4e-6, -2e-6, -1.0, -7e-6),
+        ] {
+            let q = Quat::<Fixed>::new([u(w), u(x), u(y), u(z)]);
+            let row = [
+                2.0 * (z * x - w * y),
+                2.0 * (z * y + w * x),
+                1.0 - 2.0 * (x * x + y * y),
+            ];
+            let axis = [2.0 * (z * x + w * y), 2.0 * (z * y - w * x), row[2]];
+            let (gr, ga) = (q.z_row(), q.z_axis());
+            for k in 0..3 {
+                let (r, a) = (Fixed::u_to_f64(gr[k]), Fixed::u_to_f64(ga[k]));
+                assert!((r - row[k]).abs() < 1e-8, "row {k}: {r} vs {}", row[k]);
+                assert!((a - axis[k]).abs() < 1e-8, "axis {k}: {a} vs {}", axis[k]);
+            }
+        }
     }
 
     #[test]

@@ -12,14 +12,14 @@
 //! offset  size  field                                   (all little-endian)
 //! ------  ----  ---------------------------------------------------------------
 //!      0     4  magic "QATB"
-//!      4     2  format version (1)
+//!      4     2  format version (2)
 //!      6     1  joint count N (6 or 7)
 //!      7     1  flags: bit0 geometric errors, bit1 encoder harmonics,
 //!               bit2 gravity compliance, bit3 thermal expansion (others 0)
-//!      8    16  arm serial, UTF-8, NUL-padded
-//!     24     4  total length in bytes, CRC included (= 32 + N·248 + 56 + 4)
-//!     28     4  reserved, 0
-//!     32 N·248  joint records, base first:
+//!      8    32  arm serial, UTF-8, NUL-padded
+//!     40     4  total length in bytes, CRC included (= 48 + N·248 + 56 + 4)
+//!     44     4  reserved, 0
+//!     48 N·248  joint records, base first:
 //!                 +0    1  axis: 0 = x, 1 = y, 2 = z
 //!                 +1    1  harmonic count H (0..=4)
 //!                 +2    2  reserved, 0
@@ -32,7 +32,7 @@
 //!                 +152 96  4 harmonic slots of 24 bytes, the first H used:
 //!                            +0 2 order h (1..=64), +2 6 reserved 0,
 //!                            +8 8 sin coefficient (rad), +16 8 cos coefficient (rad)
-//! 32+N·248   56  probe: vector v_p + Δv_p (mm, f64 ×3), its unit direction (f64 ×3),
+//! 48+N·248   56  probe: vector v_p + Δv_p (mm, f64 ×3), its unit direction (f64 ×3),
 //!               thermal expansion κ_p (1/°C, f64)
 //!  len−4     4  CRC-32 (ISO-HDLC, as zlib) of every byte before it
 //! ```
@@ -46,8 +46,11 @@ use core::fmt;
 
 /// The table's magic bytes.
 pub const MAGIC: [u8; 4] = *b"QATB";
-/// The format version this firmware reads and writes.
-pub const VERSION: u16 = 1;
+/// The format version this firmware reads and writes. Version 2 widened the serial from 16
+/// to 32 bytes (the MUKCa Panda `panda_1_with_sensor` has 19), which moved every field after
+/// it; a version-1 table is refused ([`TableError::UnsupportedVersion`]) rather than read, since
+/// the Cortex-M0 image has no flash for a second layout: rebuild it with `armcal table build`.
+pub const VERSION: u16 = 2;
 /// Most joints a table holds.
 pub const MAX_JOINTS: usize = 7;
 /// Fewest joints a table holds.
@@ -56,11 +59,11 @@ pub const MIN_JOINTS: usize = 6;
 pub const MAX_HARMONICS: usize = 4;
 /// Highest harmonic order.
 pub const MAX_HARMONIC_ORDER: u16 = 64;
-/// Length of the serial field.
-pub const SERIAL_LEN: usize = 16;
+/// Length of the serial field (bytes of UTF-8).
+pub const SERIAL_LEN: usize = 32;
 
 /// Header length.
-pub const HEADER_LEN: usize = 32;
+pub const HEADER_LEN: usize = 48;
 /// Length of one joint record.
 pub const JOINT_LEN: usize = 248;
 /// Length of the probe record.
@@ -75,8 +78,8 @@ mod off {
     pub const JOINTS: usize = 6;
     pub const FLAGS: usize = 7;
     pub const SERIAL: usize = 8;
-    pub const LENGTH: usize = 24;
-    pub const RESERVED: usize = 28;
+    pub const LENGTH: usize = 40;
+    pub const RESERVED: usize = 44;
     // Joint record.
     pub const AXIS: usize = 0;
     pub const HARMONICS: usize = 1;
@@ -133,7 +136,7 @@ pub mod limits {
     /// over 100 °C) stretches the arm by at most 4 %, to 2146.6 mm here. A longer arm would be
     /// clipped in the stream: the host's table builder refuses it, and on the board
     /// `Chain::new` refuses any table whose reach with that margin leaves its evaluator's
-    /// range ([`crate::ChainError::Reach`]; f32 1700 mm, its rounding's; fixed point 2000 mm,
+    /// range ([`crate::ChainError::Reach`]; f32 1650 mm, its rounding's; fixed point 2000 mm,
     /// its I12F20's). (The check lives there rather than in [`super::Table::parse`] because the
     /// chain sums the reach anyway, and the Cortex-M0 image has no flash for a second sum.)
     pub const REACH_MM: f64 = 2064.0;
@@ -251,7 +254,8 @@ impl fmt::Display for TableError {
             TableError::UnsupportedVersion(v) => {
                 write!(
                     f,
-                    "calibration table format version {v}, this firmware reads {VERSION}"
+                    "calibration table format version {v}, this firmware reads only {VERSION} \
+                     (rebuild the table from its calibration file: armcal table build)"
                 )
             }
             TableError::BadJointCount(n) => write!(f, "calibration table has {n} joints"),
@@ -871,6 +875,21 @@ mod tests {
         assert!(Table::parse_for(&buf[..n], 6).is_ok());
     }
 
+    /// The serial's full 32 bytes (a MUKCa serial has 19; version 1 held 16) come back whole,
+    /// with nothing after them disturbed.
+    #[test]
+    fn full_width_serial_round_trip() {
+        let mut d = sample();
+        d.serial
+            .copy_from_slice(b"panda_1_with_sensor-0123456789ab");
+        let mut b = [0u8; MAX_TABLE_LEN];
+        let n = d.encode(&mut b).unwrap();
+        assert_eq!(n, HEADER_LEN + 6 * JOINT_LEN + PROBE_LEN + CRC_LEN);
+        let t = Table::parse(&b[..n]).unwrap();
+        assert_eq!(t.serial(), b"panda_1_with_sensor-0123456789ab");
+        assert_eq!(t.data(), d);
+    }
+
     #[test]
     fn rejections() {
         let (buf, n) = encoded();
@@ -894,17 +913,27 @@ mod tests {
         let mut b = buf;
         b[0] = b'X';
         assert_eq!(Table::parse(&b).unwrap_err(), TableError::BadMagic);
-        let mut b = buf;
-        b[4] = 2;
-        assert_eq!(
-            Table::parse(&b).unwrap_err(),
-            TableError::UnsupportedVersion(2)
-        );
+        // Version 1 (the 16-byte serial, every later field 16 bytes earlier) and any unknown
+        // version are refused by number, with a CRC that matches, before any field is read.
+        for v in [1u8, 3, 0xff] {
+            let mut b = buf;
+            b[4] = v;
+            recrc(&mut b[..n]);
+            let e = Table::parse(&b).unwrap_err();
+            assert_eq!(e, TableError::UnsupportedVersion(u16::from(v)));
+            let msg = std::format!("{e}");
+            assert!(
+                msg.contains(&std::format!("version {v},"))
+                    && msg.contains("reads only 2")
+                    && msg.contains("armcal table build"),
+                "{msg}"
+            );
+        }
         let mut b = buf;
         b[6] = 5;
         assert_eq!(Table::parse(&b).unwrap_err(), TableError::BadJointCount(5));
         let mut b = buf;
-        b[24] += 1;
+        b[off::LENGTH] += 1;
         assert!(matches!(
             Table::parse(&b).unwrap_err(),
             TableError::BadLength(_)

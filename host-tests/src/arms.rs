@@ -177,15 +177,15 @@ pub fn case(u: &mut Unstructured) -> ArbResult<Case> {
         reference_frame: None,
     };
     // Most arms drawn at 5 m a component reach far beyond what an evaluator holds: scale
-    // many of them to just inside a limit (f32's 1700 mm and fixed point's 2000 mm with the
+    // many of them to just inside a limit (f32's and fixed point's `MAX_REACH_MM` with the
     // thermal margin, the table's 2064 mm, or anywhere below), where the chain is hardest
     // pressed.
     let reach = reach_mm(&arm);
     if reach > 0.0 {
         let target = match u.int_in_range(0u8..=4)? {
             0 => None,
-            1 => Some(2000.0 / 1.04 * (1.0 - 1e-6)),
-            2 if u.arbitrary::<bool>()? => Some(1700.0 / 1.04 * (1.0 - 1e-6)),
+            1 => Some(Fixed::MAX_REACH_MM / 1.04 * (1.0 - 1e-6)),
+            2 if u.arbitrary::<bool>()? => Some(F32::MAX_REACH_MM / 1.04 * (1.0 - 1e-6)),
             2 => Some(2064.0 * (1.0 - 1e-9)),
             _ => Some(2147.0 / 1.04 * unit(u)?),
         };

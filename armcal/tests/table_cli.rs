@@ -1,0 +1,89 @@
+//! `armcal table build` and `table show` on real calibrations: every MUKCa arm becomes a table
+//! the firmware's parser accepts and reads back as built, serial included. (Table format
+//! version 1 held a 16-byte serial and refused `panda_1_with_sensor`'s 19 bytes.)
+
+#[allow(dead_code)] // `write_truth` is for the simulating suites
+mod common;
+
+use common::{armcal, armcal_ok, workdir};
+
+#[test]
+fn panda_1_with_sensor_builds_and_reads_back() {
+    let d = workdir("panda1sensor");
+    let calib = armcal::mukca::default_dir().join("mukca-panda-panda_1_with_sensor.toml");
+    let calib = calib.to_str().unwrap();
+    armcal_ok(&["table", "build", calib, "-o", "t.bin"], &d);
+    let bytes = std::fs::read(d.join("t.bin")).unwrap();
+    let t = quatarm::Table::parse(&bytes).unwrap();
+    assert_eq!(t.serial(), b"panda_1_with_sensor");
+    assert_eq!(bytes.len(), quatarm::table::table_len(t.joint_count()));
+    // What was built is what the calibration says, bit for bit (the builder is the one the
+    // accuracy measurements use).
+    let arm = quatarm_ref::calfile::read(std::path::Path::new(calib))
+        .unwrap()
+        .arm;
+    assert_eq!(t.joint_count(), arm.dof());
+    assert_eq!(bytes, armcal::tablebuild::build(&arm).unwrap());
+    let out = armcal_ok(&["table", "show", "t.bin"], &d);
+    let shown = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        shown.contains(&format!(
+            "quatarm calibration table v{}",
+            quatarm::table::VERSION
+        )) && shown.contains("serial: panda_1_with_sensor\n"),
+        "{shown}"
+    );
+}
+
+/// The table's serial limit is named, with the serial's length, when a calibration exceeds it.
+#[test]
+fn a_serial_beyond_the_table_is_refused_by_length() {
+    let d = workdir("longserial");
+    let base = quatarm_ref::calfile::write(&quatarm_ref::Arm::default6(), &[]);
+    let serial = "s".repeat(quatarm::table::SERIAL_LEN + 1);
+    std::fs::write(
+        d.join("long.toml"),
+        format!("serial = \"{serial}\"\n{base}"),
+    )
+    .unwrap();
+    let o = armcal(&["table", "build", "long.toml", "-o", "t.bin"], &d);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("serial: 33 bytes; the table holds at most 32"),
+        "{err}"
+    );
+    assert!(!d.join("t.bin").exists());
+    // 32 bytes fit.
+    let serial = "s".repeat(quatarm::table::SERIAL_LEN);
+    std::fs::write(
+        d.join("fits.toml"),
+        format!("serial = \"{serial}\"\n{base}"),
+    )
+    .unwrap();
+    armcal_ok(&["table", "build", "fits.toml", "-o", "t.bin"], &d);
+}
+
+/// Every MUKCa calibration in `data/mukca` becomes a valid table.
+#[test]
+fn every_mukca_calibration_builds_a_table() {
+    let dir = armcal::mukca::default_dir();
+    let mut n = 0;
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_some_and(|x| x == "toml") {
+            let arm = quatarm_ref::calfile::read(&p).unwrap().arm;
+            let bytes =
+                armcal::tablebuild::build(&arm).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            let t = quatarm::Table::parse(&bytes).unwrap();
+            assert_eq!(
+                t.serial(),
+                arm.serial.as_deref().unwrap_or("").as_bytes(),
+                "{}",
+                p.display()
+            );
+            n += 1;
+        }
+    }
+    assert!(n >= 18, "{n} calibrations");
+}
