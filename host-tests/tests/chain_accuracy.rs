@@ -433,7 +433,7 @@ fn the_fuzz_finding_on_f32_reach_at_1700mm() {
     let counts = [
         904_653, 904_653, 904_653, 904_653, 904_653, 904_462, 904_653,
     ];
-    let theta = armcal::accuracy::counts_to_rad(&arm, &counts);
+    let theta = arm.counts_to_rad(&counts);
     let r = quatarm_ref::forward::forward(&arm, &theta, 120.0);
     let x = fixed.eval(&counts, 120_000).unwrap().xyz_f64();
     let tip = (0..3).map(|k| (x[k] - r.p[k]).powi(2)).sum::<f64>().sqrt() * 1000.0;
