@@ -162,3 +162,43 @@ fn bad_input_is_refused_with_its_place() {
     assert!(!o.status.success() && e.contains("sphere rows"), "{e}");
     assert!(!dir.join("cal.toml").exists());
 }
+
+#[test]
+fn the_virtual_test_needs_a_budget_and_gives_u_from_it() {
+    let dir = workdir("predict");
+    write_truth(&dir, &truth());
+    simulate(&dir, "length", "20", &[], "bar.csv");
+    let o = armcal(
+        &["check", "bar.csv", "--calib", "truth.toml", "--predict"],
+        &dir,
+    );
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("[uncertainty]"), "{e}");
+    let mut text = std::fs::read_to_string(dir.join("truth.toml")).unwrap();
+    text.push_str("\n[uncertainty]\nprobing_mm = 0.002\n");
+    std::fs::write(dir.join("budget.toml"), text).unwrap();
+    std::fs::write(dir.join("mpe.toml"), "E_Uni = 0.030\n").unwrap();
+    let v = json(
+        &dir,
+        &[
+            "check",
+            "bar.csv",
+            "--calib",
+            "budget.toml",
+            "--mpe",
+            "mpe.toml",
+            "--predict",
+            "--json",
+        ],
+    );
+    for t in v["tests"].as_array().unwrap() {
+        // Two means of five probings each, 2 µm per axis: sd 1.26 µm, U = 2 sd.
+        let u = t["U_um"].as_f64().unwrap();
+        assert!((u - 2.53).abs() < 0.5, "{t}");
+        let p = &t["predicted_um"];
+        assert!(
+            p["lo"].as_f64().unwrap() < 0.0 && p["hi"].as_f64().unwrap() > 0.0,
+            "{t}"
+        );
+    }
+}

@@ -140,3 +140,46 @@ fn ideal_centres(arm: &Arm, data: &Dataset) -> Result<Vec<Vector3<f64>>, StatErr
     }
     Ok(x)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::Kind;
+    use crate::sim::{self, Options};
+
+    fn test_set(arm: &Arm) -> Dataset {
+        let mut o = Options::new(Kind::Point, 1);
+        o.noise_mm = 0.0;
+        sim::protocol::iso_10360_12(arm, &o, &mut rng(4))
+            .unwrap()
+            .data
+    }
+
+    #[test]
+    fn a_budget_of_nothing_predicts_the_ideal_artefact() {
+        let arm = Arm::default6();
+        let data = test_set(&arm);
+        let p = predict(&arm, &Budget::zero(6), &data, 20, 1).unwrap();
+        assert_eq!(p.len(), 3 * 2 - 1 + 15 + 2 * 3, "every (test, group)");
+        for ((t, g), i) in &p {
+            assert!(i.mean.abs() < 1e-9 && i.sd < 1e-9, "{t:?} {g}: {i:?}");
+        }
+    }
+
+    #[test]
+    fn probing_noise_spreads_the_prediction_as_it_should() {
+        let arm = Arm::default6();
+        let data = test_set(&arm);
+        let mut b = Budget::zero(6);
+        b.probing_mm = 0.002;
+        let p = predict(&arm, &b, &data, 400, 2).unwrap();
+        // A bar's error is the difference of two means of five probings each, along the bar:
+        // sd = σ √(1/5 + 1/5) = 1.26 µm.
+        let e = p[&(Test::EUni, 11)];
+        assert!((e.sd - 0.002 * 0.4f64.sqrt()).abs() < 0.2e-3, "{e:?}");
+        assert!(e.lo < 0.0 && e.hi > 0.0 && e.mean.abs() < 0.3e-3);
+        // A form is a range: positive, of a few σ for 25 points.
+        let f = p[&(Test::PForm, 1)];
+        assert!(f.lo > 0.002 && f.hi < 0.02, "{f:?}");
+    }
+}
