@@ -521,6 +521,53 @@ fn joint_index(name: &str, prefix: &str) -> Option<usize> {
     digits.parse().ok().filter(|k| *k >= 1)
 }
 
+/// One record's cells, with what turns a bad one into an error naming its line and column.
+struct Cells<'a> {
+    record: &'a csv::StringRecord,
+    line: usize,
+    names: &'a [String],
+    err: &'a dyn Fn(usize, &str, String) -> DataError,
+}
+
+impl Cells<'_> {
+    fn text(&self, i: usize) -> &str {
+        self.record.get(i).unwrap_or("")
+    }
+
+    fn fail(&self, column: &str, message: String) -> DataError {
+        (self.err)(self.line, column, message)
+    }
+
+    fn number(&self, i: usize, bound: Bound) -> Result<f64, DataError> {
+        number_cell(self.text(i), &bound)
+            .map_err(|m| self.fail(&shown(&self.names[i]), m.to_string()))
+    }
+
+    fn positive(&self, i: usize, column: &str, what: &str) -> Result<f64, DataError> {
+        let x = self.number(i, Bound::coordinate())?;
+        if x <= 0.0 {
+            return Err(self.fail(column, format!("{x} is not a positive {what}")));
+        }
+        Ok(x)
+    }
+
+    fn integer(&self, i: usize, column: &str) -> Result<i64, DataError> {
+        let s = self.text(i);
+        match s.parse::<i64>() {
+            Ok(g) => Ok(g),
+            Err(_) => match s.parse::<f64>() {
+                Ok(f) if f.is_finite() && f.fract() == 0.0 && f.abs() < 9e15 => Ok(f as i64),
+                _ => Err(self.fail(column, format!("`{}` is not an integer", shown(s)))),
+            },
+        }
+    }
+
+    /// The column a kind's rows need, or the error saying so.
+    fn needed(&self, col: Option<usize>, column: &str, kind: &str) -> Result<usize, DataError> {
+        col.ok_or_else(|| self.fail(column, format!("missing column: `{kind}` rows need it")))
+    }
+}
+
 fn parse_row(
     record: &csv::StringRecord,
     line: usize,
@@ -528,18 +575,19 @@ fn parse_row(
     c: &Columns,
     err: &dyn Fn(usize, &str, String) -> DataError,
 ) -> Result<Row, DataError> {
-    let cell = |i: usize| record.get(i).unwrap_or("");
-    let number = |i: usize, bound: Bound| -> Result<f64, DataError> {
-        number_cell(cell(i), &bound).map_err(|m| err(line, &shown(&names[i]), m.to_string()))
+    let cells = Cells {
+        record,
+        line,
+        names,
+        err,
     };
-    let kind = match cell(c.kind) {
+    let kind = match cells.text(c.kind) {
         "point" => Kind::Point,
         "spat" => Kind::Spat,
         "length" => Kind::Length,
         "sphere" => Kind::Sphere,
         other => {
-            return Err(err(
-                line,
+            return Err(cells.fail(
                 "kind",
                 format!(
                     "unknown kind `{}`: point, spat, length or sphere",
@@ -548,113 +596,29 @@ fn parse_row(
             ))
         }
     };
-    let integer = |i: usize, column: &str| -> Result<i64, DataError> {
-        let s = cell(i);
-        match s.parse::<i64>() {
-            Ok(g) => Ok(g),
-            Err(_) => match s.parse::<f64>() {
-                Ok(f) if f.is_finite() && f.fract() == 0.0 && f.abs() < 9e15 => Ok(f as i64),
-                _ => Err(err(
-                    line,
-                    column,
-                    format!("`{}` is not an integer", shown(s)),
-                )),
-            },
-        }
-    };
-    let group = integer(c.group, "group")?;
+    let group = cells.integer(c.group, "group")?;
     let theta = c
         .joints
         .iter()
-        .map(|&i| number(i, Bound::joint()))
+        .map(|&i| cells.number(i, Bound::joint()))
         .collect::<Result<Vec<_>, _>>()?;
-    let xyz = if kind == Kind::Point {
-        let Some(cols) = c.xyz else {
-            let missing = ["x", "y", "z"]
-                .into_iter()
-                .find(|n| !names.iter().any(|m| m == n))
-                .unwrap_or("x");
-            return Err(err(
-                line,
-                missing,
-                "missing column: `point` rows need x, y and z".into(),
-            ));
-        };
-        Some([
-            number(cols[0], Bound::coordinate())?,
-            number(cols[1], Bound::coordinate())?,
-            number(cols[2], Bound::coordinate())?,
-        ])
-    } else {
-        None
+    let xyz = match kind {
+        Kind::Point => Some(point_cells(&cells, c)?),
+        _ => None,
     };
-    let (end, length_mm) = if kind == Kind::Length {
-        let Some(ce) = c.end else {
-            return Err(err(
-                line,
-                "end",
-                "missing column: `length` rows need it".into(),
-            ));
-        };
-        let Some(cl) = c.length else {
-            return Err(err(
-                line,
-                "length_mm",
-                "missing column: `length` rows need it".into(),
-            ));
-        };
-        let end = match cell(ce) {
-            "a" | "A" => End::A,
-            "b" | "B" => End::B,
-            other => {
-                return Err(err(
-                    line,
-                    "end",
-                    format!("`{}` is not an end: a or b", shown(other)),
-                ))
-            }
-        };
-        let l = number(cl, Bound::coordinate())?;
-        if l <= 0.0 {
-            return Err(err(
-                line,
-                "length_mm",
-                format!("{l} is not a positive length"),
-            ));
+    let (end, length_mm) = match kind {
+        Kind::Length => {
+            let (end, l) = bar_cells(&cells, c)?;
+            (Some(end), Some(l))
         }
-        (Some(end), Some(l))
-    } else {
-        (None, None)
+        _ => (None, None),
     };
-    let sphere = if kind == Kind::Sphere {
-        let Some(cd) = c.diameter else {
-            return Err(err(
-                line,
-                "diameter_mm",
-                "missing column: `sphere` rows need it".into(),
-            ));
-        };
-        let diameter_mm = number(cd, Bound::coordinate())?;
-        if diameter_mm <= 0.0 {
-            return Err(err(
-                line,
-                "diameter_mm",
-                format!("{diameter_mm} is not a positive diameter"),
-            ));
-        }
-        let articulation = match c.articulation {
-            Some(i) if !cell(i).is_empty() => Some(integer(i, "articulation")?),
-            _ => None,
-        };
-        Some(Touch {
-            diameter_mm,
-            articulation,
-        })
-    } else {
-        None
+    let sphere = match kind {
+        Kind::Sphere => Some(sphere_cells(&cells, c)?),
+        _ => None,
     };
     let temp_c = match c.temp {
-        Some(i) if !cell(i).is_empty() => number(i, Bound::temperature())?,
+        Some(i) if !cells.text(i).is_empty() => cells.number(i, Bound::temperature())?,
         _ => quatarm_ref::forward::REFERENCE_TEMP_C,
     };
     Ok(Row {
@@ -667,6 +631,51 @@ fn parse_row(
         sphere,
         temp_c,
         line,
+    })
+}
+
+/// A `point` row's reference coordinates.
+fn point_cells(cells: &Cells, c: &Columns) -> Result<[f64; 3], DataError> {
+    let Some(cols) = c.xyz else {
+        let missing = ["x", "y", "z"]
+            .into_iter()
+            .find(|n| !cells.names.iter().any(|m| m == n))
+            .unwrap_or("x");
+        return Err(cells.fail(
+            missing,
+            "missing column: `point` rows need x, y and z".into(),
+        ));
+    };
+    Ok([
+        cells.number(cols[0], Bound::coordinate())?,
+        cells.number(cols[1], Bound::coordinate())?,
+        cells.number(cols[2], Bound::coordinate())?,
+    ])
+}
+
+/// A `length` row's ball and bar length.
+fn bar_cells(cells: &Cells, c: &Columns) -> Result<(End, f64), DataError> {
+    let ce = cells.needed(c.end, "end", "length")?;
+    let cl = cells.needed(c.length, "length_mm", "length")?;
+    let end = match cells.text(ce) {
+        "a" | "A" => End::A,
+        "b" | "B" => End::B,
+        other => return Err(cells.fail("end", format!("`{}` is not an end: a or b", shown(other)))),
+    };
+    Ok((end, cells.positive(cl, "length_mm", "length")?))
+}
+
+/// A `sphere` row's test sphere.
+fn sphere_cells(cells: &Cells, c: &Columns) -> Result<Touch, DataError> {
+    let cd = cells.needed(c.diameter, "diameter_mm", "sphere")?;
+    let diameter_mm = cells.positive(cd, "diameter_mm", "diameter")?;
+    let articulation = match c.articulation {
+        Some(i) if !cells.text(i).is_empty() => Some(cells.integer(i, "articulation")?),
+        _ => None,
+    };
+    Ok(Touch {
+        diameter_mm,
+        articulation,
     })
 }
 

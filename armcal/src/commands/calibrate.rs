@@ -89,23 +89,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     for w in &data.warnings {
         eprintln!("armcal: warning: {w}");
     }
-    let mut opts = calib::Options {
-        terms: terms.clone(),
-        allow_degenerate: a.allow_degenerate,
-        significance: a.significance,
-        ..calib::Options::default()
-    };
-    opts.lm.max_iterations = a.max_iter as usize;
-    if let (Some(angle_rad), Some(length_mm)) = (a.prior_angle, a.prior_length) {
-        opts.prior = Some(Prior {
-            angle_rad,
-            length_mm,
-            noise_mm: None,
-        });
-    }
-    if let Some(lambda) = a.ridge {
-        opts.ridge = Some(calib::Ridge { lambda });
-    }
+    let opts = options(&a, &terms);
     let mut observer = armcal::progress::for_command(a.progress, "calibrating");
     let fit = calib::calibrate_observed(&start, &data, &opts, observer.as_mut())
         .with_context(|| format!("cannot calibrate from {}", a.data.display()))?;
@@ -166,20 +150,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             None
         }
     };
-    let text = calfile::write_with(&fit.arm, budget.as_ref(), &refs);
-    let (back, back_budget) = armcal::load::written_with(&text)
-        .map_err(|e| anyhow::anyhow!("the calibration file written does not read back: {e}"))?;
-    if back_budget != budget {
-        bail!("the [uncertainty] section written does not read back the same (a bug)");
-    }
-    for r in data.rows.iter().take(50) {
-        let d = (forward::forward(&back, &r.theta, r.temp_c).p
-            - forward::forward(&fit.arm, &r.theta, r.temp_c).p)
-            .norm();
-        if d > 1e-9 {
-            bail!("the calibration file written evaluates {d} mm away from the fit (a bug)");
-        }
-    }
+    let text = checked_text(&fit.arm, budget, &refs, &data)?;
     let mut files = armcal::output::Staged::new();
     files.write(&a.output, text.as_bytes())?;
     rep.output.calibration = Some(a.output.display().to_string());
@@ -201,6 +172,53 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         print!("{}", rep.text());
     }
     Ok(())
+}
+
+/// The fit's options from the arguments.
+fn options(a: &Args, terms: &Terms) -> calib::Options {
+    let mut opts = calib::Options {
+        terms: terms.clone(),
+        allow_degenerate: a.allow_degenerate,
+        significance: a.significance,
+        ..calib::Options::default()
+    };
+    opts.lm.max_iterations = a.max_iter as usize;
+    if let (Some(angle_rad), Some(length_mm)) = (a.prior_angle, a.prior_length) {
+        opts.prior = Some(Prior {
+            angle_rad,
+            length_mm,
+            noise_mm: None,
+        });
+    }
+    if let Some(lambda) = a.ridge {
+        opts.ridge = Some(calib::Ridge { lambda });
+    }
+    opts
+}
+
+/// The calibration file's text, checked by reading it back (the budget too) and evaluating
+/// it on the first rows of the data against the fit itself.
+fn checked_text(
+    arm: &quatarm_ref::arm::Arm,
+    budget: Option<quatarm_ref::calfile::Uncertainty>,
+    header: &[&str],
+    data: &armcal::data::Dataset,
+) -> anyhow::Result<String> {
+    let text = calfile::write_with(arm, budget.as_ref(), header);
+    let (back, back_budget) = armcal::load::written_with(&text)
+        .map_err(|e| anyhow::anyhow!("the calibration file written does not read back: {e}"))?;
+    if back_budget != budget {
+        bail!("the [uncertainty] section written does not read back the same (a bug)");
+    }
+    for r in data.rows.iter().take(50) {
+        let d = (forward::forward(&back, &r.theta, r.temp_c).p
+            - forward::forward(arm, &r.theta, r.temp_c).p)
+            .norm();
+        if d > 1e-9 {
+            bail!("the calibration file written evaluates {d} mm away from the fit (a bug)");
+        }
+    }
+    Ok(text)
 }
 
 /// The help of `--terms`, with an example of every effect from the registry.
