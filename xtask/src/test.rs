@@ -94,6 +94,26 @@ pub fn run() -> Result<()> {
         }
     }
 
+    // Clippy needs rustup's: Debian's Rust ships none. The boards are clippy-clean with it.
+    match survey
+        .available
+        .iter()
+        .find(|tc| tc.kind == toolchain::Kind::Rustup)
+    {
+        Some(tc) => {
+            step(&format!("clippy on the boards ({})", tc.version));
+            for b in boards()? {
+                let mut cmd = tc.cargo(&b.dir(), b.target, "clippy");
+                cmd.args(["--release", "--locked", "--bins", "--", "-D", "warnings"]);
+                check(&mut cmd, &format!("cargo clippy in {}", b.dir().display()))?;
+            }
+        }
+        None => eprintln!(
+            "\nxtask test: clippy on the boards skipped: it needs rustup's thumb targets \
+             (Debian's Rust ships no clippy)"
+        ),
+    }
+
     step("QEMU end-to-end");
     // The tests compare the stream with what the `armcal` binary prints.
     check(
