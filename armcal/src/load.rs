@@ -39,3 +39,39 @@ pub fn written_with(
 ) -> Result<(Arm, Option<calfile::Uncertainty>), calfile::CalFileError> {
     calfile::parse_with(text, &CALFILE).map(|p| (p.arm, p.uncertainty))
 }
+
+/// A calibration file without the budget an option needs.
+#[derive(Debug, thiserror::Error)]
+pub enum BudgetLoadError {
+    /// The file itself.
+    #[error(transparent)]
+    CalFile(#[from] calfile::CalFileError),
+    /// No `[uncertainty]` section.
+    #[error("{path}: no [uncertainty] section: {needed_by} needs the calibration's budget (armcal calibrate writes one)")]
+    NoBudget {
+        /// The file.
+        path: String,
+        /// The option that needs it.
+        needed_by: &'static str,
+    },
+}
+
+/// A calibration and, where `needed_by` names an option that needs it, its uncertainty
+/// budget: a file without one is refused rather than taken as a zero uncertainty.
+pub fn calibration_and_budget(
+    path: &Path,
+    needed_by: Option<&'static str>,
+) -> Result<(Arm, Option<crate::uncertainty::Budget>), BudgetLoadError> {
+    let (arm, file) = calibration(path)?;
+    let budget = match (needed_by, file) {
+        (None, _) => None,
+        (Some(_), Some(u)) => Some(crate::uncertainty::Budget::from_file(&u, &arm)),
+        (Some(needed_by), None) => {
+            return Err(BudgetLoadError::NoBudget {
+                path: path.display().to_string(),
+                needed_by,
+            })
+        }
+    };
+    Ok((arm, budget))
+}

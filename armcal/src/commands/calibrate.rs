@@ -1,13 +1,12 @@
 //! `armcal calibrate`: identify an arm's parameters from measured data.
 
-use anyhow::{bail, Context};
+use anyhow::Context;
 use armcal::calib::{self, Prior};
 use armcal::holdout;
 use armcal::params::Terms;
 use armcal::report;
 use armcal::residuals::{residuals, summarise};
 use quatarm_ref::arm::Arm;
-use quatarm_ref::{calfile, forward};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `armcal calibrate`.
@@ -150,7 +149,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             None
         }
     };
-    let text = checked_text(&fit.arm, budget, &refs, &data)?;
+    let text = super::written::checked_text(&fit.arm, budget, &refs, &data)?;
     let mut files = armcal::output::Staged::new();
     files.write(&a.output, text.as_bytes())?;
     rep.output.calibration = Some(a.output.display().to_string());
@@ -194,31 +193,6 @@ fn options(a: &Args, terms: &Terms) -> calib::Options {
         opts.ridge = Some(calib::Ridge { lambda });
     }
     opts
-}
-
-/// The calibration file's text, checked by reading it back (the budget too) and evaluating
-/// it on the first rows of the data against the fit itself.
-fn checked_text(
-    arm: &quatarm_ref::arm::Arm,
-    budget: Option<quatarm_ref::calfile::Uncertainty>,
-    header: &[&str],
-    data: &armcal::data::Dataset,
-) -> anyhow::Result<String> {
-    let text = calfile::write_with(arm, budget.as_ref(), header);
-    let (back, back_budget) = armcal::load::written_with(&text)
-        .map_err(|e| anyhow::anyhow!("the calibration file written does not read back: {e}"))?;
-    if back_budget != budget {
-        bail!("the [uncertainty] section written does not read back the same (a bug)");
-    }
-    for r in data.rows.iter().take(50) {
-        let d = (forward::forward(&back, &r.theta, r.temp_c).p
-            - forward::forward(arm, &r.theta, r.temp_c).p)
-            .norm();
-        if d > 1e-9 {
-            bail!("the calibration file written evaluates {d} mm away from the fit (a bug)");
-        }
-    }
-    Ok(text)
 }
 
 /// The help of `--terms`, with an example of every effect from the registry.

@@ -3,7 +3,6 @@
 
 use anyhow::Context;
 use armcal::acceptance::{self, mpe::Mpe, virtual_test};
-use armcal::uncertainty::Budget;
 use std::path::PathBuf;
 
 /// Arguments of `armcal check`.
@@ -35,16 +34,8 @@ pub struct Args {
 
 /// Runs the subcommand: everything is read and checked before anything is printed.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    let (arm, file_budget) = armcal::load::calibration(&a.calib)?;
-    let budget = match (a.predict, file_budget) {
-        (false, _) => None,
-        (true, Some(u)) => Some(Budget::from_file(&u, &arm)),
-        (true, None) => anyhow::bail!(
-            "{}: no [uncertainty] section: --predict needs the calibration's budget (armcal \
-             calibrate writes one)",
-            a.calib.display()
-        ),
-    };
+    let (arm, budget) =
+        armcal::load::calibration_and_budget(&a.calib, a.predict.then_some("--predict"))?;
     let mpe = a.mpe.as_deref().map(Mpe::read).transpose()?;
     let data = armcal::data::read(&a.data, arm.dof())?;
     for w in &data.warnings {

@@ -7,7 +7,6 @@ use armcal::diagnose::report::Report;
 use armcal::diagnose::Diagnosis;
 use armcal::diagnose::{self, patterns, plots, report, FoldChoice};
 use armcal::output::Staged;
-use quatarm_ref::{calfile, forward};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `armcal diagnose`.
@@ -167,20 +166,7 @@ fn stage_extended(
             None
         }
     };
-    let text = calfile::write_with(arm, budget.as_ref(), &refs);
-    let (back, back_budget) = armcal::load::written_with(&text)
-        .map_err(|e| anyhow::anyhow!("the calibration file written does not read back: {e}"))?;
-    if back_budget != budget {
-        bail!("the [uncertainty] section written does not read back the same (a bug)");
-    }
-    for r in data.rows.iter().take(50) {
-        let dist = (forward::forward(&back, &r.theta, r.temp_c).p
-            - forward::forward(arm, &r.theta, r.temp_c).p)
-            .norm();
-        if dist > 1e-9 {
-            bail!("the calibration file written evaluates {dist} mm away from the fit (a bug)");
-        }
-    }
+    let text = super::written::checked_text(arm, budget, &refs, data)?;
     files.write(out, text.as_bytes())?;
     rep.output.calibration = Some(out.display().to_string());
     let table = out.with_extension("bin");

@@ -3,7 +3,6 @@
 use anyhow::Context;
 use armcal::eval::{evaluate, read_rows, Evaluator};
 use armcal::uncertainty::columns::{columns, Method, HEADER};
-use armcal::uncertainty::Budget;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -36,16 +35,10 @@ pub struct Args {
 
 /// Runs the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let (arm, file_budget) = armcal::load::calibration(&args.calib)?;
-    let budget = match (args.uncertainty, file_budget) {
-        (false, _) => None,
-        (true, Some(u)) => Some(Budget::from_file(&u, &arm)),
-        (true, None) => anyhow::bail!(
-            "{}: no [uncertainty] section, so no uncertainty to propagate (armcal calibrate \
-             writes one)",
-            args.calib.display()
-        ),
-    };
+    let (arm, budget) = armcal::load::calibration_and_budget(
+        &args.calib,
+        args.uncertainty.then_some("--uncertainty"),
+    )?;
     let (rows, name) = match &args.input {
         Some(p) => {
             let f = std::fs::File::open(p).with_context(|| format!("{}", p.display()))?;

@@ -10,3 +10,4 @@ pub mod diagnose;
 pub mod eval;
 pub mod simulate;
 pub mod table;
+pub mod written;
