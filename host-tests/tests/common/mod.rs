@@ -241,8 +241,10 @@ pub fn bad_tables(name: &str) {
     let (mut arm, table) = calibration(&default_calibration_path()).unwrap();
     let mut corrupt = table.clone();
     corrupt[200] ^= 0x01;
+    // A version this firmware does not read: the one after its own (u16 LE at byte 4).
     let mut version = table.clone();
-    version[4] = 2;
+    let next = quatarm::table::VERSION + 1;
+    version[4..6].copy_from_slice(&next.to_le_bytes());
     let n = version.len();
     let crc = quatarm::table::CRC.checksum(&version[..n - 4]);
     version[n - 4..].copy_from_slice(&crc.to_le_bytes());
