@@ -49,6 +49,16 @@ pub enum Reading {
     Counts(Vec<u32>),
 }
 
+impl Reading {
+    /// The reading's angles (rad), as the f64 reference evaluates it.
+    pub fn radians(&self, arm: &Arm) -> Vec<f64> {
+        match self {
+            Reading::Radians(v) => v.clone(),
+            Reading::Counts(c) => arm.counts_to_rad(c),
+        }
+    }
+}
+
 /// Parsed input: readings with their temperature (°C).
 pub type Rows = Vec<(Reading, f64)>;
 
@@ -235,15 +245,7 @@ pub fn evaluate(
     match evaluator {
         Evaluator::F64 => {
             for (r, t) in rows {
-                let theta: Vec<f64> = match r {
-                    Reading::Radians(v) => v.clone(),
-                    Reading::Counts(c) => c
-                        .iter()
-                        .zip(&arm.joints)
-                        .map(|(&c, j)| j.count_to_rad(i64::from(c)))
-                        .collect(),
-                };
-                let pose = quatarm_ref::forward::forward(arm, &theta, *t);
+                let pose = quatarm_ref::forward::forward(arm, &r.radians(arm), *t);
                 let _ = writeln!(
                     out,
                     "{:.9},{:.9},{:.9},{:.12},{:.12},{:.12}",

@@ -55,3 +55,22 @@ impl BudgetArgs {
         Ok((file, BudgetReport::build(&est, &fit.arm)))
     }
 }
+
+/// The budget for the file, or none and a warning that says why: a fit without a covariance
+/// is still written (`calibrate`, `diagnose -o`), without an `[uncertainty]` section.
+pub fn or_warning(
+    made: anyhow::Result<(Uncertainty, BudgetReport)>,
+    report: &mut Option<BudgetReport>,
+    warnings: &mut Vec<String>,
+) -> Option<Uncertainty> {
+    match made {
+        Ok((budget, budget_report)) => {
+            *report = Some(budget_report);
+            Some(budget)
+        }
+        Err(e) => {
+            warnings.push(format!("{e}; the file has no [uncertainty] section"));
+            None
+        }
+    }
+}

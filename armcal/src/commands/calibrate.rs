@@ -132,23 +132,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         ),
     ];
     let refs: Vec<&str> = header.iter().map(String::as_str).collect();
-    // A fit without a covariance is still written: without a budget, and said.
-    let budget = match a.budget.budget(
+    let made = a.budget.budget(
         &fit,
         &data,
         validation.as_ref(),
         rep.residuals.after.all.rms_um,
-    ) {
-        Ok((budget, budget_report)) => {
-            rep.uncertainty = Some(budget_report);
-            Some(budget)
-        }
-        Err(e) => {
-            rep.warnings
-                .push(format!("{e}; the file has no [uncertainty] section"));
-            None
-        }
-    };
+    );
+    let budget = super::budget::or_warning(made, &mut rep.uncertainty, &mut rep.warnings);
     let text = super::written::checked_text(&fit.arm, budget, &refs, &data)?;
     let mut files = armcal::output::Staged::new();
     files.write(&a.output, text.as_bytes())?;

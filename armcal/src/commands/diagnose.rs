@@ -154,18 +154,8 @@ fn stage_extended(
     let fit = &d.extended.fit;
     let in_sample =
         armcal::residuals::summarise(&armcal::residuals::residuals(arm, data, fit.frame), data);
-    // A fit without a covariance is still written: without a budget, and said.
-    let budget = match a.budget.budget(fit, data, None, in_sample.all.rms_um) {
-        Ok((budget, budget_report)) => {
-            rep.uncertainty = Some(budget_report);
-            Some(budget)
-        }
-        Err(e) => {
-            rep.warnings
-                .push(format!("{e}; the file has no [uncertainty] section"));
-            None
-        }
-    };
+    let made = a.budget.budget(fit, data, None, in_sample.all.rms_um);
+    let budget = super::budget::or_warning(made, &mut rep.uncertainty, &mut rep.warnings);
     let text = super::written::checked_text(arm, budget, &refs, data)?;
     files.write(out, text.as_bytes())?;
     rep.output.calibration = Some(out.display().to_string());

@@ -2,7 +2,7 @@
 //! first-order propagation or by Monte Carlo (GUM Supplement 1) of the same budget.
 
 use super::{montecarlo, propagate, u95, Budget};
-use crate::eval::{Reading, Rows};
+use crate::eval::Rows;
 use nalgebra::Matrix3;
 use quatarm_ref::arm::Arm;
 
@@ -17,18 +17,6 @@ pub enum Method {
 
 /// The header the columns add.
 pub const HEADER: &str = "cxx,cyy,czz,cxy,cxz,cyz,U95";
-
-/// The reading's angles (rad), as the f64 reference evaluates it.
-pub fn radians(arm: &Arm, r: &Reading) -> Vec<f64> {
-    match r {
-        Reading::Radians(v) => v.clone(),
-        Reading::Counts(c) => c
-            .iter()
-            .zip(&arm.joints)
-            .map(|(&c, j)| j.count_to_rad(i64::from(c)))
-            .collect(),
-    }
-}
 
 fn line(s: &Matrix3<f64>, u: f64) -> String {
     let e = propagate::entries(s);
@@ -52,7 +40,7 @@ pub fn columns(
     let mut rng = crate::sim::rng(seed);
     rows.iter()
         .map(|(r, t)| {
-            let th = radians(arm, r);
+            let th = r.radians(arm);
             match method {
                 Method::FirstOrder => {
                     let (_, s) = propagate::point(arm, budget, &th, *t);
