@@ -12,6 +12,7 @@
 //!   cores without. Encoder harmonics, gravity compliance and thermal expansion are part of
 //!   the model ([`model`], [`physics`]). [`MatrixChain`] is the same model as 3×4 matrices,
 //!   for comparison.
+//! - [`uncertainty`]: every point's covariance and U95, from the budget the table carries.
 //! - [`stream`]: the framed messages both ways (postcard, CRC-32, COBS), the hub's report
 //!   logic and the decoder of its receive side.
 //! - [`encoder::AbsoluteEncoder`] and [`temperature::TemperatureSensor`]: what a hub needs of
@@ -42,7 +43,11 @@
 //!         ..JointData::default()
 //!     };
 //! }
-//! data.probe = ProbeData { vector: [0.0, 0.0, 50.0], direction: [0.0, 0.0, 1.0], thermal: 0.0 };
+//! data.probe = ProbeData {
+//!     vector: [0.0, 0.0, 50.0],
+//!     direction: [0.0, 0.0, 1.0],
+//!     ..ProbeData::default()
+//! };
 //! data.flags = data.content_flags();
 //!
 //! let mut bytes = [0u8; MAX_TABLE_LEN];
@@ -75,6 +80,7 @@ pub mod scalar;
 pub mod stream;
 pub mod table;
 pub mod temperature;
+pub mod uncertainty;
 
 pub use chain::{Chain, ChainF32, ChainFixed, Evaluator};
 pub use matrix::{MatrixChain, MatrixChainF32, MatrixChainFixed};

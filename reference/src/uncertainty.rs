@@ -89,6 +89,29 @@ impl ParamKey {
         }
     }
 
+    /// Adds `dx` to the value this key names in `arm` (which [`ParamKey::parse`] checked has
+    /// it): how a budget's direction in parameter space becomes an arm (the hub's factor
+    /// tables, `quatarm_wire::budget`).
+    pub fn add_to(&self, arm: &mut Arm, dx: f64) {
+        match *self {
+            ParamKey::ZeroOffset(j) => arm.joints[j].zero_offset += dx,
+            ParamKey::Tilt(j, c) => arm.joints[j].tilt[c] += dx,
+            ParamKey::LinkError(j, c) => arm.joints[j].link_error[c] += dx,
+            ParamKey::ProbeError(c) => arm.probe.error[c] += dx,
+            ParamKey::Harmonic { joint, index, cos } => {
+                let h = &mut arm.joints[joint].harmonics[index];
+                if cos {
+                    h.cos += dx;
+                } else {
+                    h.sin += dx;
+                }
+            }
+            ParamKey::Gravity(j) => arm.joints[j].gravity += dx,
+            ParamKey::Thermal(Some(j)) => arm.joints[j].thermal += dx,
+            ParamKey::Thermal(None) => arm.probe.thermal += dx,
+        }
+    }
+
     /// The name as the file writes it.
     pub fn name(&self) -> String {
         match *self {

@@ -21,5 +21,6 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod budget;
 pub mod stream_decode;
 pub mod tablebuild;

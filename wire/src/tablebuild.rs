@@ -6,10 +6,12 @@
 //! joint rotation, which commutes with the rest of R(u, ·)), the same as a matrix, the link and
 //! probe vectors with their errors, and the probe's unit direction. Layout: `quatarm::table`.
 
+use crate::budget::budget_data;
 use quatarm::table::{
     quat_to_matrix, Harmonic, JointData, ProbeData, TableData, FLAG_GEOMETRIC, MAX_HARMONICS,
     MAX_HARMONIC_ORDER, MAX_TABLE_LEN, SERIAL_LEN,
 };
+use quatarm_ref::uncertainty::Uncertainty;
 use quatarm_ref::{Arm, Axis};
 
 /// Why an arm cannot become a table.
@@ -140,6 +142,7 @@ pub fn table_data(arm: &Arm) -> Result<TableData, BuildError> {
         vector: v,
         direction: v.map(|x| x / len),
         thermal: arm.probe.thermal,
+        ball_diameter: arm.probe.ball_diameter,
     };
     d.flags = d.content_flags() | if geometric { FLAG_GEOMETRIC } else { 0 };
     Ok(d)
@@ -157,6 +160,12 @@ fn reach_mm(d: &TableData) -> f64 {
 
 /// The table bytes for an arm, checked by the firmware's own parser before they are returned.
 pub fn build(arm: &Arm) -> Result<Vec<u8>, BuildError> {
+    build_with(arm, None)
+}
+
+/// The table bytes for an arm with the reading's own terms of its uncertainty budget
+/// ([`crate::budget`]), checked by the firmware's own parser.
+pub fn build_with(arm: &Arm, budget: Option<&Uncertainty>) -> Result<Vec<u8>, BuildError> {
     let data = table_data(arm)?;
     let reach = reach_mm(&data);
     // Finite by `table_data`'s checks; written so that NaN would be refused too.
@@ -174,7 +183,7 @@ pub fn build(arm: &Arm) -> Result<Vec<u8>, BuildError> {
     }
     let mut buf = vec![0u8; MAX_TABLE_LEN];
     let len = data
-        .encode(&mut buf)
+        .encode_with(budget.map(budget_data).as_ref(), &mut buf)
         .map_err(|e| err("(table)", e.to_string()))?;
     buf.truncate(len);
     quatarm::Table::parse(&buf).map_err(|e| match e {

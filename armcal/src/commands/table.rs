@@ -26,9 +26,9 @@ pub enum Command {
 pub fn run(command: Command) -> anyhow::Result<()> {
     match command {
         Command::Build { calib, output } => {
-            let arm = armcal::load::arm(&calib)?;
-            let bytes =
-                armcal::tablebuild::build(&arm).with_context(|| calib.display().to_string())?;
+            let (arm, budget) = armcal::load::calibration(&calib)?;
+            let bytes = armcal::tablebuild::build_with(&arm, budget.as_ref())
+                .with_context(|| calib.display().to_string())?;
             std::fs::write(&output, &bytes).with_context(|| output.display().to_string())?;
             let t = Table::parse(&bytes)?;
             println!(

@@ -15,9 +15,11 @@
 //!      4     2  format version (2)
 //!      6     1  joint count N (6 or 7)
 //!      7     1  flags: bit0 geometric errors, bit1 encoder harmonics,
-//!               bit2 gravity compliance, bit3 thermal expansion (others 0)
+//!               bit2 gravity compliance, bit3 thermal expansion, bit4 uncertainty budget
+//!               (others 0)
 //!      8    32  arm serial, UTF-8, NUL-padded
-//!     40     4  total length in bytes, CRC included (= 48 + N·248 + 56 + 4)
+//!     40     4  total length in bytes, CRC included (= 48 + N·248 + 64 + 4, plus the
+//!               uncertainty budget's length where flag bit4 is set)
 //!     44     4  reserved, 0
 //!     48 N·248  joint records, base first:
 //!                 +0    1  axis: 0 = x, 1 = y, 2 = z
@@ -32,8 +34,9 @@
 //!                 +152 96  4 harmonic slots of 24 bytes, the first H used:
 //!                            +0 2 order h (1..=64), +2 6 reserved 0,
 //!                            +8 8 sin coefficient (rad), +16 8 cos coefficient (rad)
-//! 48+N·248   56  probe: vector v_p + Δv_p (mm, f64 ×3), its unit direction (f64 ×3),
-//!               thermal expansion κ_p (1/°C, f64)
+//! 48+N·248   64  probe: vector v_p + Δv_p (mm, f64 ×3), its unit direction (f64 ×3),
+//!               thermal expansion κ_p (1/°C, f64), stylus ball diameter (mm, f64; 0 unknown)
+//! 48+N·248+64    the uncertainty budget, where flag bit4 is set ([`budget`]: its layout)
 //!  len−4     4  CRC-32 (ISO-HDLC, as zlib) of every byte before it
 //! ```
 //!
@@ -44,13 +47,19 @@
 
 use core::fmt;
 
+pub mod budget;
+
 /// The table's magic bytes.
 pub const MAGIC: [u8; 4] = *b"QATB";
 /// The format version this firmware reads and writes. Version 2 widened the serial from 16
 /// to 32 bytes (the MUKCa Panda `panda_1_with_sensor` has 19), which moved every field after
 /// it; a version-1 table is refused ([`TableError::UnsupportedVersion`]) rather than read, since
 /// the Cortex-M0 image has no flash for a second layout: rebuild it with `armcal table build`.
-pub const VERSION: u16 = 2;
+///
+/// Version 3 added the stylus ball diameter to the probe record (the sphere tests of
+/// `spec/acceptance-tests.md` compensate it) and the optional uncertainty budget
+/// ([`budget`]); a version-2 table is refused like a version-1 one.
+pub const VERSION: u16 = 3;
 /// Most joints a table holds.
 pub const MAX_JOINTS: usize = 7;
 /// Fewest joints a table holds.
@@ -67,7 +76,7 @@ pub const HEADER_LEN: usize = 48;
 /// Length of one joint record.
 pub const JOINT_LEN: usize = 248;
 /// Length of the probe record.
-pub const PROBE_LEN: usize = 56;
+pub const PROBE_LEN: usize = 64;
 /// Length of one harmonic slot.
 pub const HARMONIC_LEN: usize = 24;
 const CRC_LEN: usize = 4;
@@ -100,6 +109,7 @@ mod off {
     pub const P_VECTOR: usize = 0;
     pub const P_DIR: usize = 24;
     pub const P_THERMAL: usize = 48;
+    pub const P_BALL: usize = 56;
 }
 
 /// Flag: some geometric error (zero offset, tilt, link or probe error) is non-zero.
@@ -110,7 +120,9 @@ pub const FLAG_HARMONICS: u8 = 1 << 1;
 pub const FLAG_GRAVITY: u8 = 1 << 2;
 /// Flag: some link or the probe has thermal expansion.
 pub const FLAG_THERMAL: u8 = 1 << 3;
-const FLAGS_KNOWN: u8 = 0x0f;
+/// Flag: the table carries an uncertainty budget ([`budget`]).
+pub const FLAG_BUDGET: u8 = 1 << 4;
+const FLAGS_KNOWN: u8 = 0x1f;
 
 /// Limits of the values a table may hold. They keep every evaluator inside its range and its
 /// small-angle formulas inside their accuracy; a real arm is far inside them.
@@ -140,6 +152,8 @@ pub mod limits {
     /// its I12F20's). (The check lives there rather than in [`super::Table::parse`] because the
     /// chain sums the reach anyway, and the Cortex-M0 image has no flash for a second sum.)
     pub const REACH_MM: f64 = 2064.0;
+    /// Stylus ball diameter (mm): larger than any stylus an arm carries.
+    pub const BALL_MM: f64 = 100.0;
 }
 
 /// Why a table cannot be used. The firmware streams no coordinates while it has one.
@@ -218,6 +232,9 @@ pub enum Field {
     Gravity,
     /// Probe vector or direction invalid.
     Probe,
+    /// The uncertainty budget: a standard uncertainty out of range, a factor's scale, or a
+    /// factor table that is not a table of the same arm.
+    Budget,
 }
 
 impl fmt::Display for Field {
@@ -236,6 +253,7 @@ impl fmt::Display for Field {
             Field::Thermal => "thermal coefficient",
             Field::Gravity => "gravity coefficient",
             Field::Probe => "probe",
+            Field::Budget => "uncertainty budget",
         })
     }
 }
@@ -283,13 +301,18 @@ impl core::error::Error for TableError {}
 /// The CRC of the table: CRC-32/ISO-HDLC (the zlib and Ethernet CRC).
 pub const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
 
-/// Table length for `joints` joints.
+/// Table length for `joints` joints, without an uncertainty budget.
 pub const fn table_len(joints: usize) -> usize {
-    HEADER_LEN + joints * JOINT_LEN + PROBE_LEN + CRC_LEN
+    core_len(joints) + CRC_LEN
 }
 
-/// Largest table length.
-pub const MAX_TABLE_LEN: usize = table_len(MAX_JOINTS);
+/// Where the budget starts: the header, the joints and the probe.
+const fn core_len(joints: usize) -> usize {
+    HEADER_LEN + joints * JOINT_LEN + PROBE_LEN
+}
+
+/// Largest table length: 7 joints with a budget.
+pub const MAX_TABLE_LEN: usize = table_len(MAX_JOINTS) + budget::LEN;
 
 /// One encoder-harmonic term: e += sin·sin(hθ) + cos·cos(hθ).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -334,6 +357,9 @@ pub struct ProbeData {
     pub direction: [f64; 3],
     /// Thermal expansion κ_p (1/°C).
     pub thermal: f64,
+    /// Stylus ball diameter (mm; 0 where the calibration gives none): the chain gives the
+    /// ball's centre, the sphere tests compensate the diameter.
+    pub ball_diameter: f64,
 }
 
 /// The contents of a table, as plain values: what the encoder writes and [`Table::data`]
@@ -389,14 +415,26 @@ impl TableData {
             .fold(self.probe.content_flags(), |f, j| f | j.content_flags())
     }
 
-    /// Writes the table into `out`; returns its length. Fails only if `out` is too short or
-    /// the joint count is outside 6..=7.
+    /// Writes the table into `out`, without an uncertainty budget; returns its length. Fails
+    /// only if `out` is too short or the joint count is outside 6..=7.
     pub fn encode(&self, out: &mut [u8]) -> Result<usize, TableError> {
+        self.encode_with(None, out)
+    }
+
+    /// Writes the table into `out` with `budget` (flag bit4 follows it, whatever
+    /// `self.flags` says); returns its length. Fails only if `out` is too short, the joint
+    /// count is outside 6..=7.
+    pub fn encode_with(
+        &self,
+        budget: Option<&budget::BudgetData>,
+        out: &mut [u8],
+    ) -> Result<usize, TableError> {
         let n = usize::from(self.joint_count);
         if !(MIN_JOINTS..=MAX_JOINTS).contains(&n) {
             return Err(TableError::BadJointCount(self.joint_count));
         }
-        let len = table_len(n);
+        let extra = if budget.is_some() { budget::LEN } else { 0 };
+        let len = table_len(n) + extra;
         if out.len() < len {
             return Err(TableError::Truncated {
                 needed: len as u32,
@@ -408,7 +446,7 @@ impl TableData {
         out[off::MAGIC..off::MAGIC + 4].copy_from_slice(&MAGIC);
         out[off::VERSION..off::VERSION + 2].copy_from_slice(&VERSION.to_le_bytes());
         out[off::JOINTS] = self.joint_count;
-        out[off::FLAGS] = self.flags;
+        out[off::FLAGS] = (self.flags & !FLAG_BUDGET) | if extra > 0 { FLAG_BUDGET } else { 0 };
         out[off::SERIAL..off::SERIAL + SERIAL_LEN].copy_from_slice(&self.serial);
         out[off::LENGTH..off::LENGTH + 4].copy_from_slice(&(len as u32).to_le_bytes());
         for (i, j) in self.joints[..n].iter().enumerate() {
@@ -430,10 +468,14 @@ impl TableData {
                 put_f64s(&mut s[off::H_COS..], &[h.cos]);
             }
         }
-        let p = &mut out[HEADER_LEN + n * JOINT_LEN..HEADER_LEN + n * JOINT_LEN + PROBE_LEN];
+        let p = &mut out[HEADER_LEN + n * JOINT_LEN..core_len(n)];
         put_f64s(&mut p[off::P_VECTOR..], &self.probe.vector);
         put_f64s(&mut p[off::P_DIR..], &self.probe.direction);
         put_f64s(&mut p[off::P_THERMAL..], &[self.probe.thermal]);
+        put_f64s(&mut p[off::P_BALL..], &[self.probe.ball_diameter]);
+        if let Some(b) = budget {
+            b.encode(&mut out[core_len(n)..len - CRC_LEN]);
+        }
         let crc = CRC.checksum(&out[..len - CRC_LEN]);
         out[len - CRC_LEN..].copy_from_slice(&crc.to_le_bytes());
         Ok(len)
@@ -532,7 +574,12 @@ impl<'a> Table<'a> {
         if !(MIN_JOINTS..=MAX_JOINTS).contains(&n) {
             return Err(TableError::BadJointCount(n8));
         }
-        let len = table_len(n);
+        let len = table_len(n)
+            + if bytes[off::FLAGS] & FLAG_BUDGET != 0 {
+                budget::LEN
+            } else {
+                0
+            };
         let stated = rd_u32(bytes, off::LENGTH);
         if stated as usize != len {
             return Err(TableError::BadLength(stated));
@@ -636,14 +683,16 @@ impl<'a> Table<'a> {
         let p = self.probe();
         content |= p.content_flags();
         let flags = b[off::FLAGS];
-        if flags & !FLAGS_KNOWN != 0 || flags & !FLAG_GEOMETRIC != content {
+        if flags & !FLAGS_KNOWN != 0 || flags & !(FLAG_GEOMETRIC | FLAG_BUDGET) != content {
             return Err(invalid(0, Field::Flags));
         }
         let ok = p.vector.iter().all(|&x| within(x, limits::LENGTH_MM))
             && p.direction
                 .iter()
                 .all(|&x| within(x, 1.0 + limits::UNIT_TOLERANCE))
-            && within(p.thermal, limits::THERMAL);
+            && within(p.thermal, limits::THERMAL)
+            && within(p.ball_diameter, limits::BALL_MM)
+            && p.ball_diameter >= 0.0;
         if !ok {
             return Err(invalid(0, Field::Probe));
         }
@@ -663,7 +712,21 @@ impl<'a> Table<'a> {
         if !parallel {
             return Err(invalid(0, Field::Probe));
         }
+        if let Some(budget) = self.budget() {
+            budget.check(self)?;
+        }
         Ok(())
+    }
+
+    /// The uncertainty budget, where the table has one.
+    pub fn budget(&self) -> Option<budget::Budget<'a>> {
+        if self.flags() & FLAG_BUDGET == 0 {
+            return None;
+        }
+        let n = self.joint_count();
+        self.bytes
+            .get(core_len(n)..self.bytes.len() - CRC_LEN)
+            .map(budget::Budget::new)
     }
 
     /// The table's bytes (exactly its length).
@@ -734,6 +797,7 @@ impl<'a> Table<'a> {
             vector: rd_f64s::<3>(self.bytes, at + off::P_VECTOR),
             direction: rd_f64s::<3>(self.bytes, at + off::P_DIR),
             thermal: rd_f64(self.bytes, at + off::P_THERMAL),
+            ball_diameter: rd_f64(self.bytes, at + off::P_BALL),
         }
     }
 
@@ -847,6 +911,7 @@ mod tests {
             vector: [0.0, 0.0, 120.0],
             direction: [0.0, 0.0, 1.0],
             thermal: 0.0,
+            ball_diameter: 6.0,
         };
         d.flags = d.content_flags() | FLAG_GEOMETRIC;
         d
@@ -891,6 +956,56 @@ mod tests {
     }
 
     #[test]
+    fn budget_round_trips_and_bad_values_are_refused() {
+        let b = budget::BudgetData {
+            encoder_counts: [0.29, 0.29, 0.5, 0.29, 0.29, 1.0, 0.0],
+            probing_mm: 0.002,
+            model_mm: 0.001,
+            temperature_c: 0.2,
+        };
+        let mut buf = [0u8; MAX_TABLE_LEN];
+        let n = sample().encode_with(Some(&b), &mut buf).unwrap();
+        assert_eq!(n, table_len(6) + budget::LEN);
+        let t = Table::parse(&buf[..n]).unwrap();
+        let got = t.budget().unwrap();
+        assert_eq!(got.encoder_counts(2), 0.5);
+        assert_eq!(got.encoder_counts(6), 0.0);
+        assert_eq!(
+            (got.probing_mm(), got.model_mm(), got.temperature_c()),
+            (0.002, 0.001, 0.2)
+        );
+        assert_eq!(t.probe().ball_diameter, 6.0);
+        // Without the budget: no budget, and the flag is clear.
+        let (plain, m) = encoded();
+        assert!(Table::parse(&plain[..m]).unwrap().budget().is_none());
+        // A negative, a NaN, an encoder term on a joint the arm does not have.
+        for (at, v) in [
+            (core_len(6) + 56, -0.001),
+            (core_len(6) + 72, f64::NAN),
+            (core_len(6) + 48, 0.1),
+        ] {
+            let mut bad = buf;
+            bad[at..at + 8].copy_from_slice(&v.to_le_bytes());
+            recrc(&mut bad[..n]);
+            assert!(
+                matches!(
+                    Table::parse(&bad[..n]),
+                    Err(TableError::Invalid {
+                        field: Field::Budget,
+                        ..
+                    })
+                ),
+                "{at} {v}"
+            );
+        }
+        // The flag set on a table without the budget's bytes: a length that disagrees.
+        let mut flagged = plain;
+        flagged[off::FLAGS] |= FLAG_BUDGET;
+        recrc(&mut flagged[..m]);
+        assert!(Table::parse(&flagged[..m]).is_err());
+    }
+
+    #[test]
     fn rejections() {
         let (buf, n) = encoded();
         assert_eq!(Table::parse(&[0xff; 64]).unwrap_err(), TableError::Blank);
@@ -913,9 +1028,9 @@ mod tests {
         let mut b = buf;
         b[0] = b'X';
         assert_eq!(Table::parse(&b).unwrap_err(), TableError::BadMagic);
-        // Version 1 (the 16-byte serial, every later field 16 bytes earlier) and any unknown
+        // Versions 1 (the 16-byte serial) and 2 (no ball diameter, no budget) and any unknown
         // version are refused by number, with a CRC that matches, before any field is read.
-        for v in [1u8, 3, 0xff] {
+        for v in [1u8, 2, 4, 0xff] {
             let mut b = buf;
             b[4] = v;
             recrc(&mut b[..n]);
@@ -924,7 +1039,7 @@ mod tests {
             let msg = std::format!("{e}");
             assert!(
                 msg.contains(&std::format!("version {v},"))
-                    && msg.contains("reads only 2")
+                    && msg.contains("reads only 3")
                     && msg.contains("armcal table build"),
                 "{msg}"
             );

@@ -1,0 +1,158 @@
+//! The uncertainty of every point the hub streams (`spec/uncertainty.md`): Σ_p and U95.
+//!
+//! Σ_p = J_π C J_πᵀ + J_θ diag(σ_θ²) J_θᵀ + J_T σ_T² J_Tᵀ + (σ_probe² + σ_model²) I₃. This
+//! module has the reading's own terms, each Jacobian taken from the firmware's own chain by
+//! differences, and the radius of the 95 % sphere ([`radius::u95`]); the parameter part
+//! J_π C J_πᵀ is not on the hub yet ([`crate::table::budget`] says why the low-rank form
+//! tried first does not hold).
+//!
+//! - **Joints**: the chain at the reading with joint i stepped by k_i counts (≈ 1 mrad), less
+//!   the point, is k_i counts of J_θ's column i; σ_θ is in counts already, so
+//!   Σ += (σ_counts / k_i)² d dᵀ. A milliradian moves the tip by up to 1.5 mm: far above the
+//!   chain's rounding (0.1 µm, 1e-4), far below where the chain bends (second-order terms
+//!   ~5e-4 of the step).
+//! - **Temperature**: the chain at T ± 10 °C (thermal expansion is linear in T).
+//!
+//! Every difference is of integer nanometres (`Point::xyz_nm`), so the f32 and the fixed-point
+//! chain feed the same f32 arithmetic here.
+
+pub mod radius;
+
+mod grid;
+
+use crate::chain::{Chain, Evaluator};
+use crate::model::{ChainError, Point};
+use crate::table::{Table, FLAG_THERMAL, MAX_JOINTS};
+use heapless::Vec;
+
+/// Σ_p, in nm²: xx, yy, zz, xy, xz, yz (the order of `armcal eval --uncertainty`'s columns).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Covariance(pub [f32; 6]);
+
+impl Covariance {
+    /// Σ += w d dᵀ.
+    fn add_outer(&mut self, d: [f32; 3], w: f32) {
+        let c = &mut self.0;
+        c[0] += w * d[0] * d[0];
+        c[1] += w * d[1] * d[1];
+        c[2] += w * d[2] * d[2];
+        c[3] += w * d[0] * d[1];
+        c[4] += w * d[0] * d[2];
+        c[5] += w * d[1] * d[2];
+    }
+
+    /// U95 (nm): the radius of the sphere about the point that holds the true point with
+    /// 95 % probability.
+    pub fn u95_nm(&self) -> f32 {
+        radius::u95(self)
+    }
+}
+
+/// One joint's reading term: the step k (counts), its joint's counts per revolution, and
+/// (σ_counts / k)².
+#[derive(Clone, Copy, Debug, Default)]
+struct JointTerm {
+    step: u32,
+    counts: u32,
+    weight: f32,
+}
+
+/// The temperature step of the thermal term (m°C).
+const TEMPERATURE_STEP_MC: i32 = 10_000;
+/// The joint step: about a milliradian, counts per revolution / 2π·1000.
+const STEPS_PER_TURN: u32 = 6283;
+
+/// What the hub needs to give every point the reading's own part of Σ_p: built once at
+/// boot from the table's budget.
+#[derive(Clone, Debug)]
+pub struct Uncertainty<P: Evaluator> {
+    joints: Vec<JointTerm, MAX_JOINTS>,
+    /// (σ_T / step)², where the table has thermal expansion.
+    temperature: Option<f32>,
+    /// σ_probe² + σ_model² (nm²).
+    isotropic: f32,
+    _evaluator: core::marker::PhantomData<P>,
+}
+
+/// f64 → f32 without the soft-float `as` on the Cortex-M0 being a concern: boot only.
+fn f32_of(x: f64) -> f32 {
+    x as f32
+}
+
+impl<P: Evaluator> Uncertainty<P> {
+    /// The budget of a validated table, `None` where the table has none. Fails where a
+    /// factor's chain cannot be built (as the table's own chain would fail).
+    pub fn new(table: &Table<'_>) -> Result<Option<Uncertainty<P>>, ChainError> {
+        let Some(budget) = table.budget() else {
+            return Ok(None);
+        };
+        let n = table.joint_count();
+        let mut joints = Vec::new();
+        for i in 0..n {
+            let counts = table.joint(i).map_or(2, |j| j.counts);
+            let step = (counts / STEPS_PER_TURN).max(1);
+            let sigma = budget.encoder_counts(i) / f64::from(step);
+            let _ = joints.push(JointTerm {
+                step,
+                counts,
+                weight: f32_of(sigma * sigma),
+            });
+        }
+        let thermal = table.flags() & FLAG_THERMAL != 0;
+        let t = budget.temperature_c() * 1000.0 / f64::from(TEMPERATURE_STEP_MC);
+        let temperature = (thermal && t > 0.0).then(|| f32_of(t * t));
+        let iso_mm2 =
+            budget.probing_mm() * budget.probing_mm() + budget.model_mm() * budget.model_mm();
+        Ok(Some(Uncertainty {
+            _evaluator: core::marker::PhantomData,
+            joints,
+            temperature,
+            isotropic: f32_of(iso_mm2 * 1.0e12),
+        }))
+    }
+
+    /// The reading's own part of Σ_p (`counts`, `temp_mc`; `chain` gave `point` for it).
+    pub fn covariance(
+        &self,
+        chain: &Chain<P>,
+        counts: &[u32],
+        temp_mc: i32,
+        point: &Point<P>,
+    ) -> Result<Covariance, ChainError> {
+        let p = point.xyz_nm();
+        let diff = |q: Point<P>| {
+            let q = q.xyz_nm();
+            [0, 1, 2].map(|k| q[k].wrapping_sub(p[k]) as f32)
+        };
+        let iso = self.isotropic;
+        let mut c = Covariance([iso, iso, iso, 0.0, 0.0, 0.0]);
+        let mut stepped = [0u32; MAX_JOINTS];
+        let n = counts.len().min(MAX_JOINTS);
+        stepped[..n].copy_from_slice(&counts[..n]);
+        for (i, j) in self.joints.iter().enumerate().take(n) {
+            if j.weight == 0.0 {
+                continue;
+            }
+            // Below counts per revolution by the chain's check (the point was evaluated).
+            let c0 = stepped[i];
+            stepped[i] = if c0 >= j.counts - j.step.min(j.counts) {
+                c0 + j.step - j.counts
+            } else {
+                c0 + j.step
+            };
+            c.add_outer(diff(chain.eval(&stepped[..n], temp_mc)?), j.weight);
+            stepped[i] = c0;
+        }
+        if let Some(w) = self.temperature {
+            let up = chain.eval(counts, temp_mc.saturating_add(TEMPERATURE_STEP_MC));
+            let q = match up {
+                Err(ChainError::Temperature) => {
+                    chain.eval(counts, temp_mc.saturating_sub(TEMPERATURE_STEP_MC))?
+                }
+                other => other?,
+            };
+            c.add_outer(diff(q), w);
+        }
+        Ok(c)
+    }
+}
