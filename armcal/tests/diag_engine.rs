@@ -20,7 +20,7 @@ fn candidates_of_default6_with_and_without_temperatures() {
     assert!(c.thermal);
     // 24 harmonics, 6 gravity, 7 thermal, of which: gravity 1 has no lever (vertical axis),
     // links 3, 5 and the probe are collinear with 2, 4 and 6.
-    assert_eq!(vocabulary(6, true).len(), 37);
+    assert_eq!(vocabulary(6, true).len(), 6 * 64 + 6 + 7);
     let untestable: Vec<Effect> = c.untestable.iter().map(|u| u.effect).collect();
     assert_eq!(
         untestable,
