@@ -26,7 +26,10 @@ fn show(label: &str, d: &Diagnosis) {
         d.unexplained.lines()
     );
     for x in &d.unexplained.doubtful {
-        println!("  doubtful {} (stands in for {}, p = {:.1e})", x.cause, x.stand_in_for, x.p);
+        println!(
+            "  doubtful {} (stands in for {}, p = {:.1e})",
+            x.cause, x.stand_in_for, x.p
+        );
     }
 }
 
@@ -41,7 +44,12 @@ fn points(truth: &Arm, seed: u64, sag: Vec<Sag>) -> Dataset {
 #[test]
 fn harmonics_of_orders_5_to_8_are_named_exactly() {
     let mut fails = Vec::new();
-    for (seed, joint, order) in [(501u64, 0usize, 5u32), (502, 2, 6), (503, 3, 7), (504, 1, 8)] {
+    for (seed, joint, order) in [
+        (501u64, 0usize, 5u32),
+        (502, 2, 6),
+        (503, 3, 7),
+        (504, 1, 8),
+    ] {
         let mut s = scenario::with_families(seed, &[]);
         s.truth.joints[joint].harmonics.push(Harmonic {
             order,
@@ -50,13 +58,22 @@ fn harmonics_of_orders_5_to_8_are_named_exactly() {
         });
         let data = points(&s.truth, seed + 1, Vec::new());
         let d = diagnose::diagnose(&Arm::default6(), &data, &diagnose::Options::default()).unwrap();
-        show(&format!("seed {seed} joint {} order {order}", joint + 1), &d);
+        show(
+            &format!("seed {seed} joint {} order {order}", joint + 1),
+            &d,
+        );
         let want = vec![Effect::Harmonic { joint, order }];
         if names(&d) != want {
-            fails.push(format!("seed {seed}: named {:?}, hidden {want:?}", names(&d)));
+            fails.push(format!(
+                "seed {seed}: named {:?}, hidden {want:?}",
+                names(&d)
+            ));
         }
         if !d.unexplained.found.is_empty() || !d.unexplained.doubtful.is_empty() {
-            fails.push(format!("seed {seed}: unexplained {:?}", d.unexplained.lines()));
+            fails.push(format!(
+                "seed {seed}: unexplained {:?}",
+                d.unexplained.lines()
+            ));
         }
     }
     assert!(fails.is_empty(), "{}", fails.join("\n"));
@@ -91,9 +108,18 @@ fn terms_named_for_a_sagging_link_are_marked_doubtful() {
     // must be marked as a possible stand-in for the structure (seed 601; on seed 602 two of
     // four are not: docs/results/diagnosis.md, "Beyond the vocabulary").
     let d = sag_case(601, 1);
-    let doubtful: Vec<String> = d.unexplained.doubtful.iter().map(|x| x.cause.clone()).collect();
+    let doubtful: Vec<String> = d
+        .unexplained
+        .doubtful
+        .iter()
+        .map(|x| x.cause.clone())
+        .collect();
     for e in names(&d) {
-        assert!(doubtful.contains(&e.spec()), "named {} without doubt", e.spec());
+        assert!(
+            doubtful.contains(&e.spec()),
+            "named {} without doubt",
+            e.spec()
+        );
     }
 }
 
@@ -106,8 +132,31 @@ fn pure_noise_shows_no_structure() {
         let d = diagnose::diagnose(&Arm::default6(), &data, &diagnose::Options::default()).unwrap();
         show(&format!("seed {seed} null"), &d);
         if !d.unexplained.found.is_empty() || !d.causes.is_empty() {
-            fails.push(format!("seed {seed}: {:?} {:?}", names(&d), d.unexplained.lines()));
+            fails.push(format!(
+                "seed {seed}: {:?} {:?}",
+                names(&d),
+                d.unexplained.lines()
+            ));
         }
     }
     assert!(fails.is_empty(), "{}", fails.join("\n"));
+}
+
+#[test]
+fn the_report_lists_unexplained_structure_and_draws_it() {
+    let d = sag_case(601, 1);
+    let s = scenario::with_families(601, &[]);
+    let data = points(&s.truth, 602, vec![Sag { link: 1, mm: 0.03 }]);
+    let fig = diagnose::unexplained::figure(&d.unexplained).expect("a figure");
+    assert_eq!(fig.panels[0].title.split(' ').next(), Some("link:2+3"));
+    assert!(!fig.panels[0].points.is_empty());
+    let rep = diagnose::report::build(&d, &data, &[fig]);
+    let json: serde_json::Value = serde_json::from_str(&rep.json()).unwrap();
+    let first = &json["unexplained"][0];
+    assert_eq!(first["variable"], "link:2+3");
+    assert!(first["rms_um"].as_f64().unwrap() > 2.0, "{first}");
+    assert!(first["p"].as_f64().unwrap() < 1e-3, "{first}");
+    assert!(first["pattern"].as_str().unwrap().contains("elevation"));
+    assert!(rep.text().contains("unexplained structure"));
+    assert!(rep.text().contains("doubtful cause"));
 }

@@ -30,10 +30,10 @@ use super::patterns::{binned, geometry, missing, Figure, Panel};
 use super::Model;
 use crate::data::{Dataset, Kind};
 use crate::effects::TipPoint;
-use quatarm_ref::forward;
 use crate::residuals::residuals;
 use crate::stats::f_tail;
 use nalgebra::{DMatrix, DVector, Vector3};
+use quatarm_ref::forward;
 use serde::Serialize;
 
 /// Default family-wise level of the search.

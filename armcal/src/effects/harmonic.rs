@@ -57,9 +57,7 @@ pub fn resolvable_order(data: &Dataset, k: usize) -> u32 {
         0.0
     };
     let by_count = (v.len() / READINGS_PER_ORDER) as f64;
-    by_gap
-        .min(by_count)
-        .min(f64::from(VOCABULARY_MAX_ORDER)) as u32
+    by_gap.min(by_count).min(f64::from(VOCABULARY_MAX_ORDER)) as u32
 }
 
 /// The family of encoder harmonics.
