@@ -283,7 +283,7 @@ fn least_squares(cols: &[Vec<Vector3<f64>>], y: &[Vector3<f64>]) -> Option<Solve
     let yv = DVector::from_fn(3 * n, |r, _| y[r / 3][r % 3]);
     let svd = x.clone().svd(true, true);
     let top = svd.singular_values.max();
-    if !(top > 0.0) {
+    if top.is_nan() || top <= 0.0 {
         return None;
     }
     let rank = svd
@@ -454,7 +454,7 @@ fn tests(model: &Model, data: &Dataset, geo: &[super::patterns::RowGeometry]) ->
 /// Centred and scaled x, x² (`None` when x spans less than `min_span`).
 fn quadratic(x: &[f64], min_span: f64) -> Option<Vec<Vec<f64>>> {
     let (lo, hi) = span(x);
-    if !(hi - lo >= min_span) {
+    if (hi - lo).is_nan() || hi - lo < min_span {
         return None;
     }
     let (c, h) = (0.5 * (lo + hi), 0.5 * (hi - lo));
