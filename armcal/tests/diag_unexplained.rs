@@ -4,6 +4,8 @@
 //! and is reported as unexplained structure against the right variable. Pure noise shows no
 //! structure.
 
+mod common;
+
 use armcal::data::{Dataset, Kind};
 use armcal::diagnose::{self, scenario, Diagnosis};
 use armcal::params::Effect;
@@ -159,4 +161,51 @@ fn the_report_lists_unexplained_structure_and_draws_it() {
     assert!(first["pattern"].as_str().unwrap().contains("elevation"));
     assert!(rep.text().contains("unexplained structure"));
     assert!(rep.text().contains("doubtful cause"));
+}
+
+#[test]
+fn simulate_sag_then_diagnose_reports_it_in_json() {
+    let dir = common::workdir("sag");
+    let truth = armcal::sim::perturb(&Arm::default6(), 3e-4, 0.3, &mut sim::rng(31));
+    common::write_truth(&dir, &truth);
+    let sim_args = |extra: &[&str]| {
+        let mut v = vec![
+            "simulate",
+            "--truth",
+            "truth.toml",
+            "--seed",
+            "3",
+            "--temp",
+            "16..28",
+        ];
+        v.extend_from_slice(extra);
+        v.iter().map(|s| s.to_string()).collect::<Vec<String>>()
+    };
+    let run = |args: Vec<String>| {
+        let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+        common::armcal(&refs, &dir)
+    };
+    // A link the arm lacks and a kind the sag is not simulated for are refused, no file.
+    let o = run(sim_args(&[
+        "--kind", "point", "--count", "600", "--sag", "9:30", "-o", "bad.csv",
+    ]));
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("`9` is not a link"));
+    let o = run(sim_args(&[
+        "--kind", "spat", "--count", "60", "--sag", "2:30", "-o", "bad.csv",
+    ]));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("point data only"));
+    assert!(!dir.join("bad.csv").exists());
+    let o = run(sim_args(&[
+        "--kind", "point", "--count", "600", "--sag", "2:30", "-o", "sag.csv",
+    ]));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = common::armcal_ok(&["diagnose", "sag.csv", "--json", "--plots", "figs"], &dir);
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(
+        json["unexplained"][0]["variable"], "link:2+3",
+        "{}",
+        json["unexplained"]
+    );
+    assert!(dir.join("figs").join(diagnose::unexplained::FILE).exists());
 }
