@@ -30,6 +30,8 @@ use super::patterns::{binned, geometry, missing, Figure, Panel};
 use super::Model;
 use crate::data::{Dataset, Kind};
 use crate::effects::TipPoint;
+use crate::jacobian::tip_jacobian;
+use crate::params::Param;
 use crate::residuals::residuals;
 use crate::stats::f_tail;
 use nalgebra::{DMatrix, DVector, Vector3};
@@ -190,7 +192,7 @@ pub fn search(model: &Model, data: &Dataset, alpha: f64) -> Search {
         .find(|&&i| adjusted[i] <= alpha && fitted[i].is_some())
         .map(|&i| &tests[i]);
     let doubtful = match strongest {
-        Some(t) => doubts(model, data, &miss, &geo, held, t, alpha),
+        Some(t) => doubts(model, data, &miss, &geo, held - fit.params.len(), t, alpha),
         None => Vec::new(),
     };
     Search {
@@ -204,14 +206,16 @@ pub fn search(model: &Model, data: &Dataset, alpha: f64) -> Search {
 
 /// The named causes of `model` that the structure of test `s` explains as well: for each, the
 /// residuals plus its own part (the extended arm with and without its term) regressed on the
-/// structure's columns, then on those and the cause's; the cause is doubtful when its columns
-/// add nothing significant (p > `alpha` / causes).
+/// structure's columns and the fit's other unknowns (linearised at the fit: what the geometry
+/// absorbed of the structure is allowed back), then on those and the cause's; the cause is
+/// doubtful when its columns add nothing significant (p > `alpha` / causes). `centrings`:
+/// degrees of freedom the spat and length groups' centring takes.
 fn doubts(
     model: &Model,
     data: &Dataset,
     miss: &[Vector3<f64>],
     geo: &[super::patterns::RowGeometry],
-    held: usize,
+    centrings: usize,
     s: &Test,
     alpha: f64,
 ) -> Vec<Doubt> {
@@ -238,7 +242,37 @@ fn doubts(
             };
             own.push(e.with(|t| (0..t.coefficients()).map(|c| t.column(c, &at)).collect()));
         }
-        let base: Vec<Vec<Vector3<f64>>> = (0..n).map(|i| columns(s, i, geo)).collect();
+        // Nuisance columns: the structure's, the fit's other unknowns (geometry and the
+        // other causes, ∂p by [`tip_jacobian`]) and, for point rows, the instrument frame's.
+        let own_params = e.params();
+        let others: Vec<Param> = fit
+            .ident
+            .kept
+            .iter()
+            .map(|&k| fit.params[k])
+            .filter(|p| !own_params.contains(p))
+            .collect();
+        let base: Vec<Vec<Vector3<f64>>> = data
+            .rows
+            .iter()
+            .enumerate()
+            .map(|(i, r)| {
+                let mut c = columns(s, i, geo);
+                let mut g = vec![Vector3::zeros(); others.len()];
+                let p = tip_jacobian(&fit.arm, &others, &r.theta, r.temp_c, &mut g);
+                c.extend(g);
+                let point = r.kind == Kind::Point;
+                for ax in [Vector3::x(), Vector3::y(), Vector3::z()] {
+                    c.push(if point { ax } else { Vector3::zeros() });
+                    c.push(if point {
+                        ax.cross(&p)
+                    } else {
+                        Vector3::zeros()
+                    });
+                }
+                c
+            })
+            .collect();
         let both: Vec<Vec<Vector3<f64>>> = base
             .iter()
             .zip(&own)
@@ -247,7 +281,7 @@ fn doubts(
         let (Some(a), Some(b)) = (least_squares(&base, &y), least_squares(&both, &y)) else {
             continue;
         };
-        let Some(d2) = (3 * n).checked_sub(held + b.rank).filter(|d| *d > 0) else {
+        let Some(d2) = (3 * n).checked_sub(centrings + b.rank).filter(|d| *d > 0) else {
             continue;
         };
         let d1 = b.rank.saturating_sub(a.rank);
