@@ -355,7 +355,7 @@ fn tests(model: &Model, data: &Dataset, geo: &[super::patterns::RowGeometry]) ->
             let a: Vec<f64> = theta.iter().map(|t| f64::from(h) * t).collect();
             out.push(Test {
                 variable: format!("joint:{}", k + 1),
-                basis: format!("order {h}"),
+                basis: format!("order-{h}"),
                 form: Form::Angle(k),
                 x: theta.iter().map(|t| t.to_degrees()).collect(),
                 x_label: format!("joint {} reading (deg)", k + 1),
@@ -572,7 +572,7 @@ fn structure(
                 };
                 (
                     format!(
-                        "a wave of {} per turn in joint {}'s angle error, {amp:.1} µrad",
+                        "an {} wave in joint {}'s angle error, {amp:.1} µrad",
                         t.basis,
                         k + 1
                     ),
@@ -592,7 +592,7 @@ fn structure(
                     format!(
                         "a displacement against {} ({}), mostly along ({:.2}, {:.2}, {:.2}) of \
                          the base",
-                        t.x_label, t.basis, d.x, d.y, d.z
+                        t.variable, t.basis, d.x, d.y, d.z
                     ),
                     format!("residual along ({:.2}, {:.2}, {:.2}) (µm)", d.x, d.y, d.z),
                     (0..n).map(|i| Some(1e3 * miss[i].dot(&d))).collect(),
