@@ -262,6 +262,45 @@ pub struct Options {
     /// Error of the temperature sensor (°C, standard deviation): the recorded `temp_c` is the
     /// arm's true temperature plus this noise.
     pub temp_noise_c: f64,
+    /// Links bending under their own weight (`point` data only): an effect of the truth that
+    /// the model and the diagnosis' vocabulary do not hold, to test what a diagnosis says
+    /// about what it cannot name.
+    pub sag: Vec<Sag>,
+}
+
+/// A link that sags under its own weight, on the truth side only: the end of link `link`
+/// (0-based: from joint `link`'s origin to the next joint's, or the probe's tip after the
+/// last joint) drops by `mm` · cos ε, ε the link's elevation above the horizontal (a
+/// cantilever's tip deflection under its own weight is proportional to the weight's moment,
+/// which is proportional to the link's horizontal reach), and everything beyond the link
+/// moves down with it. No calibration term moves the ball this way: a gravity compliance
+/// turns a joint by its moment, and this translates the rest of the chain straight down.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sag {
+    /// Link, 0-based (`dof`: the probe).
+    pub link: usize,
+    /// Deflection of its end when horizontal (mm).
+    pub mm: f64,
+}
+
+impl Sag {
+    /// The ball's displacement (mm, base frame) at true angles `theta` and temperature `tc`.
+    pub fn displacement(&self, truth: &Arm, theta: &[f64], tc: f64) -> Vector3<f64> {
+        let c = forward::evaluate(truth, theta, tc);
+        let n = truth.dof();
+        let (a, b) = match self.link {
+            k if k < n => (c.origins[k], c.origins[k + 1]),
+            _ => (c.origins[n], c.p),
+        };
+        let d = b - a;
+        let horizontal = d.x.hypot(d.y);
+        let len = d.norm();
+        if len > 0.0 {
+            -Vector3::z() * self.mm * horizontal / len
+        } else {
+            Vector3::zeros()
+        }
+    }
 }
 
 impl Options {
@@ -284,6 +323,7 @@ impl Options {
             articulations: None,
             encoder_noise_counts: 0.0,
             temp_noise_c: 0.0,
+            sag: Vec::new(),
         }
     }
 }
@@ -318,6 +358,12 @@ pub enum SimError {
     /// No pose tried puts the probe on the group's target.
     #[error("could not place group {0}: the arm does not reach it from any pose tried")]
     Unreachable(i64),
+    /// A sagging link that the arm does not have.
+    #[error("sag of link {0}: the arm has links 1..={1} and the probe ({1} + 1)")]
+    SagLink(usize, usize),
+    /// Sag is simulated on `point` data only.
+    #[error("a sagging link is simulated on point data only, not {0}")]
+    SagNeedsPoints(&'static str),
     /// The rows made do not form valid data (the reader's own checks).
     #[error(transparent)]
     Data(#[from] crate::data::DataError),
@@ -327,6 +373,12 @@ pub enum SimError {
 pub fn simulate(truth: &Arm, opts: &Options, rng: &mut SimRng) -> Result<Simulated, SimError> {
     if opts.count == 0 {
         return Err(SimError::NoRows);
+    }
+    if let Some(s) = opts.sag.iter().find(|s| s.link > truth.dof()) {
+        return Err(SimError::SagLink(s.link + 1, truth.dof()));
+    }
+    if opts.kind != Kind::Point && !opts.sag.is_empty() {
+        return Err(SimError::SagNeedsPoints(opts.kind.name()));
     }
     if opts.kind != Kind::Point && opts.count < 2 {
         return Err(SimError::TooFewRows(opts.kind.name()));
@@ -353,7 +405,12 @@ pub fn simulate(truth: &Arm, opts: &Options, rng: &mut SimRng) -> Result<Simulat
             for _ in 0..opts.count {
                 let th = random_pose(&lim, rng);
                 let tc = temp(rng);
-                let p = forward::forward(truth, &th, tc).p;
+                let p = forward::forward(truth, &th, tc).p
+                    + opts
+                        .sag
+                        .iter()
+                        .map(|s| s.displacement(truth, &th, tc))
+                        .sum::<Vector3<f64>>();
                 let noise = Vector3::new(normal(rng), normal(rng), normal(rng)) * opts.noise_mm;
                 let x = r * p + t + noise;
                 rows.push(Row {

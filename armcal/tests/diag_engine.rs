@@ -18,9 +18,10 @@ fn candidates_of_default6_with_and_without_temperatures() {
     let data = scenario::points(&s, 200);
     let c = candidates(&Arm::default6(), &data);
     assert!(c.thermal);
-    // 24 harmonics, 6 gravity, 7 thermal, of which: gravity 1 has no lever (vertical axis),
-    // links 3, 5 and the probe are collinear with 2, 4 and 6.
-    assert_eq!(vocabulary(6, true).len(), 37);
+    // Harmonics of orders 1–64 in the vocabulary, 1–8 tried (200 readings per joint resolve
+    // more), 6 gravity, 7 thermal, of which: gravity 1 has no lever (vertical axis), links 3, 5
+    // and the probe are collinear with 2, 4 and 6.
+    assert_eq!(vocabulary(6, true).len(), 6 * 64 + 6 + 7);
     let untestable: Vec<Effect> = c.untestable.iter().map(|u| u.effect).collect();
     assert_eq!(
         untestable,
@@ -31,7 +32,7 @@ fn candidates_of_default6_with_and_without_temperatures() {
             Effect::Thermal(Link::Probe)
         ]
     );
-    assert_eq!(c.testable.len(), 33);
+    assert_eq!(c.testable.len(), 6 * 8 + 5 + 4);
     let pair = |l: usize| {
         c.testable
             .iter()
@@ -55,7 +56,7 @@ fn candidates_of_default6_with_and_without_temperatures() {
     .data;
     let c = candidates(&Arm::default6(), &plain);
     assert!(!c.thermal);
-    assert_eq!(c.testable.len(), 29);
+    assert_eq!(c.testable.len(), 6 * 8 + 5);
     assert!(c
         .testable
         .iter()
@@ -73,7 +74,38 @@ fn candidates_of_a_panda_session() {
         .iter()
         .any(|u| u.effect == Effect::Gravity(0) && u.reason.contains("no gravity lever")));
     assert!(!c.thermal);
-    assert_eq!(c.testable.len(), 7 * 4 + 6);
+    assert_eq!(c.testable.len(), 7 * 8 + 6);
+}
+
+#[test]
+fn the_highest_harmonic_order_follows_the_readings() {
+    // 101 readings of joint 1: the widest gap and the count set the order (⌊π / g⌋ − 1 and
+    // n / 8), and orders beyond it are not tried.
+    let s = scenario::with_families(1, &[]);
+    let mut data = scenario::points(&s, 101);
+    for (i, r) in data.rows.iter_mut().enumerate() {
+        r.theta[0] = 0.5 * i as f64;
+    }
+    assert_eq!(armcal::effects::harmonic::resolvable_order(&data, 0), 5);
+    let c = armcal::diagnose::candidates::candidates_up_to(&Arm::default6(), &data, 8);
+    let tried = |order| {
+        c.testable
+            .iter()
+            .any(|t| t.effect == Effect::Harmonic { joint: 0, order })
+    };
+    assert!(tried(5) && !tried(6));
+    assert!(c
+        .untestable
+        .iter()
+        .any(|u| u.effect == Effect::Harmonic { joint: 0, order: 6 }
+            && u.reason.contains("up to order 5")));
+    for (i, r) in data.rows.iter_mut().enumerate() {
+        r.theta[0] = 0.01 * i as f64;
+    }
+    // The gap allows ⌊π / 0.01⌋ − 1 = 313; 101 readings allow 12.
+    assert_eq!(armcal::effects::harmonic::resolvable_order(&data, 0), 12);
+    // Other joints: random readings, far beyond the default cap.
+    assert!(armcal::effects::harmonic::resolvable_order(&data, 1) >= 8);
 }
 
 #[test]

@@ -40,6 +40,19 @@ pub struct Args {
     /// Standard errors by which a cause must lower the held-out error.
     #[arg(long, default_value_t = 2.0, value_parser = super::args::non_negative)]
     z: f64,
+    /// Highest encoder-harmonic order tried as a cause, on every joint. The data may resolve
+    /// less, and then set the limit: joint k is tried up to min(this, ⌊π / g⌋ − 1, n / 8),
+    /// with g the widest gap (rad) between its consecutive distinct readings and n their
+    /// number (one reading per half period, eight per order); higher orders are listed as not
+    /// testable. The search for unexplained structure uses the data's limit alone.
+    #[arg(long, default_value_t = diagnose::candidates::MAX_ORDER,
+          value_parser = clap::value_parser!(u32).range(1..=64))]
+    max_order: u32,
+    /// Family-wise level of the search for unexplained structure in what the named causes
+    /// leave (Holm's step-down over every test of every variable).
+    #[arg(long, default_value_t = diagnose::unexplained::ALPHA,
+          value_parser = super::args::probability)]
+    unexplained_alpha: f64,
     /// Iterations before a fit is declared not converging.
     #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     max_iter: u32,
@@ -94,6 +107,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     opts.calib.lm.max_iterations = a.max_iter as usize;
     opts.select.alpha = a.alpha;
     opts.select.z = a.z;
+    opts.max_order = a.max_order;
+    opts.unexplained_alpha = a.unexplained_alpha;
     let spinner = (!a.json).then(|| {
         let pb = indicatif::ProgressBar::new_spinner();
         pb.set_message("diagnosing: fitting the geometric model, testing candidates…");
@@ -106,7 +121,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         pb.finish_and_clear();
     }
     let d = d?;
-    let figures = patterns::figures(&d, &data);
+    let mut figures = patterns::figures(&d, &data);
+    figures.extend(diagnose::unexplained::figure(&d.unexplained));
     let mut rep = report::build(&d, &data, &figures);
 
     let mut files = armcal::output::Staged::new();

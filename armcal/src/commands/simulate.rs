@@ -64,6 +64,12 @@ pub struct Args {
     /// `temp_c` (with `--temp`; the arm is at the true temperature).
     #[arg(long, default_value_t = 0.0, requires = "temp", value_parser = super::args::non_negative)]
     temp_noise_c: f64,
+    /// A link of the truth that sags under its own weight, `LINK:UM` (LINK 1-based or
+    /// `probe`): its end drops by UM µm times the cosine of its elevation, and the rest of the
+    /// chain moves down with it. No calibration term holds this effect: it tests what a
+    /// diagnosis says about what it cannot name. Point data only; repeatable.
+    #[arg(long, value_name = "LINK:UM", value_parser = parse_sag)]
+    sag: Vec<(String, f64)>,
     /// Output file (CSV of `spec/measured-data.md`).
     #[arg(short, long)]
     output: PathBuf,
@@ -80,6 +86,19 @@ fn parse_bar(s: &str) -> Result<f64, ArgError> {
         return Err(ArgError::TooLong { value, max });
     }
     Ok(value)
+}
+
+/// `LINK:UM` of `--sag`: the link as written (checked against the arm later) and the size.
+fn parse_sag(s: &str) -> Result<(String, f64), String> {
+    let (link, um) = s
+        .split_once(':')
+        .ok_or_else(|| format!("`{s}`: give LINK:UM, e.g. `2:30` (link 2, 30 µm)"))?;
+    let um: f64 = um
+        .parse()
+        .ok()
+        .filter(|v: &f64| v.is_finite() && v.abs() <= 1e4)
+        .ok_or_else(|| format!("`{s}`: `{um}` is not a size in µm (at most 10000)"))?;
+    Ok((link.to_string(), um))
 }
 
 fn parse_kind(s: &str) -> Result<Kind, ArgError> {
@@ -188,6 +207,22 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     opts.articulations = a.articulations.map(|k| k as usize);
     opts.encoder_noise_counts = a.encoder_noise_counts;
     opts.temp_noise_c = a.temp_noise_c;
+    for (link, um) in &a.sag {
+        let dof = truth.dof();
+        let k = match link.as_str() {
+            "probe" => dof,
+            j => match j.parse::<usize>() {
+                Ok(k) if (1..=dof).contains(&k) => k - 1,
+                _ => bail!(
+                    "--sag {link}:{um}: `{link}` is not a link of this arm (1..={dof} or probe)"
+                ),
+            },
+        };
+        opts.sag.push(sim::Sag {
+            link: k,
+            mm: um * 1e-3,
+        });
+    }
     let mut rng = sim::rng(a.seed);
     let s = match a.test {
         Some(_) => sim::protocol::iso_10360_12(&truth, &opts, &mut rng)?,

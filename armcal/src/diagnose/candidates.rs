@@ -2,7 +2,10 @@
 //! see at all.
 //!
 //! Candidates are every effect's vocabulary ([`crate::effects::Family::vocabulary`]): the
-//! encoder harmonics of every joint and orders 1–4, the gravity compliance of every joint, and
+//! encoder harmonics of every joint and every order up to the smaller of a cap (default
+//! [`MAX_ORDER`], `diagnose --max-order`) and what the joint's readings resolve
+//! ([`crate::effects::harmonic::resolvable_order`]; orders beyond it are listed as not
+//! testable, with the reason), the gravity compliance of every joint, and
 //! the thermal expansion of every link and the probe when the data have a temperature spread. Before any is tested, the structural identifiability of the geometric
 //! model with all of them (the calibration's own analysis, at the arm's nominal skeleton) sorts
 //! them:
@@ -21,7 +24,7 @@ use crate::ident::{Fixed, Identifiability, Why};
 use crate::params::{Effect, Param, Terms};
 use quatarm_ref::arm::Arm;
 
-/// Highest harmonic order tried.
+/// Highest harmonic order tried by default.
 pub const MAX_ORDER: u32 = crate::effects::harmonic::DIAGNOSIS_MAX_ORDER;
 
 /// Smallest temperature spread (°C, max − min) for which thermal terms are candidates.
@@ -80,19 +83,45 @@ pub fn temperature_range(data: &Dataset) -> Option<(f64, f64)> {
     )
 }
 
-/// Sorts the vocabulary into what these data can test.
+/// Sorts the vocabulary into what these data can test, harmonics up to [`MAX_ORDER`].
 pub fn candidates(start: &Arm, data: &Dataset) -> Candidates {
+    candidates_up_to(start, data, MAX_ORDER)
+}
+
+/// Sorts the vocabulary into what these data can test, harmonics up to order `max_order` or
+/// what each joint's readings resolve, whichever is lower.
+pub fn candidates_up_to(start: &Arm, data: &Dataset, max_order: u32) -> Candidates {
     let temp_range = temperature_range(data);
     let thermal = temp_range.is_some_and(|(lo, hi)| hi - lo >= MIN_TEMP_SPREAD_C);
-    let vocab = vocabulary(data.dof, thermal);
-    let terms = Terms::with(&vocab);
-    let all = unknowns(&terms, data);
-    let (id, _) = structural(start, data, &all, 1e-8);
+    let resolvable: Vec<u32> = (0..data.dof)
+        .map(|k| crate::effects::harmonic::resolvable_order(data, k))
+        .collect();
     let mut out = Candidates {
         thermal,
         temp_range,
         ..Candidates::default()
     };
+    let mut vocab = Vec::new();
+    for e in vocabulary(data.dof, thermal) {
+        match e {
+            Effect::Harmonic { order, .. } if order > max_order => {}
+            Effect::Harmonic { joint, order } if order > resolvable[joint] => {
+                out.untestable.push(Untestable {
+                    effect: e,
+                    reason: format!(
+                        "joint {}'s readings resolve waves up to order {} (their widest gap \
+                         and count)",
+                        joint + 1,
+                        resolvable[joint]
+                    ),
+                })
+            }
+            _ => vocab.push(e),
+        }
+    }
+    let terms = Terms::with(&vocab);
+    let all = unknowns(&terms, data);
+    let (id, _) = structural(start, data, &all, 1e-8);
     // Effects of which some unknown is held, and why.
     for e in &vocab {
         let held = held_of(&id, &all, *e);

@@ -11,6 +11,9 @@
 //! 4. The model extended with the named causes is refitted on all data: its parameters, its
 //!    residuals, its held-out gain.
 //!
+//! 5. What the extended model still leaves is searched for structure against every variable of
+//!    the data ([`unexplained`]) and reported without naming a cause.
+//!
 //! [`patterns`] turns residuals into what a person reads (the apparent angle error of each
 //! joint against its reading and its gravity lever, the apparent elongation of each link
 //! against temperature) and [`plots`] draws them; [`report`] writes the result as text or
@@ -23,6 +26,7 @@ pub mod plots;
 pub mod report;
 pub mod scenario;
 pub mod select;
+pub mod unexplained;
 pub use crate::stats;
 
 use crate::calib::{self, CalibError, Fit};
@@ -59,6 +63,12 @@ pub struct Options {
     pub folds: FoldChoice,
     /// Selection thresholds.
     pub select: Settings,
+    /// Highest encoder-harmonic order tried (the data may resolve less:
+    /// [`crate::effects::harmonic::resolvable_order`]).
+    pub max_order: u32,
+    /// Family-wise level of the search for unexplained structure ([`unexplained`], Holm over
+    /// every test).
+    pub unexplained_alpha: f64,
 }
 
 impl Default for Options {
@@ -70,6 +80,8 @@ impl Default for Options {
                 seed: 0x0f01d,
             },
             select: Settings::default(),
+            max_order: candidates::MAX_ORDER,
+            unexplained_alpha: unexplained::ALPHA,
         }
     }
 }
@@ -136,6 +148,8 @@ pub struct Diagnosis {
     pub extended: Model,
     /// The thresholds used.
     pub settings: Settings,
+    /// Structure left in the extended model's residuals, against every variable of the data.
+    pub unexplained: unexplained::Search,
 }
 
 impl Diagnosis {
@@ -195,7 +209,7 @@ pub fn diagnose(start: &Arm, data: &Dataset, opts: &Options) -> Result<Diagnosis
         fit: base_fit,
         holdout: base_holdout,
     };
-    let cands = candidates::candidates(start, data);
+    let cands = candidates::candidates_up_to(start, data, opts.max_order);
     let selection = select::select(
         start,
         data,
@@ -276,6 +290,7 @@ pub fn diagnose(start: &Arm, data: &Dataset, opts: &Options) -> Result<Diagnosis
             )
         })
         .collect();
+    let unexplained = unexplained::search(&extended, data, opts.unexplained_alpha);
     Ok(Diagnosis {
         candidates: cands,
         folds_method,
@@ -286,6 +301,7 @@ pub fn diagnose(start: &Arm, data: &Dataset, opts: &Options) -> Result<Diagnosis
         causes,
         extended,
         settings: opts.select,
+        unexplained,
     })
 }
 

@@ -107,7 +107,11 @@ pub fn draw(fig: &Figure, path: &Path) -> Result<(), PlotError> {
         (20, 50),
     )
     .map_err(|x| e(&x))?;
-    legend(&head, 20, 80).map_err(|x| e(&x))?;
+    if fig.file == super::unexplained::FILE {
+        legend_unexplained(&head, 20, 80).map_err(|x| e(&x))?;
+    } else {
+        legend(&head, 20, 80).map_err(|x| e(&x))?;
+    }
     let areas = body.split_evenly((rows, cols.max(1)));
     for (area, p) in areas.iter().zip(&fig.panels) {
         panel(area, p).map_err(|x| e(&x))?;
@@ -145,6 +149,29 @@ fn legend(area: &Area, x: i32, y: i32) -> DrawResult {
         OWN,
         "a named cause's own part: its term's displacement plus what is left (binned mean)",
     )
+}
+
+/// The legend of [`super::unexplained::figure`]: its points are the extended model's
+/// residuals and its second line the fitted pattern.
+fn legend_unexplained(area: &Area, x: i32, y: i32) -> DrawResult {
+    let font = (FAMILY, 16).into_font().color(&BLACK);
+    area.draw(&Circle::new((x + 6, y + 8), 3, GREY.mix(0.7).filled()))?;
+    area.draw_text(
+        "residuals with the named causes (in sample)",
+        &font,
+        (x + 18, y),
+    )?;
+    for (dx, colour, label) in [
+        (400, GEOMETRIC, "their binned mean"),
+        (600, EXTENDED, "the fitted pattern (binned mean)"),
+    ] {
+        area.draw(&PathElement::new(
+            vec![(x + dx, y + 8), (x + dx + 28, y + 8)],
+            colour.stroke_width(3),
+        ))?;
+        area.draw_text(label, &font, (x + dx + 36, y))?;
+    }
+    Ok(())
 }
 
 fn panel(area: &Area, p: &Panel) -> DrawResult {

@@ -261,6 +261,13 @@ pub struct Report {
     pub not_testable: Vec<NotTestable>,
     /// The residual patterns of the figures.
     pub patterns: Vec<PatternReport>,
+    /// Structure the named causes leave, against the data's variables, no cause named
+    /// ([`super::unexplained`]).
+    pub unexplained: Vec<super::unexplained::Structure>,
+    /// Named causes the strongest unexplained structure explains as well.
+    pub doubtful: Vec<super::unexplained::Doubt>,
+    /// How it was searched.
+    pub unexplained_search: super::unexplained::Search,
     /// Files written.
     pub output: OutputReport,
     /// Warnings.
@@ -368,6 +375,9 @@ pub fn build(d: &Diagnosis, data: &Dataset, figures: &[Figure]) -> Report {
             })
             .collect(),
         patterns,
+        unexplained: d.unexplained.found.clone(),
+        doubtful: d.unexplained.doubtful.clone(),
+        unexplained_search: d.unexplained.clone(),
         output: OutputReport::default(),
         warnings: data.warnings.clone(),
         uncertainty: None,
@@ -524,6 +534,7 @@ impl Report {
         self.write_models(&mut s);
         self.write_causes(&mut s);
         self.write_selection(&mut s);
+        super::unexplained::write_text(&mut s, &self.unexplained_search);
         if !self.not_testable.is_empty() {
             let _ = writeln!(s, "\nnot testable on these data");
             for n in &self.not_testable {

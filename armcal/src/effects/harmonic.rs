@@ -3,6 +3,7 @@
 //! eccentricity, order 2 its ellipticity. Two unknowns per term: s (0) and c (1).
 
 use super::{joint_args, joints_of, Effect, Family, Term, TermsError, TipPoint};
+use crate::data::Dataset;
 use crate::diagnose::patterns::{Figure, Patterns};
 use crate::params::{Link, Param, MAX_ORDER};
 use crate::sim::SimRng;
@@ -15,8 +16,49 @@ use serde_json::Value;
 /// The spec's key.
 pub const KEY: &str = "encoder_harmonic";
 
-/// Highest harmonic order a diagnosis tries.
-pub const DIAGNOSIS_MAX_ORDER: u32 = 4;
+/// Highest harmonic order a diagnosis tries by default (`diagnose --max-order`). Each order
+/// adds two unknowns per joint to every selection step, so the cap bounds the run time; the
+/// data may resolve less ([`resolvable_order`]), which then sets the limit.
+pub const DIAGNOSIS_MAX_ORDER: u32 = 8;
+
+/// Highest order the vocabulary holds: what the firmware's table can apply.
+pub const VOCABULARY_MAX_ORDER: u32 = quatarm::table::MAX_HARMONIC_ORDER as u32;
+
+/// Fewest distinct readings per order of a wave: each order is two unknowns, and a fit of
+/// 2H unknowns wants several readings per unknown to tell a wave from noise.
+pub const READINGS_PER_ORDER: usize = 8;
+
+/// The highest order of a wave in joint `k`'s reading (0-based) that `data` resolve: the
+/// smallest of
+/// - ⌊π / g⌋ − 1 with g the widest gap between consecutive distinct readings (rad): a wave of
+///   order h has a half period of π / h, and a half period with no reading in it hides a
+///   whole crest (the Nyquist argument on irregular samples: one reading per half period at
+///   least, with one order of margin);
+/// - n / [`READINGS_PER_ORDER`] with n the distinct readings (two unknowns per order);
+/// - [`VOCABULARY_MAX_ORDER`].
+///
+/// 0 when the joint has fewer than 2 [`READINGS_PER_ORDER`] distinct readings.
+pub fn resolvable_order(data: &Dataset, k: usize) -> u32 {
+    let mut v: Vec<f64> = data
+        .rows
+        .iter()
+        .filter_map(|r| r.theta.get(k).copied())
+        .filter(|t| t.is_finite())
+        .collect();
+    v.sort_by(f64::total_cmp);
+    v.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+    if v.len() < 2 * READINGS_PER_ORDER {
+        return 0;
+    }
+    let gap = v.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max);
+    let by_gap = if gap > 0.0 {
+        ((std::f64::consts::PI / gap).floor() - 1.0).max(0.0)
+    } else {
+        0.0
+    };
+    let by_count = (v.len() / READINGS_PER_ORDER) as f64;
+    by_gap.min(by_count).min(f64::from(VOCABULARY_MAX_ORDER)) as u32
+}
 
 /// The family of encoder harmonics.
 pub struct Harmonics;
@@ -66,7 +108,7 @@ impl Family for Harmonics {
     fn vocabulary(&self, dof: usize, _thermal: bool) -> Vec<Effect> {
         (0..dof)
             .flat_map(|joint| {
-                (1..=DIAGNOSIS_MAX_ORDER).map(move |order| Effect::Harmonic { joint, order })
+                (1..=VOCABULARY_MAX_ORDER).map(move |order| Effect::Harmonic { joint, order })
             })
             .collect()
     }
@@ -85,7 +127,7 @@ impl Family for Harmonics {
                 (true, true) => " (hinge)".to_string(),
                 (true, false) => " (swivel)".to_string(),
             };
-            let harmonic = (1..=DIAGNOSIS_MAX_ORDER)
+            let harmonic = (1..=VOCABULARY_MAX_ORDER)
                 .map(|order| Effect::Harmonic { joint: k, order })
                 .find(|e| at.named(*e));
             panels.push(at.panel(
