@@ -75,6 +75,7 @@ pub mod scalar;
 pub mod stream;
 pub mod table;
 pub mod temperature;
+pub mod update;
 
 pub use chain::{Chain, ChainF32, ChainFixed, Evaluator};
 pub use matrix::{MatrixChain, MatrixChainF32, MatrixChainFixed};
