@@ -15,6 +15,8 @@
 //! the record layout, the steps and the argument for power loss.
 
 pub mod boot;
+#[cfg(test)]
+mod fixtures;
 pub mod layout;
 #[cfg(test)]
 mod mock;
@@ -22,6 +24,8 @@ mod mock;
 mod power_loss;
 pub mod record;
 pub mod session;
+#[cfg(test)]
+mod session_tests;
 
 pub use boot::{live_table, BootError, Live};
 pub use layout::{Layout, LayoutError};

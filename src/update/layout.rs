@@ -40,7 +40,12 @@ pub const MAX_WRITE_SIZE: usize = 256;
 impl Layout {
     /// The four regions, slots first.
     pub(crate) fn regions(&self) -> [&Range<u32>; 4] {
-        [&self.slots[0], &self.slots[1], &self.state[0], &self.state[1]]
+        [
+            &self.slots[0],
+            &self.slots[1],
+            &self.state[0],
+            &self.state[1],
+        ]
     }
 
     /// Checks the layout against a device: every region erase-aligned, inside the device,

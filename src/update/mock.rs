@@ -143,7 +143,9 @@ impl NorFlash for MockFlash {
     const ERASE_SIZE: usize = 1024;
 
     fn erase(&mut self, from: u32, to: u32) -> Result<(), MockError> {
-        let len = (to as usize).checked_sub(from as usize).ok_or(MockError::OutOfBounds)?;
+        let len = (to as usize)
+            .checked_sub(from as usize)
+            .ok_or(MockError::OutOfBounds)?;
         let start = self.range(from, len, Self::ERASE_SIZE)?;
         for unit in (start..start + len).step_by(Self::ERASE_SIZE) {
             let cut = self.operation()?;
@@ -192,7 +194,11 @@ mod tests {
         let mut f = MockFlash::new(2048);
         f.write(0, &[0x0f, 0xf0, 0x55, 0xaa]).unwrap();
         f.write(0, &[0xff, 0x00, 0xff, 0xff]).unwrap();
-        assert_eq!(&f.mem[..4], &[0x0f, 0x00, 0x55, 0xaa], "writes only clear bits");
+        assert_eq!(
+            &f.mem[..4],
+            &[0x0f, 0x00, 0x55, 0xaa],
+            "writes only clear bits"
+        );
         assert_eq!(f.write(1, &[0; 4]), Err(MockError::NotAligned));
         f.erase(0, 1024).unwrap();
         assert!(f.mem[..1024].iter().all(|&b| b == 0xff));

@@ -2,96 +2,17 @@
 //! each cut the flash is rebooted and must come up on the old table or the new one, byte for
 //! byte (never a mix, never none), and a retried update must then succeed.
 
-use std::vec::Vec;
-
-use super::layout::Layout;
+use super::fixtures::{boot, crc_of, factory, layout, table, update};
 use super::mock::{Cut, MockFlash};
 use super::record::{self, StateRecord};
-use super::session::{Accepted, Step, Updater, CHUNK_LEN};
-use super::{live_table, Refusal};
-use crate::table::{quat_to_matrix, JointData, ProbeData, TableData, MAX_TABLE_LEN};
+use super::session::Accepted;
 
-const FLASH_LEN: usize = 8 * 1024;
-
-fn layout() -> Layout {
-    Layout {
-        slots: [0..2048, 2048..4096],
-        state: [4096..5120, 5120..6144],
-    }
-}
-
-/// A valid table of a nominal six-joint arm whose links are `link` mm long.
-fn table(link: f64) -> Vec<u8> {
-    let mut data = TableData {
-        joint_count: 6,
-        ..TableData::default()
-    };
-    data.serial[..4].copy_from_slice(b"SN-9");
-    let identity = [1.0, 0.0, 0.0, 0.0];
-    for joint in &mut data.joints[..6] {
-        *joint = JointData {
-            axis: 2,
-            counts: 1 << 14,
-            rotation: identity,
-            matrix: quat_to_matrix(&identity),
-            link: [link, 0.0, 0.0],
-            ..JointData::default()
-        };
-    }
-    data.probe = ProbeData {
-        vector: [0.0, 0.0, 50.0],
-        direction: [0.0, 0.0, 1.0],
-        thermal: 0.0,
-    };
-    data.flags = data.content_flags();
-    let mut bytes = [0u8; MAX_TABLE_LEN];
-    let len = data.encode(&mut bytes).expect("fixture table encodes");
-    bytes[..len].to_vec()
-}
-
-/// The steps that send `t`.
-fn steps(t: &[u8]) -> Vec<Step> {
-    let crc = u32::from_le_bytes([t[t.len() - 4], t[t.len() - 3], t[t.len() - 2], t[t.len() - 1]]);
-    let mut s = std::vec![Step::Begin {
-        len: t.len() as u32,
-        crc
-    }];
-    for (i, c) in t.chunks(CHUNK_LEN).enumerate() {
-        s.push(Step::Chunk {
-            offset: (i * CHUNK_LEN) as u32,
-            bytes: heapless::Vec::from_slice(c).expect("chunk fits"),
-        });
-    }
-    s.push(Step::Commit);
-    s
-}
-
-fn update(flash: &mut MockFlash, t: &[u8]) -> Result<Accepted, Refusal> {
-    let mut up = Updater::new(layout(), Some(6));
-    let mut scratch = [0u8; MAX_TABLE_LEN];
-    let mut last = Accepted::Aborted;
-    for s in steps(t) {
-        last = up.step(flash, &mut scratch, &s)?;
-    }
-    Ok(last)
-}
-
-/// The table the flash boots on, as bytes (`None`: no table).
-fn boot(flash: &mut MockFlash) -> Option<Vec<u8>> {
-    let mut buf = [0u8; MAX_TABLE_LEN];
-    live_table(flash, &layout(), Some(6), &mut buf)
-        .ok()
-        .map(|l| l.table.bytes().to_vec())
-}
-
-/// The flash a board leaves the factory with: `t` in slot 0 by a probe, no state record.
-fn factory(t: &[u8]) -> MockFlash {
-    let mut f = MockFlash::new(FLASH_LEN);
-    f.mem[..t.len()].copy_from_slice(t);
-    f
-}
-
-const CUTS: [Cut; 4] = [Cut::Untouched, Cut::Done, Cut::Random(0x9e37_79b9), Cut::Random(7)];
+const CUTS: [Cut; 4] = [
+    Cut::Untouched,
+    Cut::Done,
+    Cut::Random(0x9e37_79b9),
+    Cut::Random(7),
+];
 
 /// Cuts the power at every operation of `run` on `start` (for each kind of cut), reboots,
 /// and checks the boot and a retried update. Returns (cut points, boots on a valid table).
@@ -104,27 +25,36 @@ fn sweep(
     let mut clean = start.clone();
     assert!(run(&mut clean), "the uncut run succeeds");
     let total = clean.ops;
-    assert_eq!(boot(&mut clean).as_deref(), Some(new));
+    assert!(boot(&mut clean).as_deref() == Some(new));
     let (mut tried, mut valid) = (0, 0);
     for cut in CUTS {
         let (mut saw_old, mut saw_new) = (false, false);
         for at in 0..total {
             let mut f = start.clone();
             f.cut = Some((at, cut));
-            assert!(!run(&mut f), "cut at {at} of {total} ({cut:?}) stops the run");
+            assert!(
+                !run(&mut f),
+                "cut at {at} of {total} ({cut:?}) stops the run"
+            );
             let mut rebooted = MockFlash::from_image(f.mem);
             tried += 1;
             let got = boot(&mut rebooted);
             let is_old = got.as_deref() == Some(old);
             let is_new = got.as_deref() == Some(new);
-            assert!(is_old || is_new, "cut at {at} of {total} ({cut:?}): no valid table");
+            assert!(
+                is_old || is_new,
+                "cut at {at} of {total} ({cut:?}): no valid table"
+            );
             valid += 1;
             saw_old |= is_old;
             saw_new |= is_new;
             // Only the last operation (the word holding the record's CRC) can make the new
             // table live.
             if at + 1 < total {
-                assert!(is_old, "cut at {at} of {total} ({cut:?}): new table before its record");
+                assert!(
+                    is_old,
+                    "cut at {at} of {total} ({cut:?}): new table before its record"
+                );
             }
             if at + 1 == total {
                 match cut {
@@ -139,7 +69,7 @@ fn sweep(
                 matches!(update(&mut retry, new), Ok(Accepted::Committed { .. })),
                 "retry after cut at {at} ({cut:?})"
             );
-            assert_eq!(boot(&mut retry).as_deref(), Some(new));
+            assert!(boot(&mut retry).as_deref() == Some(new));
         }
         assert!(saw_old, "{cut:?}: some cut leaves the old table");
         if cut == Cut::Done {
@@ -185,7 +115,7 @@ fn power_loss_at_every_operation_of_the_state_record() {
         seq,
         slot,
         len: t.len() as u32,
-        crc: u32::from_le_bytes([t[t.len() - 4], t[t.len() - 3], t[t.len() - 2], t[t.len() - 1]]),
+        crc: crc_of(t),
     };
     record::write(&mut start, &layout(), &rec(1, 0, &a)).expect("record 1");
     start.mem[2048..2048 + b.len()].copy_from_slice(&b);

@@ -94,7 +94,11 @@ pub fn newest(copies: &[Option<StateRecord>; 2]) -> Option<(usize, StateRecord)>
 
 /// Writes `rec` into the copy that does not hold the newest valid record (copy 0 when there
 /// is none): erase it, then one write of the record padded with 0xFF to the write unit.
-pub fn write<F: NorFlash>(flash: &mut F, layout: &Layout, rec: &StateRecord) -> Result<(), F::Error> {
+pub fn write<F: NorFlash>(
+    flash: &mut F,
+    layout: &Layout,
+    rec: &StateRecord,
+) -> Result<(), F::Error> {
     let target = match newest(&read_copies(flash, layout)) {
         Some((copy, _)) => 1 - copy,
         None => 0,
@@ -113,7 +117,12 @@ mod tests {
 
     #[test]
     fn round_trip_and_rejections() {
-        let r = StateRecord { seq: 7, slot: 1, len: 1596, crc: 0xdead_beef };
+        let r = StateRecord {
+            seq: 7,
+            slot: 1,
+            len: 1596,
+            crc: 0xdead_beef,
+        };
         let b = r.encode();
         assert_eq!(StateRecord::decode(&b), Some(r));
         assert_eq!(StateRecord::decode(&[0xff; RECORD_LEN]), None);
@@ -129,7 +138,14 @@ mod tests {
 
     #[test]
     fn newest_wins() {
-        let r = |seq| Some(StateRecord { seq, slot: 0, len: 0, crc: 0 });
+        let r = |seq| {
+            Some(StateRecord {
+                seq,
+                slot: 0,
+                len: 0,
+                crc: 0,
+            })
+        };
         assert_eq!(newest(&[r(3), r(4)]).map(|x| x.0), Some(1));
         assert_eq!(newest(&[r(5), r(4)]).map(|x| x.0), Some(0));
         assert_eq!(newest(&[None, r(1)]).map(|x| x.0), Some(1));

@@ -270,7 +270,8 @@ impl Updater {
             });
         }
         if !self.pending.is_empty() {
-            let at = self.layout.slots[usize::from(slot)].start + written - self.pending.len() as u32;
+            let at =
+                self.layout.slots[usize::from(slot)].start + written - self.pending.len() as u32;
             self.pending.resize(F::WRITE_SIZE, 0xff).ok();
             let w = flash.write(at, &self.pending);
             self.pending.clear();

@@ -1,0 +1,161 @@
+//! The update's answers: each wrong step refused with its reason, and the old table live
+//! after every refusal.
+
+use super::boot::FlashFault;
+use super::fixtures::{boot, crc_of, factory, layout, steps, table, update};
+use super::session::{Accepted, Refusal, Step, Updater};
+use crate::table::{TableError, MAX_TABLE_LEN};
+
+fn chunk(offset: u32, bytes: &[u8]) -> Step {
+    Step::Chunk {
+        offset,
+        bytes: heapless::Vec::from_slice(bytes).expect("chunk fits"),
+    }
+}
+
+#[test]
+fn out_of_order_steps_are_refused() {
+    let (a, b) = (table(100.0), table(120.0));
+    let mut f = factory(&a);
+    let mut up = Updater::new(layout(), Some(6));
+    let mut s = [0u8; MAX_TABLE_LEN];
+    assert_eq!(
+        up.step(&mut f, &mut s, &chunk(0, &b[..8])),
+        Err(Refusal::NotBegun)
+    );
+    assert_eq!(
+        up.step(&mut f, &mut s, &Step::Commit),
+        Err(Refusal::NotBegun)
+    );
+    assert_eq!(
+        up.step(&mut f, &mut s, &Step::Begin { len: 1000, crc: 0 }),
+        Err(Refusal::BadLength(1000))
+    );
+    let begin = Step::Begin {
+        len: b.len() as u32,
+        crc: crc_of(&b),
+    };
+    assert_eq!(
+        up.step(&mut f, &mut s, &begin),
+        Ok(Accepted::Begun { slot: 1 })
+    );
+    assert_eq!(
+        up.step(&mut f, &mut s, &chunk(4, &b[4..8])),
+        Err(Refusal::OutOfOrder { expected: 0 })
+    );
+    assert_eq!(
+        up.step(&mut f, &mut s, &chunk(0, &b[..6])),
+        Ok(Accepted::Chunk { next: 6 })
+    );
+    // The refused chunk did not end the update: the next one at the right offset is taken.
+    let n = b.len() as u32;
+    assert_eq!(
+        up.step(&mut f, &mut s, &chunk(6, &[0; 64])),
+        Ok(Accepted::Chunk { next: 70 })
+    );
+    assert_eq!(
+        up.step(&mut f, &mut s, &Step::Commit),
+        Err(Refusal::Incomplete {
+            received: 70,
+            len: n
+        })
+    );
+    // The refused commit ended the update; the old table is live.
+    assert_eq!(
+        up.step(&mut f, &mut s, &chunk(70, &[0; 4])),
+        Err(Refusal::NotBegun)
+    );
+    assert!(boot(&mut f).as_deref() == Some(&a[..]));
+    up.step(&mut f, &mut s, &begin).unwrap();
+    for st in &steps(&b)[1..steps(&b).len() - 1] {
+        up.step(&mut f, &mut s, st).unwrap();
+    }
+    assert_eq!(
+        up.step(&mut f, &mut s, &chunk(n, &[0])),
+        Err(Refusal::PastEnd { len: n })
+    );
+    assert_eq!(
+        up.step(&mut f, &mut s, &Step::Commit),
+        Ok(Accepted::Committed { slot: 1, seq: 1 })
+    );
+    assert!(boot(&mut f).as_deref() == Some(&b[..]));
+}
+
+/// A table that is not what was announced, or fails a check of the boot, is never made live.
+#[test]
+fn bad_tables_are_refused_at_commit() {
+    let (a, b) = (table(100.0), table(120.0));
+    let send = |t: &[u8], crc: u32| {
+        let mut f = factory(&a);
+        let mut up = Updater::new(layout(), Some(6));
+        let mut s = [0u8; MAX_TABLE_LEN];
+        let mut st = steps(t);
+        st[0] = Step::Begin {
+            len: t.len() as u32,
+            crc,
+        };
+        let mut last = Ok(Accepted::Aborted);
+        for x in &st {
+            last = up.step(&mut f, &mut s, x);
+        }
+        assert!(
+            boot(&mut f).as_deref() == Some(&a[..]),
+            "old table stays live"
+        );
+        last
+    };
+    // One byte changed: the table's own CRC fails.
+    let mut t = b.clone();
+    t[100] ^= 1;
+    assert!(matches!(
+        send(&t, crc_of(&b)),
+        Err(Refusal::Table(TableError::Crc { .. }))
+    ));
+    // A valid table, but another CRC announced.
+    assert_eq!(send(&b, crc_of(&b) ^ 1), Err(Refusal::NotAnnounced));
+    // Blank bytes.
+    let blank = std::vec![0xffu8; b.len()];
+    assert_eq!(send(&blank, 0), Err(Refusal::Table(TableError::Blank)));
+}
+
+/// A table for another joint count than the hub drives is refused, as the boot refuses it.
+#[test]
+fn wrong_joint_count_is_refused() {
+    let (a, b) = (table(100.0), table(120.0));
+    let mut f = factory(&a);
+    let mut up = Updater::new(layout(), Some(7));
+    let mut s = [0u8; MAX_TABLE_LEN];
+    let mut last = Ok(Accepted::Aborted);
+    for x in &steps(&b) {
+        last = up.step(&mut f, &mut s, x);
+    }
+    assert_eq!(
+        last,
+        Err(Refusal::Table(TableError::WrongJointCount {
+            expected: 7,
+            found: 6
+        }))
+    );
+}
+
+/// Updates alternate slots and count up; a flash that lost power is reported as a fault.
+#[test]
+fn updates_alternate_slots() {
+    let mut f = factory(&table(100.0));
+    for (k, link) in [110.0, 120.0, 130.0, 140.0].into_iter().enumerate() {
+        let t = table(link);
+        assert_eq!(
+            update(&mut f, &t),
+            Ok(Accepted::Committed {
+                slot: (1 - k % 2) as u8,
+                seq: k as u32 + 1
+            })
+        );
+        assert!(boot(&mut f).as_deref() == Some(&t[..]));
+    }
+    f.cut = Some((f.ops, super::mock::Cut::Untouched));
+    assert_eq!(
+        update(&mut f, &table(150.0)),
+        Err(Refusal::Flash(FlashFault::Other))
+    );
+}
