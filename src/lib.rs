@@ -12,6 +12,8 @@
 //!   cores without. Encoder harmonics, gravity compliance and thermal expansion are part of
 //!   the model ([`model`], [`physics`]). [`MatrixChain`] is the same model as 3×4 matrices,
 //!   for comparison.
+//! - [`update`]: a new table written into the inactive one of two flash slots and made live by
+//!   a state record, safe against a power cut at any moment.
 //! - [`stream`]: the framed messages both ways (postcard, CRC-32, COBS), the hub's report
 //!   logic and the decoder of its receive side.
 //! - [`encoder::AbsoluteEncoder`] and [`temperature::TemperatureSensor`]: what a hub needs of

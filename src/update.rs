@@ -7,7 +7,8 @@
 //!   encoding and its two copies.
 //! - [`session`]: the update state machine, `Begin` / `Chunk` / `Commit`, each answered with a
 //!   [`session::Refusal`] or accepted; the messages of the stream call it.
-//! - [`boot`]: [`boot::live_table`], the table a hub uses at boot.
+//! - [`boot`]: [`boot::live_table`], the table a hub uses at boot. (Not yet called by the
+//!   boards, which still read slot 0 directly.)
 //!
 //! Flash is reached through the `embedded-storage` crate's `NorFlash` traits, the interface
 //! every embassy and `*-hal` flash driver implements (and embassy-boot and sequential-storage
@@ -27,7 +28,7 @@ pub mod session;
 #[cfg(test)]
 mod session_tests;
 
-pub use boot::{live_table, BootError, Live};
+pub use boot::{live_slot, live_table, BootError, Live};
 pub use layout::{Layout, LayoutError};
 pub use record::StateRecord;
 pub use session::{Accepted, Refusal, Updater};

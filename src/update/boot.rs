@@ -94,8 +94,10 @@ pub(crate) fn verify_slot<'b, F: NorFlash>(
     Ok(table)
 }
 
-/// Which slot boots, and the record that names it (see the module's rule).
-fn choose<F: NorFlash>(
+/// Which slot boots, and the record that names it (see the module's rule); `buf` is scratch.
+/// A board whose flash is memory-mapped takes the slot's bytes from there and keeps the table
+/// in flash; [`live_table`] is this plus a copy into `buf`.
+pub fn live_slot<F: NorFlash>(
     flash: &mut F,
     layout: &Layout,
     joints: Option<usize>,
@@ -129,8 +131,8 @@ pub fn live_table<'b, F: NorFlash>(
     joints: Option<usize>,
     buf: &'b mut [u8; MAX_TABLE_LEN],
 ) -> Result<Live<'b>, BootError> {
-    let (slot, rec) = choose(flash, layout, joints, buf)?;
-    // Read again for the borrow of `buf`: `choose` may have tried another slot last.
+    let (slot, rec) = live_slot(flash, layout, joints, buf)?;
+    // Read again for the borrow of `buf`: `live_slot` may have tried another slot last.
     let table = verify_slot(flash, layout, slot, joints, rec.as_ref(), buf).map_err(|e| {
         let mut why = [SlotError::Table(TableError::Blank); 2];
         why[usize::from(slot)] = e;

@@ -160,10 +160,8 @@ impl Updater {
             }
         };
         // A flash fault or a refused commit ends the update; a refused chunk does not.
-        if matches!(
-            result,
-            Err(Refusal::Flash(_) | Refusal::Table(_) | Refusal::NotAnnounced)
-        ) || matches!(result, Err(_) if matches!(step, Step::Commit))
+        if matches!(result, Err(Refusal::Flash(_)))
+            || (result.is_err() && matches!(step, Step::Commit))
         {
             self.state = State::Idle;
         }
