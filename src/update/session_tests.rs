@@ -159,3 +159,55 @@ fn updates_alternate_slots() {
         Err(Refusal::Flash(FlashFault::Other))
     );
 }
+
+/// The boot falls back when the slot the newest record names does not verify: to the slot of
+/// the older record, else to any valid slot; with no valid table it says what each slot holds.
+#[test]
+fn boot_falls_back_past_a_bad_slot() {
+    use super::boot::{BootError, SlotError};
+    use super::live_table;
+    let (a, b, c) = (table(100.0), table(120.0), table(140.0));
+    let mut f = factory(&a);
+    update(&mut f, &b).unwrap(); // slot 1, seq 1
+    update(&mut f, &c).unwrap(); // slot 0, seq 2
+    let mut buf = [0u8; MAX_TABLE_LEN];
+    let live = live_table(&mut f, &layout(), Some(6), &mut buf).unwrap();
+    assert_eq!((live.slot, live.seq), (0, Some(2)));
+    f.mem[300] ^= 0x04; // slot 0 corrupt: record 1's slot
+    let live = live_table(&mut f, &layout(), Some(6), &mut buf).unwrap();
+    assert_eq!((live.slot, live.seq), (1, Some(1)));
+    assert!(live.table.bytes() == &b[..]);
+    f.mem[4096] ^= 0x01; // and record 1 (copy 0) torn: slot 1 by its contents
+    let live = live_table(&mut f, &layout(), Some(6), &mut buf).unwrap();
+    assert_eq!((live.slot, live.seq), (1, None));
+    f.mem[2048 + 40] ^= 0x01; // slot 1 corrupt too: nothing
+    assert!(matches!(
+        live_table(&mut f, &layout(), Some(6), &mut buf),
+        Err(BootError::NoTable([
+            SlotError::Table(TableError::Crc { .. }),
+            SlotError::Table(_)
+        ]))
+    ));
+}
+
+#[test]
+fn layouts_that_do_not_fit_are_refused() {
+    use super::layout::{Layout, LayoutError};
+    let f = factory(&table(100.0));
+    let ok = layout();
+    assert_eq!(ok.check(&f), Ok(()));
+    let mut l = ok.clone();
+    l.state[1] = 5120..6000;
+    assert_eq!(l.check(&f), Err(LayoutError::Unaligned(3)));
+    let mut l = ok.clone();
+    l.slots[1] = 1024..3072;
+    assert_eq!(l.check(&f), Err(LayoutError::Overlap(0, 1)));
+    let mut l = ok.clone();
+    l.slots[0] = 6144..7168;
+    assert_eq!(l.check(&f), Err(LayoutError::SlotTooSmall(0)));
+    let l = Layout {
+        slots: ok.slots.clone(),
+        state: [4096..5120, 8192..9216],
+    };
+    assert_eq!(l.check(&f), Err(LayoutError::OutOfFlash(3)));
+}
