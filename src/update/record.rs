@@ -94,7 +94,8 @@ pub fn newest(copies: &[Option<StateRecord>; 2]) -> Option<(usize, StateRecord)>
 
 /// Writes `rec` into the copy that does not hold the newest valid record (copy 0 when there
 /// is none): erase it, then one write of the record padded with 0xFF to the write unit.
-pub fn write<F: NorFlash>(
+/// Crate-only: callers have checked the layout (a write unit within `MAX_WRITE_SIZE`).
+pub(crate) fn write<F: NorFlash>(
     flash: &mut F,
     layout: &Layout,
     rec: &StateRecord,
