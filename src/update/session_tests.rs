@@ -211,3 +211,44 @@ fn layouts_that_do_not_fit_are_refused() {
     };
     assert_eq!(l.check(&f), Err(LayoutError::OutOfFlash(3)));
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+
+    /// Any sequence of steps (right or wrong lengths, CRCs, offsets, bytes) never panics, and
+    /// the boot is always on the old table or on one whose commit was accepted.
+    #[test]
+    fn arbitrary_steps_never_leave_a_bad_table(
+        ops in proptest::collection::vec((0u8..12, 0u32..2000, proptest::collection::vec(proptest::num::u8::ANY, 0..64)), 0..120)
+    ) {
+        let (a, b) = (table(100.0), table(120.0));
+        let mut f = factory(&a);
+        let mut up = Updater::new(layout(), Some(6));
+        let mut s = [0u8; MAX_TABLE_LEN];
+        let mut committed = false;
+        let mut next = 0u32;
+        for (kind, n, bytes) in ops {
+            let step = match kind {
+                0 => Step::Begin { len: b.len() as u32, crc: if n % 2 == 0 { crc_of(&b) } else { n } },
+                // The right next bytes of `b`, or the given ones at a given offset.
+                1..=8 => {
+                    let at = next as usize;
+                    let end = (at + 64).min(b.len());
+                    chunk(next, &b[at.min(end)..end])
+                }
+                9 => chunk(n, &bytes),
+                10 => Step::Commit,
+                _ => Step::Abort,
+            };
+            match up.step(&mut f, &mut s, &step) {
+                Ok(Accepted::Begun { .. }) => next = 0,
+                Ok(Accepted::Chunk { next: x }) => next = x,
+                Ok(Accepted::Committed { .. }) => committed = true,
+                _ => {}
+            }
+            let got = boot(&mut f);
+            let ok = got.as_deref() == Some(&a[..]) || (committed && got.as_deref() == Some(&b[..]));
+            proptest::prop_assert!(ok, "boot on neither the old nor a committed table");
+        }
+    }
+}
