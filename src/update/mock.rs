@@ -2,6 +2,9 @@
 //! only clear bits (the stored byte becomes `old & new`), and after a chosen number of
 //! operations (one write unit written, or one erase unit erased) the power goes: that
 //! operation is left untouched, done, or with random bits, and every later one fails.
+//! Like sequential-storage's mock, it refuses a second write of a word before its erase
+//! (flash with ECC, as on the STM32L4/H7, forbids it), so the tests also show that the update
+//! never relies on rewriting a word.
 
 use embedded_storage::nor_flash::{
     ErrorType, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,
@@ -25,6 +28,8 @@ pub enum Cut {
 pub enum MockError {
     /// Offset or length not aligned.
     NotAligned,
+    /// A word written twice without an erase between.
+    Rewrite,
     /// Outside the device.
     OutOfBounds,
     /// The power is off.
@@ -36,7 +41,7 @@ impl NorFlashError for MockError {
         match self {
             MockError::NotAligned => NorFlashErrorKind::NotAligned,
             MockError::OutOfBounds => NorFlashErrorKind::OutOfBounds,
-            MockError::PowerLost => NorFlashErrorKind::Other,
+            MockError::Rewrite | MockError::PowerLost => NorFlashErrorKind::Other,
         }
     }
 }
@@ -50,6 +55,8 @@ pub struct MockFlash {
     pub ops: usize,
     /// The operation (0-based) at which the power goes, and what it leaves.
     pub cut: Option<(usize, Cut)>,
+    /// Per write unit: written since its last erase (or since the image was loaded).
+    written: Vec<bool>,
     powered: bool,
     rng: u64,
 }
@@ -63,6 +70,7 @@ impl MockFlash {
     /// A flash holding `mem`, powered, with no cut planned: what a reboot finds.
     pub fn from_image(mem: Vec<u8>) -> MockFlash {
         MockFlash {
+            written: std::vec![false; mem.len() / Self::WRITE_SIZE],
             mem,
             ops: 0,
             cut: None,
@@ -149,6 +157,9 @@ impl NorFlash for MockFlash {
         let start = self.range(from, len, Self::ERASE_SIZE)?;
         for unit in (start..start + len).step_by(Self::ERASE_SIZE) {
             let cut = self.operation()?;
+            let words = unit / Self::WRITE_SIZE..(unit + Self::ERASE_SIZE) / Self::WRITE_SIZE;
+            // A torn erase leaves the unit in no state a write may rely on: not writable.
+            self.written[words].fill(cut.is_some());
             for i in unit..unit + Self::ERASE_SIZE {
                 self.mem[i] = match cut {
                     None | Some(Cut::Done) => 0xff,
@@ -166,8 +177,12 @@ impl NorFlash for MockFlash {
     fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), MockError> {
         let start = self.range(offset, bytes.len(), Self::WRITE_SIZE)?;
         for (k, word) in bytes.chunks(Self::WRITE_SIZE).enumerate() {
-            let cut = self.operation()?;
             let at = start + k * Self::WRITE_SIZE;
+            if self.written[at / Self::WRITE_SIZE] {
+                return Err(MockError::Rewrite);
+            }
+            let cut = self.operation()?;
+            self.written[at / Self::WRITE_SIZE] = true;
             for (i, &new) in word.iter().enumerate() {
                 let old = self.mem[at + i];
                 self.mem[at + i] = match cut {
@@ -192,16 +207,18 @@ mod tests {
     #[test]
     fn nor_semantics_and_cut() {
         let mut f = MockFlash::new(2048);
-        f.write(0, &[0x0f, 0xf0, 0x55, 0xaa]).unwrap();
+        f.mem[..4].copy_from_slice(&[0x0f, 0xf0, 0x55, 0xaa]);
         f.write(0, &[0xff, 0x00, 0xff, 0xff]).unwrap();
         assert_eq!(
             &f.mem[..4],
             &[0x0f, 0x00, 0x55, 0xaa],
             "writes only clear bits"
         );
+        assert_eq!(f.write(0, &[0; 4]), Err(MockError::Rewrite));
         assert_eq!(f.write(1, &[0; 4]), Err(MockError::NotAligned));
         f.erase(0, 1024).unwrap();
         assert!(f.mem[..1024].iter().all(|&b| b == 0xff));
+        f.write(0, &[0; 4]).unwrap();
         let mut f = MockFlash::new(2048);
         f.cut = Some((1, Cut::Untouched));
         assert_eq!(f.write(0, &[0; 8]), Err(MockError::PowerLost));
