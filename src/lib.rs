@@ -13,6 +13,8 @@
 //!   the model ([`model`], [`physics`]). [`MatrixChain`] is the same model as 3×4 matrices,
 //!   for comparison.
 //! - [`uncertainty`]: every point's covariance and U95, from the budget the table carries.
+//! - [`update`]: a new table written into the inactive one of two flash slots and made live by
+//!   a state record, safe against a power cut at any moment.
 //! - [`stream`]: the framed messages both ways (postcard, CRC-32, COBS), the hub's report
 //!   logic and the decoder of its receive side.
 //! - [`encoder::AbsoluteEncoder`] and [`temperature::TemperatureSensor`]: what a hub needs of
@@ -81,6 +83,7 @@ pub mod stream;
 pub mod table;
 pub mod temperature;
 pub mod uncertainty;
+pub mod update;
 
 pub use chain::{Chain, ChainF32, ChainFixed, Evaluator};
 pub use matrix::{MatrixChain, MatrixChainF32, MatrixChainFixed};

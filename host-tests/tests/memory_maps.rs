@@ -33,6 +33,44 @@ fn check(path: &std::path::Path) {
     for sym in ["_cal_table_start = ORIGIN(CALTABLE)", "_cal_table_end"] {
         assert!(script.contains(sym), "{who}: no `{sym}`");
     }
+    // The update's second slot and the two state-record copies (docs/update.md): each holds
+    // what it must, and no two regions share a byte.
+    let (b, b_len) = region(&script, "CALTABLE_B");
+    assert!(
+        b_len >= table_len(MAX_JOINTS) as u64,
+        "{who}: CALTABLE_B of {b_len} bytes cannot hold a {MAX_JOINTS}-joint table"
+    );
+    let s0 = region(&script, "CALSTATE0");
+    let s1 = region(&script, "CALSTATE1");
+    for (name, (_, len)) in [("CALSTATE0", s0), ("CALSTATE1", s1)] {
+        assert!(
+            len >= quatarm::update::record::RECORD_LEN as u64,
+            "{who}: {name} cannot hold a state record"
+        );
+    }
+    let all = [
+        ("FLASH", (flash, flash_len)),
+        ("RAM", (ram, ram_len)),
+        ("CALTABLE", (ct, ct_len)),
+        ("CALTABLE_B", (b, b_len)),
+        ("CALSTATE0", s0),
+        ("CALSTATE1", s1),
+    ];
+    for (i, (n, (x, xl))) in all.iter().enumerate() {
+        for (m, (y, yl)) in &all[i + 1..] {
+            assert!(apart(*x, *xl, *y, *yl), "{who}: {n} overlaps {m}");
+        }
+    }
+    for sym in [
+        "_cal_slot1_start = ORIGIN(CALTABLE_B)",
+        "_cal_slot1_end",
+        "_cal_state0_start = ORIGIN(CALSTATE0)",
+        "_cal_state0_end",
+        "_cal_state1_start = ORIGIN(CALSTATE1)",
+        "_cal_state1_end",
+    ] {
+        assert!(script.contains(sym), "{who}: no `{sym}`");
+    }
 }
 
 #[test]

@@ -1,0 +1,34 @@
+//! Calibration update in place: a new table written into the inactive one of two flash slots,
+//! checked completely, then made live by a small state record, so that a power cut at any
+//! moment leaves the hub on a valid table, the old or the new, never a mix.
+//!
+//! - [`layout`]: where the two slots and the two copies of the state record lie.
+//! - [`record`]: the state record (which slot is live, sequence number, length, CRC), its
+//!   encoding and its two copies.
+//! - [`session`]: the update state machine, `Begin` / `Chunk` / `Commit`, each answered with a
+//!   [`session::Refusal`] or accepted; the messages of the stream call it.
+//! - [`boot`]: [`boot::live_table`], the table a hub uses at boot. (Not yet called by the
+//!   boards, which still read slot 0 directly.)
+//!
+//! Flash is reached through the `embedded-storage` crate's `NorFlash` traits, the interface
+//! every embassy and `*-hal` flash driver implements (and embassy-boot and sequential-storage
+//! are written against), so a board passes its own driver unchanged. `docs/update.md` gives
+//! the record layout, the steps and the argument for power loss.
+
+pub mod boot;
+#[cfg(test)]
+mod fixtures;
+pub mod layout;
+#[cfg(test)]
+mod mock;
+#[cfg(test)]
+mod power_loss;
+pub mod record;
+pub mod session;
+#[cfg(test)]
+mod session_tests;
+
+pub use boot::{live_slot, live_table, BootError, Live};
+pub use layout::{Layout, LayoutError};
+pub use record::StateRecord;
+pub use session::{Accepted, Refusal, Updater};

@@ -1,0 +1,146 @@
+//! The table a hub uses at boot: the slot the newest valid state record names, if its table
+//! verifies (the record's length and CRC, then every check of [`Table::parse`]); else the
+//! slot of the other record; else whichever slot holds a valid table, slot 0 first (a board
+//! whose factory table was flashed by a probe has no record yet).
+
+use embedded_storage::nor_flash::{NorFlash, NorFlashError, NorFlashErrorKind};
+
+use super::layout::{Layout, LayoutError};
+use super::record::{self, StateRecord};
+use crate::table::{Table, TableError, MAX_TABLE_LEN};
+
+/// A flash operation failed; what the driver said, in a form a stream message can carry.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FlashFault {
+    /// Offset or length not aligned to the device's unit.
+    NotAligned,
+    /// Outside the device.
+    OutOfBounds,
+    /// Anything else the driver reports (a write or erase that failed, a timeout).
+    Other,
+}
+
+impl FlashFault {
+    /// The fault of a driver's error.
+    pub fn of<E: NorFlashError>(e: E) -> FlashFault {
+        match e.kind() {
+            NorFlashErrorKind::NotAligned => FlashFault::NotAligned,
+            NorFlashErrorKind::OutOfBounds => FlashFault::OutOfBounds,
+            _ => FlashFault::Other,
+        }
+    }
+}
+
+/// Why no slot holds a table the hub can use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum BootError {
+    /// The layout does not fit the device.
+    Layout(LayoutError),
+    /// Neither slot holds a valid table: what each slot's bytes are (blank, corrupt, ...).
+    NoTable([SlotError; 2]),
+}
+
+/// Why one slot's table cannot be used.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SlotError {
+    /// The slot could not be read.
+    Flash(FlashFault),
+    /// The bytes are not a valid table.
+    Table(TableError),
+    /// A valid table, but not the one the state record names (another length or CRC).
+    NotRecorded,
+}
+
+/// The live table and where it came from.
+#[derive(Clone, Copy, Debug)]
+pub struct Live<'b> {
+    /// The slot (0 or 1).
+    pub slot: u8,
+    /// The sequence number of the state record that names it; `None` when no record did and
+    /// the slot was found by its contents alone.
+    pub seq: Option<u32>,
+    /// The table, parsed and checked.
+    pub table: Table<'b>,
+}
+
+/// Reads slot `slot` into `buf` and checks it completely: for `joints` joints if given, and
+/// against the record's length and CRC if given. The one check of a slot, used by the boot
+/// and by the update's commit.
+pub(crate) fn verify_slot<'b, F: NorFlash>(
+    flash: &mut F,
+    layout: &Layout,
+    slot: u8,
+    joints: Option<usize>,
+    rec: Option<&StateRecord>,
+    buf: &'b mut [u8; MAX_TABLE_LEN],
+) -> Result<Table<'b>, SlotError> {
+    let start = layout.slots[usize::from(slot & 1)].start;
+    flash
+        .read(start, buf)
+        .map_err(|e| SlotError::Flash(FlashFault::of(e)))?;
+    let table = match joints {
+        Some(n) => Table::parse_for(buf, n),
+        None => Table::parse(buf),
+    }
+    .map_err(SlotError::Table)?;
+    if let Some(r) = rec {
+        if table.bytes().len() as u32 != r.len || table.crc() != r.crc {
+            return Err(SlotError::NotRecorded);
+        }
+    }
+    Ok(table)
+}
+
+/// Which slot boots, and the record that names it (see the module's rule); `buf` is scratch.
+/// A board whose flash is memory-mapped takes the slot's bytes from there and keeps the table
+/// in flash; [`live_table`] is this plus a copy into `buf`.
+pub fn live_slot<F: NorFlash>(
+    flash: &mut F,
+    layout: &Layout,
+    joints: Option<usize>,
+    buf: &mut [u8; MAX_TABLE_LEN],
+) -> Result<(u8, Option<StateRecord>), BootError> {
+    layout.check(flash).map_err(BootError::Layout)?;
+    let copies = record::read_copies(flash, layout);
+    if let Some((first, _)) = record::newest(&copies) {
+        for rec in [copies[first], copies[1 - first]].into_iter().flatten() {
+            if verify_slot(flash, layout, rec.slot, joints, Some(&rec), buf).is_ok() {
+                return Ok((rec.slot, Some(rec)));
+            }
+        }
+    }
+    let mut why = [SlotError::Table(TableError::Blank); 2];
+    for slot in 0..2u8 {
+        match verify_slot(flash, layout, slot, joints, None, buf) {
+            Ok(_) => return Ok((slot, None)),
+            Err(e) => why[usize::from(slot)] = e,
+        }
+    }
+    Err(BootError::NoTable(why))
+}
+
+/// The table to boot on, read into `buf` (`joints`: the joints the hub drives, if the table
+/// must match them). Never a slot that fails any check; the old table while an update has not
+/// written its record; the new one once it has.
+pub fn live_table<'b, F: NorFlash>(
+    flash: &mut F,
+    layout: &Layout,
+    joints: Option<usize>,
+    buf: &'b mut [u8; MAX_TABLE_LEN],
+) -> Result<Live<'b>, BootError> {
+    let (slot, rec) = live_slot(flash, layout, joints, buf)?;
+    // Read again for the borrow of `buf`: `live_slot` may have tried another slot last.
+    let table = verify_slot(flash, layout, slot, joints, rec.as_ref(), buf).map_err(|e| {
+        let mut why = [SlotError::Table(TableError::Blank); 2];
+        why[usize::from(slot)] = e;
+        BootError::NoTable(why)
+    })?;
+    Ok(Live {
+        slot,
+        seq: rec.map(|r| r.seq),
+        table,
+    })
+}

@@ -1,0 +1,100 @@
+//! Test fixtures of the update: a layout on the mock flash, real tables, the steps that send
+//! one, and a boot.
+
+use std::vec::Vec;
+
+use super::layout::Layout;
+use super::mock::MockFlash;
+use super::session::{Accepted, Step, Updater, CHUNK_LEN};
+use super::{live_table, Refusal};
+use crate::table::{quat_to_matrix, JointData, ProbeData, TableData, MAX_TABLE_LEN};
+
+pub const FLASH_LEN: usize = 8 * 1024;
+
+pub fn layout() -> Layout {
+    Layout {
+        slots: [0..2048, 2048..4096],
+        state: [4096..5120, 5120..6144],
+    }
+}
+
+/// A valid table of a nominal six-joint arm whose links are `link` mm long.
+pub fn table(link: f64) -> Vec<u8> {
+    let mut data = TableData {
+        joint_count: 6,
+        ..TableData::default()
+    };
+    data.serial[..4].copy_from_slice(b"SN-9");
+    let identity = [1.0, 0.0, 0.0, 0.0];
+    for joint in &mut data.joints[..6] {
+        *joint = JointData {
+            axis: 2,
+            counts: 1 << 14,
+            rotation: identity,
+            matrix: quat_to_matrix(&identity),
+            link: [link, 0.0, 0.0],
+            ..JointData::default()
+        };
+    }
+    data.probe = ProbeData {
+        vector: [0.0, 0.0, 50.0],
+        direction: [0.0, 0.0, 1.0],
+        thermal: 0.0,
+    };
+    data.flags = data.content_flags();
+    let mut bytes = [0u8; MAX_TABLE_LEN];
+    let len = data.encode(&mut bytes).expect("fixture table encodes");
+    bytes[..len].to_vec()
+}
+
+/// The CRC a table carries in its last four bytes.
+pub fn crc_of(t: &[u8]) -> u32 {
+    u32::from_le_bytes([
+        t[t.len() - 4],
+        t[t.len() - 3],
+        t[t.len() - 2],
+        t[t.len() - 1],
+    ])
+}
+
+/// The steps that send `t`.
+pub fn steps(t: &[u8]) -> Vec<Step> {
+    let crc = crc_of(t);
+    let mut s = std::vec![Step::Begin {
+        len: t.len() as u32,
+        crc
+    }];
+    for (i, c) in t.chunks(CHUNK_LEN).enumerate() {
+        s.push(Step::Chunk {
+            offset: (i * CHUNK_LEN) as u32,
+            bytes: heapless::Vec::from_slice(c).expect("chunk fits"),
+        });
+    }
+    s.push(Step::Commit);
+    s
+}
+
+pub fn update(flash: &mut MockFlash, t: &[u8]) -> Result<Accepted, Refusal> {
+    let mut up = Updater::new(layout(), Some(6));
+    let mut scratch = [0u8; MAX_TABLE_LEN];
+    let mut last = Accepted::Aborted;
+    for s in steps(t) {
+        last = up.step(flash, &mut scratch, &s)?;
+    }
+    Ok(last)
+}
+
+/// The table the flash boots on, as bytes (`None`: no table).
+pub fn boot(flash: &mut MockFlash) -> Option<Vec<u8>> {
+    let mut buf = [0u8; MAX_TABLE_LEN];
+    live_table(flash, &layout(), Some(6), &mut buf)
+        .ok()
+        .map(|l| l.table.bytes().to_vec())
+}
+
+/// The flash a board leaves the factory with: `t` in slot 0 by a probe, no state record.
+pub fn factory(t: &[u8]) -> MockFlash {
+    let mut f = MockFlash::new(FLASH_LEN);
+    f.mem[..t.len()].copy_from_slice(t);
+    f
+}

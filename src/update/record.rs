@@ -1,0 +1,155 @@
+//! The state record: which slot holds the live table. Two copies, each in an erase unit of
+//! its own (as embassy-boot keeps its state partition apart from the images); a new record
+//! always goes into the copy that does not hold the newest valid one, so a torn erase or
+//! write spoils only the copy being written and the previous record still stands.
+//!
+//! ```text
+//! offset size field (little-endian)
+//!      0    4 magic "QAST"
+//!      4    4 sequence number (the highest valid one wins)
+//!      8    1 slot (0 or 1)
+//!      9    3 reserved, 0
+//!     12    4 table length in bytes
+//!     16    4 table CRC-32 (the table's own last four bytes)
+//!     20    4 CRC-32 (ISO-HDLC) of bytes 0..20
+//! ```
+//!
+//! Its CRC is written in the same flash write as the rest, after it in address order; a cut
+//! that leaves any part unwritten, or bits of an erase, fails the CRC (erased flash, all
+//! 0xFF, and zeros fail the magic first).
+
+use embedded_storage::nor_flash::NorFlash;
+
+use super::layout::{Layout, MAX_WRITE_SIZE};
+use crate::table::CRC;
+
+/// The record's magic bytes.
+pub const MAGIC: [u8; 4] = *b"QAST";
+/// Encoded length of a record.
+pub const RECORD_LEN: usize = 24;
+
+/// What a valid state record says.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct StateRecord {
+    /// Sequence number: one more than the newest record before it.
+    pub seq: u32,
+    /// The live slot (0 or 1).
+    pub slot: u8,
+    /// The table's length in bytes.
+    pub len: u32,
+    /// The table's CRC-32 (its last four bytes, over everything before them).
+    pub crc: u32,
+}
+
+impl StateRecord {
+    /// The record's bytes.
+    pub fn encode(&self) -> [u8; RECORD_LEN] {
+        let mut b = [0u8; RECORD_LEN];
+        b[0..4].copy_from_slice(&MAGIC);
+        b[4..8].copy_from_slice(&self.seq.to_le_bytes());
+        b[8] = self.slot;
+        b[12..16].copy_from_slice(&self.len.to_le_bytes());
+        b[16..20].copy_from_slice(&self.crc.to_le_bytes());
+        let crc = CRC.checksum(&b[..20]);
+        b[20..24].copy_from_slice(&crc.to_le_bytes());
+        b
+    }
+
+    /// The record in `b`, or `None` if these bytes are not a whole, valid record (erased,
+    /// torn, or corrupt: the caller treats all three alike, as no record).
+    pub fn decode(b: &[u8; RECORD_LEN]) -> Option<StateRecord> {
+        let u32_at = |at: usize| u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]);
+        let valid = b[0..4] == MAGIC
+            && CRC.checksum(&b[..20]) == u32_at(20)
+            && b[8] <= 1
+            && b[9..12] == [0; 3];
+        valid.then(|| StateRecord {
+            seq: u32_at(4),
+            slot: b[8],
+            len: u32_at(12),
+            crc: u32_at(16),
+        })
+    }
+}
+
+/// The valid record of each copy (`None` where a copy is erased, torn or unreadable).
+pub fn read_copies<F: NorFlash>(flash: &mut F, layout: &Layout) -> [Option<StateRecord>; 2] {
+    layout.state.clone().map(|r| {
+        let mut b = [0u8; RECORD_LEN];
+        flash.read(r.start, &mut b).ok()?;
+        StateRecord::decode(&b)
+    })
+}
+
+/// The newest valid record and the copy that holds it.
+pub fn newest(copies: &[Option<StateRecord>; 2]) -> Option<(usize, StateRecord)> {
+    match copies {
+        [Some(a), Some(b)] => Some(if b.seq > a.seq { (1, *b) } else { (0, *a) }),
+        [Some(a), None] => Some((0, *a)),
+        [None, Some(b)] => Some((1, *b)),
+        [None, None] => None,
+    }
+}
+
+/// Writes `rec` into the copy that does not hold the newest valid record (copy 0 when there
+/// is none): erase it, then one write of the record padded with 0xFF to the write unit.
+/// Crate-only: callers have checked the layout (a write unit within `MAX_WRITE_SIZE`).
+pub(crate) fn write<F: NorFlash>(
+    flash: &mut F,
+    layout: &Layout,
+    rec: &StateRecord,
+) -> Result<(), F::Error> {
+    let target = match newest(&read_copies(flash, layout)) {
+        Some((copy, _)) => 1 - copy,
+        None => 0,
+    };
+    let region = &layout.state[target];
+    flash.erase(region.start, region.end)?;
+    let mut buf = [0xffu8; MAX_WRITE_SIZE];
+    let len = RECORD_LEN.div_ceil(F::WRITE_SIZE) * F::WRITE_SIZE;
+    buf[..RECORD_LEN].copy_from_slice(&rec.encode());
+    flash.write(region.start, &buf[..len])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip_and_rejections() {
+        let r = StateRecord {
+            seq: 7,
+            slot: 1,
+            len: 1596,
+            crc: 0xdead_beef,
+        };
+        let b = r.encode();
+        assert_eq!(StateRecord::decode(&b), Some(r));
+        assert_eq!(StateRecord::decode(&[0xff; RECORD_LEN]), None);
+        assert_eq!(StateRecord::decode(&[0; RECORD_LEN]), None);
+        for at in 0..RECORD_LEN {
+            for bit in 0..8 {
+                let mut c = b;
+                c[at] ^= 1 << bit;
+                assert_eq!(StateRecord::decode(&c), None, "byte {at} bit {bit}");
+            }
+        }
+    }
+
+    #[test]
+    fn newest_wins() {
+        let r = |seq| {
+            Some(StateRecord {
+                seq,
+                slot: 0,
+                len: 0,
+                crc: 0,
+            })
+        };
+        assert_eq!(newest(&[r(3), r(4)]).map(|x| x.0), Some(1));
+        assert_eq!(newest(&[r(5), r(4)]).map(|x| x.0), Some(0));
+        assert_eq!(newest(&[None, r(1)]).map(|x| x.0), Some(1));
+        assert_eq!(newest(&[None, None]), None);
+    }
+}

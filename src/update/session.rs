@@ -1,0 +1,300 @@
+//! The update state machine. `Begin` picks the inactive slot and erases it; `Chunk`s write
+//! the table in order; `Commit` checks the slot completely and only then writes the state
+//! record that makes it live. Until that record is written the old table stays live (the
+//! boot never reads the slot being written, see [`super::boot`]); each step answers
+//! [`Accepted`] or a [`Refusal`] saying why, for a stream message to carry.
+//!
+//! The hash `Begin` carries is the table's own CRC-32 (its last four bytes), not a SHA-256:
+//! it guards against transfer and flash errors, which CRC-32 detects over a 1.8 KB table as
+//! well as any hash, and it is already in every image (the table's own check). Against a
+//! forged table no unkeyed hash helps; that is the signature's job (Ed25519 over the table's
+//! bytes, with its own SHA-512), which `Commit` will check through the same `verify_slot`.
+
+use embedded_storage::nor_flash::NorFlash;
+use heapless::Vec;
+
+use super::boot::{self, FlashFault, SlotError};
+use super::layout::{Layout, LayoutError, MAX_WRITE_SIZE};
+use super::record::{self, StateRecord};
+use crate::table::{table_len, TableError, MAX_JOINTS, MAX_TABLE_LEN, MIN_JOINTS};
+
+/// Most table bytes one `Chunk` carries (a stream frame stays well under its limit).
+pub const CHUNK_LEN: usize = 64;
+
+/// One step of an update, as a `ToDevice` message will carry it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Step {
+    /// Start (or restart) an update of a table of `len` bytes whose CRC (last four bytes) is
+    /// `crc`.
+    Begin {
+        /// Table length in bytes.
+        len: u32,
+        /// The table's CRC-32.
+        crc: u32,
+    },
+    /// Table bytes at `offset`; chunks come in order, `offset` is the count so far.
+    Chunk {
+        /// Where these bytes go in the table.
+        offset: u32,
+        /// The bytes.
+        bytes: Vec<u8, CHUNK_LEN>,
+    },
+    /// Check the whole table and make it live.
+    Commit,
+    /// Give up; the old table stays live.
+    Abort,
+}
+
+/// A step that was carried out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Accepted {
+    /// The slot is erased and waits for `len` bytes.
+    Begun {
+        /// The slot being written.
+        slot: u8,
+    },
+    /// Bytes written; the next chunk's offset.
+    Chunk {
+        /// Offset the next chunk must have.
+        next: u32,
+    },
+    /// The new table is live.
+    Committed {
+        /// Its slot.
+        slot: u8,
+        /// Its state record's sequence number.
+        seq: u32,
+    },
+    /// The update was abandoned.
+    Aborted,
+}
+
+/// Why a step was refused. After a refusal of `Commit` or a flash fault the update is over
+/// (a new `Begin` starts again); a refused `Chunk` may be resent.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Refusal {
+    /// `Chunk` or `Commit` with no update begun.
+    NotBegun,
+    /// A length no table has (a table of 6 or 7 joints).
+    BadLength(u32),
+    /// A chunk not at the next offset.
+    OutOfOrder {
+        /// The offset expected.
+        expected: u32,
+    },
+    /// A chunk reaching past the length `Begin` gave.
+    PastEnd {
+        /// The length `Begin` gave.
+        len: u32,
+    },
+    /// `Commit` before every byte arrived.
+    Incomplete {
+        /// Bytes received.
+        received: u32,
+        /// Bytes `Begin` announced.
+        len: u32,
+    },
+    /// The written table fails a check of the boot.
+    Table(TableError),
+    /// The written table is valid but is not what `Begin` announced (its length or CRC).
+    NotAnnounced,
+    /// The layout does not fit the flash.
+    Layout(LayoutError),
+    /// A flash operation failed.
+    Flash(FlashFault),
+    /// The sequence number would wrap (after 2^32 − 1 updates).
+    SequenceExhausted,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum State {
+    Idle,
+    Receiving {
+        slot: u8,
+        len: u32,
+        crc: u32,
+        seq: u32,
+        written: u32,
+    },
+}
+
+/// An update in progress (or none). Holds no table bytes beyond one flash write unit.
+#[derive(Debug)]
+pub struct Updater {
+    layout: Layout,
+    joints: Option<usize>,
+    state: State,
+    /// Bytes received but not yet written: less than one write unit.
+    pending: Vec<u8, MAX_WRITE_SIZE>,
+}
+
+impl Updater {
+    /// An updater for the slots of `layout`; `joints` is the joint count the hub drives (a
+    /// table for another count is refused at commit, as at boot).
+    pub fn new(layout: Layout, joints: Option<usize>) -> Updater {
+        Updater {
+            layout,
+            joints,
+            state: State::Idle,
+            pending: Vec::new(),
+        }
+    }
+
+    /// Carries out one step. `scratch` holds a table while it is checked (`Begin` finds the
+    /// live slot, `Commit` checks the new one).
+    pub fn step<F: NorFlash>(
+        &mut self,
+        flash: &mut F,
+        scratch: &mut [u8; MAX_TABLE_LEN],
+        step: &Step,
+    ) -> Result<Accepted, Refusal> {
+        let result = match step {
+            Step::Begin { len, crc } => self.begin(flash, scratch, *len, *crc),
+            Step::Chunk { offset, bytes } => self.chunk(flash, *offset, bytes),
+            Step::Commit => self.commit(flash, scratch),
+            Step::Abort => {
+                self.state = State::Idle;
+                Ok(Accepted::Aborted)
+            }
+        };
+        // A flash fault or a refused commit ends the update; a refused chunk does not.
+        if matches!(result, Err(Refusal::Flash(_)))
+            || (result.is_err() && matches!(step, Step::Commit))
+        {
+            self.state = State::Idle;
+        }
+        result
+    }
+
+    fn begin<F: NorFlash>(
+        &mut self,
+        flash: &mut F,
+        scratch: &mut [u8; MAX_TABLE_LEN],
+        len: u32,
+        crc: u32,
+    ) -> Result<Accepted, Refusal> {
+        self.state = State::Idle;
+        self.pending.clear();
+        self.layout.check(flash).map_err(Refusal::Layout)?;
+        let lengths = MIN_JOINTS..=MAX_JOINTS;
+        if !lengths.clone().any(|n| table_len(n) as u32 == len) {
+            return Err(Refusal::BadLength(len));
+        }
+        let live = boot::live_table(flash, &self.layout, self.joints, scratch)
+            .ok()
+            .map(|l| l.slot);
+        let slot = match live {
+            Some(s) => 1 - s,
+            None => 0,
+        };
+        let seq = match record::newest(&record::read_copies(flash, &self.layout)) {
+            Some((_, r)) => r.seq.checked_add(1).ok_or(Refusal::SequenceExhausted)?,
+            None => 1,
+        };
+        let region = &self.layout.slots[usize::from(slot)];
+        flash
+            .erase(region.start, region.end)
+            .map_err(|e| Refusal::Flash(FlashFault::of(e)))?;
+        self.state = State::Receiving {
+            slot,
+            len,
+            crc,
+            seq,
+            written: 0,
+        };
+        Ok(Accepted::Begun { slot })
+    }
+
+    fn chunk<F: NorFlash>(
+        &mut self,
+        flash: &mut F,
+        offset: u32,
+        bytes: &[u8],
+    ) -> Result<Accepted, Refusal> {
+        let State::Receiving {
+            slot, len, written, ..
+        } = self.state
+        else {
+            return Err(Refusal::NotBegun);
+        };
+        if offset != written {
+            return Err(Refusal::OutOfOrder { expected: written });
+        }
+        let end = written.saturating_add(bytes.len() as u32);
+        if end > len {
+            return Err(Refusal::PastEnd { len });
+        }
+        let base = self.layout.slots[usize::from(slot)].start;
+        // Flash offset of the first pending byte.
+        let mut at = base + written - self.pending.len() as u32;
+        for &b in bytes {
+            // Cannot fail: the buffer is flushed whenever it reaches a write unit.
+            let _ = self.pending.push(b);
+            if self.pending.len() == F::WRITE_SIZE {
+                flash
+                    .write(at, &self.pending)
+                    .map_err(|e| Refusal::Flash(FlashFault::of(e)))?;
+                at += F::WRITE_SIZE as u32;
+                self.pending.clear();
+            }
+        }
+        if let State::Receiving { written, .. } = &mut self.state {
+            *written = end;
+        }
+        Ok(Accepted::Chunk { next: end })
+    }
+
+    fn commit<F: NorFlash>(
+        &mut self,
+        flash: &mut F,
+        scratch: &mut [u8; MAX_TABLE_LEN],
+    ) -> Result<Accepted, Refusal> {
+        let State::Receiving {
+            slot,
+            len,
+            crc,
+            seq,
+            written,
+        } = self.state
+        else {
+            return Err(Refusal::NotBegun);
+        };
+        if written != len {
+            return Err(Refusal::Incomplete {
+                received: written,
+                len,
+            });
+        }
+        if !self.pending.is_empty() {
+            let at =
+                self.layout.slots[usize::from(slot)].start + written - self.pending.len() as u32;
+            self.pending.resize(F::WRITE_SIZE, 0xff).ok();
+            let w = flash.write(at, &self.pending);
+            self.pending.clear();
+            w.map_err(|e| Refusal::Flash(FlashFault::of(e)))?;
+        }
+        let rec = StateRecord {
+            seq,
+            slot,
+            len,
+            crc,
+        };
+        boot::verify_slot(flash, &self.layout, slot, self.joints, Some(&rec), scratch).map_err(
+            |e| match e {
+                SlotError::Flash(f) => Refusal::Flash(f),
+                SlotError::Table(t) => Refusal::Table(t),
+                SlotError::NotRecorded => Refusal::NotAnnounced,
+            },
+        )?;
+        record::write(flash, &self.layout, &rec).map_err(|e| Refusal::Flash(FlashFault::of(e)))?;
+        // Read back: the record just written must be the one the boot will follow.
+        match record::newest(&record::read_copies(flash, &self.layout)) {
+            Some((_, r)) if r == rec => {}
+            _ => return Err(Refusal::Flash(FlashFault::Other)),
+        }
+        self.state = State::Idle;
+        Ok(Accepted::Committed { slot, seq })
+    }
+}

@@ -1,0 +1,255 @@
+//! The update's answers: each wrong step refused with its reason, and the old table live
+//! after every refusal.
+
+use super::boot::FlashFault;
+use super::fixtures::{boot, crc_of, factory, layout, steps, table, update};
+use super::session::{Accepted, Refusal, Step, Updater};
+use crate::table::{TableError, MAX_TABLE_LEN};
+
+fn chunk(offset: u32, bytes: &[u8]) -> Step {
+    Step::Chunk {
+        offset,
+        bytes: heapless::Vec::from_slice(bytes).expect("chunk fits"),
+    }
+}
+
+#[test]
+fn out_of_order_steps_are_refused() {
+    let (a, b) = (table(100.0), table(120.0));
+    let mut f = factory(&a);
+    let mut up = Updater::new(layout(), Some(6));
+    let mut s = [0u8; MAX_TABLE_LEN];
+    assert_eq!(
+        up.step(&mut f, &mut s, &chunk(0, &b[..8])),
+        Err(Refusal::NotBegun)
+    );
+    assert_eq!(
+        up.step(&mut f, &mut s, &Step::Commit),
+        Err(Refusal::NotBegun)
+    );
+    assert_eq!(
+        up.step(&mut f, &mut s, &Step::Begin { len: 1000, crc: 0 }),
+        Err(Refusal::BadLength(1000))
+    );
+    let begin = Step::Begin {
+        len: b.len() as u32,
+        crc: crc_of(&b),
+    };
+    assert_eq!(
+        up.step(&mut f, &mut s, &begin),
+        Ok(Accepted::Begun { slot: 1 })
+    );
+    assert_eq!(
+        up.step(&mut f, &mut s, &chunk(4, &b[4..8])),
+        Err(Refusal::OutOfOrder { expected: 0 })
+    );
+    assert_eq!(
+        up.step(&mut f, &mut s, &chunk(0, &b[..6])),
+        Ok(Accepted::Chunk { next: 6 })
+    );
+    // The refused chunk did not end the update: the next one at the right offset is taken.
+    let n = b.len() as u32;
+    assert_eq!(
+        up.step(&mut f, &mut s, &chunk(6, &[0; 64])),
+        Ok(Accepted::Chunk { next: 70 })
+    );
+    assert_eq!(
+        up.step(&mut f, &mut s, &Step::Commit),
+        Err(Refusal::Incomplete {
+            received: 70,
+            len: n
+        })
+    );
+    // The refused commit ended the update; the old table is live.
+    assert_eq!(
+        up.step(&mut f, &mut s, &chunk(70, &[0; 4])),
+        Err(Refusal::NotBegun)
+    );
+    assert!(boot(&mut f).as_deref() == Some(&a[..]));
+    up.step(&mut f, &mut s, &begin).unwrap();
+    for st in &steps(&b)[1..steps(&b).len() - 1] {
+        up.step(&mut f, &mut s, st).unwrap();
+    }
+    assert_eq!(
+        up.step(&mut f, &mut s, &chunk(n, &[0])),
+        Err(Refusal::PastEnd { len: n })
+    );
+    assert_eq!(
+        up.step(&mut f, &mut s, &Step::Commit),
+        Ok(Accepted::Committed { slot: 1, seq: 1 })
+    );
+    assert!(boot(&mut f).as_deref() == Some(&b[..]));
+}
+
+/// A table that is not what was announced, or fails a check of the boot, is never made live.
+#[test]
+fn bad_tables_are_refused_at_commit() {
+    let (a, b) = (table(100.0), table(120.0));
+    let send = |t: &[u8], crc: u32| {
+        let mut f = factory(&a);
+        let mut up = Updater::new(layout(), Some(6));
+        let mut s = [0u8; MAX_TABLE_LEN];
+        let mut st = steps(t);
+        st[0] = Step::Begin {
+            len: t.len() as u32,
+            crc,
+        };
+        let mut last = Ok(Accepted::Aborted);
+        for x in &st {
+            last = up.step(&mut f, &mut s, x);
+        }
+        assert!(
+            boot(&mut f).as_deref() == Some(&a[..]),
+            "old table stays live"
+        );
+        last
+    };
+    // One byte changed: the table's own CRC fails.
+    let mut t = b.clone();
+    t[100] ^= 1;
+    assert!(matches!(
+        send(&t, crc_of(&b)),
+        Err(Refusal::Table(TableError::Crc { .. }))
+    ));
+    // A valid table, but another CRC announced.
+    assert_eq!(send(&b, crc_of(&b) ^ 1), Err(Refusal::NotAnnounced));
+    // Blank bytes.
+    let blank = std::vec![0xffu8; b.len()];
+    assert_eq!(send(&blank, 0), Err(Refusal::Table(TableError::Blank)));
+}
+
+/// A table for another joint count than the hub drives is refused, as the boot refuses it.
+#[test]
+fn wrong_joint_count_is_refused() {
+    let (a, b) = (table(100.0), table(120.0));
+    let mut f = factory(&a);
+    let mut up = Updater::new(layout(), Some(7));
+    let mut s = [0u8; MAX_TABLE_LEN];
+    let mut last = Ok(Accepted::Aborted);
+    for x in &steps(&b) {
+        last = up.step(&mut f, &mut s, x);
+    }
+    assert_eq!(
+        last,
+        Err(Refusal::Table(TableError::WrongJointCount {
+            expected: 7,
+            found: 6
+        }))
+    );
+}
+
+/// Updates alternate slots and count up; a flash that lost power is reported as a fault.
+#[test]
+fn updates_alternate_slots() {
+    let mut f = factory(&table(100.0));
+    for (k, link) in [110.0, 120.0, 130.0, 140.0].into_iter().enumerate() {
+        let t = table(link);
+        assert_eq!(
+            update(&mut f, &t),
+            Ok(Accepted::Committed {
+                slot: (1 - k % 2) as u8,
+                seq: k as u32 + 1
+            })
+        );
+        assert!(boot(&mut f).as_deref() == Some(&t[..]));
+    }
+    f.cut = Some((f.ops, super::mock::Cut::Untouched));
+    assert_eq!(
+        update(&mut f, &table(150.0)),
+        Err(Refusal::Flash(FlashFault::Other))
+    );
+}
+
+/// The boot falls back when the slot the newest record names does not verify: to the slot of
+/// the older record, else to any valid slot; with no valid table it says what each slot holds.
+#[test]
+fn boot_falls_back_past_a_bad_slot() {
+    use super::boot::{BootError, SlotError};
+    use super::live_table;
+    let (a, b, c) = (table(100.0), table(120.0), table(140.0));
+    let mut f = factory(&a);
+    update(&mut f, &b).unwrap(); // slot 1, seq 1
+    update(&mut f, &c).unwrap(); // slot 0, seq 2
+    let mut buf = [0u8; MAX_TABLE_LEN];
+    let live = live_table(&mut f, &layout(), Some(6), &mut buf).unwrap();
+    assert_eq!((live.slot, live.seq), (0, Some(2)));
+    f.mem[300] ^= 0x04; // slot 0 corrupt: record 1's slot
+    let live = live_table(&mut f, &layout(), Some(6), &mut buf).unwrap();
+    assert_eq!((live.slot, live.seq), (1, Some(1)));
+    assert!(live.table.bytes() == &b[..]);
+    f.mem[4096] ^= 0x01; // and record 1 (copy 0) torn: slot 1 by its contents
+    let live = live_table(&mut f, &layout(), Some(6), &mut buf).unwrap();
+    assert_eq!((live.slot, live.seq), (1, None));
+    f.mem[2048 + 40] ^= 0x01; // slot 1 corrupt too: nothing
+    assert!(matches!(
+        live_table(&mut f, &layout(), Some(6), &mut buf),
+        Err(BootError::NoTable([
+            SlotError::Table(TableError::Crc { .. }),
+            SlotError::Table(_)
+        ]))
+    ));
+}
+
+#[test]
+fn layouts_that_do_not_fit_are_refused() {
+    use super::layout::{Layout, LayoutError};
+    let f = factory(&table(100.0));
+    let ok = layout();
+    assert_eq!(ok.check(&f), Ok(()));
+    let mut l = ok.clone();
+    l.state[1] = 5120..6000;
+    assert_eq!(l.check(&f), Err(LayoutError::Unaligned(3)));
+    let mut l = ok.clone();
+    l.slots[1] = 1024..3072;
+    assert_eq!(l.check(&f), Err(LayoutError::Overlap(0, 1)));
+    let mut l = ok.clone();
+    l.slots[0] = 6144..7168;
+    assert_eq!(l.check(&f), Err(LayoutError::SlotTooSmall(0)));
+    let l = Layout {
+        slots: ok.slots.clone(),
+        state: [4096..5120, 8192..9216],
+    };
+    assert_eq!(l.check(&f), Err(LayoutError::OutOfFlash(3)));
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+
+    /// Any sequence of steps (right or wrong lengths, CRCs, offsets, bytes) never panics, and
+    /// the boot is always on the old table or on one whose commit was accepted.
+    #[test]
+    fn arbitrary_steps_never_leave_a_bad_table(
+        ops in proptest::collection::vec((0u8..40, 0u32..2000, proptest::collection::vec(proptest::num::u8::ANY, 0..64)), 0..200)
+    ) {
+        let (a, b) = (table(100.0), table(120.0));
+        let mut f = factory(&a);
+        let mut up = Updater::new(layout(), Some(6));
+        let mut s = [0u8; MAX_TABLE_LEN];
+        let mut committed = false;
+        let mut next = 0u32;
+        for (kind, n, bytes) in ops {
+            let step = match kind {
+                // Mostly the right next chunk, so that some updates reach their commit.
+                0 => Step::Begin { len: b.len() as u32, crc: if n % 2 == 0 { crc_of(&b) } else { n } },
+                // The right next bytes of `b`, or the given ones at a given offset.
+                4.. => {
+                    let at = next as usize;
+                    let end = (at + 64).min(b.len());
+                    chunk(next, &b[at.min(end)..end])
+                }
+                1 => chunk(n, &bytes),
+                2 => Step::Commit,
+                _ => Step::Abort,
+            };
+            match up.step(&mut f, &mut s, &step) {
+                Ok(Accepted::Begun { .. }) => next = 0,
+                Ok(Accepted::Chunk { next: x }) => next = x,
+                Ok(Accepted::Committed { .. }) => committed = true,
+                _ => {}
+            }
+            let got = boot(&mut f);
+            let ok = got.as_deref() == Some(&a[..]) || (committed && got.as_deref() == Some(&b[..]));
+            proptest::prop_assert!(ok, "boot on neither the old nor a committed table");
+        }
+    }
+}
