@@ -221,6 +221,21 @@ mod tests {
     }
 
     #[test]
+    fn overflow_starts_past_65_bytes_before_a_delimiter() {
+        // docs/protocol.md: a good frame is at most MAX_FRAME bytes with its 0x00, so 65
+        // bytes before a delimiter are judged on their content and 66 are an overflow.
+        let mut r = FrameReader::<MAX_FRAME>::new();
+        let mut at_limit = vec![1u8; MAX_FRAME - 1];
+        at_limit.push(0);
+        let got = read_all(&mut r, &at_limit);
+        assert_eq!(got.len(), 1);
+        assert_ne!(got[0], Err(FrameError::Overflow));
+        let mut past = vec![1u8; MAX_FRAME];
+        past.push(0);
+        assert_eq!(read_all(&mut r, &past), vec![Err(FrameError::Overflow)]);
+    }
+
+    #[test]
     fn crc_is_over_the_postcard_bytes() {
         let msg = report(7);
         let mut frame = frame_of(&msg);

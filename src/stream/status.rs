@@ -142,9 +142,15 @@ impl Status {
     }
 
     /// This status with the encoder faults of `joints` set: bit j of `joints` is joint j + 1.
-    /// Joints beyond the seventh cannot be represented and are ignored.
+    /// A fault of an eighth joint (bit 7) cannot be represented: no arm has one, so the
+    /// reading is malformed and is marked `INPUT_ERROR` rather than silently masked.
     pub const fn with_encoder_faults(self, joints: u8) -> Status {
-        Status(self.0 | (((joints & 0x7F) as u16) << Self::FAULT_SHIFT))
+        let s = self.0 | (((joints & 0x7F) as u16) << Self::FAULT_SHIFT);
+        if joints & 0x80 != 0 {
+            Status(s | Self::INPUT_ERROR)
+        } else {
+            Status(s)
+        }
     }
 
     /// The encoder faults, bit j for joint j + 1.
@@ -202,5 +208,14 @@ mod tests {
             assert!(!s.has(Status::TEMP_SENSOR_FAULT), "nor the sensor bit");
         }
         assert_eq!(ok.with_encoder_faults(0x80).encoder_faults(), 0);
+    }
+    #[test]
+    fn a_fault_of_an_eighth_joint_is_an_input_error_not_dropped() {
+        let s = Status(Status::TABLE_VALID).with_encoder_faults(0x80);
+        assert!(s.has(Status::INPUT_ERROR));
+        assert!(!s.is_measurement());
+        assert!(!Status(Status::TABLE_VALID)
+            .with_encoder_faults(0x01)
+            .has(Status::INPUT_ERROR));
     }
 }

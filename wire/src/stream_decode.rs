@@ -7,7 +7,9 @@
 //! for. A report whose status carries a fault but which holds coordinates anyway (a hub never
 //! sends one; a broken or foreign hub might) is handed out without them.
 
-use quatarm::stream::{FrameError, FrameReader, Hello, Report, ToHost, MAX_FRAME};
+use quatarm::stream::{
+    FrameError, FrameReader, Hello, Report, ToHost, MAX_FRAME, PROTOCOL_VERSION,
+};
 
 /// A forward jump of the sequence number up to this size is a gap (lost reports); a larger
 /// one is a step backwards modulo 2^32 (at ~1,700 reports/s, 2^31 reports are two weeks).
@@ -72,6 +74,12 @@ pub struct Stats {
     pub crc_errors: u64,
     /// Frames refused for another reason (COBS, length, undecodable after a good CRC).
     pub other_errors: u64,
+    /// Of `other_errors`, frames whose CRC was good but which are not a message of this
+    /// protocol version (an unknown `ToHost` variant, a newer hub): reported apart because
+    /// they mean "wrong decoder", not "bad line".
+    pub undecodable: u64,
+    /// `Hello`s announcing a `protocol` other than this decoder's [`PROTOCOL_VERSION`].
+    pub foreign_protocol: u64,
     /// Bytes skipped before the first delimiter (joining a running stream).
     pub skipped_bytes: u64,
     /// Bytes after the last delimiter that never closed a frame, at the end of the input
@@ -153,12 +161,17 @@ impl Decoder {
                 // A hub that (re)boots numbers from 0 again.
                 self.last = None;
                 self.stats.hellos += 1;
+                self.stats.foreign_protocol += u64::from(h.protocol != PROTOCOL_VERSION);
                 Item::Hello(h)
             }
             Ok(ToHost::Report(r)) => self.report(r),
             Err(e) => {
                 match e {
                     FrameError::Crc => self.stats.crc_errors += 1,
+                    FrameError::Decode => {
+                        self.stats.other_errors += 1;
+                        self.stats.undecodable += 1;
+                    }
                     _ => self.stats.other_errors += 1,
                 }
                 Item::Damaged(e)
@@ -234,6 +247,26 @@ mod tests {
 
     fn frame(seq: u32) -> Vec<u8> {
         frame_of(report(seq))
+    }
+
+    #[test]
+    fn a_foreign_protocol_and_an_unknown_variant_are_reported_as_such() {
+        // Postcard writes a tuple field by field, as it writes the enum and struct: variant
+        // 0 (Hello), protocol 2, precision 0, joints 0, status 0; then variant 9 (unknown).
+        let mut out = [0u8; MAX_FRAME];
+        let mut bytes = Vec::new();
+        let n = encode(&(0u8, PROTOCOL_VERSION + 1, 0u8, 0u8, 0u16), &mut out).unwrap();
+        bytes.extend(&out[..n]);
+        let n = encode(&(9u8,), &mut out).unwrap();
+        bytes.extend(&out[..n]);
+        let mut d = Decoder::from_start();
+        let items: Vec<_> = bytes.iter().filter_map(|&b| d.push(b)).collect();
+        assert!(matches!(items[1], Item::Damaged(FrameError::Decode)));
+        let s = d.finish();
+        assert_eq!(
+            (s.hellos, s.foreign_protocol, s.undecodable, s.crc_errors),
+            (1, 1, 1, 0)
+        );
     }
 
     #[test]

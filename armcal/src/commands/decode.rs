@@ -11,7 +11,7 @@ use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
 use armcal::stream_decode::{Decoder, Item, Stats};
-use quatarm::stream::{write_csv_line, CSV_HEADER, MAX_CSV_LINE};
+use quatarm::stream::{write_csv_line, CSV_HEADER, MAX_CSV_LINE, PROTOCOL_VERSION};
 
 /// Arguments of `armcal decode`.
 #[derive(clap::Args)]
@@ -166,6 +166,12 @@ fn summarise(s: &Stats, name: &str, total: u64, head: &[u8]) -> Result<()> {
         s.inconsistent,
         s.unterminated_bytes
     );
+    if s.foreign_protocol > 0 || s.undecodable > 0 {
+        eprintln!(
+            "# {name}: {} Hello(s) of a protocol other than version {PROTOCOL_VERSION}, {} frame(s) with a good CRC that are no message of version {PROTOCOL_VERSION}: this hub speaks another protocol version",
+            s.foreign_protocol, s.undecodable
+        );
+    }
     if s.unterminated_bytes > 0 {
         eprintln!(
             "# {} bytes at the end of {name} never reached a frame delimiter (0x00)",
