@@ -193,6 +193,29 @@ mod tests {
         out[..n].to_vec()
     }
 
+    /// The sizes `docs/protocol.md` states: 11 bytes for the shortest report, 56 for the
+    /// longest.
+    #[test]
+    fn report_sizes_are_as_documented() {
+        let short = ToHost::Report(Report {
+            seq: 0,
+            time_us: 0,
+            status: Status(0),
+            point: None,
+        });
+        assert_eq!(frame_of(&short).len(), 11);
+        let long = ToHost::Report(Report {
+            seq: u32::MAX,
+            time_us: u64::MAX,
+            status: Status(u16::MAX),
+            point: Some(Coordinates {
+                xyz_nm: [i32::MIN; 3],
+                dir_e9: [i32::MIN; 3],
+            }),
+        });
+        assert_eq!(frame_of(&long).len(), 56);
+    }
+
     fn read_all(reader: &mut FrameReader, bytes: &[u8]) -> Vec<Result<ToHost, FrameError>> {
         bytes.iter().filter_map(|&b| reader.push(b)).collect()
     }

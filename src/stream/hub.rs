@@ -7,8 +7,8 @@
 //! once.
 
 use super::{
-    encode, write_csv_line, Coordinates, FrameError, Hello, Mode, NumberFormat, Reading, Report,
-    Status, TableState, ToHost, MAX_CSV_LINE, MAX_FRAME, PROTOCOL_VERSION,
+    encode, write_csv_header, write_csv_line, Coordinates, FrameError, Hello, Mode, NumberFormat,
+    Reading, Report, Status, TableState, ToHost, MAX_CSV_LINE, MAX_FRAME, PROTOCOL_VERSION,
 };
 
 /// The rated temperature range of the thermal model, milli-degrees Celsius. Outside it the
@@ -16,9 +16,9 @@ use super::{
 /// calibrated between these limits.
 pub const RATED_TEMP_MC: core::ops::RangeInclusive<i32> = 0..=40_000;
 
-/// Longest output of [`Hub::render`]: a frame or a CSV line.
-pub const MAX_OUTPUT: usize = if MAX_FRAME > MAX_CSV_LINE {
-    MAX_FRAME
+/// Longest output of [`Hub::render`]: a frame behind its lone delimiter, or a CSV line.
+pub const MAX_OUTPUT: usize = if MAX_FRAME + 1 > MAX_CSV_LINE {
+    MAX_FRAME + 1
 } else {
     MAX_CSV_LINE
 };
@@ -80,9 +80,11 @@ impl Hub {
         self.mode
     }
 
-    /// Switches the output mode.
+    /// Switches the output mode. The `Hello` that follows says the stream restarted, so the
+    /// report count restarts with it (`docs/protocol.md`: a `Hello` resets `seq`).
     pub fn set_mode(&mut self, mode: Mode) {
         self.mode = mode;
+        self.seq = 0;
     }
 
     /// The report for one slot: `reading` is what arrived (or why nothing usable did),
@@ -161,12 +163,21 @@ impl Hub {
     }
 
     /// Renders a message in the current mode into `out` (at least [`MAX_OUTPUT`] bytes);
-    /// returns the bytes to send. In text mode a `Hello` is not rendered (CSV rows only).
+    /// returns the bytes to send. A binary `Hello` goes out behind a lone `0x00`, so that it
+    /// is a frame of its own whatever came before it (a CSV line, after a switch back from
+    /// text mode, has no delimiter); in text mode a `Hello` is the CSV header line.
     pub fn render<'a>(&self, msg: &ToHost, out: &'a mut [u8]) -> &'a [u8] {
         let n = match (self.mode, msg) {
+            (Mode::Binary, m @ ToHost::Hello(_)) => match out.split_first_mut() {
+                Some((first, rest)) => {
+                    *first = 0;
+                    encode(m, rest).map_or(0, |n| n + 1)
+                }
+                None => 0,
+            },
             (Mode::Binary, m) => encode(m, out).unwrap_or(0),
             (Mode::Text, ToHost::Report(r)) => write_csv_line(r, out),
-            (Mode::Text, ToHost::Hello(_)) => 0,
+            (Mode::Text, ToHost::Hello(_)) => write_csv_header(out),
         };
         &out[..n]
     }
@@ -175,7 +186,7 @@ impl Hub {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::stream::{Counts, FrameReader};
+    use crate::stream::{Counts, FrameReader, CSV_HEADER};
 
     fn reading(faults: u8, temp_mc: i32) -> Reading {
         Reading {
@@ -300,6 +311,30 @@ mod tests {
         hub.set_mode(Mode::Text);
         let text = hub.render(&ToHost::Report(report), &mut out);
         assert!(text.starts_with(b"0,1,0x0001,0.000001,"));
-        assert!(hub.render(&hub.hello(), &mut out).is_empty());
+        // In text mode a Hello is the header line.
+        assert_eq!(hub.render(&hub.hello(), &mut out), CSV_HEADER.as_bytes());
+    }
+
+    #[test]
+    fn a_mode_change_restarts_the_count_and_a_binary_hello_stands_alone() {
+        let mut hub = Hub::new(TableState::Valid, 6, NumberFormat::F32);
+        let _ = hub.report(1, Ok(&reading(0, 20_000)), ok_eval);
+        hub.set_mode(Mode::Text);
+        let mut out = [0u8; MAX_OUTPUT];
+        let report = hub.report(1, Ok(&reading(0, 20_000)), ok_eval);
+        let line = hub.render(&ToHost::Report(report), &mut out).to_vec();
+        assert!(line.starts_with(b"0,"), "seq restarts at the mode change");
+        hub.set_mode(Mode::Binary);
+        let hello = hub.render(&hub.hello(), &mut out).to_vec();
+        // After a CSV line (no delimiter of its own) the Hello still decodes as a frame.
+        let mut reader = FrameReader::<MAX_FRAME>::new();
+        let got: Vec<_> = line
+            .iter()
+            .chain(&hello)
+            .filter_map(|&b| reader.push::<ToHost>(b))
+            .filter_map(Result::ok)
+            .collect();
+        assert_eq!(got, vec![hub.hello()]);
+        assert_eq!(hub.report(1, Ok(&reading(0, 20_000)), ok_eval).seq, 0);
     }
 }

@@ -39,7 +39,7 @@ pub fn table(link: f64) -> Vec<u8> {
     data.probe = ProbeData {
         vector: [0.0, 0.0, 50.0],
         direction: [0.0, 0.0, 1.0],
-        thermal: 0.0,
+        ..ProbeData::default()
     };
     data.flags = data.content_flags();
     let mut bytes = [0u8; MAX_TABLE_LEN];

@@ -290,10 +290,14 @@ pub fn text_mode(name: &str) {
     )
     .unwrap();
     assert!(out.status.success());
-    // Binary: delimiter + Hello; then text, starting after the Hello frame's delimiter.
-    let text_start = out.stream.iter().skip(1).position(|&x| x == 0).unwrap() + 2;
+    // Binary: delimiters + Hello; then text, starting after the Hello frame's delimiter, with
+    // the text mode's Hello: the header line.
+    let first = out.stream.iter().position(|&x| x != 0).unwrap();
+    let text_start = first + out.stream[first..].iter().position(|&x| x == 0).unwrap() + 1;
     let text = std::str::from_utf8(&out.stream[text_start..]).unwrap();
-    let lines: Vec<&str> = text.lines().collect();
+    let mut lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.first(), Some(&CSV_HEADER.trim_end()), "{text}");
+    lines.remove(0);
     assert_eq!(lines.len(), readings.len(), "{text}");
     let host = host_points(b.precision, &table, &readings).unwrap();
     assert_eq!(CSV_HEADER.trim_end().split(',').count(), 9);
