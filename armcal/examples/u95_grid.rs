@@ -26,7 +26,7 @@ fn main() {
                     a * a,
                     a * a * b * b,
                 )));
-                format!("{:.7}", g as f32)
+                format!("{}", g as f32)
             })
             .collect();
         println!("    {},", row.join(", "));

@@ -40,7 +40,7 @@ pub fn eigenvalues(c: &Covariance) -> [f32; 3] {
     for _ in 0..SWEEPS {
         let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
         let diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
-        if !(off > 1e-14 * diag) {
+        if off.is_nan() || off <= 1e-14 * diag {
             break;
         }
         for (p, q) in [(0, 1), (0, 2), (1, 2)] {
