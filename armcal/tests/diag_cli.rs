@@ -218,3 +218,29 @@ fn data_without_held_out_units_are_refused_plainly() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("nothing.csv"));
 }
+
+/// Two sessions cannot confirm or rule out any cause: the report says so, never "none".
+#[test]
+fn two_sessions_are_reported_as_cannot_test() {
+    let d = workdir("two-sessions");
+    let mukca = Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/mukca");
+    let data = mukca.join("mukca-panda-panda_7.csv");
+    let arm = mukca.join("mukca-panda-panda_7.toml");
+    let args = [
+        "diagnose",
+        data.to_str().unwrap(),
+        "--arm",
+        arm.to_str().unwrap(),
+    ];
+    let o = armcal_ok(&[&args[..], &["--by-group", "--json"]].concat(), &d);
+    let j: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let verdict = j["verdict"].as_str().unwrap();
+    assert!(
+        verdict.starts_with("cannot test: 2 held-out units"),
+        "{verdict}"
+    );
+    assert!(verdict.contains("record 1 more session"), "{verdict}");
+    let o = armcal_ok(&[&args[..], &["--by-group"]].concat(), &d);
+    let text = String::from_utf8(o.stdout).unwrap();
+    assert!(!text.contains("\n  none\n"), "{text}");
+}

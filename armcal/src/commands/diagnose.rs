@@ -37,7 +37,10 @@ pub struct Args {
     /// candidates).
     #[arg(long, default_value_t = 1e-3, value_parser = super::args::probability)]
     alpha: f64,
-    /// Standard errors by which a cause must lower the held-out error.
+    /// The held-out rule: a cause is kept only if its gain in held-out squared error, paired
+    /// over the held-out units (a `point` row, a `spat` or `length` group), passes a one-sided
+    /// paired t-test with (units − 1) degrees of freedom at p < Φ(−z), the normal tail of z
+    /// (z = 2: p < 0.0228). Fewer than 3 units test nothing ("cannot test").
     #[arg(long, default_value_t = 2.0, value_parser = super::args::non_negative)]
     z: f64,
     /// Highest encoder-harmonic order tried as a cause, on every joint. The data may resolve

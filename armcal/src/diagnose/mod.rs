@@ -150,9 +150,18 @@ pub struct Diagnosis {
     pub settings: Settings,
     /// Structure left in the extended model's residuals, against every variable of the data.
     pub unexplained: unexplained::Search,
+    /// Units the held-out test pairs (a `point` row, a `spat` or `length` group) that were
+    /// judged: below [`crate::stats::MIN_UNITS`] no cause can be confirmed, and the report
+    /// says "cannot test".
+    pub held_out_units: usize,
 }
 
 impl Diagnosis {
+    /// Whether the held-out test has too few units to confirm anything.
+    pub fn cannot_test(&self) -> bool {
+        self.held_out_units < crate::stats::MIN_UNITS
+    }
+
     /// Held-out RMS gain of the extended model over the geometric one (%).
     pub fn gain_percent(&self) -> f64 {
         let b = self.baseline.holdout.summary.all.rms_um;
@@ -291,7 +300,12 @@ pub fn diagnose(start: &Arm, data: &Dataset, opts: &Options) -> Result<Diagnosis
         })
         .collect();
     let unexplained = unexplained::search(&extended, data, opts.unexplained_alpha);
+    let held_out_units = select::unit_errors(data, &baseline.holdout)
+        .iter()
+        .filter(|u| u.is_some())
+        .count();
     Ok(Diagnosis {
+        held_out_units,
         candidates: cands,
         folds_method,
         folds,

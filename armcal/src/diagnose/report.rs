@@ -482,7 +482,29 @@ fn selection_report(d: &Diagnosis) -> SelectionReport {
 fn verdict(d: &Diagnosis) -> String {
     let b = d.baseline.holdout.summary.all.rms_um;
     let e = d.extended.holdout.summary.all.rms_um;
-    if d.causes.is_empty() {
+    if d.causes.is_empty() && d.cannot_test() {
+        let n = d.held_out_units;
+        format!(
+            "cannot test: {n} held-out unit{} ({}); a held-out test needs at least {} (with \
+             --by-group: record {} more session{} or artefact position{}), so no cause can be \
+             confirmed or ruled out — this is not evidence that the model is fine; held-out \
+             RMS {b:.2} µm",
+            if n == 1 { "" } else { "s" },
+            d.folds_method,
+            crate::stats::MIN_UNITS,
+            crate::stats::MIN_UNITS - n,
+            if crate::stats::MIN_UNITS - n == 1 {
+                ""
+            } else {
+                "s"
+            },
+            if crate::stats::MIN_UNITS - n == 1 {
+                ""
+            } else {
+                "s"
+            },
+        )
+    } else if d.causes.is_empty() {
         let extra = if d.confirmations.is_empty() {
             String::new()
         } else {
@@ -639,7 +661,13 @@ impl Report {
     fn write_causes(&self, s: &mut String) {
         let _ = writeln!(s, "\ncauses");
         if self.causes.is_empty() {
-            let _ = writeln!(s, "  none");
+            // Too few held-out units is not "no cause": the verdict below says what would decide.
+            let none = if self.verdict.starts_with("cannot test") {
+                "  none named: cannot test (the verdict below)"
+            } else {
+                "  none"
+            };
+            let _ = writeln!(s, "{none}");
         }
         for c in &self.causes {
             let _ = writeln!(s, "  {}", c.description);
