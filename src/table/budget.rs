@@ -45,7 +45,7 @@ pub mod limits {
     pub const TEMPERATURE_C: f64 = 50.0;
 }
 
-/// A budget to write ([`TableData::encode_with`]).
+/// A budget to write ([`super::TableData::encode_with`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct BudgetData {
     /// Encoder reading's standard uncertainty per joint (counts).

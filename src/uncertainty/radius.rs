@@ -3,7 +3,7 @@
 //! In Σ's eigenbasis |x|² = λ₁z₁² + λ₂z₂² + λ₃z₃² (z_i standard normal), so the radius is
 //! √λ₁ · G(a, b) with a = √(λ₂/λ₁), b = √(λ₃/λ₂), both in [0, 1]: from 1.960 (a line) to
 //! 2.796 (a round ball). G has no closed form; the host computes it exactly (nested
-//! quadrature, `armcal::uncertainty::u95`), and [`grid`](super::grid) holds it on a 17 × 17
+//! quadrature, `armcal::uncertainty::u95`), and the module `grid` holds it on a 17 × 17
 //! grid of (a, b), generated from the host's function (`cargo run -p armcal --example
 //! u95_grid`; the test `u95_grid_is_current` checks it). G is smooth in a and b (even in
 //! each at 0), so bilinear interpolation is within 0.07 % of it (measured by the same test).
