@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{armcal, armcal_ok, workdir, write_truth};
+use common::{armcal, armcal_ok, png_size, workdir, write_truth};
 use quatarm_ref::arm::Arm;
 use std::path::Path;
 
@@ -201,4 +201,60 @@ fn the_virtual_test_needs_a_budget_and_gives_u_from_it() {
             "{t}"
         );
     }
+}
+
+/// `--plots`: the three pictures of a complete ISO 10360-12 test set, valid PNGs; a folder that
+/// is a file is refused and nothing is written.
+#[test]
+fn plots_are_written_for_a_complete_test_set() {
+    let d = workdir("plots");
+    write_truth(&d, &truth());
+    armcal_ok(
+        &[
+            "simulate",
+            "--truth",
+            "truth.toml",
+            "--test",
+            "iso10360-12",
+            "--seed",
+            "5",
+            "-o",
+            "iso.csv",
+        ],
+        &d,
+    );
+    armcal_ok(
+        &[
+            "check",
+            "iso.csv",
+            "--calib",
+            "truth.toml",
+            "--plots",
+            "figs",
+        ],
+        &d,
+    );
+    for f in [
+        "sphere_deviations.png",
+        "length_errors.png",
+        "spat_scatter.png",
+    ] {
+        let (w, h) = png_size(&d.join("figs").join(f));
+        assert!(w >= 1000 && h >= 300, "{f}: {w}×{h}");
+    }
+    std::fs::write(d.join("afile"), "x").unwrap();
+    let o = armcal(
+        &[
+            "check",
+            "iso.csv",
+            "--calib",
+            "truth.toml",
+            "--plots",
+            "afile",
+        ],
+        &d,
+    );
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("afile"));
+    assert!(o.stdout.is_empty(), "no partial output");
 }

@@ -7,7 +7,7 @@ use std::path::Path;
 
 mod common;
 
-use common::{armcal, armcal_ok, workdir, write_truth};
+use common::{armcal, armcal_ok, png_size, workdir, write_truth};
 
 /// Writes a truth file and simulates 600 point readings of it at 16–28 °C into `points.csv`.
 fn simulate(dir: &Path, truth: &Arm, seed: &str) {
@@ -44,20 +44,6 @@ fn truth() -> Arm {
 }
 
 /// Width and height from a PNG's IHDR, after checking the signature.
-fn png_size(path: &Path) -> (u32, u32) {
-    let b = std::fs::read(path).unwrap();
-    assert_eq!(
-        &b[..8],
-        b"\x89PNG\r\n\x1a\n",
-        "{} is not a PNG",
-        path.display()
-    );
-    assert_eq!(&b[12..16], b"IHDR");
-    let w = u32::from_be_bytes(b[16..20].try_into().unwrap());
-    let h = u32::from_be_bytes(b[20..24].try_into().unwrap());
-    (w, h)
-}
-
 #[test]
 fn diagnose_prints_the_issue_json_and_writes_file_table_and_figures() {
     let d = workdir("json");

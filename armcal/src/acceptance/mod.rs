@@ -10,6 +10,7 @@
 
 pub mod fit;
 pub mod mpe;
+pub mod plots;
 pub mod statistics;
 pub mod virtual_test;
 

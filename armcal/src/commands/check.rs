@@ -30,6 +30,12 @@ pub struct Args {
     /// Seed of the virtual test's draws.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Write the pictures into this folder (created if needed): `sphere_deviations.png`
+    /// (radial deviations against azimuth, per sphere group), `length_errors.png` (each bar
+    /// position's error against length, height and reach), `spat_scatter.png` (each SPAT
+    /// cone's centres about their mean, from above); each only where the data has its groups.
+    #[arg(long, value_name = "DIR")]
+    plots: Option<PathBuf>,
 }
 
 /// Runs the subcommand: everything is read and checked before anything is printed.
@@ -53,6 +59,18 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             "{}: no sphere, length or spat group: no acceptance test to run",
             a.data.display()
         );
+    }
+    let mut files = armcal::output::Staged::new();
+    let written = match &a.plots {
+        Some(dir) => {
+            let figures = acceptance::plots::figures(&data, &acceptance::centres(&arm, &data));
+            armcal::diagnose::plots::write_all(&figures, dir, &mut files)?
+        }
+        None => Vec::new(),
+    };
+    files.commit()?;
+    for f in &written {
+        eprintln!("armcal: wrote {}", f.display());
     }
     if a.json {
         println!("{}", serde_json::to_string_pretty(&c)?);

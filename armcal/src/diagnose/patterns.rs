@@ -135,9 +135,22 @@ impl Panel {
     }
 }
 
+/// What a figure's legend explains.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Legend {
+    /// The geometric and the extended model's points and means (a diagnosis).
+    Models,
+    /// The residuals left and the structure fitted to them (the unexplained search).
+    Unexplained,
+    /// Measured points alone (the acceptance tests' pictures): no legend.
+    Points,
+}
+
 /// A figure: panels under one title, written to one file.
 #[derive(Clone, Debug)]
 pub struct Figure {
+    /// What its legend explains.
+    pub legend: Legend,
     /// File name (PNG).
     pub file: String,
     /// Title.

@@ -1,11 +1,12 @@
-//! The figures of a diagnosis as PNG files (plotters, bitmap backend).
+//! The figures of a diagnosis (and of an acceptance check, `crate::acceptance::plots`) as PNG
+//! files (plotters, bitmap backend).
 //!
 //! Text is drawn with a font compiled into the program (`assets/fonts/DejaVuSans-subset.ttf`,
 //! DejaVu Sans cut to the characters the figures use, under its licence in the same folder)
 //! through plotters' `ab_glyph` support, so the pictures come out the same on a machine with
 //! no fonts installed (plotters' default `ttf` feature asks the system for them).
 
-use super::patterns::{Figure, Panel};
+use super::patterns::{Figure, Legend, Panel};
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 use std::path::{Path, PathBuf};
@@ -107,10 +108,10 @@ pub fn draw(fig: &Figure, path: &Path) -> Result<(), PlotError> {
         (20, 50),
     )
     .map_err(|x| e(&x))?;
-    if fig.file == super::unexplained::FILE {
-        legend_unexplained(&head, 20, 80).map_err(|x| e(&x))?;
-    } else {
-        legend(&head, 20, 80).map_err(|x| e(&x))?;
+    match fig.legend {
+        Legend::Unexplained => legend_unexplained(&head, 20, 80).map_err(|x| e(&x))?,
+        Legend::Models => legend(&head, 20, 80).map_err(|x| e(&x))?,
+        Legend::Points => {}
     }
     let areas = body.split_evenly((rows, cols.max(1)));
     for (area, p) in areas.iter().zip(&fig.panels) {

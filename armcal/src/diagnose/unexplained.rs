@@ -642,6 +642,7 @@ pub fn figure(s: &Search) -> Option<Figure> {
         })
         .collect();
     Some(Figure {
+        legend: super::patterns::Legend::Unexplained,
         file: FILE.into(),
         title: "What the named causes leave, against the variables it depends on".into(),
         caption: format!(

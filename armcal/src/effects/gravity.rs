@@ -67,6 +67,7 @@ impl Family for Compliances {
             ));
         }
         Some(Figure {
+            legend: crate::diagnose::patterns::Legend::Models,
             file: "residuals_vs_gravity_lever.png".into(),
             title: "What the model misses, as each joint's angle error, against its gravity lever"
                 .into(),

@@ -156,6 +156,7 @@ impl Family for Harmonics {
             );
         }
         Some(Figure {
+            legend: crate::diagnose::patterns::Legend::Models,
             file: "residuals_vs_joint_angle.png".into(),
             title:
                 "What the model misses, as each joint's angle error, against the joint's reading"

@@ -85,6 +85,7 @@ impl Family for Expansions {
             ));
         }
         Some(Figure {
+            legend: crate::diagnose::patterns::Legend::Models,
             file: "residuals_vs_temperature.png".into(),
             title: "What the model misses, as each link's elongation, against temperature".into(),
             caption: "A thermal expansion shows as a line rising with temperature (slope κ·L)"

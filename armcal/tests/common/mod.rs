@@ -40,3 +40,19 @@ pub fn write_truth(dir: &Path, truth: &Arm) {
     )
     .unwrap();
 }
+
+/// The width and height of a PNG file, after checking its signature and header.
+#[allow(dead_code)]
+pub fn png_size(path: &Path) -> (u32, u32) {
+    let b = std::fs::read(path).unwrap();
+    assert_eq!(
+        &b[..8],
+        b"\x89PNG\r\n\x1a\n",
+        "{} is not a PNG",
+        path.display()
+    );
+    assert_eq!(&b[12..16], b"IHDR");
+    let w = u32::from_be_bytes(b[16..20].try_into().unwrap());
+    let h = u32::from_be_bytes(b[20..24].try_into().unwrap());
+    (w, h)
+}
