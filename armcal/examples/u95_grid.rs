@@ -3,8 +3,7 @@
 //!
 //! `cargo run -p armcal --example u95_grid > src/uncertainty/grid.rs`
 
-use armcal::uncertainty::u95::u95;
-use nalgebra::Matrix3;
+use armcal::uncertainty::u95::shape_factor;
 
 /// Grid points per axis (as the firmware's `GRID_N`).
 const N: usize = 17;
@@ -21,12 +20,7 @@ fn main() {
         let row: Vec<String> = (0..N)
             .map(|j| {
                 let b = j as f64 / (N - 1) as f64;
-                let g = u95(&Matrix3::from_diagonal(&nalgebra::Vector3::new(
-                    1.0,
-                    a * a,
-                    a * a * b * b,
-                )));
-                format!("{}", g as f32)
+                format!("{}", shape_factor(a, b) as f32)
             })
             .collect();
         println!("    {},", row.join(", "));

@@ -1,19 +1,11 @@
 //! The hub's U95 (`quatarm::uncertainty::radius`, f32, a grid and micromath) against the
 //! host's exact radius (`armcal::uncertainty::u95`, f64 quadrature).
 
-use armcal::uncertainty::u95::u95;
+use armcal::uncertainty::u95::{shape_factor as shape_factor_exact, u95};
 use nalgebra::{Matrix3, Vector3};
 use quatarm::uncertainty::radius::{shape_factor, u95 as hub_u95};
 use quatarm::uncertainty::Covariance;
 use rand::{Rng, SeedableRng};
-
-fn host_shape(a: f64, b: f64) -> f64 {
-    u95(&Matrix3::from_diagonal(&Vector3::new(
-        1.0,
-        a * a,
-        a * a * b * b,
-    )))
-}
 
 /// The committed grid is the host's function at its nodes (as `--example u95_grid` prints).
 #[test]
@@ -22,7 +14,7 @@ fn u95_grid_is_current() {
         for j in 0..17 {
             let (a, b) = (i as f64 / 16.0, j as f64 / 16.0);
             let (want, got) = (
-                host_shape(a, b),
+                shape_factor_exact(a, b),
                 f64::from(shape_factor(a as f32, b as f32)),
             );
             assert!(
@@ -40,7 +32,7 @@ fn interpolation_is_within_a_permille() {
     let mut worst: f64 = 0.0;
     for _ in 0..400 {
         let (a, b) = (rng.gen::<f64>(), rng.gen::<f64>());
-        let e = f64::from(shape_factor(a as f32, b as f32)) / host_shape(a, b) - 1.0;
+        let e = f64::from(shape_factor(a as f32, b as f32)) / shape_factor_exact(a, b) - 1.0;
         worst = worst.max(e.abs());
     }
     println!("worst interpolation error {:.2e}", worst);
@@ -92,8 +84,7 @@ fn hub_own_terms_agree_with_the_host() {
     let mut host = Budget::from_file(u, arm);
     host.params.clear();
     host.cov = nalgebra::DMatrix::zeros(0, 0);
-    let hub32 = Uncertainty::<F32>::new(&table).unwrap().unwrap();
-    let hubfx = Uncertainty::<Fixed>::new(&table).unwrap().unwrap();
+    let hub = Uncertainty::new(&table).expect("the table has its budget");
     let (c32, cfx) = (
         Chain::<F32>::new(&table).unwrap(),
         Chain::<Fixed>::new(&table).unwrap(),
@@ -117,12 +108,10 @@ fn hub_own_terms_agree_with_the_host() {
         let p32 = c32.eval(&counts, temp_mc).unwrap();
         let pfx = cfx.eval(&counts, temp_mc).unwrap();
         for got in [
-            hub32
-                .covariance(&c32, &counts, temp_mc, &p32)
+            hub.covariance(&c32, &counts, temp_mc, &p32)
                 .unwrap()
                 .u95_nm(),
-            hubfx
-                .covariance(&cfx, &counts, temp_mc, &pfx)
+            hub.covariance(&cfx, &counts, temp_mc, &pfx)
                 .unwrap()
                 .u95_nm(),
         ] {

@@ -12,7 +12,7 @@
 //! offset  size  field                                   (all little-endian)
 //! ------  ----  ---------------------------------------------------------------
 //!      0     4  magic "QATB"
-//!      4     2  format version (2)
+//!      4     2  format version (3)
 //!      6     1  joint count N (6 or 7)
 //!      7     1  flags: bit0 geometric errors, bit1 encoder harmonics,
 //!               bit2 gravity compliance, bit3 thermal expansion, bit4 uncertainty budget

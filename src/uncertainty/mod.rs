@@ -63,29 +63,21 @@ const TEMPERATURE_STEP_MC: i32 = 10_000;
 const STEPS_PER_TURN: u32 = 6283;
 
 /// What the hub needs to give every point the reading's own part of Σ_p: built once at
-/// boot from the table's budget.
+/// boot from the table's budget, the same for either evaluator's chain.
 #[derive(Clone, Debug)]
-pub struct Uncertainty<P: Evaluator> {
+pub struct Uncertainty {
     joints: Vec<JointTerm, MAX_JOINTS>,
     /// (σ_T / step)², where the table has thermal expansion.
     temperature: Option<f32>,
     /// σ_probe² + σ_model² (nm²).
     isotropic: f32,
-    _evaluator: core::marker::PhantomData<P>,
 }
 
-/// f64 → f32 without the soft-float `as` on the Cortex-M0 being a concern: boot only.
-fn f32_of(x: f64) -> f32 {
-    x as f32
-}
-
-impl<P: Evaluator> Uncertainty<P> {
-    /// The budget of a validated table, `None` where the table has none. Fails where a
-    /// factor's chain cannot be built (as the table's own chain would fail).
-    pub fn new(table: &Table<'_>) -> Result<Option<Uncertainty<P>>, ChainError> {
-        let Some(budget) = table.budget() else {
-            return Ok(None);
-        };
+impl Uncertainty {
+    /// The budget of a validated table, `None` where the table has none. Its f64 arithmetic
+    /// (soft-float on every target) runs once, at boot.
+    pub fn new(table: &Table<'_>) -> Option<Uncertainty> {
+        let budget = table.budget()?;
         let n = table.joint_count();
         let mut joints = Vec::new();
         for i in 0..n {
@@ -95,24 +87,23 @@ impl<P: Evaluator> Uncertainty<P> {
             let _ = joints.push(JointTerm {
                 step,
                 counts,
-                weight: f32_of(sigma * sigma),
+                weight: (sigma * sigma) as f32,
             });
         }
         let thermal = table.flags() & FLAG_THERMAL != 0;
         let t = budget.temperature_c() * 1000.0 / f64::from(TEMPERATURE_STEP_MC);
-        let temperature = (thermal && t > 0.0).then(|| f32_of(t * t));
+        let temperature = (thermal && t > 0.0).then_some((t * t) as f32);
         let iso_mm2 =
             budget.probing_mm() * budget.probing_mm() + budget.model_mm() * budget.model_mm();
-        Ok(Some(Uncertainty {
-            _evaluator: core::marker::PhantomData,
+        Some(Uncertainty {
             joints,
             temperature,
-            isotropic: f32_of(iso_mm2 * 1.0e12),
-        }))
+            isotropic: (iso_mm2 * 1.0e12) as f32,
+        })
     }
 
     /// The reading's own part of Σ_p (`counts`, `temp_mc`; `chain` gave `point` for it).
-    pub fn covariance(
+    pub fn covariance<P: Evaluator>(
         &self,
         chain: &Chain<P>,
         counts: &[u32],
@@ -133,13 +124,12 @@ impl<P: Evaluator> Uncertainty<P> {
             if j.weight == 0.0 {
                 continue;
             }
-            // Below counts per revolution by the chain's check (the point was evaluated).
+            // c0 is below counts per revolution by the chain's check (the point was
+            // evaluated) and the step is at most a sixth of a turn, so one subtraction wraps
+            // it (no division: software on the Cortex-M0).
             let c0 = stepped[i];
-            stepped[i] = if c0 >= j.counts - j.step.min(j.counts) {
-                c0 + j.step - j.counts
-            } else {
-                c0 + j.step
-            };
+            let s = c0 + j.step;
+            stepped[i] = if s >= j.counts { s - j.counts } else { s };
             c.add_outer(diff(chain.eval(&stepped[..n], temp_mc)?), j.weight);
             stepped[i] = c0;
         }

@@ -71,6 +71,11 @@ pub fn centres(arm: &Arm, data: &Dataset) -> Vec<Vector3<f64>> {
         .collect()
 }
 
+/// The mean of the centres of `rows`: a bar end's, a cone's or a sphere's centroid.
+pub fn mean_of(rows: &[usize], centres: &[Vector3<f64>]) -> Vector3<f64> {
+    rows.iter().map(|&i| centres[i]).sum::<Vector3<f64>>() / rows.len() as f64
+}
+
 /// Runs every test the data supports. U is the MPE file's `test_uncertainty` where it gives
 /// one; else, with a budget, twice the standard deviation of the value under the budget (the
 /// virtual test's spread, k = 2); else 0, said as such (`u_source`).

@@ -46,10 +46,6 @@ struct Bar {
     error_um: f64,
 }
 
-fn mean(rows: &[usize], c: &[Vector3<f64>]) -> Vector3<f64> {
-    rows.iter().map(|&i| c[i]).sum::<Vector3<f64>>() / rows.len().max(1) as f64
-}
-
 /// The figures for `data`, its ball centres `centres` by the calibrated model.
 pub fn figures(data: &Dataset, centres: &[Vector3<f64>]) -> Vec<Figure> {
     let layout = data.layout();
@@ -85,7 +81,7 @@ pub fn figures(data: &Dataset, centres: &[Vector3<f64>]) -> Vec<Figure> {
         .length
         .iter()
         .map(|g| {
-            let (a, b) = (mean(&g.a, centres), mean(&g.b, centres));
+            let (a, b) = (super::mean_of(&g.a, centres), super::mean_of(&g.b, centres));
             Bar {
                 length_mm: g.length_mm,
                 middle: 0.5 * (a + b),
@@ -130,7 +126,7 @@ pub fn figures(data: &Dataset, centres: &[Vector3<f64>]) -> Vec<Figure> {
         .spat
         .iter()
         .map(|g| {
-            let m = mean(&g.rows, centres);
+            let m = super::mean_of(&g.rows, centres);
             let points = g
                 .rows
                 .iter()

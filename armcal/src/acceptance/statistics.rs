@@ -99,10 +99,8 @@ pub fn values(
     let mut out = Vec::new();
     sphere_values(data, &layout, centres, ball_diameter, &mut out)?;
     for g in &layout.length {
-        let mean = |rows: &[usize]| {
-            rows.iter().map(|&i| centres[i]).sum::<Vector3<f64>>() / rows.len() as f64
-        };
-        let e = (mean(&g.a) - mean(&g.b)).norm() - g.length_mm;
+        let e =
+            (super::mean_of(&g.a, centres) - super::mean_of(&g.b, centres)).norm() - g.length_mm;
         out.push(Value {
             test: Test::EUni,
             group: g.group,

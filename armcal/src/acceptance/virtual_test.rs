@@ -106,9 +106,6 @@ pub fn predict(
 fn ideal_centres(arm: &Arm, data: &Dataset) -> Result<Vec<Vector3<f64>>, StatError> {
     let mut x = super::centres(arm, data);
     let layout = data.layout();
-    let mean = |x: &[Vector3<f64>], rows: &[usize]| {
-        rows.iter().map(|&i| x[i]).sum::<Vector3<f64>>() / rows.len() as f64
-    };
     for g in &layout.sphere {
         let p: Vec<Vector3<f64>> = g.rows.iter().map(|&i| x[i]).collect();
         let c = super::fit::free(&p)
@@ -123,7 +120,7 @@ fn ideal_centres(arm: &Arm, data: &Dataset) -> Result<Vec<Vector3<f64>>, StatErr
         }
     }
     for g in &layout.length {
-        let (a, b) = (mean(&x, &g.a), mean(&x, &g.b));
+        let (a, b) = (super::mean_of(&g.a, &x), super::mean_of(&g.b, &x));
         let b_ideal = a + (b - a).normalize() * g.length_mm;
         for &i in &g.a {
             x[i] = a;
@@ -133,7 +130,7 @@ fn ideal_centres(arm: &Arm, data: &Dataset) -> Result<Vec<Vector3<f64>>, StatErr
         }
     }
     for g in &layout.spat {
-        let m = mean(&x, &g.rows);
+        let m = super::mean_of(&g.rows, &x);
         for &i in &g.rows {
             x[i] = m;
         }

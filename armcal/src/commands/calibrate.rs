@@ -139,13 +139,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         rep.residuals.after.all.rms_um,
     );
     let budget = super::budget::or_warning(made, &mut rep.uncertainty, &mut rep.warnings);
-    // The table carries the budget's reading terms for the hub (`quatarm::table::budget`).
-    let table_budget = budget.clone();
-    let text = super::written::checked_text(&fit.arm, budget, &refs, &data)?;
+    let text = super::written::checked_text(&fit.arm, budget.as_ref(), &refs, &data)?;
     let mut files = armcal::output::Staged::new();
     files.write(&a.output, text.as_bytes())?;
     rep.output.calibration = Some(a.output.display().to_string());
-    match armcal::tablebuild::build_with(&fit.arm, table_budget.as_ref()) {
+    match armcal::tablebuild::build_with(&fit.arm, budget.as_ref()) {
         Ok(bytes) => {
             files.write(&table, &bytes)?;
             rep.output.table = Some(table.display().to_string());

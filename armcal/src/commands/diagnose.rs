@@ -175,12 +175,11 @@ fn stage_extended(
         armcal::residuals::summarise(&armcal::residuals::residuals(arm, data, fit.frame), data);
     let made = a.budget.budget(fit, data, None, in_sample.all.rms_um);
     let budget = super::budget::or_warning(made, &mut rep.uncertainty, &mut rep.warnings);
-    let table_budget = budget.clone();
-    let text = super::written::checked_text(arm, budget, &refs, data)?;
+    let text = super::written::checked_text(arm, budget.as_ref(), &refs, data)?;
     files.write(out, text.as_bytes())?;
     rep.output.calibration = Some(out.display().to_string());
     let table = out.with_extension("bin");
-    match armcal::tablebuild::build_with(arm, table_budget.as_ref()) {
+    match armcal::tablebuild::build_with(arm, budget.as_ref()) {
         Ok(bytes) => {
             files.write(&table, &bytes)?;
             rep.output.table = Some(table.display().to_string());

@@ -9,14 +9,14 @@ use quatarm_ref::{calfile, forward};
 /// it on the first rows of the data against the fit itself.
 pub fn checked_text(
     arm: &quatarm_ref::arm::Arm,
-    budget: Option<quatarm_ref::calfile::Uncertainty>,
+    budget: Option<&quatarm_ref::calfile::Uncertainty>,
     header: &[&str],
     data: &armcal::data::Dataset,
 ) -> anyhow::Result<String> {
-    let text = calfile::write_with(arm, budget.as_ref(), header);
+    let text = calfile::write_with(arm, budget, header);
     let (back, back_budget) = armcal::load::written_with(&text)
         .map_err(|e| anyhow::anyhow!("the calibration file written does not read back: {e}"))?;
-    if back_budget != budget {
+    if back_budget.as_ref() != budget {
         bail!("the [uncertainty] section written does not read back the same (a bug)");
     }
     for r in data.rows.iter().take(50) {

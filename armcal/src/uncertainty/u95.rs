@@ -152,6 +152,17 @@ pub fn u95(sigma: &Matrix3<f64>) -> f64 {
     radius(sigma, LEVEL)
 }
 
+/// U95 of diag(1, a², a²b²): the shape factor G(a, b) of a covariance with eigenvalues
+/// λ₁ ≥ λ₂ ≥ λ₃, a = √(λ₂/λ₁), b = √(λ₃/λ₂), U95 = √λ₁ · G; the hub keeps it on a grid
+/// (`quatarm::uncertainty::radius`, written by `cargo run -p armcal --example u95_grid`).
+pub fn shape_factor(a: f64, b: f64) -> f64 {
+    u95(&Matrix3::from_diagonal(&nalgebra::Vector3::new(
+        1.0,
+        a * a,
+        a * a * b * b,
+    )))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
