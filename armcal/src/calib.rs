@@ -1,4 +1,5 @@
-//! Calibration: the arm's parameters from any mix of `point`, `spat` and `length` data.
+//! Calibration: the arm's parameters from any mix of `point`, `spat`, `length` and `sphere`
+//! data.
 //!
 //! ## The residuals
 //! - `point`: R_T p + t_T − x, with the instrument frame (R_T, t_T) estimated alongside.
@@ -11,6 +12,13 @@
 //!   bar by the length discrepancy, which adds exactly √(n_a n_b / (n_a + n_b)) · (|m_a − m_b| − L)
 //!   as one more residual. The reduced problem has the same minimum as the one with the
 //!   centres as unknowns.
+//! - `sphere`: each row's distance from the group's sphere centre c minus the known radius
+//!   R = (diameter + ball diameter)/2, one scalar per row. The centre is the best one for the
+//!   arm (a small fit with R known, as L_Dia takes it), and its three unknowns are projected
+//!   out of the Jacobian: J ← J − A (AᵀA)⁻¹ Aᵀ J with A's rows −u_iᵀ, the derivatives of the
+//!   residuals by the centre (Kaufman's variable projection, exact in the gradient at the
+//!   best centre; the covariance from it is marginal over the centre). A sphere of known
+//!   diameter is a spat cone with a known radius: it fixes the scale, not the placement.
 //!
 //! All residuals are millimetres of ball position, so one noise level weighs them all.
 //!
@@ -426,6 +434,44 @@ impl<'a> Problem<'a> {
             }
             sink(&br, &bj);
         }
+        for g in &self.layout.sphere {
+            let radius = (g.diameter_mm + arm.probe.ball_diameter) / 2.0;
+            br.clear();
+            bj.clear();
+            let mut qs = Vec::with_capacity(g.rows.len());
+            for &i in &g.rows {
+                bj.resize(bj.len() + if jac { 3 * n } else { 0 }, 0.0);
+                let len = bj.len();
+                qs.push(eval(i, if jac { &mut bj[len - 3 * n..] } else { &mut [] }));
+            }
+            // Validated before any fit (`check_sphere_groups`); a group whose centre is lost
+            // on the way keeps its mean, which the solver sees as a large residual.
+            let c = crate::acceptance::fit::centre_of(&qs, radius)
+                .unwrap_or_else(|_| qs.iter().sum::<Vector3<f64>>() / qs.len() as f64);
+            let us: Vec<Vector3<f64>> = qs
+                .iter()
+                .map(|q| (q - c).try_normalize(0.0).unwrap_or_else(Vector3::z))
+                .collect();
+            br.extend(qs.iter().map(|q| (q - c).norm() - radius));
+            if jac {
+                // Radial rows u_iᵀ J_i, then the centre projected out.
+                let mut radial = DMatrix::zeros(qs.len(), n);
+                for (k, u) in us.iter().enumerate() {
+                    let block = &bj[k * 3 * n..(k + 1) * 3 * n];
+                    for col in 0..n {
+                        radial[(k, col)] = (0..3).map(|c| u[c] * block[c * n + col]).sum();
+                    }
+                }
+                let a = DMatrix::from_fn(qs.len(), 3, |k, c| -us[k][c]);
+                let ata = a.transpose() * &a;
+                if let Some(inv) = ata.try_inverse() {
+                    radial -= &a * (inv * (a.transpose() * &radial));
+                }
+                bj.clear();
+                bj.extend(radial.transpose().iter());
+            }
+            sink(&br, &bj);
+        }
     }
 
     /// The R factor of the Jacobian at a state.
@@ -511,7 +557,8 @@ impl lm::Problem for Problem<'_> {
 }
 
 /// Equations the data give once the fixed points are eliminated: 3 per `point` row, 3 (n − 1)
-/// per `spat` group and per bar end, and 1 per bar.
+/// per `spat` group and per bar end, 1 per bar, and n − 3 per sphere position (one radial
+/// equation per row, less the centre's three).
 pub fn equations(layout: &Layout) -> usize {
     3 * layout.points.len()
         + layout
@@ -523,6 +570,11 @@ pub fn equations(layout: &Layout) -> usize {
             .length
             .iter()
             .map(|g| 3 * (g.a.len() - 1) + 3 * (g.b.len() - 1) + 1)
+            .sum::<usize>()
+        + layout
+            .sphere
+            .iter()
+            .map(|g| g.rows.len().saturating_sub(3))
             .sum::<usize>()
 }
 
@@ -541,6 +593,12 @@ fn equations_detail(layout: &Layout) -> String {
         parts.push(format!(
             "{} bar positions: 3 per row beyond the first of each ball, 1 per bar",
             layout.length.len()
+        ));
+    }
+    if !layout.sphere.is_empty() {
+        parts.push(format!(
+            "{} sphere positions: 1 per row beyond the third",
+            layout.sphere.len()
         ));
     }
     parts.join("; ")
@@ -840,6 +898,7 @@ fn check_structure(
             crate::effects::gravity::KEY
         )));
     }
+    check_sphere_groups(&base, data, &layout)?;
     // 0. What the data's kinds cannot fix, before anything is computed on them.
     let requested: Vec<usize> = (0..all.len())
         .filter(|&i| !all[i].is_frame() && !opts.hold.contains(&all[i]))
@@ -888,6 +947,27 @@ fn check_structure(
         r_skel,
         shared,
     })
+}
+
+/// Every `sphere` group must fix a sphere at the start arm (four or more points, not in one
+/// plane), or its centre, which the fit eliminates, is not defined.
+fn check_sphere_groups(start: &Arm, data: &Dataset, layout: &Layout) -> Result<(), CalibError> {
+    for g in &layout.sphere {
+        let qs: Vec<Vector3<f64>> = g
+            .rows
+            .iter()
+            .map(|&i| forward::forward(start, &data.rows[i].theta, data.rows[i].temp_c).p)
+            .collect();
+        let radius = (g.diameter_mm + start.probe.ball_diameter) / 2.0;
+        if let Err(e) = crate::acceptance::fit::centre_of(&qs, radius) {
+            let line = g.rows.first().map_or(0, |&i| data.rows[i].line);
+            return Err(CalibError::Mismatch(format!(
+                "{}: sphere group {} (line {line}): {e}",
+                data.source, g.group
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Holds the unknowns `--hold` names.

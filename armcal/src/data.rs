@@ -121,6 +121,36 @@ pub struct Layout {
     pub sphere: Vec<SphereGroup>,
 }
 
+/// One unit of evidence: what a held-out check leaves out and judges whole, and what the
+/// calibration's residuals come in blocks of (a `point` row alone; a `spat`, `length` or
+/// `sphere` group whole, since its fixed point, bar or centre is estimated from its own rows).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Unit {
+    /// Indices into [`Dataset::rows`].
+    pub rows: Vec<usize>,
+    /// The group number of a `length` unit, whose bar error belongs to it too.
+    pub bar: Option<i64>,
+}
+
+impl Layout {
+    /// The units, in the order the calibration visits its residual blocks: `point` rows one
+    /// by one, then `spat`, `length` (ball `a`'s rows, then `b`'s) and `sphere` groups.
+    pub fn units(&self) -> Vec<Unit> {
+        let whole = |rows: &[usize]| Unit {
+            rows: rows.to_vec(),
+            bar: None,
+        };
+        let mut v: Vec<Unit> = self.points.iter().map(|&i| whole(&[i])).collect();
+        v.extend(self.spat.iter().map(|g| whole(&g.rows)));
+        v.extend(self.length.iter().map(|g| Unit {
+            rows: g.a.iter().chain(&g.b).copied().collect(),
+            bar: Some(g.group),
+        }));
+        v.extend(self.sphere.iter().map(|g| whole(&g.rows)));
+        v
+    }
+}
+
 /// A whole data file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Dataset {

@@ -4,7 +4,7 @@
 //! left out is a whole unit of evidence: a `point` row alone, but a `spat` or `length` group
 //! whole, since a group's fixed point is estimated from its own rows (a held-out group is then
 //! judged, as the MUKCa authors judge a session, by how tightly the model's ball centres
-//! gather and how well the bar keeps its length). Held-out `point` rows go through the
+//! gather, how well the bar keeps its length and how round the sphere stays). Held-out `point` rows go through the
 //! instrument frame fitted on the other folds. Sessions are held out whole by [`by_group`].
 
 use crate::calib::{calibrate, CalibError, Options};
@@ -23,14 +23,7 @@ pub type Folds = Vec<Vec<usize>>;
 /// Fewer units than `k` give one fold per unit.
 pub fn kfold(data: &Dataset, k: usize, seed: u64) -> Folds {
     let layout = data.layout();
-    let mut units: Vec<Vec<usize>> = layout.points.iter().map(|&i| vec![i]).collect();
-    units.extend(layout.spat.iter().map(|g| g.rows.clone()));
-    units.extend(
-        layout
-            .length
-            .iter()
-            .map(|g| g.a.iter().chain(&g.b).copied().collect()),
-    );
+    let mut units: Vec<Vec<usize>> = layout.units().into_iter().map(|u| u.rows).collect();
     let mut rng = sim::rng(seed);
     units.shuffle(&mut rng);
     let k = k.min(units.len()).max(1);

@@ -9,11 +9,11 @@
 //!   the cost falls towards zero as the arm shrinks, and at ε = −1 (every length gone) it is
 //!   zero. At the skeleton the scale column is the model's own misfit, small but not a
 //!   dependency, so the fit walks down it and collapses the arm (links −600 mm, residuals
-//!   0.00 µm). Only a known length fixes the scale: a bar (`length`) or an instrument
-//!   (`point`). Without one the calibration is refused whenever the unknowns can express the
+//!   0.00 µm). Only a known length fixes the scale: a bar (`length`), a test sphere's
+//!   diameter (`sphere`) or an instrument (`point`). Without one the calibration is refused whenever the unknowns can express the
 //!   scale (every link and probe error fitted); a fit of effects alone (`--terms only,…`) on a
 //!   given geometry is not affected.
-//! - **Placement** (`spat`, `length`). Residuals are centred on each group's point, which is
+//! - **Placement** (`spat`, `length`, `sphere`). Residuals are centred on each group's point, which is
 //!   unknown: moving or turning the whole arm changes none of them. Such unknowns are held
 //!   (the frame's rotations stand for the turn; a translation has no effect at all).
 //! - **Instrument frame** (`point`). The instrument's frame is unknown and fitted alongside;
@@ -67,24 +67,15 @@ pub fn can_scale(arm: &Arm, params: &[Param], fitted: &[usize]) -> bool {
 
 /// The refusal for data whose kinds cannot fix what the unknowns `fitted` would change.
 pub fn check(layout: &Layout, arm: &Arm, params: &[Param], fitted: &[usize]) -> Option<Refusal> {
-    if let Some(g) = layout.sphere.first() {
-        return Some(Refusal {
-            what: format!("the sphere rows (group {} and any others)", g.group),
-            why: "sphere rows are acceptance-test data, for `armcal check`; the fit does not \
-                  take them yet (a sphere of known diameter would constrain the arm like a \
-                  spat cone with a known radius): calibrate from the other rows"
-                .into(),
-        });
-    }
-    let has_length = !layout.length.is_empty();
+    let has_length = !layout.length.is_empty() || !layout.sphere.is_empty();
     let has_points = !layout.points.is_empty();
     if !has_length && !has_points && can_scale(arm, params, fitted) {
         return Some(Refusal {
             what: "the arm's scale".into(),
             why: "spat rows alone probe unknown points, and an arm scaled by any factor (every link and the probe together) fits \
                   them as well, down to an arm shrunk to nothing with no residual at all. A \
-                  known length is needed: add ball-bar rows (`length`) or instrument rows \
-                  (`point`), or fit extended effects alone on the given geometry \
+                  known length is needed: add ball-bar rows (`length`), test-sphere rows \
+                  (`sphere`) or instrument rows (`point`), or fit extended effects alone on the given geometry \
                   (`--terms only,+…`)"
                 .into(),
         });
@@ -96,15 +87,16 @@ pub fn check(layout: &Layout, arm: &Arm, params: &[Param], fitted: &[usize]) -> 
 /// report (empty when nothing is worth saying).
 pub fn notes(layout: &Layout) -> Vec<String> {
     let has_length = !layout.length.is_empty();
+    let has_sphere = !layout.sphere.is_empty();
     let has_spat = !layout.spat.is_empty();
     let has_points = !layout.points.is_empty();
     let mut v = Vec::new();
-    if (has_spat || has_length) && !has_points {
+    if (has_spat || has_length || has_sphere) && !has_points {
         v.push(
-            "spat and length data do not fix where the arm stands: moving or turning the \
-             whole arm leaves every residual unchanged, so its placement is that of the start \
-             arm"
-            .into(),
+            "spat, length and sphere data do not fix where the arm stands: moving or turning \
+             the whole arm leaves every residual unchanged, so its placement is that of the \
+             start arm"
+                .into(),
         );
     }
     if has_points {
@@ -114,8 +106,19 @@ pub fn notes(layout: &Layout) -> Vec<String> {
                 .into(),
         );
     }
-    if has_length && !has_points {
-        v.push("the scale comes from the bar lengths alone".into());
+    match (has_length, has_sphere, has_points) {
+        (true, false, false) => v.push("the scale comes from the bar lengths alone".into()),
+        (false, true, false) => v.push(
+            "the scale comes from the test spheres' diameters alone, with the stylus ball's \
+             diameter as the calibration file gives it (not fitted)"
+                .into(),
+        ),
+        (true, true, false) => v.push(
+            "the scale comes from the bar lengths and the test spheres' diameters (with the \
+             stylus ball's diameter as the calibration file gives it, not fitted)"
+                .into(),
+        ),
+        _ => {}
     }
     v
 }
@@ -165,6 +168,24 @@ mod tests {
             .unwrap();
         let some: Vec<usize> = all.iter().copied().filter(|&i| i != held).collect();
         assert!(check(&spat_only(), &arm, &params, &some).is_none());
+    }
+
+    #[test]
+    fn a_test_sphere_fixes_the_scale() {
+        let arm = Arm::default6();
+        let params = Terms::geometric().params(6);
+        let all: Vec<usize> = (0..params.len()).collect();
+        let mut with_sphere = spat_only();
+        with_sphere.sphere.push(crate::data::SphereGroup {
+            group: 3,
+            rows: vec![4, 5, 6, 7],
+            diameter_mm: 25.0,
+        });
+        assert!(check(&with_sphere, &arm, &params, &all).is_none());
+        let notes = notes(&with_sphere);
+        assert!(notes
+            .iter()
+            .any(|n| n.contains("test spheres' diameters alone")));
     }
 
     #[test]

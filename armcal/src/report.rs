@@ -27,6 +27,10 @@ pub struct DataInfo {
     pub length_rows: usize,
     /// `length` groups (bar positions).
     pub length_groups: usize,
+    /// `sphere` rows.
+    pub sphere_rows: usize,
+    /// `sphere` groups (test-sphere positions).
+    pub sphere_groups: usize,
     /// Equations once the fixed points are eliminated.
     pub equations: usize,
 }
@@ -294,6 +298,8 @@ pub fn build(
             spat_groups: layout.spat.len(),
             length_rows: data.count(Kind::Length),
             length_groups: layout.length.len(),
+            sphere_rows: data.count(Kind::Sphere),
+            sphere_groups: layout.sphere.len(),
             equations: fit.equations,
         },
         arm: fit.start.name.clone().unwrap_or_else(|| "(unnamed)".into()),
@@ -354,19 +360,15 @@ fn spread_line(s: &mut String, label: &str, sum: &Summary) {
         "  {label:<28} {:>10.2} {:>10.2}   ({} rows)",
         sum.all.rms_um, sum.all.max_um, sum.all.n
     );
-    for (kind, sp) in [
+    let kinds = [
         ("point", &sum.point),
         ("spat", &sum.spat),
         ("length", &sum.length),
-    ] {
-        if let (Some(sp), true) = (
-            sp,
-            [&sum.point, &sum.spat, &sum.length]
-                .iter()
-                .filter(|x| x.is_some())
-                .count()
-                > 1,
-        ) {
+        ("sphere", &sum.sphere),
+    ];
+    let present = kinds.iter().filter(|(_, x)| x.is_some()).count();
+    for (kind, sp) in kinds {
+        if let (Some(sp), true) = (sp, present > 1) {
             let _ = writeln!(s, "    {kind:<26} {:>10.2} {:>10.2}", sp.rms_um, sp.max_um);
         }
     }
@@ -398,6 +400,12 @@ impl Report {
             kinds.push(format!(
                 "{} length rows at {} bar positions",
                 d.length_rows, d.length_groups
+            ));
+        }
+        if d.sphere_rows > 0 {
+            kinds.push(format!(
+                "{} sphere rows at {} sphere positions",
+                d.sphere_rows, d.sphere_groups
             ));
         }
         let _ = writeln!(s, "calibration of {} from {}", self.arm, d.file);

@@ -4,7 +4,9 @@
 //! instrument frame minus the measured one; for `spat` rows the model's ball centre minus the
 //! group's mean centre; for `length` rows the same against the mean of its end. Each `length`
 //! group adds one scalar: the model's distance between the two mean centres minus the bar's
-//! length. These are what a metrologist reads (how far the ball is from where it should be),
+//! length. A `sphere` row's residual is radial: its distance from the group's sphere centre
+//! (fitted with the known radius, (diameter + ball diameter)/2) minus that radius, along the
+//! direction from the centre. These are what a metrologist reads (how far the ball is from where it should be),
 //! and what diagnosis plots against joint angles, temperature and gravity levers.
 
 use crate::data::{Dataset, Kind};
@@ -89,11 +91,17 @@ pub fn residuals(arm: &Arm, data: &Dataset, frame: Option<Rigid>) -> Residuals {
         .iter()
         .map(|r| forward::forward(arm, &r.theta, r.temp_c).p)
         .collect();
-    residuals_of(&ps, data, frame)
+    residuals_of(&ps, data, frame, arm.probe.ball_diameter)
 }
 
-/// As [`residuals`], from the model's ball centres `ps` (one per row) already computed.
-pub fn residuals_of(ps: &[Vector3<f64>], data: &Dataset, frame: Option<Rigid>) -> Residuals {
+/// As [`residuals`], from the model's ball centres `ps` (one per row) already computed, with
+/// the stylus ball's diameter (mm) for `sphere` rows.
+pub fn residuals_of(
+    ps: &[Vector3<f64>],
+    data: &Dataset,
+    frame: Option<Rigid>,
+    ball_diameter: f64,
+) -> Residuals {
     let layout = data.layout();
     let mut rows = vec![Vector3::zeros(); data.rows.len()];
     let mut used = None;
@@ -129,6 +137,21 @@ pub fn residuals_of(ps: &[Vector3<f64>], data: &Dataset, frame: Option<Rigid>) -
             rows[i] = ps[i] - mb;
         }
         lengths.push((g.group, (ma - mb).norm() - g.length_mm));
+    }
+    for g in &layout.sphere {
+        let q: Vec<Vector3<f64>> = g.rows.iter().map(|&i| ps[i]).collect();
+        let radius = (g.diameter_mm + ball_diameter) / 2.0;
+        // A group whose points fix no sphere (coplanar, too few) was refused by the loader's
+        // callers; its rows keep no residual rather than an invented one.
+        if let Ok(c) = crate::acceptance::fit::centre_of(&q, radius) {
+            for (&i, p) in g.rows.iter().zip(&q) {
+                let d = p - c;
+                let dist = d.norm();
+                if dist > 0.0 {
+                    rows[i] = d * ((dist - radius) / dist);
+                }
+            }
+        }
     }
     Residuals {
         rows,
@@ -186,6 +209,9 @@ pub struct Summary {
     /// `length` rows (distance from their ball's mean centre).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub length: Option<Spread>,
+    /// `sphere` rows (radial distance from their sphere of known diameter).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sphere: Option<Spread>,
     /// Bar length errors, one per `length` group.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bar_length: Option<Spread>,
@@ -208,6 +234,7 @@ pub fn summarise(res: &Residuals, data: &Dataset) -> Summary {
         point: of(Kind::Point),
         spat: of(Kind::Spat),
         length: of(Kind::Length),
+        sphere: of(Kind::Sphere),
         bar_length: (!res.lengths.is_empty())
             .then(|| Spread::of_mm(res.lengths.iter().map(|l| l.1))),
     }

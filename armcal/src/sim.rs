@@ -623,7 +623,26 @@ pub fn design_like(arm: &Arm, like: &Dataset, seed: u64) -> Dataset {
             rows.extend(made);
         }
     }
-    // Spat and length rows are read by the encoders, as `simulate` records them (point rows
+    let spheres: Vec<f64> = like.layout().sphere.iter().map(|g| g.diameter_mm).collect();
+    for (g, d) in spheres
+        .iter()
+        .cycle()
+        .take(if spheres.is_empty() { 0 } else { 6 })
+        .enumerate()
+    {
+        let test = sphere::Test {
+            points: 25,
+            diameter_mm: *d,
+            articulations: None,
+            noise_mm: 0.0,
+        };
+        if let Some(made) =
+            sphere::group(arm, &lim, &test, 3000 + g as i64, &mut next_temp, &mut rng)
+        {
+            rows.extend(made);
+        }
+    }
+    // Spat, length and sphere rows are read by the encoders, as `simulate` records them (point rows
     // of the design keep their continuous angles).
     for r in rows.iter_mut().filter(|r| r.kind != Kind::Point) {
         r.theta = quantise(arm, &r.theta);

@@ -185,3 +185,114 @@ fn spat_and_length_calibrate_without_an_instrument() {
     let cal = quatarm_ref::calfile::read(&d.join("cal.toml")).unwrap();
     assert!(cal.arm.reference_frame.is_none());
 }
+
+/// The rows of several simulated files as one file, each file's groups moved apart.
+fn merge(d: &std::path::Path, files: &[&str], out: &str) {
+    let mut rows = Vec::new();
+    for (k, f) in files.iter().enumerate() {
+        let data = armcal::data::read(&d.join(f), 6).unwrap();
+        rows.extend(data.rows.into_iter().map(|r| armcal::data::Row {
+            group: r.group + 1000 * k as i64,
+            ..r
+        }));
+    }
+    let all = armcal::data::Dataset::from_rows(rows, 6, false, out).unwrap();
+    std::fs::write(d.join(out), all.to_csv(&[])).unwrap();
+}
+
+fn simulate(d: &std::path::Path, kind: &str, count: &str, seed: &str, extra: &[&str], out: &str) {
+    let mut args = vec![
+        "simulate",
+        "--truth",
+        "truth.toml",
+        "--kind",
+        kind,
+        "--count",
+        count,
+        "--seed",
+        seed,
+    ];
+    args.extend_from_slice(extra);
+    args.extend_from_slice(&["-o", out]);
+    armcal_ok(&args, d);
+}
+
+/// `sphere` rows are calibration data: a sphere of known diameter fixes the scale that spat
+/// rows alone cannot, so spat + sphere calibrate an arm that spat alone is refused on.
+#[test]
+fn sphere_rows_calibrate_with_spat_rows() {
+    let d = workdir("sphere");
+    write_truth(&d, &truth());
+    simulate(&d, "spat", "300", "5", &[], "spat.csv");
+    simulate(
+        &d,
+        "sphere",
+        "300",
+        "6",
+        &["--articulations", "5"],
+        "sphere.csv",
+    );
+    merge(&d, &["spat.csv", "sphere.csv"], "both.csv");
+    let refused = armcal(&["calibrate", "spat.csv", "-o", "spat.toml"], &d);
+    assert!(!refused.status.success());
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("the arm's scale"));
+    let o = armcal_ok(&["calibrate", "both.csv", "-o", "cal.toml", "--json"], &d);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["data"]["sphere_rows"], 300);
+    assert_eq!(v["data"]["sphere_groups"], 12);
+    // 300 spat rows give 3 (n − 1) per group, 300 sphere rows n − 3 per group of 25.
+    let eq = v["data"]["equations"].as_u64().unwrap();
+    assert_eq!(
+        eq,
+        3 * (300 - v["data"]["spat_groups"].as_u64().unwrap()) + (300 - 36)
+    );
+    let before = v["residuals"]["before"]["sphere"]["rms_um"]
+        .as_f64()
+        .unwrap();
+    let after = v["residuals"]["after"]["sphere"]["rms_um"]
+        .as_f64()
+        .unwrap();
+    assert!(after < 10.0 && before > 20.0 * after, "{before} -> {after}");
+    // The calibrated arm is the truth's to within a tenth of its nominal error over the
+    // workspace (71 µm from 1,085: a 25 mm sphere fixes the scale only through its radius, so
+    // the scale is the weakest part of such a calibration; a bar fixes it far better).
+    let cal = quatarm_ref::calfile::read(&d.join("cal.toml")).unwrap().arm;
+    let lim = armcal::sim::limits(&cal);
+    let mut r = armcal::sim::rng(8);
+    let poses: Vec<(Vec<f64>, f64)> = (0..2000)
+        .map(|_| (armcal::sim::random_pose(&lim, &mut r), 20.0))
+        .collect();
+    let nominal =
+        armcal::residuals::compare_aligned(&quatarm_ref::Arm::default6(), &truth(), &poses);
+    let fitted = armcal::residuals::compare_aligned(&cal, &truth(), &poses);
+    assert!(
+        fitted.rms_um < nominal.rms_um / 10.0,
+        "{fitted:?} vs {nominal:?}"
+    );
+    // And the diagnosis takes them too.
+    armcal_ok(&["diagnose", "both.csv", "--folds", "3"], &d);
+}
+
+/// A sphere group that fixes no sphere is refused by name and line, before any fit.
+#[test]
+fn a_sphere_group_of_three_rows_is_refused() {
+    let d = workdir("sphere3");
+    write_truth(&d, &truth());
+    simulate(&d, "point", "100", "5", &[], "pts.csv");
+    simulate(&d, "sphere", "25", "6", &[], "sphere.csv");
+    let text = std::fs::read_to_string(d.join("sphere.csv")).unwrap();
+    let short: Vec<&str> = text
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .take(4)
+        .collect();
+    std::fs::write(d.join("short.csv"), short.join("\n") + "\n").unwrap();
+    merge(&d, &["pts.csv", "short.csv"], "both.csv");
+    let o = armcal(&["calibrate", "both.csv", "-o", "cal.toml"], &d);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("sphere group 1001"), "{err}");
+    assert!(err.contains("line"), "{err}");
+    assert!(err.contains("a sphere needs 4 or more"), "{err}");
+    assert!(!d.join("cal.toml").exists());
+}

@@ -84,6 +84,20 @@ fn the_true_arm_passes_and_a_wrong_ball_diameter_shows_in_p_size() {
     );
     let p = v["results"]["P_Size"].as_f64().unwrap();
     assert!((p - 3000.0).abs() < 5.0, "P_Size {p} µm");
+    // The effective diameter test measures the ball the wrong file lost: 3 mm, per group.
+    let eff = v["effective_ball_diameter"].as_array().unwrap();
+    assert_eq!(eff.len(), 2, "{v}");
+    for e in eff {
+        let d = e["diameter_mm"].as_f64().unwrap();
+        assert!((d - truth().probe.ball_diameter).abs() < 0.005, "{e}");
+    }
+    let text = armcal_ok(&["check", "sphere.csv", "--calib", "wrong.toml"], &dir);
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(
+        text.contains("effective stylus ball diameter (B89.4.22): ")
+            && text.contains("mm (group 2)"),
+        "{text}"
+    );
 }
 
 #[test]
@@ -156,10 +170,11 @@ fn bad_input_is_refused_with_its_place() {
         e.contains("short.csv") && e.contains("group 1") && e.contains("24 points"),
         "{e}"
     );
-    // Sphere rows are not calibration data (yet): said before any fit.
+    // Sphere rows are calibration data, but one sphere position (22 equations) cannot
+    // calibrate an arm: refused, naming the file, and nothing written.
     let o = armcal(&["calibrate", "sphere.csv", "-o", "cal.toml"], &dir);
     let e = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && e.contains("sphere rows"), "{e}");
+    assert!(!o.status.success() && e.contains("sphere.csv"), "{e}");
     assert!(!dir.join("cal.toml").exists());
 }
 

@@ -125,6 +125,13 @@ pub fn with_radius(
     Err(FitError::NoConvergence)
 }
 
+/// The least-squares centre of `points` on a sphere of known `radius`, started from their free
+/// sphere's centre (the right side of a cap): what calibration and residuals take a `sphere`
+/// group's unknown centre to be.
+pub fn centre_of(points: &[Vector3<f64>], radius: f64) -> Result<Vector3<f64>, FitError> {
+    with_radius(points, radius, free(points)?.centre)
+}
+
 /// Distances of the points from a centre.
 pub fn distances(points: &[Vector3<f64>], centre: &Vector3<f64>) -> Vec<f64> {
     points.iter().map(|p| (p - centre).norm()).collect()

@@ -60,6 +60,21 @@ pub struct Check {
     pub tests: Vec<Row>,
     /// The stylus ball diameter used (mm).
     pub ball_diameter_mm: f64,
+    /// The effective stylus ball diameter each plain sphere group measures (B89.4.22).
+    pub effective_ball_diameter: Vec<EffectiveDiameter>,
+}
+
+/// ASME B89.4.22's effective diameter test: the stylus ball's diameter as the arm probes with
+/// it, d_eff = 2 R − D from the free sphere through the ball centres (R) of a test sphere of
+/// calibrated diameter D. It is P_Size's own fit read the other way (d_eff = d + P_Size), so
+/// it is taken from the P_Size value, not fitted again: the diameter to write into
+/// `[probe] ball_diameter` after a probe change.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct EffectiveDiameter {
+    /// The sphere group.
+    pub group: i64,
+    /// d_eff (mm).
+    pub diameter_mm: f64,
 }
 
 /// The ball centres of every row by the calibrated model (the f64 reference, as
@@ -99,11 +114,20 @@ pub fn check(
         .iter()
         .map(|v| row(v, mpe, prediction.and_then(|p| p.get(&(v.test, v.group)))))
         .collect();
+    let effective_ball_diameter = values
+        .iter()
+        .filter(|v| v.test == Test::PSize)
+        .map(|v| EffectiveDiameter {
+            group: v.group,
+            diameter_mm: d + v.value_mm,
+        })
+        .collect();
     Ok(Check {
         results,
         worst_group,
         tests,
         ball_diameter_mm: d,
+        effective_ball_diameter,
     })
 }
 
@@ -190,6 +214,19 @@ impl Check {
                 s,
                 "  {k:<9} {v:>10.2} µm (worst group {}): {overall}",
                 self.worst_group[k]
+            );
+        }
+        if !self.effective_ball_diameter.is_empty() {
+            let each: Vec<String> = self
+                .effective_ball_diameter
+                .iter()
+                .map(|e| format!("{:.4} mm (group {})", e.diameter_mm, e.group))
+                .collect();
+            let _ = writeln!(
+                s,
+                "effective stylus ball diameter (B89.4.22): {}; the calibration file says {} mm",
+                each.join(", "),
+                self.ball_diameter_mm
             );
         }
         if self

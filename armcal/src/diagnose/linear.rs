@@ -7,7 +7,7 @@
 //! any set S of columns the least-squares step on the training folds is then
 //! dx = −(A − A_f)_S⁻¹ (b − b_f)_S and the held-out errors are r_f + J_f dx: k-fold
 //! cross-validation of every candidate model at the cost of small dense solves. A second pass
-//! evaluates the held-out error of every unit (a `point` row, a `spat` or `length` group) for
+//! evaluates the held-out error of every unit ([`crate::data::Layout::units`]) for
 //! the paired test of [`super::stats::Paired`].
 //!
 //! The linearisation is accurate here because the steps are tiny: a candidate effect of
@@ -100,10 +100,11 @@ impl Linearisation {
             }
         }
         let layout = data.layout();
-        let mut unit_fold: Vec<Option<usize>> = Vec::new();
-        unit_fold.extend(layout.points.iter().map(|&i| row_fold[i]));
-        unit_fold.extend(layout.spat.iter().map(|g| row_fold[g.rows[0]]));
-        unit_fold.extend(layout.length.iter().map(|g| row_fold[g.a[0]]));
+        let unit_fold: Vec<Option<usize>> = layout
+            .units()
+            .iter()
+            .map(|u| u.rows.first().and_then(|&i| row_fold[i]))
+            .collect();
         let mut lin = Linearisation {
             cols,
             model_cols,

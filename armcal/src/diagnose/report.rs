@@ -197,7 +197,9 @@ pub struct DataReport {
     pub spat_rows: usize,
     /// `length` rows.
     pub length_rows: usize,
-    /// Groups (sessions, artefact positions) of `spat` and `length` rows.
+    /// `sphere` rows.
+    pub sphere_rows: usize,
+    /// Groups (sessions, artefact positions) of `spat`, `length` and `sphere` rows.
     pub groups: usize,
     /// Temperature range (°C), when recorded.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -355,7 +357,8 @@ pub fn build(d: &Diagnosis, data: &Dataset, figures: &[Figure]) -> Report {
             point_rows: layout.points.len(),
             spat_rows: data.count(Kind::Spat),
             length_rows: data.count(Kind::Length),
-            groups: layout.spat.len() + layout.length.len(),
+            sphere_rows: data.count(Kind::Sphere),
+            groups: layout.spat.len() + layout.length.len() + layout.sphere.len(),
             temperature_c: d.candidates.temp_range.map(|(a, b)| [a, b]),
         },
         holdout: HoldoutInfo {
@@ -592,6 +595,9 @@ impl Report {
         }
         if d.length_rows > 0 {
             kinds.push(format!("{} length", d.length_rows));
+        }
+        if d.sphere_rows > 0 {
+            kinds.push(format!("{} sphere", d.sphere_rows));
         }
         let _ = writeln!(s, "diagnosis of {} from {}", self.arm, d.file);
         let _ = write!(s, "  data: {} rows ({})", d.rows, kinds.join(", "));

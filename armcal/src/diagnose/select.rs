@@ -323,21 +323,22 @@ pub fn select(
     })
 }
 
-/// Per-unit held-out squared error (mm²) of a validation, in the units of [`holdout::kfold`]
-/// (a `point` row; a `spat` group; a `length` group with its bar error); `None` for a unit
-/// not judged.
+/// Per-unit held-out squared error (mm²) of a validation, in the units of
+/// [`crate::data::Layout::units`] (a `length` group with its bar error); `None` for a unit not
+/// judged.
 pub fn unit_errors(data: &Dataset, h: &Holdout) -> Vec<Option<f64>> {
     let layout = data.layout();
     let row = |i: usize| h.judged[i].then(|| h.residuals.rows[i].norm_squared());
     let group = |rows: &[usize]| -> Option<f64> { rows.iter().map(|&i| row(i)).sum() };
-    let mut out: Vec<Option<f64>> = layout.points.iter().map(|&i| row(i)).collect();
-    out.extend(layout.spat.iter().map(|g| group(&g.rows)));
     let bars: BTreeMap<i64, f64> = h.residuals.lengths.iter().copied().collect();
-    out.extend(layout.length.iter().map(|g| {
-        let rows: Vec<usize> = g.a.iter().chain(&g.b).copied().collect();
-        group(&rows).map(|s| s + bars.get(&g.group).map_or(0.0, |e| e * e))
-    }));
-    out
+    layout
+        .units()
+        .iter()
+        .map(|u| {
+            let bar = u.bar.and_then(|g| bars.get(&g)).map_or(0.0, |e| e * e);
+            group(&u.rows).map(|s| s + bar)
+        })
+        .collect()
 }
 
 /// The paired comparison of two validations over the units both judged.

@@ -155,7 +155,10 @@ pub fn search(model: &Model, data: &Dataset, alpha: f64) -> Search {
     let miss = missing(&res.rows, fit.frame.as_ref(), data);
     let geo = geometry(&fit.arm, data);
     let layout = data.layout();
-    let held = fit.params.len() + 3 * layout.spat.len() + 6 * layout.length.len();
+    let held = fit.params.len()
+        + 3 * layout.spat.len()
+        + 6 * layout.length.len()
+        + 3 * layout.sphere.len();
     let tests = tests(model, data, &geo);
     let mut variables: Vec<String> = Vec::new();
     for t in &tests {

@@ -82,7 +82,8 @@ fn held_out_excess(fit: &Fit, holdout: &Holdout, in_sample_rms_um: f64) -> Optio
 }
 
 /// Per-axis probing from the scatter of the `spat` groups and bar ends (each probing of a
-/// fixed point from another pose): (sd, rows used), less the reading's own part.
+/// fixed point from another pose) and the radial scatter of the `sphere` groups about their
+/// sphere of known radius: (sd, rows used), less the reading's own part.
 fn spat_probing(fit: &Fit, data: &Dataset, budget: &Budget) -> Option<(f64, usize)> {
     let res = crate::residuals::residuals(&fit.arm, data, fit.frame);
     let layout = data.layout();
@@ -90,10 +91,14 @@ fn spat_probing(fit: &Fit, data: &Dataset, budget: &Budget) -> Option<(f64, usiz
         .spat
         .iter()
         .map(|g| &g.rows)
-        .chain(layout.length.iter().flat_map(|g| [&g.a, &g.b]));
+        .chain(layout.length.iter().flat_map(|g| [&g.a, &g.b]))
+        .map(|g| (g, 3, 3))
+        // A sphere row's residual is radial: one equation per row, less the centre's three.
+        .chain(layout.sphere.iter().map(|g| (&g.rows, 1, 3)));
     let (mut ss, mut dof, mut own, mut rows) = (0.0, 0usize, 0.0, 0usize);
     let st = budget.sigma_theta(&fit.arm);
-    for g in groups {
+    // (rows, equations per row, equations the group's own point or centre takes)
+    for (g, per_row, lost) in groups {
         for &i in g {
             ss += res.rows[i].norm_squared();
             let r = &data.rows[i];
@@ -101,7 +106,7 @@ fn spat_probing(fit: &Fit, data: &Dataset, budget: &Budget) -> Option<(f64, usiz
             own += propagate::own_terms(budget, &st, &j).trace();
             rows += 1;
         }
-        dof += 3 * g.len().saturating_sub(1);
+        dof += (per_row * g.len()).saturating_sub(lost);
     }
     (dof > 0).then(|| {
         let var = ss / dof as f64 - own / (3 * rows) as f64;
@@ -120,7 +125,7 @@ pub fn from_fit(
     let (params, mut cov) = marginal(fit)?;
     let mut notes = vec![format!(
         "parameters: covariance of the {} identified unknowns, estimated: σ̂² (JᵀJ)⁻¹ with σ̂ = \
-         {:.2} µm per equation, marginal over the instrument frame and the spat points",
+         {:.2} µm per equation, marginal over the instrument frame, the spat points and the sphere centres",
         params.len(),
         fit.sigma_mm * 1e3
     )];
