@@ -306,6 +306,12 @@ pub const fn table_len(joints: usize) -> usize {
     core_len(joints) + CRC_LEN
 }
 
+/// Whether a table can be `len` bytes long: 6 or 7 joints, with or without the budget
+/// (what an update must be told before any byte of it arrives).
+pub fn is_table_len(len: usize) -> bool {
+    (MIN_JOINTS..=MAX_JOINTS).any(|n| len == table_len(n) || len == table_len(n) + budget::LEN)
+}
+
 /// Where the budget starts: the header, the joints and the probe.
 const fn core_len(joints: usize) -> usize {
     HEADER_LEN + joints * JOINT_LEN + PROBE_LEN

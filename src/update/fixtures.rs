@@ -7,6 +7,7 @@ use super::layout::Layout;
 use super::mock::MockFlash;
 use super::session::{Accepted, Step, Updater, CHUNK_LEN};
 use super::{live_table, Refusal};
+use crate::table::budget::BudgetData;
 use crate::table::{quat_to_matrix, JointData, ProbeData, TableData, MAX_TABLE_LEN};
 
 pub const FLASH_LEN: usize = 8 * 1024;
@@ -20,6 +21,21 @@ pub fn layout() -> Layout {
 
 /// A valid table of a nominal six-joint arm whose links are `link` mm long.
 pub fn table(link: f64) -> Vec<u8> {
+    encoded(link, None)
+}
+
+/// [`table`] with an uncertainty budget (80 bytes more), as `armcal calibrate` writes it.
+pub fn table_with_budget(link: f64) -> Vec<u8> {
+    let budget = BudgetData {
+        encoder_counts: [1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0],
+        probing_mm: 0.002,
+        model_mm: 0.001,
+        temperature_c: 0.2,
+    };
+    encoded(link, Some(&budget))
+}
+
+fn encoded(link: f64, budget: Option<&BudgetData>) -> Vec<u8> {
     let mut data = TableData {
         joint_count: 6,
         ..TableData::default()
@@ -43,7 +59,9 @@ pub fn table(link: f64) -> Vec<u8> {
     };
     data.flags = data.content_flags();
     let mut bytes = [0u8; MAX_TABLE_LEN];
-    let len = data.encode(&mut bytes).expect("fixture table encodes");
+    let len = data
+        .encode_with(budget, &mut bytes)
+        .expect("fixture table encodes");
     bytes[..len].to_vec()
 }
 

@@ -16,7 +16,7 @@ use heapless::Vec;
 use super::boot::{self, FlashFault, SlotError};
 use super::layout::{Layout, LayoutError, MAX_WRITE_SIZE};
 use super::record::{self, StateRecord};
-use crate::table::{table_len, TableError, MAX_JOINTS, MAX_TABLE_LEN, MIN_JOINTS};
+use crate::table::{is_table_len, TableError, MAX_TABLE_LEN};
 
 /// Most table bytes one `Chunk` carries (a stream frame stays well under its limit).
 pub const CHUNK_LEN: usize = 64;
@@ -178,8 +178,7 @@ impl Updater {
         self.state = State::Idle;
         self.pending.clear();
         self.layout.check(flash).map_err(Refusal::Layout)?;
-        let lengths = MIN_JOINTS..=MAX_JOINTS;
-        if !lengths.clone().any(|n| table_len(n) as u32 == len) {
+        if !is_table_len(len as usize) {
             return Err(Refusal::BadLength(len));
         }
         let live = boot::live_table(flash, &self.layout, self.joints, scratch)

@@ -2,7 +2,7 @@
 //! after every refusal.
 
 use super::boot::FlashFault;
-use super::fixtures::{boot, crc_of, factory, layout, steps, table, update};
+use super::fixtures::{boot, crc_of, factory, layout, steps, table, table_with_budget, update};
 use super::session::{Accepted, Refusal, Step, Updater};
 use crate::table::{TableError, MAX_TABLE_LEN};
 
@@ -252,4 +252,22 @@ proptest::proptest! {
             proptest::prop_assert!(ok, "boot on neither the old nor a committed table");
         }
     }
+}
+
+#[test]
+fn a_table_with_its_budget_is_an_update_like_any_other() {
+    // `armcal calibrate` writes the budget into the table: 80 bytes longer than the plain one,
+    // and a length `Begin` must accept (it refused it once, as a length no table has).
+    let (a, b) = (table(100.0), table_with_budget(120.0));
+    assert_eq!(b.len(), a.len() + crate::table::budget::LEN);
+    let mut f = factory(&a);
+    let r = update(&mut f, &b);
+    assert!(matches!(r, Ok(Accepted::Committed { .. })), "{r:?}");
+    let live = boot(&mut f).expect("a live table");
+    assert_eq!(live, b);
+    let t = crate::table::Table::parse(&live).expect("it parses");
+    assert!(t.budget().is_some());
+    // And back to a table without one.
+    assert!(matches!(update(&mut f, &a), Ok(Accepted::Committed { .. })));
+    assert_eq!(boot(&mut f).as_deref(), Some(&a[..]));
 }
