@@ -166,6 +166,20 @@ pub struct Report {
     /// The uncertainty budget written with the calibration (`[uncertainty]`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub uncertainty: Option<crate::uncertainty::report::BudgetReport>,
+    /// The prior or penalty the fit used besides the data (none: plain least squares).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub prior: Option<PriorReport>,
+}
+
+/// What pulled the fit besides the data: a fleet prior, a class prior, a ridge.
+#[derive(Clone, Debug, Serialize)]
+pub struct PriorReport {
+    /// The rule for the unknowns without a fleet Gaussian, in words (`ridge λ = 1e-4`,
+    /// `Gaussian 0 ± 0.002 rad, 0 ± 1 mm`, `none (least squares)`).
+    pub rule: String,
+    /// The fleet prior, when there is one: its units and every unknown's statistics.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fleet: Option<crate::fleet_prior::FleetPrior>,
 }
 
 /// A parameter in words, with the frame's rotations named for what they are without an
@@ -327,6 +341,7 @@ pub fn build(
         output: OutputReport::default(),
         warnings: data.warnings.clone(),
         uncertainty: None,
+        prior: None,
     }
 }
 
@@ -474,6 +489,9 @@ impl Report {
                 let _ = writeln!(s, "  {}: {}", h.description, h.explanation);
             }
         }
+        if let Some(p) = &self.prior {
+            p.text(&mut s);
+        }
         if let Some(u) = &self.uncertainty {
             u.text(&mut s);
         }
@@ -505,5 +523,41 @@ pub(crate) fn wrote<'a>(s: &mut String, files: impl IntoIterator<Item = &'a Stri
     }
     for f in files {
         let _ = writeln!(s, "wrote {f}");
+    }
+}
+
+impl PriorReport {
+    /// The prior's section of the text report.
+    fn text(&self, s: &mut String) {
+        let _ = writeln!(s, "\nprior");
+        let Some(f) = &self.fleet else {
+            let _ = writeln!(s, "  {}", self.rule);
+            return;
+        };
+        let used = f.entries.iter().filter(|e| e.fallback.is_none()).count();
+        let _ = writeln!(
+            s,
+            "  fleet prior from {} units ({}): {} unknowns pulled towards the fleet's mean error",
+            f.units.len(),
+            f.units.join(", "),
+            used
+        );
+        for e in f.entries.iter().filter(|e| e.fallback.is_none()) {
+            let _ = writeln!(
+                s,
+                "    {:<28} {:>+12.4e} ± {:.2e} {} ({} units)",
+                e.key, e.mean, e.sd, e.unit, e.units
+            );
+        }
+        let back: Vec<String> = f
+            .fallbacks()
+            .map(|e| {
+                let why = e.fallback.map_or("", |b| b.words());
+                format!("{} ({why}, {} units)", e.key, e.units)
+            })
+            .collect();
+        if !back.is_empty() {
+            let _ = writeln!(s, "  left to the rule `{}`: {}", self.rule, back.join(", "));
+        }
     }
 }
