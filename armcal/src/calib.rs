@@ -142,6 +142,10 @@ pub struct Prior {
     /// rule and over the ridge. An unknown the data cannot separate from others is fitted
     /// under such a prior (the prior decides how the effect is shared), as under the ridge.
     pub unknowns: Vec<(Param, Gaussian)>,
+    /// How far (standard deviations) the data-only estimate may stand from an unknown's own
+    /// prior before the prior is dropped; `None`: [`PRIOR_CONFLICT_SIGMAS`], `f64::INFINITY`:
+    /// never.
+    pub conflict_sigmas: Option<f64>,
 }
 
 /// A normal distribution of one unknown's increment from the start arm.
@@ -828,7 +832,15 @@ pub fn calibrate_observed(
         if noise_pass {
             run.prior_noise = run.prior_noise.or(Some(sigma));
             run.data_pass_done = true;
-            run.conflicts = prior_conflicts(opts, all, &kept, &state.x, &normal.jtj, sigma);
+            run.conflicts = prior_conflicts(
+                opts,
+                all,
+                &kept,
+                &state.x,
+                &normal.jtj,
+                sigma,
+                &s.shared_fixed,
+            );
             run.model_iterations = 0;
             continue;
         }
@@ -877,6 +889,8 @@ struct Structure {
     r_skel: DMatrix<f64>,
     /// Unknowns a ridge shares out instead of holding.
     shared: Vec<usize>,
+    /// What the structural analysis said of each shared unknown (what absorbs it when held).
+    shared_fixed: Vec<Fixed>,
 }
 
 /// What can be fitted before any fit: the data's kinds, the structural identifiability at the
@@ -943,6 +957,12 @@ fn check_structure(
         .map(|f| f.index)
         .filter(|&i| penalised(i))
         .collect();
+    let shared_fixed: Vec<Fixed> = id
+        .fixed
+        .iter()
+        .filter(|f| shared.contains(&f.index))
+        .cloned()
+        .collect();
     id.fixed.retain(|f| !shared.contains(&f.index));
     id.kept.extend(&shared);
     id.kept.sort_unstable();
@@ -954,6 +974,7 @@ fn check_structure(
         id,
         r_skel,
         shared,
+        shared_fixed,
     })
 }
 
@@ -1024,6 +1045,10 @@ fn compare_design(
 pub const PRIOR_CONFLICT_SIGMAS: f64 = 3.0;
 
 /// An unknown's own prior dropped because the data contradict it ([`PRIOR_CONFLICT_SIGMAS`]).
+///
+/// The data-only pass holds what only the prior lets the fit separate, so its estimate of an
+/// unknown includes what the unknown absorbs of those (the structural analysis' coefficients):
+/// `prior` is the prior's prediction of that same combination.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PriorConflict {
     /// The unknown (index into the fit's `params`).
@@ -1032,7 +1057,8 @@ pub struct PriorConflict {
     pub data: f64,
     /// Its standard uncertainty from the data alone.
     pub data_sd: f64,
-    /// The prior it contradicts.
+    /// The prior's prediction of the data-only estimate: the unknown's own prior plus what it
+    /// absorbs of the priors of unknowns the data-only pass held.
     pub prior: Gaussian,
 }
 
@@ -1044,8 +1070,9 @@ impl PriorConflict {
 }
 
 /// The per-unknown priors the data-only pass contradicts: its estimate x and covariance σ²
-/// (JᵀJ)⁻¹ against each prior's mean and standard deviation. Nothing when JᵀJ is singular (the
-/// data then determine too little to contradict anything reliably).
+/// (JᵀJ)⁻¹ against each prior's prediction of it (the unknown's own Gaussian plus coefficient ×
+/// the Gaussian of each unknown `held` that it absorbs, independent). Nothing when JᵀJ is
+/// singular (the data then determine too little to contradict anything reliably).
 fn prior_conflicts(
     opts: &Options,
     all: &[Param],
@@ -1053,6 +1080,7 @@ fn prior_conflicts(
     x: &[f64],
     jtj: &DMatrix<f64>,
     sigma: f64,
+    held: &[Fixed],
 ) -> Vec<PriorConflict> {
     let Some(prior) = &opts.prior else {
         return Vec::new();
@@ -1060,17 +1088,32 @@ fn prior_conflicts(
     let Some(cov) = ident::covariance(jtj, sigma) else {
         return Vec::new();
     };
+    let limit = prior.conflict_sigmas.unwrap_or(PRIOR_CONFLICT_SIGMAS);
     kept.iter()
         .enumerate()
         .filter_map(|(pos, &i)| {
-            let g = prior.own(all[i])?;
+            let own = prior.own(all[i])?;
+            let (mut mean, mut var) = (own.mean, own.sd.powi(2));
+            for f in held.iter().filter(|f| !kept.contains(&f.index)) {
+                let Some(h) = prior.own(all[f.index]) else {
+                    continue;
+                };
+                for &(_, c) in f.absorbed_by.iter().filter(|(by, _)| *by == i) {
+                    mean += c * h.mean;
+                    var += (c * h.sd).powi(2);
+                }
+            }
+            let g = Gaussian {
+                mean,
+                sd: var.sqrt(),
+            };
             let c = PriorConflict {
                 index: i,
                 data: x[i],
                 data_sd: cov[(pos, pos)].max(0.0).sqrt(),
                 prior: g,
             };
-            (c.sigmas() > PRIOR_CONFLICT_SIGMAS).then_some(c)
+            (c.sigmas() > limit).then_some(c)
         })
         .collect()
 }
@@ -1255,6 +1298,7 @@ fn finish(s: Structure, f: Fitted, iterations: usize, rms_before: f64, t0: Insta
         mut id,
         r_skel,
         mut shared,
+        shared_fixed: _,
     } = s;
     // The rows of `f.jtj`: the kept unknowns of the accepted pass, before the reordering below.
     let jtj_order = id.kept.clone();

@@ -180,6 +180,42 @@ pub struct PriorReport {
     /// The fleet prior, when there is one: its units and every unknown's statistics.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fleet: Option<crate::fleet_prior::FleetPrior>,
+    /// Per-unknown priors the data contradicted, left to the rule for this fit.
+    pub dropped: Vec<DroppedPrior>,
+}
+
+/// A per-unknown prior the data contradicted ([`crate::calib::PRIOR_CONFLICT_SIGMAS`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct DroppedPrior {
+    /// The calibration-file key.
+    pub key: String,
+    /// The data-only estimate and its standard uncertainty (increments from the start arm).
+    pub data: f64,
+    /// Standard uncertainty of `data`.
+    pub data_sd: f64,
+    /// The prior's mean.
+    pub prior_mean: f64,
+    /// The prior's standard deviation.
+    pub prior_sd: f64,
+    /// Their distance in standard deviations of both.
+    pub sigmas: f64,
+}
+
+impl DroppedPrior {
+    /// The report of each prior a fit dropped.
+    pub fn of(fit: &Fit) -> Vec<DroppedPrior> {
+        fit.prior_conflicts
+            .iter()
+            .map(|c| DroppedPrior {
+                key: fit.params[c.index].key(),
+                data: c.data,
+                data_sd: c.data_sd,
+                prior_mean: c.prior.mean,
+                prior_sd: c.prior.sd,
+                sigmas: c.sigmas(),
+            })
+            .collect()
+    }
 }
 
 /// A parameter in words, with the frame's rotations named for what they are without an
@@ -530,6 +566,13 @@ impl PriorReport {
     /// The prior's section of the text report.
     fn text(&self, s: &mut String) {
         let _ = writeln!(s, "\nprior");
+        for d in &self.dropped {
+            let _ = writeln!(
+                s,
+                "  {}: prior {:+.4e} ± {:.2e} dropped, the data say {:+.4e} ± {:.2e} ({:.1} σ apart)",
+                d.key, d.prior_mean, d.prior_sd, d.data, d.data_sd, d.sigmas
+            );
+        }
         let Some(f) = &self.fleet else {
             let _ = writeln!(s, "  {}", self.rule);
             return;

@@ -124,7 +124,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         validation.as_ref().map(|h| (method.as_str(), h)),
     );
     rep.terms = terms.spec();
-    rep.prior = prior_report(&a, fleet);
+    rep.prior = prior_report(&a, fleet, &fit);
     if !held && (k > 0 || a.by_group) {
         rep.residuals.holdout_note = Some(
             "none: the data are a single unit (one group) that cannot be split into folds".into(),
@@ -207,6 +207,7 @@ fn options(
 fn prior_report(
     a: &Args,
     fleet: Option<armcal::fleet_prior::FleetPrior>,
+    fit: &calib::Fit,
 ) -> Option<report::PriorReport> {
     let mut rule = Vec::new();
     if let (Some(angle), Some(length)) = (a.prior_angle, a.prior_length) {
@@ -223,7 +224,11 @@ fn prior_report(
     } else {
         rule.join(" and ")
     };
-    Some(report::PriorReport { rule, fleet })
+    Some(report::PriorReport {
+        rule,
+        fleet,
+        dropped: report::DroppedPrior::of(fit),
+    })
 }
 
 /// The help of `--terms`, with an example of every effect from the registry.
