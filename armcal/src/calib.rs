@@ -77,8 +77,7 @@ pub struct Options {
     /// Proceed on a degenerate pose set, holding what it cannot determine (instead of an
     /// error).
     pub allow_degenerate: bool,
-    /// A Gaussian prior on the geometric errors, centred on the start arm (`None`: plain
-    /// least squares).
+    /// A Gaussian prior on the geometric errors (`None`: plain least squares).
     pub prior: Option<Prior>,
     /// Unknowns to hold at their start values whatever the data say.
     pub hold: Vec<Param>,
@@ -128,29 +127,62 @@ impl Ridge {
     }
 }
 
-/// Prior standard deviations of the geometric errors: what an arm's drawings and assembly
-/// tolerances say about them before any measurement. It regularises directions the data
-/// determine only weakly (a calibration from one artefact position) and barely moves the
-/// well-determined ones.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A Gaussian prior on the geometric errors: what is known of them before any measurement.
+/// It regularises directions the data determine only weakly (a calibration from one artefact
+/// position) and barely moves the well-determined ones.
+///
+/// Two sources, one implementation: a rule by class (`angle_rad`, `length_mm`: what an arm's
+/// drawings and tolerances say, centred on the start arm), and per-unknown Gaussians
+/// (`unknowns`: e.g. [`crate::fleet_prior`], the mean and spread of other units' errors) that
+/// replace the class rule and the ridge for their unknowns. Each prior unknown adds the
+/// residual (σ/s)·(x − m) to the cost, σ the data's noise, m and s the prior's mean and
+/// standard deviation.
+#[derive(Clone, Debug, PartialEq, Default)]
 pub struct Prior {
-    /// Zero offsets and tilts (rad).
-    pub angle_rad: f64,
-    /// Link and probe errors (mm).
-    pub length_mm: f64,
+    /// Zero offsets and tilts (rad); `None`: no class prior on them.
+    pub angle_rad: Option<f64>,
+    /// Link and probe errors (mm); `None`: no class prior on them.
+    pub length_mm: Option<f64>,
     /// The noise the prior is weighed against (mm per equation); `None`: estimated by a first
     /// fit without the prior.
     pub noise_mm: Option<f64>,
+    /// Per-unknown priors, increments from the start arm: they take precedence over the class
+    /// rule and over the ridge. An unknown the data cannot separate from others is fitted
+    /// under such a prior (the prior decides how the effect is shared), as under the ridge.
+    pub unknowns: Vec<(Param, Gaussian)>,
+    /// How far (standard deviations) the data-only estimate may stand from an unknown's own
+    /// prior before the prior is dropped; `None`: [`PRIOR_CONFLICT_SIGMAS`], `f64::INFINITY`:
+    /// never.
+    pub conflict_sigmas: Option<f64>,
+}
+
+/// A normal distribution of one unknown's increment from the start arm.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Gaussian {
+    /// The mean (the unknown's unit).
+    pub mean: f64,
+    /// The standard deviation (> 0).
+    pub sd: f64,
 }
 
 impl Prior {
-    /// The prior's standard deviation for an unknown, if it has one.
-    pub fn sd(&self, p: Param) -> Option<f64> {
-        match p {
-            Param::ZeroOffset(_) | Param::Tilt(..) => Some(self.angle_rad),
-            Param::LinkError(..) | Param::ProbeError(_) => Some(self.length_mm),
-            _ => None,
+    /// The prior of an unknown, if it has one: its own Gaussian, else the class rule's
+    /// (mean 0: the start arm).
+    pub fn of(&self, p: Param) -> Option<Gaussian> {
+        if let Some(g) = self.own(p) {
+            return Some(g);
         }
+        let sd = match p {
+            Param::ZeroOffset(_) | Param::Tilt(..) => self.angle_rad,
+            Param::LinkError(..) | Param::ProbeError(_) => self.length_mm,
+            _ => None,
+        }?;
+        Some(Gaussian { mean: 0.0, sd })
+    }
+
+    /// The unknown's own Gaussian (`unknowns`), if it has one.
+    pub fn own(&self, p: Param) -> Option<Gaussian> {
+        self.unknowns.iter().find(|(q, _)| *q == p).map(|(_, g)| *g)
     }
 }
 
@@ -246,8 +278,9 @@ pub struct Problem<'a> {
     arm_params: Vec<Param>,
     arm_cols: Vec<usize>,
     frame_cols: Vec<(Param, usize)>,
-    /// Prior weights per kept unknown: the residual w·x joins the cost (0: no prior).
-    prior: Vec<f64>,
+    /// Prior weight and centre per kept unknown: the residual w·(x − m) joins the cost
+    /// (w = 0: no prior).
+    prior: Vec<(f64, f64)>,
 }
 
 impl<'a> Problem<'a> {
@@ -279,16 +312,16 @@ impl<'a> Problem<'a> {
             arm_params,
             arm_cols,
             frame_cols,
-            prior: vec![0.0; kept.len()],
+            prior: vec![(0.0, 0.0); kept.len()],
         }
     }
 
-    /// The same problem with a Gaussian prior centred on the start arm: unknown k (solver
-    /// order) adds the residual `weights[k]` · x_k, i.e. σ/s_k for a prior standard deviation
-    /// s_k against a noise σ.
-    pub fn with_prior(mut self, weights: Vec<f64>) -> Self {
-        assert_eq!(weights.len(), self.kept.len());
-        self.prior = weights;
+    /// The same problem with a Gaussian prior: unknown k (solver order) adds the residual
+    /// w_k · (x_k − m_k) for `terms[k]` = (w_k, m_k), i.e. w_k = σ/s_k for a prior standard
+    /// deviation s_k against a noise σ, m_k the prior's mean (0: the start arm).
+    pub fn with_prior(mut self, terms: Vec<(f64, f64)>) -> Self {
+        assert_eq!(terms.len(), self.kept.len());
+        self.prior = terms;
         self
     }
 
@@ -296,7 +329,7 @@ impl<'a> Problem<'a> {
         self.kept
             .iter()
             .zip(&self.prior)
-            .map(|(&i, w)| (w * s.x[i]).powi(2))
+            .map(|(&i, (w, m))| (w * (s.x[i] - m)).powi(2))
             .sum()
     }
 
@@ -517,9 +550,9 @@ impl lm::Problem for Problem<'_> {
                 }
             }
         });
-        for (k, (&i, w)) in self.kept.iter().zip(&self.prior).enumerate() {
+        for (k, (&i, (w, m))) in self.kept.iter().zip(&self.prior).enumerate() {
             jtj[k * n + k] += w * w;
-            jtr[k] += w * w * s.x[i];
+            jtr[k] += w * w * (s.x[i] - m);
         }
         let m = DMatrix::from_fn(n, n, |a, b| {
             if a <= b {
@@ -745,6 +778,8 @@ pub struct Fit {
     /// unknowns marginal over the frame (`spat` points are already eliminated by the
     /// variable projection, which is the same marginalisation). `None` when JᵀJ is singular.
     pub covariance: Option<(Vec<usize>, DMatrix<f64>)>,
+    /// Per-unknown priors the data contradicted, dropped for this fit.
+    pub prior_conflicts: Vec<PriorConflict>,
 }
 
 impl Fit {
@@ -806,14 +841,43 @@ pub fn calibrate_observed(
         iterations: 0,
         passes: 0,
         model_iterations: 0,
-        prior_noise: opts.prior.and_then(|p| p.noise_mm),
+        prior_noise: opts.prior.as_ref().and_then(|p| p.noise_mm),
+        data_pass_done: false,
+        conflicts: Vec::new(),
     };
     loop {
-        let problem = Problem::new(data, layout, &s.base, all, &s.id.kept)
-            .with_prior(prior_weights(opts, all, &s.id.kept, run.prior_noise, data));
+        // A first pass without the prior estimates the noise it is weighed against and tests
+        // the per-unknown priors against what the data say alone; it leaves out what only the
+        // prior lets it fit (unknowns shared out by their own prior alone).
+        let noise_pass = opts.prior.as_ref().is_some_and(|p| {
+            !run.data_pass_done && (run.prior_noise.is_none() || !p.unknowns.is_empty())
+        });
+        let kept: Vec<usize> = if noise_pass {
+            let ridged = |i: usize| {
+                opts.ridge
+                    .is_some_and(|r| r.weight(all[i], data.rows.len()) > 0.0)
+            };
+            let shared = &s.shared;
+            s.id.kept
+                .iter()
+                .copied()
+                .filter(|&i| !shared.contains(&i) || ridged(i))
+                .collect()
+        } else {
+            s.id.kept.clone()
+        };
+        let dropped: Vec<usize> = run.conflicts.iter().map(|c| c.index).collect();
+        let problem = Problem::new(data, layout, &s.base, all, &kept).with_prior(prior_terms(
+            opts,
+            all,
+            &kept,
+            if noise_pass { None } else { run.prior_noise },
+            &dropped,
+            data,
+        ));
         observer.stage(&format!(
             "fitting {} unknowns (pass {})",
-            s.id.kept.len(),
+            kept.len(),
             run.passes + 1
         ));
         let out = run.pass(&problem, state, opts, eqs, observer)?;
@@ -821,10 +885,20 @@ pub fn calibrate_observed(
         state = out.state;
         let normal = lm::Problem::normal(&problem, &state);
         let data_cost = problem.data_cost(&state);
-        let dof = eqs.saturating_sub(s.id.kept.len()).max(1);
+        let dof = eqs.saturating_sub(kept.len()).max(1);
         let sigma = (2.0 * data_cost / dof as f64).sqrt();
-        if opts.prior.is_some() && run.prior_noise.is_none() {
-            run.prior_noise = Some(sigma);
+        if noise_pass {
+            run.prior_noise = run.prior_noise.or(Some(sigma));
+            run.data_pass_done = true;
+            run.conflicts = prior_conflicts(
+                opts,
+                all,
+                &kept,
+                &state.x,
+                &normal.jtj,
+                sigma,
+                &s.shared_fixed,
+            );
             run.model_iterations = 0;
             continue;
         }
@@ -852,7 +926,9 @@ pub fn calibrate_observed(
             data_cost,
             solver: out.reason,
         };
-        return Ok(finish(s, fitted, run.iterations, rms_before, t0));
+        let mut fit = finish(s, fitted, run.iterations, rms_before, t0);
+        fit.prior_conflicts = run.conflicts;
+        return Ok(fit);
     }
 }
 
@@ -871,6 +947,8 @@ struct Structure {
     r_skel: DMatrix<f64>,
     /// Unknowns a ridge shares out instead of holding.
     shared: Vec<usize>,
+    /// What the structural analysis said of each shared unknown (what absorbs it when held).
+    shared_fixed: Vec<Fixed>,
 }
 
 /// What can be fitted before any fit: the data's kinds, the structural identifiability at the
@@ -923,21 +1001,30 @@ fn check_structure(
             "nothing to fit: these data determine none of the unknowns requested".into(),
         ));
     }
-    // Under a ridge, what the data cannot separate is shared out by the penalty instead of held
-    // (the frame's rotations without an instrument are a symmetry, never unknowns).
-    let mut shared: Vec<usize> = Vec::new();
-    if let Some(r) = opts.ridge {
-        shared = id
-            .fixed
-            .iter()
-            .filter(|f| matches!(f.why, Why::Inseparable | Why::NoEffect))
-            .map(|f| f.index)
-            .filter(|&i| r.weight(all[i], data.rows.len()) > 0.0)
-            .collect();
-        id.fixed.retain(|f| !shared.contains(&f.index));
-        id.kept.extend(&shared);
-        id.kept.sort_unstable();
-    }
+    // Under a ridge, or an unknown's own prior, what the data cannot separate is shared out by
+    // the penalty instead of held (the frame's rotations without an instrument are a symmetry,
+    // never unknowns).
+    let penalised = |i: usize| {
+        opts.ridge
+            .is_some_and(|r| r.weight(all[i], data.rows.len()) > 0.0)
+            || opts.prior.as_ref().is_some_and(|p| p.own(all[i]).is_some())
+    };
+    let shared: Vec<usize> = id
+        .fixed
+        .iter()
+        .filter(|f| matches!(f.why, Why::Inseparable | Why::NoEffect))
+        .map(|f| f.index)
+        .filter(|&i| penalised(i))
+        .collect();
+    let shared_fixed: Vec<Fixed> = id
+        .fixed
+        .iter()
+        .filter(|f| shared.contains(&f.index))
+        .cloned()
+        .collect();
+    id.fixed.retain(|f| !shared.contains(&f.index));
+    id.kept.extend(&shared);
+    id.kept.sort_unstable();
     Ok(Structure {
         layout,
         all,
@@ -946,6 +1033,7 @@ fn check_structure(
         id,
         r_skel,
         shared,
+        shared_fixed,
     })
 }
 
@@ -1030,24 +1118,118 @@ fn compare_design(
     Ok(())
 }
 
-/// The weights of the Gaussian prior and the ridge on each kept unknown.
-fn prior_weights(
+/// A prior standing this many standard deviations (of the prior and the data-only estimate
+/// together) from what the data say alone is taken to be wrong for this unit: its Gaussian is
+/// dropped, and the unknown is left to the class rule or the ridge. A fleet's spread from a few
+/// units can be far narrower than one unit's departure (a unit with another tool mounted).
+pub const PRIOR_CONFLICT_SIGMAS: f64 = 3.0;
+
+/// An unknown's own prior dropped because the data contradict it ([`PRIOR_CONFLICT_SIGMAS`]).
+///
+/// The data-only pass holds what only the prior lets the fit separate, so its estimate of an
+/// unknown includes what the unknown absorbs of those (the structural analysis' coefficients):
+/// `prior` is the prior's prediction of that same combination.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PriorConflict {
+    /// The unknown (index into the fit's `params`).
+    pub index: usize,
+    /// The data-only estimate (increment from the start arm).
+    pub data: f64,
+    /// Its standard uncertainty from the data alone.
+    pub data_sd: f64,
+    /// The prior's prediction of the data-only estimate: the unknown's own prior plus what it
+    /// absorbs of the priors of unknowns the data-only pass held.
+    pub prior: Gaussian,
+}
+
+impl PriorConflict {
+    /// The distance between data and prior in standard deviations of both.
+    pub fn sigmas(&self) -> f64 {
+        (self.data - self.prior.mean).abs() / self.data_sd.hypot(self.prior.sd)
+    }
+}
+
+/// The per-unknown priors the data-only pass contradicts: its estimate x and covariance σ²
+/// (JᵀJ)⁻¹ against each prior's prediction of it (the unknown's own Gaussian plus coefficient ×
+/// the Gaussian of each unknown `held` that it absorbs, independent). Nothing when JᵀJ is
+/// singular (the data then determine too little to contradict anything reliably).
+fn prior_conflicts(
+    opts: &Options,
+    all: &[Param],
+    kept: &[usize],
+    x: &[f64],
+    jtj: &DMatrix<f64>,
+    sigma: f64,
+    held: &[Fixed],
+) -> Vec<PriorConflict> {
+    let Some(prior) = &opts.prior else {
+        return Vec::new();
+    };
+    let Some(cov) = ident::covariance(jtj, sigma) else {
+        return Vec::new();
+    };
+    let limit = prior.conflict_sigmas.unwrap_or(PRIOR_CONFLICT_SIGMAS);
+    kept.iter()
+        .enumerate()
+        .filter_map(|(pos, &i)| {
+            let own = prior.own(all[i])?;
+            let (mut mean, mut var) = (own.mean, own.sd.powi(2));
+            for f in held.iter().filter(|f| !kept.contains(&f.index)) {
+                let Some(h) = prior.own(all[f.index]) else {
+                    continue;
+                };
+                for &(_, c) in f.absorbed_by.iter().filter(|(by, _)| *by == i) {
+                    mean += c * h.mean;
+                    var += (c * h.sd).powi(2);
+                }
+            }
+            let g = Gaussian {
+                mean,
+                sd: var.sqrt(),
+            };
+            let c = PriorConflict {
+                index: i,
+                data: x[i],
+                data_sd: cov[(pos, pos)].max(0.0).sqrt(),
+                prior: g,
+            };
+            (c.sigmas() > limit).then_some(c)
+        })
+        .collect()
+}
+
+/// The prior's weight and centre on each kept unknown (`Problem::with_prior`): an unknown's own
+/// Gaussian alone where it has one (and the data did not contradict it: `dropped`); else the
+/// class rule (centred on the start arm) and the ridge together, both pulling towards the start
+/// arm. Without a noise (the data-only pass), the prior weighs nothing and the ridge alone is
+/// applied.
+fn prior_terms(
     opts: &Options,
     all: &[Param],
     kept: &[usize],
     prior_noise: Option<f64>,
+    dropped: &[usize],
     data: &Dataset,
-) -> Vec<f64> {
+) -> Vec<(f64, f64)> {
+    let ridge = |p: Param| opts.ridge.map_or(0.0, |r| r.weight(p, data.rows.len()));
     kept.iter()
         .map(|&i| {
-            let prior = match (opts.prior, prior_noise) {
-                (Some(p), Some(noise)) => p.sd(all[i]).map_or(0.0, |sd| noise / sd),
-                _ => 0.0,
-            };
-            let ridge = opts
-                .ridge
-                .map_or(0.0, |r| r.weight(all[i], data.rows.len()));
-            prior.hypot(ridge)
+            let p = all[i];
+            let prior = opts.prior.as_ref();
+            let own = prior
+                .and_then(|q| q.own(p))
+                .filter(|_| !dropped.contains(&i));
+            match (own, prior_noise) {
+                (Some(g), Some(noise)) => (noise / g.sd, g.mean),
+                (Some(_), None) => (0.0, 0.0),
+                (None, _) => {
+                    let w = match (prior.and_then(|q| q.of(p)), prior_noise) {
+                        (Some(g), Some(noise)) => noise / g.sd,
+                        _ => 0.0,
+                    };
+                    (w.hypot(ridge(p)), 0.0)
+                }
+            }
         })
         .collect()
 }
@@ -1059,6 +1241,10 @@ struct Run {
     /// Iterations since the model last changed: the budget is per model.
     model_iterations: usize,
     prior_noise: Option<f64>,
+    /// Whether the data-only pass has been run (noise estimated, priors tested).
+    data_pass_done: bool,
+    /// Per-unknown priors dropped after that pass.
+    conflicts: Vec<PriorConflict>,
 }
 
 impl Run {
@@ -1192,6 +1378,7 @@ fn finish(s: Structure, f: Fitted, iterations: usize, rms_before: f64, t0: Insta
         mut id,
         r_skel,
         mut shared,
+        shared_fixed: _,
     } = s;
     // The rows of `f.jtj`: the kept unknowns of the accepted pass, before the reordering below.
     let jtj_order = id.kept.clone();
@@ -1242,6 +1429,7 @@ fn finish(s: Structure, f: Fitted, iterations: usize, rms_before: f64, t0: Insta
         elapsed: t0.elapsed(),
         correlation,
         covariance: cov.map(|c| (jtj_order, c)),
+        prior_conflicts: Vec::new(),
     }
 }
 

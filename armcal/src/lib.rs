@@ -68,6 +68,7 @@ pub mod calib;
 pub mod data;
 pub mod diagnose;
 pub mod effects;
+pub mod fleet_prior;
 pub mod holdout;
 pub mod ident;
 pub mod jacobian;

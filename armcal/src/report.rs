@@ -170,6 +170,56 @@ pub struct Report {
     /// The uncertainty budget written with the calibration (`[uncertainty]`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub uncertainty: Option<crate::uncertainty::report::BudgetReport>,
+    /// The prior or penalty the fit used besides the data (none: plain least squares).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub prior: Option<PriorReport>,
+}
+
+/// What pulled the fit besides the data: a fleet prior, a class prior, a ridge.
+#[derive(Clone, Debug, Serialize)]
+pub struct PriorReport {
+    /// The rule for the unknowns without a fleet Gaussian, in words (`ridge λ = 1e-4`,
+    /// `Gaussian 0 ± 0.002 rad, 0 ± 1 mm`, `none (least squares)`).
+    pub rule: String,
+    /// The fleet prior, when there is one: its units and every unknown's statistics.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fleet: Option<crate::fleet_prior::FleetPrior>,
+    /// Per-unknown priors the data contradicted, left to the rule for this fit.
+    pub dropped: Vec<DroppedPrior>,
+}
+
+/// A per-unknown prior the data contradicted ([`crate::calib::PRIOR_CONFLICT_SIGMAS`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct DroppedPrior {
+    /// The calibration-file key.
+    pub key: String,
+    /// The data-only estimate and its standard uncertainty (increments from the start arm).
+    pub data: f64,
+    /// Standard uncertainty of `data`.
+    pub data_sd: f64,
+    /// The prior's mean.
+    pub prior_mean: f64,
+    /// The prior's standard deviation.
+    pub prior_sd: f64,
+    /// Their distance in standard deviations of both.
+    pub sigmas: f64,
+}
+
+impl DroppedPrior {
+    /// The report of each prior a fit dropped.
+    pub fn of(fit: &Fit) -> Vec<DroppedPrior> {
+        fit.prior_conflicts
+            .iter()
+            .map(|c| DroppedPrior {
+                key: fit.params[c.index].key(),
+                data: c.data,
+                data_sd: c.data_sd,
+                prior_mean: c.prior.mean,
+                prior_sd: c.prior.sd,
+                sigmas: c.sigmas(),
+            })
+            .collect()
+    }
 }
 
 /// A parameter in words, with the frame's rotations named for what they are without an
@@ -333,6 +383,7 @@ pub fn build(
         output: OutputReport::default(),
         warnings: data.warnings.clone(),
         uncertainty: None,
+        prior: None,
     }
 }
 
@@ -482,6 +533,9 @@ impl Report {
                 let _ = writeln!(s, "  {}: {}", h.description, h.explanation);
             }
         }
+        if let Some(p) = &self.prior {
+            p.text(&mut s);
+        }
         if let Some(u) = &self.uncertainty {
             u.text(&mut s);
         }
@@ -513,5 +567,48 @@ pub(crate) fn wrote<'a>(s: &mut String, files: impl IntoIterator<Item = &'a Stri
     }
     for f in files {
         let _ = writeln!(s, "wrote {f}");
+    }
+}
+
+impl PriorReport {
+    /// The prior's section of the text report.
+    fn text(&self, s: &mut String) {
+        let _ = writeln!(s, "\nprior");
+        for d in &self.dropped {
+            let _ = writeln!(
+                s,
+                "  {}: prior {:+.4e} ± {:.2e} dropped, the data say {:+.4e} ± {:.2e} ({:.1} σ apart)",
+                d.key, d.prior_mean, d.prior_sd, d.data, d.data_sd, d.sigmas
+            );
+        }
+        let Some(f) = &self.fleet else {
+            let _ = writeln!(s, "  {}", self.rule);
+            return;
+        };
+        let used = f.entries.iter().filter(|e| e.fallback.is_none()).count();
+        let _ = writeln!(
+            s,
+            "  fleet prior from {} units ({}): {} unknowns pulled towards the fleet's mean error",
+            f.units.len(),
+            f.units.join(", "),
+            used
+        );
+        for e in f.entries.iter().filter(|e| e.fallback.is_none()) {
+            let _ = writeln!(
+                s,
+                "    {:<28} {:>+12.4e} ± {:.2e} {} ({} units)",
+                e.key, e.mean, e.sd, e.unit, e.units
+            );
+        }
+        let back: Vec<String> = f
+            .fallbacks()
+            .map(|e| {
+                let why = e.fallback.map_or("", |b| b.words());
+                format!("{} ({why}, {} units)", e.key, e.units)
+            })
+            .collect();
+        if !back.is_empty() {
+            let _ = writeln!(s, "  left to the rule `{}`: {}", self.rule, back.join(", "));
+        }
     }
 }

@@ -54,6 +54,12 @@ pub struct Args {
     /// determined.
     #[arg(long, num_args = 0..=1, require_equals = true, default_missing_value = "1e-4", value_name = "LAMBDA", value_parser = super::args::positive)]
     ridge: Option<f64>,
+    /// A fleet prior: calibration files of other units of the same design as `--arm` (its
+    /// nominal arm). Each geometric error is pulled towards the units' mean error, weighed by
+    /// their spread, in place of the ridge or `--prior-angle/--prior-length`, which still apply
+    /// to errors fewer than 3 units determined. Give the data file before this list.
+    #[arg(long, num_args = 1.., value_name = "CAL.toml")]
+    fleet_prior: Vec<PathBuf>,
     /// Show progress on stderr even when it is not a terminal.
     #[arg(long)]
     progress: bool,
@@ -88,7 +94,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     for w in &data.warnings {
         eprintln!("armcal: warning: {w}");
     }
-    let opts = options(&a, &terms);
+    let fleet = if a.fleet_prior.is_empty() {
+        None
+    } else {
+        Some(armcal::fleet_prior::from_files(&start, &a.fleet_prior)?)
+    };
+    let opts = options(&a, &terms, fleet.as_ref());
     let mut observer = armcal::progress::for_command(a.progress, "calibrating");
     let fit = calib::calibrate_observed(&start, &data, &opts, observer.as_mut())
         .with_context(|| format!("cannot calibrate from {}", a.data.display()))?;
@@ -113,6 +124,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         validation.as_ref().map(|h| (method.as_str(), h)),
     );
     rep.terms = terms.spec();
+    rep.prior = prior_report(&a, fleet, &fit);
     if !held && (k > 0 || a.by_group) {
         rep.residuals.holdout_note = Some(
             "none: the data are a single unit (one group) that cannot be split into folds".into(),
@@ -164,7 +176,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 }
 
 /// The fit's options from the arguments.
-fn options(a: &Args, terms: &Terms) -> calib::Options {
+fn options(
+    a: &Args,
+    terms: &Terms,
+    fleet: Option<&armcal::fleet_prior::FleetPrior>,
+) -> calib::Options {
     let mut opts = calib::Options {
         terms: terms.clone(),
         allow_degenerate: a.allow_degenerate,
@@ -172,17 +188,47 @@ fn options(a: &Args, terms: &Terms) -> calib::Options {
         ..calib::Options::default()
     };
     opts.lm.max_iterations = a.max_iter as usize;
-    if let (Some(angle_rad), Some(length_mm)) = (a.prior_angle, a.prior_length) {
+    if a.prior_angle.is_some() || fleet.is_some() {
         opts.prior = Some(Prior {
-            angle_rad,
-            length_mm,
-            noise_mm: None,
+            angle_rad: a.prior_angle,
+            length_mm: a.prior_length,
+            unknowns: fleet.map(|f| f.gaussians()).unwrap_or_default(),
+            ..Prior::default()
         });
     }
     if let Some(lambda) = a.ridge {
         opts.ridge = Some(calib::Ridge { lambda });
     }
     opts
+}
+
+/// What the report says of the prior: the rule of the unknowns without a fleet Gaussian, and
+/// the fleet's statistics (`None`: plain least squares).
+fn prior_report(
+    a: &Args,
+    fleet: Option<armcal::fleet_prior::FleetPrior>,
+    fit: &calib::Fit,
+) -> Option<report::PriorReport> {
+    let mut rule = Vec::new();
+    if let (Some(angle), Some(length)) = (a.prior_angle, a.prior_length) {
+        rule.push(format!("Gaussian 0 ± {angle} rad, 0 ± {length} mm"));
+    }
+    if let Some(lambda) = a.ridge {
+        rule.push(format!("ridge λ = {lambda}"));
+    }
+    if rule.is_empty() && fleet.is_none() {
+        return None;
+    }
+    let rule = if rule.is_empty() {
+        "none: least squares, held where the data cannot determine it".to_string()
+    } else {
+        rule.join(" and ")
+    };
+    Some(report::PriorReport {
+        rule,
+        fleet,
+        dropped: report::DroppedPrior::of(fit),
+    })
 }
 
 /// The help of `--terms`, with an example of every effect from the registry.
