@@ -13,7 +13,20 @@ use std::path::{Path, PathBuf};
 #[derive(clap::Args)]
 pub struct Args {
     /// Measured data (CSV of `spec/measured-data.md`): any mix of point, spat and length rows.
-    data: PathBuf,
+    #[arg(required_unless_present = "fleet")]
+    data: Option<PathBuf>,
+    /// Diagnose several units of one design instead, one file per unit (its `group`s are its
+    /// sessions): which causes the design has (random-effects pooling of every unit's
+    /// held-out gain) and which single units have. A unit is named by its file stem less the
+    /// prefix all stems share up to a `-`.
+    #[arg(long, num_args = 2.., value_name = "CSV",
+          conflicts_with_all = ["data", "plots", "output", "by_group"])]
+    fleet: Vec<PathBuf>,
+    /// With `--fleet`: family-wise level of each step's design-level test (Holm over the
+    /// candidates).
+    #[arg(long, default_value_t = diagnose::fleet::ALPHA,
+          value_parser = super::args::probability)]
+    fleet_alpha: f64,
     /// The arm's nominal model (or an earlier calibration); default the spec's `default-6`.
     #[arg(long)]
     arm: Option<PathBuf>,
@@ -67,11 +80,17 @@ pub struct Args {
 /// checked before any fit; the files (calibration, table, figures) are written together at
 /// the end, or none of them.
 pub fn run(a: Args) -> anyhow::Result<()> {
+    if !a.fleet.is_empty() {
+        return run_fleet(&a);
+    }
+    let Some(data_path) = a.data.clone() else {
+        bail!("no data file given");
+    };
     if a.folds < 2 && !a.by_group {
         bail!("--folds must be 2 or more: a diagnosis needs held-out data");
     }
     let start = super::calibrate::start_arm(a.arm.as_deref())?;
-    let mut inputs = vec![(a.data.as_path(), "data")];
+    let mut inputs = vec![(data_path.as_path(), "data")];
     if let Some(arm) = &a.arm {
         inputs.push((arm.as_path(), "start arm"));
     }
@@ -92,7 +111,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             );
         }
     }
-    let data = armcal::data::read(&a.data, start.dof())?;
+    let data = armcal::data::read(&data_path, start.dof())?;
     for w in &data.warnings {
         eprintln!("armcal: warning: {w}");
     }
@@ -119,7 +138,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         pb
     });
     let d = diagnose::diagnose(&start, &data, &opts)
-        .with_context(|| format!("cannot diagnose {}", a.data.display()));
+        .with_context(|| format!("cannot diagnose {}", data_path.display()));
     if let Some(pb) = &spinner {
         pb.finish_and_clear();
     }
@@ -150,6 +169,51 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `armcal diagnose --fleet`: every file is a unit of the arm `--arm` (default `default-6`).
+fn run_fleet(a: &Args) -> anyhow::Result<()> {
+    let start = super::calibrate::start_arm(a.arm.as_deref())?;
+    let paths: Vec<&Path> = a.fleet.iter().map(PathBuf::as_path).collect();
+    let units = diagnose::fleet::read_units(&paths, start.dof())?;
+    for u in &units {
+        for w in &u.data.warnings {
+            eprintln!("armcal: warning: {}: {w}", u.file);
+        }
+    }
+    let mut opts = diagnose::fleet::Options {
+        alpha: a.fleet_alpha,
+        ..diagnose::fleet::Options::default()
+    };
+    opts.diagnose.calib.lm.max_iterations = a.max_iter as usize;
+    opts.diagnose.select.alpha = a.alpha;
+    opts.diagnose.select.z = a.z;
+    opts.diagnose.max_order = a.max_order;
+    opts.diagnose.unexplained_alpha = a.unexplained_alpha;
+    let spinner = (!a.json).then(|| {
+        let pb = indicatif::ProgressBar::new_spinner();
+        pb.set_message(format!(
+            "diagnosing a fleet of {} units: every candidate on every unit, sessions held out…",
+            units.len()
+        ));
+        pb.enable_steady_tick(std::time::Duration::from_millis(200));
+        pb
+    });
+    let f = diagnose::fleet::diagnose_fleet(&start, &units, &opts);
+    if let Some(pb) = &spinner {
+        pb.finish_and_clear();
+    }
+    let f = f.context("cannot diagnose the fleet")?;
+    let rep = diagnose::fleet_report::build(
+        &f,
+        "file stem less the prefix every stem shares up to its last `-`",
+    );
+    if a.json {
+        println!("{}", rep.json());
+    } else {
+        print!("{}", rep.text());
+    }
+    Ok(())
+}
+
 /// Stages the extended calibration file `out` and its binary table beside it (or says in the
 /// report why the firmware cannot hold the model, and removes a stale table at commit).
 fn stage_extended(
@@ -164,7 +228,7 @@ fn stage_extended(
     let header = [
         format!(
             "extended calibration by armcal diagnose from {}",
-            a.data.display()
+            a.data.as_deref().unwrap_or(Path::new("?")).display()
         ),
         format!("model {}; {}", rep.extended.model, rep.verdict),
     ];

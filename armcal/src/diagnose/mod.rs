@@ -20,6 +20,8 @@
 //! JSON.
 
 pub mod candidates;
+pub mod fleet;
+pub mod fleet_report;
 pub mod linear;
 pub mod patterns;
 pub mod plots;
@@ -319,7 +321,7 @@ pub fn diagnose(start: &Arm, data: &Dataset, opts: &Options) -> Result<Diagnosis
     })
 }
 
-fn cause(
+pub(crate) fn cause(
     fit: &Fit,
     data: &Dataset,
     c: &Confirmation,

@@ -388,7 +388,7 @@ pub fn build(d: &Diagnosis, data: &Dataset, figures: &[Figure]) -> Report {
 }
 
 /// A named cause as the report gives it.
-fn cause_report(c: &super::Cause) -> CauseReport {
+pub fn cause_report(c: &super::Cause) -> CauseReport {
     let coefficients: Vec<f64> = c.values.iter().map(|v| v.1).collect();
     let phasor = c.effect.with(|t| t.phasor(&coefficients));
     let (s, co) = (phasor.map(|p| p.0), phasor.map(|p| p.1));

@@ -32,6 +32,7 @@ pub fn workdir(name: &str) -> PathBuf {
     d
 }
 
+#[allow(dead_code)]
 /// Writes `truth` to `dir/truth.toml`, the file the tests' `armcal simulate --truth` reads.
 #[allow(dead_code)]
 pub fn write_truth(dir: &Path, truth: &Arm) {
