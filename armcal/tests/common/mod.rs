@@ -34,7 +34,6 @@ pub fn workdir(name: &str) -> PathBuf {
 
 #[allow(dead_code)]
 /// Writes `truth` to `dir/truth.toml`, the file the tests' `armcal simulate --truth` reads.
-#[allow(dead_code)]
 pub fn write_truth(dir: &Path, truth: &Arm) {
     std::fs::write(
         dir.join("truth.toml"),
