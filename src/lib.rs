@@ -71,6 +71,10 @@
 //! ```
 #![cfg_attr(not(test), no_std)]
 
+// The mock flash of the update's fuzz target lives on the heap.
+#[cfg(all(feature = "mock-flash", not(test)))]
+extern crate std;
+
 pub mod angle;
 pub mod chain;
 pub mod encoder;

@@ -10,17 +10,21 @@
 //! - [`boot`]: [`boot::live_table`], the table a hub uses at boot. (Not yet called by the
 //!   boards, which still read slot 0 directly.)
 //!
+//! - `mock` and `fixtures` (tests, and feature `mock-flash` for the fuzz target
+//!   `update_session`): a NOR flash in RAM that can lose power part-way through any operation,
+//!   and the tables and steps the tests send.
+//!
 //! Flash is reached through the `embedded-storage` crate's `NorFlash` traits, the interface
 //! every embassy and `*-hal` flash driver implements (and embassy-boot and sequential-storage
 //! are written against), so a board passes its own driver unchanged. `docs/update.md` gives
 //! the record layout, the steps and the argument for power loss.
 
 pub mod boot;
-#[cfg(test)]
-mod fixtures;
+#[cfg(any(test, feature = "mock-flash"))]
+pub mod fixtures;
 pub mod layout;
-#[cfg(test)]
-mod mock;
+#[cfg(any(test, feature = "mock-flash"))]
+pub mod mock;
 #[cfg(test)]
 mod power_loss;
 pub mod record;

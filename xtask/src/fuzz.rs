@@ -19,7 +19,7 @@ use host_tests::boards::root;
 use crate::build::check;
 
 /// Every fuzz target, as `fuzz/Cargo.toml` declares them.
-pub const TARGETS: [&str; 7] = [
+pub const TARGETS: [&str; 8] = [
     "table_parse",
     "hub_frames",
     "host_frames",
@@ -27,6 +27,7 @@ pub const TARGETS: [&str; 7] = [
     "chain_arm_accuracy",
     "data_csv",
     "calfile_toml",
+    "update_session",
 ];
 
 /// Seconds of each target's smoke run in `cargo xtask test`.
