@@ -75,7 +75,7 @@ fn an_effect_every_unit_has_is_named_for_the_design() {
         .find(|(p, _)| p.effect == Effect::Gravity(1))
         .unwrap();
     assert!(*significant);
-    assert_eq!(named.units_gaining, 5);
+    assert_eq!(named.pooling.units_gaining, 5);
     // Once it is in the model its near alias, the shoulder's first-order wave, has nothing
     // left to explain.
     let last = f.steps.last().unwrap();

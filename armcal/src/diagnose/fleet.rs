@@ -219,11 +219,21 @@ pub struct UnitTest {
 pub struct Pooled {
     /// The candidate.
     pub effect: Effect,
+    /// The pooled statistics.
+    pub pooling: Pooling,
+    /// Every pooled unit's (index among the fleet's units, mean log-ratio, standard error).
+    pub per_unit: Vec<(usize, f64, f64)>,
+}
+
+/// A pooled test's statistics, as the report gives them too.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct Pooling {
     /// Units pooled.
     pub units: usize,
     /// Units whose own mean log-ratio is positive.
     pub units_gaining: usize,
-    /// The pooled mean log-ratio μ̂ (the design's typical ln of its held-out RMS ratio).
+    /// The pooled mean log-ratio μ̂ of ½ ln(held-out SS before / after) (the design's typical
+    /// ln of its held-out RMS ratio).
     pub mean_log_ratio: f64,
     /// Its standard error.
     pub se: f64,
@@ -234,9 +244,8 @@ pub struct Pooled {
     /// μ̂ / se (Hartung–Knapp).
     pub t: f64,
     /// One-sided p-value P(T > t), Student's t with units − 1 degrees of freedom.
+    #[serde(rename = "p_value")]
     pub p: f64,
-    /// Every pooled unit's (index among the fleet's units, mean log-ratio, standard error).
-    pub per_unit: Vec<(usize, f64, f64)>,
 }
 
 /// DerSimonian–Laird random-effects pooling of estimates `y` with variances `v`, and
@@ -528,32 +537,41 @@ pub fn diagnose_fleet(
                 let k = ts.len();
                 Pooled {
                     effect: e,
-                    units: k,
-                    units_gaining: y.iter().filter(|y| **y > 0.0).count(),
-                    mean_log_ratio: mu,
-                    se,
-                    tau2,
-                    q,
-                    t,
-                    p: if k >= MIN_FLEET_UNITS {
-                        t_tail(t, (k - 1) as f64)
-                    } else {
-                        1.0
+                    pooling: Pooling {
+                        units: k,
+                        units_gaining: y.iter().filter(|y| **y > 0.0).count(),
+                        mean_log_ratio: mu,
+                        se,
+                        tau2,
+                        q,
+                        t,
+                        p: if k >= MIN_FLEET_UNITS {
+                            t_tail(t, (k - 1) as f64)
+                        } else {
+                            1.0
+                        },
                     },
                     per_unit: ts.iter().map(|(u, t)| (*u, t.log_ratio, t.se)).collect(),
                 }
             })
             .collect();
-        let ps: Vec<f64> = pooled.iter().map(|p| p.p).collect();
+        let ps: Vec<f64> = pooled.iter().map(|p| p.pooling.p).collect();
         let rejected = holm(&ps, opts.alpha);
         let mut ranked: Vec<(Pooled, bool)> = pooled.into_iter().zip(rejected).collect();
-        ranked.sort_by(|a, b| a.0.p.total_cmp(&b.0.p).then(b.0.t.total_cmp(&a.0.t)));
+        ranked.sort_by(|a, b| {
+            let (a, b) = (&a.0.pooling, &b.0.pooling);
+            a.p.total_cmp(&b.p).then(b.t.total_cmp(&a.t))
+        });
         // Of those that pass, the largest pooled gain (a near alias of the true cause passes
         // too, with less gain: the single-arm selection's lowest held-out error likewise).
         let named = ranked
             .iter()
             .filter(|(_, r)| *r)
-            .max_by(|a, b| a.0.mean_log_ratio.total_cmp(&b.0.mean_log_ratio))
+            .max_by(|a, b| {
+                a.0.pooling
+                    .mean_log_ratio
+                    .total_cmp(&b.0.pooling.mean_log_ratio)
+            })
             .map(|(p, _)| p.effect);
         steps.push(DesignStep {
             pooled: ranked,

@@ -13,7 +13,7 @@
 //! `uncertainty` the standard error of that mean over the units (the units' spread / √k) and
 //! `spread` their standard deviation: the design's typical size and how much units differ.
 
-use super::fleet::{Fleet, Level, Pooled, UnitResult, UnitTest};
+use super::fleet::{Fleet, Level, Pooled, Pooling, UnitResult, UnitTest};
 use super::report::{cause_report, CauseReport};
 use crate::params::Effect;
 use crate::report::pretty_json;
@@ -26,22 +26,9 @@ use std::fmt::Write as _;
 pub struct PooledReport {
     /// `--terms` spelling.
     pub term: String,
-    /// Units pooled.
-    pub units: usize,
-    /// Units whose own mean log-ratio is positive.
-    pub units_gaining: usize,
-    /// Pooled mean of ½ ln(held-out SS before / after) (random effects).
-    pub mean_log_ratio: f64,
-    /// Its standard error.
-    pub se: f64,
-    /// DerSimonian–Laird between-unit variance of the true log-ratios.
-    pub tau2: f64,
-    /// Cochran's Q.
-    pub q: f64,
-    /// mean / se (Hartung–Knapp).
-    pub t: f64,
-    /// One-sided p-value (Student's t, units − 1 degrees of freedom).
-    pub p_value: f64,
+    /// The pooled statistics.
+    #[serde(flatten)]
+    pub pooling: Pooling,
     /// Every pooled unit's own mean log-ratio and its standard error.
     pub per_unit: Vec<UnitLogRatio>,
     /// Whether Holm's step-down over the step's candidates rejects "no gain" at `alpha`.
@@ -175,14 +162,7 @@ pub struct FleetReport {
 fn pooled_report(f: &Fleet, p: &Pooled, significant: bool) -> PooledReport {
     PooledReport {
         term: p.effect.spec(),
-        units: p.units,
-        units_gaining: p.units_gaining,
-        mean_log_ratio: p.mean_log_ratio,
-        se: p.se,
-        tau2: p.tau2,
-        q: p.q,
-        t: p.t,
-        p_value: p.p,
+        pooling: p.pooling,
         per_unit: p
             .per_unit
             .iter()
@@ -342,13 +322,13 @@ impl FleetReport {
                  (units' spread {:.1e})",
                 c.term,
                 c.description,
-                e.units_gaining,
-                e.units,
-                e.mean_log_ratio,
-                e.se,
-                e.tau2,
-                e.t,
-                e.p_value,
+                e.pooling.units_gaining,
+                e.pooling.units,
+                e.pooling.mean_log_ratio,
+                e.pooling.se,
+                e.pooling.tau2,
+                e.pooling.t,
+                e.pooling.p,
                 c.magnitude,
                 c.uncertainty,
                 c.unit,
@@ -363,13 +343,13 @@ impl FleetReport {
                     "    {:<26} {}/{} units gain; ln ratio {:+.3} ± {:.3} (τ² = {:.3}), t = \
                      {:.1}, p = {:.1e}",
                     p.term,
-                    p.units_gaining,
-                    p.units,
-                    p.mean_log_ratio,
-                    p.se,
-                    p.tau2,
-                    p.t,
-                    p.p_value
+                    p.pooling.units_gaining,
+                    p.pooling.units,
+                    p.pooling.mean_log_ratio,
+                    p.pooling.se,
+                    p.pooling.tau2,
+                    p.pooling.t,
+                    p.pooling.p
                 );
             }
         }
