@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{armcal, armcal_ok, workdir, write_truth};
+use common::{armcal, armcal_ok, simulate, workdir, write_truth};
 
 /// The virtual arm the simulations measure.
 fn truth() -> quatarm_ref::Arm {
@@ -144,22 +144,7 @@ fn spat_and_length_calibrate_without_an_instrument() {
         ("spat", "160", "5", "s.csv"),
         ("length", "80", "6", "l.csv"),
     ] {
-        armcal_ok(
-            &[
-                "simulate",
-                "--truth",
-                "truth.toml",
-                "--kind",
-                kind,
-                "--count",
-                count,
-                "--seed",
-                seed,
-                "-o",
-                out,
-            ],
-            &d,
-        );
+        simulate(&d, kind, count, seed, &[], out);
     }
     // One file: length groups renumbered after the spat ones, without the second header.
     let s = std::fs::read_to_string(d.join("s.csv")).unwrap();
@@ -198,23 +183,6 @@ fn merge(d: &std::path::Path, files: &[&str], out: &str) {
     }
     let all = armcal::data::Dataset::from_rows(rows, 6, false, out).unwrap();
     std::fs::write(d.join(out), all.to_csv(&[])).unwrap();
-}
-
-fn simulate(d: &std::path::Path, kind: &str, count: &str, seed: &str, extra: &[&str], out: &str) {
-    let mut args = vec![
-        "simulate",
-        "--truth",
-        "truth.toml",
-        "--kind",
-        kind,
-        "--count",
-        count,
-        "--seed",
-        seed,
-    ];
-    args.extend_from_slice(extra);
-    args.extend_from_slice(&["-o", out]);
-    armcal_ok(&args, d);
 }
 
 /// `sphere` rows are calibration data: a sphere of known diameter fixes the scale that spat

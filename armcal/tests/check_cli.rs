@@ -13,24 +13,10 @@ fn truth() -> Arm {
     a
 }
 
+/// Noise-free simulated rows of `truth.toml` (seed 7).
 fn simulate(dir: &Path, kind: &str, count: &str, extra: &[&str], out: &str) {
-    let mut args = vec![
-        "simulate",
-        "--truth",
-        "truth.toml",
-        "--kind",
-        kind,
-        "--count",
-        count,
-        "--seed",
-        "7",
-        "--noise-um",
-        "0",
-        "-o",
-        out,
-    ];
-    args.extend_from_slice(extra);
-    armcal_ok(&args, dir);
+    let extra = [&["--noise-um", "0"][..], extra].concat();
+    common::simulate(dir, kind, count, "7", &extra, out);
 }
 
 fn json(dir: &Path, args: &[&str]) -> serde_json::Value {

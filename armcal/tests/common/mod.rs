@@ -42,6 +42,26 @@ pub fn write_truth(dir: &Path, truth: &Arm) {
     .unwrap();
 }
 
+/// `armcal simulate --truth truth.toml --kind KIND --count COUNT --seed SEED EXTRA… -o OUT` in
+/// `dir`, required to succeed.
+#[allow(dead_code)]
+pub fn simulate(dir: &Path, kind: &str, count: &str, seed: &str, extra: &[&str], out: &str) {
+    let mut args = vec![
+        "simulate",
+        "--truth",
+        "truth.toml",
+        "--kind",
+        kind,
+        "--count",
+        count,
+        "--seed",
+        seed,
+    ];
+    args.extend_from_slice(extra);
+    args.extend_from_slice(&["-o", out]);
+    armcal_ok(&args, dir);
+}
+
 /// The width and height of a PNG file, after checking its signature and header.
 #[allow(dead_code)]
 pub fn png_size(path: &Path) -> (u32, u32) {
