@@ -41,10 +41,11 @@ pub use csv::{write_csv_header, write_csv_line, CSV_HEADER, MAX_CSV_LINE};
 pub use framing::{decode, encode, FrameError, FrameReader, CRC, MAX_FRAME, MAX_PAYLOAD};
 pub use hub::{Hub, MAX_OUTPUT, RATED_TEMP_MC};
 pub use message::{
-    Coordinates, Counts, Hello, Mode, NumberFormat, Reading, Report, ToDevice, ToHost,
+    Coordinates, Counts, Hello, LiveTable, Mode, NumberFormat, Reading, Report, ToDevice, ToHost,
+    UpdateAnswer,
 };
 pub use replay::{Event, Replay};
 pub use status::{Status, TableState};
 
 /// Protocol version carried in [`Hello`]; bumped on any incompatible change of a message.
-pub const PROTOCOL_VERSION: u16 = 1;
+pub const PROTOCOL_VERSION: u16 = 2;

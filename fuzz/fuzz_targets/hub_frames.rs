@@ -2,7 +2,8 @@
 //! of host→hub `ToDevice` frames) and the `Hub` that turns each event into a report, as a
 //! board's replay loop (`board_common::serve`) does. Never a panic; coordinates exactly when
 //! the report's status allows them, never for a damaged frame; every report rendered in the
-//! hub's mode reads back as itself.
+//! hub's mode reads back as itself; update steps go to the updater on a mock flash and its
+//! answers read back as themselves.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -10,6 +11,8 @@ use quatarm::stream::{
     Coordinates, Event, FrameReader, Hub, Mode, NumberFormat, Replay, Status, TableState, ToHost,
     MAX_FRAME, MAX_OUTPUT,
 };
+use quatarm::table::MAX_TABLE_LEN;
+use quatarm::update::{fixtures, Updater};
 use quatarm_fuzz::chains;
 
 fuzz_target!(|bytes: &[u8]| {
@@ -43,6 +46,9 @@ fuzz_target!(|bytes: &[u8]| {
     };
     let mut replay = Replay::new();
     let mut out = [0u8; MAX_OUTPUT];
+    let mut flash = fixtures::factory(&fixtures::table(100.0));
+    let mut updater = Updater::new(fixtures::layout(), Some(6));
+    let mut scratch = [0u8; MAX_TABLE_LEN];
     let mut time = 0u64;
     for &b in stream {
         let Some(event) = replay.push(b) else {
@@ -58,6 +64,21 @@ fuzz_target!(|bytes: &[u8]| {
                 continue;
             }
             Event::End => break,
+            Event::Update(step) => {
+                // The update steps go to the update state machine on a mock flash, as a
+                // board's serve loop sends them; the answer must read back as itself in
+                // either mode (update answers are frames in text mode too).
+                let answer = updater.step(&mut flash, &mut scratch, &step);
+                let msg = ToHost::Update(answer);
+                let rendered = hub.render(&msg, &mut out);
+                let mut reader = FrameReader::<MAX_FRAME>::new();
+                let back: Vec<_> = rendered
+                    .iter()
+                    .filter_map(|&x| reader.push::<ToHost>(x))
+                    .collect();
+                assert_eq!(back, [Ok(msg)], "an update answer does not read back");
+                continue;
+            }
         };
         assert_eq!(report.point.is_some(), report.status.is_measurement());
         if damaged {

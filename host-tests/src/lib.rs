@@ -8,4 +8,5 @@ pub mod defmt_log;
 pub mod e2e;
 pub mod qemu;
 pub mod recording;
+pub mod session;
 pub mod soak;

@@ -4,7 +4,7 @@
 use std::io::{Read, Write};
 use std::os::unix::net::UnixStream;
 use std::path::{Path, PathBuf};
-use std::process::{Command, ExitStatus, Stdio};
+use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
@@ -45,11 +45,75 @@ impl Default for Options {
     }
 }
 
-/// Runs `elf` on `board`'s QEMU machine, sending `input` to its UART.
-pub fn run(board: &Board, elf: &Path, input: &[u8], opts: &Options) -> Result<Run> {
+/// The QEMU command line of `board` (without `-kernel`): its UART on a Unix socket at `sock`
+/// (QEMU the server, waiting for the connection), semihosting (the defmt log) on QEMU's
+/// stdout, `table` loaded into the calibration region, the monitor on a Unix socket at
+/// `monitor` if given (for resets), else none.
+pub(crate) fn command(
+    board: &Board,
+    table: &Option<PathBuf>,
+    icount: bool,
+    sock: &Path,
+    monitor: Option<&Path>,
+) -> Result<Command> {
     let Some(m) = board.qemu else {
         bail!("{} does not run under QEMU", board.name);
     };
+    // QEMU 7.2 sends a semihosting `:tt` handle to stdout whatever `-semihosting-config
+    // chardev=` says, so the log goes there.
+    let mut cmd = Command::new("qemu-system-arm");
+    cmd.args(["-M", m.machine, "-display", "none"]);
+    match monitor {
+        Some(p) => cmd
+            .arg("-monitor")
+            .arg(format!("unix:{},server=on,wait=off", p.display())),
+        None => cmd.args(["-monitor", "none"]),
+    };
+    cmd.arg("-chardev")
+        .arg(format!(
+            "socket,id=uart,path={},server=on,wait=on",
+            sock.display()
+        ))
+        .args(["-serial", "chardev:uart"])
+        .args(["-semihosting-config", "enable=on,target=native"]);
+    if icount {
+        cmd.args(["-icount", "shift=0"]);
+    }
+    if let Some(table) = table {
+        cmd.arg("-device").arg(format!(
+            "loader,file={},addr={:#x},force-raw=on",
+            table.display(),
+            m.table_addr
+        ));
+    }
+    cmd.stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    Ok(cmd)
+}
+
+/// Connects to QEMU's UART socket at `sock` once QEMU has opened it.
+pub(crate) fn connect(child: &mut Child, sock: &Path) -> Result<UnixStream> {
+    let start = Instant::now();
+    loop {
+        match UnixStream::connect(sock) {
+            Ok(s) => return Ok(s),
+            Err(_) if start.elapsed() < Duration::from_secs(20) => {
+                if let Some(status) = child.try_wait()? {
+                    bail!("qemu exited before opening its socket ({status})");
+                }
+                std::thread::sleep(Duration::from_millis(10));
+            }
+            Err(e) => {
+                let _ = child.kill();
+                return Err(e).context("connecting to QEMU's socket");
+            }
+        }
+    }
+}
+
+/// Runs `elf` on `board`'s QEMU machine, sending `input` to its UART.
+pub fn run(board: &Board, elf: &Path, input: &[u8], opts: &Options) -> Result<Run> {
     if !elf.exists() {
         bail!(
             "{} is not built: run `cargo xtask build` (looked for {})",
@@ -58,33 +122,9 @@ pub fn run(board: &Board, elf: &Path, input: &[u8], opts: &Options) -> Result<Ru
         );
     }
     let dir = tempfile::tempdir()?;
-    // The UART on a Unix socket, semihosting (the defmt log) on QEMU's stdout: QEMU 7.2 sends
-    // a semihosting `:tt` handle to stdout whatever `-semihosting-config chardev=` says.
     let sock = dir.path().join("uart.sock");
-    let mut cmd = Command::new("qemu-system-arm");
-    cmd.args(["-M", m.machine, "-display", "none", "-monitor", "none"])
-        .arg("-chardev")
-        .arg(format!(
-            "socket,id=uart,path={},server=on,wait=on",
-            sock.display()
-        ))
-        .args(["-serial", "chardev:uart"])
-        .args(["-semihosting-config", "enable=on,target=native"]);
-    if opts.icount {
-        cmd.args(["-icount", "shift=0"]);
-    }
-    if let Some(table) = &opts.table {
-        cmd.arg("-device").arg(format!(
-            "loader,file={},addr={:#x},force-raw=on",
-            table.display(),
-            m.table_addr
-        ));
-    }
-    cmd.arg("-kernel")
-        .arg(elf)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped());
+    let mut cmd = command(board, &opts.table, opts.icount, &sock, None)?;
+    cmd.arg("-kernel").arg(elf);
     let start = Instant::now();
     let mut child = cmd.spawn().context("starting qemu-system-arm")?;
     let mut stdout = child.stdout.take().context("qemu stdout")?;
@@ -99,21 +139,7 @@ pub fn run(board: &Board, elf: &Path, input: &[u8], opts: &Options) -> Result<Ru
         let _ = stderr.read_to_string(&mut out);
         out
     });
-    let uart = loop {
-        match UnixStream::connect(&sock) {
-            Ok(s) => break s,
-            Err(_) if start.elapsed() < Duration::from_secs(20) => {
-                if let Some(status) = child.try_wait()? {
-                    bail!("qemu exited before opening its UART ({status})");
-                }
-                std::thread::sleep(Duration::from_millis(10));
-            }
-            Err(e) => {
-                let _ = child.kill();
-                return Err(e).context("connecting to QEMU's UART socket");
-            }
-        }
-    };
+    let uart = connect(&mut child, &sock)?;
     let mut uart_in = uart.try_clone()?;
     let mut uart_out = uart;
     let input = input.to_vec();

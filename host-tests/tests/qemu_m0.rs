@@ -11,4 +11,5 @@ common::board_tests! {
         dir: 1e-7,
     },
     full_recording: replays_the_recording_bit_identical_to_the_host_and_within_0_1um,
+    update: update_not_supported,
 }

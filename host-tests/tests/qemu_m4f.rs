@@ -11,4 +11,5 @@ common::board_tests! {
         dir: 1e-6,
     },
     full_recording: replays_the_recording_bit_identical_to_the_host_and_within_1um,
+    update: update_with_resets,
 }

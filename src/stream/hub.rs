@@ -7,8 +7,9 @@
 //! once.
 
 use super::{
-    encode, write_csv_header, write_csv_line, Coordinates, FrameError, Hello, Mode, NumberFormat,
-    Reading, Report, Status, TableState, ToHost, MAX_CSV_LINE, MAX_FRAME, PROTOCOL_VERSION,
+    encode, write_csv_header, write_csv_line, Coordinates, FrameError, Hello, LiveTable, Mode,
+    NumberFormat, Reading, Report, Status, TableState, ToHost, MAX_CSV_LINE, MAX_FRAME,
+    PROTOCOL_VERSION,
 };
 
 /// The rated temperature range of the thermal model, milli-degrees Celsius. Outside it the
@@ -31,6 +32,7 @@ pub struct Hub {
     joints: u8,
     precision: NumberFormat,
     mode: Mode,
+    live: Option<LiveTable>,
 }
 
 impl Hub {
@@ -47,7 +49,17 @@ impl Hub {
             },
             precision,
             mode: Mode::Binary,
+            live: None,
         }
+    }
+
+    /// The same hub, announcing `live` as the table in use (only with a valid table: a hub
+    /// without one names none).
+    pub fn with_live(mut self, live: LiveTable) -> Hub {
+        if self.base.table_valid() {
+            self.live = Some(live);
+        }
+        self
     }
 
     /// The boot announcement.
@@ -57,6 +69,7 @@ impl Hub {
             precision: self.precision,
             joints: self.joints,
             status: self.base,
+            live: self.live,
         })
     }
 
@@ -163,21 +176,23 @@ impl Hub {
     }
 
     /// Renders a message in the current mode into `out` (at least [`MAX_OUTPUT`] bytes);
-    /// returns the bytes to send. A binary `Hello` goes out behind a lone `0x00`, so that it
-    /// is a frame of its own whatever came before it (a CSV line, after a switch back from
-    /// text mode, has no delimiter); in text mode a `Hello` is the CSV header line.
+    /// returns the bytes to send. In text mode a report is a CSV line and a `Hello` the CSV
+    /// header line. A binary `Hello` goes out behind a lone `0x00`, so that it is a frame of
+    /// its own whatever came before it (a CSV line, after a switch back from text mode, has
+    /// no delimiter). An update answer is a frame in either mode, behind a lone `0x00` too:
+    /// an update is driven by a program, never read at a terminal.
     pub fn render<'a>(&self, msg: &ToHost, out: &'a mut [u8]) -> &'a [u8] {
         let n = match (self.mode, msg) {
-            (Mode::Binary, m @ ToHost::Hello(_)) => match out.split_first_mut() {
+            (Mode::Binary, m @ ToHost::Report(_)) => encode(m, out).unwrap_or(0),
+            (Mode::Text, ToHost::Report(r)) => write_csv_line(r, out),
+            (Mode::Text, ToHost::Hello(_)) => write_csv_header(out),
+            (_, m) => match out.split_first_mut() {
                 Some((first, rest)) => {
                     *first = 0;
                     encode(m, rest).map_or(0, |n| n + 1)
                 }
                 None => 0,
             },
-            (Mode::Binary, m) => encode(m, out).unwrap_or(0),
-            (Mode::Text, ToHost::Report(r)) => write_csv_line(r, out),
-            (Mode::Text, ToHost::Hello(_)) => write_csv_header(out),
         };
         &out[..n]
     }

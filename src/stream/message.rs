@@ -8,6 +8,7 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::Status;
 use crate::table::MAX_JOINTS;
+use crate::update::session::{Accepted, Refusal, Step};
 
 /// Firmware to host.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -17,10 +18,18 @@ pub enum ToHost {
     Hello(Hello),
     /// One per reading: the corrected point, or the status saying why there is none.
     Report(Report),
+    /// The answer to one [`ToDevice::Update`] step: carried out, or refused and why.
+    Update(UpdateAnswer),
 }
 
+/// What a hub answers to an update step (`docs/update.md`).
+pub type UpdateAnswer = Result<Accepted, Refusal>;
+
 /// What a hub announces at boot.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+///
+/// It decodes from protocol 1 too (the same fields without `live`, read as `None`): the
+/// version is its first field, so a host tells the layouts apart before it reads the rest.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Hello {
     /// [`super::PROTOCOL_VERSION`] of the firmware.
@@ -31,6 +40,58 @@ pub struct Hello {
     pub joints: u8,
     /// The boot check's verdict on the table (the same bits every report carries).
     pub status: Status,
+    /// Which table is live (protocol 2): `None` when there is no valid table.
+    pub live: Option<LiveTable>,
+}
+
+impl<'de> Deserialize<'de> for Hello {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Hello, D::Error> {
+        struct HelloVisitor;
+        impl<'de> Visitor<'de> for HelloVisitor {
+            type Value = Hello;
+            fn expecting(&self, f: &mut core::fmt::Formatter) -> core::fmt::Result {
+                f.write_str("a Hello of protocol 1 or 2")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Hello, A::Error> {
+                let missing = |i| A::Error::invalid_length(i, &self);
+                let protocol: u16 = seq.next_element()?.ok_or_else(|| missing(0))?;
+                let precision = seq.next_element()?.ok_or_else(|| missing(1))?;
+                let joints = seq.next_element()?.ok_or_else(|| missing(2))?;
+                let status = seq.next_element()?.ok_or_else(|| missing(3))?;
+                // Every version starts with these four; only protocol 2 has `live` after them
+                // (a Hello of another version decodes as far as they go, for a host to say
+                // which version it met).
+                let live = if protocol == 2 {
+                    seq.next_element()?.ok_or_else(|| missing(4))?
+                } else {
+                    None
+                };
+                Ok(Hello {
+                    protocol,
+                    precision,
+                    joints,
+                    status,
+                    live,
+                })
+            }
+        }
+        const FIELDS: &[&str] = &["protocol", "precision", "joints", "status", "live"];
+        deserializer.deserialize_struct("Hello", FIELDS, HelloVisitor)
+    }
+}
+
+/// The table a hub runs on, as its `Hello` names it: a host sees from it which calibration
+/// is in use after a boot or an update, without reading the flash.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LiveTable {
+    /// The flash slot it lies in (0 or 1, `docs/update.md`).
+    pub slot: u8,
+    /// The sequence number of the state record naming it; 0 when none does (a table flashed
+    /// by a debug probe, found by its contents).
+    pub seq: u32,
+    /// The table's own CRC-32 (its last four bytes), which `armcal table build` prints.
+    pub crc: u32,
 }
 
 /// The number format a hub evaluates the chain in, as [`Hello`] announces it (the variant
@@ -70,7 +131,7 @@ pub struct Coordinates {
 }
 
 /// Host to firmware.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum ToDevice {
     /// A recorded reading to evaluate in place of the hub's own encoders (replay).
@@ -79,6 +140,9 @@ pub enum ToDevice {
     SetMode(Mode),
     /// The recording is over: a QEMU hub exits, a real one goes back to its encoders.
     End,
+    /// One step of a calibration update over the stream (`docs/update.md`); answered by
+    /// [`ToHost::Update`].
+    Update(Step),
 }
 
 /// The hub's output format.
@@ -187,6 +251,7 @@ mod tests {
             precision,
             joints: 6,
             status: Status::default(),
+            live: None,
         };
         let mut buf = [0u8; 16];
         let f32 = postcard::to_slice(&hello(NumberFormat::F32), &mut buf)
@@ -195,7 +260,43 @@ mod tests {
         let fixed = postcard::to_slice(&hello(NumberFormat::Fixed), &mut buf)
             .unwrap()
             .to_vec();
-        assert_eq!(f32, [1, 0, 6, 0]);
-        assert_eq!(fixed, [1, 1, 6, 0]);
+        assert_eq!(f32, [1, 0, 6, 0, 0]);
+        assert_eq!(fixed, [1, 1, 6, 0, 0]);
+    }
+
+    /// A protocol-1 `Hello` (no `live`) still decodes, and a protocol-2 one round-trips.
+    #[test]
+    fn hello_decodes_from_both_protocols() {
+        let v1: Hello = postcard::from_bytes(&[1, 0, 6, 1]).unwrap();
+        assert_eq!((v1.protocol, v1.joints, v1.live), (1, 6, None));
+        let v2 = Hello {
+            protocol: 2,
+            precision: NumberFormat::Fixed,
+            joints: 6,
+            status: Status(Status::TABLE_VALID),
+            live: Some(LiveTable {
+                slot: 1,
+                seq: 7,
+                crc: 0xdead_beef,
+            }),
+        };
+        let mut buf = [0u8; 32];
+        let bytes = postcard::to_slice(&v2, &mut buf).unwrap();
+        assert_eq!(postcard::from_bytes::<Hello>(bytes).unwrap(), v2);
+        // A protocol-2 Hello cut before `live` is refused, not read as protocol 1.
+        assert!(postcard::from_bytes::<Hello>(&[2, 0, 6, 1]).is_err());
+    }
+
+    /// The longest update message (a full chunk at an offset past any slot) fits a frame.
+    #[test]
+    fn a_full_update_chunk_fits_a_frame() {
+        let step = Step::Chunk {
+            offset: (1 << 21) - 1,
+            bytes: heapless::Vec::from_slice(&[0xa5; crate::update::session::CHUNK_LEN]).unwrap(),
+        };
+        let mut out = [0u8; crate::stream::MAX_FRAME];
+        let n = crate::stream::encode(&ToDevice::Update(step.clone()), &mut out).unwrap();
+        let got: ToDevice = crate::stream::decode(&mut out[..n - 1]).unwrap();
+        assert_eq!(got, ToDevice::Update(step));
     }
 }

@@ -8,9 +8,10 @@
 //! per incoming reading and a host can line them up.
 
 use super::{FrameError, FrameReader, Mode, Reading, ToDevice, MAX_FRAME};
+use crate::update::session::Step;
 
 /// What one incoming frame asks of the hub.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Event {
     /// A reading to evaluate.
@@ -21,6 +22,8 @@ pub enum Event {
     SetMode(Mode),
     /// The recording is over.
     End,
+    /// A step of a calibration update.
+    Update(Step),
 }
 
 /// Turns received bytes into [`Event`]s.
@@ -43,6 +46,7 @@ impl Replay {
             Ok(ToDevice::Reading(reading)) => Event::Reading(reading),
             Ok(ToDevice::SetMode(m)) => Event::SetMode(m),
             Ok(ToDevice::End) => Event::End,
+            Ok(ToDevice::Update(step)) => Event::Update(step),
             Err(e) => Event::InputError(e),
         })
     }

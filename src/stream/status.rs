@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 pub struct Status(pub u16);
 
 /// What the boot check found in the calibration-table flash region.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[repr(u8)]
 pub enum TableState {

@@ -10,7 +10,7 @@ use super::record::{self, StateRecord};
 use crate::table::{Table, TableError, MAX_TABLE_LEN};
 
 /// A flash operation failed; what the driver said, in a form a stream message can carry.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum FlashFault {
     /// Offset or length not aligned to the device's unit.

@@ -77,19 +77,7 @@ pub fn crc_of(t: &[u8]) -> u32 {
 
 /// The steps that send `t`.
 pub fn steps(t: &[u8]) -> Vec<Step> {
-    let crc = crc_of(t);
-    let mut s = std::vec![Step::Begin {
-        len: t.len() as u32,
-        crc
-    }];
-    for (i, c) in t.chunks(CHUNK_LEN).enumerate() {
-        s.push(Step::Chunk {
-            offset: (i * CHUNK_LEN) as u32,
-            bytes: heapless::Vec::from_slice(c).expect("chunk fits"),
-        });
-    }
-    s.push(Step::Commit);
-    s
+    Step::sequence(t).collect()
 }
 
 pub fn update(flash: &mut MockFlash, t: &[u8]) -> Result<Accepted, Refusal> {

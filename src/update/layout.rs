@@ -19,7 +19,7 @@ pub struct Layout {
 }
 
 /// Why a [`Layout`] cannot be used with a flash device.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum LayoutError {
     /// A region does not start and end on an erase unit (slot 0–1, then state 2–3).

@@ -16,13 +16,16 @@ use heapless::Vec;
 use super::boot::{self, FlashFault, SlotError};
 use super::layout::{Layout, LayoutError, MAX_WRITE_SIZE};
 use super::record::{self, StateRecord};
-use crate::table::{is_table_len, TableError, MAX_TABLE_LEN};
+use crate::stream::TableState;
+use crate::table::{is_table_len, MAX_TABLE_LEN};
 
-/// Most table bytes one `Chunk` carries (a stream frame stays well under its limit).
-pub const CHUNK_LEN: usize = 64;
+/// Most table bytes one `Chunk` carries: the largest that keeps its `ToDevice` message
+/// (variant bytes, offset varint, length byte, the bytes) and CRC within a frame's
+/// [`MAX_PAYLOAD`](crate::stream::MAX_PAYLOAD) of 64 bytes, with offsets up to 2^21.
+pub const CHUNK_LEN: usize = 48;
 
-/// One step of an update, as a `ToDevice` message will carry it.
-#[derive(Clone, Debug, PartialEq, Eq)]
+/// One step of an update, as the `ToDevice::Update` message carries it (`docs/protocol.md`).
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Step {
     /// Start (or restart) an update of a table of `len` bytes whose CRC (last four bytes) is
     /// `crc`.
@@ -45,8 +48,59 @@ pub enum Step {
     Abort,
 }
 
+impl Step {
+    /// Every step that sends `table` whole, as a host sends them: `Begin` with its length and
+    /// the CRC of its last four bytes, the chunks in order, `Commit`. The one place a table
+    /// is cut into chunks (`armcal table send`, the tests, the fuzz seeds).
+    pub fn sequence(table: &[u8]) -> impl Iterator<Item = Step> + '_ {
+        let crc = match table.len().checked_sub(4) {
+            Some(at) => {
+                u32::from_le_bytes([table[at], table[at + 1], table[at + 2], table[at + 3]])
+            }
+            None => 0,
+        };
+        let begin = Step::Begin {
+            len: table.len() as u32,
+            crc,
+        };
+        let chunks = table
+            .chunks(CHUNK_LEN)
+            .enumerate()
+            .map(|(i, c)| Step::Chunk {
+                offset: (i * CHUNK_LEN) as u32,
+                // Cannot fail: `chunks` gives at most CHUNK_LEN bytes.
+                bytes: Vec::from_slice(c).unwrap_or_default(),
+            });
+        core::iter::once(begin)
+            .chain(chunks)
+            .chain(core::iter::once(Step::Commit))
+    }
+}
+
+// By hand: heapless's `defmt` support is for defmt 0.3; a chunk logs as its offset and length.
+#[cfg(feature = "defmt")]
+impl defmt::Format for Step {
+    fn format(&self, f: defmt::Formatter) {
+        match self {
+            Step::Begin { len, crc } => {
+                defmt::write!(f, "Begin {{ len: {=u32}, crc: {=u32:#x} }}", len, crc)
+            }
+            Step::Chunk { offset, bytes } => {
+                defmt::write!(
+                    f,
+                    "Chunk {{ offset: {=u32}, {=usize} bytes }}",
+                    offset,
+                    bytes.len()
+                )
+            }
+            Step::Commit => defmt::write!(f, "Commit"),
+            Step::Abort => defmt::write!(f, "Abort"),
+        }
+    }
+}
+
 /// A step that was carried out.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Accepted {
     /// The slot is erased and waits for `len` bytes.
@@ -72,7 +126,7 @@ pub enum Accepted {
 
 /// Why a step was refused. After a refusal of `Commit` or a flash fault the update is over
 /// (a new `Begin` starts again); a refused `Chunk` may be resent.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Refusal {
     /// `Chunk` or `Commit` with no update begun.
@@ -96,8 +150,9 @@ pub enum Refusal {
         /// Bytes `Begin` announced.
         len: u32,
     },
-    /// The written table fails a check of the boot.
-    Table(TableError),
+    /// The written table fails a check of the boot: the state a boot would report for it
+    /// (the status word's table state, so that the host reads one vocabulary for both).
+    Table(TableState),
     /// The written table is valid but is not what `Begin` announced (its length or CRC).
     NotAnnounced,
     /// The layout does not fit the flash.
@@ -106,6 +161,9 @@ pub enum Refusal {
     Flash(FlashFault),
     /// The sequence number would wrap (after 2^32 − 1 updates).
     SequenceExhausted,
+    /// This hub takes no update over the stream (its board has no flash driver wired to
+    /// [`Updater`]); the table is changed with a debug probe.
+    NotSupported,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -283,7 +341,7 @@ impl Updater {
         boot::verify_slot(flash, &self.layout, slot, self.joints, Some(&rec), scratch).map_err(
             |e| match e {
                 SlotError::Flash(f) => Refusal::Flash(f),
-                SlotError::Table(t) => Refusal::Table(t),
+                SlotError::Table(t) => Refusal::Table(TableState::from(&t)),
                 SlotError::NotRecorded => Refusal::NotAnnounced,
             },
         )?;

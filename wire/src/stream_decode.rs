@@ -8,7 +8,7 @@
 //! sends one; a broken or foreign hub might) is handed out without them.
 
 use quatarm::stream::{
-    FrameError, FrameReader, Hello, Report, ToHost, MAX_FRAME, PROTOCOL_VERSION,
+    FrameError, FrameReader, Hello, Report, ToHost, UpdateAnswer, MAX_FRAME, PROTOCOL_VERSION,
 };
 
 /// A forward jump of the sequence number up to this size is a gap (lost reports); a larger
@@ -38,6 +38,8 @@ pub enum Item {
     /// invalid table (here without them, as the status demands), or no coordinates without a
     /// reason.
     Inconsistent(Report),
+    /// The hub's answer to a calibration update step (`docs/update.md`).
+    Update(UpdateAnswer),
     /// A frame that failed its checks.
     Damaged(FrameError),
 }
@@ -47,7 +49,7 @@ impl Item {
     pub fn report(&self) -> Option<&Report> {
         match self {
             Item::Report(r) | Item::Backward { report: r, .. } | Item::Inconsistent(r) => Some(r),
-            Item::Hello(_) | Item::Repeated(_) | Item::Damaged(_) => None,
+            Item::Hello(_) | Item::Repeated(_) | Item::Update(_) | Item::Damaged(_) => None,
         }
     }
 }
@@ -57,6 +59,8 @@ impl Item {
 pub struct Stats {
     /// `Hello` announcements decoded.
     pub hellos: u64,
+    /// Answers to update steps decoded.
+    pub updates: u64,
     /// Reports decoded (repeated ones not included).
     pub reports: u64,
     /// Reports that carried coordinates, as handed out.
@@ -78,7 +82,9 @@ pub struct Stats {
     /// protocol version (an unknown `ToHost` variant, a newer hub): reported apart because
     /// they mean "wrong decoder", not "bad line".
     pub undecodable: u64,
-    /// `Hello`s announcing a `protocol` other than this decoder's [`PROTOCOL_VERSION`].
+    /// `Hello`s announcing a `protocol` this decoder does not read (it reads 1 and
+    /// [`PROTOCOL_VERSION`], 2: the same messages, protocol 2 adding `Hello::live` and the
+    /// update messages).
     pub foreign_protocol: u64,
     /// Bytes skipped before the first delimiter (joining a running stream).
     pub skipped_bytes: u64,
@@ -96,7 +102,7 @@ impl Stats {
 
     /// Frames that passed every check.
     pub fn valid_frames(&self) -> u64 {
-        self.hellos + self.reports + self.repeated
+        self.hellos + self.reports + self.repeated + self.updates
     }
 }
 
@@ -161,10 +167,15 @@ impl Decoder {
                 // A hub that (re)boots numbers from 0 again.
                 self.last = None;
                 self.stats.hellos += 1;
-                self.stats.foreign_protocol += u64::from(h.protocol != PROTOCOL_VERSION);
+                self.stats.foreign_protocol +=
+                    u64::from(!(1..=PROTOCOL_VERSION).contains(&h.protocol));
                 Item::Hello(h)
             }
             Ok(ToHost::Report(r)) => self.report(r),
+            Ok(ToHost::Update(a)) => {
+                self.stats.updates += 1;
+                Item::Update(a)
+            }
             Err(e) => {
                 match e {
                     FrameError::Crc => self.stats.crc_errors += 1,

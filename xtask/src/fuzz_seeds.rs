@@ -8,7 +8,8 @@ use host_tests::boards::root;
 use host_tests::e2e::{calibration, default_recording_path};
 use host_tests::recording::{self, frame, replay_bytes};
 use quatarm::stream::{
-    encode, Coordinates, Hello, Mode, NumberFormat, Report, Status, ToDevice, ToHost, MAX_FRAME,
+    encode, Coordinates, Hello, LiveTable, Mode, NumberFormat, Report, Status, ToDevice, ToHost,
+    MAX_FRAME,
 };
 
 fn write(target: &str, name: &str, bytes: &[u8]) -> Result<()> {
@@ -83,6 +84,18 @@ pub fn run() -> Result<()> {
     }
     damaged.extend(frame(&ToDevice::SetMode(Mode::Binary)));
     write("hub_frames", "damaged.bin", &picked(1, &damaged))?;
+    // A whole calibration update, a reading and a switch to text mode in its middle.
+    let (_, new_table) = calibration(&data.join("default-6.toml"))?;
+    let steps: Vec<_> = quatarm::update::session::Step::sequence(&new_table).collect();
+    let mut update = vec![0u8];
+    for (i, step) in steps.into_iter().enumerate() {
+        if i == 10 {
+            update.extend(frame(&ToDevice::Reading(readings[0])));
+            update.extend(frame(&ToDevice::SetMode(Mode::Text)));
+        }
+        update.extend(frame(&ToDevice::Update(step)));
+    }
+    write("hub_frames", "update.bin", &picked(0, &update))?;
 
     let streams = root().join("armcal/tests/streams");
     for name in ["s-dup.bin", "s-fault-with-point.bin"] {
@@ -94,6 +107,11 @@ pub fn run() -> Result<()> {
         precision: NumberFormat::F32,
         joints: 6,
         status: Status(Status::TABLE_VALID),
+        live: Some(LiveTable {
+            slot: 1,
+            seq: 3,
+            crc: 0x1234_5678,
+        }),
     })));
     for seq in 0..4u32 {
         let fault = seq == 2;

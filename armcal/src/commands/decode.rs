@@ -124,12 +124,20 @@ fn open(args: &Args) -> Result<(Box<dyn Read>, bool, String)> {
 fn note(item: &Item) {
     match item {
         Item::Hello(h) => eprintln!(
-            "# hub: protocol {}, {:?}, {} joints, table {}",
+            "# hub: protocol {}, {:?}, {} joints, table {}{}",
             h.protocol,
             h.precision,
             h.joints,
-            h.status.table().name()
+            h.status.table().name(),
+            match h.live {
+                Some(l) => format!(
+                    " (slot {}, record {}, CRC {:#010x})",
+                    l.slot, l.seq, l.crc
+                ),
+                None => String::new(),
+            }
         ),
+        Item::Update(a) => eprintln!("# update: {a:?}"),
         Item::Damaged(e) => eprintln!("# damaged frame: {e}"),
         Item::Repeated(r) => {
             eprintln!("# report {} repeated: not written again", r.seq)
@@ -168,7 +176,7 @@ fn summarise(s: &Stats, name: &str, total: u64, head: &[u8]) -> Result<()> {
     );
     if s.foreign_protocol > 0 || s.undecodable > 0 {
         eprintln!(
-            "# {name}: {} Hello(s) of a protocol other than version {PROTOCOL_VERSION}, {} frame(s) with a good CRC that are no message of version {PROTOCOL_VERSION}: this hub speaks another protocol version",
+            "# {name}: {} Hello(s) of a protocol other than versions 1–{PROTOCOL_VERSION}, {} frame(s) with a good CRC that are no message of version {PROTOCOL_VERSION}: this hub speaks another protocol version",
             s.foreign_protocol, s.undecodable
         );
     }

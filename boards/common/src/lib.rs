@@ -4,6 +4,8 @@
 //! - [`calibration`]: the table validated at boot and the chain built from it.
 //! - [`stack`]: stack high-water mark by painting.
 //! - [`clock`]: microseconds since boot from SysTick, whose handler it defines.
+//! - [`flash`]: the two table slots and the update's state record, the boot through them,
+//!   the QEMU boards' flash drivers.
 //! - [`table_region`]: the calibration table's flash region, as `memory.x` reserves it.
 //! - [`live`]: a real hub's loop: encoders at a fixed period, replay when the host sends one.
 //! - [`serve`]: the replay loop: bytes in, [`quatarm::stream::Hub`] reports out.
@@ -19,6 +21,7 @@
 pub mod bench;
 pub mod calibration;
 pub mod clock;
+pub mod flash;
 pub mod live;
 #[cfg(feature = "qemu")]
 pub mod qemu;

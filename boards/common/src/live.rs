@@ -9,7 +9,8 @@
 //! poll succeeds again (`Hub::report_sample`).
 
 use quatarm::encoder::{read_joints, AbsoluteEncoder};
-use quatarm::stream::{Coordinates, Event, Hub, Replay, ToHost, MAX_OUTPUT};
+use quatarm::stream::{Coordinates, Event, Hub, Replay, ToHost, UpdateAnswer, MAX_OUTPUT};
+use quatarm::update::Refusal;
 use quatarm::temperature::TemperatureSensor;
 
 use crate::calibration::{self, HubEvaluator, JOINTS};
@@ -103,6 +104,13 @@ pub fn serve_live<L: PollLink, E: AbsoluteEncoder, T: TemperatureSensor, X>(
                 Some(Event::End) => {
                     replaying = false;
                     next = now_us();
+                    continue;
+                }
+                // The real boards' flash drivers are not wired to the updater yet: the
+                // table changes with a debug probe, and the host is told so.
+                Some(Event::Update(_)) => {
+                    let answer: UpdateAnswer = Err(Refusal::NotSupported);
+                    link.write(hub.render(&ToHost::Update(answer), &mut out));
                     continue;
                 }
                 None => continue,

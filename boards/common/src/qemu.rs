@@ -4,19 +4,65 @@
 
 use cortex_m_semihosting::debug::{self, EXIT_FAILURE, EXIT_SUCCESS};
 
-use crate::calibration::{self, HubEvaluator};
-use crate::{bench, clock, serve, stack, table_region, Link};
+use embedded_storage::nor_flash::NorFlash;
+use quatarm::table::MAX_TABLE_LEN;
+use quatarm::update::{Refusal, Updater};
 
-/// The whole run of a QEMU hub image: replay the recording that arrives on the link until the
-/// host's `End`, log the stack's peak and the statics' size, exit with success.
+use crate::calibration::{self, HubEvaluator, JOINTS};
+use crate::flash::{self, slots};
+use crate::{bench, clock, serve, stack, table_region, Link, Served};
+
+/// The whole run of a QEMU hub image: boot on the live table, replay the recording that
+/// arrives on the link and carry out update steps until the host's `End` (booting again on
+/// the new table after each committed update, as after a reset), log the stack's peak and the
+/// statics' size, exit with success.
 ///
 /// The core clock is a constant parameter, not an argument: the ticks-to-µs division of every
 /// report then compiles to a multiplication (a runtime u64 division costs hundreds of
 /// instructions on the M0, and flash).
 ///
 /// `open_link` sets up the board's UART; it runs after the clock has started, so that report
-/// times count from the same point on every board. `ram_start` is where `memory.x` puts RAM.
-pub fn hub_main<P: HubEvaluator, const CORE_HZ: u32, L: Link>(
+/// times count from the same point on every board. `open_flash` gives the driver of the
+/// calibration flash ([`crate::flash::slots::base`], [`crate::flash::slots::span`]).
+/// `ram_start` is where `memory.x` puts RAM.
+pub fn hub_main<P: HubEvaluator, const CORE_HZ: u32, L: Link, F: NorFlash>(
+    ram_start: usize,
+    open_link: impl FnOnce() -> L,
+    open_flash: impl FnOnce() -> F,
+) -> ! {
+    stack::paint();
+    let Some(cp) = cortex_m::Peripherals::take() else {
+        exit_failure()
+    };
+    clock::start(cp.SYST);
+    let mut link = open_link();
+    let mut flash = open_flash();
+    let mut scratch = [0u8; MAX_TABLE_LEN];
+    let mut updater = Updater::new(slots::layout(), Some(JOINTS));
+    loop {
+        let boot = flash::boot::<P, _>(&mut flash, &mut scratch);
+        let mut hub = boot.hub();
+        let cal = &boot.calibration;
+        let served = serve(
+            &mut link,
+            &mut hub,
+            || clock::now_us(CORE_HZ),
+            |counts, temp_mc| cal.eval(counts, temp_mc),
+            |step| updater.step(&mut flash, &mut scratch, step),
+        );
+        if let Served::Ended { .. } = served {
+            break;
+        }
+    }
+    log_memory(ram_start);
+    exit_success()
+}
+
+/// The whole run of a QEMU hub image without an update port: as [`hub_main`], on the table
+/// of slot 0 (`CALTABLE`) as a debug probe flashed it; update steps are answered
+/// `NotSupported`. For the qemu-m0 hub, whose 32 KiB budget the updater does not fit
+/// (37,228 bytes with it, rustup 1.95; README, "On the targets").
+pub fn hub_main_without_update<P: HubEvaluator, const CORE_HZ: u32, L: Link>(
     ram_start: usize,
     open_link: impl FnOnce() -> L,
 ) -> ! {
@@ -33,13 +79,19 @@ pub fn hub_main<P: HubEvaluator, const CORE_HZ: u32, L: Link>(
         &mut hub,
         || clock::now_us(CORE_HZ),
         |counts, temp_mc| cal.eval(counts, temp_mc),
+        |_| Err(Refusal::NotSupported),
     );
+    log_memory(ram_start);
+    exit_success()
+}
+
+/// The stack's peak and the statics' size, for the end-to-end tests' report.
+fn log_memory(ram_start: usize) {
     defmt::info!(
         "stack peak {=u32} bytes, statics {=u32} bytes",
         stack::peak() as u32,
         stack::statics(ram_start) as u32
     );
-    exit_success()
 }
 
 /// The whole run of a QEMU benchmark image ([`bench::run`] in precision `P`), then exit with

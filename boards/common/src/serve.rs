@@ -1,6 +1,9 @@
-//! The replay loop every board runs: read bytes, evaluate readings, send reports.
+//! The replay loop every board runs: read bytes, evaluate readings, send reports, carry out
+//! calibration update steps.
 
-use quatarm::stream::{Coordinates, Event, Hub, Replay, ToHost, MAX_OUTPUT};
+use quatarm::stream::{Coordinates, Event, Hub, Replay, ToHost, UpdateAnswer, MAX_OUTPUT};
+use quatarm::update::session::Step;
+use quatarm::update::Accepted;
 
 /// A byte link to the host (a UART).
 pub trait Link {
@@ -11,19 +14,27 @@ pub trait Link {
 }
 
 /// How a replay ended.
-pub struct Served {
-    /// Reports sent.
-    pub reports: u32,
+pub enum Served {
+    /// The host sent `End`.
+    Ended {
+        /// Reports sent.
+        reports: u32,
+    },
+    /// An update committed a new table: the caller boots on it (a new chain, a new `Hello`).
+    Updated,
 }
 
-/// Announces the hub, then answers every incoming frame until the host sends `End`.
-/// `now_us` stamps each report; `eval` runs the chain (it is called only for readings that may
-/// give coordinates, see [`Hub::report`]).
+/// Announces the hub, then answers every incoming frame until the host sends `End` or an
+/// update commits. `now_us` stamps each report; `eval` runs the chain (it is called only for
+/// readings that may give coordinates, see [`Hub::report`]); `update` carries out one update
+/// step (`quatarm::update::Updater::step` on the board's flash). Readings keep being answered
+/// while an update is under way, on the old table, until the commit.
 pub fn serve<L: Link, E>(
     link: &mut L,
     hub: &mut Hub,
     mut now_us: impl FnMut() -> u64,
     mut eval: impl FnMut(&[u32], i32) -> Result<Coordinates, E>,
+    mut update: impl FnMut(&Step) -> UpdateAnswer,
 ) -> Served {
     let mut out = [0u8; MAX_OUTPUT];
     // A lone delimiter first: whoever listens is in sync from the first frame on.
@@ -54,13 +65,22 @@ pub fn serve<L: Link, E>(
                 link.write(hub.render(&hub.hello(), &mut out));
                 continue;
             }
+            Event::Update(step) => {
+                let answer = update(&step);
+                link.write(hub.render(&ToHost::Update(answer), &mut out));
+                if let Ok(Accepted::Committed { slot, seq }) = answer {
+                    defmt::info!("update committed: slot {=u8}, record {=u32}", slot, seq);
+                    return Served::Updated;
+                }
+                continue;
+            }
             Event::End => {
                 defmt::info!(
                     "replay done: {=u32} reports, {=u32} damaged input frames",
                     reports,
                     input_errors
                 );
-                return Served { reports };
+                return Served::Ended { reports };
             }
         };
         link.write(hub.render(&ToHost::Report(report), &mut out));

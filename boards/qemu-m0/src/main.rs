@@ -19,7 +19,7 @@ const RAM_START: usize = 0x2000_0000;
 
 #[entry]
 fn main() -> ! {
-    qemu::hub_main::<quatarm::Fixed, CORE_HZ, _>(RAM_START, || {
+    qemu::hub_main_without_update::<quatarm::Fixed, CORE_HZ, _>(RAM_START, || {
         // SAFETY: the only UART of the image.
         unsafe { uart::Uart::take() }
     })

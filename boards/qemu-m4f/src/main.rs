@@ -1,13 +1,14 @@
 //! quatarm hub on QEMU `mps2-an386` (Cortex-M4F): the f32 chain, fed by a recording over
 //! CMSDK UART0, streaming reports back on the same UART.
 //!
-//! Boot: read the calibration region, validate the table, announce the result. Then replay
-//! until the host sends `End`, and exit QEMU with success (any panic exits with failure).
+//! Boot: the live one of the two table slots, validated, announced in `Hello`. Then replay,
+//! and carry out calibration updates (`docs/update.md`), until the host sends `End`, and exit QEMU with success (any panic exits with failure).
 #![no_std]
 #![no_main]
 
 mod uart;
 
+use board_common::flash::{ram_nor::RamNor, slots};
 use board_common::qemu;
 use cortex_m_rt::entry;
 
@@ -21,8 +22,16 @@ const RAM_START: usize = 0x2000_0000;
 
 #[entry]
 fn main() -> ! {
-    qemu::hub_main::<quatarm::F32, CORE_HZ, _>(RAM_START, || {
-        // SAFETY: UART0 is used by nothing else.
-        unsafe { uart::Uart::new(uart::Uart::UART0, BAUDDIV) }
-    })
+    qemu::hub_main::<quatarm::F32, CORE_HZ, _, _>(
+        RAM_START,
+        || {
+            // SAFETY: UART0 is used by nothing else.
+            unsafe { uart::Uart::new(uart::Uart::UART0, BAUDDIV) }
+        },
+        || {
+            // SAFETY: the calibration regions of memory.x, RAM outside the image that only
+            // the updater touches. 4 KiB: the state record's copies, the smallest regions.
+            unsafe { RamNor::<4096>::new(slots::base(), slots::span()) }
+        },
+    )
 }

@@ -1,5 +1,5 @@
 //! The end-to-end cases every QEMU board must pass; `qemu_m4f.rs` and `qemu_m0.rs` declare
-//! them for their board and bounds with [`board_tests!`]. They need the board built
+//! them for their board, bounds and update behaviour with [`board_tests!`]. They need the board built
 //! (`cargo xtask build`) and `qemu-system-arm`: a missing one fails the test, it is never
 //! skipped.
 
@@ -9,15 +9,29 @@ use host_tests::e2e::{
     direction_deviation, host_points, reference, replay,
 };
 use host_tests::recording::{self, frame, replay_bytes};
-use quatarm::stream::{Mode, Reading, Status, TableState, ToDevice, CSV_HEADER};
+use host_tests::session::Session;
+use quatarm::stream::{
+    Coordinates, LiveTable, Mode, Reading, Status, TableState, ToDevice, CSV_HEADER,
+};
+use quatarm::update::session::Step;
+use quatarm::update::{Accepted, Refusal};
+use quatarm_wire::stream_decode::Item;
 
 /// Declares every case of this module as a test of one board: `board` (a name of
-/// `host_tests::boards`), `bounds` for its full recording, and `full_recording`, the name of
-/// that test (it says the bound). They are `#[ignore]`d for plain `cargo test`, which has
+/// `host_tests::boards`), `bounds` for its full recording, `full_recording`, the name of
+/// that test (it says the bound), and `update`, the case of its hub's update port
+/// ([`update_with_resets`] or [`update_not_supported`]). They are `#[ignore]`d for plain `cargo test`, which has
 /// neither QEMU nor the cross-built board; `cargo xtask test` builds the boards and runs them
 /// with `--include-ignored`.
 macro_rules! board_tests {
-    (board: $board:literal, bounds: $bounds:expr, full_recording: $full:ident $(,)?) => {
+    (board: $board:literal, bounds: $bounds:expr, full_recording: $full:ident,
+     update: $update:ident $(,)?) => {
+        #[test]
+        #[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
+        fn a_calibration_update_over_the_uart() {
+            $crate::common::$update($board);
+        }
+
         #[test]
         #[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
         fn $full() {
@@ -364,4 +378,146 @@ pub fn soak(name: &str) {
         c.damage_in.total() > 300 && c.damage_out.total() > 300,
         "{c:?}"
     );
+}
+
+/// The steps `armcal table send` sends for `table`.
+fn update_steps(table: &[u8]) -> Vec<Step> {
+    Step::sequence(table).collect()
+}
+
+/// The next item must be a `Hello` naming `live` as the table in use.
+#[allow(dead_code)] // each board's test binary uses one of the two update cases
+fn expect_hello(s: &mut Session, live: Option<LiveTable>, when: &str) {
+    match s.next().unwrap() {
+        Item::Hello(h) => assert_eq!(h.live, live, "{when}: {h:?}"),
+        other => panic!("{when}: expected a Hello, got {other:?}"),
+    }
+}
+
+/// One reading's coordinates as the hub gives them now.
+fn point_now(s: &mut Session, r: &Reading) -> Coordinates {
+    match s.ask(&ToDevice::Reading(*r)).unwrap() {
+        Item::Report(rep) => rep.point.expect("a point"),
+        other => panic!("expected a report, got {other:?}"),
+    }
+}
+
+/// A calibration update over the UART, with the machine reset before the commit at several
+/// points (no step, after `Begin`, half the chunks, every chunk) and after it: every boot
+/// comes up on the old table until the commit and on the new one after it, as its `Hello`
+/// says (slot, record sequence number, CRC) and its points show; readings sent during the
+/// update are answered on the old table; a damaged table is refused at commit and changes
+/// nothing; a second update cut by a reset leaves the first one live.
+#[allow(dead_code)] // each board's test binary uses one of the two update cases
+pub fn update_with_resets(name: &str) {
+    let b = the_board(name);
+    let (mut arm, old) = calibration(&default_calibration_path()).unwrap();
+    arm.probe.error[2] += 0.05;
+    let new = quatarm_wire::tablebuild::build(&arm).unwrap();
+    let crc = |t: &[u8]| u32::from_le_bytes(t[t.len() - 4..].try_into().unwrap());
+    let factory = Some(LiveTable {
+        slot: 0,
+        seq: 0,
+        crc: crc(&old),
+    });
+    let updated = Some(LiveTable {
+        slot: 1,
+        seq: 1,
+        crc: crc(&new),
+    });
+    let reading = some_readings(1)[0];
+    let host_old = host_points(b.precision, &old, &[reading]).unwrap()[0].unwrap();
+    let host_new = host_points(b.precision, &new, &[reading]).unwrap()[0].unwrap();
+    assert_ne!(host_old, host_new);
+
+    let mut s = Session::start(&b, &b.elf(b.name), Some(&old)).unwrap();
+    expect_hello(&mut s, factory, "boot");
+    assert_eq!(point_now(&mut s, &reading), host_old);
+    let steps = update_steps(&new);
+    let commit = steps.len() - 1;
+    for cut in [0, 1, commit / 2, commit] {
+        for step in &steps[..cut] {
+            let answer = s.ask(&ToDevice::Update(step.clone())).unwrap();
+            assert!(matches!(answer, Item::Update(Ok(_))), "{answer:?}");
+        }
+        s.reset().unwrap();
+        expect_hello(
+            &mut s,
+            factory,
+            &format!("reset after {cut} of {commit} steps"),
+        );
+    }
+    for (i, step) in steps.iter().enumerate() {
+        if i == commit / 2 {
+            assert_eq!(
+                point_now(&mut s, &reading),
+                host_old,
+                "old table during an update"
+            );
+        }
+        let answer = s.ask(&ToDevice::Update(step.clone())).unwrap();
+        if i == commit {
+            assert_eq!(
+                answer,
+                Item::Update(Ok(Accepted::Committed { slot: 1, seq: 1 }))
+            );
+        } else {
+            assert!(matches!(answer, Item::Update(Ok(_))), "{answer:?}");
+        }
+    }
+    expect_hello(&mut s, updated, "after the commit");
+    assert_eq!(point_now(&mut s, &reading), host_new);
+    s.reset().unwrap();
+    expect_hello(&mut s, updated, "reset after the commit");
+    assert_eq!(point_now(&mut s, &reading), host_new);
+
+    // One byte of the table changed: refused at commit as the boot would call it.
+    let mut damaged = update_steps(&old);
+    match &mut damaged[3] {
+        Step::Chunk { bytes, .. } => bytes[5] ^= 0x01,
+        other => panic!("step 3 is a chunk, not {other:?}"),
+    }
+    let mut last = None;
+    for step in &damaged {
+        last = Some(s.ask(&ToDevice::Update(step.clone())).unwrap());
+    }
+    assert_eq!(
+        last,
+        Some(Item::Update(Err(Refusal::Table(TableState::Corrupt))))
+    );
+    assert_eq!(
+        point_now(&mut s, &reading),
+        host_new,
+        "a refused update changes nothing"
+    );
+
+    // A second update (into slot 0) cut by a reset: the first one stays live.
+    for step in &update_steps(&old)[..commit / 2] {
+        s.ask(&ToDevice::Update(step.clone())).unwrap();
+    }
+    s.reset().unwrap();
+    expect_hello(&mut s, updated, "reset during a second update");
+    let (status, _) = s.finish().unwrap();
+    assert!(status.success(), "{status}");
+}
+
+/// A hub without an update port (the qemu-m0 image, for its flash budget) answers every update
+/// step `NotSupported` and keeps its table.
+#[allow(dead_code)] // each board's test binary uses one of the two update cases
+pub fn update_not_supported(name: &str) {
+    let b = the_board(name);
+    let (_, table) = calibration(&default_calibration_path()).unwrap();
+    let reading = some_readings(1)[0];
+    let host = host_points(b.precision, &table, &[reading]).unwrap()[0].unwrap();
+    let mut s = Session::start(&b, &b.elf(b.name), Some(&table)).unwrap();
+    assert!(matches!(s.next().unwrap(), Item::Hello(_)));
+    for step in &update_steps(&table)[..3] {
+        assert_eq!(
+            s.ask(&ToDevice::Update(step.clone())).unwrap(),
+            Item::Update(Err(Refusal::NotSupported))
+        );
+    }
+    assert_eq!(point_now(&mut s, &reading), host);
+    let (status, _) = s.finish().unwrap();
+    assert!(status.success(), "{status}");
 }

@@ -1,0 +1,157 @@
+//! An interactive QEMU run: frames sent one at a time, the hub's answers read as they arrive,
+//! the machine reset through QEMU's monitor in between (`system_reset`: the core and its
+//! peripherals restart from the reset vector, as after a power cycle or a watchdog; the
+//! flash keeps what was written). The calibration-update tests drive a hub through it.
+
+use std::io::{Read, Write};
+use std::os::unix::net::UnixStream;
+use std::path::PathBuf;
+use std::process::{Child, ExitStatus};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Context, Result};
+use quatarm::stream::{encode, ToDevice, MAX_FRAME};
+use quatarm_wire::stream_decode::{Decoder, Item};
+
+use crate::boards::Board;
+use crate::qemu::{command, connect};
+
+/// How long an answer may take before the session counts it as missing.
+pub const ANSWER_TIMEOUT: Duration = Duration::from_secs(30);
+
+/// A running QEMU hub.
+pub struct Session {
+    child: Child,
+    uart: UnixStream,
+    monitor: UnixStream,
+    bytes: Receiver<Vec<u8>>,
+    pending: std::collections::VecDeque<Item>,
+    decoder: Decoder,
+    log: Option<JoinHandle<Vec<u8>>>,
+    _dir: tempfile::TempDir,
+}
+
+impl Session {
+    /// Starts `board`'s main binary with `table` (bytes) in its calibration region (slot 0).
+    pub fn start(board: &Board, elf: &std::path::Path, table: Option<&[u8]>) -> Result<Session> {
+        if !elf.exists() {
+            bail!("{} is not built: run `cargo xtask build`", board.name);
+        }
+        let dir = tempfile::tempdir()?;
+        let table_path = match table {
+            Some(t) => {
+                let p = dir.path().join("table.bin");
+                std::fs::write(&p, t)?;
+                Some(p)
+            }
+            None => None::<PathBuf>,
+        };
+        let sock = dir.path().join("uart.sock");
+        let mon = dir.path().join("monitor.sock");
+        let mut cmd = command(board, &table_path, false, &sock, Some(&mon))?;
+        cmd.arg("-kernel").arg(elf);
+        let mut child = cmd.spawn().context("starting qemu-system-arm")?;
+        let mut stdout = child.stdout.take().context("qemu stdout")?;
+        let log = std::thread::spawn(move || {
+            let mut out = Vec::new();
+            let _ = stdout.read_to_end(&mut out);
+            out
+        });
+        let uart = connect(&mut child, &sock)?;
+        let monitor = connect(&mut child, &mon)?;
+        let mut rx = uart.try_clone()?;
+        let (tx, bytes) = mpsc::channel();
+        std::thread::spawn(move || {
+            let mut buf = [0u8; 4096];
+            while let Ok(n) = rx.read(&mut buf) {
+                if n == 0 || tx.send(buf[..n].to_vec()).is_err() {
+                    break;
+                }
+            }
+        });
+        Ok(Session {
+            child,
+            uart,
+            monitor,
+            bytes,
+            pending: Default::default(),
+            decoder: Decoder::from_start(),
+            log: Some(log),
+            _dir: dir,
+        })
+    }
+
+    /// Sends one message as a frame.
+    pub fn send(&mut self, msg: &ToDevice) -> Result<()> {
+        let mut out = [0u8; MAX_FRAME];
+        let n = encode(msg, &mut out).context("encoding a message")?;
+        self.uart.write_all(&out[..n])?;
+        Ok(())
+    }
+
+    /// The next decoded item of the hub's stream, waiting up to [`ANSWER_TIMEOUT`].
+    pub fn next(&mut self) -> Result<Item> {
+        let deadline = Instant::now() + ANSWER_TIMEOUT;
+        loop {
+            if let Some(item) = self.pending.pop_front() {
+                return Ok(item);
+            }
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.bytes.recv_timeout(left) {
+                Ok(chunk) => {
+                    let items = self.decoder.push_all(&chunk);
+                    self.pending.extend(items);
+                }
+                Err(RecvTimeoutError::Timeout) => {
+                    bail!("no answer from the hub in {ANSWER_TIMEOUT:?}")
+                }
+                Err(RecvTimeoutError::Disconnected) => bail!("the hub's UART closed"),
+            }
+        }
+    }
+
+    /// Sends `msg` and returns the next item the hub sends.
+    pub fn ask(&mut self, msg: &ToDevice) -> Result<Item> {
+        self.send(msg)?;
+        self.next()
+    }
+
+    /// Resets the machine through QEMU's monitor. The hub boots again and sends a `Hello`.
+    pub fn reset(&mut self) -> Result<()> {
+        self.monitor.write_all(b"system_reset\n")?;
+        Ok(())
+    }
+
+    /// Sends `End` and waits for QEMU to exit; returns its status and the defmt log bytes.
+    pub fn finish(mut self) -> Result<(ExitStatus, Vec<u8>)> {
+        self.send(&ToDevice::End)?;
+        let start = Instant::now();
+        let status = loop {
+            if let Some(s) = self.child.try_wait()? {
+                break s;
+            }
+            if start.elapsed() > ANSWER_TIMEOUT {
+                let _ = self.child.kill();
+                bail!("QEMU did not exit after End");
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        let log = self
+            .log
+            .take()
+            .and_then(|h| h.join().ok())
+            .unwrap_or_default();
+        Ok((status, log))
+    }
+}
+
+impl Drop for Session {
+    fn drop(&mut self) {
+        if let Ok(None) = self.child.try_wait() {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
+    }
+}
