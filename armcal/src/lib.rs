@@ -6,7 +6,7 @@
 //! simulating measurements ([`sim`]) and evaluating readings with the f64 reference or the
 //! firmware's chains ([`eval`], [`accuracy`]). Building the firmware's binary table
 //! ([`tablebuild`]) and decoding a hub's stream ([`stream_decode`]) are `quatarm-wire`'s,
-//! re-exported here. The arm model itself is `quatarm-ref`'s; the chains are `quatarm`'s.
+//! re-exported here; sending a table to a hub over its UART is [`table_send`]. The arm model itself is `quatarm-ref`'s; the chains are `quatarm`'s.
 //!
 //! # Example
 //!
@@ -84,3 +84,4 @@ pub mod report;
 pub mod residuals;
 pub mod sim;
 pub mod stats;
+pub mod table_send;

@@ -92,7 +92,7 @@ impl Session {
     }
 
     /// The next decoded item of the hub's stream, waiting up to [`ANSWER_TIMEOUT`].
-    pub fn next(&mut self) -> Result<Item> {
+    pub fn next_item(&mut self) -> Result<Item> {
         let deadline = Instant::now() + ANSWER_TIMEOUT;
         loop {
             if let Some(item) = self.pending.pop_front() {
@@ -115,7 +115,7 @@ impl Session {
     /// Sends `msg` and returns the next item the hub sends.
     pub fn ask(&mut self, msg: &ToDevice) -> Result<Item> {
         self.send(msg)?;
-        self.next()
+        self.next_item()
     }
 
     /// Resets the machine through QEMU's monitor. The hub boots again and sends a `Hello`.

@@ -287,6 +287,18 @@ mod tests {
         assert!(postcard::from_bytes::<Hello>(&[2, 0, 6, 1]).is_err());
     }
 
+    /// An update answer as `docs/protocol.md` spells it: `ToHost::Update` 2, `Err` 1,
+    /// `Refusal::Table` 5, the table state's code (2, corrupt).
+    #[test]
+    fn an_update_answer_is_encoded_as_documented() {
+        use crate::stream::TableState;
+        let mut buf = [0u8; 16];
+        let msg = ToHost::Update(Err(Refusal::Table(TableState::Corrupt)));
+        assert_eq!(postcard::to_slice(&msg, &mut buf).unwrap(), [2, 1, 5, 2]);
+        let ok = ToHost::Update(Ok(Accepted::Committed { slot: 1, seq: 3 }));
+        assert_eq!(postcard::to_slice(&ok, &mut buf).unwrap(), [2, 0, 2, 1, 3]);
+    }
+
     /// The longest update message (a full chunk at an offset past any slot) fits a frame.
     #[test]
     fn a_full_update_chunk_fits_a_frame() {

@@ -5,7 +5,7 @@ use std::vec::Vec;
 
 use super::layout::Layout;
 use super::mock::MockFlash;
-use super::session::{Accepted, Step, Updater, CHUNK_LEN};
+use super::session::{Accepted, Step, Updater};
 use super::{live_table, Refusal};
 use crate::table::budget::BudgetData;
 use crate::table::{quat_to_matrix, JointData, ProbeData, TableData, MAX_TABLE_LEN};

@@ -1,4 +1,4 @@
-//! `armcal table build|show`: the firmware's binary calibration table.
+//! `armcal table build|show|send`: the firmware's binary calibration table.
 
 use anyhow::Context;
 use quatarm::table::{Table, FLAG_GEOMETRIC, FLAG_GRAVITY, FLAG_HARMONICS, FLAG_THERMAL};
@@ -20,6 +20,22 @@ pub enum Command {
         /// Table file.
         table: PathBuf,
     },
+    /// Send a binary table to a hub over its stream's UART (`docs/update.md`): it is written
+    /// into the hub's inactive flash slot, checked completely, then made live; until then, and
+    /// whenever a step is refused or the power fails, the old table stays live.
+    Send {
+        /// Table file.
+        table: PathBuf,
+        /// The hub's serial port (for instance /dev/ttyACM0).
+        #[arg(long)]
+        port: String,
+        /// Baud rate of the serial port.
+        #[arg(long, default_value_t = 115_200)]
+        baud: u32,
+        /// Seconds to wait for each answer of the hub before giving up (the old table stays).
+        #[arg(long, default_value_t = 5.0)]
+        timeout: f64,
+    },
 }
 
 /// Runs the subcommand.
@@ -37,6 +53,33 @@ pub fn run(command: Command) -> anyhow::Result<()> {
                 bytes.len(),
                 t.joint_count(),
                 t.crc()
+            );
+            Ok(())
+        }
+        Command::Send {
+            table,
+            port,
+            baud,
+            timeout,
+        } => {
+            let bytes = std::fs::read(&table).with_context(|| table.display().to_string())?;
+            if !(timeout > 0.0 && timeout.is_finite()) {
+                anyhow::bail!("--timeout {timeout}: a positive number of seconds");
+            }
+            let mut p = serialport::new(&port, baud)
+                .timeout(std::time::Duration::from_secs_f64(timeout))
+                .open()
+                .with_context(|| format!("opening serial port {port}"))?;
+            let sent = armcal::table_send::send(&mut p, &bytes)
+                .with_context(|| format!("sending {} to {port}", table.display()))?;
+            println!(
+                "{}: live on the hub in slot {}, record {}, CRC {:08x} ({} steps, {} reports while it ran)",
+                table.display(),
+                sent.live.slot,
+                sent.live.seq,
+                sent.live.crc,
+                sent.steps,
+                sent.reports_between
             );
             Ok(())
         }

@@ -388,7 +388,7 @@ fn update_steps(table: &[u8]) -> Vec<Step> {
 /// The next item must be a `Hello` naming `live` as the table in use.
 #[allow(dead_code)] // each board's test binary uses one of the two update cases
 fn expect_hello(s: &mut Session, live: Option<LiveTable>, when: &str) {
-    match s.next().unwrap() {
+    match s.next_item().unwrap() {
         Item::Hello(h) => assert_eq!(h.live, live, "{when}: {h:?}"),
         other => panic!("{when}: expected a Hello, got {other:?}"),
     }
@@ -510,7 +510,7 @@ pub fn update_not_supported(name: &str) {
     let reading = some_readings(1)[0];
     let host = host_points(b.precision, &table, &[reading]).unwrap()[0].unwrap();
     let mut s = Session::start(&b, &b.elf(b.name), Some(&table)).unwrap();
-    assert!(matches!(s.next().unwrap(), Item::Hello(_)));
+    assert!(matches!(s.next_item().unwrap(), Item::Hello(_)));
     for step in &update_steps(&table)[..3] {
         assert_eq!(
             s.ask(&ToDevice::Update(step.clone())).unwrap(),
