@@ -83,6 +83,7 @@ pub mod model;
 pub mod physics;
 pub mod rotate;
 pub mod scalar;
+pub mod signature;
 pub mod stream;
 pub mod table;
 pub mod temperature;

@@ -32,7 +32,7 @@ pub mod session;
 #[cfg(test)]
 mod session_tests;
 
-pub use boot::{live_slot, live_table, BootError, Live};
+pub use boot::{live_slot, live_table, Accept, BootError, Live};
 pub use layout::{Layout, LayoutError};
 pub use record::StateRecord;
 pub use session::{Accepted, Refusal, Updater};

@@ -31,7 +31,7 @@ impl PortHub {
     fn new(factory_table: &[u8]) -> PortHub {
         let mut p = PortHub {
             flash: factory(factory_table),
-            updater: Updater::new(layout(), Some(6)),
+            updater: Updater::new(layout(), Accept::joints(6)),
             replay: Replay::new(),
             hub: Hub::new(TableState::Valid, 6, NumberFormat::F32),
             out: VecDeque::new(),
@@ -45,7 +45,7 @@ impl PortHub {
     /// Boots on the live table and sends the `Hello` naming it.
     fn boot(&mut self) {
         let mut scratch = [0u8; MAX_TABLE_LEN];
-        let live = live_table(&mut self.flash, &layout(), Some(6), &mut scratch).unwrap();
+        let live = live_table(&mut self.flash, &layout(), &Accept::joints(6), &mut scratch).unwrap();
         self.hub = Hub::new(TableState::Valid, 6, NumberFormat::F32).with_live(LiveTable {
             slot: live.slot,
             seq: live.seq.unwrap_or(0),
@@ -142,7 +142,7 @@ fn a_table_sent_goes_live_and_the_hub_says_so() {
 #[test]
 fn a_refused_step_is_named_and_nothing_goes_live() {
     let mut port = PortHub::new(&table(100.0));
-    port.updater = Updater::new(layout(), Some(7));
+    port.updater = Updater::new(layout(), Accept::joints(7));
     let new = table(120.0);
     let err = format!("{:#}", send(&mut port, &new).unwrap_err());
     let steps = quatarm::update::session::Step::sequence(&new).count();
@@ -152,7 +152,7 @@ fn a_refused_step_is_named_and_nothing_goes_live() {
         "{err}"
     );
     let mut scratch = [0u8; MAX_TABLE_LEN];
-    assert!(live_table(&mut port.flash, &layout(), Some(7), &mut scratch).is_err());
+    assert!(live_table(&mut port.flash, &layout(), &Accept::joints(7), &mut scratch).is_err());
 }
 
 #[test]

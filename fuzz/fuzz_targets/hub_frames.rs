@@ -47,7 +47,7 @@ fuzz_target!(|bytes: &[u8]| {
     let mut replay = Replay::new();
     let mut out = [0u8; MAX_OUTPUT];
     let mut flash = fixtures::factory(&fixtures::table(100.0));
-    let mut updater = Updater::new(fixtures::layout(), Some(6));
+    let mut updater = Updater::new(fixtures::layout(), Accept::joints(6));
     let mut scratch = [0u8; MAX_TABLE_LEN];
     let mut time = 0u64;
     for &b in stream {

@@ -17,7 +17,7 @@ use quatarm::update::Updater;
 fuzz_target!(|program: &[u8]| {
     let (old, new) = (table(100.0), table(120.0));
     let mut flash = factory(&old);
-    let mut up = Updater::new(layout(), Some(6));
+    let mut up = Updater::new(layout(), Accept::joints(6));
     let mut scratch = [0u8; MAX_TABLE_LEN];
     // What may be live: the old table, and each table a `Commit` was sent for.
     let mut may_be_live: Vec<Vec<u8>> = vec![old.clone()];
@@ -71,7 +71,7 @@ fuzz_target!(|program: &[u8]| {
             _ => {
                 // Reboot: the flash as the cut left it, powered again; a new updater.
                 flash = MockFlash::from_image(flash.mem.clone());
-                up = Updater::new(layout(), Some(6));
+                up = Updater::new(layout(), Accept::joints(6));
                 sent.clear();
                 check_boot(&flash, &may_be_live, None);
                 continue;

@@ -42,6 +42,11 @@ pub enum TableState {
     Malformed = 5,
     /// A table whose counts per revolution differ from the resolution of the hub's encoders.
     WrongResolution = 6,
+    /// A valid table without a signature, on a hub that holds its maker's key.
+    Unsigned = 7,
+    /// A valid table whose signature does not verify under the hub's key (another key, or
+    /// bytes changed after signing).
+    BadSignature = 8,
 }
 
 impl TableState {
@@ -60,6 +65,8 @@ impl TableState {
             4 => TableState::WrongJointCount,
             5 => TableState::Malformed,
             6 => TableState::WrongResolution,
+            7 => TableState::Unsigned,
+            8 => TableState::BadSignature,
             _ => return None,
         })
     }
@@ -74,6 +81,8 @@ impl TableState {
             TableState::WrongJointCount => "wrong-joint-count",
             TableState::Malformed => "malformed",
             TableState::WrongResolution => "wrong-resolution",
+            TableState::Unsigned => "unsigned",
+            TableState::BadSignature => "bad-signature",
         }
     }
 }

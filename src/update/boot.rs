@@ -7,7 +7,37 @@ use embedded_storage::nor_flash::{NorFlash, NorFlashError, NorFlashErrorKind};
 
 use super::layout::{Layout, LayoutError};
 use super::record::{self, StateRecord};
+use crate::signature::{self, SignatureError, KEY_LEN, SIGNATURE_LEN};
+use crate::stream::TableState;
 use crate::table::{Table, TableError, MAX_TABLE_LEN};
+
+/// What a slot's table must be for this hub to boot on it (and an update to commit it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Accept {
+    /// The joint count the hub drives (`None`: any the format allows).
+    pub joints: Option<usize>,
+    /// The arm maker's public key: with it, only a table signed under it is accepted
+    /// ([`crate::signature`]); without it, signed and unsigned tables alike.
+    pub key: Option<[u8; KEY_LEN]>,
+}
+
+impl Accept {
+    /// Tables for `joints` joints, signed or not.
+    pub const fn joints(joints: usize) -> Accept {
+        Accept {
+            joints: Some(joints),
+            key: None,
+        }
+    }
+
+    /// The same, and signed under `key`.
+    pub const fn signed_by(self, key: [u8; KEY_LEN]) -> Accept {
+        Accept {
+            key: Some(key),
+            ..self
+        }
+    }
+}
 
 /// A flash operation failed; what the driver said, in a form a stream message can carry.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -52,6 +82,20 @@ pub enum SlotError {
     Table(TableError),
     /// A valid table, but not the one the state record names (another length or CRC).
     NotRecorded,
+    /// A valid table whose signature is missing or wrong, on a hub with a key.
+    Signature(SignatureError),
+}
+
+impl SlotError {
+    /// How the stream reports the slot: the status word's table state.
+    pub fn state(&self) -> TableState {
+        match self {
+            SlotError::Flash(_) | SlotError::NotRecorded => TableState::Corrupt,
+            SlotError::Table(t) => TableState::from(t),
+            SlotError::Signature(SignatureError::Missing) => TableState::Unsigned,
+            SlotError::Signature(_) => TableState::BadSignature,
+        }
+    }
 }
 
 /// The live table and where it came from.
@@ -66,30 +110,48 @@ pub struct Live<'b> {
     pub table: Table<'b>,
 }
 
-/// Reads slot `slot` into `buf` and checks it completely: for `joints` joints if given, and
-/// against the record's length and CRC if given. The one check of a slot, used by the boot
-/// and by the update's commit.
+/// Reads slot `slot` into `buf` and checks it completely: as `accept` says (joints, the
+/// signature), and against the record's length and CRC if given. The one check of a slot,
+/// used by the boot and by the update's commit.
+///
+/// A record's length is the table's, or the table's plus [`SIGNATURE_LEN`] for a signed one;
+/// without a record (a table flashed by a probe) the bytes after the table are its signature
+/// unless they are erased (0xFF).
 pub(crate) fn verify_slot<'b, F: NorFlash>(
     flash: &mut F,
     layout: &Layout,
     slot: u8,
-    joints: Option<usize>,
+    accept: &Accept,
     rec: Option<&StateRecord>,
     buf: &'b mut [u8; MAX_TABLE_LEN],
 ) -> Result<Table<'b>, SlotError> {
     let start = layout.slots[usize::from(slot & 1)].start;
-    flash
-        .read(start, buf)
-        .map_err(|e| SlotError::Flash(FlashFault::of(e)))?;
-    let table = match joints {
+    let fault = |e: F::Error| SlotError::Flash(FlashFault::of(e));
+    flash.read(start, buf).map_err(fault)?;
+    let table = match accept.joints {
         Some(n) => Table::parse_for(buf, n),
         None => Table::parse(buf),
     }
     .map_err(SlotError::Table)?;
-    if let Some(r) = rec {
-        if table.bytes().len() as u32 != r.len || table.crc() != r.crc {
-            return Err(SlotError::NotRecorded);
+    let len = table.bytes().len() as u32;
+    let signed = match rec {
+        Some(r) if table.crc() != r.crc => return Err(SlotError::NotRecorded),
+        Some(r) if r.len == len => false,
+        Some(r) if r.len == len + SIGNATURE_LEN as u32 => true,
+        Some(_) => return Err(SlotError::NotRecorded),
+        None => true,
+    };
+    if let Some(key) = &accept.key {
+        let mut sig = [0xffu8; SIGNATURE_LEN];
+        if signed && start + len + SIGNATURE_LEN as u32 <= layout.slots[usize::from(slot & 1)].end
+        {
+            flash.read(start + len, &mut sig).map_err(fault)?;
         }
+        // Erased flash reads 0xFF; QEMU's RAM-backed regions read 0 beyond a loaded file.
+        if !signed || sig.iter().all(|&b| b == 0xff) || sig.iter().all(|&b| b == 0) {
+            return Err(SlotError::Signature(SignatureError::Missing));
+        }
+        signature::verify(key, table.bytes(), &sig).map_err(SlotError::Signature)?;
     }
     Ok(table)
 }
@@ -100,21 +162,21 @@ pub(crate) fn verify_slot<'b, F: NorFlash>(
 pub fn live_slot<F: NorFlash>(
     flash: &mut F,
     layout: &Layout,
-    joints: Option<usize>,
+    accept: &Accept,
     buf: &mut [u8; MAX_TABLE_LEN],
 ) -> Result<(u8, Option<StateRecord>), BootError> {
     layout.check(flash).map_err(BootError::Layout)?;
     let copies = record::read_copies(flash, layout);
     if let Some((first, _)) = record::newest(&copies) {
         for rec in [copies[first], copies[1 - first]].into_iter().flatten() {
-            if verify_slot(flash, layout, rec.slot, joints, Some(&rec), buf).is_ok() {
+            if verify_slot(flash, layout, rec.slot, accept, Some(&rec), buf).is_ok() {
                 return Ok((rec.slot, Some(rec)));
             }
         }
     }
     let mut why = [SlotError::Table(TableError::Blank); 2];
     for slot in 0..2u8 {
-        match verify_slot(flash, layout, slot, joints, None, buf) {
+        match verify_slot(flash, layout, slot, accept, None, buf) {
             Ok(_) => return Ok((slot, None)),
             Err(e) => why[usize::from(slot)] = e,
         }
@@ -122,18 +184,17 @@ pub fn live_slot<F: NorFlash>(
     Err(BootError::NoTable(why))
 }
 
-/// The table to boot on, read into `buf` (`joints`: the joints the hub drives, if the table
-/// must match them). Never a slot that fails any check; the old table while an update has not
+/// The table to boot on, read into `buf` (`accept`: what the hub requires of it). Never a slot that fails any check; the old table while an update has not
 /// written its record; the new one once it has.
 pub fn live_table<'b, F: NorFlash>(
     flash: &mut F,
     layout: &Layout,
-    joints: Option<usize>,
+    accept: &Accept,
     buf: &'b mut [u8; MAX_TABLE_LEN],
 ) -> Result<Live<'b>, BootError> {
-    let (slot, rec) = live_slot(flash, layout, joints, buf)?;
+    let (slot, rec) = live_slot(flash, layout, accept, buf)?;
     // Read again for the borrow of `buf`: `live_slot` may have tried another slot last.
-    let table = verify_slot(flash, layout, slot, joints, rec.as_ref(), buf).map_err(|e| {
+    let table = verify_slot(flash, layout, slot, accept, rec.as_ref(), buf).map_err(|e| {
         let mut why = [SlotError::Table(TableError::Blank); 2];
         why[usize::from(slot)] = e;
         BootError::NoTable(why)

@@ -3,6 +3,7 @@
 
 use std::vec::Vec;
 
+use super::boot::Accept;
 use super::layout::Layout;
 use super::mock::MockFlash;
 use super::session::{Accepted, Step, Updater};
@@ -81,7 +82,7 @@ pub fn steps(t: &[u8]) -> Vec<Step> {
 }
 
 pub fn update(flash: &mut MockFlash, t: &[u8]) -> Result<Accepted, Refusal> {
-    let mut up = Updater::new(layout(), Some(6));
+    let mut up = Updater::new(layout(), Accept::joints(6));
     let mut scratch = [0u8; MAX_TABLE_LEN];
     let mut last = Accepted::Aborted;
     for s in steps(t) {
@@ -93,7 +94,7 @@ pub fn update(flash: &mut MockFlash, t: &[u8]) -> Result<Accepted, Refusal> {
 /// The table the flash boots on, as bytes (`None`: no table).
 pub fn boot(flash: &mut MockFlash) -> Option<Vec<u8>> {
     let mut buf = [0u8; MAX_TABLE_LEN];
-    live_table(flash, &layout(), Some(6), &mut buf)
+    live_table(flash, &layout(), &Accept::joints(6), &mut buf)
         .ok()
         .map(|l| l.table.bytes().to_vec())
 }
@@ -103,4 +104,20 @@ pub fn factory(t: &[u8]) -> MockFlash {
     let mut f = MockFlash::new(FLASH_LEN);
     f.mem[..t.len()].copy_from_slice(t);
     f
+}
+
+/// The public key of the test signing key made from `seed` (never a maker's key).
+pub fn public_key(seed: u8) -> [u8; crate::signature::KEY_LEN] {
+    ed25519_dalek::SigningKey::from_bytes(&[seed; 32])
+        .verifying_key()
+        .to_bytes()
+}
+
+/// `t` followed by its signature under the test key made from `seed`: a signed image.
+pub fn signed(t: &[u8], seed: u8) -> Vec<u8> {
+    use ed25519_dalek::Signer;
+    let sig = ed25519_dalek::SigningKey::from_bytes(&[seed; 32]).sign(t);
+    let mut out = t.to_vec();
+    out.extend_from_slice(&sig.to_bytes());
+    out
 }

@@ -13,11 +13,13 @@
 use embedded_storage::nor_flash::NorFlash;
 use heapless::Vec;
 
-use super::boot::{self, FlashFault, SlotError};
+use super::boot::{self, Accept, FlashFault, SlotError};
 use super::layout::{Layout, LayoutError, MAX_WRITE_SIZE};
 use super::record::{self, StateRecord};
+
+use crate::signature::SIGNATURE_LEN;
 use crate::stream::TableState;
-use crate::table::{is_table_len, MAX_TABLE_LEN};
+use crate::table::{is_table_len, Table, MAX_TABLE_LEN};
 
 /// Most table bytes one `Chunk` carries: the largest that keeps its `ToDevice` message
 /// (variant bytes, offset varint, length byte, the bytes) and CRC within a frame's
@@ -49,16 +51,13 @@ pub enum Step {
 }
 
 impl Step {
-    /// Every step that sends `table` whole, as a host sends them: `Begin` with its length and
-    /// the CRC of its last four bytes, the chunks in order, `Commit`. The one place a table
-    /// is cut into chunks (`armcal table send`, the tests, the fuzz seeds).
+    /// Every step that sends `table` whole (a table, or a signed one: the table and its
+    /// signature), as a host sends them: `Begin` with its length and the table's CRC (0 for
+    /// bytes that are no table, which the hub then refuses), the chunks in order, `Commit`.
+    /// The one place a table is cut into chunks (`armcal table send`, the tests, the fuzz
+    /// seeds).
     pub fn sequence(table: &[u8]) -> impl Iterator<Item = Step> + '_ {
-        let crc = match table.len().checked_sub(4) {
-            Some(at) => {
-                u32::from_le_bytes([table[at], table[at + 1], table[at + 2], table[at + 3]])
-            }
-            None => 0,
-        };
+        let crc = Table::parse(table).map_or(0, |t| t.crc());
         let begin = Step::Begin {
             len: table.len() as u32,
             crc,
@@ -131,7 +130,8 @@ pub enum Accepted {
 pub enum Refusal {
     /// `Chunk` or `Commit` with no update begun.
     NotBegun,
-    /// A length no table has (a table of 6 or 7 joints).
+    /// A length no table has, signed or not (a table of 6 or 7 joints, with or without its
+    /// 64-byte signature).
     BadLength(u32),
     /// A chunk not at the next offset.
     OutOfOrder {
@@ -150,8 +150,9 @@ pub enum Refusal {
         /// Bytes `Begin` announced.
         len: u32,
     },
-    /// The written table fails a check of the boot: the state a boot would report for it
-    /// (the status word's table state, so that the host reads one vocabulary for both).
+    /// The written table fails a check of the boot, its signature included: the state a boot
+    /// would report for it (the status word's table state, so that the host reads one
+    /// vocabulary for both).
     Table(TableState),
     /// The written table is valid but is not what `Begin` announced (its length or CRC).
     NotAnnounced,
@@ -182,19 +183,20 @@ enum State {
 #[derive(Debug)]
 pub struct Updater {
     layout: Layout,
-    joints: Option<usize>,
+    accept: Accept,
     state: State,
     /// Bytes received but not yet written: less than one write unit.
     pending: Vec<u8, MAX_WRITE_SIZE>,
 }
 
 impl Updater {
-    /// An updater for the slots of `layout`; `joints` is the joint count the hub drives (a
-    /// table for another count is refused at commit, as at boot).
-    pub fn new(layout: Layout, joints: Option<usize>) -> Updater {
+    /// An updater for the slots of `layout`; `accept` is what the hub's boot requires of a
+    /// table (its joint count, its signature): a table the boot would refuse is refused at
+    /// commit.
+    pub fn new(layout: Layout, accept: Accept) -> Updater {
         Updater {
             layout,
-            joints,
+            accept,
             state: State::Idle,
             pending: Vec::new(),
         }
@@ -236,10 +238,11 @@ impl Updater {
         self.state = State::Idle;
         self.pending.clear();
         self.layout.check(flash).map_err(Refusal::Layout)?;
-        if !is_table_len(len as usize) {
+        let unsigned = (len as usize).checked_sub(SIGNATURE_LEN);
+        if !is_table_len(len as usize) && !unsigned.is_some_and(is_table_len) {
             return Err(Refusal::BadLength(len));
         }
-        let live = boot::live_table(flash, &self.layout, self.joints, scratch)
+        let live = boot::live_table(flash, &self.layout, &self.accept, scratch)
             .ok()
             .map(|l| l.slot);
         let slot = match live {
@@ -338,11 +341,11 @@ impl Updater {
             len,
             crc,
         };
-        boot::verify_slot(flash, &self.layout, slot, self.joints, Some(&rec), scratch).map_err(
+        boot::verify_slot(flash, &self.layout, slot, &self.accept, Some(&rec), scratch).map_err(
             |e| match e {
                 SlotError::Flash(f) => Refusal::Flash(f),
-                SlotError::Table(t) => Refusal::Table(TableState::from(&t)),
                 SlotError::NotRecorded => Refusal::NotAnnounced,
+                e @ (SlotError::Table(_) | SlotError::Signature(_)) => Refusal::Table(e.state()),
             },
         )?;
         record::write(flash, &self.layout, &rec).map_err(|e| Refusal::Flash(FlashFault::of(e)))?;

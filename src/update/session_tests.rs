@@ -1,6 +1,8 @@
 //! The update's answers: each wrong step refused with its reason, and the old table live
 //! after every refusal.
 
+use super::boot::{Accept, BootError};
+use super::live_table;
 use super::boot::FlashFault;
 use super::fixtures::{boot, crc_of, factory, layout, steps, table, table_with_budget, update};
 use super::session::{Accepted, Refusal, Step, Updater, CHUNK_LEN};
@@ -18,7 +20,7 @@ fn chunk(offset: u32, bytes: &[u8]) -> Step {
 fn out_of_order_steps_are_refused() {
     let (a, b) = (table(100.0), table(120.0));
     let mut f = factory(&a);
-    let mut up = Updater::new(layout(), Some(6));
+    let mut up = Updater::new(layout(), Accept::joints(6));
     let mut s = [0u8; MAX_TABLE_LEN];
     assert_eq!(
         up.step(&mut f, &mut s, &chunk(0, &b[..8])),
@@ -88,7 +90,7 @@ fn bad_tables_are_refused_at_commit() {
     let (a, b) = (table(100.0), table(120.0));
     let send = |t: &[u8], crc: u32| {
         let mut f = factory(&a);
-        let mut up = Updater::new(layout(), Some(6));
+        let mut up = Updater::new(layout(), Accept::joints(6));
         let mut s = [0u8; MAX_TABLE_LEN];
         let mut st = steps(t);
         st[0] = Step::Begin {
@@ -124,7 +126,7 @@ fn bad_tables_are_refused_at_commit() {
 fn wrong_joint_count_is_refused() {
     let (a, b) = (table(100.0), table(120.0));
     let mut f = factory(&a);
-    let mut up = Updater::new(layout(), Some(7));
+    let mut up = Updater::new(layout(), Accept::joints(7));
     let mut s = [0u8; MAX_TABLE_LEN];
     let mut last = Ok(Accepted::Aborted);
     for x in &steps(&b) {
@@ -166,18 +168,18 @@ fn boot_falls_back_past_a_bad_slot() {
     update(&mut f, &b).unwrap(); // slot 1, seq 1
     update(&mut f, &c).unwrap(); // slot 0, seq 2
     let mut buf = [0u8; MAX_TABLE_LEN];
-    let live = live_table(&mut f, &layout(), Some(6), &mut buf).unwrap();
+    let live = live_table(&mut f, &layout(), &Accept::joints(6), &mut buf).unwrap();
     assert_eq!((live.slot, live.seq), (0, Some(2)));
     f.mem[300] ^= 0x04; // slot 0 corrupt: record 1's slot
-    let live = live_table(&mut f, &layout(), Some(6), &mut buf).unwrap();
+    let live = live_table(&mut f, &layout(), &Accept::joints(6), &mut buf).unwrap();
     assert_eq!((live.slot, live.seq), (1, Some(1)));
     assert!(live.table.bytes() == &b[..]);
     f.mem[4096] ^= 0x01; // and record 1 (copy 0) torn: slot 1 by its contents
-    let live = live_table(&mut f, &layout(), Some(6), &mut buf).unwrap();
+    let live = live_table(&mut f, &layout(), &Accept::joints(6), &mut buf).unwrap();
     assert_eq!((live.slot, live.seq), (1, None));
     f.mem[2048 + 40] ^= 0x01; // slot 1 corrupt too: nothing
     assert!(matches!(
-        live_table(&mut f, &layout(), Some(6), &mut buf),
+        live_table(&mut f, &layout(), &Accept::joints(6), &mut buf),
         Err(BootError::NoTable([
             SlotError::Table(TableError::Crc { .. }),
             SlotError::Table(_)
@@ -218,7 +220,7 @@ proptest::proptest! {
     ) {
         let (a, b) = (table(100.0), table(120.0));
         let mut f = factory(&a);
-        let mut up = Updater::new(layout(), Some(6));
+        let mut up = Updater::new(layout(), Accept::joints(6));
         let mut s = [0u8; MAX_TABLE_LEN];
         let mut committed = false;
         let mut next = 0u32;
@@ -265,4 +267,55 @@ fn a_table_with_its_budget_is_an_update_like_any_other() {
     // And back to a table without one.
     assert!(matches!(update(&mut f, &a), Ok(Accepted::Committed { .. })));
     assert_eq!(boot(&mut f).as_deref(), Some(&a[..]));
+}
+
+/// A hub with a key commits only a table signed under it: unsigned, another key's and a
+/// changed signature byte are refused with the state a boot would give, and the old table
+/// stays live; a boot with the key refuses an unsigned factory table.
+#[test]
+fn only_a_table_signed_under_the_hub_key_is_committed() {
+    use super::fixtures::{public_key, signed};
+    let (a, b) = (signed(&table(100.0), 1), table(120.0));
+    let accept = Accept::joints(6).signed_by(public_key(1));
+    let mut f = factory(&a);
+    let mut buf = [0u8; MAX_TABLE_LEN];
+    assert_eq!(live_table(&mut f, &layout(), &accept, &mut buf).unwrap().slot, 0);
+    let mut send = |image: &[u8]| {
+        let mut up = Updater::new(layout(), accept);
+        let mut s = [0u8; MAX_TABLE_LEN];
+        let mut last = Ok(Accepted::Aborted);
+        for step in Step::sequence(image) {
+            last = up.step(&mut f, &mut s, &step);
+        }
+        let live = live_table(&mut f, &layout(), &accept, &mut s).map(|l| l.table.crc());
+        (last, live)
+    };
+    let crc_a = crc_of(&table(100.0));
+    let crc_b = crc_of(&b);
+    assert_eq!(
+        send(&b),
+        (Err(Refusal::Table(TableState::Unsigned)), Ok(crc_a))
+    );
+    assert_eq!(
+        send(&signed(&b, 2)),
+        (Err(Refusal::Table(TableState::BadSignature)), Ok(crc_a))
+    );
+    let mut bad = signed(&b, 1);
+    let last = bad.len() - 1;
+    bad[last] ^= 0x40;
+    assert_eq!(
+        send(&bad),
+        (Err(Refusal::Table(TableState::BadSignature)), Ok(crc_a))
+    );
+    let (answer, live) = send(&signed(&b, 1));
+    assert!(matches!(answer, Ok(Accepted::Committed { slot: 1, .. })), "{answer:?}");
+    assert_eq!(live, Ok(crc_b));
+
+    // An unsigned factory table does not boot on a hub with a key; it does without one.
+    let mut f = factory(&table(100.0));
+    match live_table(&mut f, &layout(), &accept, &mut buf) {
+        Err(BootError::NoTable(why)) => assert_eq!(why[0].state(), TableState::Unsigned),
+        other => panic!("{:?}", other.map(|l| l.slot)),
+    }
+    assert!(live_table(&mut f, &layout(), &Accept::joints(6), &mut buf).is_ok());
 }

@@ -38,7 +38,7 @@ pub fn hub_main<P: HubEvaluator, const CORE_HZ: u32, L: Link, F: NorFlash>(
     let mut link = open_link();
     let mut flash = open_flash();
     let mut scratch = [0u8; MAX_TABLE_LEN];
-    let mut updater = Updater::new(slots::layout(), Some(JOINTS));
+    let mut updater = Updater::new(slots::layout(), slots::accept());
     loop {
         let boot = flash::boot::<P, _>(&mut flash, &mut scratch);
         let mut hub = boot.hub();

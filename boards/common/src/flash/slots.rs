@@ -98,7 +98,7 @@ pub fn boot<P: quatarm::Evaluator, F: NorFlash>(
     scratch: &mut [u8; MAX_TABLE_LEN],
 ) -> Boot<P> {
     let layout = layout();
-    match live_table(flash, &layout, Some(JOINTS), scratch) {
+    match live_table(flash, &layout, &accept(), scratch) {
         Ok(live) => {
             let id = LiveTable {
                 slot: live.slot,
