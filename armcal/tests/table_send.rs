@@ -45,7 +45,8 @@ impl PortHub {
     /// Boots on the live table and sends the `Hello` naming it.
     fn boot(&mut self) {
         let mut scratch = [0u8; MAX_TABLE_LEN];
-        let live = live_table(&mut self.flash, &layout(), &Accept::joints(6), &mut scratch).unwrap();
+        let live =
+            live_table(&mut self.flash, &layout(), &Accept::joints(6), &mut scratch).unwrap();
         self.hub = Hub::new(TableState::Valid, 6, NumberFormat::F32).with_live(LiveTable {
             slot: live.slot,
             seq: live.seq.unwrap_or(0),

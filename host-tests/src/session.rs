@@ -34,13 +34,14 @@ pub struct Session {
 }
 
 impl Session {
-    /// Starts `board`'s main binary with `table` (bytes) in its calibration region (slot 0).
-    pub fn start(board: &Board, elf: &std::path::Path, table: Option<&[u8]>) -> Result<Session> {
+    /// Starts `board`'s main binary with `image` (bytes, exactly as given: sign a table
+    /// first with `e2e::signed` for a board with a key) in its calibration region (slot 0).
+    pub fn start(board: &Board, elf: &std::path::Path, image: Option<&[u8]>) -> Result<Session> {
         if !elf.exists() {
             bail!("{} is not built: run `cargo xtask build`", board.name);
         }
         let dir = tempfile::tempdir()?;
-        let table_path = match table {
+        let table_path = match image {
             Some(t) => {
                 let p = dir.path().join("table.bin");
                 std::fs::write(&p, t)?;

@@ -143,8 +143,7 @@ pub(crate) fn verify_slot<'b, F: NorFlash>(
     };
     if let Some(key) = &accept.key {
         let mut sig = [0xffu8; SIGNATURE_LEN];
-        if signed && start + len + SIGNATURE_LEN as u32 <= layout.slots[usize::from(slot & 1)].end
-        {
+        if signed && start + len + SIGNATURE_LEN as u32 <= layout.slots[usize::from(slot & 1)].end {
             flash.read(start + len, &mut sig).map_err(fault)?;
         }
         // Erased flash reads 0xFF; QEMU's RAM-backed regions read 0 beyond a loaded file.

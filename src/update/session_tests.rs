@@ -1,10 +1,10 @@
 //! The update's answers: each wrong step refused with its reason, and the old table live
 //! after every refusal.
 
-use super::boot::{Accept, BootError};
-use super::live_table;
 use super::boot::FlashFault;
+use super::boot::{Accept, BootError};
 use super::fixtures::{boot, crc_of, factory, layout, steps, table, table_with_budget, update};
+use super::live_table;
 use super::session::{Accepted, Refusal, Step, Updater, CHUNK_LEN};
 use crate::stream::TableState;
 use crate::table::{TableError, MAX_TABLE_LEN};
@@ -279,7 +279,12 @@ fn only_a_table_signed_under_the_hub_key_is_committed() {
     let accept = Accept::joints(6).signed_by(public_key(1));
     let mut f = factory(&a);
     let mut buf = [0u8; MAX_TABLE_LEN];
-    assert_eq!(live_table(&mut f, &layout(), &accept, &mut buf).unwrap().slot, 0);
+    assert_eq!(
+        live_table(&mut f, &layout(), &accept, &mut buf)
+            .unwrap()
+            .slot,
+        0
+    );
     let mut send = |image: &[u8]| {
         let mut up = Updater::new(layout(), accept);
         let mut s = [0u8; MAX_TABLE_LEN];
@@ -308,7 +313,10 @@ fn only_a_table_signed_under_the_hub_key_is_committed() {
         (Err(Refusal::Table(TableState::BadSignature)), Ok(crc_a))
     );
     let (answer, live) = send(&signed(&b, 1));
-    assert!(matches!(answer, Ok(Accepted::Committed { slot: 1, .. })), "{answer:?}");
+    assert!(
+        matches!(answer, Ok(Accepted::Committed { slot: 1, .. })),
+        "{answer:?}"
+    );
     assert_eq!(live, Ok(crc_b));
 
     // An unsigned factory table does not boot on a hub with a key; it does without one.

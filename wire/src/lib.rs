@@ -1,7 +1,7 @@
 //! The host side of the two formats the hub shares with the host: the binary calibration
 //! table it boots from ([`tablebuild`]: an arm in, the bytes `quatarm::table` reads out) and
 //! the UART stream it writes ([`stream_decode`]: bytes in, `Hello`s, reports and counted
-//! damage out).
+//! damage out); and signing a table with the arm maker's key ([`tablesign`]).
 //!
 //! `armcal` re-exports both (`armcal table build`, `armcal decode`); `cargo xtask demo` and the
 //! QEMU tests use them directly, so a first run compiles the firmware's formats and the f64
@@ -24,3 +24,4 @@
 pub mod budget;
 pub mod stream_decode;
 pub mod tablebuild;
+pub mod tablesign;

@@ -1,7 +1,9 @@
-//! `armcal table build|show|send`: the firmware's binary calibration table.
+//! `armcal table build|show|keygen|sign|verify|send`: the firmware's binary calibration
+//! table, its signature, and sending it to a hub.
 
 use anyhow::Context;
 use quatarm::table::{Table, FLAG_GEOMETRIC, FLAG_GRAVITY, FLAG_HARMONICS, FLAG_THERMAL};
+use quatarm_wire::tablesign;
 use std::path::PathBuf;
 
 /// `armcal table` subcommands.
@@ -19,6 +21,33 @@ pub enum Command {
     Show {
         /// Table file.
         table: PathBuf,
+    },
+    /// Make an Ed25519 key pair for signing tables: OUT.pem, the private key (PKCS#8 PEM;
+    /// keep it secret), and OUT.pub, the 32-byte public key the firmware image embeds.
+    Keygen {
+        /// Path without extension.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Sign a binary table: write the table followed by its 64-byte Ed25519 signature, the
+    /// image a hub with the matching public key accepts.
+    Sign {
+        /// Table file (a signed one is signed afresh).
+        table: PathBuf,
+        /// Private key (PKCS#8 PEM, from `keygen` or `openssl genpkey -algorithm ed25519`).
+        #[arg(long)]
+        key: PathBuf,
+        /// Output file.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Check a signed table as a hub does; exit 1 if it does not verify under the key.
+    Verify {
+        /// Signed table file.
+        table: PathBuf,
+        /// Public key (32 raw bytes, as `keygen` writes it).
+        #[arg(long)]
+        key: PathBuf,
     },
     /// Send a binary table to a hub over its stream's UART (`docs/update.md`): it is written
     /// into the hub's inactive flash slot, checked completely, then made live; until then, and
@@ -80,6 +109,53 @@ pub fn run(command: Command) -> anyhow::Result<()> {
                 sent.live.crc,
                 sent.steps,
                 sent.reports_between
+            );
+            Ok(())
+        }
+        Command::Keygen { out } => {
+            let (pem, public) = tablesign::keygen()?;
+            let (private_path, public_path) =
+                (out.with_extension("pem"), out.with_extension("pub"));
+            for p in [&private_path, &public_path] {
+                if p.exists() {
+                    anyhow::bail!("{}: exists; a key is never overwritten", p.display());
+                }
+            }
+            std::fs::write(&private_path, pem)
+                .with_context(|| private_path.display().to_string())?;
+            std::fs::write(&public_path, public)
+                .with_context(|| public_path.display().to_string())?;
+            println!(
+                "{}: private key (keep it secret); {}: public key {}",
+                private_path.display(),
+                public_path.display(),
+                public
+                    .iter()
+                    .map(|b| format!("{b:02x}"))
+                    .collect::<String>()
+            );
+            Ok(())
+        }
+        Command::Sign { table, key, output } => {
+            let k = tablesign::read_private(&key)?;
+            let bytes = std::fs::read(&table).with_context(|| table.display().to_string())?;
+            let image = tablesign::sign(&k, &bytes).with_context(|| table.display().to_string())?;
+            std::fs::write(&output, &image).with_context(|| output.display().to_string())?;
+            println!(
+                "{}: {} bytes, table and signature",
+                output.display(),
+                image.len()
+            );
+            Ok(())
+        }
+        Command::Verify { table, key } => {
+            let k = tablesign::read_public(&key)?;
+            let bytes = std::fs::read(&table).with_context(|| table.display().to_string())?;
+            let n = tablesign::verify(&k, &bytes).with_context(|| table.display().to_string())?;
+            println!(
+                "{}: a {n}-byte table, signature valid under {}",
+                table.display(),
+                key.display()
             );
             Ok(())
         }

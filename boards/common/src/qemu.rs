@@ -6,9 +6,9 @@ use cortex_m_semihosting::debug::{self, EXIT_FAILURE, EXIT_SUCCESS};
 
 use embedded_storage::nor_flash::NorFlash;
 use quatarm::table::MAX_TABLE_LEN;
-use quatarm::update::{Refusal, Updater};
+use quatarm::update::{Accept, Refusal, Updater};
 
-use crate::calibration::{self, HubEvaluator, JOINTS};
+use crate::calibration::{self, HubEvaluator};
 use crate::flash::{self, slots};
 use crate::{bench, clock, serve, stack, table_region, Link, Served};
 
@@ -24,9 +24,11 @@ use crate::{bench, clock, serve, stack, table_region, Link, Served};
 /// `open_link` sets up the board's UART; it runs after the clock has started, so that report
 /// times count from the same point on every board. `open_flash` gives the driver of the
 /// calibration flash ([`crate::flash::slots::base`], [`crate::flash::slots::span`]).
-/// `ram_start` is where `memory.x` puts RAM.
+/// `accept` is what the hub requires of a table (its joints, its maker's key). `ram_start`
+/// is where `memory.x` puts RAM.
 pub fn hub_main<P: HubEvaluator, const CORE_HZ: u32, L: Link, F: NorFlash>(
     ram_start: usize,
+    accept: Accept,
     open_link: impl FnOnce() -> L,
     open_flash: impl FnOnce() -> F,
 ) -> ! {
@@ -38,9 +40,9 @@ pub fn hub_main<P: HubEvaluator, const CORE_HZ: u32, L: Link, F: NorFlash>(
     let mut link = open_link();
     let mut flash = open_flash();
     let mut scratch = [0u8; MAX_TABLE_LEN];
-    let mut updater = Updater::new(slots::layout(), slots::accept());
+    let mut updater = Updater::new(slots::layout(), accept);
     loop {
-        let boot = flash::boot::<P, _>(&mut flash, &mut scratch);
+        let boot = flash::boot::<P, _>(&mut flash, &accept, &mut scratch);
         let mut hub = boot.hub();
         let cal = &boot.calibration;
         let served = serve(

@@ -4,6 +4,7 @@
 //! skipped.
 
 use host_tests::boards::{board, Board};
+use host_tests::e2e::signed;
 use host_tests::e2e::{
     calibration, default_calibration_path, default_recording_path, deviation_um,
     direction_deviation, host_points, reference, replay,
@@ -16,6 +17,7 @@ use quatarm::stream::{
 use quatarm::update::session::Step;
 use quatarm::update::{Accepted, Refusal};
 use quatarm_wire::stream_decode::Item;
+use quatarm_wire::tablesign;
 
 /// Declares every case of this module as a test of one board: `board` (a name of
 /// `host_tests::boards`), `bounds` for its full recording, `full_recording`, the name of
@@ -411,10 +413,11 @@ fn point_now(s: &mut Session, r: &Reading) -> Coordinates {
 #[allow(dead_code)] // each board's test binary uses one of the two update cases
 pub fn update_with_resets(name: &str) {
     let b = the_board(name);
-    let (mut arm, old) = calibration(&default_calibration_path()).unwrap();
+    let (mut arm, old_table) = calibration(&default_calibration_path()).unwrap();
     arm.probe.error[2] += 0.05;
-    let new = quatarm_wire::tablebuild::build(&arm).unwrap();
-    let crc = |t: &[u8]| u32::from_le_bytes(t[t.len() - 4..].try_into().unwrap());
+    let new_table = quatarm_wire::tablebuild::build(&arm).unwrap();
+    let (old, new) = (signed(&old_table).unwrap(), signed(&new_table).unwrap());
+    let crc = |t: &[u8]| quatarm::table::Table::parse(t).unwrap().crc();
     let factory = Some(LiveTable {
         slot: 0,
         seq: 0,
@@ -491,12 +494,49 @@ pub fn update_with_resets(name: &str) {
         "a refused update changes nothing"
     );
 
+    // Unsigned, and signed under another key: refused at commit with the boot's states.
+    let other_key = {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("other.pem");
+        std::fs::write(&path, tablesign::keygen().unwrap().0).unwrap();
+        tablesign::read_private(&path).unwrap()
+    };
+    for (image, state) in [
+        (old_table.clone(), TableState::Unsigned),
+        (
+            tablesign::sign(&other_key, &old_table).unwrap(),
+            TableState::BadSignature,
+        ),
+    ] {
+        let mut last = None;
+        for step in &update_steps(&image) {
+            last = Some(s.ask(&ToDevice::Update(step.clone())).unwrap());
+        }
+        assert_eq!(last, Some(Item::Update(Err(Refusal::Table(state)))));
+    }
+    assert_eq!(point_now(&mut s, &reading), host_new);
+
     // A second update (into slot 0) cut by a reset: the first one stays live.
     for step in &update_steps(&old)[..commit / 2] {
         s.ask(&ToDevice::Update(step.clone())).unwrap();
     }
     s.reset().unwrap();
     expect_hello(&mut s, updated, "reset during a second update");
+    let (status, _) = s.finish().unwrap();
+    assert!(status.success(), "{status}");
+
+    // An unsigned factory table does not boot: its state says why, and no point is given.
+    let mut s = Session::start(&b, &b.elf(b.name), Some(&old_table)).unwrap();
+    match s.next_item().unwrap() {
+        Item::Hello(h) => {
+            assert_eq!((h.status.table(), h.live), (TableState::Unsigned, None));
+        }
+        other => panic!("expected a Hello, got {other:?}"),
+    }
+    match s.ask(&ToDevice::Reading(reading)).unwrap() {
+        Item::Report(r) => assert_eq!((r.status.table(), r.point), (TableState::Unsigned, None)),
+        other => panic!("expected a report, got {other:?}"),
+    }
     let (status, _) = s.finish().unwrap();
     assert!(status.success(), "{status}");
 }

@@ -5,13 +5,13 @@
 //! record's copies). A flash driver here covers the span from the lowest of them to the end
 //! of the highest, so [`layout`] gives the four regions as offsets from [`base`].
 
-use quatarm::stream::{Hub, LiveTable};
+use quatarm::stream::{Hub, LiveTable, TableState};
 use quatarm::table::MAX_TABLE_LEN;
-use quatarm::update::{live_table, Layout};
+use quatarm::update::{live_table, Accept, BootError, Layout};
 
 use embedded_storage::nor_flash::NorFlash;
 
-use crate::calibration::{self, Calibration, HubEvaluator, JOINTS};
+use crate::calibration::{self, Calibration, HubEvaluator};
 
 extern "C" {
     static _cal_table_start: u8;
@@ -92,13 +92,15 @@ impl<P: HubEvaluator> Boot<P> {
 /// Boots on the table `quatarm::update::live_table` picks (the slot the newest valid state
 /// record names, else any valid slot, slot 0 first). Without one, slot 0's bytes give the
 /// table state the hub reports (blank, corrupt, ...), as before there were two slots.
+/// `accept` is what the hub requires of a table (its joints, its maker's signature);
 /// `scratch` holds the table while the chain is built.
 pub fn boot<P: quatarm::Evaluator, F: NorFlash>(
     flash: &mut F,
+    accept: &Accept,
     scratch: &mut [u8; MAX_TABLE_LEN],
 ) -> Boot<P> {
     let layout = layout();
-    match live_table(flash, &layout, &accept(), scratch) {
+    match live_table(flash, &layout, accept, scratch) {
         Ok(live) => {
             let id = LiveTable {
                 slot: live.slot,
@@ -111,14 +113,14 @@ pub fn boot<P: quatarm::Evaluator, F: NorFlash>(
                 live: Some(id),
             }
         }
-        Err(_) => {
-            if flash.read(layout.slots[0].start, scratch).is_err() {
-                scratch.fill(0xff);
-            }
-            Boot {
-                calibration: calibration::load::<P>(scratch),
-                live: None,
-            }
-        }
+        // No slot boots: slot 0's reason (the factory slot) is what the hub reports.
+        Err(BootError::NoTable(why)) => Boot {
+            calibration: Calibration::refused(why[0].state()),
+            live: None,
+        },
+        Err(BootError::Layout(_)) => Boot {
+            calibration: Calibration::refused(TableState::Malformed),
+            live: None,
+        },
     }
 }
