@@ -54,9 +54,12 @@ pub struct Row {
     pub stack: Option<u64>,
     /// Instructions per point: quaternion, matrix (QEMU boards).
     pub instructions: Option<(f64, f64)>,
+    /// Instructions of one Ed25519 check of the table's signature (QEMU boards).
+    pub signature: Option<f64>,
 }
 
-fn instructions(b: &Board, table: &[u8]) -> Result<(f64, f64)> {
+/// Instructions per point of both chains, and of one signature check.
+fn instructions(b: &Board, table: &[u8]) -> Result<((f64, f64), f64)> {
     let readings = recording::read(&default_recording_path())?;
     let input = replay_bytes(&readings[..POINTS.min(readings.len())], None);
     let file = table_file(table)?;
@@ -99,6 +102,14 @@ fn instructions(b: &Board, table: &[u8]) -> Result<(f64, f64)> {
         }
         Ok((points, ticks))
     };
+    let sig_line = lines
+        .iter()
+        .find(|l| l.starts_with("bench signature"))
+        .context("`bench signature` missing")?;
+    if !sig_line.ends_with("true valid") {
+        bail!("{}: the table's signature did not verify: {sig_line}", b.name);
+    }
+    let sig_ticks = number_after(&lines, "bench signature").context("signature ticks")? as f64;
     let (n0, t0) = ticks_of("bench clock overhead")?;
     let (nq, tq) = ticks_of("bench quaternion")?;
     let (nm, tm) = ticks_of("bench matrix")?;
@@ -110,14 +121,17 @@ fn instructions(b: &Board, table: &[u8]) -> Result<(f64, f64)> {
         overhead * per_tick
     );
     Ok((
-        (tq / nq - overhead) * per_tick,
-        (tm / nm - overhead) * per_tick,
+        (
+            (tq / nq - overhead) * per_tick,
+            (tm / nm - overhead) * per_tick,
+        ),
+        (sig_ticks - overhead) * per_tick,
     ))
 }
 
 fn measure(b: &Board, tc: &Toolchain, table: &[u8]) -> Result<Row> {
     let (flash, statics) = sizes(&b.elf(b.name))?;
-    let (mut stack, mut instr) = (None, None);
+    let (mut stack, mut instr, mut signature) = (None, None, None);
     if b.qemu.is_some() {
         let readings: Vec<_> = recording::read(&default_recording_path())?
             .into_iter()
@@ -126,7 +140,9 @@ fn measure(b: &Board, tc: &Toolchain, table: &[u8]) -> Result<Row> {
         let out = replay(b, Some(table), &replay_bytes(&readings, None))?;
         let lines = defmt_log::decode(&b.elf(b.name), &out.run.log)?;
         stack = number_after(&lines, "stack peak");
-        instr = Some(instructions(b, table)?);
+        let (chains, sig) = instructions(b, table)?;
+        instr = Some(chains);
+        signature = Some(sig);
     }
     Ok(Row {
         board: *b,
@@ -139,13 +155,14 @@ fn measure(b: &Board, tc: &Toolchain, table: &[u8]) -> Result<Row> {
         statics,
         stack,
         instructions: instr,
+        signature,
     })
 }
 
 /// The table, as markdown.
 pub fn table(rows: &[Row]) -> String {
     let mut s = String::from(
-        "| board | compiler | chain | flash (bytes) | RAM: statics + stack peak (bytes) | quaternion chain (instr/point) | 3×4 matrix chain (instr/point) |\n|---|---|---|---|---|---|---|\n",
+        "| board | compiler | chain | flash (bytes) | RAM: statics + stack peak (bytes) | quaternion chain (instr/point) | 3×4 matrix chain (instr/point) | Ed25519 check of the table (instr) |\n|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let ram = match r.stack {
@@ -156,9 +173,12 @@ pub fn table(rows: &[Row]) -> String {
             Some((q, m)) => (format!("{q:.0}"), format!("{m:.0}")),
             None => ("(no QEMU model)".into(), "(no QEMU model)".into()),
         };
+        let sig = r
+            .signature
+            .map_or_else(|| "(no QEMU model)".into(), |n| format!("{n:.0}"));
         s.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {} |\n",
-            r.board.name, r.compiler, r.board.precision, r.flash, ram, q, m
+            "| {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            r.board.name, r.compiler, r.board.precision, r.flash, ram, q, m, sig
         ));
     }
     s

@@ -6,8 +6,10 @@
 //! timed on its own (readings arrive over the UART, as in the replay) and the cost of reading
 //! the clock is measured the same way and subtracted. A loop of known length, timed at the
 //! start, gives the instructions per tick instead of trusting the machine's nominal clock.
-//! Results go to the defmt log (`cargo xtask bench-target` decodes it).
+//! The Ed25519 check of the table's signature is timed once the same way. Results go to the
+//! defmt log (`cargo xtask bench-target` decodes it).
 
+use quatarm::signature::{self, KEY_LEN, SIGNATURE_LEN};
 use quatarm::stream::{Event, Replay};
 use quatarm::{Chain, Evaluator, MatrixChain, Table};
 
@@ -39,8 +41,26 @@ struct Sum {
     failures: u32,
 }
 
-/// Times both chains on every reading until `End`, then logs the sums.
-pub fn run<L: Link, P: Evaluator>(link: &mut L, region: &[u8]) {
+/// Times the Ed25519 check of the table's signature (the bytes after it in the region) under
+/// `key`, once: it is deterministic, and runs once per boot or update.
+fn time_signature(key: &[u8; KEY_LEN], table: &Table<'_>, region: &[u8]) {
+    let n = table.bytes().len();
+    let Some(sig) = region
+        .get(n..n + SIGNATURE_LEN)
+        .and_then(|s| <&[u8; SIGNATURE_LEN]>::try_from(s).ok())
+    else {
+        defmt::error!("bench: no room for a signature after the table");
+        return;
+    };
+    let a = clock::ticks();
+    let ok = core::hint::black_box(signature::verify(key, table.bytes(), sig)).is_ok();
+    let b = clock::ticks();
+    defmt::info!("bench signature {=u64} ticks {=bool} valid", b - a, ok);
+}
+
+/// Times the signature check once, then both chains on every reading until `End`, then logs
+/// the sums.
+pub fn run<L: Link, P: Evaluator>(link: &mut L, region: &[u8], key: &[u8; KEY_LEN]) {
     let Ok(table) = Table::parse_for(region, JOINTS) else {
         defmt::error!("bench: no valid table");
         return;
@@ -58,6 +78,7 @@ pub fn run<L: Link, P: Evaluator>(link: &mut L, region: &[u8]) {
         2 * LOOP_ITERATIONS,
         t1 - t0
     );
+    time_signature(key, &table, region);
 
     let (mut q, mut m, mut empty) = (Sum::default(), Sum::default(), Sum::default());
     let mut replay = Replay::new();

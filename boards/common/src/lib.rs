@@ -7,6 +7,7 @@
 //! - [`flash`]: the two table slots and the update's state record, the boot through them,
 //!   the QEMU boards' flash drivers.
 //! - [`table_region`]: the calibration table's flash region, as `memory.x` reserves it.
+//! - [`maker_key`]: the public key the QEMU images check tables against (the test key).
 //! - [`live`]: a real hub's loop: encoders at a fixed period, replay when the host sends one.
 //! - [`serve`]: the replay loop: bytes in, [`quatarm::stream::Hub`] reports out.
 //! - [`qemu`] (feature `qemu`): the QEMU images' runs, exit codes through semihosting, the
@@ -23,6 +24,7 @@ pub mod calibration;
 pub mod clock;
 pub mod flash;
 pub mod live;
+pub mod maker_key;
 #[cfg(feature = "qemu")]
 pub mod qemu;
 #[cfg(feature = "rtt")]

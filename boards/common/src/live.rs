@@ -10,8 +10,8 @@
 
 use quatarm::encoder::{read_joints, AbsoluteEncoder};
 use quatarm::stream::{Coordinates, Event, Hub, Replay, ToHost, UpdateAnswer, MAX_OUTPUT};
-use quatarm::update::Refusal;
 use quatarm::temperature::TemperatureSensor;
+use quatarm::update::Refusal;
 
 use crate::calibration::{self, HubEvaluator, JOINTS};
 use crate::{clock, table_region};

@@ -98,13 +98,17 @@ fn log_memory(ram_start: usize) {
 
 /// The whole run of a QEMU benchmark image ([`bench::run`] in precision `P`), then exit with
 /// success. `open_link` as for [`hub_main`].
-pub fn bench_main<P: quatarm::Evaluator, L: Link>(open_link: impl FnOnce() -> L) -> ! {
+/// `key` is the public key the table in the region is checked against (its check is timed).
+pub fn bench_main<P: quatarm::Evaluator, L: Link>(
+    key: &[u8; quatarm::signature::KEY_LEN],
+    open_link: impl FnOnce() -> L,
+) -> ! {
     let Some(cp) = cortex_m::Peripherals::take() else {
         exit_failure()
     };
     clock::start(cp.SYST);
     let mut link = open_link();
-    bench::run::<_, P>(&mut link, table_region::bytes());
+    bench::run::<_, P>(&mut link, table_region::bytes(), key);
     exit_success()
 }
 

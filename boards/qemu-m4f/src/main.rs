@@ -8,20 +8,17 @@
 
 mod uart;
 
-use board_common::flash::{ram_nor::RamNor, slots};
 use board_common::calibration::JOINTS;
+use board_common::flash::{ram_nor::RamNor, slots};
+use board_common::maker_key::TEST_MAKER_KEY;
 use board_common::qemu;
-use quatarm::update::Accept;
 use cortex_m_rt::entry;
+use quatarm::update::Accept;
 
 /// mps2-an386 core clock: 25 MHz.
 const CORE_HZ: u32 = 25_000_000;
 /// 115200 baud (QEMU does not pace the UART, but the divider must be valid).
 const BAUDDIV: u32 = CORE_HZ / 115_200;
-
-/// The "arm maker's" public key: the repository's test key (`keys/README.md`). A table must
-/// be signed under it to boot or to be committed by an update.
-const MAKER_KEY: [u8; 32] = *include_bytes!("../../../keys/test-maker.pub");
 
 /// Start of RAM in `memory.x`.
 const RAM_START: usize = 0x2000_0000;
@@ -30,7 +27,8 @@ const RAM_START: usize = 0x2000_0000;
 fn main() -> ! {
     qemu::hub_main::<quatarm::F32, CORE_HZ, _, _>(
         RAM_START,
-        Accept::joints(JOINTS).signed_by(MAKER_KEY),
+        // A table must be signed under the (test) maker key to boot or to be committed.
+        Accept::joints(JOINTS).signed_by(TEST_MAKER_KEY),
         || {
             // SAFETY: UART0 is used by nothing else.
             unsafe { uart::Uart::new(uart::Uart::UART0, BAUDDIV) }

@@ -6,12 +6,13 @@
 #[path = "../uart.rs"]
 mod uart;
 
+use board_common::maker_key::TEST_MAKER_KEY;
 use board_common::qemu;
 use cortex_m_rt::entry;
 
 #[entry]
 fn main() -> ! {
-    qemu::bench_main::<quatarm::Fixed, _>(|| {
+    qemu::bench_main::<quatarm::Fixed, _>(&TEST_MAKER_KEY, || {
         // SAFETY: the only UART of the image.
         unsafe { uart::Uart::take() }
     })

@@ -6,12 +6,13 @@
 #[path = "../uart.rs"]
 mod uart;
 
+use board_common::maker_key::TEST_MAKER_KEY;
 use board_common::qemu;
 use cortex_m_rt::entry;
 
 #[entry]
 fn main() -> ! {
-    qemu::bench_main::<quatarm::F32, _>(|| {
+    qemu::bench_main::<quatarm::F32, _>(&TEST_MAKER_KEY, || {
         // SAFETY: UART0 is used by nothing else.
         unsafe { uart::Uart::new(uart::Uart::UART0, 217) }
     })
