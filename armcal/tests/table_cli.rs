@@ -87,3 +87,71 @@ fn every_mukca_calibration_builds_a_table() {
     }
     assert!(n >= 18, "{n} calibrations");
 }
+
+/// `keygen`, `sign`, `verify`: a signed table verifies under its key only, a changed byte is
+/// refused, a key is never overwritten, and every refusal names its file.
+#[test]
+fn a_signed_table_verifies_under_its_own_key_only() {
+    let d = workdir("signing");
+    let calib = armcal::mukca::default_dir().join("mukca-panda-panda_3-repo-calibrated.toml");
+    armcal_ok(
+        &["table", "build", calib.to_str().unwrap(), "-o", "t.bin"],
+        &d,
+    );
+    armcal_ok(&["table", "keygen", "--out", "maker"], &d);
+    armcal_ok(&["table", "keygen", "--out", "other"], &d);
+    let again = armcal(&["table", "keygen", "--out", "maker"], &d);
+    assert!(!again.status.success());
+    assert!(String::from_utf8_lossy(&again.stderr).contains("maker.pem: exists"));
+    armcal_ok(
+        &[
+            "table",
+            "sign",
+            "t.bin",
+            "--key",
+            "maker.pem",
+            "-o",
+            "s.bin",
+        ],
+        &d,
+    );
+    let (table, image) = (
+        std::fs::read(d.join("t.bin")).unwrap(),
+        std::fs::read(d.join("s.bin")).unwrap(),
+    );
+    assert_eq!(&image[..table.len()], &table[..]);
+    assert_eq!(image.len(), table.len() + quatarm::signature::SIGNATURE_LEN);
+    armcal_ok(&["table", "verify", "s.bin", "--key", "maker.pub"], &d);
+    for (file, key, why) in [
+        ("s.bin", "other.pub", "does not verify"),
+        ("t.bin", "maker.pub", "bytes after the table"),
+    ] {
+        let out = armcal(&["table", "verify", file, "--key", key], &d);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(file) && err.contains(why),
+            "{err}"
+        );
+    }
+    let mut changed = image.clone();
+    changed[200] ^= 1;
+    std::fs::write(d.join("c.bin"), &changed).unwrap();
+    let out = armcal(&["table", "verify", "c.bin", "--key", "maker.pub"], &d);
+    assert!(!out.status.success());
+    // A private key file that is not one is named.
+    let out = armcal(
+        &[
+            "table",
+            "sign",
+            "t.bin",
+            "--key",
+            "maker.pub",
+            "-o",
+            "x.bin",
+        ],
+        &d,
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("maker.pub"), "{err}");
+    assert!(!d.join("x.bin").exists(), "no partial output");
+}

@@ -12,7 +12,7 @@ use quatarm::stream::{
 use quatarm::table::MAX_TABLE_LEN;
 use quatarm::update::fixtures::{boot, factory, layout, table};
 use quatarm::update::mock::MockFlash;
-use quatarm::update::{live_table, Accepted, Updater};
+use quatarm::update::{live_table, Accept, Accepted, Updater};
 
 /// A hub behind a port: what is written to it is the host's stream, what is read its answers.
 struct PortHub {

@@ -12,7 +12,7 @@ use quatarm::stream::{
     MAX_FRAME, MAX_OUTPUT,
 };
 use quatarm::table::MAX_TABLE_LEN;
-use quatarm::update::{fixtures, Updater};
+use quatarm::update::{fixtures, Accept, Updater};
 use quatarm_fuzz::chains;
 
 fuzz_target!(|bytes: &[u8]| {

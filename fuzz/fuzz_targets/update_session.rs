@@ -12,7 +12,7 @@ use quatarm::table::MAX_TABLE_LEN;
 use quatarm::update::fixtures::{boot, crc_of, factory, layout, table};
 use quatarm::update::mock::{Cut, MockFlash};
 use quatarm::update::session::{Accepted, Step, CHUNK_LEN};
-use quatarm::update::Updater;
+use quatarm::update::{Accept, Updater};
 
 fuzz_target!(|program: &[u8]| {
     let (old, new) = (table(100.0), table(120.0));

@@ -107,7 +107,10 @@ fn instructions(b: &Board, table: &[u8]) -> Result<((f64, f64), f64)> {
         .find(|l| l.starts_with("bench signature"))
         .context("`bench signature` missing")?;
     if !sig_line.ends_with("true valid") {
-        bail!("{}: the table's signature did not verify: {sig_line}", b.name);
+        bail!(
+            "{}: the table's signature did not verify: {sig_line}",
+            b.name
+        );
     }
     let sig_ticks = number_after(&lines, "bench signature").context("signature ticks")? as f64;
     let (n0, t0) = ticks_of("bench clock overhead")?;
