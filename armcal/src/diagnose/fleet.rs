@@ -113,6 +113,10 @@ pub enum FleetError {
         /// The reader's error (it names the file, line and column).
         source: crate::data::DataError,
     },
+    /// A grouping of recordings into arms that cannot be honoured (it names the option and
+    /// the recording).
+    #[error("{0}")]
+    Grouping(String),
     /// Two files give the same unit name.
     #[error("{a} and {b} give the same unit name `{name}`")]
     SameName {
@@ -453,32 +457,60 @@ impl Work<'_> {
     }
 }
 
+/// The calibration settings of every unit's geometric model (and of its refits with
+/// candidates): the data's own rank is trusted and what it cannot determine is held, since a
+/// unit's sessions are what they are.
+pub fn geometric_options(opts: &Options) -> calib::Options {
+    calib::Options {
+        terms: Terms::geometric(),
+        design_check: false,
+        allow_degenerate: true,
+        ..opts.diagnose.calib.clone()
+    }
+}
+
+/// A unit's geometric model: its folds (one session each), their held-out validation (`None`
+/// with fewer than two sessions) and the fit on all its data (`None` when it failed).
+#[derive(Clone, Debug)]
+pub struct Geometric {
+    /// One fold per session.
+    pub folds: Folds,
+    /// Held-out validation of the geometric model.
+    pub baseline: Option<Holdout>,
+    /// The fit on all the unit's sessions.
+    pub fit: Option<Fit>,
+}
+
+/// The geometric model of `data` with `inner` ([`geometric_options`]); the fleet diagnosis
+/// and the same-arm test ([`super::same_arm`]) both start from it.
+pub fn geometric(start: &Arm, data: &Dataset, inner: &calib::Options) -> Geometric {
+    let folds = holdout::by_group(data);
+    let baseline = (folds.len() >= 2).then(|| holdout::validate(start, data, inner, &folds));
+    Geometric {
+        fit: calib::calibrate(start, data, inner).ok(),
+        folds,
+        baseline,
+    }
+}
+
 /// Diagnoses a fleet of units of one design, every unit's model starting at `start`.
 pub fn diagnose_fleet(
     start: &Arm,
     units: &[UnitData],
     opts: &Options,
 ) -> Result<Fleet, CalibError> {
-    let geometric = calib::Options {
-        terms: Terms::geometric(),
-        ..opts.diagnose.calib.clone()
-    };
-    let inner = calib::Options {
-        design_check: false,
-        allow_degenerate: true,
-        ..geometric.clone()
-    };
+    let inner = geometric_options(opts);
     let mut work: Vec<Work> = Vec::new();
     let mut geometric_fits = Vec::new();
     for u in units {
-        let folds = holdout::by_group(&u.data);
         let cands = candidates::candidates_up_to(start, &u.data, opts.diagnose.max_order);
-        let chain = if folds.len() >= 2 {
-            vec![holdout::validate(start, &u.data, &inner, &folds)]
-        } else {
-            Vec::new()
-        };
-        geometric_fits.push(calib::calibrate(start, &u.data, &inner).ok());
+        let Geometric {
+            folds,
+            baseline,
+            fit,
+        } = geometric(start, &u.data, &inner);
+        let chain: Vec<Holdout> = baseline.into_iter().collect();
+        geometric_fits.push(fit);
         let testable = folds.len() >= MIN_UNITS && chain.iter().all(|h| h.failed.is_empty());
         work.push(Work {
             unit: u,
