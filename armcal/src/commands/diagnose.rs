@@ -31,7 +31,7 @@ pub struct Args {
     fleet_alpha: f64,
     /// With `--fleet`: these recordings (unit names as the fleet gives them, e.g.
     /// `--same-arm panda_3=panda_3,panda_3_bis,panda_right`) are one physical arm, one unit of
-    /// the fleet test named ARM, their sessions merged. Repeat for more arms. Given, it sets
+    /// the fleet test named ARM, their sessions' evidence pooled. Repeat for more arms. Given, it sets
     /// the grouping wholly: every recording not listed is an arm of its own and nothing is
     /// detected (the pairwise statistics are still reported).
     #[arg(long = "same-arm", value_name = "ARM=REC,REC,…", requires = "fleet",
@@ -232,8 +232,7 @@ fn run_fleet(a: &Args) -> anyhow::Result<()> {
     });
     let run = || -> anyhow::Result<_> {
         let arms = same_arm::group(&start, &files, &opts, &grouping)?;
-        let units = same_arm::merge(&files, &arms)?;
-        let f = diagnose::fleet::diagnose_fleet(&start, &units, &opts)
+        let f = diagnose::fleet::diagnose_arms(&start, &files, &arms.list(), &opts)
             .context("cannot diagnose the fleet")?;
         Ok((arms, f))
     };

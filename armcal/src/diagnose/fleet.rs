@@ -204,6 +204,8 @@ pub struct UnitTest {
     pub effect: Effect,
     /// Sessions judged by both models.
     pub sessions: usize,
+    /// Each session's ½ ln(SS before / SS after), session order.
+    pub per_session: Vec<f64>,
     /// Mean over sessions of ½ ln(SS before / SS after): the log of the held-out RMS ratio
     /// (positive: the candidate helps).
     pub log_ratio: f64,
@@ -225,7 +227,8 @@ pub struct Pooled {
     pub effect: Effect,
     /// The pooled statistics.
     pub pooling: Pooling,
-    /// Every pooled unit's (index among the fleet's units, mean log-ratio, standard error).
+    /// Every pooled arm's (index among the fleet's arms, mean log-ratio, standard error):
+    /// the sessions of all its recordings together.
     pub per_unit: Vec<(usize, f64, f64)>,
 }
 
@@ -354,8 +357,10 @@ pub struct Fleet {
     pub steps: Vec<DesignStep>,
     /// Every unit.
     pub units: Vec<UnitResult>,
-    /// Units whose sessions allow a held-out test.
+    /// Arms whose sessions allow a held-out test (the units of the pooled test).
     pub tested_units: usize,
+    /// The arms' names and their recordings (indices into `units`).
+    pub arms: Vec<(String, Vec<usize>)>,
     /// The level used.
     pub alpha: f64,
 }
@@ -379,6 +384,28 @@ fn session_ss(data: &Dataset, h: &Holdout) -> BTreeMap<i64, f64> {
     ss
 }
 
+/// The mean of per-session log-ratios `y`, its standard error and the one-sided t-test's
+/// p-value (1 below [`MIN_UNITS`] sessions or when some fold failed, `complete` false).
+fn session_summary(y: &[f64], complete: bool) -> (f64, f64, f64) {
+    let n = y.len();
+    let mean = y.iter().sum::<f64>() / n.max(1) as f64;
+    let se = if n > 1 {
+        (y.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64 / n as f64).sqrt()
+    } else {
+        f64::INFINITY
+    };
+    let p = if n < MIN_UNITS || !complete {
+        1.0
+    } else if se > 0.0 {
+        t_tail(mean / se, (n - 1) as f64)
+    } else if mean > 0.0 {
+        0.0
+    } else {
+        1.0
+    };
+    (mean, se, p)
+}
+
 /// The held-out evidence of `after` against `before` on one unit.
 fn unit_test(effect: Effect, data: &Dataset, before: &Holdout, after: Holdout) -> UnitTest {
     let a = session_ss(data, before);
@@ -390,25 +417,11 @@ fn unit_test(effect: Effect, data: &Dataset, before: &Holdout, after: Holdout) -
             (*sa > 0.0 && sb > 0.0).then(|| 0.5 * (sa / sb).ln())
         })
         .collect();
-    let n = y.len();
-    let mean = y.iter().sum::<f64>() / n.max(1) as f64;
-    let se = if n > 1 {
-        (y.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64 / n as f64).sqrt()
-    } else {
-        f64::INFINITY
-    };
-    let p = if n < MIN_UNITS || !after.failed.is_empty() {
-        1.0
-    } else if se > 0.0 {
-        t_tail(mean / se, (n - 1) as f64)
-    } else if mean > 0.0 {
-        0.0
-    } else {
-        1.0
-    };
+    let (mean, se, p) = session_summary(&y, after.failed.is_empty());
     UnitTest {
         effect,
-        sessions: n,
+        sessions: y.len(),
+        per_session: y,
         log_ratio: mean,
         se,
         p,
@@ -427,6 +440,10 @@ struct Work<'a> {
     /// The validation after each cause (index 0: the geometric model).
     chain: Vec<Holdout>,
     testable: bool,
+    /// Whether its sessions count in its arm's evidence (two or more, every fold refitted).
+    contributes: bool,
+    /// Its arm (index into the arms).
+    arm: usize,
 }
 
 impl Work<'_> {
@@ -493,12 +510,47 @@ pub fn geometric(start: &Arm, data: &Dataset, inner: &calib::Options) -> Geometr
     }
 }
 
-/// Diagnoses a fleet of units of one design, every unit's model starting at `start`.
+/// Diagnoses a fleet of units of one design, every unit's model starting at `start`, each
+/// unit an arm of its own.
 pub fn diagnose_fleet(
     start: &Arm,
     units: &[UnitData],
     opts: &Options,
 ) -> Result<Fleet, CalibError> {
+    let arms: Vec<(String, Vec<usize>)> = units
+        .iter()
+        .enumerate()
+        .map(|(i, u)| (u.name.clone(), vec![i]))
+        .collect();
+    diagnose_arms(start, units, &arms, opts)
+}
+
+/// Diagnoses a fleet whose recordings `units` are grouped into physical arms `arms` (name,
+/// recordings), every recording's model starting at `start`. Each recording keeps its own
+/// geometric model (its tool, its frame) and its own held-out validation; an arm's evidence
+/// for a candidate is the per-session log-ratios of all its recordings together (one mean,
+/// one standard error), so the pooled test has one entry per arm, not per file. An arm is
+/// tested when its recordings that can be validated (two sessions or more, every fold
+/// refitted) give [`MIN_UNITS`] sessions together. Unit-level causes remain each
+/// recording's own.
+pub fn diagnose_arms(
+    start: &Arm,
+    units: &[UnitData],
+    arms: &[(String, Vec<usize>)],
+    opts: &Options,
+) -> Result<Fleet, CalibError> {
+    let mut arm_of = vec![usize::MAX; units.len()];
+    for (a, (_, recs)) in arms.iter().enumerate() {
+        for &r in recs {
+            arm_of[r] = a;
+        }
+    }
+    if let Some(r) = arm_of.iter().position(|a| *a == usize::MAX) {
+        return Err(CalibError::Mismatch(format!(
+            "recording {} is in no arm",
+            units[r].name
+        )));
+    }
     let inner = geometric_options(opts);
     let mut work: Vec<Work> = Vec::new();
     let mut geometric_fits = Vec::new();
@@ -511,7 +563,9 @@ pub fn diagnose_fleet(
         } = geometric(start, &u.data, &inner);
         let chain: Vec<Holdout> = baseline.into_iter().collect();
         geometric_fits.push(fit);
-        let testable = folds.len() >= MIN_UNITS && chain.iter().all(|h| h.failed.is_empty());
+        let valid = chain.iter().all(|h| h.failed.is_empty());
+        let testable = folds.len() >= MIN_UNITS && valid;
+        let contributes = folds.len() >= 2 && valid;
         work.push(Work {
             unit: u,
             folds,
@@ -520,9 +574,23 @@ pub fn diagnose_fleet(
             levels: Vec::new(),
             chain,
             testable,
+            contributes,
+            arm: arm_of[work.len()],
         });
     }
-    let tested_units = work.iter().filter(|w| w.testable).count();
+    // An arm is tested when its contributing recordings give MIN_UNITS sessions together;
+    // its recordings are then tested whenever they contribute.
+    let arm_sessions = |a: usize| -> usize {
+        work.iter()
+            .filter(|w| w.arm == a && w.contributes)
+            .map(|w| w.folds.len())
+            .sum()
+    };
+    let arm_tested: Vec<bool> = (0..arms.len())
+        .map(|a| arm_sessions(a) >= MIN_UNITS)
+        .collect();
+    let in_test = |w: &Work| w.contributes && arm_tested[w.arm];
+    let tested_units = arm_tested.iter().filter(|t| **t).count();
 
     // Design level: pool every candidate over the tested units, Holm, add the strongest.
     let mut design: Vec<Effect> = Vec::new();
@@ -532,7 +600,7 @@ pub fn diagnose_fleet(
     for _ in 0..opts.diagnose.select.max_steps {
         let vocabulary: Vec<Effect> = work
             .iter()
-            .filter(|w| w.testable)
+            .filter(|w| in_test(w))
             .flat_map(|w| w.cands.testable.iter().map(|c| c.effect))
             .filter(|e| !design.contains(e))
             .collect::<BTreeSet<_>>()
@@ -541,7 +609,7 @@ pub fn diagnose_fleet(
         last = work
             .iter()
             .map(|w| {
-                if !w.testable {
+                if !in_test(w) {
                     return Vec::new();
                 }
                 vocabulary
@@ -554,16 +622,22 @@ pub fn diagnose_fleet(
         let pooled: Vec<Pooled> = vocabulary
             .iter()
             .map(|&e| {
-                let ts: Vec<(usize, &UnitTest)> = last
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(u, ts)| {
-                        let t = ts.iter().find(|t| t.effect == e && t.sessions >= 2)?;
-                        Some((u, t))
+                // Each arm: the sessions of every recording of it that tested `e`.
+                let ts: Vec<(usize, f64, f64)> = (0..arms.len())
+                    .filter_map(|a| {
+                        let ys: Vec<f64> = last
+                            .iter()
+                            .zip(&work)
+                            .filter(|(_, w)| w.arm == a)
+                            .filter_map(|(ts, _)| ts.iter().find(|t| t.effect == e))
+                            .flat_map(|t| t.per_session.iter().copied())
+                            .collect();
+                        let (mean, se, _) = session_summary(&ys, true);
+                        (ys.len() >= 2).then_some((a, mean, se))
                     })
                     .collect();
-                let y: Vec<f64> = ts.iter().map(|t| t.1.log_ratio).collect();
-                let v: Vec<f64> = ts.iter().map(|t| t.1.se * t.1.se).collect();
+                let y: Vec<f64> = ts.iter().map(|t| t.1).collect();
+                let v: Vec<f64> = ts.iter().map(|t| t.2 * t.2).collect();
                 let (mu, se, tau2, q) = dersimonian_laird(&y, &v);
                 let t = if se > 0.0 { mu / se } else { 0.0 };
                 let k = ts.len();
@@ -583,7 +657,7 @@ pub fn diagnose_fleet(
                             1.0
                         },
                     },
-                    per_unit: ts.iter().map(|(u, t)| (*u, t.log_ratio, t.se)).collect(),
+                    per_unit: ts,
                 }
             })
             .collect();
@@ -621,7 +695,7 @@ pub fn diagnose_fleet(
     // Units that cannot be tested still get the design's causes when they can be validated.
     for w in work
         .iter_mut()
-        .filter(|w| !w.testable && w.folds.len() >= 2)
+        .filter(|w| !in_test(w) && w.folds.len() >= 2)
     {
         for &e in &design {
             if w.can_test(e) {
@@ -665,9 +739,12 @@ pub fn diagnose_fleet(
     let mut out = Vec::new();
     for ((w, geo), tests) in work.into_iter().zip(geometric_fits).zip(first_tests) {
         let sessions = w.folds.len();
+        let counted = (in_test(&w) && arms[w.arm].1.len() > 1)
+            .then(|| format!("; its sessions count in arm {}'s evidence", arms[w.arm].0))
+            .unwrap_or_default();
         let cannot_test = (!w.testable).then(|| {
             if sessions < MIN_UNITS {
-                format!("cannot test: {sessions} session{}", plural(sessions))
+                format!("cannot test: {sessions} session{}{counted}", plural(sessions))
             } else {
                 "cannot test: its geometric model could not be refitted on every fold".into()
             }
@@ -718,6 +795,7 @@ pub fn diagnose_fleet(
         steps,
         units: out,
         tested_units,
+        arms: arms.to_vec(),
         alpha: opts.alpha,
     })
 }

@@ -36,7 +36,8 @@ pub struct PooledReport {
     /// The pooled statistics.
     #[serde(flatten)]
     pub pooling: Pooling,
-    /// Every pooled unit's own mean log-ratio and its standard error.
+    /// Every pooled arm's own mean log-ratio (its recordings' sessions together) and its
+    /// standard error.
     pub per_unit: Vec<UnitLogRatio>,
     /// Whether Holm's step-down over the step's candidates rejects "no gain" at `alpha`.
     pub significant: bool,
@@ -97,7 +98,7 @@ pub struct DesignCause {
 pub struct DesignReport {
     /// Causes named for the design.
     pub causes: Vec<DesignCause>,
-    /// Units with a held-out test (enough sessions).
+    /// Arms with a held-out test (enough sessions over their recordings).
     pub tested_units: usize,
     /// Family-wise level of each step (Holm over the candidates).
     pub alpha: f64,
@@ -192,7 +193,7 @@ pub struct ArmReport {
 pub struct FleetReport {
     /// The design level.
     pub design: DesignReport,
-    /// Every unit (one per arm).
+    /// Every recording (its own geometric model and causes; `arms` says which are one arm).
     pub units: Vec<UnitReport>,
     /// How unit names were made.
     pub naming: String,
@@ -237,7 +238,7 @@ fn pooled_report(f: &Fleet, p: &Pooled, significant: bool) -> PooledReport {
             .per_unit
             .iter()
             .map(|&(u, y, se)| UnitLogRatio {
-                unit: f.units[u].name.clone(),
+                unit: f.arms[u].0.clone(),
                 log_ratio: y,
                 se,
             })
@@ -471,8 +472,10 @@ impl FleetReport {
         let d = &self.design;
         let _ = writeln!(
             s,
-            "fleet diagnosis: {} units (arms), {} with a held-out test; names: {}",
+            "fleet diagnosis: {} recordings of {} arms (the pooled test's units), {} arms with a \
+             held-out test; names: {}",
             self.units.len(),
+            self.arms.len(),
             d.tested_units,
             self.naming
         );

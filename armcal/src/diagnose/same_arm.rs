@@ -56,7 +56,7 @@
 
 use super::fleet::{self, FleetError, UnitData};
 use crate::calib::Fit;
-use crate::data::{Dataset, Kind};
+use crate::data::Dataset;
 use crate::holdout::Holdout;
 use crate::params::Param;
 use crate::stats::{chi2_tail, f_tail};
@@ -486,63 +486,12 @@ fn by_hand(files: &[UnitData], hand: &[(String, Vec<String>)]) -> Result<Vec<usi
     Ok(of)
 }
 
-/// The fleet's units, one per arm: an arm of several recordings gets their sessions merged
-/// (renumbered one after the other, in file order) under the arm's name. A unit has one
-/// instrument frame, so at most one of an arm's recordings may have `point` rows (`spat`,
-/// `length` and `sphere` rows have no frame).
-pub fn merge(files: &[UnitData], arms: &Arms) -> Result<Vec<UnitData>, FleetError> {
-    arms.groups
-        .iter()
-        .map(|g| {
-            if let [one] = g.recordings[..] {
-                return Ok(UnitData {
-                    name: g.arm.clone(),
-                    ..files[one].clone()
-                });
-            }
-            let recs: Vec<&UnitData> = g.recordings.iter().map(|&i| &files[i]).collect();
-            let with_points: Vec<&str> = recs
-                .iter()
-                .filter(|u| u.data.rows.iter().any(|r| r.kind == Kind::Point))
-                .map(|u| u.file.as_str())
-                .collect();
-            if with_points.len() > 1 {
-                return Err(FleetError::Grouping(format!(
-                    "arm `{}`: {} have `point` rows, each in its own instrument frame, and one \
-                     unit has one frame; give them as separate arms (--each-file-an-arm, or \
-                     --same-arm without them)",
-                    g.arm,
-                    with_points.join(" and ")
-                )));
-            }
-            let mut rows = Vec::new();
-            let mut offset = 0;
-            for u in &recs {
-                let top = u.data.rows.iter().map(|r| r.group).max().unwrap_or(0);
-                let low = u.data.rows.iter().map(|r| r.group).min().unwrap_or(0);
-                rows.extend(u.data.rows.iter().map(|r| {
-                    let mut r = r.clone();
-                    r.group = r.group - low + 1 + offset;
-                    r
-                }));
-                offset += top - low + 1;
-            }
-            let files: Vec<&str> = recs.iter().map(|u| u.file.as_str()).collect();
-            let source = files.join(" + ");
-            let dof = recs[0].data.dof;
-            let temp = recs.iter().any(|u| u.data.has_temperature);
-            let mut data = Dataset::from_rows(rows, dof, temp, &source).map_err(|source| {
-                FleetError::Data {
-                    unit: g.arm.clone(),
-                    source,
-                }
-            })?;
-            data.warnings = recs.iter().flat_map(|u| u.data.warnings.clone()).collect();
-            Ok(UnitData {
-                name: g.arm.clone(),
-                file: source,
-                data,
-            })
-        })
-        .collect()
+impl Arms {
+    /// The arms as [`fleet::diagnose_arms`] takes them: (name, recordings).
+    pub fn list(&self) -> Vec<(String, Vec<usize>)> {
+        self.groups
+            .iter()
+            .map(|g| (g.arm.clone(), g.recordings.clone()))
+            .collect()
+    }
 }
