@@ -302,6 +302,11 @@ pub fn group(
     grouping: &Grouping,
 ) -> Result<Arms, FleetError> {
     let n = files.len();
+    // A hand grouping is checked before any fit.
+    let hand = match grouping {
+        Grouping::ByHand(hand) => Some(by_hand(files, hand)?),
+        _ => None,
+    };
     let mut pairs = Vec::new();
     let mut uncompared = Vec::new();
     let mut splits = Vec::new();
@@ -397,7 +402,7 @@ pub fn group(
             (0..n).map(|i| find(&mut root, i)).collect()
         }
         Grouping::EachFile => (0..n).collect(),
-        Grouping::ByHand(hand) => by_hand(files, hand)?,
+        Grouping::ByHand(_) => hand.expect("checked above"),
     };
     let mut groups: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
     for (i, r) in of.iter().enumerate() {
