@@ -57,7 +57,11 @@ fn main() {
         );
     }
     for g in &arms.groups {
-        let names: Vec<&str> = g.recordings.iter().map(|&i| files[i].name.as_str()).collect();
+        let names: Vec<&str> = g
+            .recordings
+            .iter()
+            .map(|&i| files[i].name.as_str())
+            .collect();
         println!("arm {}: {}", g.arm, names.join(" + "));
     }
 }

@@ -130,7 +130,9 @@ fn a_hand_grouping_is_honoured_and_counts_arms() {
             let recs = a["recordings"].as_array().unwrap();
             (
                 a["arm"].as_str().unwrap().to_string(),
-                recs.iter().map(|r| r.as_str().unwrap().to_string()).collect(),
+                recs.iter()
+                    .map(|r| r.as_str().unwrap().to_string())
+                    .collect(),
             )
         })
         .collect();
@@ -186,7 +188,10 @@ fn bad_groupings_are_refused_with_the_option_and_recording_named() {
     let err = run(&["--same-arm", "x=a,b", "--same-arm", "y=b,c"]);
     assert!(err.contains("`b`") && err.contains("fleet-b.csv"), "{err}");
     let err = run(&["--same-arm", "c=a,b"]);
-    assert!(err.contains("--same-arm c=") && err.contains("fleet-c.csv"), "{err}");
+    assert!(
+        err.contains("--same-arm c=") && err.contains("fleet-c.csv"),
+        "{err}"
+    );
     let err = run(&["--same-arm", "x=a,b", "--same-arm", "x=c"]);
     assert!(err.contains("arm `x` is given twice"), "{err}");
     let err = run(&["--same-arm", "a,b"]);

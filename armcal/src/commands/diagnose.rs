@@ -4,8 +4,8 @@
 use anyhow::{bail, Context};
 use armcal::data::Dataset;
 use armcal::diagnose::report::Report;
-use armcal::diagnose::Diagnosis;
 use armcal::diagnose::same_arm::{self, Grouping};
+use armcal::diagnose::Diagnosis;
 use armcal::diagnose::{self, patterns, plots, report, FoldChoice};
 use armcal::output::Staged;
 use std::path::{Path, PathBuf};

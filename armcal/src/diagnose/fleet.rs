@@ -739,12 +739,17 @@ pub fn diagnose_arms(
     let mut out = Vec::new();
     for ((w, geo), tests) in work.into_iter().zip(geometric_fits).zip(first_tests) {
         let sessions = w.folds.len();
-        let counted = (in_test(&w) && arms[w.arm].1.len() > 1)
-            .then(|| format!("; its sessions count in arm {}'s evidence", arms[w.arm].0))
-            .unwrap_or_default();
+        let counted = if in_test(&w) && arms[w.arm].1.len() > 1 {
+            format!("; its sessions count in arm {}'s evidence", arms[w.arm].0)
+        } else {
+            String::new()
+        };
         let cannot_test = (!w.testable).then(|| {
             if sessions < MIN_UNITS {
-                format!("cannot test: {sessions} session{}{counted}", plural(sessions))
+                format!(
+                    "cannot test: {sessions} session{}{counted}",
+                    plural(sessions)
+                )
             } else {
                 "cannot test: its geometric model could not be refitted on every fold".into()
             }

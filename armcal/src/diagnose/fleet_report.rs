@@ -20,8 +20,8 @@
 //! `spread` their standard deviation: the design's typical size and how much units differ.
 
 use super::fleet::{Fleet, Level, Pooled, Pooling, UnitResult, UnitTest};
-use super::same_arm::{Arms, Pair};
 use super::report::{cause_report, CauseReport};
+use super::same_arm::{Arms, Pair};
 use crate::params::Effect;
 use crate::report::pretty_json;
 use serde::Serialize;
@@ -344,7 +344,11 @@ pub fn build(f: &Fleet, naming: &str, arms: &Arms, recordings: &[String]) -> Fle
         .iter()
         .map(|g| ArmReport {
             arm: g.arm.clone(),
-            recordings: g.recordings.iter().map(|&i| recordings[i].clone()).collect(),
+            recordings: g
+                .recordings
+                .iter()
+                .map(|&i| recordings[i].clone())
+                .collect(),
             evidence: ArmEvidence {
                 rule: arms.rule.clone(),
                 pairs: arms
@@ -447,9 +451,7 @@ impl FleetReport {
                     .any(|a| a.recordings.contains(&p.a) && a.recordings.contains(&p.b))
             })
             .collect();
-        apart.sort_by(|x, y| {
-            x.pair.f.total_cmp(&y.pair.f)
-        });
+        apart.sort_by(|x, y| x.pair.f.total_cmp(&y.pair.f));
         if !apart.is_empty() {
             let _ = writeln!(s, "  closest pairs of different arms:");
             for p in apart.iter().take(3) {

@@ -421,7 +421,10 @@ pub fn group(
     let mut groups: Vec<ArmGroup> = groups
         .into_iter()
         .map(|(r, recordings)| ArmGroup {
-            arm: names.get(&r).cloned().unwrap_or_else(|| files[r].name.clone()),
+            arm: names
+                .get(&r)
+                .cloned()
+                .unwrap_or_else(|| files[r].name.clone()),
             recordings,
         })
         .collect();
