@@ -425,6 +425,11 @@ impl FleetReport {
         let Some(rule) = self.arms.first().map(|a| &a.evidence.rule) else {
             return;
         };
+        // `--each-file-an-arm`: nothing to say beyond the rule.
+        if self.pairs.is_empty() && self.arms.iter().all(|a| a.recordings.len() == 1) {
+            let _ = writeln!(s, "\narms: {rule}");
+            return;
+        }
         let _ = writeln!(s, "\narms ({rule})");
         if let Some(o) = &self.overdispersion {
             let _ = writeln!(
