@@ -49,6 +49,13 @@
 //! the single-arm rule (paired t-test over the sessions at the level of `z`). A unit with fewer
 //! than [`crate::stats::MIN_UNITS`] sessions cannot be tested ("cannot test: N sessions") and
 //! contributes nothing.
+//!
+//! **Arms, not files.** The pooled test's units are physical arms ([`diagnose_arms`]): the
+//! recordings of one arm, found from their geometry by [`super::same_arm`] or given by hand,
+//! each keep their own geometric model (their tool, their frame) and validation, and the arm's
+//! evidence for a candidate is the per-session log-ratios of all of them together. Two
+//! recordings of one arm are not two draws from the design; pooled as two, one arm's effect
+//! would count twice and look like the design's.
 
 use super::candidates::{self, Candidates};
 use super::select::{compare, Confirmation};
