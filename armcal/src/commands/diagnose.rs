@@ -4,6 +4,7 @@
 use anyhow::{bail, Context};
 use armcal::data::Dataset;
 use armcal::diagnose::report::Report;
+use armcal::diagnose::same_arm::{self, Grouping};
 use armcal::diagnose::Diagnosis;
 use armcal::diagnose::{self, patterns, plots, report, FoldChoice};
 use armcal::output::Staged;
@@ -15,10 +16,11 @@ pub struct Args {
     /// Measured data (CSV of `spec/measured-data.md`): any mix of point, spat and length rows.
     #[arg(required_unless_present = "fleet")]
     data: Option<PathBuf>,
-    /// Diagnose several units of one design instead, one file per unit (its `group`s are its
-    /// sessions): which causes the design has (random-effects pooling of every unit's
-    /// held-out gain) and which single units have. A unit is named by its file stem less the
-    /// prefix all stems share up to a `-`.
+    /// Diagnose several units of one design instead, one file per recording (its `group`s
+    /// are its sessions): which causes the design has (random-effects pooling of every unit's
+    /// held-out gain) and which single units have. A recording is named by its file stem
+    /// less the prefix all stems share up to a `-`; recordings of one physical arm are one
+    /// unit (see `--same-arm-alpha`, `--same-arm`, `--each-file-an-arm`).
     #[arg(long, num_args = 2.., value_name = "CSV",
           conflicts_with_all = ["data", "plots", "output", "by_group"])]
     fleet: Vec<PathBuf>,
@@ -27,6 +29,27 @@ pub struct Args {
     #[arg(long, default_value_t = diagnose::fleet::ALPHA,
           value_parser = super::args::probability)]
     fleet_alpha: f64,
+    /// With `--fleet`: these recordings (unit names as the fleet gives them, e.g.
+    /// `--same-arm panda_3=panda_3,panda_3_bis,panda_right`) are one physical arm, one unit of
+    /// the fleet test named ARM, their sessions' evidence pooled. Repeat for more arms. Given, it sets
+    /// the grouping wholly: every recording not listed is an arm of its own and nothing is
+    /// detected (the pairwise statistics are still reported).
+    #[arg(long = "same-arm", value_name = "ARM=REC,REC,…", requires = "fleet",
+          conflicts_with = "each_file_an_arm",
+          value_parser = diagnose::same_arm::parse_same_arm)]
+    same_arm: Vec<(String, Vec<String>)>,
+    /// With `--fleet`: every file is an arm of its own (no same-arm detection, no
+    /// statistics).
+    #[arg(long, requires = "fleet")]
+    each_file_an_arm: bool,
+    /// With `--fleet` and neither option above: two recordings are one arm when their
+    /// identified geometric errors (probe excluded) agree, P(F(k, D) > F) ≥ this, with
+    /// F = dᵀ(C_A + C_B)⁻¹d / (k φ̂) (d their difference, C their covariances, k the unknowns
+    /// both identify alike, φ̂ the same statistic's χ²/k between alternate-session halves of
+    /// every recording, pooled over D degrees of freedom), closed transitively.
+    #[arg(long, default_value_t = diagnose::same_arm::ALPHA,
+          value_parser = super::args::probability)]
+    same_arm_alpha: f64,
     /// The arm's nominal model (or an earlier calibration); default the spec's `default-6`.
     #[arg(long)]
     arm: Option<PathBuf>,
@@ -173,8 +196,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 fn run_fleet(a: &Args) -> anyhow::Result<()> {
     let start = super::calibrate::start_arm(a.arm.as_deref())?;
     let paths: Vec<&Path> = a.fleet.iter().map(PathBuf::as_path).collect();
-    let units = diagnose::fleet::read_units(&paths, start.dof())?;
-    for u in &units {
+    let files = diagnose::fleet::read_units(&paths, start.dof())?;
+    for u in &files {
         for w in &u.data.warnings {
             eprintln!("armcal: warning: {}: {w}", u.file);
         }
@@ -188,23 +211,42 @@ fn run_fleet(a: &Args) -> anyhow::Result<()> {
     opts.diagnose.select.z = a.z;
     opts.diagnose.max_order = a.max_order;
     opts.diagnose.unexplained_alpha = a.unexplained_alpha;
+    let grouping = if a.each_file_an_arm {
+        Grouping::EachFile
+    } else if !a.same_arm.is_empty() {
+        Grouping::ByHand(a.same_arm.clone())
+    } else {
+        Grouping::Detect {
+            alpha: a.same_arm_alpha,
+        }
+    };
     let spinner = (!a.json).then(|| {
         let pb = indicatif::ProgressBar::new_spinner();
         pb.set_message(format!(
-            "diagnosing a fleet of {} units: every candidate on every unit, sessions held out…",
-            units.len()
+            "diagnosing a fleet of {} recordings: which are one arm, then every candidate on \
+             every arm, sessions held out…",
+            files.len()
         ));
         pb.enable_steady_tick(std::time::Duration::from_millis(200));
         pb
     });
-    let f = diagnose::fleet::diagnose_fleet(&start, &units, &opts);
+    let run = || -> anyhow::Result<_> {
+        let arms = same_arm::group(&start, &files, &opts, &grouping)?;
+        let f = diagnose::fleet::diagnose_arms(&start, &files, &arms.list(), &opts)
+            .context("cannot diagnose the fleet")?;
+        Ok((arms, f))
+    };
+    let done = run();
     if let Some(pb) = &spinner {
         pb.finish_and_clear();
     }
-    let f = f.context("cannot diagnose the fleet")?;
+    let (arms, f) = done?;
+    let names: Vec<String> = files.iter().map(|u| u.name.clone()).collect();
     let rep = diagnose::fleet_report::build(
         &f,
         "file stem less the prefix every stem shares up to its last `-`",
+        &arms,
+        &names,
     );
     if a.json {
         println!("{}", rep.json());

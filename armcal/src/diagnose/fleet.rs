@@ -49,6 +49,13 @@
 //! the single-arm rule (paired t-test over the sessions at the level of `z`). A unit with fewer
 //! than [`crate::stats::MIN_UNITS`] sessions cannot be tested ("cannot test: N sessions") and
 //! contributes nothing.
+//!
+//! **Arms, not files.** The pooled test's units are physical arms ([`diagnose_arms`]): the
+//! recordings of one arm, found from their geometry by [`super::same_arm`] or given by hand,
+//! each keep their own geometric model (their tool, their frame) and validation, and the arm's
+//! evidence for a candidate is the per-session log-ratios of all of them together. Two
+//! recordings of one arm are not two draws from the design; pooled as two, one arm's effect
+//! would count twice and look like the design's.
 
 use super::candidates::{self, Candidates};
 use super::select::{compare, Confirmation};
@@ -113,6 +120,10 @@ pub enum FleetError {
         /// The reader's error (it names the file, line and column).
         source: crate::data::DataError,
     },
+    /// A grouping of recordings into arms that cannot be honoured (it names the option and
+    /// the recording).
+    #[error("{0}")]
+    Grouping(String),
     /// Two files give the same unit name.
     #[error("{a} and {b} give the same unit name `{name}`")]
     SameName {
@@ -200,6 +211,8 @@ pub struct UnitTest {
     pub effect: Effect,
     /// Sessions judged by both models.
     pub sessions: usize,
+    /// Each session's ½ ln(SS before / SS after), session order.
+    pub per_session: Vec<f64>,
     /// Mean over sessions of ½ ln(SS before / SS after): the log of the held-out RMS ratio
     /// (positive: the candidate helps).
     pub log_ratio: f64,
@@ -221,7 +234,8 @@ pub struct Pooled {
     pub effect: Effect,
     /// The pooled statistics.
     pub pooling: Pooling,
-    /// Every pooled unit's (index among the fleet's units, mean log-ratio, standard error).
+    /// Every pooled arm's (index among the fleet's arms, mean log-ratio, standard error):
+    /// the sessions of all its recordings together.
     pub per_unit: Vec<(usize, f64, f64)>,
 }
 
@@ -350,8 +364,10 @@ pub struct Fleet {
     pub steps: Vec<DesignStep>,
     /// Every unit.
     pub units: Vec<UnitResult>,
-    /// Units whose sessions allow a held-out test.
+    /// Arms whose sessions allow a held-out test (the units of the pooled test).
     pub tested_units: usize,
+    /// The arms' names and their recordings (indices into `units`).
+    pub arms: Vec<(String, Vec<usize>)>,
     /// The level used.
     pub alpha: f64,
 }
@@ -375,6 +391,28 @@ fn session_ss(data: &Dataset, h: &Holdout) -> BTreeMap<i64, f64> {
     ss
 }
 
+/// The mean of per-session log-ratios `y`, its standard error and the one-sided t-test's
+/// p-value (1 below [`MIN_UNITS`] sessions or when some fold failed, `complete` false).
+fn session_summary(y: &[f64], complete: bool) -> (f64, f64, f64) {
+    let n = y.len();
+    let mean = y.iter().sum::<f64>() / n.max(1) as f64;
+    let se = if n > 1 {
+        (y.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64 / n as f64).sqrt()
+    } else {
+        f64::INFINITY
+    };
+    let p = if n < MIN_UNITS || !complete {
+        1.0
+    } else if se > 0.0 {
+        t_tail(mean / se, (n - 1) as f64)
+    } else if mean > 0.0 {
+        0.0
+    } else {
+        1.0
+    };
+    (mean, se, p)
+}
+
 /// The held-out evidence of `after` against `before` on one unit.
 fn unit_test(effect: Effect, data: &Dataset, before: &Holdout, after: Holdout) -> UnitTest {
     let a = session_ss(data, before);
@@ -386,25 +424,11 @@ fn unit_test(effect: Effect, data: &Dataset, before: &Holdout, after: Holdout) -
             (*sa > 0.0 && sb > 0.0).then(|| 0.5 * (sa / sb).ln())
         })
         .collect();
-    let n = y.len();
-    let mean = y.iter().sum::<f64>() / n.max(1) as f64;
-    let se = if n > 1 {
-        (y.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64 / n as f64).sqrt()
-    } else {
-        f64::INFINITY
-    };
-    let p = if n < MIN_UNITS || !after.failed.is_empty() {
-        1.0
-    } else if se > 0.0 {
-        t_tail(mean / se, (n - 1) as f64)
-    } else if mean > 0.0 {
-        0.0
-    } else {
-        1.0
-    };
+    let (mean, se, p) = session_summary(&y, after.failed.is_empty());
     UnitTest {
         effect,
-        sessions: n,
+        sessions: y.len(),
+        per_session: y,
         log_ratio: mean,
         se,
         p,
@@ -423,6 +447,10 @@ struct Work<'a> {
     /// The validation after each cause (index 0: the geometric model).
     chain: Vec<Holdout>,
     testable: bool,
+    /// Whether its sessions count in its arm's evidence (two or more, every fold refitted).
+    contributes: bool,
+    /// Its arm (index into the arms).
+    arm: usize,
 }
 
 impl Work<'_> {
@@ -453,33 +481,98 @@ impl Work<'_> {
     }
 }
 
-/// Diagnoses a fleet of units of one design, every unit's model starting at `start`.
+/// The calibration settings of every unit's geometric model (and of its refits with
+/// candidates): the data's own rank is trusted and what it cannot determine is held, since a
+/// unit's sessions are what they are.
+pub fn geometric_options(opts: &Options) -> calib::Options {
+    calib::Options {
+        terms: Terms::geometric(),
+        design_check: false,
+        allow_degenerate: true,
+        ..opts.diagnose.calib.clone()
+    }
+}
+
+/// A unit's geometric model: its folds (one session each), their held-out validation (`None`
+/// with fewer than two sessions) and the fit on all its data (`None` when it failed).
+#[derive(Clone, Debug)]
+pub struct Geometric {
+    /// One fold per session.
+    pub folds: Folds,
+    /// Held-out validation of the geometric model.
+    pub baseline: Option<Holdout>,
+    /// The fit on all the unit's sessions.
+    pub fit: Option<Fit>,
+}
+
+/// The geometric model of `data` with `inner` ([`geometric_options`]); the fleet diagnosis
+/// and the same-arm test ([`super::same_arm`]) both start from it.
+pub fn geometric(start: &Arm, data: &Dataset, inner: &calib::Options) -> Geometric {
+    let folds = holdout::by_group(data);
+    let baseline = (folds.len() >= 2).then(|| holdout::validate(start, data, inner, &folds));
+    Geometric {
+        fit: calib::calibrate(start, data, inner).ok(),
+        folds,
+        baseline,
+    }
+}
+
+/// Diagnoses a fleet of units of one design, every unit's model starting at `start`, each
+/// unit an arm of its own.
 pub fn diagnose_fleet(
     start: &Arm,
     units: &[UnitData],
     opts: &Options,
 ) -> Result<Fleet, CalibError> {
-    let geometric = calib::Options {
-        terms: Terms::geometric(),
-        ..opts.diagnose.calib.clone()
-    };
-    let inner = calib::Options {
-        design_check: false,
-        allow_degenerate: true,
-        ..geometric.clone()
-    };
+    let arms: Vec<(String, Vec<usize>)> = units
+        .iter()
+        .enumerate()
+        .map(|(i, u)| (u.name.clone(), vec![i]))
+        .collect();
+    diagnose_arms(start, units, &arms, opts)
+}
+
+/// Diagnoses a fleet whose recordings `units` are grouped into physical arms `arms` (name,
+/// recordings), every recording's model starting at `start`. Each recording keeps its own
+/// geometric model (its tool, its frame) and its own held-out validation; an arm's evidence
+/// for a candidate is the per-session log-ratios of all its recordings together (one mean,
+/// one standard error), so the pooled test has one entry per arm, not per file. An arm is
+/// tested when its recordings that can be validated (two sessions or more, every fold
+/// refitted) give [`MIN_UNITS`] sessions together. Unit-level causes remain each
+/// recording's own.
+pub fn diagnose_arms(
+    start: &Arm,
+    units: &[UnitData],
+    arms: &[(String, Vec<usize>)],
+    opts: &Options,
+) -> Result<Fleet, CalibError> {
+    let mut arm_of = vec![usize::MAX; units.len()];
+    for (a, (_, recs)) in arms.iter().enumerate() {
+        for &r in recs {
+            arm_of[r] = a;
+        }
+    }
+    if let Some(r) = arm_of.iter().position(|a| *a == usize::MAX) {
+        return Err(CalibError::Mismatch(format!(
+            "recording {} is in no arm",
+            units[r].name
+        )));
+    }
+    let inner = geometric_options(opts);
     let mut work: Vec<Work> = Vec::new();
     let mut geometric_fits = Vec::new();
     for u in units {
-        let folds = holdout::by_group(&u.data);
         let cands = candidates::candidates_up_to(start, &u.data, opts.diagnose.max_order);
-        let chain = if folds.len() >= 2 {
-            vec![holdout::validate(start, &u.data, &inner, &folds)]
-        } else {
-            Vec::new()
-        };
-        geometric_fits.push(calib::calibrate(start, &u.data, &inner).ok());
-        let testable = folds.len() >= MIN_UNITS && chain.iter().all(|h| h.failed.is_empty());
+        let Geometric {
+            folds,
+            baseline,
+            fit,
+        } = geometric(start, &u.data, &inner);
+        let chain: Vec<Holdout> = baseline.into_iter().collect();
+        geometric_fits.push(fit);
+        let valid = chain.iter().all(|h| h.failed.is_empty());
+        let testable = folds.len() >= MIN_UNITS && valid;
+        let contributes = folds.len() >= 2 && valid;
         work.push(Work {
             unit: u,
             folds,
@@ -488,9 +581,23 @@ pub fn diagnose_fleet(
             levels: Vec::new(),
             chain,
             testable,
+            contributes,
+            arm: arm_of[work.len()],
         });
     }
-    let tested_units = work.iter().filter(|w| w.testable).count();
+    // An arm is tested when its contributing recordings give MIN_UNITS sessions together;
+    // its recordings are then tested whenever they contribute.
+    let arm_sessions = |a: usize| -> usize {
+        work.iter()
+            .filter(|w| w.arm == a && w.contributes)
+            .map(|w| w.folds.len())
+            .sum()
+    };
+    let arm_tested: Vec<bool> = (0..arms.len())
+        .map(|a| arm_sessions(a) >= MIN_UNITS)
+        .collect();
+    let in_test = |w: &Work| w.contributes && arm_tested[w.arm];
+    let tested_units = arm_tested.iter().filter(|t| **t).count();
 
     // Design level: pool every candidate over the tested units, Holm, add the strongest.
     let mut design: Vec<Effect> = Vec::new();
@@ -500,7 +607,7 @@ pub fn diagnose_fleet(
     for _ in 0..opts.diagnose.select.max_steps {
         let vocabulary: Vec<Effect> = work
             .iter()
-            .filter(|w| w.testable)
+            .filter(|w| in_test(w))
             .flat_map(|w| w.cands.testable.iter().map(|c| c.effect))
             .filter(|e| !design.contains(e))
             .collect::<BTreeSet<_>>()
@@ -509,7 +616,7 @@ pub fn diagnose_fleet(
         last = work
             .iter()
             .map(|w| {
-                if !w.testable {
+                if !in_test(w) {
                     return Vec::new();
                 }
                 vocabulary
@@ -522,16 +629,22 @@ pub fn diagnose_fleet(
         let pooled: Vec<Pooled> = vocabulary
             .iter()
             .map(|&e| {
-                let ts: Vec<(usize, &UnitTest)> = last
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(u, ts)| {
-                        let t = ts.iter().find(|t| t.effect == e && t.sessions >= 2)?;
-                        Some((u, t))
+                // Each arm: the sessions of every recording of it that tested `e`.
+                let ts: Vec<(usize, f64, f64)> = (0..arms.len())
+                    .filter_map(|a| {
+                        let ys: Vec<f64> = last
+                            .iter()
+                            .zip(&work)
+                            .filter(|(_, w)| w.arm == a)
+                            .filter_map(|(ts, _)| ts.iter().find(|t| t.effect == e))
+                            .flat_map(|t| t.per_session.iter().copied())
+                            .collect();
+                        let (mean, se, _) = session_summary(&ys, true);
+                        (ys.len() >= 2).then_some((a, mean, se))
                     })
                     .collect();
-                let y: Vec<f64> = ts.iter().map(|t| t.1.log_ratio).collect();
-                let v: Vec<f64> = ts.iter().map(|t| t.1.se * t.1.se).collect();
+                let y: Vec<f64> = ts.iter().map(|t| t.1).collect();
+                let v: Vec<f64> = ts.iter().map(|t| t.2 * t.2).collect();
                 let (mu, se, tau2, q) = dersimonian_laird(&y, &v);
                 let t = if se > 0.0 { mu / se } else { 0.0 };
                 let k = ts.len();
@@ -551,7 +664,7 @@ pub fn diagnose_fleet(
                             1.0
                         },
                     },
-                    per_unit: ts.iter().map(|(u, t)| (*u, t.log_ratio, t.se)).collect(),
+                    per_unit: ts,
                 }
             })
             .collect();
@@ -589,7 +702,7 @@ pub fn diagnose_fleet(
     // Units that cannot be tested still get the design's causes when they can be validated.
     for w in work
         .iter_mut()
-        .filter(|w| !w.testable && w.folds.len() >= 2)
+        .filter(|w| !in_test(w) && w.folds.len() >= 2)
     {
         for &e in &design {
             if w.can_test(e) {
@@ -633,9 +746,17 @@ pub fn diagnose_fleet(
     let mut out = Vec::new();
     for ((w, geo), tests) in work.into_iter().zip(geometric_fits).zip(first_tests) {
         let sessions = w.folds.len();
+        let counted = if in_test(&w) && arms[w.arm].1.len() > 1 {
+            format!("; its sessions count in arm {}'s evidence", arms[w.arm].0)
+        } else {
+            String::new()
+        };
         let cannot_test = (!w.testable).then(|| {
             if sessions < MIN_UNITS {
-                format!("cannot test: {sessions} session{}", plural(sessions))
+                format!(
+                    "cannot test: {sessions} session{}{counted}",
+                    plural(sessions)
+                )
             } else {
                 "cannot test: its geometric model could not be refitted on every fold".into()
             }
@@ -686,6 +807,7 @@ pub fn diagnose_fleet(
         steps,
         units: out,
         tested_units,
+        arms: arms.to_vec(),
         alpha: opts.alpha,
     })
 }

@@ -6,8 +6,14 @@
 //!                         "evidence": {"z", "p_value", "tau2", …}}],
 //!             "tested_units", "alpha", "strongest": […]},
 //!  "units": [{"unit": "panda_3", "sessions", "cannot_test", "causes": [{"level": "design",
-//!             …the single-arm report's cause…}], "holdout_rms_um", "holdout_rms_um_after"}]}
+//!             …the single-arm report's cause…}], "holdout_rms_um", "holdout_rms_um_after"}],
+//!  "arms": [{"arm": "panda_3", "recordings": ["panda_3", "panda_3_bis", "panda_right"],
+//!            "evidence": {"rule", "pairs": [{"a", "b", "chi2", "dof", "f", "p_value", "same"}]}}],
+//!  "pairs": [every pair of recordings, as in "evidence"], "uncompared": [[recording, why]],
+//!  "halves": [{"recording", "chi2", "dof"}], "overdispersion": {"phi", "dof"}}
 //! ```
+//!
+//! A unit is an arm ([`super::same_arm`]): recordings of one physical arm are one unit.
 //!
 //! A design cause's `magnitude` is the mean of the units' fitted magnitudes, its
 //! `uncertainty` the standard error of that mean over the units (the units' spread / √k) and
@@ -15,6 +21,7 @@
 
 use super::fleet::{Fleet, Level, Pooled, Pooling, UnitResult, UnitTest};
 use super::report::{cause_report, CauseReport};
+use super::same_arm::{Arms, Pair};
 use crate::params::Effect;
 use crate::report::pretty_json;
 use serde::Serialize;
@@ -29,7 +36,8 @@ pub struct PooledReport {
     /// The pooled statistics.
     #[serde(flatten)]
     pub pooling: Pooling,
-    /// Every pooled unit's own mean log-ratio and its standard error.
+    /// Every pooled arm's own mean log-ratio (its recordings' sessions together) and its
+    /// standard error.
     pub per_unit: Vec<UnitLogRatio>,
     /// Whether Holm's step-down over the step's candidates rejects "no gain" at `alpha`.
     pub significant: bool,
@@ -90,7 +98,7 @@ pub struct DesignCause {
 pub struct DesignReport {
     /// Causes named for the design.
     pub causes: Vec<DesignCause>,
-    /// Units with a held-out test (enough sessions).
+    /// Arms with a held-out test (enough sessions over their recordings).
     pub tested_units: usize,
     /// Family-wise level of each step (Holm over the candidates).
     pub alpha: f64,
@@ -148,15 +156,78 @@ pub struct UnitReport {
     pub strongest: Vec<UnitTestReport>,
 }
 
+/// One pair's same-arm statistic ([`super::same_arm`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct PairReport {
+    /// One recording.
+    pub a: String,
+    /// The other.
+    pub b: String,
+    /// The statistic and the decision.
+    #[serde(flatten)]
+    pub pair: Pair,
+}
+
+/// Why an arm's recordings are one arm.
+#[derive(Clone, Debug, Serialize)]
+pub struct ArmEvidence {
+    /// The grouping rule.
+    pub rule: String,
+    /// The statistic of every pair of its recordings.
+    pub pairs: Vec<PairReport>,
+}
+
+/// One physical arm: one unit of the fleet test.
+#[derive(Clone, Debug, Serialize)]
+pub struct ArmReport {
+    /// The arm's name (the unit's in `units`).
+    pub arm: String,
+    /// Its recordings' names, file order.
+    pub recordings: Vec<String>,
+    /// Why they are one arm.
+    pub evidence: ArmEvidence,
+}
+
 /// The whole report.
 #[derive(Clone, Debug, Serialize)]
 pub struct FleetReport {
     /// The design level.
     pub design: DesignReport,
-    /// Every unit.
+    /// Every recording (its own geometric model and causes; `arms` says which are one arm).
     pub units: Vec<UnitReport>,
     /// How unit names were made.
     pub naming: String,
+    /// The physical arms the recordings were grouped into.
+    pub arms: Vec<ArmReport>,
+    /// Every pair of recordings' same-arm statistic (none with `--each-file-an-arm`).
+    pub pairs: Vec<PairReport>,
+    /// Recordings that could not be compared, with why.
+    pub uncompared: Vec<(String, String)>,
+    /// Each recording's two halves compared (what one arm's scatter is).
+    pub halves: Vec<HalvesReport>,
+    /// φ̂, the halves' pooled χ²/k, and its degrees of freedom D.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub overdispersion: Option<Overdispersion>,
+}
+
+/// One recording's halves ([`super::same_arm::halves`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct HalvesReport {
+    /// The recording.
+    pub recording: String,
+    /// χ² of the halves' difference.
+    pub chi2: f64,
+    /// Unknowns compared.
+    pub dof: usize,
+}
+
+/// The pooled halves' statistic.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Overdispersion {
+    /// φ̂ = Σ χ² / Σ k.
+    pub phi: f64,
+    /// D = Σ k.
+    pub dof: usize,
 }
 
 fn pooled_report(f: &Fleet, p: &Pooled, significant: bool) -> PooledReport {
@@ -167,7 +238,7 @@ fn pooled_report(f: &Fleet, p: &Pooled, significant: bool) -> PooledReport {
             .per_unit
             .iter()
             .map(|&(u, y, se)| UnitLogRatio {
-                unit: f.units[u].name.clone(),
+                unit: f.arms[u].0.clone(),
                 log_ratio: y,
                 se,
             })
@@ -257,8 +328,38 @@ fn unit_report(u: &UnitResult) -> UnitReport {
     }
 }
 
-/// Builds the report; `naming` says how unit names were made.
-pub fn build(f: &Fleet, naming: &str) -> FleetReport {
+fn pair_report(p: &Pair, names: &[String]) -> PairReport {
+    PairReport {
+        a: names[p.a].clone(),
+        b: names[p.b].clone(),
+        pair: p.clone(),
+    }
+}
+
+/// Builds the report; `naming` says how unit names were made, `arms` how the recordings
+/// (named `recordings`, file order) were grouped into the fleet's units.
+pub fn build(f: &Fleet, naming: &str, arms: &Arms, recordings: &[String]) -> FleetReport {
+    let arm_reports = arms
+        .groups
+        .iter()
+        .map(|g| ArmReport {
+            arm: g.arm.clone(),
+            recordings: g
+                .recordings
+                .iter()
+                .map(|&i| recordings[i].clone())
+                .collect(),
+            evidence: ArmEvidence {
+                rule: arms.rule.clone(),
+                pairs: arms
+                    .pairs
+                    .iter()
+                    .filter(|p| g.recordings.contains(&p.a) && g.recordings.contains(&p.b))
+                    .map(|p| pair_report(p, recordings))
+                    .collect(),
+            },
+        })
+        .collect();
     let left = f
         .steps
         .last()
@@ -280,6 +381,29 @@ pub fn build(f: &Fleet, naming: &str) -> FleetReport {
         },
         units: f.units.iter().map(unit_report).collect(),
         naming: naming.into(),
+        arms: arm_reports,
+        pairs: arms
+            .pairs
+            .iter()
+            .map(|p| pair_report(p, recordings))
+            .collect(),
+        uncompared: arms
+            .uncompared
+            .iter()
+            .map(|(i, why)| (recordings[*i].clone(), why.clone()))
+            .collect(),
+        halves: arms
+            .splits
+            .iter()
+            .map(|h| HalvesReport {
+                recording: recordings[h.recording].clone(),
+                chi2: h.chi2,
+                dof: h.dof,
+            })
+            .collect(),
+        overdispersion: arms
+            .overdispersion
+            .map(|(phi, dof)| Overdispersion { phi, dof }),
     }
 }
 
@@ -287,7 +411,63 @@ fn um(x: Option<f64>) -> String {
     x.map_or("—".into(), |x| format!("{x:.2}"))
 }
 
+fn pair_text(p: &PairReport) -> String {
+    format!(
+        "{} ~ {}: χ² = {:.1} on {}, F = {:.2}, p = {:.1e}",
+        p.a, p.b, p.pair.chi2, p.pair.dof, p.pair.f, p.pair.p_value
+    )
+}
+
 impl FleetReport {
+    /// The arms section: each arm of several recordings with its pairs, the closest pairs
+    /// left apart, and the recordings not compared.
+    fn arms_text(&self, s: &mut String) {
+        let Some(rule) = self.arms.first().map(|a| &a.evidence.rule) else {
+            return;
+        };
+        // `--each-file-an-arm`: nothing to say beyond the rule.
+        if self.pairs.is_empty() && self.arms.iter().all(|a| a.recordings.len() == 1) {
+            let _ = writeln!(s, "\narms: {rule}");
+            return;
+        }
+        let _ = writeln!(s, "\narms ({rule})");
+        if let Some(o) = &self.overdispersion {
+            let _ = writeln!(
+                s,
+                "  φ̂ = {:.2} on D = {} (alternate-session halves of {} recordings)",
+                o.phi,
+                o.dof,
+                self.halves.len()
+            );
+        }
+        for a in &self.arms {
+            let _ = writeln!(s, "  {}: {}", a.arm, a.recordings.join(" + "));
+            for p in &a.evidence.pairs {
+                let _ = writeln!(s, "    {}", pair_text(p));
+            }
+        }
+        let mut apart: Vec<&PairReport> = self
+            .pairs
+            .iter()
+            .filter(|p| {
+                !self
+                    .arms
+                    .iter()
+                    .any(|a| a.recordings.contains(&p.a) && a.recordings.contains(&p.b))
+            })
+            .collect();
+        apart.sort_by(|x, y| x.pair.f.total_cmp(&y.pair.f));
+        if !apart.is_empty() {
+            let _ = writeln!(s, "  closest pairs of different arms:");
+            for p in apart.iter().take(3) {
+                let _ = writeln!(s, "    {}", pair_text(p));
+            }
+        }
+        for (r, why) in &self.uncompared {
+            let _ = writeln!(s, "  {r}: not compared, {why}");
+        }
+    }
+
     /// The report as JSON.
     pub fn json(&self) -> String {
         pretty_json(self)
@@ -299,11 +479,14 @@ impl FleetReport {
         let d = &self.design;
         let _ = writeln!(
             s,
-            "fleet diagnosis: {} units, {} with a held-out test; names: {}",
+            "fleet diagnosis: {} recordings of {} arms (the pooled test's units), {} arms with a \
+             held-out test; names: {}",
             self.units.len(),
+            self.arms.len(),
             d.tested_units,
             self.naming
         );
+        self.arms_text(&mut s);
         let _ = writeln!(
             s,
             "\ndesign-level causes (random-effects pooling of each unit's held-out log RMS \

@@ -26,6 +26,7 @@ pub mod linear;
 pub mod patterns;
 pub mod plots;
 pub mod report;
+pub mod same_arm;
 pub mod scenario;
 pub mod select;
 pub mod unexplained;

@@ -114,6 +114,24 @@ fn spat_probing(fit: &Fit, data: &Dataset, budget: &Budget) -> Option<(f64, usiz
     })
 }
 
+/// The covariance of a fit's identified arm unknowns, marginal over the frame, inflated by
+/// the held-out excess when `holdout` is given (see the module text): (params, C, the
+/// factor). The budget's parameter term, and what the fleet's same-arm test
+/// ([`crate::diagnose::same_arm`]) compares recordings with.
+pub fn parameters(
+    fit: &Fit,
+    holdout: Option<&Holdout>,
+    in_sample_rms_um: f64,
+) -> Result<(Vec<crate::params::Param>, DMatrix<f64>, f64), super::BudgetError> {
+    let (params, mut cov) = marginal(fit)?;
+    let mut inflation = 1.0;
+    if let Some(k) = holdout.and_then(|h| held_out_excess(fit, h, in_sample_rms_um)) {
+        inflation = k;
+        cov *= k;
+    }
+    Ok((params, cov, inflation))
+}
+
 /// The budget of a fit of `data`; `holdout` the held-out validation if one was run.
 pub fn from_fit(
     fit: &Fit,
@@ -122,17 +140,14 @@ pub fn from_fit(
     in_sample_rms_um: f64,
     s: &Settings,
 ) -> Result<Estimated, super::BudgetError> {
-    let (params, mut cov) = marginal(fit)?;
+    let (params, cov, inflation) = parameters(fit, holdout, in_sample_rms_um)?;
     let mut notes = vec![format!(
         "parameters: covariance of the {} identified unknowns, estimated: σ̂² (JᵀJ)⁻¹ with σ̂ = \
          {:.2} µm per equation, marginal over the instrument frame, the spat points and the sphere centres",
         params.len(),
         fit.sigma_mm * 1e3
     )];
-    let mut inflation = 1.0;
     if let Some(k) = holdout.and_then(|h| held_out_excess(fit, h, in_sample_rms_um)) {
-        inflation = k;
-        cov *= k;
         notes.push(format!(
             "held-out residuals: mean square {k:.3}× what σ̂ predicts for them{}",
             if k > 1.0 {
