@@ -15,6 +15,15 @@ use quatarm::table::MAX_TABLE_LEN;
 use quatarm::update::{fixtures, Accept, Updater};
 use quatarm_fuzz::chains;
 
+/// The messages a rendered output decodes to, as a host reads them.
+fn frames(rendered: &[u8]) -> Vec<Result<ToHost, quatarm::stream::FrameError>> {
+    let mut reader = FrameReader::<MAX_FRAME>::new();
+    rendered
+        .iter()
+        .filter_map(|&x| reader.push::<ToHost>(x))
+        .collect()
+}
+
 fuzz_target!(|bytes: &[u8]| {
     let Some((&pick, stream)) = bytes.split_first() else {
         return;
@@ -71,12 +80,11 @@ fuzz_target!(|bytes: &[u8]| {
                 let answer = updater.step(&mut flash, &mut scratch, &step);
                 let msg = ToHost::Update(answer);
                 let rendered = hub.render(&msg, &mut out);
-                let mut reader = FrameReader::<MAX_FRAME>::new();
-                let back: Vec<_> = rendered
-                    .iter()
-                    .filter_map(|&x| reader.push::<ToHost>(x))
-                    .collect();
-                assert_eq!(back, [Ok(msg)], "an update answer does not read back");
+                assert_eq!(
+                    frames(rendered),
+                    [Ok(msg)],
+                    "an update answer does not read back"
+                );
                 continue;
             }
         };
@@ -91,12 +99,11 @@ fuzz_target!(|bytes: &[u8]| {
         let rendered = hub.render(&msg, &mut out);
         match hub.mode() {
             Mode::Binary => {
-                let mut reader = FrameReader::<MAX_FRAME>::new();
-                let back: Vec<_> = rendered
-                    .iter()
-                    .filter_map(|&x| reader.push::<ToHost>(x))
-                    .collect();
-                assert_eq!(back, [Ok(msg)], "a report frame does not read back");
+                assert_eq!(
+                    frames(rendered),
+                    [Ok(msg)],
+                    "a report frame does not read back"
+                );
             }
             Mode::Text => {
                 assert!(rendered.ends_with(b"\n") && rendered.is_ascii());

@@ -33,11 +33,7 @@ pub fn hub_main<P: HubEvaluator, const CORE_HZ: u32, L: Link, F: NorFlash>(
     open_flash: impl FnOnce() -> F,
 ) -> ! {
     stack::paint();
-    let Some(cp) = cortex_m::Peripherals::take() else {
-        exit_failure()
-    };
-    clock::start(cp.SYST);
-    let mut link = open_link();
+    let mut link = start(open_link);
     let mut flash = open_flash();
     let mut scratch = [0u8; MAX_TABLE_LEN];
     let mut updater = Updater::new(slots::layout(), accept);
@@ -69,11 +65,7 @@ pub fn hub_main_without_update<P: HubEvaluator, const CORE_HZ: u32, L: Link>(
     open_link: impl FnOnce() -> L,
 ) -> ! {
     stack::paint();
-    let Some(cp) = cortex_m::Peripherals::take() else {
-        exit_failure()
-    };
-    clock::start(cp.SYST);
-    let mut link = open_link();
+    let mut link = start(open_link);
     let cal = calibration::load::<P>(table_region::bytes());
     let mut hub = cal.hub();
     serve(
@@ -85,6 +77,16 @@ pub fn hub_main_without_update<P: HubEvaluator, const CORE_HZ: u32, L: Link>(
     );
     log_memory(ram_start);
     exit_success()
+}
+
+/// What every QEMU image does first: SysTick started as the µs clock, then the board's link
+/// opened (after the clock, so that report times count from the same point on every board).
+fn start<L: Link>(open_link: impl FnOnce() -> L) -> L {
+    let Some(cp) = cortex_m::Peripherals::take() else {
+        exit_failure()
+    };
+    clock::start(cp.SYST);
+    open_link()
 }
 
 /// The stack's peak and the statics' size, for the end-to-end tests' report.
@@ -103,11 +105,7 @@ pub fn bench_main<P: quatarm::Evaluator, L: Link>(
     key: &[u8; quatarm::signature::KEY_LEN],
     open_link: impl FnOnce() -> L,
 ) -> ! {
-    let Some(cp) = cortex_m::Peripherals::take() else {
-        exit_failure()
-    };
-    clock::start(cp.SYST);
-    let mut link = open_link();
+    let mut link = start(open_link);
     bench::run::<_, P>(&mut link, table_region::bytes(), key);
     exit_success()
 }
