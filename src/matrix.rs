@@ -21,6 +21,17 @@ use crate::table::{Table, MAX_JOINTS};
 
 type Mat<P> = [[<P as Arithmetic>::U; 3]; 3];
 
+/// The joints' frames at a reading, in f32, for the Jacobians of the uncertainty
+/// ([`crate::uncertainty`]): what this chain composes anyway, kept.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Frames {
+    /// R_0i after joint i's turn, row-major, in the chain's z-axis frames (column 2 is the
+    /// joint's axis in the base frame).
+    pub rotation: [[[f32; 3]; 3]; MAX_JOINTS],
+    /// Joint i's origin o_i (mm, base frame).
+    pub origin: [[f32; 3]; MAX_JOINTS],
+}
+
 /// The 3×4 matrix chain of one evaluator.
 #[derive(Clone, Copy, Debug)]
 pub struct MatrixChain<P: Physics> {
@@ -75,11 +86,38 @@ impl<P: Physics> MatrixChain<P> {
     // line for the quaternion chain, 1,245 against 1,201 for the matrix chain).
     #[inline(never)]
     pub fn eval(&self, counts: &[u32], temp_mc: i32) -> Result<Point<P>, ChainError> {
+        self.eval_seen(counts, temp_mc, &mut |_, _, _| {})
+    }
+
+    /// As [`Self::eval`], with the joints' frames of the (last) pass in `frames`: the
+    /// undeflected chain's, where gravity is corrected to first order, which moves them by
+    /// g·L ≈ 1e-5 of themselves — far below what a Jacobian for U95 needs.
+    pub fn eval_frames(
+        &self,
+        counts: &[u32],
+        temp_mc: i32,
+        frames: &mut Frames,
+    ) -> Result<Point<P>, ChainError> {
+        self.eval_seen(counts, temp_mc, &mut |i, r, o| {
+            if let (Some(fr), Some(fo)) = (frames.rotation.get_mut(i), frames.origin.get_mut(i)) {
+                *fr = r.map(|row| row.map(P::u_to_f32));
+                *fo = o.map(P::l_to_f32);
+            }
+        })
+    }
+
+    #[inline(always)]
+    fn eval_seen(
+        &self,
+        counts: &[u32],
+        temp_mc: i32,
+        seen: &mut impl FnMut(usize, &Mat<P>, &Vec3<P::L>),
+    ) -> Result<Point<P>, ChainError> {
         let m = &self.model;
         let dt = m.check(counts, temp_mc)?;
         let mut gravity = Gravity::<P>::default();
         let mut gravity_count = GravityCount::default();
-        let undeflected = self.pass(counts, dt, None, &mut gravity, &mut gravity_count)?;
+        let undeflected = self.pass(counts, dt, None, &mut gravity, &mut gravity_count, seen)?;
         if !m.second_order_gravity {
             let (xyz, dir) = gravity.apply(gravity_count, undeflected.xyz, undeflected.dir);
             return Ok(Point { xyz, dir });
@@ -87,12 +125,13 @@ impl<P: Physics> MatrixChain<P> {
         let mut e = [P::U::default(); MAX_JOINTS];
         gravity.deflections(gravity_count, undeflected.xyz, &mut e);
         let mut unused = GravityCount::default();
-        self.pass(counts, dt, Some(&e), &mut gravity, &mut unused)
+        self.pass(counts, dt, Some(&e), &mut gravity, &mut unused, seen)
     }
 
     /// The chain base to tip: tip and direction. With `deflections` (one per compliant
     /// joint, base first) they join the joints' angles; without, the compliant joints'
-    /// axes and origins are recorded for the first-order correction.
+    /// axes and origins are recorded for the first-order correction. `seen` gets each joint's
+    /// frame after its turn and its origin.
     #[inline(always)]
     fn pass(
         &self,
@@ -101,6 +140,7 @@ impl<P: Physics> MatrixChain<P> {
         deflections: Option<&[P::U; MAX_JOINTS]>,
         gravity: &mut Gravity<P>,
         gravity_count: &mut GravityCount,
+        seen: &mut impl FnMut(usize, &Mat<P>, &Vec3<P::L>),
     ) -> Result<Point<P>, ChainError> {
         let m = &self.model;
         let zero = P::U::default();
@@ -158,6 +198,7 @@ impl<P: Physics> MatrixChain<P> {
             if j.has_gravity && deflections.is_none() {
                 gravity.push(gravity_count, j.gravity, [r[0][2], r[1][2], r[2][2]], o);
             }
+            seen(i, &r, &o);
             let v = mat_vec::<P, P::L>(&r, &jr.link);
             o = [o[0] + v[0], o[1] + v[1], o[2] + v[2]];
         }

@@ -265,8 +265,10 @@ const THERMAL_MARGIN: f64 = 1.04;
 /// MUKCa robots' 1e-6 rad/mm is far above.
 pub const SECOND_ORDER_DEFLECTION: f64 = 1.4e-4;
 
-/// Component k of P_a⁻¹ v is component (k + a + 1) mod 3 of v (a = 2, z: the identity).
-fn unpermute(v: [f64; 3], axis: u8) -> [f64; 3] {
+/// A vector of a joint's frame in the calibration file's coordinates (its axis x, y or z) in
+/// the chain's z-axis frame of that joint, P_a⁻¹ v: component k is component (k + a + 1)
+/// mod 3 of v (a = 2, z: the identity). A relabelling, exact.
+pub(crate) fn unpermute<T: Copy>(v: [T; 3], axis: u8) -> [T; 3] {
     let a = usize::from(axis % 3);
     [v[(a + 1) % 3], v[(a + 2) % 3], v[a % 3]]
 }

@@ -72,6 +72,10 @@ pub trait Arithmetic: Copy + Default + Debug + 'static {
     fn l_to_f64(x: Self::L) -> f64;
     /// Exact value of a dimensionless number, for host-side comparisons.
     fn u_to_f64(x: Self::U) -> f64;
+    /// A length (mm) as an f32, for the uncertainty's arithmetic (which needs 1e-4).
+    fn l_to_f32(x: Self::L) -> f32;
+    /// A dimensionless number as an f32, for the uncertainty's arithmetic.
+    fn u_to_f32(x: Self::U) -> f32;
     /// A dimensionless number as a length of `x` · 1024 mm, exactly: a unit vector carried
     /// through the chain's position code (fixed point: the same bits, I2F30 read as I12F20).
     fn u_as_l1024(x: Self::U) -> Self::L;
@@ -172,6 +176,14 @@ impl Arithmetic for F32 {
     }
     fn u_to_f64(x: f32) -> f64 {
         f64::from(x)
+    }
+    #[inline(always)]
+    fn l_to_f32(x: f32) -> f32 {
+        x
+    }
+    #[inline(always)]
+    fn u_to_f32(x: f32) -> f32 {
+        x
     }
     #[inline(always)]
     fn u_as_l1024(x: f32) -> f32 {
@@ -476,6 +488,12 @@ impl Arithmetic for Fixed {
     }
     fn u_to_f64(x: Unit) -> f64 {
         x.bits() as f64 / 1_073_741_824.0
+    }
+    fn l_to_f32(x: Len) -> f32 {
+        x.bits() as f32 * (1.0 / 1_048_576.0)
+    }
+    fn u_to_f32(x: Unit) -> f32 {
+        x.bits() as f32 * (1.0 / 1_073_741_824.0)
     }
     #[inline(always)]
     fn u_as_l1024(x: Unit) -> Len {

@@ -14,10 +14,11 @@
 //!     no 0x00 inside                      4 bytes, LE            delimiter
 //!
 //!  ToHost::Report, the per-reading message (postcard: varints, zigzag for signed)
-//!  +-----+---------+-----------+---------+-------+----------------------------------+
-//!  | tag | seq u32 | time_us   | status  | point | xyz_nm [i32; 3], dir_e9 [i32; 3] |
-//!  |  1  | varint  | u64 varint| u16 var | 0 / 1 | present only when tag is 1       |
-//!  +-----+---------+-----------+---------+-------+----------------------------------+
+//!  +-----+---------+-----------+---------+-------+-----------------------------------------+
+//!  | tag | seq u32 | time_us   | status  | point | xyz_nm [i32; 3], dir_e9 [i32; 3],       |
+//!  |  1  | varint  | u64 varint| u16 var | 0 / 1 | u95_nm 0 / 1 + u32 varint (protocol 3); |
+//!  |     |         |           |         |       | present only when point's tag is 1      |
+//!  +-----+---------+-----------+---------+-------+-----------------------------------------+
 //! ```
 //!
 //! Why integers, not f32 millimetres: the fixed-point chain resolves a few nanometres, while
@@ -48,4 +49,5 @@ pub use replay::{Event, Replay};
 pub use status::{Status, TableState};
 
 /// Protocol version carried in [`Hello`]; bumped on any incompatible change of a message.
-pub const PROTOCOL_VERSION: u16 = 2;
+/// Version 2 added the live table to `Hello`; version 3 the point's U95 to its coordinates.
+pub const PROTOCOL_VERSION: u16 = 3;

@@ -21,6 +21,7 @@ fn report(seq: u32, point: bool) -> ToHost {
         point: point.then_some(Coordinates {
             xyz_nm: [1_500_000_000, -2, 3],
             dir_e9: [0, 0, 1_000_000_000],
+            u95_nm: Some(12_345 + seq),
         }),
     })
 }
@@ -111,7 +112,11 @@ fn coordinates_beside_a_fault_are_not_written_as_points() {
     let rows: Vec<&str> = csv.lines().skip(1).collect();
     assert_eq!(
         rows,
-        ["0,0,0x0009,,,,,,", "1,0,0x0020,,,,,,", "2,0,0x0101,,,,,,"]
+        [
+            "0,0,0x0009,,,,,,,",
+            "1,0,0x0020,,,,,,,",
+            "2,0,0x0101,,,,,,,"
+        ]
     );
     let err = text(&out.stderr);
     assert!(err.contains("3 reports (0 with coordinates)"), "{err}");
@@ -181,12 +186,15 @@ fn decodes_a_capture_counting_gaps_and_damage() {
     assert!(out.status.success());
     let csv = String::from_utf8(out.stdout).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
-    assert_eq!(lines[0], "seq,time_us,status,x_mm,y_mm,z_mm,nx,ny,nz");
+    assert_eq!(
+        lines[0],
+        "seq,time_us,status,x_mm,y_mm,z_mm,nx,ny,nz,u95_mm"
+    );
     assert_eq!(
         lines[1],
-        "0,0,0x0001,1500.000000,-0.000002,0.000003,0.000000000,0.000000000,1.000000000"
+        "0,0,0x0001,1500.000000,-0.000002,0.000003,0.000000000,0.000000000,1.000000000,0.012345"
     );
-    assert_eq!(lines[2], "1,1000,0x0401,,,,,,");
+    assert_eq!(lines[2], "1,1000,0x0401,,,,,,,");
     assert!(lines[3].starts_with("4,4000,"));
     assert!(lines[4].starts_with("6,6000,"));
     assert_eq!(lines.len(), 5);

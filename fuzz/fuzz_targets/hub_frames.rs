@@ -51,7 +51,11 @@ fuzz_target!(|bytes: &[u8]| {
                 .eval(counts, temp_mc)
                 .map(|p| (p.xyz_nm(), p.dir_e9()))
         };
-        p.map(|(xyz_nm, dir_e9)| Coordinates { xyz_nm, dir_e9 })
+        p.map(|(xyz_nm, dir_e9)| Coordinates {
+            xyz_nm,
+            dir_e9,
+            u95_nm: None,
+        })
     };
     let mut replay = Replay::new();
     let mut out = [0u8; MAX_OUTPUT];

@@ -4,16 +4,35 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
+use quatarm::table::parameters::{Column, ParameterData};
+use quatarm::uncertainty::Uncertainty;
 use quatarm::{Chain, Fixed, MatrixChain, Table, F32};
 
 fuzz_target!(|bytes: &[u8]| {
     let Ok(table) = Table::parse(bytes) else {
         return;
     };
-    // An accepted table reads back and re-encodes to the same bytes.
+    // An accepted table reads back and re-encodes to the same bytes, its budget and
+    // parameter block with it.
     let data = table.data();
+    let budget = table.budget().map(|b| b.data());
+    let block = table.parameters().map(|p| {
+        let columns: Vec<Column> = (0..p.count())
+            .map(|i| p.column(i).expect("an accepted block's records read back"))
+            .collect();
+        let factor: Vec<f32> = (0..p.count())
+            .flat_map(|i| p.factor_row(i).chunks_exact(4))
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect();
+        (columns, factor)
+    });
+    let parameters = block
+        .as_ref()
+        .map(|(columns, factor)| ParameterData { columns, factor });
     let mut out = vec![0u8; quatarm::table::MAX_TABLE_LEN];
-    let n = data.encode(&mut out).expect("an accepted table re-encodes");
+    let n = data
+        .encode_full(budget.as_ref(), parameters.as_ref(), &mut out)
+        .expect("an accepted table re-encodes");
     assert_eq!(
         &out[..n],
         &bytes[..n],
@@ -24,4 +43,13 @@ fuzz_target!(|bytes: &[u8]| {
     let _ = Chain::<Fixed>::new(&table);
     let _ = MatrixChain::<F32>::new(&table);
     let _ = MatrixChain::<Fixed>::new(&table);
+    // And its uncertainty builds or refuses cleanly, and never panics on a reading.
+    if let (Ok(Some(u)), Ok(chain)) = (Uncertainty::<F32>::new(&table), Chain::<F32>::new(&table)) {
+        let counts: Vec<u32> = (0..table.joint_count())
+            .map(|i| table.joint(i).map_or(0, |j| j.counts / 3))
+            .collect();
+        if let Ok(p) = chain.eval(&counts, 21_000) {
+            let _ = u.covariance(&chain, &counts, 21_000, &p);
+        }
+    }
 });

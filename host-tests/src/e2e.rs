@@ -51,6 +51,7 @@ fn host_chain<P: Evaluator>(
                 .map(|p| Coordinates {
                     xyz_nm: p.xyz_nm(),
                     dir_e9: p.dir_e9(),
+                    u95_nm: None,
                 })
         })
         .collect())

@@ -2,16 +2,17 @@
 //!
 //! Written with integer arithmetic only, no `core::fmt`: on a Cortex-M0 the formatting
 //! machinery alone would cost several KiB of the 32 KiB budget. Millimetres get six decimals
-//! (the nanometre the stream carries), direction components nine. A report without
-//! coordinates leaves those six fields empty, so a spreadsheet never sees a made-up zero.
+//! (the nanometre the stream carries), direction components nine, U95 six. A report without
+//! coordinates leaves those seven fields empty, and one without U95 its last, so a
+//! spreadsheet never sees a made-up zero.
 
 use super::{Report, Status};
 
 /// The header line (with its newline) that matches [`write_csv_line`].
-pub const CSV_HEADER: &str = "seq,time_us,status,x_mm,y_mm,z_mm,nx,ny,nz\n";
+pub const CSV_HEADER: &str = "seq,time_us,status,x_mm,y_mm,z_mm,nx,ny,nz,u95_mm\n";
 
 /// Longest line [`write_csv_line`] writes, newline included.
-pub const MAX_CSV_LINE: usize = 128;
+pub const MAX_CSV_LINE: usize = 144;
 
 /// Writes [`CSV_HEADER`] into `out`; returns its length (0 if `out` is too small).
 pub fn write_csv_header(out: &mut [u8]) -> usize {
@@ -43,8 +44,12 @@ pub fn write_csv_line(report: &Report, out: &mut [u8]) -> usize {
             w.byte(b',');
             w.decimal(i64::from(v), 9);
         }
+        w.byte(b',');
+        if let Some(u) = p.u95_nm {
+            w.decimal(i64::from(u), 6);
+        }
     } else {
-        for _ in 0..6 {
+        for _ in 0..7 {
             w.byte(b',');
         }
     }
@@ -135,12 +140,19 @@ mod tests {
             point: Some(Coordinates {
                 xyz_nm: [1_234_567_891, -5, 0],
                 dir_e9: [-1_000_000_000, 12, 999_999_999],
+                u95_nm: Some(12_345),
             }),
         };
         assert_eq!(
             line(&r),
-            "42,1000001,0x0001,1234.567891,-0.000005,0.000000,-1.000000000,0.000000012,0.999999999\n"
+            "42,1000001,0x0001,1234.567891,-0.000005,0.000000,-1.000000000,0.000000012,\
+             0.999999999,0.012345\n"
         );
+        let without = Report {
+            point: r.point.map(|p| Coordinates { u95_nm: None, ..p }),
+            ..r
+        };
+        assert!(line(&without).ends_with(",0.999999999,\n"));
     }
 
     #[test]
@@ -151,7 +163,7 @@ mod tests {
             status: Status(0x0120),
             point: None,
         };
-        assert_eq!(line(&r), "0,0,0x0120,,,,,,\n");
+        assert_eq!(line(&r), "0,0,0x0120,,,,,,,\n");
     }
 
     #[test]
@@ -163,6 +175,7 @@ mod tests {
             point: Some(Coordinates {
                 xyz_nm: [i32::MIN; 3],
                 dir_e9: [i32::MIN; 3],
+                u95_nm: Some(u32::MAX),
             }),
         };
         let l = line(&r);

@@ -183,6 +183,7 @@ mod tests {
             point: Some(Coordinates {
                 xyz_nm: [i32::MAX, i32::MIN, -1_234_567_890],
                 dir_e9: [-1_000_000_000, 1, 999_999_999],
+                u95_nm: Some(u32::MAX),
             }),
         })
     }
@@ -193,8 +194,8 @@ mod tests {
         out[..n].to_vec()
     }
 
-    /// The sizes `docs/protocol.md` states: 11 bytes for the shortest report, 56 for the
-    /// longest.
+    /// The sizes `docs/protocol.md` states: 11 bytes for the shortest report, 62 for the
+    /// longest (57 without its U95, as protocols 1 and 2 send it).
     #[test]
     fn report_sizes_are_as_documented() {
         let short = ToHost::Report(Report {
@@ -211,9 +212,51 @@ mod tests {
             point: Some(Coordinates {
                 xyz_nm: [i32::MIN; 3],
                 dir_e9: [i32::MIN; 3],
+                u95_nm: Some(u32::MAX),
             }),
         });
-        assert_eq!(frame_of(&long).len(), 56);
+        assert_eq!(frame_of(&long).len(), 62);
+        let ToHost::Report(r) = long else {
+            unreachable!()
+        };
+        let without = ToHost::Report(Report {
+            point: r.point.map(|p| Coordinates { u95_nm: None, ..p }),
+            ..r
+        });
+        assert_eq!(frame_of(&without).len(), 57);
+    }
+
+    /// A report of protocol 2 (its coordinates end after `dir_e9`) decodes, with no U95;
+    /// protocol 3's round-trips with it.
+    #[test]
+    fn a_protocol_2_report_decodes_without_u95() {
+        let v3 = Report {
+            seq: 5,
+            time_us: 77,
+            status: Status(Status::TABLE_VALID),
+            point: Some(Coordinates {
+                xyz_nm: [1, -2, 3],
+                dir_e9: [0, 0, 1_000_000_000],
+                u95_nm: Some(4_321),
+            }),
+        };
+        let mut buf = [0u8; MAX_PAYLOAD];
+        let bytes = postcard::to_slice(&ToHost::Report(v3), &mut buf)
+            .unwrap()
+            .to_vec();
+        // Protocol 3 ends with the option's tag 1 and the varint 4321 (2 bytes).
+        assert_eq!(&bytes[bytes.len() - 3..], [1, 0xe1, 0x21]);
+        let v2 = &bytes[..bytes.len() - 3];
+        let got: ToHost = postcard::from_bytes(v2).unwrap();
+        let want = Report {
+            point: v3.point.map(|p| Coordinates { u95_nm: None, ..p }),
+            ..v3
+        };
+        assert_eq!(got, ToHost::Report(want));
+        assert_eq!(
+            postcard::from_bytes::<ToHost>(&bytes).unwrap(),
+            ToHost::Report(v3)
+        );
     }
 
     fn read_all(reader: &mut FrameReader, bytes: &[u8]) -> Vec<Result<ToHost, FrameError>> {
@@ -356,10 +399,11 @@ mod tests {
 
         #[test]
         fn reports_round_trip(seq in any::<u32>(), t in any::<u64>(), s in any::<u16>(),
-                              xyz in any::<[i32; 3]>(), dir in any::<[i32; 3]>(), some in any::<bool>()) {
+                              xyz in any::<[i32; 3]>(), dir in any::<[i32; 3]>(), some in any::<bool>(),
+                              u95 in any::<Option<u32>>()) {
             let msg = ToHost::Report(Report {
                 seq, time_us: t, status: Status(s),
-                point: some.then_some(Coordinates { xyz_nm: xyz, dir_e9: dir }),
+                point: some.then_some(Coordinates { xyz_nm: xyz, dir_e9: dir, u95_nm: u95 }),
             });
             let frame = frame_of(&msg);
             prop_assert_eq!(read_all(&mut FrameReader::<MAX_FRAME>::new(), &frame), vec![Ok(msg)]);

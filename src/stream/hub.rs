@@ -215,6 +215,7 @@ mod tests {
     const POINT: Coordinates = Coordinates {
         xyz_nm: [1, 2, 3],
         dir_e9: [0, 0, 1_000_000_000],
+        u95_nm: Some(7),
     };
 
     fn ok_eval(_: &[u32], _: i32) -> Result<Coordinates, ()> {

@@ -40,7 +40,7 @@ pub struct Hello {
     pub joints: u8,
     /// The boot check's verdict on the table (the same bits every report carries).
     pub status: Status,
-    /// Which table is live (protocol 2): `None` when there is no valid table.
+    /// Which table is live (protocols 2 and 3): `None` when there is no valid table.
     pub live: Option<LiveTable>,
 }
 
@@ -50,7 +50,7 @@ impl<'de> Deserialize<'de> for Hello {
         impl<'de> Visitor<'de> for HelloVisitor {
             type Value = Hello;
             fn expecting(&self, f: &mut core::fmt::Formatter) -> core::fmt::Result {
-                f.write_str("a Hello of protocol 1 or 2")
+                f.write_str("a Hello of protocol 1, 2 or 3")
             }
             fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Hello, A::Error> {
                 let missing = |i| A::Error::invalid_length(i, &self);
@@ -58,10 +58,10 @@ impl<'de> Deserialize<'de> for Hello {
                 let precision = seq.next_element()?.ok_or_else(|| missing(1))?;
                 let joints = seq.next_element()?.ok_or_else(|| missing(2))?;
                 let status = seq.next_element()?.ok_or_else(|| missing(3))?;
-                // Every version starts with these four; only protocol 2 has `live` after them
-                // (a Hello of another version decodes as far as they go, for a host to say
-                // which version it met).
-                let live = if protocol == 2 {
+                // Every version starts with these four; protocols 2 and 3 have `live` after
+                // them (a Hello of another version decodes as far as they go, for a host to
+                // say which version it met).
+                let live = if protocol == 2 || protocol == 3 {
                     seq.next_element()?.ok_or_else(|| missing(4))?
                 } else {
                     None
@@ -120,14 +120,50 @@ pub struct Report {
     pub point: Option<Coordinates>,
 }
 
-/// A corrected probe-ball position and probe direction, in the base frame of the arm.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+/// A corrected probe-ball position and probe direction, in the base frame of the arm, and
+/// the position's expanded uncertainty.
+///
+/// It decodes from protocols 1 and 2 too, which end it after `dir_e9`: a report is the last
+/// thing in its frame, so a frame that ends there is an older hub's (`u95_nm` `None`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Coordinates {
     /// Ball centre in integer nanometres.
     pub xyz_nm: [i32; 3],
     /// Unit probe direction in units of 1e-9.
     pub dir_e9: [i32; 3],
+    /// U95 (protocol 3): the radius, in nanometres rounded up, of the sphere about the
+    /// centre that holds the true centre with 95 % probability (`spec/uncertainty.md`).
+    /// `None` where the hub's table carries no uncertainty budget or the hub does not
+    /// compute it (the fixed-point boards).
+    pub u95_nm: Option<u32>,
+}
+
+impl<'de> Deserialize<'de> for Coordinates {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Coordinates, D::Error> {
+        struct CoordinatesVisitor;
+        impl<'de> Visitor<'de> for CoordinatesVisitor {
+            type Value = Coordinates;
+            fn expecting(&self, f: &mut core::fmt::Formatter) -> core::fmt::Result {
+                f.write_str("coordinates of protocol 1, 2 or 3")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Coordinates, A::Error> {
+                let missing = |i| A::Error::invalid_length(i, &self);
+                let xyz_nm = seq.next_element()?.ok_or_else(|| missing(0))?;
+                let dir_e9 = seq.next_element()?.ok_or_else(|| missing(1))?;
+                // Protocol 3's field, or the end of an older frame. (A frame whose bytes do
+                // not end here fails the decoder's every-byte-consumed check.)
+                let u95_nm = seq.next_element::<Option<u32>>().ok().flatten().flatten();
+                Ok(Coordinates {
+                    xyz_nm,
+                    dir_e9,
+                    u95_nm,
+                })
+            }
+        }
+        const FIELDS: &[&str] = &["xyz_nm", "dir_e9", "u95_nm"];
+        deserializer.deserialize_struct("Coordinates", FIELDS, CoordinatesVisitor)
+    }
 }
 
 /// Host to firmware.

@@ -103,6 +103,16 @@ impl<'a> Budget<'a> {
         rd_f64(self.bytes, off::TEMPERATURE)
     }
 
+    /// Everything, as plain values (what [`super::TableData::encode_with`] writes back).
+    pub fn data(&self) -> BudgetData {
+        BudgetData {
+            encoder_counts: core::array::from_fn(|i| self.encoder_counts(i)),
+            probing_mm: self.probing_mm(),
+            model_mm: self.model_mm(),
+            temperature_c: self.temperature_c(),
+        }
+    }
+
     /// Every value in range.
     pub(super) fn check(&self, main: &Table<'_>) -> Result<(), TableError> {
         let bad = |joint: usize| TableError::Invalid {

@@ -15,11 +15,12 @@
 //!      4     2  format version (3)
 //!      6     1  joint count N (6 or 7)
 //!      7     1  flags: bit0 geometric errors, bit1 encoder harmonics,
-//!               bit2 gravity compliance, bit3 thermal expansion, bit4 uncertainty budget
-//!               (others 0)
+//!               bit2 gravity compliance, bit3 thermal expansion, bit4 uncertainty budget,
+//!               bit5 parameter covariance (only with bit4; others 0)
 //!      8    32  arm serial, UTF-8, NUL-padded
 //!     40     4  total length in bytes, CRC included (= 48 + N·248 + 64 + 4, plus the
-//!               uncertainty budget's length where flag bit4 is set)
+//!               uncertainty budget's length where flag bit4 is set, and the parameter
+//!               block's where bit5 is)
 //!     44     4  reserved, 0
 //!     48 N·248  joint records, base first:
 //!                 +0    1  axis: 0 = x, 1 = y, 2 = z
@@ -37,6 +38,8 @@
 //! 48+N·248   64  probe: vector v_p + Δv_p (mm, f64 ×3), its unit direction (f64 ×3),
 //!               thermal expansion κ_p (1/°C, f64), stylus ball diameter (mm, f64; 0 unknown)
 //! 48+N·248+64    the uncertainty budget, where flag bit4 is set ([`budget`]: its layout)
+//!   … +80        the parameter covariance, where flag bit5 is set ([`parameters`]: its
+//!                layout; its parameter count is its first field)
 //!  len−4     4  CRC-32 (ISO-HDLC, as zlib) of every byte before it
 //! ```
 //!
@@ -48,6 +51,7 @@
 use core::fmt;
 
 pub mod budget;
+pub mod parameters;
 
 /// The table's magic bytes.
 pub const MAGIC: [u8; 4] = *b"QATB";
@@ -122,7 +126,15 @@ pub const FLAG_GRAVITY: u8 = 1 << 2;
 pub const FLAG_THERMAL: u8 = 1 << 3;
 /// Flag: the table carries an uncertainty budget ([`budget`]).
 pub const FLAG_BUDGET: u8 = 1 << 4;
-const FLAGS_KNOWN: u8 = 0x1f;
+/// Flag: the table carries the calibration's parameter covariance ([`parameters`]), after
+/// the budget (so only with [`FLAG_BUDGET`]).
+pub const FLAG_PARAMETERS: u8 = 1 << 5;
+/// Without the `parameters` feature the block's flag is unknown, so refused.
+const FLAGS_KNOWN: u8 = if cfg!(feature = "parameters") {
+    0x3f
+} else {
+    0x1f
+};
 
 /// Limits of the values a table may hold. They keep every evaluator inside its range and its
 /// small-angle formulas inside their accuracy; a real arm is far inside them.
@@ -306,10 +318,24 @@ pub const fn table_len(joints: usize) -> usize {
     core_len(joints) + CRC_LEN
 }
 
-/// Whether a table can be `len` bytes long: 6 or 7 joints, with or without the budget
-/// (what an update must be told before any byte of it arrives).
+/// Whether a table can be `len` bytes long: 6 or 7 joints, with or without the budget, with
+/// or without a parameter block after it (what an update must be told before any byte of it
+/// arrives).
 pub fn is_table_len(len: usize) -> bool {
-    (MIN_JOINTS..=MAX_JOINTS).any(|n| len == table_len(n) || len == table_len(n) + budget::LEN)
+    (MIN_JOINTS..=MAX_JOINTS).any(|n| {
+        let with_budget = table_len(n) + budget::LEN;
+        len == table_len(n) || len == with_budget || is_block_len(len.wrapping_sub(with_budget))
+    })
+}
+
+#[cfg(feature = "parameters")]
+fn is_block_len(len: usize) -> bool {
+    (1..=parameters::MAX_PARAMETERS).any(|p| len == parameters::len(p))
+}
+
+#[cfg(not(feature = "parameters"))]
+fn is_block_len(_: usize) -> bool {
+    false
 }
 
 /// Where the budget starts: the header, the joints and the probe.
@@ -317,8 +343,19 @@ const fn core_len(joints: usize) -> usize {
     HEADER_LEN + joints * JOINT_LEN + PROBE_LEN
 }
 
+/// Largest table length: 7 joints with a budget and `parameters::MAX_PARAMETERS`
+/// parameters (11,792 bytes; without the `parameters` feature, [`MAX_PLAIN_TABLE_LEN`]).
+#[cfg(feature = "parameters")]
+pub const MAX_TABLE_LEN: usize = MAX_PLAIN_TABLE_LEN + parameters::len(parameters::MAX_PARAMETERS);
 /// Largest table length: 7 joints with a budget.
-pub const MAX_TABLE_LEN: usize = table_len(MAX_JOINTS) + budget::LEN;
+#[cfg(not(feature = "parameters"))]
+pub const MAX_TABLE_LEN: usize = MAX_PLAIN_TABLE_LEN;
+
+/// Largest table without a parameter block: 7 joints with a budget (1,932 bytes). A board
+/// whose flash slots are smaller than [`MAX_TABLE_LEN`] but at least this (the fixed-point
+/// boards' 4 KiB) takes every table but those with many parameters, and its update refuses
+/// those by their length.
+pub const MAX_PLAIN_TABLE_LEN: usize = table_len(MAX_JOINTS) + budget::LEN;
 
 /// One encoder-harmonic term: e += sin·sin(hθ) + cos·cos(hθ).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -435,12 +472,53 @@ impl TableData {
         budget: Option<&budget::BudgetData>,
         out: &mut [u8],
     ) -> Result<usize, TableError> {
+        self.encode_parts(budget, None, out)
+    }
+
+    /// Writes the table into `out` with `budget` and, after it, `parameters` (flag bits 4 and
+    /// 5 follow them); returns its length. Fails if `out` is too short, the joint count is
+    /// outside 6..=7, or there are parameters without a budget or a block of a wrong size
+    /// ([`parameters::ParameterData::block_len`]).
+    pub fn encode_full(
+        &self,
+        budget: Option<&budget::BudgetData>,
+        parameters: Option<&parameters::ParameterData<'_>>,
+        out: &mut [u8],
+    ) -> Result<usize, TableError> {
+        let block = match parameters {
+            None => None,
+            Some(p) => {
+                let len = p.block_len().ok_or(TableError::Invalid {
+                    joint: 0,
+                    field: Field::Budget,
+                })?;
+                Some((len, p as &dyn BlockWriter))
+            }
+        };
+        self.encode_parts(budget, block, out)
+    }
+
+    fn encode_parts(
+        &self,
+        budget: Option<&budget::BudgetData>,
+        parameters: Option<(usize, &dyn BlockWriter)>,
+        out: &mut [u8],
+    ) -> Result<usize, TableError> {
         let n = usize::from(self.joint_count);
         if !(MIN_JOINTS..=MAX_JOINTS).contains(&n) {
             return Err(TableError::BadJointCount(self.joint_count));
         }
+        let invalid = TableError::Invalid {
+            joint: 0,
+            field: Field::Budget,
+        };
+        let block = match parameters {
+            None => 0,
+            Some(_) if budget.is_none() => return Err(invalid),
+            Some((len, _)) => len,
+        };
         let extra = if budget.is_some() { budget::LEN } else { 0 };
-        let len = table_len(n) + extra;
+        let len = table_len(n) + extra + block;
         if out.len() < len {
             return Err(TableError::Truncated {
                 needed: len as u32,
@@ -452,7 +530,9 @@ impl TableData {
         out[off::MAGIC..off::MAGIC + 4].copy_from_slice(&MAGIC);
         out[off::VERSION..off::VERSION + 2].copy_from_slice(&VERSION.to_le_bytes());
         out[off::JOINTS] = self.joint_count;
-        out[off::FLAGS] = (self.flags & !FLAG_BUDGET) | if extra > 0 { FLAG_BUDGET } else { 0 };
+        out[off::FLAGS] = (self.flags & !(FLAG_BUDGET | FLAG_PARAMETERS))
+            | if extra > 0 { FLAG_BUDGET } else { 0 }
+            | if block > 0 { FLAG_PARAMETERS } else { 0 };
         out[off::SERIAL..off::SERIAL + SERIAL_LEN].copy_from_slice(&self.serial);
         out[off::LENGTH..off::LENGTH + 4].copy_from_slice(&(len as u32).to_le_bytes());
         for (i, j) in self.joints[..n].iter().enumerate() {
@@ -480,11 +560,25 @@ impl TableData {
         put_f64s(&mut p[off::P_THERMAL..], &[self.probe.thermal]);
         put_f64s(&mut p[off::P_BALL..], &[self.probe.ball_diameter]);
         if let Some(b) = budget {
-            b.encode(&mut out[core_len(n)..len - CRC_LEN]);
+            b.encode(&mut out[core_len(n)..core_len(n) + budget::LEN]);
+        }
+        if let Some((_, p)) = parameters {
+            p.write(&mut out[core_len(n) + budget::LEN..len - CRC_LEN]);
         }
         let crc = CRC.checksum(&out[..len - CRC_LEN]);
         out[len - CRC_LEN..].copy_from_slice(&crc.to_le_bytes());
         Ok(len)
+    }
+}
+
+/// A block after the budget that writes itself ([`parameters::ParameterData`]).
+trait BlockWriter {
+    fn write(&self, out: &mut [u8]);
+}
+
+impl BlockWriter for parameters::ParameterData<'_> {
+    fn write(&self, out: &mut [u8]) {
+        self.encode(out);
     }
 }
 
@@ -580,12 +674,17 @@ impl<'a> Table<'a> {
         if !(MIN_JOINTS..=MAX_JOINTS).contains(&n) {
             return Err(TableError::BadJointCount(n8));
         }
-        let len = table_len(n)
-            + if bytes[off::FLAGS] & FLAG_BUDGET != 0 {
-                budget::LEN
-            } else {
-                0
-            };
+        let flags = bytes[off::FLAGS];
+        let mut len = table_len(n);
+        if flags & FLAG_BUDGET != 0 {
+            len += budget::LEN;
+            if flags & FLAG_PARAMETERS != 0 {
+                // The block states its own size; a count that cannot be read counts as 0 and
+                // fails the length check below or the block's own.
+                let at = core_len(n) + budget::LEN;
+                len += parameters::len(parameters::stated_count(bytes.get(at..).unwrap_or(&[])));
+            }
+        }
         let stated = rd_u32(bytes, off::LENGTH);
         if stated as usize != len {
             return Err(TableError::BadLength(stated));
@@ -689,7 +788,11 @@ impl<'a> Table<'a> {
         let p = self.probe();
         content |= p.content_flags();
         let flags = b[off::FLAGS];
-        if flags & !FLAGS_KNOWN != 0 || flags & !(FLAG_GEOMETRIC | FLAG_BUDGET) != content {
+        let blocks = FLAG_GEOMETRIC | FLAG_BUDGET | FLAG_PARAMETERS;
+        if flags & !FLAGS_KNOWN != 0
+            || flags & !blocks != content
+            || (flags & FLAG_PARAMETERS != 0 && flags & FLAG_BUDGET == 0)
+        {
             return Err(invalid(0, Field::Flags));
         }
         let ok = p.vector.iter().all(|&x| within(x, limits::LENGTH_MM))
@@ -721,6 +824,10 @@ impl<'a> Table<'a> {
         if let Some(budget) = self.budget() {
             budget.check(self)?;
         }
+        #[cfg(feature = "parameters")]
+        if let Some(p) = self.parameters() {
+            p.check(self.joint_count())?;
+        }
         Ok(())
     }
 
@@ -731,8 +838,20 @@ impl<'a> Table<'a> {
         }
         let n = self.joint_count();
         self.bytes
-            .get(core_len(n)..self.bytes.len() - CRC_LEN)
+            .get(core_len(n)..core_len(n) + budget::LEN)
             .map(budget::Budget::new)
+    }
+
+    /// The calibration's parameter covariance, where the table has it (never without the
+    /// `parameters` feature, which refuses a table with the block).
+    pub fn parameters(&self) -> Option<parameters::Parameters<'a>> {
+        if self.flags() & FLAG_PARAMETERS == 0 {
+            return None;
+        }
+        let at = core_len(self.joint_count()) + budget::LEN;
+        self.bytes
+            .get(at..self.bytes.len() - CRC_LEN)
+            .map(parameters::Parameters::new)
     }
 
     /// The table's bytes (exactly its length).

@@ -125,8 +125,13 @@ pub(crate) fn verify_slot<'b, F: NorFlash>(
     rec: Option<&StateRecord>,
     buf: &'b mut [u8; MAX_TABLE_LEN],
 ) -> Result<Table<'b>, SlotError> {
-    let start = layout.slots[usize::from(slot & 1)].start;
+    let region = &layout.slots[usize::from(slot & 1)];
+    let start = region.start;
     let fault = |e: F::Error| SlotError::Flash(FlashFault::of(e));
+    // A slot may be smaller than the largest table (one with many parameters): read no
+    // further than it.
+    let span = ((region.end - region.start) as usize).min(buf.len());
+    let buf = &mut buf[..span];
     flash.read(start, buf).map_err(fault)?;
     let table = match accept.joints {
         Some(n) => Table::parse_for(buf, n),

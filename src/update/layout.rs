@@ -5,7 +5,7 @@
 use core::ops::Range;
 use embedded_storage::nor_flash::NorFlash;
 
-use crate::table::MAX_TABLE_LEN;
+use crate::table::MAX_PLAIN_TABLE_LEN;
 
 /// Offsets (from the start of the flash device, as `NorFlash` counts them) of the regions.
 /// Slot 0 is the region a probe or `picotool` writes a factory table into (`CALTABLE` in
@@ -26,7 +26,8 @@ pub enum LayoutError {
     Unaligned(u8),
     /// A region lies past the end of the device.
     OutOfFlash(u8),
-    /// A slot is smaller than the largest table.
+    /// A slot is smaller than the largest table without a parameter block
+    /// ([`crate::table::MAX_PLAIN_TABLE_LEN`]).
     SlotTooSmall(u8),
     /// Two regions share bytes.
     Overlap(u8, u8),
@@ -64,7 +65,7 @@ impl Layout {
             if r.end as usize > flash.capacity() {
                 return Err(LayoutError::OutOfFlash(i));
             }
-            if i < 2 && ((r.end - r.start) as usize) < MAX_TABLE_LEN {
+            if i < 2 && ((r.end - r.start) as usize) < MAX_PLAIN_TABLE_LEN {
                 return Err(LayoutError::SlotTooSmall(i));
             }
             for (j, o) in regions.iter().enumerate().skip(usize::from(i) + 1) {

@@ -254,6 +254,11 @@ impl Updater {
             None => 1,
         };
         let region = &self.layout.slots[usize::from(slot)];
+        // A slot holds every table without a parameter block (the layout's check); one with
+        // many parameters may not fit a small board's slot.
+        if len > region.end - region.start {
+            return Err(Refusal::BadLength(len));
+        }
         flash
             .erase(region.start, region.end)
             .map_err(|e| Refusal::Flash(FlashFault::of(e)))?;

@@ -1,10 +1,14 @@
-//! The calibration's uncertainty budget as the hub carries it (`quatarm::table::budget`):
-//! the reading's own terms. The parameter covariance is not carried yet (the table module
-//! says why, with the measurement).
+//! The calibration's uncertainty budget as the hub carries it: the reading's own terms
+//! (`quatarm::table::budget`) and the parameter covariance (`quatarm::table::parameters`:
+//! each parameter as the way it moves the tip, and C's Cholesky factor).
 
+use nalgebra::DMatrix;
 use quatarm::table::budget::BudgetData;
+use quatarm::table::parameters::{Column, Kind, ParameterData, MAX_PARAMETERS};
 use quatarm::table::MAX_JOINTS;
-use quatarm_ref::uncertainty::Uncertainty;
+use quatarm_ref::forward::{axis_vector, rotation};
+use quatarm_ref::uncertainty::{ParamKey, Uncertainty};
+use quatarm_ref::Arm;
 
 /// The table's budget of a calibration file's `[uncertainty]` section.
 pub fn budget_data(u: &Uncertainty) -> BudgetData {
@@ -17,5 +21,145 @@ pub fn budget_data(u: &Uncertainty) -> BudgetData {
         probing_mm: u.probing_mm,
         model_mm: u.model_mm,
         temperature_c: u.temperature_c,
+    }
+}
+
+/// A budget's parameter block, owned: what [`ParameterData`] borrows.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Block {
+    /// One column record per listed parameter.
+    pub columns: Vec<Column>,
+    /// C's lower Cholesky factor, row by row.
+    pub factor: Vec<f32>,
+}
+
+impl Block {
+    /// The block as the table encoder takes it.
+    pub fn data(&self) -> ParameterData<'_> {
+        ParameterData {
+            columns: &self.columns,
+            factor: &self.factor,
+        }
+    }
+}
+
+/// The parameter block of a budget: one column record per listed parameter and C's lower
+/// Cholesky factor (row by row, f32). `Ok(None)` where the budget lists no parameter; `Err`
+/// says why the block cannot be written.
+pub fn parameter_data(u: &Uncertainty, arm: &Arm) -> Result<Option<Block>, String> {
+    let p = u.parameters.len();
+    if p == 0 {
+        return Ok(None);
+    }
+    if p > MAX_PARAMETERS {
+        return Err(format!(
+            "{p} parameters; a table carries the covariance of at most {MAX_PARAMETERS}"
+        ));
+    }
+    Ok(Some(Block {
+        columns: u.parameters.iter().map(|k| column(*k, arm)).collect(),
+        factor: factor(&u.matrix())?,
+    }))
+}
+
+/// How parameter `key` moves the tip (`quatarm::table::parameters`, its table of kinds):
+/// the host's analytic Jacobian (`armcal::jacobian`) written as the hub evaluates it. Every
+/// kind of parameter the calibration file can list is here: a new one fails to compile until
+/// it is.
+fn column(key: ParamKey, arm: &Arm) -> Column {
+    let n = arm.dof();
+    let shift = |joint: usize, vector: [f64; 3], w0: f64, w1: f64| Column {
+        vector: vector.map(|x| x as f32),
+        w0: w0 as f32,
+        w1: w1 as f32,
+        ..Column::new(Kind::Shift, joint as u8)
+    };
+    let unit = |c: usize| {
+        let mut e = [0.0; 3];
+        e[c] = 1.0;
+        e
+    };
+    match key {
+        ParamKey::ZeroOffset(j) => Column::new(Kind::Turn, j as u8),
+        ParamKey::Tilt(j, c) => {
+            let joint = &arm.joints[j];
+            let (e1, e2) = joint.axis.perpendicular();
+            let w = if c == 0 {
+                axis_vector(e1)
+            } else {
+                rotation(&axis_vector(e1), joint.tilt[0]) * axis_vector(e2)
+            };
+            Column {
+                vector: [w.x as f32, w.y as f32, w.z as f32],
+                ..Column::new(Kind::Tilt, j as u8)
+            }
+        }
+        ParamKey::LinkError(j, c) => shift(j, unit(c), 1.0, arm.joints[j].thermal),
+        ParamKey::ProbeError(c) => shift(n - 1, unit(c), 1.0, arm.probe.thermal),
+        ParamKey::Harmonic { joint, index, cos } => Column {
+            order: arm.joints[joint].harmonics[index].order as u16,
+            ..Column::new(if cos { Kind::TurnCos } else { Kind::TurnSin }, joint as u8)
+        },
+        ParamKey::Gravity(j) => Column::new(Kind::TurnGravity, j as u8),
+        ParamKey::Thermal(Some(j)) => shift(j, arm.joints[j].actual_link(), 0.0, 1.0),
+        ParamKey::Thermal(None) => shift(n - 1, arm.probe.actual(), 0.0, 1.0),
+    }
+}
+
+/// L with C = L Lᵀ, lower triangular, row by row. C is a covariance, positive semidefinite
+/// but possibly singular (a parameter the data does not see), where Cholesky fails: so
+/// C = S Sᵀ with S = V √Λ from its eigenvectors (negative rounding clamped to 0), and the QR
+/// decomposition Sᵀ = Q R gives C = Rᵀ R, L = Rᵀ.
+fn factor(c: &DMatrix<f64>) -> Result<Vec<f32>, String> {
+    let p = c.nrows();
+    if c.iter().any(|x| !x.is_finite()) {
+        return Err("the covariance has a value that is not finite".into());
+    }
+    let sym = (c + c.transpose()) * 0.5;
+    let eig = sym.symmetric_eigen();
+    let mut s = eig.eigenvectors.clone();
+    for (k, lambda) in eig.eigenvalues.iter().enumerate() {
+        let root = lambda.max(0.0).sqrt();
+        s.column_mut(k).scale_mut(root);
+    }
+    let r = s.transpose().qr().r();
+    let mut out = Vec::with_capacity(p * (p + 1) / 2);
+    for i in 0..p {
+        for k in 0..=i {
+            out.push(r[(k, i)] as f32);
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// L Lᵀ gives C back, also for a singular C (one parameter a copy of another).
+    #[test]
+    fn the_factor_gives_the_covariance_back() {
+        let a = DMatrix::from_row_slice(3, 3, &[4.0, 2.0, 0.6, 1.0, 3.0, -0.5, 0.2, 0.1, 1.5]);
+        let mut c = &a * a.transpose() * 1e-6;
+        // Make parameter 2 a copy of parameter 0: C singular.
+        for k in 0..3 {
+            c[(2, k)] = c[(0, k)];
+        }
+        for k in 0..3 {
+            c[(k, 2)] = c[(k, 0)];
+        }
+        c[(2, 2)] = c[(0, 0)];
+        let l = factor(&c).unwrap();
+        let mut lm = DMatrix::zeros(3, 3);
+        let mut at = 0;
+        for i in 0..3 {
+            for k in 0..=i {
+                lm[(i, k)] = f64::from(l[at]);
+                at += 1;
+            }
+        }
+        let back = &lm * lm.transpose();
+        let err = (back - &c).abs().max();
+        assert!(err < 1e-6 * c.abs().max(), "{err:e}");
     }
 }

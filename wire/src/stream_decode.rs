@@ -82,9 +82,9 @@ pub struct Stats {
     /// protocol version (an unknown `ToHost` variant, a newer hub): reported apart because
     /// they mean "wrong decoder", not "bad line".
     pub undecodable: u64,
-    /// `Hello`s announcing a `protocol` this decoder does not read (it reads 1 and
-    /// [`PROTOCOL_VERSION`], 2: the same messages, protocol 2 adding `Hello::live` and the
-    /// update messages).
+    /// `Hello`s announcing a `protocol` this decoder does not read (it reads 1 to
+    /// [`PROTOCOL_VERSION`], 3: the same messages, protocol 2 adding `Hello::live` and the
+    /// update messages, protocol 3 the coordinates' U95).
     pub foreign_protocol: u64,
     /// Bytes skipped before the first delimiter (joining a running stream).
     pub skipped_bytes: u64,
@@ -239,6 +239,7 @@ mod tests {
     const POINT: Coordinates = Coordinates {
         xyz_nm: [1, 2, 3],
         dir_e9: [0, 0, 1_000_000_000],
+        u95_nm: Some(4_000),
     };
 
     fn report(seq: u32) -> Report {

@@ -6,7 +6,7 @@
 //! joint rotation, which commutes with the rest of R(u, ·)), the same as a matrix, the link and
 //! probe vectors with their errors, and the probe's unit direction. Layout: `quatarm::table`.
 
-use crate::budget::budget_data;
+use crate::budget::{budget_data, parameter_data};
 use quatarm::table::{
     quat_to_matrix, Harmonic, JointData, ProbeData, TableData, FLAG_GEOMETRIC, MAX_HARMONICS,
     MAX_HARMONIC_ORDER, MAX_TABLE_LEN, SERIAL_LEN,
@@ -163,8 +163,9 @@ pub fn build(arm: &Arm) -> Result<Vec<u8>, BuildError> {
     build_with(arm, None)
 }
 
-/// The table bytes for an arm with the reading's own terms of its uncertainty budget
-/// ([`crate::budget`]), checked by the firmware's own parser.
+/// The table bytes for an arm with its uncertainty budget ([`crate::budget`]: the reading's
+/// own terms, and the parameter covariance where the budget lists parameters), checked by
+/// the firmware's own parser.
 pub fn build_with(arm: &Arm, budget: Option<&Uncertainty>) -> Result<Vec<u8>, BuildError> {
     let data = table_data(arm)?;
     let reach = reach_mm(&data);
@@ -181,9 +182,14 @@ pub fn build_with(arm: &Arm, budget: Option<&Uncertainty>) -> Result<Vec<u8>, Bu
             ),
         ));
     }
+    let parameters = match budget {
+        Some(u) => parameter_data(u, arm).map_err(|m| err("uncertainty.parameters", m))?,
+        None => None,
+    };
+    let block = parameters.as_ref().map(|b| b.data());
     let mut buf = vec![0u8; MAX_TABLE_LEN];
     let len = data
-        .encode_with(budget.map(budget_data).as_ref(), &mut buf)
+        .encode_full(budget.map(budget_data).as_ref(), block.as_ref(), &mut buf)
         .map_err(|e| err("(table)", e.to_string()))?;
     buf.truncate(len);
     quatarm::Table::parse(&buf).map_err(|e| match e {

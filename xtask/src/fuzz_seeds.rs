@@ -58,6 +58,11 @@ pub fn run() -> Result<()> {
         let text = std::fs::read(&path)?;
         write("calfile_toml", &format!("{name}.toml"), &text)?;
     }
+    // The shipped budget's table: the reading's own terms and the 52 parameters' block.
+    let full = quatarm_ref::calfile::read(&data.join("default-6-full.toml"))?;
+    let with_budget = quatarm_wire::tablebuild::build_with(&full.arm, full.uncertainty.as_ref())
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    write("table_parse", "default-6-full-budget.bin", &with_budget)?;
 
     let readings: Vec<_> = recording::read(&default_recording_path())?
         .into_iter()
@@ -122,6 +127,7 @@ pub fn run() -> Result<()> {
             point: (!fault).then_some(Coordinates {
                 xyz_nm: [812_500_000, -10_250_000, 300_125_000 + seq as i32],
                 dir_e9: [0, -600_000_000, 800_000_000],
+                u95_nm: (seq != 1).then_some(9_800 + seq),
             }),
         })));
     }

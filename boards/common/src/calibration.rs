@@ -3,9 +3,12 @@
 //! A hub drives a fixed number of encoders, so the table must be for exactly that many joints
 //! (`Table::parse_for`); any refusal of the parser or of the chain's constructor becomes the
 //! [`TableState`] every report then carries, and no chain exists to produce coordinates.
+//! Where the table carries an uncertainty budget and the board's number format computes it,
+//! every point gets its U95 ([`PointUncertainty`]).
 
 use quatarm::stream::{self, Coordinates, Hub, TableState};
-use quatarm::{Chain, ChainError, Evaluator, Table};
+use quatarm::uncertainty::Uncertainty;
+use quatarm::{Chain, ChainError, Evaluator, Point, Table};
 
 /// Joints of the arms these hubs drive.
 pub const JOINTS: usize = 6;
@@ -16,50 +19,107 @@ pub const JOINTS: usize = 6;
 pub trait HubEvaluator: Evaluator {
     /// What the hub announces.
     const STREAM: stream::NumberFormat;
+    /// What it computes of a point's uncertainty (borrowing the table's parameter block).
+    type Uncertainty<'a>: PointUncertainty<'a, Self>;
 }
 
+/// The f32 hubs stream U95 where they have the flash for it (feature `u95`).
 impl HubEvaluator for quatarm::F32 {
     const STREAM: stream::NumberFormat = stream::NumberFormat::F32;
+    #[cfg(feature = "u95")]
+    type Uncertainty<'a> = Uncertainty<'a, quatarm::F32>;
+    #[cfg(not(feature = "u95"))]
+    type Uncertainty<'a> = NoUncertainty;
 }
 
+/// The fixed-point hubs stream no U95: the Cortex-M0's 32 KiB hold the chain, the stream and
+/// the table's checks, not the uncertainty as well (README, "On the targets": its flash and
+/// instructions measured on the M0's benchmark image).
 impl HubEvaluator for quatarm::Fixed {
     const STREAM: stream::NumberFormat = stream::NumberFormat::Fixed;
+    type Uncertainty<'a> = NoUncertainty;
 }
 
-/// The boot check's outcome: a chain, or why there is none.
-pub struct Calibration<P: Evaluator> {
+/// A point's U95 as a hub computes it, built at boot from the table.
+pub trait PointUncertainty<'a, P: Evaluator>: Sized {
+    /// The table's; `None` where it has no budget (or the hub computes none).
+    fn of(table: &Table<'a>) -> Option<Self>;
+    /// U95 of a point `chain` evaluated (nm); `None` where it cannot be computed.
+    fn u95_nm(&self, chain: &Chain<P>, counts: &[u32], temp_mc: i32, p: &Point<P>) -> Option<u32>;
+}
+
+impl<'a, P: Evaluator> PointUncertainty<'a, P> for Uncertainty<'a, P> {
+    fn of(table: &Table<'a>) -> Option<Self> {
+        // A budget the chain cannot use (it built the same matrix chain's model) gives no U95
+        // rather than no coordinates.
+        Uncertainty::new(table).ok().flatten()
+    }
+    fn u95_nm(&self, chain: &Chain<P>, counts: &[u32], temp_mc: i32, p: &Point<P>) -> Option<u32> {
+        Uncertainty::u95_nm(self, chain, counts, temp_mc, p).ok()
+    }
+}
+
+/// No uncertainty: what a hub without the flash for it computes.
+pub enum NoUncertainty {}
+
+impl<P: Evaluator> PointUncertainty<'_, P> for NoUncertainty {
+    #[inline(always)]
+    fn of(_: &Table<'_>) -> Option<Self> {
+        None
+    }
+    fn u95_nm(&self, _: &Chain<P>, _: &[u32], _: i32, _: &Point<P>) -> Option<u32> {
+        match *self {}
+    }
+}
+
+/// The boot check's outcome: a chain, or why there is none, and its points' uncertainty
+/// where the hub computes one. (Two fields, not a struct of both in the `Result`: built in
+/// one, the chain was copied once more on the stack, 728 bytes the M0's 8 KiB did not have.)
+pub struct Calibration<'a, P: HubEvaluator> {
     chain: Result<Chain<P>, TableState>,
+    uncertainty: Option<P::Uncertainty<'a>>,
 }
 
-impl<P: Evaluator> Calibration<P> {
+impl<'a, P: HubEvaluator> Calibration<'a, P> {
     /// No chain: the boot refused every table, for the reason `state` (a signature, a layout
     /// that does not fit the flash).
-    pub fn refused(state: TableState) -> Calibration<P> {
-        Calibration { chain: Err(state) }
+    pub fn refused(state: TableState) -> Calibration<'a, P> {
+        Calibration {
+            chain: Err(state),
+            uncertainty: None,
+        }
+    }
+
+    fn of(table: Result<Table<'a>, TableState>) -> Calibration<'a, P> {
+        let chain = table.and_then(build::<P>);
+        let uncertainty = match (&chain, table) {
+            (Ok(_), Ok(t)) => P::Uncertainty::of(&t),
+            _ => None,
+        };
+        Calibration { chain, uncertainty }
     }
 }
 
 /// Validates the region's bytes and builds the chain.
-pub fn load<P: Evaluator>(region: &[u8]) -> Calibration<P> {
-    let chain = validate(region).and_then(build::<P>);
-    Calibration { chain }
+pub fn load<P: HubEvaluator>(region: &[u8]) -> Calibration<'_, P> {
+    Calibration::of(validate(region))
 }
 
 /// Like [`load`], for a hub whose encoders have the given counts per revolution (joint 1
 /// first): a table made for other encoders would turn every count into a wrong angle.
-pub fn load_for_encoders<P: Evaluator>(region: &[u8], counts_per_rev: &[u32]) -> Calibration<P> {
-    let chain = validate(region)
-        .and_then(|t| {
-            let fits =
-                (0..JOINTS).all(|i| t.joint(i).map(|j| j.counts) == counts_per_rev.get(i).copied());
-            if fits {
-                Ok(t)
-            } else {
-                Err(TableState::WrongResolution)
-            }
-        })
-        .and_then(build::<P>);
-    Calibration { chain }
+pub fn load_for_encoders<'a, P: HubEvaluator>(
+    region: &'a [u8],
+    counts_per_rev: &[u32],
+) -> Calibration<'a, P> {
+    Calibration::of(validate(region).and_then(|t| {
+        let fits =
+            (0..JOINTS).all(|i| t.joint(i).map(|j| j.counts) == counts_per_rev.get(i).copied());
+        if fits {
+            Ok(t)
+        } else {
+            Err(TableState::WrongResolution)
+        }
+    }))
 }
 
 // Validation and construction are kept out of line, one after the other, so that their stack
@@ -75,7 +135,7 @@ fn build<P: Evaluator>(table: Table<'_>) -> Result<Chain<P>, TableState> {
     Chain::<P>::new(&table).map_err(|_| TableState::Malformed)
 }
 
-impl<P: HubEvaluator> Calibration<P> {
+impl<P: HubEvaluator> Calibration<'_, P> {
     /// A hub that reports this calibration's state, joints and precision.
     #[inline(always)] // called once per image: out of line it only adds a call (24 B on the M0)
     pub fn hub(&self) -> Hub {
@@ -83,7 +143,7 @@ impl<P: HubEvaluator> Calibration<P> {
     }
 }
 
-impl<P: Evaluator> Calibration<P> {
+impl<P: HubEvaluator> Calibration<'_, P> {
     /// What the stream reports about the table.
     pub fn state(&self) -> TableState {
         match &self.chain {
@@ -100,12 +160,16 @@ impl<P: Evaluator> Calibration<P> {
         }
     }
 
-    /// Runs the chain on one reading.
+    /// Runs the chain on one reading, with the point's U95 where the hub computes it.
     pub fn eval(&self, counts: &[u32], temp_mc: i32) -> Result<Coordinates, ChainError> {
         match &self.chain {
             Ok(chain) => chain.eval(counts, temp_mc).map(|p| Coordinates {
                 xyz_nm: p.xyz_nm(),
                 dir_e9: p.dir_e9(),
+                u95_nm: self
+                    .uncertainty
+                    .as_ref()
+                    .and_then(|u| u.u95_nm(chain, counts, temp_mc, &p)),
             }),
             // The hub never calls eval without a valid table; answer like a refusal anyway.
             Err(_) => Err(ChainError::JointCount {

@@ -35,10 +35,12 @@ pub fn hub_main<P: HubEvaluator, const CORE_HZ: u32, L: Link, F: NorFlash>(
     stack::paint();
     let mut link = start(open_link);
     let mut flash = open_flash();
+    // The live table (which the calibration borrows) and the update's scratch, apart.
+    let mut live = [0u8; MAX_TABLE_LEN];
     let mut scratch = [0u8; MAX_TABLE_LEN];
     let mut updater = Updater::new(slots::layout(), accept);
     loop {
-        let boot = flash::boot::<P, _>(&mut flash, &accept, &mut scratch);
+        let boot = flash::boot::<P, _>(&mut flash, &accept, &mut live);
         let mut hub = boot.hub();
         let cal = &boot.calibration;
         let served = serve(

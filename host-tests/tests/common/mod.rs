@@ -22,12 +22,19 @@ use quatarm_wire::tablesign;
 /// Declares every case of this module as a test of one board: `board` (a name of
 /// `host_tests::boards`), `bounds` for its full recording, `full_recording`, the name of
 /// that test (it says the bound), and `update`, the case of its hub's update port
-/// ([`update_with_resets`] or [`update_not_supported`]). They are `#[ignore]`d for plain `cargo test`, which has
+/// ([`update_with_resets`] or [`update_not_supported`]), and `u95`, the case of its points'
+/// uncertainty ([`u95_matches_the_host`] or [`no_u95`]). They are `#[ignore]`d for plain `cargo test`, which has
 /// neither QEMU nor the cross-built board; `cargo xtask test` builds the boards and runs them
 /// with `--include-ignored`.
 macro_rules! board_tests {
     (board: $board:literal, bounds: $bounds:expr, full_recording: $full:ident,
-     update: $update:ident $(,)?) => {
+     update: $update:ident, u95: $u95:ident $(,)?) => {
+        #[test]
+        #[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
+        fn the_uncertainty_of_every_point() {
+            $crate::common::$u95($board);
+        }
+
         #[test]
         #[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
         fn a_calibration_update_over_the_uart() {
@@ -134,9 +141,11 @@ pub fn full_recording(name: &str, bounds: Bounds) {
         let mut csv = [0u8; quatarm::stream::MAX_CSV_LINE];
         let n = quatarm::stream::write_csv_line(rep, &mut csv);
         let streamed = std::str::from_utf8(&csv[..n]).unwrap().trim_end();
+        // seq, time, status, the six coordinates, U95 (empty: this table has no budget).
         let fields: Vec<&str> = streamed.splitn(4, ',').collect();
         assert_eq!(
-            fields[3], line,
+            fields[3],
+            format!("{line},"),
             "reading {i}: stream and `armcal eval` differ"
         );
     }
@@ -160,6 +169,11 @@ pub fn full_recording(name: &str, bounds: Bounds) {
 /// Runs the `armcal` binary of this build (`cargo xtask test` builds it before these tests)
 /// as a user would: `armcal eval --calib <default calibration> --precision <p> <csv>`.
 fn armcal_eval(precision: &str, readings: &[Reading]) -> Vec<String> {
+    armcal_eval_with(precision, readings, false)
+}
+
+/// [`armcal_eval`], with `--uncertainty` where `uncertainty` is set.
+fn armcal_eval_with(precision: &str, readings: &[Reading], uncertainty: bool) -> Vec<String> {
     let exe = std::env::current_exe().unwrap();
     let armcal = exe
         .parent()
@@ -179,6 +193,7 @@ fn armcal_eval(precision: &str, readings: &[Reading]) -> Vec<String> {
         .arg("--calib")
         .arg(default_calibration_path())
         .args(["--precision", precision])
+        .args(uncertainty.then_some("--uncertainty"))
         .arg(&csv)
         .output()
         .unwrap();
@@ -189,8 +204,108 @@ fn armcal_eval(precision: &str, readings: &[Reading]) -> Vec<String> {
     );
     let text = String::from_utf8(out.stdout).unwrap();
     let mut lines = text.lines();
-    assert_eq!(lines.next(), Some("x,y,z,nx,ny,nz"));
+    let header = if uncertainty {
+        "x,y,z,nx,ny,nz,cxx,cyy,czz,cxy,cxz,cyz,U95"
+    } else {
+        "x,y,z,nx,ny,nz"
+    };
+    assert_eq!(lines.next(), Some(header));
     lines.map(str::to_owned).collect()
+}
+
+/// The firmware exited with success; else its status and its defmt log.
+fn assert_ran(b: &Board, out: &host_tests::e2e::Outcome) {
+    assert!(
+        out.run.status.success(),
+        "{:?}: {}",
+        out.run.status,
+        host_tests::defmt_log::decode(&b.elf(b.name), &out.run.log)
+            .unwrap_or_default()
+            .join("\n")
+    );
+}
+
+/// The default calibration's table with its uncertainty budget, as `armcal table build`
+/// writes it: the reading's own terms and the first `parameters` of its 52 parameters with
+/// their covariance (all 52: the shipped budget; 0: the table a fixed-point hub takes).
+fn budget_table(parameters: usize) -> Vec<u8> {
+    let parsed = quatarm_ref::calfile::read(&default_calibration_path()).unwrap();
+    let mut u = parsed
+        .uncertainty
+        .expect("the default calibration has a budget");
+    let n = u.parameters.len();
+    let keep = parameters.min(n);
+    u.covariance = (0..keep * keep)
+        .map(|k| u.covariance[(k / keep) * n + k % keep])
+        .collect();
+    u.parameters.truncate(keep);
+    quatarm_wire::tablebuild::build_with(&parsed.arm, Some(&u)).unwrap()
+}
+
+/// Every point of a table with the default calibration's budget carries its U95, within 1 %
+/// of what `armcal eval --uncertainty` prints for the same counts (the host's first order in
+/// f64), and the text mode's last column is the same number.
+#[allow(dead_code)] // each board's test binary uses one of the two U95 cases
+pub fn u95_matches_the_host(name: &str) {
+    let b = the_board(name);
+    let table = budget_table(usize::MAX);
+    let readings = some_readings(40);
+    let out = replay(&b, Some(&table), &replay_bytes(&readings, None)).unwrap();
+    assert_ran(&b, &out);
+    assert_eq!(out.hellos[0].status.table(), TableState::Valid);
+    assert_eq!(out.reports.len(), readings.len());
+    let eval = armcal_eval_with(b.precision, &readings, true);
+    let mut worst: f64 = 0.0;
+    for (i, (rep, line)) in out.reports.iter().zip(&eval).enumerate() {
+        let hub_nm = rep
+            .point
+            .and_then(|p| p.u95_nm)
+            .unwrap_or_else(|| panic!("reading {i}: no U95 in {rep:?}"));
+        let host_mm: f64 = line.rsplit(',').next().unwrap().parse().unwrap();
+        let err = f64::from(hub_nm) / (host_mm * 1e6) - 1.0;
+        worst = worst.max(err.abs());
+        let mut csv = [0u8; quatarm::stream::MAX_CSV_LINE];
+        let n = quatarm::stream::write_csv_line(rep, &mut csv);
+        let streamed = std::str::from_utf8(&csv[..n]).unwrap().trim_end();
+        let last: f64 = streamed.rsplit(',').next().unwrap().parse().unwrap();
+        assert_eq!(
+            (last * 1e6).round() as u32,
+            hub_nm,
+            "reading {i}: {streamed}"
+        );
+    }
+    let first = out.reports[0].point.unwrap();
+    eprintln!(
+        "{name}: U95 on {} readings within {:.3} % of `armcal eval --uncertainty` (first: {} nm, host {})",
+        readings.len(),
+        100.0 * worst,
+        first.u95_nm.unwrap(),
+        eval[0].rsplit(',').next().unwrap()
+    );
+    assert!(worst < 0.01, "hub U95 {worst} off the host's");
+}
+
+/// A hub that computes no U95 (the fixed-point boards): with the reading's own budget its
+/// points carry none; a table with the parameter block, which its flash cannot hold the
+/// checks of, is refused by its flags and gives no coordinates.
+#[allow(dead_code)] // each board's test binary uses one of the two U95 cases
+pub fn no_u95(name: &str) {
+    let b = the_board(name);
+    let readings = some_readings(4);
+    let out = replay(&b, Some(&budget_table(0)), &replay_bytes(&readings, None)).unwrap();
+    assert_ran(&b, &out);
+    assert_eq!(out.hellos[0].status.table(), TableState::Valid);
+    assert_eq!(out.reports.len(), readings.len());
+    for r in &out.reports {
+        let p = r.point.expect("coordinates");
+        assert_eq!(p.u95_nm, None, "{r:?}");
+    }
+    // Five parameters: a block that fits the board's 4 KiB slot.
+    let with_block = budget_table(5);
+    assert!(with_block.len() < 4096);
+    let out = replay(&b, Some(&with_block), &replay_bytes(&readings, None)).unwrap();
+    assert_eq!(out.hellos[0].status.table(), TableState::Malformed);
+    assert!(out.reports.iter().all(|r| r.point.is_none()));
 }
 
 fn some_readings(n: usize) -> Vec<Reading> {
@@ -316,10 +431,12 @@ pub fn text_mode(name: &str) {
     lines.remove(0);
     assert_eq!(lines.len(), readings.len(), "{text}");
     let host = host_points(b.precision, &table, &readings).unwrap();
-    assert_eq!(CSV_HEADER.trim_end().split(',').count(), 9);
+    assert_eq!(CSV_HEADER.trim_end().split(',').count(), 10);
     for (i, line) in lines.iter().enumerate() {
         let f: Vec<&str> = line.split(',').collect();
-        assert_eq!(f.len(), 9, "{line}");
+        assert_eq!(f.len(), 10, "{line}");
+        // This table has no budget: no U95.
+        assert_eq!(f[9], "", "{line}");
         assert_eq!(f[0], i.to_string());
         if i == 1 {
             assert!(f[3..].iter().all(|x| x.is_empty()), "{line}");

@@ -71,14 +71,14 @@ pub fn layout() -> Layout {
 
 /// What a boot found: the chain of the live table (or the state saying why there is none)
 /// and which table that is.
-pub struct Boot<P: quatarm::Evaluator> {
-    /// The calibration the hub runs on.
-    pub calibration: Calibration<P>,
+pub struct Boot<'a, P: HubEvaluator> {
+    /// The calibration the hub runs on (borrowing the table's bytes).
+    pub calibration: Calibration<'a, P>,
     /// The live table, for the `Hello` (`None` without a valid one).
     pub live: Option<LiveTable>,
 }
 
-impl<P: HubEvaluator> Boot<P> {
+impl<P: HubEvaluator> Boot<'_, P> {
     /// A hub announcing this boot's table.
     pub fn hub(&self) -> Hub {
         let hub = self.calibration.hub();
@@ -93,14 +93,15 @@ impl<P: HubEvaluator> Boot<P> {
 /// record names, else any valid slot, slot 0 first). Without one, slot 0's bytes give the
 /// table state the hub reports (blank, corrupt, ...), as before there were two slots.
 /// `accept` is what the hub requires of a table (its joints, its maker's signature);
-/// `scratch` holds the table while the chain is built.
-pub fn boot<P: quatarm::Evaluator, F: NorFlash>(
+/// `live` receives the table, which the boot's calibration borrows for as long as it runs
+/// (its uncertainty reads the parameter block at every point): not the update's scratch.
+pub fn boot<'a, P: HubEvaluator, F: NorFlash>(
     flash: &mut F,
     accept: &Accept,
-    scratch: &mut [u8; MAX_TABLE_LEN],
-) -> Boot<P> {
+    live: &'a mut [u8; MAX_TABLE_LEN],
+) -> Boot<'a, P> {
     let layout = layout();
-    match live_table(flash, &layout, accept, scratch) {
+    match live_table(flash, &layout, accept, live) {
         Ok(live) => {
             let id = LiveTable {
                 slot: live.slot,

@@ -1,0 +1,281 @@
+//! The calibration's parameter covariance in the table (`spec/uncertainty.md`, J_π C J_πᵀ):
+//! every identified parameter as the way it moves the tip, and C as its Cholesky factor.
+//!
+//! The hub does not know what a tilt or a harmonic is: the host writes, for each parameter,
+//! which of six motions it is — a turn about a joint's axis (weighed by 1, sin hθ, cos hθ or
+//! the gravity lever), a turn about a fixed axis through the joint (a tilt), a shift along a
+//! fixed vector of a frame (a link or probe error, a thermal expansion) — and the hub
+//! evaluates that column from the joints' frames at the reading ([`crate::uncertainty`]).
+//! The columns are the host's analytic Jacobian (`armcal::jacobian`), term for term.
+//!
+//! Why this form and not a low-rank factor of C projected on the workspace: on the shipped
+//! 52-parameter budget the parameter part is spread so evenly over the parameters that
+//! 29 factors still leave 3.5–9.6 % of it out (`docs/spec-reading.md`, "The hub's U95"); the
+//! exact factor of C costs 4 · P(P+1)/2 bytes, 5.5 KB for P = 52, and 3 · P(P+1)/2
+//! multiply-adds a point. Its numbers are f32, the table's only ones: U95 needs 1e-3, and in
+//! f64 the 52-parameter block (11 KB) would not leave a 16 KiB slot room for 64 parameters.
+//!
+//! ```text
+//! offset   size        field                     (little-endian, after the budget)
+//! ------   ----        ---------------------------------------------------------------
+//!      0      2        parameter count P (1..=64)
+//!      2      2        reserved, 0
+//!      4   P·24        one column record per parameter, in C's order:
+//!                        +0  1  kind (`Kind`: 0 turn, 1 turn·sin hθ, 2 turn·cos hθ,
+//!                               3 turn·gravity lever, 4 tilt, 5 shift)
+//!                        +1  1  joint k (0-based)
+//!                        +2  2  harmonic order h (kinds 1 and 2; else 0)
+//!                        +4 12  vector u (f32 ×3; kinds 4 and 5; else 0)
+//!                        +16 4  w0 (f32; kind 5; else 0)
+//!                        +20 4  w1 (f32, per °C; kind 5; else 0)
+//! 4+P·24  4·P(P+1)/2   L, lower triangular, C = L Lᵀ, row by row: L00, L10, L11, L20, …
+//!                      (f32, the parameters' units: rad, mm, rad/mm, 1/°C)
+//! ```
+//!
+//! What each kind's column is, at a reading with tip p, joint origins o_k, axes a_k, frames
+//! R_k (after joint k's turn; R_(−1) = I), θ_k the raw reading (rad), ΔT from 20 °C:
+//!
+//! | kind | column ∂p/∂π |
+//! |------|--------------|
+//! | 0 turn | a_k × (p − o_k) |
+//! | 1, 2 | sin hθ_k (cos hθ_k) · a_k × (p − o_k) |
+//! | 3 gravity | (a_k · ((p − o_k) × ẑ)) · a_k × (p − o_k) |
+//! | 4 tilt | (R_(k−1) u) × (p − o_k), u in the frame before joint k |
+//! | 5 shift | (w0 + w1 ΔT) · R_k u, u in the frame after joint k (the probe's is the last) |
+//!
+//! Vectors are in the calibration file's frames (each joint's axis its own x, y or z), as the
+//! host's reference has them; the hub relabels them into its chain's z-axis frames.
+
+use super::{Field, TableError, MAX_JOINTS};
+
+/// Most parameters a table carries: 64 fill a 16 KiB slot to 11.9 KB with 7 joints.
+pub const MAX_PARAMETERS: usize = 64;
+/// Length of one column record.
+pub const COLUMN_LEN: usize = 24;
+const HEAD_LEN: usize = 4;
+
+/// Length of the block for `p` parameters.
+pub const fn len(p: usize) -> usize {
+    HEAD_LEN + p * COLUMN_LEN + 4 * factor_len(p)
+}
+
+/// Entries of the lower triangle of a `p` × `p` matrix.
+pub const fn factor_len(p: usize) -> usize {
+    p * (p + 1) / 2
+}
+
+/// Largest magnitude of a vector component, weight or factor entry: far beyond any real
+/// parameter's (a link error's factor entry is ~1e-3 mm, a unit vector's 1), small enough
+/// that no product of them leaves f32.
+pub const LIMIT: f32 = 1.0e6;
+
+/// How a parameter moves the tip (the block's kind byte).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Kind {
+    /// An angle added to joint k: a zero offset.
+    Turn,
+    /// An angle sin(hθ_k) added to joint k: a harmonic's sin coefficient.
+    TurnSin,
+    /// An angle cos(hθ_k) added to joint k: a harmonic's cos coefficient.
+    TurnCos,
+    /// The gravity deflection of joint k per unit compliance.
+    TurnGravity,
+    /// A turn about the fixed axis u of the frame before joint k, through its origin.
+    Tilt,
+    /// A shift by (w0 + w1 ΔT) u in the frame after joint k.
+    Shift,
+}
+
+impl Kind {
+    fn from_byte(b: u8) -> Option<Kind> {
+        Some(match b {
+            0 => Kind::Turn,
+            1 => Kind::TurnSin,
+            2 => Kind::TurnCos,
+            3 => Kind::TurnGravity,
+            4 => Kind::Tilt,
+            5 => Kind::Shift,
+            _ => return None,
+        })
+    }
+
+    /// The kind byte.
+    pub fn byte(self) -> u8 {
+        self as u8
+    }
+}
+
+/// One parameter's column record.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Column {
+    /// How it moves the tip.
+    pub kind: Kind,
+    /// The joint whose frame it acts in (0-based).
+    pub joint: u8,
+    /// The harmonic's order (kinds [`Kind::TurnSin`], [`Kind::TurnCos`]; else 0).
+    pub order: u16,
+    /// The axis or shift vector (kinds [`Kind::Tilt`], [`Kind::Shift`]; else 0).
+    pub vector: [f32; 3],
+    /// The shift's weight at 20 °C ([`Kind::Shift`]; else 0).
+    pub w0: f32,
+    /// The shift's weight per °C ([`Kind::Shift`]; else 0).
+    pub w1: f32,
+}
+
+impl Column {
+    /// A column of `kind` at `joint` with everything else 0.
+    pub fn new(kind: Kind, joint: u8) -> Column {
+        Column {
+            kind,
+            joint,
+            order: 0,
+            vector: [0.0; 3],
+            w0: 0.0,
+            w1: 0.0,
+        }
+    }
+
+    fn encode(&self, out: &mut [u8]) {
+        out[0] = self.kind.byte();
+        out[1] = self.joint;
+        out[2..4].copy_from_slice(&self.order.to_le_bytes());
+        for (chunk, x) in out[4..].chunks_exact_mut(4).zip(
+            self.vector
+                .iter()
+                .chain(core::iter::once(&self.w0))
+                .chain(core::iter::once(&self.w1)),
+        ) {
+            chunk.copy_from_slice(&x.to_le_bytes());
+        }
+    }
+}
+
+/// The block to write ([`super::TableData::encode_full`]): columns and factor of the same
+/// length P; the factor's strict upper triangle is not written.
+#[derive(Clone, Copy, Debug)]
+pub struct ParameterData<'a> {
+    /// One column per parameter.
+    pub columns: &'a [Column],
+    /// The factor L, row by row, [`factor_len`]`(P)` entries.
+    pub factor: &'a [f32],
+}
+
+impl ParameterData<'_> {
+    /// The block's length in bytes; `None` if P is 0, above [`MAX_PARAMETERS`], or the
+    /// factor's length is not P's.
+    pub fn block_len(&self) -> Option<usize> {
+        let p = self.columns.len();
+        ((1..=MAX_PARAMETERS).contains(&p) && self.factor.len() == factor_len(p)).then(|| len(p))
+    }
+
+    /// Writes the block into `out` (exactly [`Self::block_len`] bytes).
+    pub(super) fn encode(&self, out: &mut [u8]) {
+        let p = self.columns.len();
+        out[0..2].copy_from_slice(&(p as u16).to_le_bytes());
+        for (c, rec) in self
+            .columns
+            .iter()
+            .zip(out[HEAD_LEN..HEAD_LEN + p * COLUMN_LEN].chunks_exact_mut(COLUMN_LEN))
+        {
+            c.encode(rec);
+        }
+        let at = HEAD_LEN + p * COLUMN_LEN;
+        for (chunk, x) in out[at..].chunks_exact_mut(4).zip(self.factor) {
+            chunk.copy_from_slice(&x.to_le_bytes());
+        }
+    }
+}
+
+/// A table's parameter block, borrowing its bytes (length checked by the table).
+#[derive(Clone, Copy, Debug)]
+pub struct Parameters<'a> {
+    bytes: &'a [u8],
+}
+
+fn rd_f32(b: &[u8], at: usize) -> f32 {
+    f32::from_bits(super::rd_u32(b, at))
+}
+
+/// The parameter count the block at `bytes` states (0 if it cannot be read).
+pub(super) fn stated_count(bytes: &[u8]) -> usize {
+    usize::from(super::rd_u16(bytes, 0))
+}
+
+impl<'a> Parameters<'a> {
+    pub(super) fn new(bytes: &'a [u8]) -> Parameters<'a> {
+        Parameters { bytes }
+    }
+
+    /// Number of parameters P.
+    pub fn count(&self) -> usize {
+        stated_count(self.bytes)
+    }
+
+    /// Parameter `i`'s column record; `None` past the last or for an unknown kind.
+    pub fn column(&self, i: usize) -> Option<Column> {
+        if i >= self.count() {
+            return None;
+        }
+        let r = self
+            .bytes
+            .get(HEAD_LEN + i * COLUMN_LEN..HEAD_LEN + (i + 1) * COLUMN_LEN)?;
+        Some(Column {
+            kind: Kind::from_byte(r[0])?,
+            joint: r[1],
+            order: super::rd_u16(r, 2),
+            vector: [rd_f32(r, 4), rd_f32(r, 8), rd_f32(r, 12)],
+            w0: rd_f32(r, 16),
+            w1: rd_f32(r, 20),
+        })
+    }
+
+    /// L's row `i` (its first i + 1 entries), as raw little-endian bytes.
+    pub fn factor_row(&self, i: usize) -> &'a [u8] {
+        let at = HEAD_LEN + self.count() * COLUMN_LEN + 4 * factor_len(i);
+        self.bytes.get(at..at + 4 * (i + 1)).unwrap_or(&[])
+    }
+
+    /// Every record well formed and every number finite and within [`LIMIT`] (what the boot
+    /// applies to a table that has the block).
+    #[cfg_attr(not(feature = "parameters"), allow(dead_code))] // refused by its flag there
+    pub(super) fn check(&self, joints: usize) -> Result<(), TableError> {
+        let bad = TableError::Invalid {
+            joint: 0,
+            field: Field::Budget,
+        };
+        let p = self.count();
+        if !(1..=MAX_PARAMETERS).contains(&p) || super::rd_u16(self.bytes, 2) != 0 {
+            return Err(bad);
+        }
+        let ok = |x: f32| x.is_finite() && x.abs() <= LIMIT;
+        for i in 0..p {
+            let c = self.column(i).ok_or(bad)?;
+            let harmonic = matches!(c.kind, Kind::TurnSin | Kind::TurnCos);
+            let vector = matches!(c.kind, Kind::Tilt | Kind::Shift);
+            let weights = c.kind == Kind::Shift;
+            let well_formed = usize::from(c.joint) < joints.min(MAX_JOINTS)
+                && (c.order != 0) == harmonic
+                && c.order <= super::MAX_HARMONIC_ORDER
+                && c.vector
+                    .iter()
+                    .all(|&x| ok(x) && (vector || x.to_bits() == 0))
+                && [c.w0, c.w1]
+                    .iter()
+                    .all(|&x| ok(x) && (weights || x.to_bits() == 0));
+            if !well_formed {
+                return Err(TableError::Invalid {
+                    joint: c.joint.saturating_add(1),
+                    field: Field::Budget,
+                });
+            }
+        }
+        for i in 0..p {
+            let row = self.factor_row(i);
+            if row.len() != 4 * (i + 1) || !(0..=i).all(|k| ok(rd_f32(row, 4 * k))) {
+                return Err(bad);
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,165 @@
+//! The calibration's part of Σ_p: J_π C J_πᵀ, exactly, as (J_π L)(J_π L)ᵀ with C = L Lᵀ
+//! from the table ([`crate::table::parameters`]).
+//!
+//! J_π's columns come from the joints' frames at the reading, which the matrix chain composes
+//! anyway ([`MatrixChain::eval_frames`]): each parameter is a turn about a joint's axis, a
+//! turn about a fixed axis, or a shift (the table's column kinds), evaluated in f32. The
+//! frames are the undeflected chain's and the harmonic weights come from micromath's
+//! `sin`/`cos`; both err by ~1e-3 of a column at most, where U95 must agree with the host to
+//! 1 % (measured: `cargo test -p armcal --test hub_u95`).
+//!
+//! Cost per point: the matrix chain once, P columns of a few dozen operations, and
+//! 3 · P(P+1)/2 multiply-adds with the block read from the table (4,134 for P = 52).
+
+use super::Covariance;
+use crate::matrix::{Frames, MatrixChain};
+use crate::model::{unpermute, ChainError, BASE_AXIS, REFERENCE_TEMP_MC};
+use crate::physics::Physics;
+use crate::rotate::{cross, Vec3};
+use crate::scalar::F32;
+use crate::table::parameters::{Column, Kind, Parameters, MAX_PARAMETERS};
+use crate::table::{Table, MAX_JOINTS};
+use micromath::F32Ext;
+
+/// The parameter part of a table with a parameter block, built at boot. It borrows the
+/// block (the columns' records and the factor, read at every point) rather than copying it:
+/// a copy is 11 KB at 64 parameters, and the boot's moves of a struct that size overflowed
+/// the qemu-m4f hub's 64 KiB of RAM.
+#[derive(Clone, Debug)]
+pub struct ParameterPart<'a, P: Physics> {
+    chain: MatrixChain<P>,
+    block: Parameters<'a>,
+    /// Each joint's axis (0, 1, 2: x, y, z), for the records' relabelling.
+    axes: [u8; MAX_JOINTS],
+    /// Each joint's counts per revolution, for the harmonics' angle.
+    counts: [u32; MAX_JOINTS],
+}
+
+fn sub(a: Vec3<f32>, b: Vec3<f32>) -> Vec3<f32> {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn scaled(a: Vec3<f32>, s: f32) -> Vec3<f32> {
+    a.map(|x| x * s)
+}
+
+fn mat_vec(m: &[[f32; 3]; 3], v: Vec3<f32>) -> Vec3<f32> {
+    m.map(|row| row[0] * v[0] + row[1] * v[1] + row[2] * v[2])
+}
+
+const IDENTITY: [[f32; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+impl<'a, P: Physics> ParameterPart<'a, P> {
+    /// The part of a validated table; `None` where it has no parameter block.
+    pub fn new(table: &Table<'a>) -> Result<Option<ParameterPart<'a, P>>, ChainError> {
+        let Some(block) = table.parameters() else {
+            return Ok(None);
+        };
+        let chain = MatrixChain::new(table)?;
+        let (mut axes, mut counts) = ([BASE_AXIS; MAX_JOINTS], [1; MAX_JOINTS]);
+        for (k, (a, c)) in axes.iter_mut().zip(&mut counts).enumerate() {
+            if let Some(j) = table.joint(k) {
+                (*a, *c) = (j.axis, j.counts);
+            }
+        }
+        Ok(Some(ParameterPart {
+            chain,
+            block,
+            axes,
+            counts,
+        }))
+    }
+
+    /// Number of parameters.
+    pub fn count(&self) -> usize {
+        self.block.count().min(MAX_PARAMETERS)
+    }
+
+    /// Σ += J_π C J_πᵀ at the reading (`counts`, `temp_mc`), in nm².
+    pub fn add_to(
+        &self,
+        counts: &[u32],
+        temp_mc: i32,
+        sigma: &mut Covariance,
+    ) -> Result<(), ChainError> {
+        let mut frames = Frames::default();
+        let tip = self.chain.eval_frames(counts, temp_mc, &mut frames)?;
+        let p = tip.xyz.map(P::l_to_f32);
+        let dt = temp_mc.wrapping_sub(REFERENCE_TEMP_MC) as f32 * 1.0e-3;
+        // g_k = Σ_i J_i L_ik: column k of J_π L, filled row by row of L.
+        let mut g = [[0.0f32; 3]; MAX_PARAMETERS];
+        let n = self.count();
+        for i in 0..n {
+            // The table's check read every record (kind, joint within the table).
+            let Some(col) = self.block.column(i) else {
+                continue;
+            };
+            let d = self.column(&col, &frames, p, counts, dt);
+            for (gk, l) in g.iter_mut().zip(self.block.factor_row(i).chunks_exact(4)) {
+                let l = f32::from_le_bytes([l[0], l[1], l[2], l[3]]);
+                for (x, dx) in gk.iter_mut().zip(d) {
+                    *x += dx * l;
+                }
+            }
+        }
+        // mm → nm.
+        for gk in &g[..n] {
+            sigma.add_outer(scaled(*gk, 1.0e6), 1.0);
+        }
+        Ok(())
+    }
+
+    /// ∂p/∂π for one parameter (mm per the parameter's unit).
+    fn column(
+        &self,
+        col: &Column,
+        frames: &Frames,
+        p: Vec3<f32>,
+        counts: &[u32],
+        dt: f32,
+    ) -> Vec3<f32> {
+        let k = usize::from(col.joint).min(MAX_JOINTS - 1);
+        // The record's vector is in the calibration file's frame: a tilt's in the frame
+        // before its joint (the previous joint's, or the base's, labelled like a z joint),
+        // a shift's in its joint's.
+        let frame_axis = match (col.kind, k) {
+            (Kind::Tilt, 0) => BASE_AXIS,
+            (Kind::Tilt, _) => self.axes[k - 1],
+            _ => self.axes[k],
+        };
+        let vector = unpermute(col.vector, frame_axis);
+        let r = &frames.rotation[k];
+        let lever = sub(p, frames.origin[k]);
+        let axis = [r[0][2], r[1][2], r[2][2]];
+        let turn = || cross::<F32>(&axis, &lever);
+        match col.kind {
+            Kind::Turn => turn(),
+            Kind::TurnSin | Kind::TurnCos => {
+                // hθ reduced to a turn in integers first (θ = 2π c / counts), so that the
+                // f32 angle stays below 2π whatever the order.
+                let c = u64::from(counts.get(k).copied().unwrap_or(0));
+                let n = u64::from(self.counts[k].max(1));
+                let phase = (u64::from(col.order) * c) % n;
+                let a = phase as f32 / n as f32 * core::f32::consts::TAU;
+                // micromath's (≈ 1e-3 off): a weight of one column, harmless at U95's 1 %.
+                let w = if col.kind == Kind::TurnSin {
+                    F32Ext::sin(a)
+                } else {
+                    F32Ext::cos(a)
+                };
+                scaled(turn(), w)
+            }
+            // The first-order lever of the spec: a_k · ((p − o_k) × ẑ).
+            Kind::TurnGravity => scaled(turn(), axis[0] * lever[1] - axis[1] * lever[0]),
+            Kind::Tilt => {
+                let before = if k == 0 {
+                    &IDENTITY
+                } else {
+                    &frames.rotation[k - 1]
+                };
+                cross::<F32>(&mat_vec(before, vector), &lever)
+            }
+            Kind::Shift => scaled(mat_vec(r, vector), col.w0 + col.w1 * dt),
+        }
+    }
+}
