@@ -16,10 +16,31 @@ fn cargo() -> Command {
     c
 }
 
+/// ", N.N GB free" on the disk the build writes to (empty where `df` cannot say): a run
+/// that fills the disk shows where, as one did on a CI machine.
+fn free_disk() -> String {
+    let Ok(out) = Command::new("df").arg("-Pk").arg(root()).output() else {
+        return String::new();
+    };
+    let text = String::from_utf8_lossy(&out.stdout);
+    text.lines()
+        .nth(1)
+        .and_then(|l| l.split_whitespace().nth(3))
+        .and_then(|kib| kib.parse::<f64>().ok())
+        .map(|kib| format!(", {:.1} GB free", kib / 1_048_576.0))
+        .unwrap_or_default()
+}
+
 /// Runs every check in order, stopping at the first failure.
 pub fn run() -> Result<()> {
     let start = Instant::now();
-    let step = |name: &str| eprintln!("\nxtask test: {name} [{:.0?}]", start.elapsed());
+    let step = |name: &str| {
+        eprintln!(
+            "\nxtask test: {name} [{:.0?}{}]",
+            start.elapsed(),
+            free_disk()
+        )
+    };
     setup::ensure()?;
 
     step("rustfmt");
@@ -139,8 +160,9 @@ pub fn run() -> Result<()> {
     }
 
     eprintln!(
-        "\nxtask test: all passed in {:.0?}; firmware tool chains:\n{}",
+        "\nxtask test: all passed in {:.0?}{}; firmware tool chains:\n{}",
         start.elapsed(),
+        free_disk(),
         survey.describe()
     );
     Ok(())
