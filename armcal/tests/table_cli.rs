@@ -155,3 +155,48 @@ fn a_signed_table_verifies_under_its_own_key_only() {
     assert!(!out.status.success() && err.contains("maker.pub"), "{err}");
     assert!(!d.join("x.bin").exists(), "no partial output");
 }
+
+/// The shipped budget goes into the table whole (its 52 parameters' covariance after the
+/// reading's own terms), and `--without-covariance` leaves the parameters out for the
+/// fixed-point hubs; `table show` says which.
+#[test]
+fn the_budget_goes_into_the_table_with_or_without_its_covariance() {
+    let d = workdir("budgettable");
+    let calib =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/default-6-full.toml");
+    let calib = calib.to_str().unwrap();
+    armcal_ok(&["table", "build", calib, "-o", "full.bin"], &d);
+    armcal_ok(
+        &[
+            "table",
+            "build",
+            calib,
+            "-o",
+            "own.bin",
+            "--without-covariance",
+        ],
+        &d,
+    );
+    let full = std::fs::read(d.join("full.bin")).unwrap();
+    let own = std::fs::read(d.join("own.bin")).unwrap();
+    let (tf, to) = (
+        quatarm::Table::parse(&full).unwrap(),
+        quatarm::Table::parse(&own).unwrap(),
+    );
+    assert_eq!(tf.parameters().map(|p| p.count()), Some(52));
+    assert!(to.parameters().is_none() && to.budget().is_some());
+    assert_eq!(
+        full.len(),
+        own.len() + quatarm::table::parameters::len(52),
+        "the block after the budget"
+    );
+    let shown =
+        String::from_utf8_lossy(&armcal_ok(&["table", "show", "full.bin"], &d).stdout).to_string();
+    assert!(
+        shown.contains("parameter covariance: 52 parameters"),
+        "{shown}"
+    );
+    let shown =
+        String::from_utf8_lossy(&armcal_ok(&["table", "show", "own.bin"], &d).stdout).to_string();
+    assert!(shown.contains("parameter covariance: none"), "{shown}");
+}

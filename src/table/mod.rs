@@ -993,7 +993,7 @@ pub fn quat_to_matrix(q: &[f64; 4]) -> [[f64; 3]; 3] {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     pub(crate) fn sample() -> TableData {

@@ -279,3 +279,107 @@ impl<'a> Parameters<'a> {
         Ok(())
     }
 }
+
+#[cfg(all(test, feature = "parameters"))]
+mod tests {
+    use super::*;
+    use crate::table::budget::BudgetData;
+    use crate::table::tests::sample;
+    use crate::table::{Table, CRC, FLAG_PARAMETERS, MAX_TABLE_LEN};
+
+    fn columns() -> [Column; 3] {
+        [
+            Column::new(Kind::Turn, 1),
+            Column {
+                order: 2,
+                ..Column::new(Kind::TurnCos, 3)
+            },
+            Column {
+                vector: [0.0, 0.0, 1.0],
+                w0: 1.0,
+                w1: 2.3e-5,
+                ..Column::new(Kind::Shift, 5)
+            },
+        ]
+    }
+
+    const FACTOR: [f32; 6] = [1e-5, 2e-6, 3e-5, -1e-6, 0.0, 4e-3];
+
+    fn encoded() -> ([u8; MAX_TABLE_LEN], usize) {
+        let mut buf = [0u8; MAX_TABLE_LEN];
+        let cols = columns();
+        let block = ParameterData {
+            columns: &cols,
+            factor: &FACTOR,
+        };
+        let n = sample()
+            .encode_full(Some(&BudgetData::default()), Some(&block), &mut buf)
+            .unwrap();
+        (buf, n)
+    }
+
+    /// The block's start in a 6-joint table.
+    const AT: usize = 48 + 6 * 248 + 64 + 80;
+
+    fn recrc(b: &mut [u8]) {
+        let n = b.len();
+        let c = CRC.checksum(&b[..n - 4]);
+        b[n - 4..].copy_from_slice(&c.to_le_bytes());
+    }
+
+    #[test]
+    fn a_block_round_trips() {
+        let (buf, n) = encoded();
+        assert_eq!(n, 48 + 6 * 248 + 64 + 80 + len(3) + 4);
+        assert!(crate::table::is_table_len(n));
+        let t = Table::parse(&buf[..n]).unwrap();
+        let p = t.parameters().unwrap();
+        assert_eq!(p.count(), 3);
+        for (i, c) in columns().iter().enumerate() {
+            assert_eq!(p.column(i).as_ref(), Some(c));
+        }
+        let row2: Vec<f32> = p
+            .factor_row(2)
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect();
+        assert_eq!(row2, FACTOR[3..]);
+    }
+
+    /// Every malformed record or value is refused, naming the budget (and the joint where
+    /// there is one); so is the block's flag without a budget.
+    #[test]
+    fn a_bad_block_is_refused() {
+        let (good, n) = encoded();
+        let rec = |i: usize| AT + 4 + i * COLUMN_LEN;
+        let cases: [(&str, usize, &[u8]); 6] = [
+            ("unknown kind", rec(0), &[9]),
+            ("joint past the table", rec(0) + 1, &[6]),
+            ("harmonic without order", rec(1) + 2, &[0, 0]),
+            ("turn with a vector", rec(0) + 4, &1.0f32.to_le_bytes()),
+            (
+                "NaN in the factor",
+                AT + 4 + 3 * COLUMN_LEN,
+                &f32::NAN.to_le_bytes(),
+            ),
+            ("reserved", AT + 2, &[1, 0]),
+        ];
+        for (what, at, bytes) in cases {
+            let mut b = good;
+            b[at..at + bytes.len()].copy_from_slice(bytes);
+            recrc(&mut b[..n]);
+            match Table::parse(&b[..n]) {
+                Err(TableError::Invalid {
+                    field: Field::Budget,
+                    ..
+                }) => {}
+                other => panic!("{what}: {other:?}"),
+            }
+        }
+        let mut b = [0u8; MAX_TABLE_LEN];
+        let m = sample().encode(&mut b).unwrap();
+        b[7] |= FLAG_PARAMETERS;
+        recrc(&mut b[..m]);
+        assert!(Table::parse(&b[..m]).is_err());
+    }
+}

@@ -16,6 +16,11 @@ pub enum Command {
         /// Output file.
         #[arg(short, long)]
         output: PathBuf,
+        /// Leave the `[uncertainty]` parameters' covariance out of the table (it keeps the
+        /// reading's own terms): for the fixed-point hubs, which refuse a table with it and
+        /// stream no U95.
+        #[arg(long)]
+        without_covariance: bool,
     },
     /// Validate a binary table as the firmware does and print what it holds.
     Show {
@@ -70,8 +75,16 @@ pub enum Command {
 /// Runs the subcommand.
 pub fn run(command: Command) -> anyhow::Result<()> {
     match command {
-        Command::Build { calib, output } => {
-            let (arm, budget) = armcal::load::calibration(&calib)?;
+        Command::Build {
+            calib,
+            output,
+            without_covariance,
+        } => {
+            let (arm, mut budget) = armcal::load::calibration(&calib)?;
+            if let (true, Some(u)) = (without_covariance, budget.as_mut()) {
+                u.parameters.clear();
+                u.covariance.clear();
+            }
             let bytes = armcal::tablebuild::build_with(&arm, budget.as_ref())
                 .with_context(|| calib.display().to_string())?;
             std::fs::write(&output, &bytes).with_context(|| output.display().to_string())?;
@@ -240,5 +253,31 @@ pub fn show(t: &Table<'_>) -> String {
         "probe: vector (mm) = [{:.6}, {:.6}, {:.6}], direction = [{:.12}, {:.12}, {:.12}], thermal = {:e} /degC",
         p.vector[0], p.vector[1], p.vector[2], p.direction[0], p.direction[1], p.direction[2], p.thermal
     );
+    match t.budget() {
+        None => {
+            let _ = writeln!(s, "uncertainty: none (the hub streams no U95)");
+        }
+        Some(b) => {
+            let counts: Vec<String> = (0..t.joint_count())
+                .map(|i| format!("{}", b.encoder_counts(i)))
+                .collect();
+            let _ = writeln!(
+                s,
+                "uncertainty: encoder [{}] counts, probing {} mm, model {} mm, temperature {} degC",
+                counts.join(", "),
+                b.probing_mm(),
+                b.model_mm(),
+                b.temperature_c()
+            );
+            let _ = match t.parameters() {
+                Some(p) => writeln!(
+                    s,
+                    "  parameter covariance: {} parameters (f32 hubs only)",
+                    p.count()
+                ),
+                None => writeln!(s, "  parameter covariance: none"),
+            };
+        }
+    }
     s
 }
