@@ -1048,7 +1048,7 @@ pub(crate) mod tests {
         (buf, n)
     }
 
-    fn recrc(b: &mut [u8]) {
+    pub(crate) fn recrc(b: &mut [u8]) {
         let n = b.len();
         let c = CRC.checksum(&b[..n - 4]);
         b[n - 4..].copy_from_slice(&c.to_le_bytes());

@@ -284,8 +284,8 @@ impl<'a> Parameters<'a> {
 mod tests {
     use super::*;
     use crate::table::budget::BudgetData;
-    use crate::table::tests::sample;
-    use crate::table::{Table, CRC, FLAG_PARAMETERS, MAX_TABLE_LEN};
+    use crate::table::tests::{recrc, sample};
+    use crate::table::{Table, FLAG_PARAMETERS, MAX_TABLE_LEN};
 
     fn columns() -> [Column; 3] {
         [
@@ -320,12 +320,6 @@ mod tests {
 
     /// The block's start in a 6-joint table.
     const AT: usize = 48 + 6 * 248 + 64 + 80;
-
-    fn recrc(b: &mut [u8]) {
-        let n = b.len();
-        let c = CRC.checksum(&b[..n - 4]);
-        b[n - 4..].copy_from_slice(&c.to_le_bytes());
-    }
 
     #[test]
     fn a_block_round_trips() {

@@ -56,10 +56,25 @@ pub struct Row {
     pub instructions: Option<(f64, f64)>,
     /// Instructions of one Ed25519 check of the table's signature (QEMU boards).
     pub signature: Option<f64>,
+    /// Instructions per point of U95: the reading's own terms alone, and the whole U95 as the
+    /// hub streams it (QEMU boards with a budget in the table; the second where the hub
+    /// computes U95).
+    pub u95: [Option<f64>; 2],
 }
 
-/// Instructions per point of both chains, and of one signature check.
-fn instructions(b: &Board, table: &[u8]) -> Result<((f64, f64), f64)> {
+/// Instructions per point of both chains, of one signature check, and per point of U95
+/// (where the table has a budget).
+/// What a bench image measured, in instructions.
+struct Measured {
+    /// Per point: quaternion chain, matrix chain.
+    chains: (f64, f64),
+    /// One signature check.
+    signature: f64,
+    /// Per point: U95's own terms, U95 as streamed.
+    u95: [Option<f64>; 2],
+}
+
+fn instructions(b: &Board, table: &[u8]) -> Result<Measured> {
     let readings = recording::read(&default_recording_path())?;
     let input = replay_bytes(&readings[..POINTS.min(readings.len())], None);
     let file = table_file(table)?;
@@ -116,6 +131,8 @@ fn instructions(b: &Board, table: &[u8]) -> Result<((f64, f64), f64)> {
     let (n0, t0) = ticks_of("bench clock overhead")?;
     let (nq, tq) = ticks_of("bench quaternion")?;
     let (nm, tm) = ticks_of("bench matrix")?;
+    let (no, to) = ticks_of("bench u95 own terms")?;
+    let (nu, tu) = ticks_of("bench u95 streamed")?;
     let overhead = t0 / n0;
     eprintln!(
         "{}: {per_tick:.2} instructions per SysTick tick (nominal {}), clock read {:.0} instructions",
@@ -123,18 +140,22 @@ fn instructions(b: &Board, table: &[u8]) -> Result<((f64, f64), f64)> {
         1e9 / f64::from(b.qemu.map_or(1, |m| m.core_hz)),
         overhead * per_tick
     );
-    Ok((
-        (
+    Ok(Measured {
+        chains: (
             (tq / nq - overhead) * per_tick,
             (tm / nm - overhead) * per_tick,
         ),
-        (sig_ticks - overhead) * per_tick,
-    ))
+        signature: (sig_ticks - overhead) * per_tick,
+        u95: [
+            (no > 0.0).then(|| (to / no - overhead) * per_tick),
+            (nu > 0.0).then(|| (tu / nu - overhead) * per_tick),
+        ],
+    })
 }
 
 fn measure(b: &Board, tc: &Toolchain, table: &[u8]) -> Result<Row> {
     let (flash, statics) = sizes(&b.elf(b.name))?;
-    let (mut stack, mut instr, mut signature) = (None, None, None);
+    let (mut stack, mut instr, mut signature, mut u95) = (None, None, None, [None; 2]);
     if b.qemu.is_some() {
         let readings: Vec<_> = recording::read(&default_recording_path())?
             .into_iter()
@@ -143,9 +164,10 @@ fn measure(b: &Board, tc: &Toolchain, table: &[u8]) -> Result<Row> {
         let out = replay(b, Some(table), &replay_bytes(&readings, None))?;
         let lines = defmt_log::decode(&b.elf(b.name), &out.run.log)?;
         stack = number_after(&lines, "stack peak");
-        let (chains, sig) = instructions(b, table)?;
-        instr = Some(chains);
-        signature = Some(sig);
+        let m = instructions(b, table)?;
+        instr = Some(m.chains);
+        signature = Some(m.signature);
+        u95 = m.u95;
     }
     Ok(Row {
         board: *b,
@@ -159,13 +181,14 @@ fn measure(b: &Board, tc: &Toolchain, table: &[u8]) -> Result<Row> {
         stack,
         instructions: instr,
         signature,
+        u95,
     })
 }
 
 /// The table, as markdown.
 pub fn table(rows: &[Row]) -> String {
     let mut s = String::from(
-        "| board | compiler | chain | flash (bytes) | RAM: statics + stack peak (bytes) | quaternion chain (instr/point) | 3×4 matrix chain (instr/point) | Ed25519 check of the table (instr) |\n|---|---|---|---|---|---|---|---|\n",
+        "| board | compiler | chain | flash (bytes) | RAM: statics + stack peak (bytes) | quaternion chain (instr/point) | 3×4 matrix chain (instr/point) | U95, reading's own terms (instr/point) | U95 as streamed (instr/point) | Ed25519 check of the table (instr) |\n|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let ram = match r.stack {
@@ -179,9 +202,16 @@ pub fn table(rows: &[Row]) -> String {
         let sig = r
             .signature
             .map_or_else(|| "(no QEMU model)".into(), |n| format!("{n:.0}"));
+        let cell = |u: Option<f64>, none: &str| match (u, r.instructions) {
+            (Some(n), _) => format!("{n:.0}"),
+            (None, Some(_)) => none.into(),
+            (None, None) => "(no QEMU model)".into(),
+        };
+        let own = cell(r.u95[0], "(no budget)");
+        let streamed = cell(r.u95[1], "(not computed)");
         s.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} |\n",
-            r.board.name, r.compiler, r.board.precision, r.flash, ram, q, m, sig
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            r.board.name, r.compiler, r.board.precision, r.flash, ram, q, m, own, streamed, sig
         ));
     }
     s
@@ -192,7 +222,21 @@ pub fn table(rows: &[Row]) -> String {
 pub fn run(only: Option<&str>, calib: Option<&std::path::Path>) -> Result<()> {
     setup::ensure()?;
     let path = calib.map_or_else(default_calibration_path, std::path::Path::to_path_buf);
-    let (_, table_bytes) = calibration(&path)?;
+    // With the calibration's uncertainty budget where it has one: whole for the f32 boards,
+    // without the parameters' covariance for the fixed-point ones (which refuse the block).
+    let (_, plain) = calibration(&path)?;
+    let parsed = quatarm_ref::calfile::read(&path)?;
+    let table_for = |b: &Board| -> Result<Vec<u8>> {
+        let Some(mut u) = parsed.uncertainty.clone() else {
+            return Ok(plain.clone());
+        };
+        if b.precision != "f32" {
+            u.parameters.clear();
+            u.covariance.clear();
+        }
+        quatarm_wire::tablebuild::build_with(&parsed.arm, Some(&u))
+            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+    };
     let survey = toolchain::survey();
     let chains: Vec<&Toolchain> = match std::env::var(toolchain::TOOLCHAIN_ENV) {
         Ok(_) => vec![survey.primary()?],
@@ -207,7 +251,7 @@ pub fn run(only: Option<&str>, calib: Option<&std::path::Path>) -> Result<()> {
             .filter(|b| only.is_none_or(|o| o == b.name))
         {
             build_board_with(b, tc)?;
-            rows.push(measure(b, tc, &table_bytes)?);
+            rows.push(measure(b, tc, &table_for(b)?)?);
         }
     }
     println!("\n{}", table(&rows));

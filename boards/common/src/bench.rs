@@ -6,14 +6,19 @@
 //! timed on its own (readings arrive over the UART, as in the replay) and the cost of reading
 //! the clock is measured the same way and subtracted. A loop of known length, timed at the
 //! start, gives the instructions per tick instead of trusting the machine's nominal clock.
-//! The Ed25519 check of the table's signature is timed once the same way. Results go to the
-//! defmt log (`cargo xtask bench-target` decodes it).
+//! The Ed25519 check of the table's signature is timed once the same way, and, where the
+//! table carries an uncertainty budget, each point's U95 after its quaternion chain: the
+//! reading's own terms alone (Σ_p from the chain differenced, and the radius) on every
+//! board, and the whole U95 as the hub streams it (with the parameter part where the table
+//! has the block) where the hub computes one. Results go to the defmt log (`cargo xtask
+//! bench-target` decodes it).
 
 use quatarm::signature::{self, KEY_LEN, SIGNATURE_LEN};
 use quatarm::stream::{Event, Replay};
-use quatarm::{Chain, Evaluator, MatrixChain, Table};
+use quatarm::uncertainty::OwnTerms;
+use quatarm::{Chain, MatrixChain, Table};
 
-use crate::calibration::JOINTS;
+use crate::calibration::{HubEvaluator, PointUncertainty, JOINTS};
 use crate::{clock, Link};
 
 /// Iterations of the calibration loop (2 instructions each).
@@ -60,7 +65,7 @@ fn time_signature(key: &[u8; KEY_LEN], table: &Table<'_>, region: &[u8]) {
 
 /// Times the signature check once, then both chains on every reading until `End`, then logs
 /// the sums.
-pub fn run<L: Link, P: Evaluator>(link: &mut L, region: &[u8], key: &[u8; KEY_LEN]) {
+pub fn run<L: Link, P: HubEvaluator>(link: &mut L, region: &[u8], key: &[u8; KEY_LEN]) {
     let Ok(table) = Table::parse_for(region, JOINTS) else {
         defmt::error!("bench: no valid table");
         return;
@@ -79,8 +84,17 @@ pub fn run<L: Link, P: Evaluator>(link: &mut L, region: &[u8], key: &[u8; KEY_LE
         t1 - t0
     );
     time_signature(key, &table, region);
+    let own = OwnTerms::new(&table);
+    let uncertainty = <P::Uncertainty<'_> as PointUncertainty<'_, P>>::of(&table);
+    defmt::info!(
+        "bench uncertainty budget {=bool}, streamed U95 {=bool}, parameter block {=bool}",
+        own.is_some(),
+        uncertainty.is_some(),
+        table.parameters().is_some()
+    );
 
     let (mut q, mut m, mut empty) = (Sum::default(), Sum::default(), Sum::default());
+    let (mut own_sum, mut u95) = (Sum::default(), Sum::default());
     let mut replay = Replay::new();
     loop {
         let Some(event) = replay.push(link.read()) else {
@@ -106,6 +120,24 @@ pub fn run<L: Link, P: Evaluator>(link: &mut L, region: &[u8], key: &[u8; KEY_LE
         q.ticks += b - a;
         q.failures += u32::from(res.is_err());
 
+        if let (Some(u), Ok(p)) = (&own, &res) {
+            let a = clock::ticks();
+            let got =
+                core::hint::black_box(u.covariance(&quat, counts, temp, p).map(|c| c.u95_nm()));
+            let b = clock::ticks();
+            own_sum.points += 1;
+            own_sum.ticks += b - a;
+            own_sum.failures += u32::from(got.is_err());
+        }
+        if let (Some(u), Ok(p)) = (&uncertainty, &res) {
+            let a = clock::ticks();
+            let got = core::hint::black_box(u.u95_nm(&quat, counts, temp, p));
+            let b = clock::ticks();
+            u95.points += 1;
+            u95.ticks += b - a;
+            u95.failures += u32::from(got.is_none());
+        }
+
         let a = clock::ticks();
         let res = core::hint::black_box(matrix.eval(counts, temp));
         let b = clock::ticks();
@@ -130,5 +162,17 @@ pub fn run<L: Link, P: Evaluator>(link: &mut L, region: &[u8], key: &[u8; KEY_LE
         m.points,
         m.ticks,
         m.failures
+    );
+    defmt::info!(
+        "bench u95 own terms {=u32} points {=u64} ticks {=u32} failures",
+        own_sum.points,
+        own_sum.ticks,
+        own_sum.failures
+    );
+    defmt::info!(
+        "bench u95 streamed {=u32} points {=u64} ticks {=u32} failures",
+        u95.points,
+        u95.ticks,
+        u95.failures
     );
 }

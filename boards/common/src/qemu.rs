@@ -103,7 +103,7 @@ fn log_memory(ram_start: usize) {
 /// The whole run of a QEMU benchmark image ([`bench::run`] in precision `P`), then exit with
 /// success. `open_link` as for [`hub_main`].
 /// `key` is the public key the table in the region is checked against (its check is timed).
-pub fn bench_main<P: quatarm::Evaluator, L: Link>(
+pub fn bench_main<P: HubEvaluator, L: Link>(
     key: &[u8; quatarm::signature::KEY_LEN],
     open_link: impl FnOnce() -> L,
 ) -> ! {

@@ -274,13 +274,17 @@ pub fn u95_matches_the_host(name: &str) {
             "reading {i}: {streamed}"
         );
     }
-    let first = out.reports[0].point.unwrap();
+    let mut csv = [0u8; quatarm::stream::MAX_CSV_LINE];
+    let n = quatarm::stream::write_csv_line(&out.reports[0], &mut csv);
     eprintln!(
-        "{name}: U95 on {} readings within {:.3} % of `armcal eval --uncertainty` (first: {} nm, host {})",
+        "{name}: U95 on {} readings within {:.3} % of `armcal eval --uncertainty`; the first \
+         reading (counts {:?}, {} m°C): hub `{}`, host `{}`",
         readings.len(),
         100.0 * worst,
-        first.u95_nm.unwrap(),
-        eval[0].rsplit(',').next().unwrap()
+        readings[0].counts.as_slice(),
+        readings[0].temp_mc,
+        std::str::from_utf8(&csv[..n]).unwrap().trim_end(),
+        eval[0]
     );
     assert!(worst < 0.01, "hub U95 {worst} off the host's");
 }
