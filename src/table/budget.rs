@@ -3,15 +3,8 @@
 //! What a point's Σ_p takes from the reading itself — the encoder's standard uncertainty per
 //! joint, the probing, the model's unexplained part and the temperature sensor — is four
 //! numbers and a vector, and the hub differentiates its own chain for their Jacobians
-//! ([`crate::uncertainty`]). The calibration's parameter covariance is not here yet: a
-//! low-rank factor of it (the arm at the calibrated parameters plus a step along each of the
-//! covariance's leading workspace directions, as tables of their own, differenced by the
-//! hub's chain) was built and measured, and it does not hold. On the shipped 52-parameter
-//! budget (`data/default-6-full.toml`) the parameter part is 16.5 % of a point's variance at
-//! the median pose and 23.5 % at the worst, and it is spread so evenly over the parameters
-//! that 6 factors leave 12.6 % (median) and 19.0 % (worst) of it out, 29 factors still 3.5 %
-//! and 9.6 % — far from the 1 % that host and hub must agree to. The parameter part needs the
-//! exact J_π C J_πᵀ on the hub (`docs/spec-reading.md`, "The hub's U95").
+//! ([`crate::uncertainty`]). The calibration's parameter covariance follows it, behind its
+//! own flag ([`super::parameters`]: why it is the exact factor of C and not a low-rank one).
 //!
 //! ```text
 //! offset  size  field                                   (little-endian, after the probe)
