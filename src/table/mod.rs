@@ -472,7 +472,7 @@ impl TableData {
         budget: Option<&budget::BudgetData>,
         out: &mut [u8],
     ) -> Result<usize, TableError> {
-        self.encode_parts(budget, None, out)
+        self.encode_full(budget, None, out)
     }
 
     /// Writes the table into `out` with `budget` and, after it, `parameters` (flag bits 4 and
@@ -483,25 +483,6 @@ impl TableData {
         &self,
         budget: Option<&budget::BudgetData>,
         parameters: Option<&parameters::ParameterData<'_>>,
-        out: &mut [u8],
-    ) -> Result<usize, TableError> {
-        let block = match parameters {
-            None => None,
-            Some(p) => {
-                let len = p.block_len().ok_or(TableError::Invalid {
-                    joint: 0,
-                    field: Field::Budget,
-                })?;
-                Some((len, p as &dyn BlockWriter))
-            }
-        };
-        self.encode_parts(budget, block, out)
-    }
-
-    fn encode_parts(
-        &self,
-        budget: Option<&budget::BudgetData>,
-        parameters: Option<(usize, &dyn BlockWriter)>,
         out: &mut [u8],
     ) -> Result<usize, TableError> {
         let n = usize::from(self.joint_count);
@@ -515,7 +496,7 @@ impl TableData {
         let block = match parameters {
             None => 0,
             Some(_) if budget.is_none() => return Err(invalid),
-            Some((len, _)) => len,
+            Some(p) => p.block_len().ok_or(invalid)?,
         };
         let extra = if budget.is_some() { budget::LEN } else { 0 };
         let len = table_len(n) + extra + block;
@@ -562,23 +543,12 @@ impl TableData {
         if let Some(b) = budget {
             b.encode(&mut out[core_len(n)..core_len(n) + budget::LEN]);
         }
-        if let Some((_, p)) = parameters {
-            p.write(&mut out[core_len(n) + budget::LEN..len - CRC_LEN]);
+        if let Some(p) = parameters {
+            p.encode(&mut out[core_len(n) + budget::LEN..len - CRC_LEN]);
         }
         let crc = CRC.checksum(&out[..len - CRC_LEN]);
         out[len - CRC_LEN..].copy_from_slice(&crc.to_le_bytes());
         Ok(len)
-    }
-}
-
-/// A block after the budget that writes itself ([`parameters::ParameterData`]).
-trait BlockWriter {
-    fn write(&self, out: &mut [u8]);
-}
-
-impl BlockWriter for parameters::ParameterData<'_> {
-    fn write(&self, out: &mut [u8]) {
-        self.encode(out);
     }
 }
 
