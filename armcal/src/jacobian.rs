@@ -20,7 +20,7 @@ use crate::effects::TipPoint;
 use crate::params::Param;
 use nalgebra::{Matrix3, Vector3};
 use quatarm_ref::arm::Arm;
-use quatarm_ref::forward::{self, axis_vector, rotation, thermal_scale};
+use quatarm_ref::forward::{self, thermal_scale, tilt_axis};
 
 /// The tip p at readings `theta` and temperature `temp_c`, with ∂p/∂param written into
 /// `cols` (one 3-vector per entry of `params`; zero for frame parameters).
@@ -57,12 +57,7 @@ pub fn tip_jacobian(
             Param::ZeroOffset(j) => turn(j),
             Param::Tilt(j, k) => {
                 let joint = &arm.joints[j];
-                let (e1, e2) = joint.axis.perpendicular();
-                let w = if k == 0 {
-                    before(j) * axis_vector(e1)
-                } else {
-                    before(j) * rotation(&axis_vector(e1), joint.tilt[0]) * axis_vector(e2)
-                };
+                let w = before(j) * tilt_axis(joint.axis, joint.tilt, k);
                 w.cross(&(p - c.origins[j]))
             }
             Param::LinkError(j, k) => {

@@ -58,6 +58,18 @@ pub fn tilt_matrix(axis: Axis, tilt: [f64; 2]) -> Matrix3<f64> {
     rotation(&axis_vector(e1), tilt[0]) * rotation(&axis_vector(e2), tilt[1])
 }
 
+/// The axis a change of tilt component `c` turns joint i's part of the arm about, in the
+/// frame before the joint: e1 for δα, and for δβ e2 after the δα rotation (the derivative of
+/// [`tilt_matrix`]).
+pub fn tilt_axis(axis: Axis, tilt: [f64; 2], c: usize) -> Vector3<f64> {
+    let (e1, e2) = axis.perpendicular();
+    if c == 0 {
+        axis_vector(e1)
+    } else {
+        rotation(&axis_vector(e1), tilt[0]) * axis_vector(e2)
+    }
+}
+
 /// The encoder-harmonic part of joint i's angle error at raw reading θ.
 pub fn harmonic_error(arm: &Arm, joint: usize, theta: f64) -> f64 {
     arm.joints[joint]

@@ -158,6 +158,16 @@ pub struct Uncertainty {
 }
 
 impl Uncertainty {
+    /// The same budget without its parameters: the reading's own terms only (a table for
+    /// the fixed-point hubs, which refuse the parameter block).
+    pub fn without_covariance(&self) -> Uncertainty {
+        Uncertainty {
+            parameters: Vec::new(),
+            covariance: Vec::new(),
+            ..self.clone()
+        }
+    }
+
     /// The covariance as a matrix.
     pub fn matrix(&self) -> DMatrix<f64> {
         let n = self.parameters.len();

@@ -6,7 +6,7 @@ use nalgebra::DMatrix;
 use quatarm::table::budget::BudgetData;
 use quatarm::table::parameters::{Column, Kind, ParameterData, MAX_PARAMETERS};
 use quatarm::table::MAX_JOINTS;
-use quatarm_ref::forward::{axis_vector, rotation};
+use quatarm_ref::forward::tilt_axis;
 use quatarm_ref::uncertainty::{ParamKey, Uncertainty};
 use quatarm_ref::Arm;
 
@@ -83,12 +83,7 @@ fn column(key: ParamKey, arm: &Arm) -> Column {
         ParamKey::ZeroOffset(j) => Column::new(Kind::Turn, j as u8),
         ParamKey::Tilt(j, c) => {
             let joint = &arm.joints[j];
-            let (e1, e2) = joint.axis.perpendicular();
-            let w = if c == 0 {
-                axis_vector(e1)
-            } else {
-                rotation(&axis_vector(e1), joint.tilt[0]) * axis_vector(e2)
-            };
+            let w = tilt_axis(joint.axis, joint.tilt, c);
             Column {
                 vector: [w.x as f32, w.y as f32, w.z as f32],
                 ..Column::new(Kind::Tilt, j as u8)

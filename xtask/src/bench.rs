@@ -11,9 +11,7 @@
 use anyhow::{bail, Context, Result};
 use host_tests::boards::{boards, Board};
 use host_tests::defmt_log::{self, number_after};
-use host_tests::e2e::{
-    calibration, default_calibration_path, default_recording_path, replay, table_file,
-};
+use host_tests::e2e::{default_calibration_path, default_recording_path, replay, table_file};
 use host_tests::qemu::{self, Options};
 use host_tests::recording::{self, replay_bytes};
 use object::{Object, ObjectSegment};
@@ -224,17 +222,13 @@ pub fn run(only: Option<&str>, calib: Option<&std::path::Path>) -> Result<()> {
     let path = calib.map_or_else(default_calibration_path, std::path::Path::to_path_buf);
     // With the calibration's uncertainty budget where it has one: whole for the f32 boards,
     // without the parameters' covariance for the fixed-point ones (which refuse the block).
-    let (_, plain) = calibration(&path)?;
     let parsed = quatarm_ref::calfile::read(&path)?;
     let table_for = |b: &Board| -> Result<Vec<u8>> {
-        let Some(mut u) = parsed.uncertainty.clone() else {
-            return Ok(plain.clone());
+        let budget = match &parsed.uncertainty {
+            Some(u) if b.precision != "f32" => Some(u.without_covariance()),
+            other => other.clone(),
         };
-        if b.precision != "f32" {
-            u.parameters.clear();
-            u.covariance.clear();
-        }
-        quatarm_wire::tablebuild::build_with(&parsed.arm, Some(&u))
+        quatarm_wire::tablebuild::build_with(&parsed.arm, budget.as_ref())
             .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
     };
     let survey = toolchain::survey();

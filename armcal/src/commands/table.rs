@@ -81,9 +81,8 @@ pub fn run(command: Command) -> anyhow::Result<()> {
             without_covariance,
         } => {
             let (arm, mut budget) = armcal::load::calibration(&calib)?;
-            if let (true, Some(u)) = (without_covariance, budget.as_mut()) {
-                u.parameters.clear();
-                u.covariance.clear();
+            if without_covariance {
+                budget = budget.map(|u| u.without_covariance());
             }
             let bytes = armcal::tablebuild::build_with(&arm, budget.as_ref())
                 .with_context(|| calib.display().to_string())?;
