@@ -127,6 +127,7 @@ fn joint(u: &mut Unstructured) -> ArbResult<Joint> {
         tilt: [angle(u)?, angle(u)?],
         link_error: vector(u, error_limit)?,
         harmonics: harmonics(u)?,
+        wobble: Vec::new(),
         gravity: value(u, limits::GRAVITY)?,
         thermal: value(u, limits::THERMAL)?,
         encoder_counts: counts(u)?,

@@ -66,6 +66,19 @@ pub struct Harmonic {
     pub cos: f64,
 }
 
+/// One `axis_wobble` term: the tilt motion of a joint's bearing,
+/// δα += alpha[0]·sin(order·θ) + alpha[1]·cos(order·θ) and
+/// δβ += beta[0]·sin(order·θ) + beta[1]·cos(order·θ), θ the raw reading.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Wobble {
+    /// Order h ≥ 1 (cycles per turn).
+    pub order: u32,
+    /// Coefficients of sin(hθ) and cos(hθ) in δα (rad).
+    pub alpha: [f64; 2],
+    /// Coefficients of sin(hθ) and cos(hθ) in δβ (rad).
+    pub beta: [f64; 2],
+}
+
 /// One revolute joint with the link that follows it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Joint {
@@ -81,6 +94,8 @@ pub struct Joint {
     pub link_error: [f64; 3],
     /// Encoder harmonic terms.
     pub harmonics: Vec<Harmonic>,
+    /// Axis wobble terms.
+    pub wobble: Vec<Wobble>,
     /// Gravity compliance g_i (rad/mm).
     pub gravity: f64,
     /// Thermal expansion κ_i of this link (1/°C).
@@ -99,6 +114,7 @@ impl Joint {
             tilt: [0.0, 0.0],
             link_error: [0.0; 3],
             harmonics: Vec::new(),
+            wobble: Vec::new(),
             gravity: 0.0,
             thermal: 0.0,
             encoder_counts: DEFAULT_COUNTS,
@@ -108,6 +124,17 @@ impl Joint {
     /// The link vector with its error, v_i + Δv_i (before thermal scaling).
     pub fn actual_link(&self) -> [f64; 3] {
         add3(self.link, self.link_error)
+    }
+
+    /// The tilt [δα, δβ] at raw reading θ: the fixed tilt with the wobble's variation.
+    pub fn tilt_at(&self, theta: f64) -> [f64; 2] {
+        self.wobble.iter().fold(self.tilt, |[a, b], w| {
+            let (s, c) = (f64::from(w.order) * theta).sin_cos();
+            [
+                a + w.alpha[0] * s + w.alpha[1] * c,
+                b + w.beta[0] * s + w.beta[1] * c,
+            ]
+        })
     }
 
     /// Encoder reading in radians for a count: θ = 2π · count / counts-per-revolution.

@@ -5,7 +5,7 @@
 //! Writing emits every key, zeros included, so that a file read back gives the same arm and a
 //! person sees at a glance which terms exist.
 
-use crate::arm::{Arm, Axis, Frame, Harmonic, Joint, Probe, DEFAULT_COUNTS, JOINT_COUNTS};
+use crate::arm::{Arm, Axis, Frame, Harmonic, Joint, Probe, Wobble, DEFAULT_COUNTS, JOINT_COUNTS};
 pub use crate::uncertainty::{ParamKey, Uncertainty};
 use std::fmt::Write as _;
 use toml::{Table, Value};
@@ -48,6 +48,8 @@ pub struct Limits {
     pub angle_rad: f64,
     /// |`sin`| and |`cos`| of a harmonic (rad).
     pub harmonic_rad: f64,
+    /// |`alpha`| and |`beta`| components of an axis wobble term (rad).
+    pub wobble_rad: f64,
     /// |`gravity`| (rad/mm).
     pub gravity: f64,
     /// |`thermal`| of a link or the probe (1/°C).
@@ -62,6 +64,7 @@ impl Limits {
         length_mm: f64::MAX,
         angle_rad: f64::MAX,
         harmonic_rad: f64::MAX,
+        wobble_rad: f64::MAX,
         gravity: f64::MAX,
         thermal: f64::MAX,
         translation_mm: f64::MAX,
@@ -260,6 +263,7 @@ fn joint(
         "tilt",
         "link_error",
         "harmonics",
+        "wobble",
         "gravity",
         "thermal",
     ];
@@ -297,6 +301,20 @@ fn joint(
             ))
         }
     };
+    let wobble = match t.get("wobble") {
+        None => Vec::new(),
+        Some(Value::Array(a)) => a
+            .iter()
+            .enumerate()
+            .map(|(k, w)| wobble(w, &format!("{path}.wobble[{}]", k + 1), unknown))
+            .collect::<Result<_, _>>()?,
+        Some(_) => {
+            return Err(err(
+                format!("{path}.wobble"),
+                "must be an array of { order, alpha, beta } tables",
+            ))
+        }
+    };
     let j = Joint {
         axis,
         link,
@@ -304,6 +322,7 @@ fn joint(
         tilt: opt_array::<2>(t, "tilt", path)?,
         link_error: opt_array::<3>(t, "link_error", path)?,
         harmonics,
+        wobble,
         gravity: opt_number(t, "gravity", path)?,
         thermal: opt_number(t, "thermal", path)?,
         encoder_counts: counts,
@@ -334,6 +353,16 @@ fn joint(
         bounded(h.sin, limits.harmonic_rad, &format!("{hp}.sin"), "harmonic")?;
         bounded(h.cos, limits.harmonic_rad, &format!("{hp}.cos"), "harmonic")?;
     }
+    for (k, w) in j.wobble.iter().enumerate() {
+        let wp = format!("{path}.wobble[{}]", k + 1);
+        bounded_all(
+            &w.alpha,
+            limits.wobble_rad,
+            &format!("{wp}.alpha"),
+            "wobble",
+        )?;
+        bounded_all(&w.beta, limits.wobble_rad, &format!("{wp}.beta"), "wobble")?;
+    }
     bounded(
         j.gravity,
         limits.gravity,
@@ -354,7 +383,28 @@ fn harmonic(v: &Value, path: &str, unknown: &mut Vec<String>) -> Result<Harmonic
         .as_table()
         .ok_or_else(|| err(path, "must be a table { order, sin, cos }"))?;
     note_unknown(t, &["order", "sin", "cos"], path, unknown);
-    let order = match t.get("order") {
+    Ok(Harmonic {
+        order: order(t, path)?,
+        sin: opt_number(t, "sin", path)?,
+        cos: opt_number(t, "cos", path)?,
+    })
+}
+
+fn wobble(v: &Value, path: &str, unknown: &mut Vec<String>) -> Result<Wobble, CalFileError> {
+    let t = v
+        .as_table()
+        .ok_or_else(|| err(path, "must be a table { order, alpha, beta }"))?;
+    note_unknown(t, &["order", "alpha", "beta"], path, unknown);
+    Ok(Wobble {
+        order: order(t, path)?,
+        alpha: opt_array::<2>(t, "alpha", path)?,
+        beta: opt_array::<2>(t, "beta", path)?,
+    })
+}
+
+/// A periodic term's `order`: an integer from 1 to [`MAX_HARMONIC_ORDER`].
+fn order(t: &Table, path: &str) -> Result<u32, CalFileError> {
+    Ok(match t.get("order") {
         None => return Err(err(format!("{path}.order"), "missing")),
         Some(Value::Integer(h)) if (1..=i64::from(MAX_HARMONIC_ORDER)).contains(h) => *h as u32,
         Some(Value::Integer(h)) => {
@@ -364,11 +414,6 @@ fn harmonic(v: &Value, path: &str, unknown: &mut Vec<String>) -> Result<Harmonic
             ))
         }
         Some(_) => return Err(err(format!("{path}.order"), "must be an integer ≥ 1")),
-    };
-    Ok(Harmonic {
-        order,
-        sin: opt_number(t, "sin", path)?,
-        cos: opt_number(t, "cos", path)?,
     })
 }
 
@@ -578,6 +623,21 @@ pub fn write_with(arm: &Arm, uncertainty: Option<&Uncertainty>, header: &[&str])
             })
             .collect();
         let _ = writeln!(s, "harmonics = [{}]", hs.join(", "));
+        if !j.wobble.is_empty() {
+            let ws: Vec<String> = j
+                .wobble
+                .iter()
+                .map(|w| {
+                    format!(
+                        "{{ order = {}, alpha = {}, beta = {} }}",
+                        w.order,
+                        arr(&w.alpha),
+                        arr(&w.beta)
+                    )
+                })
+                .collect();
+            let _ = writeln!(s, "wobble = [{}]", ws.join(", "));
+        }
         let _ = writeln!(s, "gravity = {}", num(j.gravity));
         let _ = writeln!(s, "thermal = {}", num(j.thermal));
     }
@@ -629,6 +689,7 @@ zero_offset = 1e-3
 tilt = [2e-4, -3e-4]
 link_error = [0.1, -0.2, 0.3]
 harmonics = [ { order = 1, sin = 5e-5, cos = -2e-5 }, { order = 3, sin = 1e-6, cos = 0.0 } ]
+wobble = [ { order = 2, alpha = [3e-5, -1e-5], beta = [0.0, 2e-5] } ]
 gravity = 3e-8
 thermal = 2.3e-5
 [[joint]]
@@ -665,6 +726,9 @@ translation = [10.0, 20.0, 30.0]
         assert_eq!(a.joints[0].harmonics.len(), 2);
         assert_eq!(a.joints[0].harmonics[1].order, 3);
         assert_eq!(a.joints[0].tilt, [2e-4, -3e-4]);
+        assert_eq!(a.joints[0].wobble[0].order, 2);
+        assert_eq!(a.joints[0].wobble[0].alpha, [3e-5, -1e-5]);
+        assert_eq!(a.joints[0].wobble[0].beta, [0.0, 2e-5]);
         assert_eq!(a.joints[1].link, [0.0, 0.0, 300.0]);
         assert_eq!(a.joints[1].gravity, 0.0);
         assert_eq!(a.probe.thermal, 1e-5);
@@ -710,6 +774,14 @@ translation = [10.0, 20.0, 30.0]
             (
                 FULL.replace("order = 3", "order = 0"),
                 "joint[1].harmonics[2].order",
+            ),
+            (
+                FULL.replace("order = 2, alpha", "order = -2, alpha"),
+                "joint[1].wobble[1].order",
+            ),
+            (
+                FULL.replace("beta = [0.0, 2e-5]", "beta = [0.0]"),
+                "joint[1].wobble[1].beta",
             ),
             ("name = ".to_string(), "line 1, column 8"),
         ];
@@ -762,6 +834,7 @@ translation = [10.0, 20.0, 30.0]
             length_mm: 5000.0,
             angle_rad: 7.0,
             harmonic_rad: 0.1,
+            wobble_rad: 0.1,
             gravity: 1e-4,
             thermal: 4e-4,
             translation_mm: 1e5,

@@ -2,7 +2,8 @@
 //!
 //! The spec writes the chain with quaternions; this module evaluates the same rotations as
 //! 3×3 matrices, R_0i = R_0(i-1) · M_i · Rot(u_i, θ_i + Δθ_i + e_i), with
-//! M_i = Rot(e1_i, δα_i) · Rot(e2_i, δβ_i), so that it shares no formula with the firmware.
+//! M_i = Rot(e1_i, δα_i) · Rot(e2_i, δβ_i) (δα_i, δβ_i varied by any axis wobble at the joint's
+//! reading), so that it shares no formula with the firmware.
 //! Gravity compliance is evaluated as the spec defines its truth: a first pass without it gives
 //! the tip p, the origins o_k and the axes a_k; the deflections
 //! e_k = g_k · a_k · ((p − o_k) × ẑ) then enter a second pass.
@@ -107,7 +108,7 @@ pub fn pass(arm: &Arm, theta: &[f64], temp_c: f64, extra: &[f64]) -> Chain {
         chain.origins.push(o);
         let u = axis_vector(j.axis);
         let angle = theta[k] + j.zero_offset + harmonic_error(arm, k, theta[k]) + extra[k];
-        r = r * tilt_matrix(j.axis, j.tilt) * rotation(&u, angle);
+        r = r * tilt_matrix(j.axis, j.tilt_at(theta[k])) * rotation(&u, angle);
         chain.axes.push(r * u);
         chain.rotations.push(r);
         chain.angles.push(angle);
@@ -204,6 +205,25 @@ mod tests {
         let a = forward(&arm, &th, 20.0);
         let b = forward(&Arm::default6(), &shifted, 20.0);
         assert!((a.p - b.p).norm() < 1e-12);
+    }
+
+    #[test]
+    fn wobble_varies_the_tilt_with_the_reading() {
+        let mut arm = Arm::default6();
+        arm.joints[2].tilt = [1e-4, -2e-4];
+        arm.joints[2].wobble.push(crate::arm::Wobble {
+            order: 3,
+            alpha: [5e-5, -3e-5],
+            beta: [2e-5, 4e-5],
+        });
+        let th = [0.3, 0.2, 0.7, 0.4, 0.5, 0.6];
+        let (s, c) = (2.1f64).sin_cos();
+        let mut fixed = Arm::default6();
+        fixed.joints[2].tilt = [1e-4 + 5e-5 * s - 3e-5 * c, -2e-4 + 2e-5 * s + 4e-5 * c];
+        let a = forward(&arm, &th, 20.0);
+        let b = forward(&fixed, &th, 20.0);
+        assert!((a.p - b.p).norm() < 1e-12);
+        assert!((a.p - forward(&Arm::default6(), &th, 20.0).p).norm() > 0.01);
     }
 
     #[test]
