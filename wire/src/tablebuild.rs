@@ -91,6 +91,18 @@ pub fn table_data(arm: &Arm) -> Result<TableData, BuildError> {
         );
         let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
         let q = q.map(|x| x / norm);
+        // The firmware's chains do not apply an axis wobble yet: a table without it would
+        // stream coordinates off by the wobble's lever, so an arm that has one is refused.
+        if let Some(k) = j
+            .wobble
+            .iter()
+            .position(|w| w.alpha != [0.0; 2] || w.beta != [0.0; 2])
+        {
+            return Err(err(
+                format!("{path}.wobble[{}]", k + 1),
+                "an axis wobble; the table holds none (the firmware does not apply it yet)",
+            ));
+        }
         if j.harmonics.len() > MAX_HARMONICS {
             return Err(err(
                 format!("{path}.harmonics"),
@@ -200,4 +212,28 @@ pub fn build_with(arm: &Arm, budget: Option<&Uncertainty>) -> Result<Vec<u8>, Bu
         other => err("(table)", other.to_string()),
     })?;
     Ok(buf)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use quatarm_ref::arm::Wobble;
+
+    #[test]
+    fn an_axis_wobble_is_refused_with_its_key() {
+        let mut arm = Arm::default6();
+        assert!(build_with(&arm, None).is_ok());
+        arm.joints[2].wobble.push(Wobble {
+            order: 2,
+            alpha: [0.0; 2],
+            beta: [0.0; 2],
+        });
+        assert!(
+            build_with(&arm, None).is_ok(),
+            "a zero entry changes nothing"
+        );
+        arm.joints[2].wobble[0].beta[1] = 3e-5;
+        let e = build_with(&arm, None).unwrap_err().to_string();
+        assert!(e.contains("joint[3].wobble[1]"), "{e}");
+    }
 }
