@@ -67,8 +67,8 @@ pub struct Harmonic {
 }
 
 /// One `axis_wobble` term: the tilt motion of a joint's bearing,
-/// δα += alpha[0]·sin(order·θ) + alpha[1]·cos(order·θ) and
-/// δβ += beta[0]·sin(order·θ) + beta[1]·cos(order·θ), θ the raw reading.
+/// δα += a·sin(hθ) + b·cos(hθ) and δβ += c·sin(hθ) + d·cos(hθ), with `alpha` = (a, b),
+/// `beta` = (c, d), h the order and θ the raw reading.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Wobble {
     /// Order h ≥ 1 (cycles per turn).
