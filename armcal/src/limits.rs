@@ -30,11 +30,12 @@ pub fn temp_range_c() -> std::ops::RangeInclusive<f64> {
 }
 
 /// Bounds of a calibration file's values. Lengths and thermal expansion are the binary
-/// table's (`quatarm::table::limits`); gravity compliance, harmonics and wobble are allowed beyond the
-/// table's accuracy limits (the host evaluates such terms exactly, and `diagnose` may name one
-/// that the firmware cannot apply), up to physical bounds: 1e-4 rad/mm droops a metre-long
-/// lever by 0.1 rad, 0.1 rad of encoder error (or of a bearing's wobble) is 6°. Angles within one turn either way (a
-/// Denavit–Hartenberg twist or θ offset is a full angle, never more than a turn).
+/// table's (`quatarm::table::limits`); gravity compliance, harmonics and wobble are allowed
+/// beyond the table's accuracy limits (the host evaluates such terms exactly, and `diagnose`
+/// may name one that the firmware cannot apply), up to physical bounds: 1e-4 rad/mm droops a
+/// metre-long lever by 0.1 rad, 0.1 rad of encoder error (or of a bearing's wobble) is 6°.
+/// Angles within one turn either way (a Denavit–Hartenberg twist or θ offset is a full angle,
+/// never more than a turn).
 pub const CALFILE: Limits = Limits {
     length_mm: table::LENGTH_MM,
     angle_rad: TAU,

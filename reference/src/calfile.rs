@@ -3,7 +3,8 @@
 //! Reading walks the TOML tree by hand rather than through `serde` so that every refusal names
 //! the key path (`joint[3].tilt[1]`) and every unknown key is reported, as the spec asks.
 //! Writing emits every key, zeros included, so that a file read back gives the same arm and a
-//! person sees at a glance which terms exist.
+//! person sees at a glance which terms exist — except `wobble`, written only where a joint has
+//! an entry, so that a file written before the key existed is written again byte for byte.
 
 use crate::arm::{Arm, Axis, Frame, Harmonic, Joint, Probe, Wobble, DEFAULT_COUNTS, JOINT_COUNTS};
 pub use crate::uncertainty::{ParamKey, Uncertainty};
@@ -287,34 +288,15 @@ fn joint(
         None => return Err(err(format!("{path}.link"), "missing")),
         Some(v) => array::<3>(v, &format!("{path}.link"))?,
     };
-    let harmonics = match t.get("harmonics") {
-        None => Vec::new(),
-        Some(Value::Array(a)) => a
-            .iter()
-            .enumerate()
-            .map(|(k, h)| harmonic(h, &format!("{path}.harmonics[{}]", k + 1), unknown))
-            .collect::<Result<_, _>>()?,
-        Some(_) => {
-            return Err(err(
-                format!("{path}.harmonics"),
-                "must be an array of { order, sin, cos } tables",
-            ))
-        }
-    };
-    let wobble = match t.get("wobble") {
-        None => Vec::new(),
-        Some(Value::Array(a)) => a
-            .iter()
-            .enumerate()
-            .map(|(k, w)| wobble(w, &format!("{path}.wobble[{}]", k + 1), unknown))
-            .collect::<Result<_, _>>()?,
-        Some(_) => {
-            return Err(err(
-                format!("{path}.wobble"),
-                "must be an array of { order, alpha, beta } tables",
-            ))
-        }
-    };
+    let harmonics = terms(
+        t,
+        "harmonics",
+        "{ order, sin, cos }",
+        path,
+        unknown,
+        harmonic,
+    )?;
+    let wobble = terms(t, "wobble", "{ order, alpha, beta }", path, unknown, wobble)?;
     let j = Joint {
         axis,
         link,
@@ -376,6 +358,30 @@ fn joint(
         "thermal expansion",
     )?;
     Ok(j)
+}
+
+/// A joint's list of periodic terms under `key` (absent: none), each read by `read` with its
+/// key path (`joint[K].KEY[W]`, 1-based); `shape` names the tables, for the message.
+fn terms<T>(
+    t: &Table,
+    key: &str,
+    shape: &str,
+    path: &str,
+    unknown: &mut Vec<String>,
+    read: fn(&Value, &str, &mut Vec<String>) -> Result<T, CalFileError>,
+) -> Result<Vec<T>, CalFileError> {
+    match t.get(key) {
+        None => Ok(Vec::new()),
+        Some(Value::Array(a)) => a
+            .iter()
+            .enumerate()
+            .map(|(k, v)| read(v, &format!("{path}.{key}[{}]", k + 1), unknown))
+            .collect(),
+        Some(_) => Err(err(
+            format!("{path}.{key}"),
+            format!("must be an array of {shape} tables"),
+        )),
+    }
 }
 
 fn harmonic(v: &Value, path: &str, unknown: &mut Vec<String>) -> Result<Harmonic, CalFileError> {
