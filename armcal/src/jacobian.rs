@@ -6,7 +6,9 @@
 //! - an angle added to joint k (zero offset, harmonics, gravity deflection) turns everything
 //!   beyond joint k about a_k through o_k: ∂p = a_k × (p − o_k);
 //! - a tilt turns the same part about the tilt's own axis through o_k: for δα the axis e1 in
-//!   the frame before the joint, for δβ the axis e2 after the δα rotation;
+//!   the frame before the joint, for δβ the axis e2 after the δα rotation (both at the tilt
+//!   the joint has at this reading: an axis wobble varies it, and its column is the tilt's
+//!   times sin or cos of its order times the reading);
 //! - a link or probe error (or its thermal scaling) moves everything beyond it by R_0k times
 //!   the change of the vector.
 //!
@@ -18,9 +20,9 @@
 
 use crate::effects::TipPoint;
 use crate::params::Param;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;
-use quatarm_ref::forward::{self, thermal_scale, tilt_axis};
+use quatarm_ref::forward::{self, thermal_scale};
 
 /// The tip p at readings `theta` and temperature `temp_c`, with ∂p/∂param written into
 /// `cols` (one 3-vector per entry of `params`; zero for frame parameters).
@@ -34,13 +36,6 @@ pub fn tip_jacobian(
     let c = forward::evaluate(arm, theta, temp_c);
     let p = c.p;
     let n = arm.dof();
-    let before = |j: usize| -> Matrix3<f64> {
-        if j == 0 {
-            Matrix3::identity()
-        } else {
-            c.rotations[j - 1]
-        }
-    };
     let turn = |j: usize| -> Vector3<f64> { c.axes[j].cross(&(p - c.origins[j])) };
     let at = TipPoint {
         arm,
@@ -55,11 +50,7 @@ pub fn tip_jacobian(
         }
         *col = match *param {
             Param::ZeroOffset(j) => turn(j),
-            Param::Tilt(j, k) => {
-                let joint = &arm.joints[j];
-                let w = before(j) * tilt_axis(joint.axis, joint.tilt, k);
-                w.cross(&(p - c.origins[j]))
-            }
+            Param::Tilt(j, k) => at.tilt_turn(j, k),
             Param::LinkError(j, k) => {
                 c.rotations[j].column(k) * thermal_scale(arm.joints[j].thermal, temp_c)
             }
@@ -76,7 +67,7 @@ pub fn tip_jacobian(
 mod tests {
     use super::*;
     use crate::params::{apply, Effect, Link, Terms};
-    use quatarm_ref::arm::Harmonic;
+    use quatarm_ref::arm::{Harmonic, Wobble};
 
     fn check(arm: &Arm, params: &[Param], theta: &[f64], temp: f64, rel_tol: f64) {
         let mut cols = vec![Vector3::zeros(); params.len()];
@@ -114,7 +105,9 @@ mod tests {
             .map(Link::Joint)
             .chain([Link::Probe])
             .map(Effect::Thermal);
-        Terms::with(&harmonics.chain(thermal).collect::<Vec<_>>()).params(dof)
+        let wobble =
+            (1..=2).flat_map(|order| (0..dof).map(move |joint| Effect::Wobble { joint, order }));
+        Terms::with(&harmonics.chain(thermal).chain(wobble).collect::<Vec<_>>()).params(dof)
     }
 
     #[test]
@@ -129,6 +122,13 @@ mod tests {
                 order: 1,
                 sin: 1e-4,
                 cos: -5e-5,
+            });
+            // A wobble large enough that the tilt at the reading differs from the fixed one
+            // by more than the tolerance would hide.
+            j.wobble.push(Wobble {
+                order: 2,
+                alpha: [3e-3, -2e-3],
+                beta: [1e-3, 4e-3 * k as f64],
             });
         }
         let theta = [0.3, -0.7, 1.1, 0.9, -2.0, 0.4];

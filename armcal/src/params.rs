@@ -45,6 +45,16 @@ pub enum Param {
         /// `true` for the cos coefficient, `false` for sin.
         cos: bool,
     },
+    /// One coefficient of an axis wobble ([`effects::wobble`], rad): `coef` 0 and 1 are δα's
+    /// sin(hθ) and cos(hθ) coefficients, 2 and 3 δβ's.
+    Wobble {
+        /// Joint (0-based).
+        joint: usize,
+        /// Order h ≥ 1.
+        order: u32,
+        /// 0..4: α sin, α cos, β sin, β cos.
+        coef: u8,
+    },
     /// A gravity compliance g_i ([`effects::gravity`], rad/mm).
     Gravity(usize),
     /// A thermal expansion κ ([`effects::thermal`], 1/°C) of a link or the probe.
@@ -383,6 +393,11 @@ mod tests {
         assert!(Terms::parse(&format!("+{}:7", effects::gravity::KEY), 6).is_err());
         assert!(Terms::parse(&format!("+{}:2", effects::harmonic::KEY), 6).is_err());
         assert!(Terms::parse("+wobble:2", 6).is_err());
+        let w = Terms::parse(&format!("+{}:3:2", effects::wobble::KEY), 6).unwrap();
+        assert_eq!(w.effects, vec![Effect::Wobble { joint: 2, order: 2 }]);
+        assert_eq!(w.params(6).len(), 39 + 4);
+        assert_eq!(Terms::parse(&w.spec(), 6).unwrap(), w);
+        assert!(Terms::parse(&format!("+{}:3", effects::wobble::KEY), 6).is_err());
         let only = Terms::parse(&format!("only,+{}:2", effects::gravity::KEY), 7).unwrap();
         assert_eq!(only.params(7), vec![Param::Gravity(1)]);
     }

@@ -19,9 +19,9 @@ fn candidates_of_default6_with_and_without_temperatures() {
     let c = candidates(&Arm::default6(), &data);
     assert!(c.thermal);
     // Harmonics of orders 1–64 in the vocabulary, 1–8 tried (200 readings per joint resolve
-    // more), 6 gravity, 7 thermal, of which: gravity 1 has no lever (vertical axis), links 3, 5
-    // and the probe are collinear with 2, 4 and 6.
-    assert_eq!(vocabulary(6, true).len(), 6 * 64 + 6 + 7);
+    // more), 6 gravity, 7 thermal, 6 × 3 axis wobbles, of which: gravity 1 has no lever
+    // (vertical axis), links 3, 5 and the probe are collinear with 2, 4 and 6.
+    assert_eq!(vocabulary(6, true).len(), 6 * 64 + 6 + 7 + 6 * 3);
     let untestable: Vec<Effect> = c.untestable.iter().map(|u| u.effect).collect();
     assert_eq!(
         untestable,
@@ -32,7 +32,23 @@ fn candidates_of_default6_with_and_without_temperatures() {
             Effect::Thermal(Link::Probe)
         ]
     );
-    assert_eq!(c.testable.len(), 6 * 8 + 5 + 4);
+    assert_eq!(c.testable.len(), 6 * 8 + 5 + 4 + 6 * 3);
+    // Axis wobbles: the co-rotating half of order 1 is the next link's frame turned, so two
+    // of its four unknowns are geometry and held; joint 6's order 2 loses two as well (the
+    // ball 200 mm along its axis: a twice-a-turn tilt there equals joint 5's angle and joint
+    // 6's fixed tilt). Every other order is tested with all four.
+    for t in &c.testable {
+        if let Effect::Wobble { joint, order } = t.effect {
+            let want = if order == 1 || (joint, order) == (5, 2) {
+                2
+            } else {
+                4
+            };
+            assert_eq!(t.fitted.len(), want, "{}", t.effect);
+        } else {
+            assert_eq!(t.fitted, t.effect.params(), "{}", t.effect);
+        }
+    }
     let pair = |l: usize| {
         c.testable
             .iter()
@@ -56,7 +72,7 @@ fn candidates_of_default6_with_and_without_temperatures() {
     .data;
     let c = candidates(&Arm::default6(), &plain);
     assert!(!c.thermal);
-    assert_eq!(c.testable.len(), 6 * 8 + 5);
+    assert_eq!(c.testable.len(), 6 * 8 + 5 + 6 * 3);
     assert!(c
         .testable
         .iter()
@@ -74,7 +90,7 @@ fn candidates_of_a_panda_session() {
         .iter()
         .any(|u| u.effect == Effect::Gravity(0) && u.reason.contains("no gravity lever")));
     assert!(!c.thermal);
-    assert_eq!(c.testable.len(), 7 * 8 + 6);
+    assert_eq!(c.testable.len(), 7 * 8 + 6 + 7 * 3);
 }
 
 #[test]

@@ -12,7 +12,7 @@ use armcal::diagnose::{self, Diagnosis};
 use armcal::params::{Effect, Link};
 use armcal::residuals::{compare_aligned, residuals, summarise};
 use nalgebra::Vector3;
-use quatarm_ref::arm::{Arm, Harmonic};
+use quatarm_ref::arm::{Arm, Harmonic, Wobble};
 
 /// The RMS of the truth's own residuals on the data: the noise floor no model can beat.
 fn floor_um(truth: &Arm, data: &Dataset) -> f64 {
@@ -50,6 +50,29 @@ fn true_magnitude(truth: &Arm, e: Effect, partners: &[Effect]) -> f64 {
             let s: f64 = hs.iter().map(|h| h.sin).sum();
             let c: f64 = hs.iter().map(|h| h.cos).sum();
             s.hypot(c)
+        }
+        Effect::Wobble { joint, order } => {
+            let sum = |f: &dyn Fn(&Wobble) -> f64| -> f64 {
+                truth.joints[joint]
+                    .wobble
+                    .iter()
+                    .filter(|w| w.order == order)
+                    .map(f)
+                    .sum()
+            };
+            let c = [
+                sum(&|w| w.alpha[0]),
+                sum(&|w| w.alpha[1]),
+                sum(&|w| w.beta[0]),
+                sum(&|w| w.beta[1]),
+            ];
+            if order == 1 {
+                // Its counter-rotating part: the rest is geometry (`effects::wobble`).
+                let (p, q) = ((c[0] + c[3]) / 2.0, (c[1] - c[2]) / 2.0);
+                (2.0 * (p * p + q * q)).sqrt()
+            } else {
+                c.iter().map(|x| x * x).sum::<f64>().sqrt()
+            }
         }
         Effect::Gravity(j) => truth.joints[j].gravity,
         Effect::Thermal(l) => {
@@ -142,6 +165,7 @@ fn family(e: Effect) -> Family {
         Effect::Harmonic { .. } => Family::Harmonic,
         Effect::Gravity(_) => Family::Gravity,
         Effect::Thermal(_) => Family::Thermal,
+        Effect::Wobble { .. } => Family::Wobble,
     }
 }
 
@@ -165,6 +189,49 @@ fn hidden_effects_are_named_from_point_data() {
     }
     assert!(cases.iter().any(|c| c.0.hidden.len() == 2));
     assert!(cases.iter().any(|c| c.0.hidden.len() == 1));
+    run(&cases);
+}
+
+#[test]
+fn axis_wobbles_are_named_exactly() {
+    // One wobble of order 1, 2 or 3 on one joint, 20–100 µrad, random direction and phase
+    // (`scenario::Family::Wobble`); then wobbles on the shoulder with a harmonic of the same
+    // order on the same joint, which turns the joint rather than tilting it.
+    let mut cases: Vec<(Scenario, Dataset, &str)> = (501..=509u64)
+        .map(|seed| {
+            let s = scenario::with_families(seed, &[Family::Wobble]);
+            let data = scenario::points(&s, 600);
+            (s, data, "600 point")
+        })
+        .collect();
+    for order in 1..=3 {
+        let seen = cases
+            .iter()
+            .any(|c| matches!(c.0.hidden[0], Effect::Wobble { order: o, .. } if o == order));
+        assert!(seen, "no seed draws a wobble of order {order}");
+    }
+    let mut s = scenario::with_families(510, &[]);
+    s.truth.joints[1].wobble.push(Wobble {
+        order: 1,
+        alpha: [4e-5, -2e-5],
+        beta: [1e-5, 3e-5],
+    });
+    s.truth.joints[1].harmonics.push(Harmonic {
+        order: 1,
+        sin: 3e-5,
+        cos: 4e-5,
+    });
+    s.hidden = vec![
+        Effect::Wobble { joint: 1, order: 1 },
+        Effect::Harmonic { joint: 1, order: 1 },
+    ];
+    s.expected = s
+        .hidden
+        .iter()
+        .map(|e| scenario::expected_cause(*e))
+        .collect();
+    let data = scenario::points(&s, 600);
+    cases.push((s, data, "600 point"));
     run(&cases);
 }
 
@@ -247,7 +314,7 @@ fn near_aliases_on_one_joint_are_told_apart() {
                         cos: -3e-5,
                     })
                 }
-                Effect::Thermal(_) => unreachable!(),
+                Effect::Thermal(_) | Effect::Wobble { .. } => unreachable!(),
             }
         }
         s.hidden = effects.to_vec();

@@ -903,7 +903,7 @@ translation = [10.0, 20.0, 30.0]
 
     const BUDGET: &str = r#"
 [uncertainty]
-parameters = ["joint.1.tilt.0", "joint.2.zero_offset", "probe.error.2", "joint.1.harmonics.2.sin"]
+parameters = ["joint.1.tilt.0", "joint.1.wobble.1.beta.1", "probe.error.2", "joint.1.harmonics.2.sin"]
 covariance = [4e-10, 1e-11, 0.0, 0.0,
               1e-11, 9e-10, 0.0, 0.0,
               0.0, 0.0, 1e-6, 0.0,
@@ -921,7 +921,12 @@ temperature_c = 0.2
             u.parameters,
             vec![
                 ParamKey::Tilt(0, 0),
-                ParamKey::ZeroOffset(1),
+                ParamKey::Wobble {
+                    joint: 0,
+                    index: 0,
+                    beta: true,
+                    comp: 1
+                },
                 ParamKey::ProbeError(2),
                 ParamKey::Harmonic {
                     joint: 0,
@@ -966,6 +971,16 @@ temperature_c = 0.2
                 "\"probe.error.2\"",
                 "\"link.1\"",
                 "uncertainty.parameters[2]",
+            ),
+            (
+                "\"joint.1.wobble.1.beta.1\"",
+                "\"joint.1.wobble.2.beta.1\"",
+                "uncertainty.parameters[1]",
+            ),
+            (
+                "\"joint.1.wobble.1.beta.1\"",
+                "\"joint.1.wobble.1.gamma.1\"",
+                "uncertainty.parameters[1]",
             ),
             (
                 "0.0, 0.0, 0.0, 1e-12]",

@@ -32,6 +32,18 @@ pub enum ParamKey {
         /// The cos coefficient (else sin).
         cos: bool,
     },
+    /// `joint.K.wobble.W.alpha.C` / `.beta.C`: component C (0: sin, 1: cos) of the W-th entry
+    /// of the joint's `wobble`.
+    Wobble {
+        /// Joint.
+        joint: usize,
+        /// Entry of the joint's `wobble` list.
+        index: usize,
+        /// The β pair (else α).
+        beta: bool,
+        /// 0: the sin coefficient, 1: the cos one.
+        comp: usize,
+    },
     /// `joint.K.gravity`.
     Gravity(usize),
     /// `joint.K.thermal`, or `probe.thermal` (`None`).
@@ -82,6 +94,23 @@ impl ParamKey {
                             cos: *sc == "cos",
                         })
                     }
+                    ["wobble", w, ab @ ("alpha" | "beta"), c] => {
+                        let n = arm.joints[j].wobble.len();
+                        let index = w
+                            .parse::<usize>()
+                            .ok()
+                            .filter(|w| (1..=n).contains(w))
+                            .ok_or_else(|| {
+                                format!("joint {} has {n} wobble terms; `{w}` is not one", j + 1)
+                            })?
+                            - 1;
+                        Ok(ParamKey::Wobble {
+                            joint: j,
+                            index,
+                            beta: *ab == "beta",
+                            comp: comp(c, 2)?,
+                        })
+                    }
                     _ => Err(unknown_name(name)),
                 }
             }
@@ -106,6 +135,19 @@ impl ParamKey {
                     h.sin += dx;
                 }
             }
+            ParamKey::Wobble {
+                joint,
+                index,
+                beta,
+                comp,
+            } => {
+                let w = &mut arm.joints[joint].wobble[index];
+                if beta {
+                    w.beta[comp] += dx;
+                } else {
+                    w.alpha[comp] += dx;
+                }
+            }
             ParamKey::Gravity(j) => arm.joints[j].gravity += dx,
             ParamKey::Thermal(Some(j)) => arm.joints[j].thermal += dx,
             ParamKey::Thermal(None) => arm.probe.thermal += dx,
@@ -125,6 +167,17 @@ impl ParamKey {
                 index + 1,
                 if cos { "cos" } else { "sin" }
             ),
+            ParamKey::Wobble {
+                joint,
+                index,
+                beta,
+                comp,
+            } => format!(
+                "joint.{}.wobble.{}.{}.{comp}",
+                joint + 1,
+                index + 1,
+                if beta { "beta" } else { "alpha" }
+            ),
             ParamKey::Gravity(j) => format!("joint.{}.gravity", j + 1),
             ParamKey::Thermal(Some(j)) => format!("joint.{}.thermal", j + 1),
             ParamKey::Thermal(None) => "probe.thermal".to_string(),
@@ -135,7 +188,8 @@ impl ParamKey {
 fn unknown_name(name: &str) -> String {
     format!(
         "`{name}` is not a parameter: joint.K.zero_offset, joint.K.tilt.C, \
-         joint.K.link_error.C, joint.K.harmonics.H.sin|cos, joint.K.gravity, joint.K.thermal, \
+         joint.K.link_error.C, joint.K.harmonics.H.sin|cos, joint.K.wobble.W.alpha|beta.C, \
+         joint.K.gravity, joint.K.thermal, \
          probe.error.C, probe.thermal"
     )
 }

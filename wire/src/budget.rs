@@ -57,7 +57,11 @@ pub fn parameter_data(u: &Uncertainty, arm: &Arm) -> Result<Option<Block>, Strin
         ));
     }
     Ok(Some(Block {
-        columns: u.parameters.iter().map(|k| column(*k, arm)).collect(),
+        columns: u
+            .parameters
+            .iter()
+            .map(|k| column(*k, arm))
+            .collect::<Result<_, _>>()?,
         factor: factor(&u.matrix())?,
     }))
 }
@@ -65,8 +69,9 @@ pub fn parameter_data(u: &Uncertainty, arm: &Arm) -> Result<Option<Block>, Strin
 /// How parameter `key` moves the tip (`quatarm::table::parameters`, its table of kinds):
 /// the host's analytic Jacobian (`armcal::jacobian`) written as the hub evaluates it. Every
 /// kind of parameter the calibration file can list is here: a new one fails to compile until
-/// it is.
-fn column(key: ParamKey, arm: &Arm) -> Column {
+/// it is. `Err` for a kind the hub has no column for (an axis wobble: the firmware does not
+/// apply it, and the table builder refuses a non-zero one).
+fn column(key: ParamKey, arm: &Arm) -> Result<Column, String> {
     let n = arm.dof();
     let shift = |joint: usize, vector: [f64; 3], w0: f64, w1: f64| Column {
         vector: vector.map(|x| x as f32),
@@ -79,7 +84,7 @@ fn column(key: ParamKey, arm: &Arm) -> Column {
         e[c] = 1.0;
         e
     };
-    match key {
+    Ok(match key {
         ParamKey::ZeroOffset(j) => Column::new(Kind::Turn, j as u8),
         ParamKey::Tilt(j, c) => {
             let joint = &arm.joints[j];
@@ -98,7 +103,14 @@ fn column(key: ParamKey, arm: &Arm) -> Column {
         ParamKey::Gravity(j) => Column::new(Kind::TurnGravity, j as u8),
         ParamKey::Thermal(Some(j)) => shift(j, arm.joints[j].actual_link(), 0.0, 1.0),
         ParamKey::Thermal(None) => shift(n - 1, arm.probe.actual(), 0.0, 1.0),
-    }
+        ParamKey::Wobble { .. } => {
+            return Err(format!(
+                "uncertainty.parameters lists `{}`: the table's parameter block holds no axis \
+                 wobble",
+                key.name()
+            ))
+        }
+    })
 }
 
 /// L with C = L Lᵀ, lower triangular, row by row. C is a covariance, positive semidefinite

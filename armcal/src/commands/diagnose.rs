@@ -79,11 +79,12 @@ pub struct Args {
     /// (z = 2: p < 0.0228). Fewer than 3 units test nothing ("cannot test").
     #[arg(long, default_value_t = 2.0, value_parser = super::args::non_negative)]
     z: f64,
-    /// Highest encoder-harmonic order tried as a cause, on every joint. The data may resolve
-    /// less, and then set the limit: joint k is tried up to min(this, ⌊π / g⌋ − 1, n / 8),
-    /// with g the widest gap (rad) between its consecutive distinct readings and n their
-    /// number (one reading per half period, eight per order); higher orders are listed as not
-    /// testable. The search for unexplained structure uses the data's limit alone.
+    /// Highest order of a periodic cause tried, on every joint: encoder harmonics up to this,
+    /// axis wobbles up to the smaller of this and 3. The data may resolve less, and then set
+    /// the limit: joint k is tried up to min(this, ⌊π / g⌋ − 1, n / 8), with g the widest gap
+    /// (rad) between its consecutive distinct readings and n their number (one reading per
+    /// half period, eight per order); higher orders are listed as not testable. The search
+    /// for unexplained structure uses the data's limit alone.
     #[arg(long, default_value_t = diagnose::candidates::MAX_ORDER,
           value_parser = clap::value_parser!(u32).range(1..=64))]
     max_order: u32,

@@ -16,7 +16,9 @@
 //!   (links 2 and 3, 4 and 5, link 6 and the probe of `default-6`). The pair is one candidate,
 //!   named by its lower joint with the other listed;
 //! - indistinguishable from the geometric model (or the instrument frame): the data could
-//!   never name it, so it is not tested, and the report says so.
+//!   never name it, so it is not tested, and the report says so. An effect only part of
+//!   whose unknowns the geometry absorbs (an order-1 axis wobble: its co-rotating half is the
+//!   next link's frame turned) is tested with that part held.
 
 use crate::calib::{structural, unknowns};
 use crate::data::Dataset;
@@ -38,6 +40,9 @@ pub struct Candidate {
     /// Effects the data cannot tell from it (a collinear link's thermal expansion): they are
     /// named with it, and never fitted.
     pub indistinguishable: Vec<Effect>,
+    /// Its unknowns the test fits: all of the effect's, less those the geometric model
+    /// absorbs (the co-rotating half of an order-1 axis wobble), which a calibration holds.
+    pub fitted: Vec<Param>,
 }
 
 /// A candidate the data cannot test, and why.
@@ -104,8 +109,10 @@ pub fn candidates_up_to(start: &Arm, data: &Dataset, max_order: u32) -> Candidat
     let mut vocab = Vec::new();
     for e in vocabulary(data.dof, thermal) {
         match e {
-            Effect::Harmonic { order, .. } if order > max_order => {}
-            Effect::Harmonic { joint, order } if order > resolvable[joint] => {
+            Effect::Harmonic { order, .. } | Effect::Wobble { order, .. } if order > max_order => {}
+            Effect::Harmonic { joint, order } | Effect::Wobble { joint, order }
+                if order > resolvable[joint] =>
+            {
                 out.untestable.push(Untestable {
                     effect: e,
                     reason: format!(
@@ -129,6 +136,7 @@ pub fn candidates_up_to(start: &Arm, data: &Dataset, max_order: u32) -> Candidat
             out.testable.push(Candidate {
                 effect: *e,
                 indistinguishable: Vec::new(),
+                fitted: e.params(),
             });
             continue;
         }
@@ -165,10 +173,26 @@ pub fn candidates_up_to(start: &Arm, data: &Dataset, max_order: u32) -> Candidat
         let alone = unknowns(&Terms::with(&[*e]), data);
         let (id1, _) = structural(start, data, &alone, 1e-8);
         let blocked = held_of(&id1, &alone, *e);
-        if blocked.is_empty() {
+        // Part of it may be geometry (the co-rotating half of an order-1 axis wobble is the
+        // next link's frame turned): with unknowns left that only it has, it is still a
+        // candidate, fitted with the geometry's share held as the calibration holds it.
+        let partly_geometric = blocked.len() < e.params().len()
+            && blocked.iter().all(|f| {
+                f.why == Why::Inseparable
+                    && f.absorbed_by
+                        .iter()
+                        .all(|&(k, _)| effect_of(alone[k]).is_none_or(|o| o == *e))
+            });
+        if blocked.is_empty() || partly_geometric {
+            let held: Vec<Param> = blocked.iter().map(|f| alone[f.index]).collect();
             out.testable.push(Candidate {
                 effect: *e,
                 indistinguishable: Vec::new(),
+                fitted: e
+                    .params()
+                    .into_iter()
+                    .filter(|p| !held.contains(p))
+                    .collect(),
             });
         } else {
             let by: Vec<String> = blocked

@@ -22,7 +22,7 @@
 
 use super::Diagnosis;
 use crate::data::{Dataset, Kind};
-use crate::effects::{Effect, FAMILIES};
+use crate::effects::{Effect, TipPoint, FAMILIES};
 use crate::residuals::Rigid;
 use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;
@@ -35,6 +35,9 @@ pub struct RowGeometry {
     pub turn: Vec<Vector3<f64>>,
     /// a_k · ((p − o_k) × ẑ) per joint (mm).
     pub lever: Vec<f64>,
+    /// The ball's motion per radian of each joint's δα and δβ (mm/rad,
+    /// [`crate::effects::TipPoint::tilt_turn`]).
+    pub tilt: Vec<[Vector3<f64>; 2]>,
     /// Unit direction of each link, then the probe (`None` for a zero-length link).
     pub links: Vec<Option<Vector3<f64>>>,
 }
@@ -56,7 +59,21 @@ pub fn geometry(arm: &Arm, data: &Dataset) -> Vec<RowGeometry> {
                 .map(|k| (c.origins[k + 1] - c.origins[k]).try_normalize(1e-9))
                 .collect();
             links.push((c.p - c.origins[n]).try_normalize(1e-9));
-            RowGeometry { turn, lever, links }
+            let at = TipPoint {
+                arm,
+                chain: &c,
+                theta: &r.theta,
+                temp_c: r.temp_c,
+            };
+            let tilt = (0..n)
+                .map(|k| [at.tilt_turn(k, 0), at.tilt_turn(k, 1)])
+                .collect();
+            RowGeometry {
+                turn,
+                lever,
+                tilt,
+                links,
+            }
         })
         .collect()
 }

@@ -10,7 +10,8 @@
 //!   already predicts such an arm to about 1.2 µm RMS (the test
 //!   `a_wrist_compliance_below_the_noise_is_not_misnamed` checks one case);
 //! - thermal expansion: 1.5–2.5e-5 /°C on one of the six links or the probe; readings at
-//!   16–28 °C.
+//!   16–28 °C;
+//! - axis wobble: any joint, order 1–3, 20–100 µrad in a random direction and phase.
 //!
 //! The sizes are each effect's [`crate::effects::Term::set_typical`].
 //!
@@ -32,6 +33,8 @@ pub enum Family {
     Gravity,
     /// Thermal expansions ([`crate::effects::thermal`]).
     Thermal,
+    /// Axis wobbles ([`crate::effects::wobble`]).
+    Wobble,
 }
 
 /// A truth arm with hidden effects, and the causes a diagnosis must name.
@@ -82,6 +85,10 @@ fn draw_effect(family: Family, rng: &mut SimRng) -> Effect {
             6 => Link::Probe,
             j => Link::Joint(j),
         }),
+        Family::Wobble => Effect::Wobble {
+            joint: rng.gen_range(0..6),
+            order: rng.gen_range(1..=3),
+        },
     }
 }
 

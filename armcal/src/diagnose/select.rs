@@ -213,7 +213,7 @@ fn candidate_sets(
     }
     let mut fwd = Vec::new();
     for c in remaining {
-        let cols = lin.positions(&c.effect.params());
+        let cols = lin.positions(&c.fitted);
         let separable = !cols.is_empty() && lin.unexplained(&cols, model) > 1e-3;
         let mut with = model.to_vec();
         with.extend(&cols);
@@ -297,9 +297,12 @@ pub fn select(
         trial.push(best.effect);
         // The exact fit may not determine it after all (it holds it as weak or inseparable,
         // or does not converge with it): then it cannot be named; try the others.
+        let fitted = remaining
+            .iter()
+            .find(|c| c.effect == best.effect)
+            .map_or_else(|| best.effect.params(), |c| c.fitted.clone());
         let next = fit_with(start, data, opts, &trial).ok().filter(|next| {
-            best.effect
-                .params()
+            fitted
                 .iter()
                 .all(|p| next.ident.kept.iter().any(|&k| next.params[k] == *p))
         });

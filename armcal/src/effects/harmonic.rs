@@ -2,10 +2,10 @@
 //! e(θ) = s·sin(hθ) + c·cos(hθ) (rad), added to the joint's angle. Order 1 is the disc's
 //! eccentricity, order 2 its ellipticity. Two unknowns per term: s (0) and c (1).
 
-use super::{joint_args, joints_of, Effect, Family, Term, TermsError, TipPoint};
+use super::{joint_args, joints_of, order_arg, Effect, Family, Term, TermsError, TipPoint};
 use crate::data::Dataset;
 use crate::diagnose::patterns::{Figure, Patterns};
-use crate::params::{Link, Param, MAX_ORDER};
+use crate::params::{Link, Param};
 use crate::sim::SimRng;
 use nalgebra::Vector3;
 use quatarm::table::limits::HARMONIC_SUM;
@@ -85,20 +85,7 @@ impl Family for Harmonics {
     }
 
     fn parse(&self, item: &str, args: &[&str], dof: usize) -> Result<Vec<Effect>, TermsError> {
-        let order = match args.get(1).map(|s| s.parse::<u32>()) {
-            Some(Ok(h)) if (1..=MAX_ORDER).contains(&h) => h,
-            Some(Ok(h)) => {
-                return Err(TermsError(format!(
-                    "`{item}`: order {h} is beyond {MAX_ORDER}, the highest a calibration file \
-                     holds"
-                )))
-            }
-            _ => {
-                return Err(TermsError(format!(
-                    "`{item}`: give the order, e.g. `+encoder_harmonic:2:1` (joint 2, order 1)"
-                )))
-            }
-        };
+        let order = order_arg(item, KEY, args.get(1))?;
         let links = joint_args(item, KEY, args.first(), dof, false)?;
         Ok(joints_of(links)
             .map(|joint| Effect::Harmonic { joint, order })

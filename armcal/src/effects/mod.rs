@@ -18,13 +18,14 @@
 pub mod gravity;
 pub mod harmonic;
 pub mod thermal;
+pub mod wobble;
 
 use crate::diagnose::patterns::{Figure, Patterns};
 use crate::params::{Link, Param};
 use crate::sim::SimRng;
 use nalgebra::{Matrix3, Vector3};
 use quatarm_ref::arm::Arm;
-use quatarm_ref::forward::Chain;
+use quatarm_ref::forward::{tilt_axis, Chain};
 use serde_json::Value;
 use std::fmt;
 
@@ -43,6 +44,13 @@ pub enum Effect {
     Gravity(usize),
     /// A thermal expansion of a link or the probe; [`thermal`].
     Thermal(Link),
+    /// An axis wobble of a joint (0-based) and order: four coefficients; [`wobble`].
+    Wobble {
+        /// Joint, 0-based.
+        joint: usize,
+        /// Order h ≥ 1.
+        order: u32,
+    },
 }
 
 /// Why a `--terms` item was refused, in words naming the item.
@@ -125,7 +133,12 @@ pub trait Term {
 }
 
 /// Every effect, in report order (figures, candidates, table limits follow it).
-pub static FAMILIES: [&dyn Family; 3] = [&harmonic::FAMILY, &gravity::FAMILY, &thermal::FAMILY];
+pub static FAMILIES: [&dyn Family; 4] = [
+    &harmonic::FAMILY,
+    &gravity::FAMILY,
+    &thermal::FAMILY,
+    &wobble::FAMILY,
+];
 
 impl Effect {
     /// The term's unit, to ask it anything.
@@ -134,6 +147,7 @@ impl Effect {
             Effect::Harmonic { joint, order } => f(&harmonic::Harmonic { joint, order }),
             Effect::Gravity(joint) => f(&gravity::Gravity { joint }),
             Effect::Thermal(link) => f(&thermal::Thermal { link }),
+            Effect::Wobble { joint, order } => f(&wobble::Wobble { joint, order }),
         }
     }
 
@@ -174,6 +188,9 @@ impl Param {
             }
             Param::Gravity(j) => Some((Effect::Gravity(j), 0)),
             Param::Thermal(l) => Some((Effect::Thermal(l), 0)),
+            Param::Wobble { joint, order, coef } => {
+                Some((Effect::Wobble { joint, order }, usize::from(coef)))
+            }
             Param::ZeroOffset(_)
             | Param::Tilt(..)
             | Param::LinkError(..)
@@ -225,6 +242,20 @@ impl TipPoint<'_> {
         self.chain.axes[j].cross(&(self.chain.p - self.chain.origins[j]))
     }
 
+    /// w_c × (p − o_j): the ball's motion per radian of joint j's tilt component `c` (0: δα,
+    /// 1: δβ), with w_c the tilt's axis ([`tilt_axis`]) at the joint's tilt at this reading
+    /// (the fixed tilt varied by its wobble), in base coordinates.
+    pub fn tilt_turn(&self, j: usize, c: usize) -> Vector3<f64> {
+        let joint = &self.arm.joints[j];
+        let before = if j == 0 {
+            Matrix3::identity()
+        } else {
+            self.chain.rotations[j - 1]
+        };
+        let w = before * tilt_axis(joint.axis, joint.tilt_at(self.theta[j]), c);
+        w.cross(&(self.chain.p - self.chain.origins[j]))
+    }
+
     /// The rotation from the base to the frame after joint j.
     pub fn after(&self, j: usize) -> Matrix3<f64> {
         self.chain.rotations[j]
@@ -258,6 +289,20 @@ pub fn joint_args(
                 if probe_ok { ", probe or *" } else { " or *" }
             ))),
         },
+    }
+}
+
+/// The order H of a periodic term's `+KEY:J:H`: 1 to the highest a calibration file holds.
+pub fn order_arg(item: &str, key: &str, arg: Option<&&str>) -> Result<u32, TermsError> {
+    use crate::params::MAX_ORDER;
+    match arg.map(|s| s.parse::<u32>()) {
+        Some(Ok(h)) if (1..=MAX_ORDER).contains(&h) => Ok(h),
+        Some(Ok(h)) => Err(TermsError(format!(
+            "`{item}`: order {h} is beyond {MAX_ORDER}, the highest a calibration file holds"
+        ))),
+        _ => Err(TermsError(format!(
+            "`{item}`: give the order, e.g. `+{key}:2:1` (joint 2, order 1)"
+        ))),
     }
 }
 

@@ -82,6 +82,15 @@ pub fn key_of(p: Param, arm: &Arm) -> Option<ParamKey> {
                 .position(|h| h.order == order)?,
             cos,
         },
+        Param::Wobble { joint, order, coef } => ParamKey::Wobble {
+            joint,
+            index: arm.joints[joint]
+                .wobble
+                .iter()
+                .position(|w| w.order == order)?,
+            beta: coef >= 2,
+            comp: usize::from(coef % 2),
+        },
         Param::Gravity(j) => ParamKey::Gravity(j),
         Param::Thermal(Link::Joint(j)) => ParamKey::Thermal(Some(j)),
         Param::Thermal(Link::Probe) => ParamKey::Thermal(None),
@@ -100,6 +109,16 @@ pub fn param_of(k: ParamKey, arm: &Arm) -> Param {
             joint,
             order: arm.joints[joint].harmonics[index].order,
             cos,
+        },
+        ParamKey::Wobble {
+            joint,
+            index,
+            beta,
+            comp,
+        } => Param::Wobble {
+            joint,
+            order: arm.joints[joint].wobble[index].order,
+            coef: 2 * u8::from(beta) + comp as u8,
         },
         ParamKey::Gravity(j) => Param::Gravity(j),
         ParamKey::Thermal(Some(j)) => Param::Thermal(Link::Joint(j)),
