@@ -4,6 +4,7 @@
 //!     cargo bench -p armcal --bench diagnosis                  # point data, seeds 1..=40
 //!     cargo bench -p armcal --bench diagnosis -- spat          # spat + length data
 //!     cargo bench -p armcal --bench diagnosis -- null          # no hidden effect
+//!     cargo bench -p armcal --bench diagnosis -- wobble        # one axis wobble, orders 1–3
 //!     cargo bench -p armcal --bench diagnosis -- seeds 1 100   # another range
 //!     cargo bench -p armcal --bench diagnosis -- mukca         # the real robots
 
@@ -24,6 +25,7 @@ fn main() {
     }
     let spat = args.iter().any(|a| a == "spat");
     let null = args.iter().any(|a| a == "null");
+    let wobble = args.iter().any(|a| a == "wobble");
     let (lo, hi) = match args.iter().position(|a| a == "seeds") {
         Some(i) => (
             args.get(i + 1).and_then(|s| s.parse().ok()).unwrap_or(1),
@@ -42,6 +44,8 @@ fn main() {
     for seed in lo..=hi {
         let s = if null {
             scenario::with_families(seed, &[])
+        } else if wobble {
+            scenario::with_families(seed, &[scenario::Family::Wobble])
         } else {
             scenario::draw(seed)
         };

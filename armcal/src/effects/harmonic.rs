@@ -2,7 +2,9 @@
 //! e(θ) = s·sin(hθ) + c·cos(hθ) (rad), added to the joint's angle. Order 1 is the disc's
 //! eccentricity, order 2 its ellipticity. Two unknowns per term: s (0) and c (1).
 
-use super::{joint_args, joints_of, order_arg, Effect, Family, Term, TermsError, TipPoint};
+use super::{
+    parse_periodic, periodic_entry, periodic_vocabulary, Effect, Family, Term, TermsError, TipPoint,
+};
 use crate::data::Dataset;
 use crate::diagnose::patterns::{Figure, Patterns};
 use crate::params::{Link, Param};
@@ -85,19 +87,17 @@ impl Family for Harmonics {
     }
 
     fn parse(&self, item: &str, args: &[&str], dof: usize) -> Result<Vec<Effect>, TermsError> {
-        let order = order_arg(item, KEY, args.get(1))?;
-        let links = joint_args(item, KEY, args.first(), dof, false)?;
-        Ok(joints_of(links)
-            .map(|joint| Effect::Harmonic { joint, order })
-            .collect())
+        parse_periodic(item, KEY, args, dof, |joint, order| Effect::Harmonic {
+            joint,
+            order,
+        })
     }
 
     fn vocabulary(&self, dof: usize, _thermal: bool) -> Vec<Effect> {
-        (0..dof)
-            .flat_map(|joint| {
-                (1..=VOCABULARY_MAX_ORDER).map(move |order| Effect::Harmonic { joint, order })
-            })
-            .collect()
+        periodic_vocabulary(dof, VOCABULARY_MAX_ORDER, |joint, order| Effect::Harmonic {
+            joint,
+            order,
+        })
     }
 
     fn figure(&self, at: &Patterns) -> Option<Figure> {
@@ -274,22 +274,21 @@ impl Term for Harmonic {
     }
 
     fn add_to(&self, arm: &mut Arm, c: usize, dx: f64) {
-        let hs = &mut arm.joints[self.joint].harmonics;
-        let i = match hs.iter().position(|h| h.order == self.order) {
-            Some(i) => i,
-            None => {
-                hs.push(Entry {
-                    order: self.order,
-                    sin: 0.0,
-                    cos: 0.0,
-                });
-                hs.len() - 1
-            }
-        };
+        let order = self.order;
+        let h = periodic_entry(
+            &mut arm.joints[self.joint].harmonics,
+            order,
+            |h| h.order,
+            || Entry {
+                order,
+                sin: 0.0,
+                cos: 0.0,
+            },
+        );
         if c == 1 {
-            hs[i].cos += dx;
+            h.cos += dx;
         } else {
-            hs[i].sin += dx;
+            h.sin += dx;
         }
     }
 

@@ -306,6 +306,49 @@ pub fn order_arg(item: &str, key: &str, arg: Option<&&str>) -> Result<u32, Terms
     }
 }
 
+/// The terms of a periodic effect's `+KEY:J:H` (joint through [`joint_args`], order through
+/// [`order_arg`]), each made by `make(joint, order)`.
+pub fn parse_periodic(
+    item: &str,
+    key: &str,
+    args: &[&str],
+    dof: usize,
+    make: fn(usize, u32) -> Effect,
+) -> Result<Vec<Effect>, TermsError> {
+    let order = order_arg(item, key, args.get(1))?;
+    let links = joint_args(item, key, args.first(), dof, false)?;
+    Ok(joints_of(links).map(|joint| make(joint, order)).collect())
+}
+
+/// A periodic effect's vocabulary: every joint, orders 1 to `max_order`.
+pub fn periodic_vocabulary(
+    dof: usize,
+    max_order: u32,
+    make: fn(usize, u32) -> Effect,
+) -> Vec<Effect> {
+    (0..dof)
+        .flat_map(|joint| (1..=max_order).map(move |order| make(joint, order)))
+        .collect()
+}
+
+/// The entry of order `order` in a joint's list of periodic terms (`order_of` reads an
+/// entry's), appended as `fresh` where the list has none: where a calibration adds to it.
+pub fn periodic_entry<T>(
+    list: &mut Vec<T>,
+    order: u32,
+    order_of: fn(&T) -> u32,
+    fresh: impl FnOnce() -> T,
+) -> &mut T {
+    let i = match list.iter().position(|e| order_of(e) == order) {
+        Some(i) => i,
+        None => {
+            list.push(fresh());
+            list.len() - 1
+        }
+    };
+    &mut list[i]
+}
+
 /// The joints of `+KEY:J` (links other than joints cannot occur: `probe_ok` was false).
 pub fn joints_of(links: Vec<Link>) -> impl Iterator<Item = usize> {
     links.into_iter().map(|l| match l {

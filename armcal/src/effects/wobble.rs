@@ -4,7 +4,9 @@
 //! a cone once a turn), order 2 an oval race, order 3 a tri-lobed one. Four unknowns per term:
 //! a, b (δα's sin and cos), c, d (δβ's).
 
-use super::{joint_args, joints_of, order_arg, Effect, Family, Term, TermsError, TipPoint};
+use super::{
+    parse_periodic, periodic_entry, periodic_vocabulary, Effect, Family, Term, TermsError, TipPoint,
+};
 use crate::diagnose::patterns::{Figure, Legend, Patterns};
 use crate::params::{Link, Param};
 use crate::sim::SimRng;
@@ -56,19 +58,17 @@ impl Family for Wobbles {
     }
 
     fn parse(&self, item: &str, args: &[&str], dof: usize) -> Result<Vec<Effect>, TermsError> {
-        let order = order_arg(item, KEY, args.get(1))?;
-        let links = joint_args(item, KEY, args.first(), dof, false)?;
-        Ok(joints_of(links)
-            .map(|joint| Effect::Wobble { joint, order })
-            .collect())
+        parse_periodic(item, KEY, args, dof, |joint, order| Effect::Wobble {
+            joint,
+            order,
+        })
     }
 
     fn vocabulary(&self, dof: usize, _thermal: bool) -> Vec<Effect> {
-        (0..dof)
-            .flat_map(|joint| {
-                (1..=VOCABULARY_MAX_ORDER).map(move |order| Effect::Wobble { joint, order })
-            })
-            .collect()
+        periodic_vocabulary(dof, VOCABULARY_MAX_ORDER, |joint, order| Effect::Wobble {
+            joint,
+            order,
+        })
     }
 
     fn figure(&self, at: &Patterns) -> Option<Figure> {
@@ -225,23 +225,22 @@ impl Term for Wobble {
     }
 
     fn add_to(&self, arm: &mut Arm, c: usize, dx: f64) {
-        let ws = &mut arm.joints[self.joint].wobble;
-        let i = match ws.iter().position(|e| e.order == self.order) {
-            Some(i) => i,
-            None => {
-                ws.push(Entry {
-                    order: self.order,
-                    alpha: [0.0; 2],
-                    beta: [0.0; 2],
-                });
-                ws.len() - 1
-            }
-        };
+        let order = self.order;
+        let e = periodic_entry(
+            &mut arm.joints[self.joint].wobble,
+            order,
+            |e| e.order,
+            || Entry {
+                order,
+                alpha: [0.0; 2],
+                beta: [0.0; 2],
+            },
+        );
         let (t, w) = split(c);
         if t == 0 {
-            ws[i].alpha[w] += dx;
+            e.alpha[w] += dx;
         } else {
-            ws[i].beta[w] += dx;
+            e.beta[w] += dx;
         }
     }
 
