@@ -196,6 +196,10 @@ pub fn analyse(r: &DMatrix<f64>, params: &[Param], tol: f64) -> Identifiability 
             });
         }
     }
+    // One SVD finds the near-null space; its unknowns are held one at a time, the space
+    // shrunk after each to its vectors that do not move the held one (what a fresh SVD of the
+    // remaining columns would find, without its cost: the full vocabulary of a diagnosis holds
+    // dozens). A fresh SVD then checks for near-null directions the holds uncovered.
     loop {
         let (s, vt) = svd_sorted(&rn, &kept);
         let Some(&smax) = s.first() else { break };
@@ -203,26 +207,25 @@ pub fn analyse(r: &DMatrix<f64>, params: &[Param], tol: f64) -> Identifiability 
         if null.is_empty() {
             break;
         }
-        // Involvement of each kept unknown in the near-null space.
-        let involvement: Vec<f64> = (0..kept.len())
-            .map(|c| {
-                null.iter()
-                    .map(|&i| vt[(i, c)] * vt[(i, c)])
-                    .sum::<f64>()
-                    .sqrt()
-            })
-            .collect();
-        let cut = 0.05_f64.min(0.5 * involvement.iter().cloned().fold(0.0, f64::max));
-        let candidates: Vec<usize> = (0..kept.len()).filter(|&c| involvement[c] >= cut).collect();
-        let pick = choose_held(&candidates, |c| kept[c], params, &norms)
-            .expect("a null vector has a non-zero component");
-        let index = kept.remove(pick);
-        fixed.push(Fixed {
-            index,
-            why: Why::Inseparable,
-            absorbed_by: Vec::new(),
-            unexplained: 0.0,
-        });
+        // Rows: the kept unknowns; columns: an orthonormal basis of the near-null space.
+        let mut basis = DMatrix::from_fn(kept.len(), null.len(), |c, k| vt[(null[k], c)]);
+        while basis.ncols() > 0 {
+            // Involvement of each kept unknown in the near-null space.
+            let involvement: Vec<f64> = (0..kept.len()).map(|c| basis.row(c).norm()).collect();
+            let cut = 0.05_f64.min(0.5 * involvement.iter().cloned().fold(0.0, f64::max));
+            let candidates: Vec<usize> =
+                (0..kept.len()).filter(|&c| involvement[c] >= cut).collect();
+            let pick = choose_held(&candidates, |c| kept[c], params, &norms)
+                .expect("a null vector has a non-zero component");
+            let index = kept.remove(pick);
+            fixed.push(Fixed {
+                index,
+                why: Why::Inseparable,
+                absorbed_by: Vec::new(),
+                unexplained: 0.0,
+            });
+            basis = without_component(&basis, pick);
+        }
     }
     let mut out = Identifiability {
         kept,
@@ -317,6 +320,29 @@ fn explain(id: &mut Identifiability, rn: &DMatrix<f64>) {
         });
         f.absorbed_by = by;
     }
+}
+
+/// The vectors of the space `basis` spans (orthonormal columns) whose component `row` is 0,
+/// as an orthonormal basis of one dimension less, with that row removed: a Householder
+/// reflection maps the row to a multiple of the first unit vector, and the other columns of
+/// the reflected basis then have 0 there.
+fn without_component(basis: &DMatrix<f64>, row: usize) -> DMatrix<f64> {
+    let d = basis.ncols();
+    let r = basis.row(row).transpose();
+    let norm = r.norm();
+    let mut u = r.clone();
+    u[0] += if r[0] >= 0.0 { norm } else { -norm };
+    let un = u.norm_squared();
+    let reflected = if un > 0.0 {
+        // B (I − 2 u uᵀ / uᵀu)
+        basis - (basis * &u) * (u.transpose() * (2.0 / un))
+    } else {
+        basis.clone()
+    };
+    let kept_rows: Vec<usize> = (0..basis.nrows()).filter(|&i| i != row).collect();
+    DMatrix::from_fn(kept_rows.len(), d - 1, |i, k| {
+        reflected[(kept_rows[i], k + 1)]
+    })
 }
 
 /// Singular values (descending) and the matching rows of Vᵀ of the columns `cols` of `rn`.
@@ -415,6 +441,23 @@ pub fn condition_from_normal(jtj: &DMatrix<f64>) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_null_space_shrinks_to_the_vectors_that_leave_a_held_unknown() {
+        // Two null vectors of five unknowns; hold unknown 1.
+        let n = DMatrix::from_row_slice(5, 2, &[0.5, 0.1, 0.5, -0.3, 0.5, 0.2, 0.5, 0.6, 0.0, 0.7]);
+        let basis = n.clone().qr().q();
+        let out = without_component(&basis, 1);
+        assert_eq!((out.nrows(), out.ncols()), (4, 1));
+        assert!((out.column(0).norm() - 1.0).abs() < 1e-12);
+        // Put back in the full space with 0 at the held unknown, it lies in the old span.
+        let mut v = nalgebra::DVector::zeros(5);
+        for (i, r) in [0, 2, 3, 4].iter().enumerate() {
+            v[*r] = out[(i, 0)];
+        }
+        let residual = &v - &basis * (basis.transpose() * &v);
+        assert!(residual.norm() < 1e-12, "{residual}");
+    }
 
     fn rows_of(m: &DMatrix<f64>) -> Vec<f64> {
         let mut v = Vec::with_capacity(m.len());
