@@ -227,6 +227,27 @@ mod tests {
     }
 
     #[test]
+    fn a_wobble_is_the_fixed_tilt_then_two_turns_about_fixed_axes() {
+        // What a firmware chain can apply (docs/spec-reading.md, "Axis wobble"): with the
+        // varied tilt [α + A, β + B], M(θ) R(u, Δθ) = M R(u, Δθ) R(f1, A) R(f2, B) exactly,
+        // f1 = R(u, −Δθ) R(e2, −β) e1 and f2 = R(u, −Δθ) e2 fixed per joint (perpendicular),
+        // so only the two angles vary with the reading.
+        for axis in [Axis::X, Axis::Y, Axis::Z] {
+            let (tilt, dz, a, b) = ([3e-3, -2e-3], 0.7, 4e-5, -6e-5);
+            let u = axis_vector(axis);
+            let (e1, e2) = axis.perpendicular();
+            let (e1, e2) = (axis_vector(e1), axis_vector(e2));
+            let f1 = rotation(&u, -dz) * rotation(&e2, -tilt[1]) * e1;
+            let f2 = rotation(&u, -dz) * e2;
+            assert!(f1.dot(&f2).abs() < 1e-15);
+            let varied = tilt_matrix(axis, [tilt[0] + a, tilt[1] + b]) * rotation(&u, dz);
+            let split =
+                tilt_matrix(axis, tilt) * rotation(&u, dz) * rotation(&f1, a) * rotation(&f2, b);
+            assert!((varied - split).norm() < 1e-15, "{axis:?}");
+        }
+    }
+
+    #[test]
     fn thermal_scales_link_and_error() {
         let mut arm = Arm::default6();
         arm.joints[0].thermal = 1e-4;
