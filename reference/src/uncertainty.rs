@@ -64,14 +64,9 @@ impl ParamKey {
             ["probe", "error", c] => Ok(ParamKey::ProbeError(comp(c, 3)?)),
             ["probe", "thermal"] => Ok(ParamKey::Thermal(None)),
             ["joint", k, rest @ ..] => {
-                let j = k
-                    .parse::<usize>()
-                    .ok()
-                    .filter(|k| (1..=arm.dof()).contains(k))
-                    .ok_or_else(|| {
-                        format!("`{k}` is not a joint of this arm: 1 to {}", arm.dof())
-                    })?
-                    - 1;
+                let j = one_based(k, arm.dof(), || {
+                    format!("`{k}` is not a joint of this arm: 1 to {}", arm.dof())
+                })?;
                 match rest {
                     ["zero_offset"] => Ok(ParamKey::ZeroOffset(j)),
                     ["tilt", c] => Ok(ParamKey::Tilt(j, comp(c, 2)?)),
@@ -80,14 +75,9 @@ impl ParamKey {
                     ["thermal"] => Ok(ParamKey::Thermal(Some(j))),
                     ["harmonics", h, sc @ ("sin" | "cos")] => {
                         let n = arm.joints[j].harmonics.len();
-                        let index = h
-                            .parse::<usize>()
-                            .ok()
-                            .filter(|h| (1..=n).contains(h))
-                            .ok_or_else(|| {
-                                format!("joint {} has {n} harmonics; `{h}` is not one", j + 1)
-                            })?
-                            - 1;
+                        let index = one_based(h, n, || {
+                            format!("joint {} has {n} harmonics; `{h}` is not one", j + 1)
+                        })?;
                         Ok(ParamKey::Harmonic {
                             joint: j,
                             index,
@@ -96,14 +86,9 @@ impl ParamKey {
                     }
                     ["wobble", w, ab @ ("alpha" | "beta"), c] => {
                         let n = arm.joints[j].wobble.len();
-                        let index = w
-                            .parse::<usize>()
-                            .ok()
-                            .filter(|w| (1..=n).contains(w))
-                            .ok_or_else(|| {
-                                format!("joint {} has {n} wobble terms; `{w}` is not one", j + 1)
-                            })?
-                            - 1;
+                        let index = one_based(w, n, || {
+                            format!("joint {} has {n} wobble terms; `{w}` is not one", j + 1)
+                        })?;
                         Ok(ParamKey::Wobble {
                             joint: j,
                             index,
@@ -183,6 +168,15 @@ impl ParamKey {
             ParamKey::Thermal(None) => "probe.thermal".to_string(),
         }
     }
+}
+
+/// The 0-based position a name's 1-based number `s` (1 to `n`) points at, or `refuse`'s message.
+fn one_based(s: &str, n: usize, refuse: impl FnOnce() -> String) -> Result<usize, String> {
+    s.parse::<usize>()
+        .ok()
+        .filter(|k| (1..=n).contains(k))
+        .map(|k| k - 1)
+        .ok_or_else(refuse)
 }
 
 fn unknown_name(name: &str) -> String {

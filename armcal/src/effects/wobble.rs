@@ -220,7 +220,7 @@ impl Term for Wobble {
             .wobble
             .iter()
             .filter(|e| e.order == self.order)
-            .map(|e| if t == 0 { e.alpha[w] } else { e.beta[w] })
+            .map(|e| [e.alpha, e.beta][t][w])
             .sum()
     }
 
@@ -237,11 +237,7 @@ impl Term for Wobble {
             },
         );
         let (t, w) = split(c);
-        if t == 0 {
-            e.alpha[w] += dx;
-        } else {
-            e.beta[w] += dx;
-        }
+        [&mut e.alpha, &mut e.beta][t][w] += dx;
     }
 
     fn add_entry(&self, arm: &mut Arm) {
