@@ -46,6 +46,7 @@ use crate::physics::Physics;
 use crate::rotate::{cross, Quat, Vec3};
 use crate::scalar::{Fixed, Scale, F32};
 use crate::table::{Table, MAX_JOINTS};
+use crate::wobble::{small_quat, turn_small, Wobble};
 use core::mem::MaybeUninit;
 
 /// What the quaternion chain is evaluated in: a number format with the physical effects' terms
@@ -81,13 +82,18 @@ struct JointRotation<P: Physics> {
 }
 
 /// The quaternion chain of one evaluator.
+// In this order (`repr(C)`): the wobble last, so that the per-point loads of the others keep
+// their short offsets.
 #[derive(Clone, Copy, Debug)]
+#[repr(C)]
 pub struct Chain<P: Evaluator> {
     model: Model<P>,
     rotation: [JointRotation<P>; MAX_JOINTS],
     /// The arm's compliances are large enough for the second-order gravity terms to matter
     /// ([`crate::model::SECOND_ORDER_DEFLECTION`]).
     second_order: bool,
+    /// The joints' axis wobble ([`crate::wobble`]; empty without its feature).
+    wobble: Wobble<P>,
 }
 
 /// The f32 quaternion chain (FPU targets).
@@ -182,9 +188,11 @@ impl<P: Evaluator> Chain<P> {
             prev = j.axis;
         }
         let second_order = model.second_order_gravity;
+        let wobble = Wobble::new(table, &model)?;
         Ok(Chain {
             model,
             rotation,
+            wobble,
             second_order,
         })
     }
@@ -212,22 +220,34 @@ impl<P: Evaluator> Chain<P> {
     // line for the quaternion chain, 1,245 against 1,201 for the matrix chain).
     #[inline(never)]
     pub fn eval(&self, counts: &[u32], temp_mc: i32) -> Result<Point<P>, ChainError> {
-        if P::SPEND_FLASH && !self.second_order {
-            // A copy of the code with the second-order gravity terms compiled out, so that an
-            // arm without large compliances does not pay for testing them.
-            self.eval_with(counts, temp_mc, false)
+        if !P::SPEND_FLASH {
+            self.eval_with(counts, temp_mc, self.second_order, true)
+        } else if !self.second_order && !self.wobble.any() {
+            // A copy of the code with the second-order gravity terms and the axis wobble
+            // compiled out, so that a hub-class arm does not pay for testing them.
+            self.eval_with(counts, temp_mc, false, false)
         } else {
-            self.eval_with(counts, temp_mc, self.second_order)
+            self.eval_every_term(counts, temp_mc)
         }
     }
 
-    /// [`Chain::eval`], with the second-order gravity terms or without.
+    /// [`Chain::eval`] with every term. Out of line: in one function with the lean copy, its
+    /// registers and spills were shared, and the lean copy took 29 instructions a point more
+    /// on qemu-m4f (1,341 → 1,370).
+    #[inline(never)]
+    fn eval_every_term(&self, counts: &[u32], temp_mc: i32) -> Result<Point<P>, ChainError> {
+        self.eval_with(counts, temp_mc, self.second_order, true)
+    }
+
+    /// [`Chain::eval`], with the second-order gravity terms or without, with the wobble or
+    /// without.
     #[inline(always)]
     fn eval_with(
         &self,
         counts: &[u32],
         temp_mc: i32,
         second_order: bool,
+        wobble: bool,
     ) -> Result<Point<P>, ChainError> {
         let m = &self.model;
         let dt = m.check(counts, temp_mc)?;
@@ -235,11 +255,15 @@ impl<P: Evaluator> Chain<P> {
 
         // Base to tip.
         let mut records = [Record::<P>::UNINIT; MAX_JOINTS];
+        // The wobble's rotation vector φ of each joint that wobbles (apart from the records:
+        // without the feature it is never written and takes no stack).
+        let mut phis = [const { MaybeUninit::<Vec3<P::U>>::uninit() }; MAX_JOINTS];
         let mut q = Quat::<P>::default();
         // `check` made counts.len() = n ≤ MAX_JOINTS.
         let n = counts.len().min(MAX_JOINTS);
         for i in 0..n {
             let (j, r, count) = (&m.joints[i], &self.rotation[i], counts[i]);
+            let wobbles = wobble && self.wobble.has(i);
             let jr = j.reading(i, count, dt, false)?;
             let mut angle = jr.angle;
             if j.harmonic_count > 0 {
@@ -249,8 +273,20 @@ impl<P: Evaluator> Chain<P> {
             // (cos x, sin x).
             let fq = &r.full[usize::from(angle.q & 3)];
             q = if i == 0 { *fq } else { q.mul(fq) };
-            q = q.mul_z(P::ONE + angle.cm1, angle.s);
             let rec = &mut records[i];
+            if wobbles {
+                // M̃ ⊗ W ⊗ Z(qπ/2) = M̃ ⊗ Z(qπ/2) ⊗ W', W' the wobble about φ turned back
+                // by the quarter turns (exact).
+                // Of the raw reading (the harmonics have not turned `jr.angle`); taken here
+                // rather than by `reading`, which would keep `jr` in memory on the lean path
+                // (29 instructions a point more on qemu-m4f, in padding stores).
+                let (c, s) = jr.angle.full();
+                let phi = self.wobble.turn(i, c, s);
+                let (x, y) = quarter_turns(4 - (angle.q & 3), (phi[0], phi[1]));
+                q = q.mul(&small_quat(&[x, y, phi[2]]));
+                phis[i].write(phi);
+            }
+            q = q.mul_z(P::ONE + angle.cm1, angle.s);
             if j.has_gravity {
                 let v = q.z_row();
                 rec.frame.write(Frame {
@@ -327,14 +363,20 @@ impl<P: Evaluator> Chain<P> {
             }
             let (sin2, omc) = a.double();
             let e = &r.near;
+            // SAFETY: the first pass wrote φ exactly where the joint wobbles.
+            let phi = (wobble && self.wobble.has(i)).then(|| unsafe { phis[i].assume_init_read() });
             for x in v.iter_mut().take(carried) {
-                // The remainder turn as a correction, M''_i as x + E_i x, the relabelling.
+                // The remainder turn as a correction, the wobble's small turn, M''_i as
+                // x + E_i x, the relabelling.
                 let (p, q) = quarter_turns(a.q, (x[0], x[1]));
-                let t = [
+                let mut t = [
                     p - (q.scale(sin2) + p.scale(omc)),
                     q + (p.scale(sin2) - q.scale(omc)),
                     x[2],
                 ];
+                if let Some(phi) = &phi {
+                    t = turn_small(phi, t);
+                }
                 *x = relabel(
                     [
                         t[0] + (t[0].scale(e[0]) + t[1].scale(e[1]) + t[2].scale(e[2])),

@@ -89,6 +89,7 @@ pub mod table;
 pub mod temperature;
 pub mod uncertainty;
 pub mod update;
+pub mod wobble;
 
 pub use chain::{Chain, ChainF32, ChainFixed, Evaluator};
 pub use matrix::{MatrixChain, MatrixChainF32, MatrixChainFixed};

@@ -18,6 +18,7 @@ use crate::physics::Physics;
 use crate::rotate::Vec3;
 use crate::scalar::{Arithmetic, Fixed, Scale, F32};
 use crate::table::{Table, MAX_JOINTS};
+use crate::wobble::{turn_small, Wobble};
 
 type Mat<P> = [[<P as Arithmetic>::U; 3]; 3];
 
@@ -32,11 +33,20 @@ pub struct Frames {
     pub origin: [[f32; 3]; MAX_JOINTS],
 }
 
+/// One reading as a pass of the chain takes it: the counts, the temperature offset, and
+/// whether the pass applies the wobble (a constant in each copy of the code).
+struct Reading<'a, P: Physics> {
+    counts: &'a [u32],
+    dt: P::T,
+    wobble: bool,
+}
+
 /// The 3×4 matrix chain of one evaluator.
 #[derive(Clone, Copy, Debug)]
 pub struct MatrixChain<P: Physics> {
     model: Model<P>,
     rotation: [Mat<P>; MAX_JOINTS],
+    wobble: Wobble<P>,
 }
 
 /// The f32 matrix chain.
@@ -67,7 +77,12 @@ impl<P: Physics> MatrixChain<P> {
             }
             prev = j.axis;
         }
-        Ok(MatrixChain { model, rotation })
+        let wobble = Wobble::new(table, &model)?;
+        Ok(MatrixChain {
+            model,
+            rotation,
+            wobble,
+        })
     }
 
     /// Number of joints.
@@ -113,11 +128,29 @@ impl<P: Physics> MatrixChain<P> {
         temp_mc: i32,
         seen: &mut impl FnMut(usize, &Mat<P>, &Vec3<P::L>),
     ) -> Result<Point<P>, ChainError> {
+        // A copy without the wobble's tests for the arms that have none (always, without the
+        // feature: `any` is then `false` at compile time and the other copy is not built).
+        if self.wobble.any() {
+            self.eval_seen_with(counts, temp_mc, true, seen)
+        } else {
+            self.eval_seen_with(counts, temp_mc, false, seen)
+        }
+    }
+
+    #[inline(always)]
+    fn eval_seen_with(
+        &self,
+        counts: &[u32],
+        temp_mc: i32,
+        wobble: bool,
+        seen: &mut impl FnMut(usize, &Mat<P>, &Vec3<P::L>),
+    ) -> Result<Point<P>, ChainError> {
         let m = &self.model;
         let dt = m.check(counts, temp_mc)?;
         let mut gravity = Gravity::<P>::default();
         let mut gravity_count = GravityCount::default();
-        let undeflected = self.pass(counts, dt, None, &mut gravity, &mut gravity_count, seen)?;
+        let at = Reading { counts, dt, wobble };
+        let undeflected = self.pass(&at, None, &mut gravity, &mut gravity_count, seen)?;
         if !m.second_order_gravity {
             let (xyz, dir) = gravity.apply(gravity_count, undeflected.xyz, undeflected.dir);
             return Ok(Point { xyz, dir });
@@ -125,7 +158,7 @@ impl<P: Physics> MatrixChain<P> {
         let mut e = [P::U::default(); MAX_JOINTS];
         gravity.deflections(gravity_count, undeflected.xyz, &mut e);
         let mut unused = GravityCount::default();
-        self.pass(counts, dt, Some(&e), &mut gravity, &mut unused, seen)
+        self.pass(&at, Some(&e), &mut gravity, &mut unused, seen)
     }
 
     /// The chain base to tip: tip and direction. With `deflections` (one per compliant
@@ -135,23 +168,27 @@ impl<P: Physics> MatrixChain<P> {
     #[inline(always)]
     fn pass(
         &self,
-        counts: &[u32],
-        dt: P::T,
+        at: &Reading<'_, P>,
         deflections: Option<&[P::U; MAX_JOINTS]>,
         gravity: &mut Gravity<P>,
         gravity_count: &mut GravityCount,
         seen: &mut impl FnMut(usize, &Mat<P>, &Vec3<P::L>),
     ) -> Result<Point<P>, ChainError> {
-        let m = &self.model;
+        let (m, counts, dt) = (&self.model, at.counts, at.dt);
         let zero = P::U::default();
         let mut r: Mat<P> = [[zero; 3]; 3];
         let mut o: Vec3<P::L> = [P::L::default(); 3];
         let mut compliant = 0;
         // `check` made counts.len() = n ≤ MAX_JOINTS.
         for (i, &count) in counts.iter().enumerate().take(MAX_JOINTS) {
-            let (j, mj) = (&m.joints[i], &self.rotation[i]);
+            let (j, mut mj) = (&m.joints[i], self.rotation[i]);
             let jr = j.reading(i, count, dt, true)?;
             let (mut c, mut sn) = jr.full.unwrap_or((P::ONE, zero));
+            if at.wobble && self.wobble.has(i) {
+                // M̃ W: each row r of M̃ times W is Wᵀ r, r turned by −φ.
+                let phi = self.wobble.turn(i, c, sn).map(|x| -x);
+                mj = mj.map(|row| turn_small(&phi, row));
+            }
             let mut e = jr.e;
             let mut turn = j.harmonic_count > 0;
             if let (true, Some(d)) = (j.has_gravity, deflections) {
@@ -175,7 +212,7 @@ impl<P: Physics> MatrixChain<P> {
             }
             // R_i = M̃ · Rot(z, θ): the third column of M̃ stays, the first two turn by θ.
             let mut ri: Mat<P> = [[zero; 3]; 3];
-            for (row, src) in ri.iter_mut().zip(mj) {
+            for (row, src) in ri.iter_mut().zip(&mj) {
                 *row = [
                     src[0].scale(c) + src[1].scale(sn),
                     src[1].scale(c) - src[0].scale(sn),

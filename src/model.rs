@@ -229,13 +229,14 @@ pub(crate) fn abs(x: f64) -> f64 {
     }
 }
 
-/// Orders a joint's harmonic terms by order, in place: an insertion sort, since there are at
-/// most [`MAX_HARMONICS`] of them and `core`'s `sort_unstable` brings about 2 KB of general
+/// Orders a joint's periodic terms (harmonics, wobble) by `order`, in place, so that
+/// [`Multiples`] reaches each order from the one before: an insertion sort, since there are
+/// at most [`MAX_HARMONICS`] of them and `core`'s `sort_unstable` brings about 2 KB of general
 /// sorting code into the M0 image at `opt-level = "z"`.
-fn sort_by_order<P: Arithmetic>(terms: &mut [HarmonicTerm<P>]) {
+pub(crate) fn sort_by_order<T>(terms: &mut [T], order: impl Fn(&T) -> u32) {
     for i in 1..terms.len() {
         let mut k = i;
-        while k > 0 && terms[k - 1].order > terms[k].order {
+        while k > 0 && order(&terms[k - 1]) > order(&terms[k]) {
             terms.swap(k - 1, k);
             k -= 1;
         }
@@ -344,7 +345,7 @@ impl<P: Physics> Model<P> {
                     cos: conv(P::u_from_f64(src.cos), no)?,
                 };
             }
-            sort_by_order(&mut harmonics[..count]);
+            sort_by_order(&mut harmonics[..count], |h| h.order);
             let mut h12 = [0.0f64; 4]; // s1, c1, s2, c2
             let mut low = count > 0;
             for src in &j.harmonics[..count] {

@@ -5,6 +5,7 @@
 
 use nalgebra::Vector3;
 use quatarm::{Arithmetic, Chain, ChainError, Fixed, MatrixChain, Point, Table, F32};
+use quatarm_ref::arm::Wobble;
 use quatarm_ref::{Arm, Harmonic};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -47,6 +48,33 @@ pub fn full_calibration() -> Arm {
     }
     arm.probe.error = [r(0.3), r(0.3), r(0.5)];
     arm.probe.thermal = 12e-6;
+    arm
+}
+
+/// `arm` with an axis wobble on every joint (`armcal accuracy --wobble`): joint k's bearing
+/// wobbles at order 1 + (k mod 3) and, on the hinges, at order 4 as well, each coefficient
+/// up to `size` (rad; real bearings 2e-5–1e-4). Deterministic.
+pub fn with_wobble(arm: &Arm, size: f64) -> Arm {
+    let mut rng = ChaCha8Rng::seed_from_u64(13);
+    let mut arm = arm.clone();
+    let mut r = |a: f64| (rng.gen_range(-a..a) * 1e8_f64).round() / 1e8 + 0.0;
+    for k in 0..arm.dof() {
+        let hinge = arm.is_hinge(k);
+        let j = &mut arm.joints[k];
+        j.wobble = vec![Wobble {
+            order: 1 + (k as u32 % 3),
+            alpha: [r(size), r(size)],
+            beta: [r(size), r(size)],
+        }];
+        if hinge {
+            j.wobble.push(Wobble {
+                order: 4,
+                alpha: [r(size / 2.0), r(size / 2.0)],
+                beta: [r(size / 2.0), r(size / 2.0)],
+            });
+        }
+    }
+    arm.name = arm.name.map(|n| format!("{n}+wobble"));
     arm
 }
 

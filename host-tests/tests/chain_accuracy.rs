@@ -3,9 +3,10 @@
 //! randomised calibrations; arbitrary counts never panic. (The million-pose figures come from
 //! `armcal accuracy`; these tests hold the same bounds on fewer poses, in seconds.)
 
-use armcal::accuracy::{full_calibration, measure, random_reading, Paths, Report};
+use armcal::accuracy::{full_calibration, measure, random_reading, with_wobble, Paths, Report};
 use proptest::prelude::*;
 use quatarm::{Chain, ChainError, Fixed, Table, F32};
+use quatarm_ref::arm::Wobble;
 use quatarm_ref::{Arm, Harmonic};
 
 /// Issue 2's bounds: tip (µm) and direction, f32 and fixed point.
@@ -60,6 +61,72 @@ fn the_shipped_calibration_file_is_the_built_in_one() {
     )))
     .unwrap();
     assert_eq!(parsed.arm, full_calibration());
+}
+
+/// An axis wobble on every joint (orders 1-4, a worn bearing's 1e-4 rad and the largest sum
+/// a table takes) keeps every path within the bounds — and moves the tip by far more than
+/// them, so a chain that left it out would fail.
+#[test]
+fn a_wobbling_arm_within_bounds() {
+    for size in [1e-4, 1.6e-4] {
+        let arm = with_wobble(&full_calibration(), size);
+        let rep = measure(&arm, 50_000, 17, 2, &|_| {}).unwrap();
+        check(&rep);
+    }
+    let arm = with_wobble(&full_calibration(), 1e-4);
+    let still = full_calibration();
+    let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(3);
+    let moved = (0..200)
+        .map(|_| {
+            let (counts, _) = random_reading(&mut rng, &arm);
+            let th = arm.counts_to_rad(&counts);
+            let (a, b) = (
+                quatarm_ref::forward::forward(&arm, &th, 20.0).p,
+                quatarm_ref::forward::forward(&still, &th, 20.0).p,
+            );
+            (a - b).norm() * 1000.0
+        })
+        .fold(0.0, f64::max);
+    assert!(moved > 50.0, "the wobble moves the tip by {moved} um");
+}
+
+/// The wobble with the large compliances of the MUKCa robots: the second-order gravity path
+/// carries three vectors through the wobble's turns.
+#[test]
+fn a_wobbling_compliant_arm_within_bounds() {
+    let mut arm = with_wobble(&full_calibration(), 1e-4);
+    for k in [1, 3, 5] {
+        arm.joints[k].gravity = 1e-6;
+    }
+    let rep = measure(&arm, 20_000, 19, 2, &|_| {}).unwrap();
+    check(&rep);
+}
+
+#[test]
+fn the_shipped_wobble_file_is_the_built_in_one() {
+    let parsed = quatarm_ref::calfile::read(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../data/default-6-wobble.toml"
+    )))
+    .unwrap();
+    let mut want = with_wobble(&full_calibration(), 1e-4);
+    // The file holds the built-in wobble as written, 1e-8 rad apart at most.
+    for (got, want) in parsed.arm.joints.iter().zip(&mut want.joints) {
+        assert_eq!(got.wobble.len(), want.wobble.len());
+        for (g, w) in got.wobble.iter().zip(&want.wobble) {
+            let d = g
+                .alpha
+                .iter()
+                .chain(&g.beta)
+                .zip(w.alpha.iter().chain(&w.beta));
+            assert!(
+                d.into_iter().all(|(a, b)| (a - b).abs() < 1e-12),
+                "{g:?} {w:?}"
+            );
+        }
+        want.wobble.clone_from(&got.wobble);
+    }
+    assert_eq!(parsed.arm, want);
 }
 
 /// Large gravity compliances on every hinge, with the full calibration: the largest a table
@@ -138,11 +205,45 @@ fn arm_strategy() -> impl Strategy<Value = Arm> {
         })
 }
 
+/// Up to four wobble terms on each joint, orders 1..=64, the sum within the table's limit.
+fn wobble_strategy() -> impl Strategy<Value = Vec<Vec<Wobble>>> {
+    let term = (1u32..=64, prop::array::uniform4(-1.2e-4..1.2e-4f64));
+    prop::collection::vec(prop::collection::vec(term, 0..=2), 6).prop_map(|joints| {
+        joints
+            .into_iter()
+            .map(|terms| {
+                terms
+                    .into_iter()
+                    .map(|(order, c)| Wobble {
+                        order,
+                        alpha: [c[0], c[1]],
+                        beta: [c[2], c[3]],
+                    })
+                    .collect()
+            })
+            .collect()
+    })
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
 
     #[test]
     fn random_calibrations_within_bounds(arm in arm_strategy(), seed in any::<u64>()) {
+        let rep = measure(&arm, 2_000, seed, 1, &|_| {}).unwrap();
+        check(&rep);
+    }
+
+    #[test]
+    fn random_wobbles_within_bounds(
+        arm in arm_strategy(),
+        wobble in wobble_strategy(),
+        seed in any::<u64>(),
+    ) {
+        let mut arm = arm;
+        for (j, w) in arm.joints.iter_mut().zip(wobble) {
+            j.wobble = w;
+        }
         let rep = measure(&arm, 2_000, seed, 1, &|_| {}).unwrap();
         check(&rep);
     }

@@ -13,4 +13,5 @@ common::board_tests! {
     full_recording: replays_the_recording_bit_identical_to_the_host_and_within_0_1um,
     update: update_not_supported,
     u95: no_u95,
+    wobble: wobble_refused,
 }

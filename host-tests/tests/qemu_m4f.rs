@@ -13,4 +13,5 @@ common::board_tests! {
     full_recording: replays_the_recording_bit_identical_to_the_host_and_within_1um,
     update: update_with_resets,
     u95: u95_matches_the_host,
+    wobble: wobble_applied,
 }

@@ -16,11 +16,11 @@
 //!      6     1  joint count N (6 or 7)
 //!      7     1  flags: bit0 geometric errors, bit1 encoder harmonics,
 //!               bit2 gravity compliance, bit3 thermal expansion, bit4 uncertainty budget,
-//!               bit5 parameter covariance (only with bit4; others 0)
+//!               bit5 parameter covariance (only with bit4), bit6 axis wobble (others 0)
 //!      8    32  arm serial, UTF-8, NUL-padded
 //!     40     4  total length in bytes, CRC included (= 48 + N·248 + 64 + 4, plus the
-//!               uncertainty budget's length where flag bit4 is set, and the parameter
-//!               block's where bit5 is)
+//!               uncertainty budget's length where flag bit4 is set, the parameter
+//!               block's where bit5 is, the wobble block's where bit6 is)
 //!     44     4  reserved, 0
 //!     48 N·248  joint records, base first:
 //!                 +0    1  axis: 0 = x, 1 = y, 2 = z
@@ -40,6 +40,8 @@
 //! 48+N·248+64    the uncertainty budget, where flag bit4 is set ([`budget`]: its layout)
 //!   … +80        the parameter covariance, where flag bit5 is set ([`parameters`]: its
 //!                layout; its parameter count is its first field)
+//!   …            the axis wobble, where flag bit6 is set ([`wobble`]: its layout; its joint
+//!                count is its first field)
 //!  len−4     4  CRC-32 (ISO-HDLC, as zlib) of every byte before it
 //! ```
 //!
@@ -52,6 +54,7 @@ use core::fmt;
 
 pub mod budget;
 pub mod parameters;
+pub mod wobble;
 
 /// The table's magic bytes.
 pub const MAGIC: [u8; 4] = *b"QATB";
@@ -129,12 +132,19 @@ pub const FLAG_BUDGET: u8 = 1 << 4;
 /// Flag: the table carries the calibration's parameter covariance ([`parameters`]), after
 /// the budget (so only with [`FLAG_BUDGET`]).
 pub const FLAG_PARAMETERS: u8 = 1 << 5;
-/// Without the `parameters` feature the block's flag is unknown, so refused.
-const FLAGS_KNOWN: u8 = if cfg!(feature = "parameters") {
-    0x3f
-} else {
-    0x1f
-};
+/// Flag: some joint has an axis wobble ([`wobble`]: its block, after every other).
+pub const FLAG_WOBBLE: u8 = 1 << 6;
+/// Without the `parameters` or `wobble` feature, that block's flag is unknown, so refused.
+const FLAGS_KNOWN: u8 =
+    0x1f | if cfg!(feature = "parameters") {
+        FLAG_PARAMETERS
+    } else {
+        0
+    } | if cfg!(feature = "wobble") {
+        FLAG_WOBBLE
+    } else {
+        0
+    };
 
 /// Limits of the values a table may hold. They keep every evaluator inside its range and its
 /// small-angle formulas inside their accuracy; a real arm is far inside them.
@@ -247,6 +257,8 @@ pub enum Field {
     /// The uncertainty budget: a standard uncertainty out of range, a factor's scale, or a
     /// factor table that is not a table of the same arm.
     Budget,
+    /// The axis wobble block: its joints, terms, coefficients or axes.
+    Wobble,
 }
 
 impl fmt::Display for Field {
@@ -266,6 +278,7 @@ impl fmt::Display for Field {
             Field::Gravity => "gravity coefficient",
             Field::Probe => "probe",
             Field::Budget => "uncertainty budget",
+            Field::Wobble => "axis wobble",
         })
     }
 }
@@ -323,12 +336,24 @@ pub const fn table_len(joints: usize) -> usize {
 /// arrives).
 pub fn is_table_len(len: usize) -> bool {
     (MIN_JOINTS..=MAX_JOINTS).any(|n| {
-        let with_budget = table_len(n) + budget::LEN;
-        len == table_len(n) || len == with_budget || is_block_len(len.wrapping_sub(with_budget))
+        // The wobble block, of any joint count the arm has, or none.
+        let wobbles = if cfg!(feature = "wobble") { n } else { 0 };
+        (0..=wobbles).any(|w| {
+            let wobble = if w > 0 { wobble::len(w) } else { 0 };
+            let Some(rest) = len.checked_sub(table_len(n) + wobble) else {
+                return false;
+            };
+            // Then the budget, and the parameter block after it, or neither.
+            rest == 0
+                || rest == budget::LEN
+                || rest.checked_sub(budget::LEN).is_some_and(is_block_len)
+        })
     })
 }
 
+// Out of line: inlined into the loops above, its 64 lengths were unrolled into 5 KB.
 #[cfg(feature = "parameters")]
+#[inline(never)]
 fn is_block_len(len: usize) -> bool {
     (1..=parameters::MAX_PARAMETERS).any(|p| len == parameters::len(p))
 }
@@ -343,13 +368,21 @@ const fn core_len(joints: usize) -> usize {
     HEADER_LEN + joints * JOINT_LEN + PROBE_LEN
 }
 
-/// Largest table length: 7 joints with a budget and `parameters::MAX_PARAMETERS`
-/// parameters (11,792 bytes; without the `parameters` feature, [`MAX_PLAIN_TABLE_LEN`]).
-#[cfg(feature = "parameters")]
-pub const MAX_TABLE_LEN: usize = MAX_PLAIN_TABLE_LEN + parameters::len(parameters::MAX_PARAMETERS);
-/// Largest table length: 7 joints with a budget.
-#[cfg(not(feature = "parameters"))]
-pub const MAX_TABLE_LEN: usize = MAX_PLAIN_TABLE_LEN;
+/// Largest table length: 7 joints with a budget, `parameters::MAX_PARAMETERS` parameters
+/// where the `parameters` feature reads them and every joint's wobble where the `wobble`
+/// feature does (11,792 bytes with the first, 13,308 with both; without either,
+/// [`MAX_PLAIN_TABLE_LEN`]).
+pub const MAX_TABLE_LEN: usize = MAX_PLAIN_TABLE_LEN
+    + if cfg!(feature = "parameters") {
+        parameters::len(parameters::MAX_PARAMETERS)
+    } else {
+        0
+    }
+    + if cfg!(feature = "wobble") {
+        wobble::len(MAX_JOINTS)
+    } else {
+        0
+    };
 
 /// Largest table without a parameter block: 7 joints with a budget (1,932 bytes). A board
 /// whose flash slots are smaller than [`MAX_TABLE_LEN`] but at least this (the fixed-point
@@ -419,6 +452,9 @@ pub struct TableData {
     pub joints: [JointData; MAX_JOINTS],
     /// The probe.
     pub probe: ProbeData,
+    /// Each joint's axis wobble (count 0: none; the block is written where some joint has
+    /// one).
+    pub wobble: [wobble::WobbleData; MAX_JOINTS],
 }
 
 impl JointData {
@@ -499,7 +535,13 @@ impl TableData {
             Some(p) => p.block_len().ok_or(invalid)?,
         };
         let extra = if budget.is_some() { budget::LEN } else { 0 };
-        let len = table_len(n) + extra + block;
+        let wobbling = self.wobble[..n].iter().filter(|w| w.count > 0).count();
+        let wobble_len = if wobbling > 0 {
+            wobble::len(wobbling)
+        } else {
+            0
+        };
+        let len = table_len(n) + extra + block + wobble_len;
         if out.len() < len {
             return Err(TableError::Truncated {
                 needed: len as u32,
@@ -511,9 +553,10 @@ impl TableData {
         out[off::MAGIC..off::MAGIC + 4].copy_from_slice(&MAGIC);
         out[off::VERSION..off::VERSION + 2].copy_from_slice(&VERSION.to_le_bytes());
         out[off::JOINTS] = self.joint_count;
-        out[off::FLAGS] = (self.flags & !(FLAG_BUDGET | FLAG_PARAMETERS))
+        out[off::FLAGS] = (self.flags & !(FLAG_BUDGET | FLAG_PARAMETERS | FLAG_WOBBLE))
             | if extra > 0 { FLAG_BUDGET } else { 0 }
-            | if block > 0 { FLAG_PARAMETERS } else { 0 };
+            | if block > 0 { FLAG_PARAMETERS } else { 0 }
+            | if wobble_len > 0 { FLAG_WOBBLE } else { 0 };
         out[off::SERIAL..off::SERIAL + SERIAL_LEN].copy_from_slice(&self.serial);
         out[off::LENGTH..off::LENGTH + 4].copy_from_slice(&(len as u32).to_le_bytes());
         for (i, j) in self.joints[..n].iter().enumerate() {
@@ -543,8 +586,12 @@ impl TableData {
         if let Some(b) = budget {
             b.encode(&mut out[core_len(n)..core_len(n) + budget::LEN]);
         }
+        let end = len - CRC_LEN - wobble_len;
         if let Some(p) = parameters {
-            p.encode(&mut out[core_len(n) + budget::LEN..len - CRC_LEN]);
+            p.encode(&mut out[core_len(n) + budget::LEN..end]);
+        }
+        if wobble_len > 0 {
+            wobble::encode(&self.wobble[..n], &mut out[end..len - CRC_LEN]);
         }
         let crc = CRC.checksum(&out[..len - CRC_LEN]);
         out[len - CRC_LEN..].copy_from_slice(&crc.to_le_bytes());
@@ -655,6 +702,18 @@ impl<'a> Table<'a> {
                 len += parameters::len(parameters::stated_count(bytes.get(at..).unwrap_or(&[])));
             }
         }
+        if flags & FLAG_WOBBLE != 0 {
+            // Without the feature, refused here, before its length is known: as a flag this
+            // firmware does not read (`Malformed` on the stream), not as a corrupt table.
+            if !cfg!(feature = "wobble") {
+                return Err(TableError::Invalid {
+                    joint: 0,
+                    field: Field::Flags,
+                });
+            }
+            let at = len - CRC_LEN;
+            len += wobble::len(wobble::stated_count(bytes.get(at..).unwrap_or(&[])));
+        }
         let stated = rd_u32(bytes, off::LENGTH);
         if stated as usize != len {
             return Err(TableError::BadLength(stated));
@@ -758,7 +817,7 @@ impl<'a> Table<'a> {
         let p = self.probe();
         content |= p.content_flags();
         let flags = b[off::FLAGS];
-        let blocks = FLAG_GEOMETRIC | FLAG_BUDGET | FLAG_PARAMETERS;
+        let blocks = FLAG_GEOMETRIC | FLAG_BUDGET | FLAG_PARAMETERS | FLAG_WOBBLE;
         if flags & !FLAGS_KNOWN != 0
             || flags & !blocks != content
             || (flags & FLAG_PARAMETERS != 0 && flags & FLAG_BUDGET == 0)
@@ -798,6 +857,10 @@ impl<'a> Table<'a> {
         if let Some(p) = self.parameters() {
             p.check(self.joint_count())?;
         }
+        #[cfg(feature = "wobble")]
+        if let Some(w) = self.wobble() {
+            w.check(self.joint_count())?;
+        }
         Ok(())
     }
 
@@ -819,9 +882,34 @@ impl<'a> Table<'a> {
             return None;
         }
         let at = core_len(self.joint_count()) + budget::LEN;
+        let p = parameters::stated_count(self.bytes.get(at..).unwrap_or(&[]));
         self.bytes
-            .get(at..self.bytes.len() - CRC_LEN)
+            .get(at..at + parameters::len(p))
             .map(parameters::Parameters::new)
+    }
+
+    /// The axis wobble block, where the table has one (never without the `wobble` feature,
+    /// which refuses a table with the block).
+    pub fn wobble(&self) -> Option<wobble::Wobble<'a>> {
+        if self.flags() & FLAG_WOBBLE == 0 {
+            return None;
+        }
+        let end = self.bytes.len() - CRC_LEN;
+        let mut at = core_len(self.joint_count());
+        if self.flags() & FLAG_BUDGET != 0 {
+            at += budget::LEN;
+        }
+        if self.flags() & FLAG_PARAMETERS != 0 {
+            at += parameters::len(parameters::stated_count(
+                self.bytes.get(at..).unwrap_or(&[]),
+            ));
+        }
+        self.bytes.get(at..end).map(wobble::Wobble::new)
+    }
+
+    /// Joint `i`'s axis wobble (0-based; count 0 where it has none).
+    pub fn joint_wobble(&self, i: usize) -> wobble::WobbleData {
+        self.wobble().map(|w| w.joint(i)).unwrap_or_default()
     }
 
     /// The table's bytes (exactly its length).
@@ -912,6 +1000,13 @@ impl<'a> Table<'a> {
             joint_count: self.bytes[off::JOINTS],
             joints,
             probe: self.probe(),
+            wobble: core::array::from_fn(|i| {
+                if cfg!(feature = "wobble") && i < self.joint_count() {
+                    self.joint_wobble(i)
+                } else {
+                    wobble::WobbleData::default()
+                }
+            }),
         }
     }
 }

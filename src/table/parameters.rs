@@ -22,10 +22,11 @@
 //!      2      2        reserved, 0
 //!      4   P·24        one column record per parameter, in C's order:
 //!                        +0  1  kind (`Kind`: 0 turn, 1 turn·sin hθ, 2 turn·cos hθ,
-//!                               3 turn·gravity lever, 4 tilt, 5 shift)
+//!                               3 turn·gravity lever, 4 tilt, 5 shift, 6 tilt·sin hθ,
+//!                               7 tilt·cos hθ)
 //!                        +1  1  joint k (0-based)
-//!                        +2  2  harmonic order h (kinds 1 and 2; else 0)
-//!                        +4 12  vector u (f32 ×3; kinds 4 and 5; else 0)
+//!                        +2  2  harmonic order h (kinds 1, 2, 6 and 7; else 0)
+//!                        +4 12  vector u (f32 ×3; kinds 4 to 7; else 0)
 //!                        +16 4  w0 (f32; kind 5; else 0)
 //!                        +20 4  w1 (f32, per °C; kind 5; else 0)
 //! 4+P·24  4·P(P+1)/2   L, lower triangular, C = L Lᵀ, row by row: L00, L10, L11, L20, …
@@ -42,6 +43,7 @@
 //! | 3 gravity | (a_k · ((p − o_k) × ẑ)) · a_k × (p − o_k) |
 //! | 4 tilt | (R_(k−1) u) × (p − o_k), u in the frame before joint k |
 //! | 5 shift | (w0 + w1 ΔT) · R_k u, u in the frame after joint k (the probe's is the last) |
+//! | 6, 7 wobble | sin hθ_k (cos hθ_k) · (R_(k−1) u) × (p − o_k): the tilt's column, u the fixed tilt's axis (the wobble moves it by ~1e-4 of itself, far below U95's 1e-3) |
 //!
 //! Vectors are in the calibration file's frames (each joint's axis its own x, y or z), as the
 //! host's reference has them; the hub relabels them into its chain's z-axis frames.
@@ -85,6 +87,11 @@ pub enum Kind {
     Tilt,
     /// A shift by (w0 + w1 ΔT) u in the frame after joint k.
     Shift,
+    /// A turn sin(hθ_k) about the fixed axis u of the frame before joint k: an axis wobble's
+    /// sin coefficient.
+    TiltSin,
+    /// A turn cos(hθ_k) about the fixed axis u: an axis wobble's cos coefficient.
+    TiltCos,
 }
 
 impl Kind {
@@ -96,6 +103,8 @@ impl Kind {
             3 => Kind::TurnGravity,
             4 => Kind::Tilt,
             5 => Kind::Shift,
+            6 => Kind::TiltSin,
+            7 => Kind::TiltCos,
             _ => return None,
         })
     }
@@ -113,9 +122,11 @@ pub struct Column {
     pub kind: Kind,
     /// The joint whose frame it acts in (0-based).
     pub joint: u8,
-    /// The harmonic's order (kinds [`Kind::TurnSin`], [`Kind::TurnCos`]; else 0).
+    /// The harmonic's order (kinds [`Kind::TurnSin`], [`Kind::TurnCos`], [`Kind::TiltSin`],
+    /// [`Kind::TiltCos`]; else 0).
     pub order: u16,
-    /// The axis or shift vector (kinds [`Kind::Tilt`], [`Kind::Shift`]; else 0).
+    /// The axis or shift vector (kinds [`Kind::Tilt`], [`Kind::Shift`], [`Kind::TiltSin`],
+    /// [`Kind::TiltCos`]; else 0).
     pub vector: [f32; 3],
     /// The shift's weight at 20 °C ([`Kind::Shift`]; else 0).
     pub w0: f32,
@@ -251,8 +262,14 @@ impl<'a> Parameters<'a> {
         let ok = |x: f32| x.is_finite() && x.abs() <= LIMIT;
         for i in 0..p {
             let c = self.column(i).ok_or(bad)?;
-            let harmonic = matches!(c.kind, Kind::TurnSin | Kind::TurnCos);
-            let vector = matches!(c.kind, Kind::Tilt | Kind::Shift);
+            let harmonic = matches!(
+                c.kind,
+                Kind::TurnSin | Kind::TurnCos | Kind::TiltSin | Kind::TiltCos
+            );
+            let vector = matches!(
+                c.kind,
+                Kind::Tilt | Kind::Shift | Kind::TiltSin | Kind::TiltCos
+            );
             let weights = c.kind == Kind::Shift;
             let well_formed = usize::from(c.joint) < joints.min(MAX_JOINTS)
                 && (c.order != 0) == harmonic

@@ -122,9 +122,10 @@ impl<'a, P: Physics> ParameterPart<'a, P> {
         // The record's vector is in the calibration file's frame: a tilt's in the frame
         // before its joint (the previous joint's, or the base's, labelled like a z joint),
         // a shift's in its joint's.
-        let frame_axis = match (col.kind, k) {
-            (Kind::Tilt, 0) => BASE_AXIS,
-            (Kind::Tilt, _) => self.axes[k - 1],
+        let tilt = matches!(col.kind, Kind::Tilt | Kind::TiltSin | Kind::TiltCos);
+        let frame_axis = match (tilt, k) {
+            (true, 0) => BASE_AXIS,
+            (true, _) => self.axes[k - 1],
             _ => self.axes[k],
         };
         let vector = unpermute(col.vector, frame_axis);
@@ -132,33 +133,35 @@ impl<'a, P: Physics> ParameterPart<'a, P> {
         let lever = sub(p, frames.origin[k]);
         let axis = [r[0][2], r[1][2], r[2][2]];
         let turn = || cross::<F32>(&axis, &lever);
+        let tilt = || {
+            let before = if k == 0 {
+                &IDENTITY
+            } else {
+                &frames.rotation[k - 1]
+            };
+            cross::<F32>(&mat_vec(before, vector), &lever)
+        };
+        // sin hθ_k or cos hθ_k, hθ reduced to a turn in integers first (θ = 2π c / counts), so
+        // that the f32 angle stays below 2π whatever the order. micromath's (≈ 1e-3 off): a
+        // weight of one column, harmless at U95's 1 %.
+        let weight = || {
+            let c = u64::from(counts.get(k).copied().unwrap_or(0));
+            let n = u64::from(self.counts[k].max(1));
+            let phase = (u64::from(col.order) * c) % n;
+            let a = phase as f32 / n as f32 * core::f32::consts::TAU;
+            if matches!(col.kind, Kind::TurnSin | Kind::TiltSin) {
+                F32Ext::sin(a)
+            } else {
+                F32Ext::cos(a)
+            }
+        };
         match col.kind {
             Kind::Turn => turn(),
-            Kind::TurnSin | Kind::TurnCos => {
-                // hθ reduced to a turn in integers first (θ = 2π c / counts), so that the
-                // f32 angle stays below 2π whatever the order.
-                let c = u64::from(counts.get(k).copied().unwrap_or(0));
-                let n = u64::from(self.counts[k].max(1));
-                let phase = (u64::from(col.order) * c) % n;
-                let a = phase as f32 / n as f32 * core::f32::consts::TAU;
-                // micromath's (≈ 1e-3 off): a weight of one column, harmless at U95's 1 %.
-                let w = if col.kind == Kind::TurnSin {
-                    F32Ext::sin(a)
-                } else {
-                    F32Ext::cos(a)
-                };
-                scaled(turn(), w)
-            }
+            Kind::TurnSin | Kind::TurnCos => scaled(turn(), weight()),
             // The first-order lever of the spec: a_k · ((p − o_k) × ẑ).
             Kind::TurnGravity => scaled(turn(), axis[0] * lever[1] - axis[1] * lever[0]),
-            Kind::Tilt => {
-                let before = if k == 0 {
-                    &IDENTITY
-                } else {
-                    &frames.rotation[k - 1]
-                };
-                cross::<F32>(&mat_vec(before, vector), &lever)
-            }
+            Kind::Tilt => tilt(),
+            Kind::TiltSin | Kind::TiltCos => scaled(tilt(), weight()),
             Kind::Shift => scaled(mat_vec(r, vector), col.w0 + col.w1 * dt),
         }
     }

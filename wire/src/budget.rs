@@ -57,11 +57,7 @@ pub fn parameter_data(u: &Uncertainty, arm: &Arm) -> Result<Option<Block>, Strin
         ));
     }
     Ok(Some(Block {
-        columns: u
-            .parameters
-            .iter()
-            .map(|k| column(*k, arm))
-            .collect::<Result<_, _>>()?,
+        columns: u.parameters.iter().map(|k| column(*k, arm)).collect(),
         factor: factor(&u.matrix())?,
     }))
 }
@@ -69,9 +65,8 @@ pub fn parameter_data(u: &Uncertainty, arm: &Arm) -> Result<Option<Block>, Strin
 /// How parameter `key` moves the tip (`quatarm::table::parameters`, its table of kinds):
 /// the host's analytic Jacobian (`armcal::jacobian`) written as the hub evaluates it. Every
 /// kind of parameter the calibration file can list is here: a new one fails to compile until
-/// it is. `Err` for a kind the hub has no column for (an axis wobble: the firmware does not
-/// apply it, and the table builder refuses a non-zero one).
-fn column(key: ParamKey, arm: &Arm) -> Result<Column, String> {
+/// it is.
+fn column(key: ParamKey, arm: &Arm) -> Column {
     let n = arm.dof();
     let shift = |joint: usize, vector: [f64; 3], w0: f64, w1: f64| Column {
         vector: vector.map(|x| x as f32),
@@ -84,7 +79,7 @@ fn column(key: ParamKey, arm: &Arm) -> Result<Column, String> {
         e[c] = 1.0;
         e
     };
-    Ok(match key {
+    match key {
         ParamKey::ZeroOffset(j) => Column::new(Kind::Turn, j as u8),
         ParamKey::Tilt(j, c) => {
             let joint = &arm.joints[j];
@@ -103,14 +98,28 @@ fn column(key: ParamKey, arm: &Arm) -> Result<Column, String> {
         ParamKey::Gravity(j) => Column::new(Kind::TurnGravity, j as u8),
         ParamKey::Thermal(Some(j)) => shift(j, arm.joints[j].actual_link(), 0.0, 1.0),
         ParamKey::Thermal(None) => shift(n - 1, arm.probe.actual(), 0.0, 1.0),
-        ParamKey::Wobble { .. } => {
-            return Err(format!(
-                "uncertainty.parameters lists `{}`: the table's parameter block holds no axis \
-                 wobble",
-                key.name()
-            ))
+        ParamKey::Wobble {
+            joint,
+            index,
+            beta,
+            comp,
+        } => {
+            // The tilt's column at the fixed tilt, weighed by sin or cos hθ (the wobble moves
+            // the axis by ~1e-4 of itself: far below U95's 1e-3).
+            let j = &arm.joints[joint];
+            let w = tilt_axis(j.axis, j.tilt, usize::from(beta));
+            let kind = if comp == 0 {
+                Kind::TiltSin
+            } else {
+                Kind::TiltCos
+            };
+            Column {
+                vector: [w.x as f32, w.y as f32, w.z as f32],
+                order: j.wobble[index].order as u16,
+                ..Column::new(kind, joint as u8)
+            }
         }
-    })
+    }
 }
 
 /// L with C = L Lᵀ, lower triangular, row by row. C is a covariance, positive semidefinite

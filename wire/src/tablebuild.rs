@@ -7,12 +7,15 @@
 //! probe vectors with their errors, and the probe's unit direction. Layout: `quatarm::table`.
 
 use crate::budget::{budget_data, parameter_data};
+use quatarm::table::wobble::{WobbleData, WobbleTerm, MAX_TERMS as WOBBLE_TERMS};
 use quatarm::table::{
     quat_to_matrix, Harmonic, JointData, ProbeData, TableData, FLAG_GEOMETRIC, MAX_HARMONICS,
     MAX_HARMONIC_ORDER, MAX_TABLE_LEN, SERIAL_LEN,
 };
+use quatarm_ref::arm::Wobble;
+use quatarm_ref::forward::{axis_vector, rotation};
 use quatarm_ref::uncertainty::Uncertainty;
-use quatarm_ref::{Arm, Axis};
+use quatarm_ref::{Arm, Axis, Joint};
 
 /// Why an arm cannot become a table.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -91,18 +94,7 @@ pub fn table_data(arm: &Arm) -> Result<TableData, BuildError> {
         );
         let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
         let q = q.map(|x| x / norm);
-        // The firmware's chains do not apply an axis wobble yet: a table without it would
-        // stream coordinates off by the wobble's lever, so an arm that has one is refused.
-        if let Some(k) = j
-            .wobble
-            .iter()
-            .position(|w| w.alpha != [0.0; 2] || w.beta != [0.0; 2])
-        {
-            return Err(err(
-                format!("{path}.wobble[{}]", k + 1),
-                "an axis wobble; the table holds none (the firmware does not apply it yet)",
-            ));
-        }
+        d.wobble[i] = wobble_data(j, &path)?;
         if j.harmonics.len() > MAX_HARMONICS {
             return Err(err(
                 format!("{path}.harmonics"),
@@ -157,6 +149,67 @@ pub fn table_data(arm: &Arm) -> Result<TableData, BuildError> {
         ball_diameter: arm.probe.ball_diameter,
     };
     d.flags = d.content_flags() | if geometric { FLAG_GEOMETRIC } else { 0 };
+    Ok(d)
+}
+
+/// A joint's axis wobble for the table: its non-zero terms, and the two fixed axes the chains
+/// turn about (`quatarm::table::wobble`), f1 = R(u, −Δθ) R(e2, −β) e1 and f2 = R(u, −Δθ) e2
+/// in the joint's frame (the identity the reference pins:
+/// `a_wobble_is_the_fixed_tilt_then_two_turns_about_fixed_axes`).
+fn wobble_data(j: &Joint, path: &str) -> Result<WobbleData, BuildError> {
+    let terms: Vec<(usize, &Wobble)> = j
+        .wobble
+        .iter()
+        .enumerate()
+        .filter(|(_, w)| w.alpha != [0.0; 2] || w.beta != [0.0; 2])
+        .collect();
+    let mut d = WobbleData::default();
+    if terms.is_empty() {
+        return Ok(d);
+    }
+    if terms.len() > WOBBLE_TERMS {
+        return Err(err(
+            format!("{path}.wobble"),
+            format!(
+                "{} non-zero terms; the table holds {WOBBLE_TERMS} per joint",
+                terms.len()
+            ),
+        ));
+    }
+    let mut sum = 0.0;
+    for (slot, (k, w)) in d.terms.iter_mut().zip(&terms) {
+        if w.order == 0 || w.order > u32::from(MAX_HARMONIC_ORDER) {
+            return Err(err(
+                format!("{path}.wobble[{}].order", k + 1),
+                format!("{}; the table takes 1..={MAX_HARMONIC_ORDER}", w.order),
+            ));
+        }
+        sum += w.alpha.iter().chain(&w.beta).map(|c| c.abs()).sum::<f64>();
+        *slot = WobbleTerm {
+            order: w.order as u16,
+            alpha: w.alpha,
+            beta: w.beta,
+        };
+    }
+    // Finite and small, as the chains' second-order turns need; NaN is refused too.
+    let small = sum <= quatarm::table::limits::HARMONIC_SUM;
+    if !small {
+        return Err(err(
+            format!("{path}.wobble"),
+            format!(
+                "sum of |coefficients| {sum:.3e} rad; the table takes at most {:e}",
+                quatarm::table::limits::HARMONIC_SUM
+            ),
+        ));
+    }
+    let (e1, e2) = j.axis.perpendicular();
+    let (u, e1, e2) = (axis_vector(j.axis), axis_vector(e1), axis_vector(e2));
+    let back = rotation(&u, -j.zero_offset);
+    let f1 = back * rotation(&e2, -j.tilt[1]) * e1;
+    let f2 = back * e2;
+    d.f1 = [f1.x, f1.y, f1.z];
+    d.f2 = [f2.x, f2.y, f2.z];
+    d.count = terms.len() as u8;
     Ok(d)
 }
 
@@ -219,21 +272,63 @@ mod tests {
     use super::*;
     use quatarm_ref::arm::Wobble;
 
+    /// A wobble reaches the table with the axes the reference's identity names, only its
+    /// non-zero terms, and too large or too many terms are refused with their key.
     #[test]
-    fn an_axis_wobble_is_refused_with_its_key() {
+    fn an_axis_wobble_reaches_the_table_and_bad_ones_are_refused_with_their_key() {
         let mut arm = Arm::default6();
-        assert!(build_with(&arm, None).is_ok());
         arm.joints[2].wobble.push(Wobble {
             order: 2,
             alpha: [0.0; 2],
             beta: [0.0; 2],
         });
-        assert!(
-            build_with(&arm, None).is_ok(),
-            "a zero entry changes nothing"
+        let t = build_with(&arm, None).unwrap();
+        let t = quatarm::Table::parse(&t).unwrap();
+        assert_eq!(
+            t.flags() & quatarm::table::FLAG_WOBBLE,
+            0,
+            "a zero entry is none"
         );
-        arm.joints[2].wobble[0].beta[1] = 3e-5;
-        let e = build_with(&arm, None).unwrap_err().to_string();
-        assert!(e.contains("joint[3].wobble[1]"), "{e}");
+        let j = &mut arm.joints[2];
+        (j.tilt, j.zero_offset) = ([2e-3, -3e-3], 0.4);
+        j.wobble.push(Wobble {
+            order: 3,
+            alpha: [1e-5, 0.0],
+            beta: [0.0, 3e-5],
+        });
+        let bytes = build_with(&arm, None).unwrap();
+        let w = quatarm::Table::parse(&bytes).unwrap().joint_wobble(2);
+        assert_eq!(
+            (w.count, w.terms[0].order, w.terms[0].beta),
+            (1, 3, [0.0, 3e-5])
+        );
+        // Joint 3 of default-6 turns about its own z (e1 = x, e2 = y): f2 = R(z, -0.4) y,
+        // f1 = R(z, -0.4) R(y, 3e-3) x (R(y, φ) x = (cos φ, 0, -sin φ)).
+        let (c, s) = (0.4f64.cos(), 0.4f64.sin());
+        let want_f2 = [s, c, 0.0];
+        let (cb, sb) = (3e-3f64.cos(), 3e-3f64.sin());
+        let want_f1 = [c * cb, -s * cb, -sb];
+        for k in 0..3 {
+            assert!((w.f2[k] - want_f2[k]).abs() < 1e-15, "{:?}", w.f2);
+            assert!((w.f1[k] - want_f1[k]).abs() < 1e-15, "{:?}", w.f1);
+        }
+        let mut big = arm.clone();
+        big.joints[2].wobble[1].alpha = [6e-4, 6e-4];
+        let e = build_with(&big, None).unwrap_err().to_string();
+        assert!(e.contains("joint[3].wobble: sum of |coefficients|"), "{e}");
+        let mut many = arm.clone();
+        many.joints[2].wobble = (1..=5)
+            .map(|order| Wobble {
+                order,
+                alpha: [1e-6, 0.0],
+                beta: [0.0; 2],
+            })
+            .collect();
+        let e = build_with(&many, None).unwrap_err().to_string();
+        assert!(e.contains("joint[3].wobble: 5 non-zero terms"), "{e}");
+        many.joints[2].wobble.truncate(4);
+        many.joints[2].wobble[3].order = 65;
+        let e = build_with(&many, None).unwrap_err().to_string();
+        assert!(e.contains("joint[3].wobble[4].order: 65"), "{e}");
     }
 }

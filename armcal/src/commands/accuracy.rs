@@ -1,7 +1,7 @@
 //! `armcal accuracy`: the firmware paths against the f64 reference over random poses.
 
 use anyhow::Context;
-use armcal::accuracy::{full_calibration, measure, PATHS, SEED};
+use armcal::accuracy::{full_calibration, measure, with_wobble, PATHS, SEED};
 use std::path::PathBuf;
 
 /// Arguments of `armcal accuracy`.
@@ -16,34 +16,63 @@ pub struct Args {
     /// Seed of the random poses.
     #[arg(long, default_value_t = SEED)]
     seed: u64,
-    /// Write the built-in full calibration to this TOML file and stop (how
-    /// `data/default-6-full.toml` was made).
+    /// Write the built-in full calibration (with `--wobble`, the wobble too) to this TOML
+    /// file and stop (how `data/default-6-full.toml` and `data/default-6-wobble.toml` were
+    /// made).
     #[arg(long)]
     write_calib: Option<PathBuf>,
+    /// Add an axis wobble to every joint of the arm (`armcal::accuracy::with_wobble`: orders
+    /// 1-3, and 4 on the hinges, each coefficient up to this many rad; 1e-4 is a worn
+    /// bearing's).
+    #[arg(long, value_name = "RAD")]
+    wobble: Option<f64>,
     /// Worker threads (the result does not depend on it).
     #[arg(long, default_value_t = 2)]
     threads: usize,
 }
 
+/// `--wobble`'s size, checked.
+fn wobble_size(size: f64) -> anyhow::Result<f64> {
+    anyhow::ensure!(
+        size.is_finite() && size > 0.0,
+        "--wobble: {size}: give a positive size in rad (1e-4 is a worn bearing's)"
+    );
+    Ok(size)
+}
+
 /// Runs the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(path) = &args.write_calib {
-        let text = quatarm_ref::calfile::write(
-            &full_calibration(),
-            &[
-                "default-6 with a realistic calibration that uses every term of the model:",
-                "zero offsets and tilts of a few mrad, link errors up to 1 mm, two encoder",
-                "harmonics per joint, gravity compliance on the hinges, thermal expansion",
-                "(aluminium links 1, 3, 5; carbon-fibre links 2, 4, 6; steel probe).",
-                "Written by `armcal accuracy --write-calib` (armcal::accuracy::full_calibration).",
-            ],
-        );
+        let arm = match args.wobble {
+            Some(size) => with_wobble(&full_calibration(), wobble_size(size)?),
+            None => full_calibration(),
+        };
+        let mut header = vec![
+            "default-6 with a realistic calibration that uses every term of the model:",
+            "zero offsets and tilts of a few mrad, link errors up to 1 mm, two encoder",
+            "harmonics per joint, gravity compliance on the hinges, thermal expansion",
+            "(aluminium links 1, 3, 5; carbon-fibre links 2, 4, 6; steel probe).",
+            "Written by `armcal accuracy --write-calib` (armcal::accuracy::full_calibration).",
+        ];
+        let wobble_line;
+        if let Some(size) = args.wobble {
+            wobble_line = format!(
+                "With an axis wobble on every joint: `--wobble {size:e}` \
+                 (armcal::accuracy::with_wobble)."
+            );
+            header.push(&wobble_line);
+        }
+        let text = quatarm_ref::calfile::write(&arm, &header);
         std::fs::write(path, text).with_context(|| path.display().to_string())?;
         return Ok(());
     }
     let arm = match &args.calib {
         Some(p) => armcal::load::arm(p)?,
         None => full_calibration(),
+    };
+    let arm = match args.wobble {
+        Some(size) => with_wobble(&arm, wobble_size(size)?),
+        None => arm,
     };
     let bar = indicatif::ProgressBar::new(args.poses);
     bar.set_style(

@@ -89,11 +89,16 @@ pub fn run(command: Command) -> anyhow::Result<()> {
             std::fs::write(&output, &bytes).with_context(|| output.display().to_string())?;
             let t = Table::parse(&bytes)?;
             println!(
-                "{}: {} bytes, {} joints, CRC {:08x}",
+                "{}: {} bytes, {} joints, CRC {:08x}{}",
                 output.display(),
                 bytes.len(),
                 t.joint_count(),
-                t.crc()
+                t.crc(),
+                if t.wobble().is_some() {
+                    " (with an axis wobble: the f32 hubs apply it; the Cortex-M0 hubs refuse the table)"
+                } else {
+                    ""
+                }
             );
             Ok(())
         }
@@ -190,6 +195,7 @@ pub fn show(t: &Table<'_>) -> String {
         (FLAG_HARMONICS, "harmonics"),
         (FLAG_GRAVITY, "gravity"),
         (FLAG_THERMAL, "thermal"),
+        (quatarm::table::FLAG_WOBBLE, "axis wobble (f32 hubs only)"),
     ]
     .iter()
     .filter(|(f, _)| flags & f != 0)
@@ -243,6 +249,21 @@ pub fn show(t: &Table<'_>) -> String {
                 s,
                 "  harmonic order {}: sin {:e}, cos {:e} rad",
                 h.order, h.sin, h.cos
+            );
+        }
+        let w = t.joint_wobble(i);
+        for term in &w.terms[..usize::from(w.count).min(w.terms.len())] {
+            let _ = writeln!(
+                s,
+                "  axis wobble order {}: alpha sin {:e}, cos {:e}; beta sin {:e}, cos {:e} rad",
+                term.order, term.alpha[0], term.alpha[1], term.beta[0], term.beta[1]
+            );
+        }
+        if w.count > 0 {
+            let _ = writeln!(
+                s,
+                "    about f1 = [{:.12}, {:.12}, {:.12}], f2 = [{:.12}, {:.12}, {:.12}]",
+                w.f1[0], w.f1[1], w.f1[2], w.f2[0], w.f2[1], w.f2[2]
             );
         }
     }

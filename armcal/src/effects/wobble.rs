@@ -110,19 +110,43 @@ impl Family for Wobbles {
         let Link::Joint(k) = at else {
             return Vec::new();
         };
-        let n = arm.joints[k]
+        let terms: Vec<_> = arm.joints[k]
             .wobble
             .iter()
             .filter(|w| w.alpha.iter().chain(&w.beta).any(|x| *x != 0.0))
-            .count();
-        if n == 0 {
-            return Vec::new();
+            .collect();
+        let (most, highest) = (
+            quatarm::table::wobble::MAX_TERMS,
+            quatarm::table::MAX_HARMONIC_ORDER,
+        );
+        let mut out = Vec::new();
+        if terms.len() > most {
+            out.push(format!(
+                "joint {} has {} axis wobble terms; the table holds {most}",
+                k + 1,
+                terms.len()
+            ));
         }
-        vec![format!(
-            "joint {} has {n} axis wobble term(s); the table holds none (the firmware's chains \
-             apply a fixed tilt)",
-            k + 1
-        )]
+        if let Some(w) = terms.iter().find(|w| w.order > u32::from(highest)) {
+            out.push(format!(
+                "joint {} axis wobble of order {}; the table holds orders up to {highest}",
+                k + 1,
+                w.order
+            ));
+        }
+        let sum: f64 = terms
+            .iter()
+            .flat_map(|w| w.alpha.iter().chain(&w.beta))
+            .map(|x| x.abs())
+            .sum();
+        let limit = quatarm::table::limits::HARMONIC_SUM;
+        if sum > limit {
+            out.push(format!(
+                "joint {} axis wobble: Σ|coefficients| = {sum:.3e} rad; the table holds {limit:e} rad",
+                k + 1
+            ));
+        }
+        out
     }
 
     fn clear(&self, arm: &mut Arm) {

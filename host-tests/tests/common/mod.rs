@@ -23,12 +23,19 @@ use quatarm_wire::tablesign;
 /// `host_tests::boards`), `bounds` for its full recording, `full_recording`, the name of
 /// that test (it says the bound), and `update`, the case of its hub's update port
 /// ([`update_with_resets`] or [`update_not_supported`]), and `u95`, the case of its points'
-/// uncertainty ([`u95_matches_the_host`] or [`no_u95`]). They are `#[ignore]`d for plain `cargo test`, which has
+/// uncertainty ([`u95_matches_the_host`] or [`no_u95`]), and `wobble`, a table with an axis
+/// wobble ([`wobble_applied`] or [`wobble_refused`]). They are `#[ignore]`d for plain `cargo test`, which has
 /// neither QEMU nor the cross-built board; `cargo xtask test` builds the boards and runs them
 /// with `--include-ignored`.
 macro_rules! board_tests {
     (board: $board:literal, bounds: $bounds:expr, full_recording: $full:ident,
-     update: $update:ident, u95: $u95:ident $(,)?) => {
+     update: $update:ident, u95: $u95:ident, wobble: $wobble:ident $(,)?) => {
+        #[test]
+        #[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
+        fn a_table_with_an_axis_wobble() {
+            $crate::common::$wobble($board, $bounds);
+        }
+
         #[test]
         #[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
         fn the_uncertainty_of_every_point() {
@@ -404,6 +411,69 @@ pub fn bad_tables(name: &str) {
             assert!(!rep.status.table_valid(), "{what}");
             assert_eq!(rep.point, None, "{what}: coordinates from a bad table");
         }
+    }
+}
+
+/// The shipped calibration with an axis wobble on every joint (`data/default-6-wobble.toml`).
+fn wobble_calibration() -> (quatarm_ref::Arm, Vec<u8>) {
+    calibration(&host_tests::boards::root().join("data/default-6-wobble.toml")).unwrap()
+}
+
+/// An f32 hub applies the wobble: 2,000 recorded readings, bit-identical to the host build
+/// and within `bounds` of the f64 reference with the wobble; the same readings are far from
+/// the reference without it (so a hub that ignored the block would fail).
+#[allow(dead_code)] // each board's test binary uses one of the two wobble cases
+pub fn wobble_applied(name: &str, bounds: Bounds) {
+    let b = the_board(name);
+    let (arm, table) = wobble_calibration();
+    let (still, _) = calibration(&default_calibration_path()).unwrap();
+    let readings: Vec<Reading> = recording::read(&default_recording_path())
+        .unwrap()
+        .into_iter()
+        .take(2_000)
+        .collect();
+    let out = replay(&b, Some(&table), &replay_bytes(&readings, None)).unwrap();
+    assert_ran(&b, &out);
+    assert_eq!(out.hellos[0].status.table(), TableState::Valid);
+    assert_eq!(out.reports.len(), readings.len());
+    let host = host_points(b.precision, &table, &readings).unwrap();
+    let (mut worst, mut worst_dir, mut moved) = (0.0f64, 0.0f64, 0.0f64);
+    for (i, ((rep, r), h)) in out.reports.iter().zip(&readings).zip(&host).enumerate() {
+        let c = rep
+            .point
+            .unwrap_or_else(|| panic!("reading {i}: no coordinates"));
+        assert_eq!(Ok(c), *h, "reading {i}: target and host builds differ");
+        let (p, n) = reference(&arm, r);
+        worst = worst.max(deviation_um(&c, &p));
+        worst_dir = worst_dir.max(direction_deviation(&c, &n));
+        moved = moved.max(deviation_um(&c, &reference(&still, r).0));
+    }
+    eprintln!(
+        "{name}: axis wobble, {} readings bit-identical to the host; from f64: tip {worst:.4} um, direction {worst_dir:.2e}; the wobble moves the tip by up to {moved:.1} um",
+        readings.len()
+    );
+    assert!(worst <= bounds.tip_um, "tip {worst} um");
+    assert!(worst_dir <= bounds.dir, "direction {worst_dir}");
+    assert!(
+        moved > 20.0 * bounds.tip_um,
+        "the wobble moved the tip by {moved} um only"
+    );
+}
+
+/// A hub built without the wobble (the Cortex-M0's) refuses a table with one as `Malformed`
+/// (a flag it does not read), streams no coordinates, and says so in every report.
+#[allow(dead_code)] // each board's test binary uses one of the two wobble cases
+pub fn wobble_refused(name: &str, _bounds: Bounds) {
+    let b = the_board(name);
+    let (_, table) = wobble_calibration();
+    let readings = some_readings(3);
+    let out = replay(&b, Some(&table), &replay_bytes(&readings, None)).unwrap();
+    assert_ran(&b, &out);
+    assert_eq!(out.hellos[0].status.table(), TableState::Malformed);
+    assert_eq!(out.reports.len(), readings.len());
+    for rep in &out.reports {
+        assert_eq!(rep.status.table(), TableState::Malformed);
+        assert_eq!(rep.point, None, "coordinates from a table it cannot apply");
     }
 }
 
