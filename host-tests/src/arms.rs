@@ -4,8 +4,8 @@
 //!
 //! Every value is drawn over the whole range the table admits ([`quatarm::table::limits`]):
 //! any axis, any counts per revolution, any fixed rotation (tilts and zero offsets of any
-//! size, D–H twists included), links and probe up to the table's 5 m, harmonics of any order
-//! up to their summed limit, gravity compliance and thermal expansion up to their limits, and
+//! size, D–H twists included), links and probe up to the table's 5 m, harmonics and axis
+//! wobble of any order up to their summed limits, gravity compliance and thermal expansion up to their limits, and
 //! readings anywhere in the encoders' turn at any accepted temperature. Values favour the
 //! edges (zero, the limit, powers of ten below it) as well as the interior, and the arm is
 //! often scaled so that its reach lies just inside an evaluator's limit, where rounding and
@@ -20,6 +20,7 @@
 use arbitrary::{Result as ArbResult, Unstructured};
 use quatarm::table::limits;
 use quatarm::{Arithmetic, Chain, ChainError, Evaluator, Fixed, MatrixChain, Point, Table, F32};
+use quatarm_ref::arm::Wobble;
 use quatarm_ref::{Arm, Axis, Harmonic, Joint, Probe};
 use std::f64::consts::PI;
 
@@ -118,6 +119,39 @@ fn harmonics(u: &mut Unstructured) -> ArbResult<Vec<Harmonic>> {
     Ok(h)
 }
 
+/// Up to four axis wobble terms of any order, their sum within the table's limit (half the
+/// time none; none once the bytes run out, so that the inputs found before the wobble, drawn
+/// last, keep their arms).
+fn wobble(u: &mut Unstructured) -> ArbResult<Vec<Wobble>> {
+    let count = if u.arbitrary::<bool>()? {
+        u.int_in_range(1usize..=quatarm::table::wobble::MAX_TERMS)?
+    } else {
+        0
+    };
+    let mut w = Vec::with_capacity(count);
+    for _ in 0..count {
+        let limit = limits::HARMONIC_SUM;
+        w.push(Wobble {
+            order: u32::from(u.int_in_range(1u16..=quatarm::table::MAX_HARMONIC_ORDER)?),
+            alpha: [value(u, limit)?, value(u, limit)?],
+            beta: [value(u, limit)?, value(u, limit)?],
+        });
+    }
+    let sum: f64 = w
+        .iter()
+        .flat_map(|t| t.alpha.iter().chain(&t.beta))
+        .map(|x| x.abs())
+        .sum();
+    if sum > limits::HARMONIC_SUM {
+        let k = limits::HARMONIC_SUM * (1.0 - 1e-9) / sum;
+        for t in &mut w {
+            t.alpha = t.alpha.map(|x| x * k);
+            t.beta = t.beta.map(|x| x * k);
+        }
+    }
+    Ok(w)
+}
+
 fn joint(u: &mut Unstructured) -> ArbResult<Joint> {
     let error_limit = if u.arbitrary::<bool>()? { 1.0 } else { 100.0 };
     Ok(Joint {
@@ -207,6 +241,10 @@ pub fn case(u: &mut Unstructured) -> ArbResult<Case> {
             _ => u.int_in_range(-80_000..=120_000)?,
         };
         readings.push((c, t));
+    }
+    // Last: the wobble changes neither the reach nor the readings' ranges.
+    for j in &mut arm.joints {
+        j.wobble = wobble(u)?;
     }
     Ok(Case { arm, readings })
 }
