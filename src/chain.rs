@@ -34,6 +34,12 @@
 //! itself. Below the threshold the lever is taken as it stands and the direction from Q turned
 //! by Σ e_k a_k, to first order.
 //!
+//! An axis wobble ([`crate::wobble`], behind the `wobble` feature) is a small rotation vector φ
+//! per wobbling joint and reading, applied right after M̃_i: base to tip as one more product,
+//! Q ⊗ M̃_i ⊗ Z(qπ/2) ⊗ W' with W' the small turn about φ turned back by the quarter turns
+//! (exact), tip to base on every carried vector before E_i. An arm without one (and without
+//! the second-order gravity terms) takes a copy of the code with both compiled out.
+//!
 //! A matrix chain could not be written this way for the same price: it would still have to
 //! compose its matrices for the direction and the verticals, and a composed 3×3 matrix costs
 //! 27 products a joint where a quaternion costs 16. (Measured cost: `docs/results/chain.md`;

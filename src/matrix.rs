@@ -10,6 +10,8 @@
 //! first-order gravity correction would miss ([`crate::model::SECOND_ORDER_DEFLECTION`]), it
 //! evaluates the spec's truth instead: the chain again with the deflections in the angles.
 //!
+//! An axis wobble ([`crate::wobble`]) turns M̃_i's rows by −φ, so that R_i = M̃_i W_i Rot(z, θ_i).
+//!
 //! It exists to measure, on the same arm and targets, whether the quaternion chain is really
 //! as accurate and as cheap (`armcal accuracy`, `cargo xtask bench-target`).
 
@@ -131,10 +133,22 @@ impl<P: Physics> MatrixChain<P> {
         // A copy without the wobble's tests for the arms that have none (always, without the
         // feature: `any` is then `false` at compile time and the other copy is not built).
         if self.wobble.any() {
-            self.eval_seen_with(counts, temp_mc, true, seen)
+            self.eval_seen_wobbling(counts, temp_mc, seen)
         } else {
             self.eval_seen_with(counts, temp_mc, false, seen)
         }
+    }
+
+    /// [`Self::eval_seen`] with the wobble. Out of line, as the quaternion chain's copy with
+    /// every term: sharing a function with the lean copy costs that copy registers.
+    #[inline(never)]
+    fn eval_seen_wobbling(
+        &self,
+        counts: &[u32],
+        temp_mc: i32,
+        seen: &mut impl FnMut(usize, &Mat<P>, &Vec3<P::L>),
+    ) -> Result<Point<P>, ChainError> {
+        self.eval_seen_with(counts, temp_mc, true, seen)
     }
 
     #[inline(always)]
@@ -181,14 +195,18 @@ impl<P: Physics> MatrixChain<P> {
         let mut compliant = 0;
         // `check` made counts.len() = n ≤ MAX_JOINTS.
         for (i, &count) in counts.iter().enumerate().take(MAX_JOINTS) {
-            let (j, mut mj) = (&m.joints[i], self.rotation[i]);
+            let j = &m.joints[i];
             let jr = j.reading(i, count, dt, true)?;
             let (mut c, mut sn) = jr.full.unwrap_or((P::ONE, zero));
-            if at.wobble && self.wobble.has(i) {
+            let wobbled;
+            let mj = if at.wobble && self.wobble.has(i) {
                 // M̃ W: each row r of M̃ times W is Wᵀ r, r turned by −φ.
                 let phi = self.wobble.turn(i, c, sn).map(|x| -x);
-                mj = mj.map(|row| turn_small(&phi, row));
-            }
+                wobbled = self.rotation[i].map(|row| turn_small(&phi, row));
+                &wobbled
+            } else {
+                &self.rotation[i]
+            };
             let mut e = jr.e;
             let mut turn = j.harmonic_count > 0;
             if let (true, Some(d)) = (j.has_gravity, deflections) {
@@ -212,7 +230,7 @@ impl<P: Physics> MatrixChain<P> {
             }
             // R_i = M̃ · Rot(z, θ): the third column of M̃ stays, the first two turn by θ.
             let mut ri: Mat<P> = [[zero; 3]; 3];
-            for (row, src) in ri.iter_mut().zip(&mj) {
+            for (row, src) in ri.iter_mut().zip(mj) {
                 *row = [
                     src[0].scale(c) + src[1].scale(sn),
                     src[1].scale(c) - src[0].scale(sn),

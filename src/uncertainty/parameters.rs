@@ -109,6 +109,22 @@ impl<'a, P: Physics> ParameterPart<'a, P> {
         Ok(())
     }
 
+    /// sin hθ_k or cos hθ_k of a periodic column, hθ reduced to a turn in integers first
+    /// (θ = 2π c / counts), so that the f32 angle stays below 2π whatever the order.
+    /// micromath's (≈ 1e-3 off): a weight of one column, harmless at U95's 1 %.
+    #[inline(always)]
+    fn weight(&self, col: &Column, counts: &[u32], k: usize) -> f32 {
+        let c = u64::from(counts.get(k).copied().unwrap_or(0));
+        let n = u64::from(self.counts[k].max(1));
+        let phase = (u64::from(col.order) * c) % n;
+        let a = phase as f32 / n as f32 * core::f32::consts::TAU;
+        if matches!(col.kind, Kind::TurnSin | Kind::TiltSin) {
+            F32Ext::sin(a)
+        } else {
+            F32Ext::cos(a)
+        }
+    }
+
     /// ∂p/∂π for one parameter (mm per the parameter's unit).
     fn column(
         &self,
@@ -141,27 +157,13 @@ impl<'a, P: Physics> ParameterPart<'a, P> {
             };
             cross::<F32>(&mat_vec(before, vector), &lever)
         };
-        // sin hθ_k or cos hθ_k, hθ reduced to a turn in integers first (θ = 2π c / counts), so
-        // that the f32 angle stays below 2π whatever the order. micromath's (≈ 1e-3 off): a
-        // weight of one column, harmless at U95's 1 %.
-        let weight = || {
-            let c = u64::from(counts.get(k).copied().unwrap_or(0));
-            let n = u64::from(self.counts[k].max(1));
-            let phase = (u64::from(col.order) * c) % n;
-            let a = phase as f32 / n as f32 * core::f32::consts::TAU;
-            if matches!(col.kind, Kind::TurnSin | Kind::TiltSin) {
-                F32Ext::sin(a)
-            } else {
-                F32Ext::cos(a)
-            }
-        };
         match col.kind {
             Kind::Turn => turn(),
-            Kind::TurnSin | Kind::TurnCos => scaled(turn(), weight()),
+            Kind::TurnSin | Kind::TurnCos => scaled(turn(), self.weight(col, counts, k)),
             // The first-order lever of the spec: a_k · ((p − o_k) × ẑ).
             Kind::TurnGravity => scaled(turn(), axis[0] * lever[1] - axis[1] * lever[0]),
             Kind::Tilt => tilt(),
-            Kind::TiltSin | Kind::TiltCos => scaled(tilt(), weight()),
+            Kind::TiltSin | Kind::TiltCos => scaled(tilt(), self.weight(col, counts, k)),
             Kind::Shift => scaled(mat_vec(r, vector), col.w0 + col.w1 * dt),
         }
     }
