@@ -65,6 +65,15 @@ pub enum ChainError {
         /// The evaluator's limit, mm.
         limit_mm: u32,
     },
+    /// The arm's sum of levers (Σ over the joints of the reach beyond each, +4 % thermal)
+    /// exceeds what this evaluator keeps within its bound (f32: its rounding of each joint's
+    /// turn, times the lever).
+    Levers {
+        /// The sum with its thermal margin, whole mm rounded up.
+        levers_mm: u32,
+        /// The evaluator's limit, mm.
+        limit_mm: u32,
+    },
 }
 
 impl fmt::Display for ChainError {
@@ -81,6 +90,13 @@ impl fmt::Display for ChainError {
             ChainError::Reach { reach_mm, limit_mm } => write!(
                 f,
                 "reach {reach_mm} mm (links and probe, +4 % thermal) exceeds this evaluator's {limit_mm} mm"
+            ),
+            ChainError::Levers {
+                levers_mm,
+                limit_mm,
+            } => write!(
+                f,
+                "sum of levers {levers_mm} mm (the reach beyond each joint, +4 % thermal) exceeds this evaluator's {limit_mm} mm"
             ),
             ChainError::Range { joint } => {
                 write!(f, "joint {joint}: table value does not fit this evaluator")
@@ -329,6 +345,7 @@ impl<P: Physics> Model<P> {
         let n = table.joint_count();
         let mut joints = [JointModel::<P>::default(); MAX_JOINTS];
         let mut reach = 0.0;
+        let mut levers = 0.0;
         let mut gravity = 0.0;
         let mut last_axis = BASE_AXIS;
         for (i, jm) in joints.iter_mut().enumerate().take(n) {
@@ -362,11 +379,14 @@ impl<P: Physics> Model<P> {
                 None
             };
             reach += l1(j.link);
+            // Link i lies beyond joints 1..=i + 1: it is in i + 1 levers.
+            levers += l1(j.link) * (i + 1) as f64;
             gravity += abs(j.gravity);
             let (mut link, mut rate) = (j.link, j.link.map(|x| x * j.thermal));
             if i + 1 == n {
                 let p = table.probe();
                 reach += l1(p.vector);
+                levers += l1(p.vector) * n as f64;
                 for k in 0..3 {
                     link[k] += p.vector[k];
                     rate[k] += p.vector[k] * p.thermal;
@@ -395,6 +415,16 @@ impl<P: Physics> Model<P> {
                 reach_mm: reach as u32 + 1,
                 limit_mm: P::MAX_REACH_MM as u32,
             });
+        }
+        if let Some(limit) = P::MAX_LEVERS_MM {
+            let levers = levers * THERMAL_MARGIN;
+            let fits = levers < limit;
+            if !fits {
+                return Err(ChainError::Levers {
+                    levers_mm: levers as u32 + 1,
+                    limit_mm: limit as u32,
+                });
+            }
         }
         Ok(Model {
             n,

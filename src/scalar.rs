@@ -84,6 +84,12 @@ pub trait Arithmetic: Copy + Default + Debug + 'static {
     /// Largest absolute length (mm) that the chain may meet anywhere; the table must keep the
     /// arm's reach below it.
     const MAX_REACH_MM: f64;
+    /// Largest sum of the levers, Σ_k (reach beyond joint k), mm with the thermal margin, that
+    /// the chain keeps within its bound (`None`: no limit beyond the reach). Each joint's
+    /// rounded turn (f32: its remainder's sine and cosine within 6e-8) moves the tip by that
+    /// much times its lever, so the rounding grows with the sum of the levers, not with the
+    /// reach alone.
+    const MAX_LEVERS_MM: Option<f64>;
     /// Whether products drift |q| enough to matter, so that the quaternion chain divides the
     /// norm out of every rotation (f32: some 1e-7 per product, 0.3 µm at the tip) rather than
     /// trusting |q| = 1 (fixed point: 1e-9 per product, under a nanometre).
@@ -142,6 +148,13 @@ impl Arithmetic for F32 {
     /// with its sensor: 1627.2 mm with the margin), and is inside the stream's i32
     /// nanometres (2147.48 mm).
     const MAX_REACH_MM: f64 = 1650.0;
+    /// The fuzz target's fifth finding was inside the reach limit: 1.101 µm at 1649.998 mm
+    /// with the margin (a 1550 mm probe at the end of six joints about x with no links, so
+    /// every joint has the whole lever: Σ 11,363 mm). The findings before it had 11,711 mm
+    /// (1.047 µm) and 14,000 mm (1.125 µm); the real arms at most 6,507 (the MUKCa Panda with
+    /// its sensor; `default-6` 5,379). 9,000 mm keeps the bound (1.101 µm × 9,000 / 11,363 =
+    /// 0.87 µm) and serves every one of them.
+    const MAX_LEVERS_MM: Option<f64> = Some(9000.0);
     const DIVIDE_NORM: bool = true;
 
     #[inline(always)]
@@ -456,6 +469,9 @@ impl Arithmetic for Fixed {
     const SQRT_HALF: Unit = q30(core::f64::consts::FRAC_1_SQRT_2);
     /// Positions are I12F20: keep 48 mm of the ±2048 mm range as margin for rounding.
     const MAX_REACH_MM: f64 = 2000.0;
+    /// Fixed point's rounding is absolute (2^-30 a turn, 1e-6 mm a length): within its bound
+    /// at any sum of levers the table holds (the fuzz target's arms up to 14,000 mm).
+    const MAX_LEVERS_MM: Option<f64> = None;
     const DIVIDE_NORM: bool = false;
 
     #[inline(always)]

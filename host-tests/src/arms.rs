@@ -311,9 +311,13 @@ pub fn worst<P: Arithmetic>(
     Ok(w)
 }
 
-/// Whether a chain refusal names its cause (a value or the reach that does not fit).
+/// Whether a chain refusal names its cause (a value, the reach or the levers that do not
+/// fit).
 fn named(e: &ChainError) -> bool {
-    matches!(e, ChainError::Range { .. } | ChainError::Reach { .. })
+    matches!(
+        e,
+        ChainError::Range { .. } | ChainError::Reach { .. } | ChainError::Levers { .. }
+    )
 }
 
 /// One precision's chains (quaternion and matrix) on a table: a named refusal, or both

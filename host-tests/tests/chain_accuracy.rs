@@ -506,6 +506,55 @@ fn the_fuzz_finding_on_f32_reach() {
     );
 }
 
+/// The fuzz target's fifth finding, inside f32's reach limit (1649.998 mm with the margin):
+/// a 1550 mm probe at the end of six joints about x with no links, every joint with the
+/// whole lever (Σ 11,363 mm), where the f32 quaternion chain reached 1.101 µm. f32 now also
+/// limits the sum of the levers (9,000 mm, `Arithmetic::MAX_LEVERS_MM`) and refuses it by
+/// name; fixed point serves it within its bound.
+#[test]
+fn the_fuzz_finding_on_f32_levers() {
+    let bytes = std::fs::read(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/fuzz/f32-levers-11363mm-1.101um.bin"),
+    )
+    .unwrap();
+    let v = host_tests::arms::check_bytes(&bytes).unwrap();
+    assert!(
+        matches!(
+            v,
+            Some(host_tests::arms::Verdict::RefusedChain {
+                f32: Some(ChainError::Levers {
+                    levers_mm: 11_363,
+                    limit_mm: 9000
+                }),
+                fixed: None
+            })
+        ),
+        "{v:?}"
+    );
+}
+
+/// Every real arm the project has (MUKCa's, `default-6`'s) is inside f32's sum of levers.
+#[test]
+fn every_real_arm_is_inside_the_f32_levers() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../data");
+    let mut seen = 0;
+    for d in [dir.clone(), dir.join("mukca")] {
+        for e in std::fs::read_dir(d).unwrap() {
+            let p = e.unwrap().path();
+            if p.extension().is_none_or(|x| x != "toml") || p.ends_with("mpe-example.toml") {
+                continue;
+            }
+            let arm = quatarm_ref::calfile::read(&p).unwrap().arm;
+            let bytes = armcal::tablebuild::build(&arm).unwrap();
+            let t = Table::parse(&bytes).unwrap();
+            assert!(Chain::<F32>::new(&t).is_ok(), "{}", p.display());
+            seen += 1;
+        }
+    }
+    assert!(seen >= 20, "{seen} calibration files");
+}
+
 /// The fuzz target's fourth finding after the fix (3,293,291 executions): an arm at f32's
 /// reach limit as it was (1634.6 mm, 1700 mm with the thermal margin; a 1567 mm probe, g of
 /// ±3e-6 on joints 1 and 6, κ = 4e-4), where the f32 quaternion chain's rounding reached
