@@ -4,8 +4,8 @@
 //! two tilt angles ([`crate::table::wobble`]); the varied joint rotation is exactly
 //! M'_k R(f1, A(θ)) R(f2, B(θ)) R(u, θ + e). The chains apply the two turns as one small
 //! rotation vector φ (in the joint's z-axis frame, [`crate::model`]): by the
-//! Baker–Campbell–Hausdorff series, R(f1, A) R(f2, B) = exp([φ]×) with
-//! φ = A f1 + B f2 + ½ A B f1 × f2 to second order, and exp([φ]×) v = v + φ × v +
+//! Baker–Campbell–Hausdorff series, R(f1, A) R(f2, B) = exp(\[φ\]×) with
+//! φ = A f1 + B f2 + ½ A B f1 × f2 to second order, and exp(\[φ\]×) v = v + φ × v +
 //! ½ φ × (φ × v) to second order again. The terms left out are third order: with the table's
 //! |A| + |B| ≤ 1e-3 ([`crate::table::limits::HARMONIC_SUM`]), under 2e-10 rad, 0.4 nm on a
 //! 2 m lever; a real wobble (≤ 1e-4) leaves 1e-13.
