@@ -88,8 +88,8 @@ struct JointRotation<P: Physics> {
 }
 
 /// The quaternion chain of one evaluator.
-// In this order (`repr(C)`): the wobble last, so that the per-point loads of the others keep
-// their short offsets.
+// In this order (`repr(C)`): the wobble last, so that the fields the lean copy of `eval`
+// reads keep the offsets they had before the wobble.
 #[derive(Clone, Copy, Debug)]
 #[repr(C)]
 pub struct Chain<P: Evaluator> {
@@ -237,9 +237,9 @@ impl<P: Evaluator> Chain<P> {
         }
     }
 
-    /// [`Chain::eval`] with every term. Out of line: in one function with the lean copy, its
-    /// registers and spills were shared, and the lean copy took 29 instructions a point more
-    /// on qemu-m4f (1,341 → 1,370).
+    /// [`Chain::eval`] with every term. Out of line, so that the lean copy is a function of
+    /// its own, as before the wobble (its instructions a point on qemu-m4f: 1,341 before,
+    /// 1,344 after).
     #[inline(never)]
     fn eval_every_term(&self, counts: &[u32], temp_mc: i32) -> Result<Point<P>, ChainError> {
         self.eval_with(counts, temp_mc, self.second_order, true)

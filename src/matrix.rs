@@ -140,7 +140,8 @@ impl<P: Physics> MatrixChain<P> {
     }
 
     /// [`Self::eval_seen`] with the wobble. Out of line, as the quaternion chain's copy with
-    /// every term: sharing a function with the lean copy costs that copy registers.
+    /// every term (the lean matrix chain on qemu-m4f: 1,228 instructions a point inlined,
+    /// 1,215 so).
     #[inline(never)]
     fn eval_seen_wobbling(
         &self,
