@@ -174,7 +174,7 @@ impl Prior {
         }
         let sd = match p {
             Param::ZeroOffset(_) | Param::Tilt(..) => self.angle_rad,
-            Param::LinkError(..) | Param::ProbeError(_) => self.length_mm,
+            Param::LinkError(..) | Param::ProbeError(..) => self.length_mm,
             _ => None,
         }?;
         Some(Gaussian { mean: 0.0, sd })
@@ -1538,7 +1538,7 @@ mod tests {
         );
         // The ball (probe), extended effects and the instrument frame are not penalised.
         for p in [
-            Param::ProbeError(2),
+            Param::ProbeError(0, 2),
             Param::Gravity(1),
             Param::FrameTranslation(0),
         ] {

@@ -110,10 +110,10 @@ pub fn error_of(p: Param, unit: &Arm, nominal: &Arm) -> f64 {
             let (u, n) = (&unit.joints[j], &nominal.joints[j]);
             (u.link[c] - n.link[c]) + (u.link_error[c] - n.link_error[c])
         }
-        Param::ProbeError(c) => {
-            let (u, n) = (&unit.probe, &nominal.probe);
-            (u.vector[c] - n.vector[c]) + (u.error[c] - n.error[c])
-        }
+        Param::ProbeError(k, c) => match (unit.probe_at(k), nominal.probe_at(k)) {
+            (Some(u), Some(n)) => (u.vector[c] - n.vector[c]) + (u.error[c] - n.error[c]),
+            _ => 0.0,
+        },
         _ => 0.0,
     }
 }

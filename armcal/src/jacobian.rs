@@ -54,7 +54,9 @@ pub fn tip_jacobian(
             Param::LinkError(j, k) => {
                 c.rotations[j].column(k) * thermal_scale(arm.joints[j].thermal, temp_c)
             }
-            Param::ProbeError(k) => {
+            // The arm as it measured this reading has its probe first (`Arm::for_probe`):
+            // another probe's error does not move this ball.
+            Param::ProbeError(0, k) => {
                 c.rotations[n - 1].column(k) * thermal_scale(arm.probe.thermal, temp_c)
             }
             _ => Vector3::zeros(),

@@ -40,7 +40,7 @@ pub fn scale_direction(arm: &Arm, params: &[Param]) -> Vec<f64> {
         .iter()
         .map(|p| match *p {
             Param::LinkError(j, c) => arm.joints[j].actual_link()[c],
-            Param::ProbeError(c) => arm.probe.actual()[c],
+            Param::ProbeError(k, c) => arm.probe_at(k).map_or(0.0, |p| p.actual()[c]),
             _ => 0.0,
         })
         .collect()
@@ -57,9 +57,19 @@ pub fn can_scale(arm: &Arm, params: &[Param], fitted: &[usize]) -> bool {
             }
         }
     }
-    for (c, v) in arm.probe.actual().iter().enumerate() {
-        if *v != 0.0 {
-            need.push(Param::ProbeError(c));
+    // The first probe always; another only where the data used it (it has unknowns then: a
+    // probe no row was taken with takes no part in the data's scale).
+    let used = |k: usize| {
+        k == 0
+            || params
+                .iter()
+                .any(|p| matches!(p, Param::ProbeError(q, _) if *q == k))
+    };
+    for (k, probe) in arm.probes().enumerate().filter(|(k, _)| used(*k)) {
+        for (c, v) in probe.actual().iter().enumerate() {
+            if *v != 0.0 {
+                need.push(Param::ProbeError(k, c));
+            }
         }
     }
     need.iter().all(|q| fitted.iter().any(|&i| params[i] == *q))

@@ -33,8 +33,9 @@ pub enum Param {
     Tilt(usize, usize),
     /// Component c of Δv_i (mm).
     LinkError(usize, usize),
-    /// Component c of Δv_p (mm).
-    ProbeError(usize),
+    /// Component c (the second field) of Δv_p of the arm's probe at index k (the first;
+    /// `quatarm_ref::Arm::probes` order, 0 the first probe) (mm).
+    ProbeError(usize, usize),
     /// One coefficient of an encoder harmonic ([`effects::harmonic`], rad): of sin(hθ) or of
     /// cos(hθ).
     Harmonic {
@@ -79,7 +80,7 @@ impl Param {
     pub fn is_geometric(self) -> bool {
         matches!(
             self,
-            Param::ZeroOffset(_) | Param::Tilt(..) | Param::LinkError(..) | Param::ProbeError(_)
+            Param::ZeroOffset(_) | Param::Tilt(..) | Param::LinkError(..) | Param::ProbeError(..)
         )
     }
 
@@ -93,7 +94,8 @@ impl Param {
             Param::ZeroOffset(j) => format!("joint[{}].zero_offset", j + 1),
             Param::Tilt(j, c) => format!("joint[{}].tilt[{c}]", j + 1),
             Param::LinkError(j, c) => format!("joint[{}].link_error[{c}]", j + 1),
-            Param::ProbeError(c) => format!("probe.error[{c}]"),
+            Param::ProbeError(0, c) => format!("probe.error[{c}]"),
+            Param::ProbeError(k, c) => format!("probe[{}].error[{c}]", k + 1),
             Param::FrameRotation(c) => format!("reference_frame.rotation_{}", XYZ[c]),
             Param::FrameTranslation(c) => format!("reference_frame.translation[{c}]"),
             _ => unreachable!("effect unknowns are answered by their effect"),
@@ -113,7 +115,12 @@ impl Param {
                 format!("joint {} tilt {sym} (about its {})", j + 1, ax.name())
             }
             Param::LinkError(j, c) => format!("link {} error along {}", j + 1, XYZ[c]),
-            Param::ProbeError(c) => format!("probe error along {}", XYZ[c]),
+            Param::ProbeError(k, c) => match arm.probe_at(k) {
+                Some(p) if arm.probe_count() > 1 => {
+                    format!("probe {} error along {}", p.id, XYZ[c])
+                }
+                _ => format!("probe error along {}", XYZ[c]),
+            },
             Param::FrameRotation(c) => {
                 format!("instrument frame rotation about the base {} axis", XYZ[c])
             }
@@ -161,7 +168,7 @@ impl Param {
         }
         match self {
             Param::ZeroOffset(_) => 1,
-            Param::ProbeError(_) => 2,
+            Param::ProbeError(..) => 2,
             Param::LinkError(..) => 3,
             Param::Tilt(..) => 4,
             _ => 0,
@@ -178,7 +185,7 @@ impl Param {
             Param::ZeroOffset(j) => arm.joints[j].zero_offset,
             Param::Tilt(j, c) => arm.joints[j].tilt[c],
             Param::LinkError(j, c) => arm.joints[j].link_error[c],
-            Param::ProbeError(c) => arm.probe.error[c],
+            Param::ProbeError(k, c) => arm.probe_at(k).map_or(0.0, |p| p.error[c]),
             _ => 0.0,
         }
     }
@@ -192,7 +199,11 @@ impl Param {
             Param::ZeroOffset(j) => arm.joints[j].zero_offset += dx,
             Param::Tilt(j, c) => arm.joints[j].tilt[c] += dx,
             Param::LinkError(j, c) => arm.joints[j].link_error[c] += dx,
-            Param::ProbeError(c) => arm.probe.error[c] += dx,
+            Param::ProbeError(k, c) => {
+                if let Some(p) = arm.probe_at_mut(k) {
+                    p.error[c] += dx;
+                }
+            }
             _ => {}
         }
     }
@@ -338,7 +349,8 @@ pub fn nothing_to_fit() -> String {
     )
 }
 
-/// The 6N + 3 geometric parameters of `spec/arm-model.md`.
+/// The 6N + 3 geometric parameters of `spec/arm-model.md` (the first probe's error; an arm
+/// with several probes adds [`probe_params`] for the others).
 pub fn geometric_params(dof: usize) -> Vec<Param> {
     let mut v = Vec::with_capacity(6 * dof + 3);
     for j in 0..dof {
@@ -349,8 +361,13 @@ pub fn geometric_params(dof: usize) -> Vec<Param> {
             v.push(Param::LinkError(j, c));
         }
     }
-    v.extend((0..3).map(Param::ProbeError));
+    v.extend(probe_params(0));
     v
+}
+
+/// The error Δv_p of the probe at index `k` (`quatarm_ref::Arm::probes` order).
+pub fn probe_params(k: usize) -> impl Iterator<Item = Param> {
+    (0..3).map(move |c| Param::ProbeError(k, c))
 }
 
 /// The instrument frame's six unknowns.

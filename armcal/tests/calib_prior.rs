@@ -131,7 +131,7 @@ fn a_prior_the_data_contradict_is_dropped() {
         mean: truth.probe.error[0] + 3.0,
         sd: 0.01,
     };
-    let probe_x = armcal::params::Param::ProbeError(0);
+    let probe_x = armcal::params::Param::ProbeError(0, 0);
     let fit = calib::calibrate(&nominal, &data, &with_prior(vec![(probe_x, wrong)])).unwrap();
     assert_eq!(fit.prior_conflicts.len(), 1);
     let c = fit.prior_conflicts[0];

@@ -190,7 +190,7 @@ fn hub_u95_agrees_with_the_host_on_a_twisted_7_axis_arm() {
             cos: j % 2 == 1,
         });
     }
-    keys.extend((0..3).map(ParamKey::ProbeError));
+    keys.extend((0..3).map(|c| ParamKey::ProbeError(0, c)));
     keys.extend([ParamKey::Thermal(Some(2)), ParamKey::Thermal(None)]);
     let p = keys.len();
     // C = A Aᵀ with A random, each parameter at its own scale: rad ~1e-5, mm ~3e-3, 1/°C ~1e-6.
@@ -198,7 +198,7 @@ fn hub_u95_agrees_with_the_host_on_a_twisted_7_axis_arm() {
     let scale: Vec<f64> = keys
         .iter()
         .map(|k| match k {
-            ParamKey::LinkError(..) | ParamKey::ProbeError(_) => 3e-3,
+            ParamKey::LinkError(..) | ParamKey::ProbeError(..) => 3e-3,
             ParamKey::Thermal(_) => 1e-6,
             _ => 1e-5,
         })

@@ -196,6 +196,7 @@ pub fn case(u: &mut Unstructured) -> ArbResult<Case> {
         joints.push(joint(u)?);
     }
     let mut probe = Probe {
+        id: 0,
         vector: vector(u, limits::LENGTH_MM)?,
         error: vector(u, 1.0)?,
         thermal: value(u, limits::THERMAL)?,
@@ -209,6 +210,7 @@ pub fn case(u: &mut Unstructured) -> ArbResult<Case> {
         serial: None,
         joints,
         probe,
+        more_probes: Vec::new(),
         reference_frame: None,
     };
     // Most arms drawn at 5 m a component reach far beyond what an evaluator holds: scale

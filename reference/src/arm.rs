@@ -143,9 +143,15 @@ impl Joint {
     }
 }
 
-/// The probe: from the last joint's frame to the centre of the stylus ball.
+/// A probe: from the last joint's frame to the centre of the stylus ball.
+///
+/// An arm carries up to [`MAX_PROBES`] of them (ball styli of different lengths and
+/// diameters, an extension), one mounted at a time; each has an `id` of its own, which the
+/// measured data's `probe` column and the hub's probe selection name.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Probe {
+    /// The probe's id (0 to 255; 0 where the file gives none).
+    pub id: u8,
     /// Nominal probe vector v_p (mm).
     pub vector: [f64; 3],
     /// Probe vector error Δv_p (mm).
@@ -183,8 +189,11 @@ pub struct Arm {
     pub serial: Option<String>,
     /// Joints, base first.
     pub joints: Vec<Joint>,
-    /// The probe.
+    /// The arm's first probe: the one readings and rows without a probe id are taken with.
     pub probe: Probe,
+    /// The arm's other probes, in file order (none for most arms): at most
+    /// [`MAX_PROBES`] − 1, ids distinct from each other and from `probe`'s.
+    pub more_probes: Vec<Probe>,
     /// `[reference_frame]`, where present.
     pub reference_frame: Option<Frame>,
 }
@@ -194,6 +203,9 @@ pub const DEFAULT_COUNTS: u32 = 1 << 20;
 
 /// The joint counts the model takes.
 pub const JOINT_COUNTS: std::ops::RangeInclusive<usize> = 6..=7;
+
+/// Most probes an arm carries (`[[probe]]` entries of a calibration file).
+pub const MAX_PROBES: usize = 8;
 
 impl Arm {
     /// A whole reading (one count per joint) in radians, joint by joint as
@@ -221,12 +233,74 @@ impl Arm {
                 j(Axis::X, 80.0),
             ],
             probe: Probe {
+                id: 0,
                 vector: [0.0, 0.0, 120.0],
                 error: [0.0; 3],
                 thermal: 0.0,
                 ball_diameter: 0.0,
             },
+            more_probes: Vec::new(),
             reference_frame: None,
+        }
+    }
+
+    /// Every probe, the first (`probe`) then the others: position k in this order is the
+    /// probe's index, which a calibration's unknowns use.
+    pub fn probes(&self) -> impl Iterator<Item = &Probe> {
+        std::iter::once(&self.probe).chain(&self.more_probes)
+    }
+
+    /// How many probes the arm carries (at least one).
+    pub fn probe_count(&self) -> usize {
+        1 + self.more_probes.len()
+    }
+
+    /// The index (in [`Arm::probes`] order) of the probe with id `id`.
+    pub fn probe_index(&self, id: u8) -> Option<usize> {
+        self.probes().position(|p| p.id == id)
+    }
+
+    /// The probe at index `k` ([`Arm::probes`] order); `None` past the last.
+    pub fn probe_at(&self, k: usize) -> Option<&Probe> {
+        self.probes().nth(k)
+    }
+
+    /// The probe at index `k`, to change; `None` past the last.
+    pub fn probe_at_mut(&mut self, k: usize) -> Option<&mut Probe> {
+        if k == 0 {
+            Some(&mut self.probe)
+        } else {
+            self.more_probes.get_mut(k - 1)
+        }
+    }
+
+    /// The arm as it measures with its probe at index `k`: the same joints, that probe as
+    /// `probe` and no others. Every evaluation of the model (the reference's forward pass,
+    /// the firmware's chain) is of one mounted probe; this is how a reading taken with
+    /// another than the first is evaluated. Borrowed for the first probe (no copy); `None`
+    /// past the last.
+    pub fn for_probe(&self, k: usize) -> Option<std::borrow::Cow<'_, Arm>> {
+        if k == 0 {
+            return Some(std::borrow::Cow::Borrowed(self));
+        }
+        let probe = self.more_probes.get(k - 1)?.clone();
+        Some(std::borrow::Cow::Owned(Arm {
+            probe,
+            more_probes: Vec::new(),
+            ..self.clone_without_probes()
+        }))
+    }
+
+    /// A copy with the first probe and no others (the joints are what [`Arm::for_probe`]
+    /// copies).
+    fn clone_without_probes(&self) -> Arm {
+        Arm {
+            name: self.name.clone(),
+            serial: self.serial.clone(),
+            joints: self.joints.clone(),
+            probe: self.probe.clone(),
+            more_probes: Vec::new(),
+            reference_frame: self.reference_frame.clone(),
         }
     }
 

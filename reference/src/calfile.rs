@@ -6,7 +6,9 @@
 //! person sees at a glance which terms exist — except `wobble`, written only where a joint has
 //! an entry, so that a file written before the key existed is written again byte for byte.
 
-use crate::arm::{Arm, Axis, Frame, Harmonic, Joint, Probe, Wobble, DEFAULT_COUNTS, JOINT_COUNTS};
+use crate::arm::{
+    Arm, Axis, Frame, Harmonic, Joint, Probe, Wobble, DEFAULT_COUNTS, JOINT_COUNTS, MAX_PROBES,
+};
 pub use crate::uncertainty::{ParamKey, Uncertainty};
 use std::fmt::Write as _;
 use toml::{Table, Value};
@@ -142,9 +144,15 @@ pub fn parse_with(text: &str, limits: &Limits) -> Result<Parsed, CalFileError> {
         let t = v.as_table().ok_or_else(|| err(&path, "must be a table"))?;
         joints.push(joint(t, &path, counts[i], &mut unknown, limits)?);
     }
-    let probe = match root.get("probe") {
-        Some(Value::Table(t)) => probe(t, &mut unknown, limits)?,
-        Some(_) => return Err(err("probe", "must be a table")),
+    let (probe, more_probes) = match root.get("probe") {
+        Some(Value::Table(t)) => (probe(t, "probe", &mut unknown, limits)?, Vec::new()),
+        Some(Value::Array(a)) => probes(a, &mut unknown, limits)?,
+        Some(_) => {
+            return Err(err(
+                "probe",
+                "must be a table ([probe]) or an array of tables ([[probe]], one per probe)",
+            ))
+        }
         None => return Err(err("probe", "missing: the [probe] table with its vector")),
     };
     let reference_frame = match root.get("reference_frame") {
@@ -157,6 +165,7 @@ pub fn parse_with(text: &str, limits: &Limits) -> Result<Parsed, CalFileError> {
         serial,
         joints,
         probe,
+        more_probes,
         reference_frame,
     };
     let uncertainty = match root.get("uncertainty") {
@@ -423,26 +432,80 @@ fn order(t: &Table, path: &str) -> Result<u32, CalFileError> {
     })
 }
 
-fn probe(t: &Table, unknown: &mut Vec<String>, limits: &Limits) -> Result<Probe, CalFileError> {
+/// Several probes (`[[probe]]`): each entry as a `[probe]` table, with its `id` (required
+/// where there is more than one), ids distinct, at most [`MAX_PROBES`]. The first is the
+/// arm's `probe`, the rest its `more_probes`.
+fn probes(
+    entries: &[Value],
+    unknown: &mut Vec<String>,
+    limits: &Limits,
+) -> Result<(Probe, Vec<Probe>), CalFileError> {
+    if entries.is_empty() || entries.len() > MAX_PROBES {
+        return Err(err(
+            "probe",
+            format!("{} probes; an arm carries 1 to {MAX_PROBES}", entries.len()),
+        ));
+    }
+    let mut all: Vec<Probe> = Vec::with_capacity(entries.len());
+    for (k, v) in entries.iter().enumerate() {
+        let path = format!("probe[{}]", k + 1);
+        let t = v.as_table().ok_or_else(|| err(&path, "must be a table"))?;
+        if entries.len() > 1 && !t.contains_key("id") {
+            return Err(err(
+                format!("{path}.id"),
+                "missing: with several probes each names its id",
+            ));
+        }
+        let p = probe(t, &path, unknown, limits)?;
+        if let Some(first) = all.iter().position(|q| q.id == p.id) {
+            return Err(err(
+                format!("{path}.id"),
+                format!(
+                    "{} is probe[{}]'s id too: ids are distinct",
+                    p.id,
+                    first + 1
+                ),
+            ));
+        }
+        all.push(p);
+    }
+    let first = all.remove(0);
+    Ok((first, all))
+}
+
+/// One probe's table at `path` (`probe`, or `probe[K]` in an array).
+fn probe(
+    t: &Table,
+    path: &str,
+    unknown: &mut Vec<String>,
+    limits: &Limits,
+) -> Result<Probe, CalFileError> {
     note_unknown(
         t,
-        &["vector", "error", "thermal", "ball_diameter"],
-        "probe",
+        &["id", "vector", "error", "thermal", "ball_diameter"],
+        path,
         unknown,
     );
+    let key = |k: &str| format!("{path}.{k}");
+    let id = match t.get("id") {
+        None => 0,
+        Some(Value::Integer(i)) if (0..=255).contains(i) => *i as u8,
+        Some(_) => return Err(err(key("id"), "must be an integer from 0 to 255")),
+    };
     let vector = match t.get("vector") {
-        None => return Err(err("probe.vector", "missing")),
-        Some(v) => array::<3>(v, "probe.vector")?,
+        None => return Err(err(key("vector"), "missing")),
+        Some(v) => array::<3>(v, &key("vector"))?,
     };
     let p = Probe {
+        id,
         vector,
-        error: opt_array::<3>(t, "error", "probe")?,
-        thermal: opt_number(t, "thermal", "probe")?,
-        ball_diameter: opt_number(t, "ball_diameter", "probe")?,
+        error: opt_array::<3>(t, "error", path)?,
+        thermal: opt_number(t, "thermal", path)?,
+        ball_diameter: opt_number(t, "ball_diameter", path)?,
     };
     if !(0.0..=limits.length_mm).contains(&p.ball_diameter) {
         return Err(err(
-            "probe.ball_diameter",
+            key("ball_diameter"),
             format!(
                 "{} mm is not a ball diameter: 0 to {} mm",
                 p.ball_diameter, limits.length_mm
@@ -450,24 +513,24 @@ fn probe(t: &Table, unknown: &mut Vec<String>, limits: &Limits) -> Result<Probe,
         ));
     }
     let length = "probe length";
-    bounded_all(&p.vector, limits.length_mm, "probe.vector", length)?;
-    bounded_all(&p.error, limits.length_mm, "probe.error", length)?;
+    bounded_all(&p.vector, limits.length_mm, &key("vector"), length)?;
+    bounded_all(&p.error, limits.length_mm, &key("error"), length)?;
     bounded_all(
         &p.actual(),
         limits.length_mm,
-        "probe.vector + error",
+        &key("vector + error"),
         length,
     )?;
     bounded(
         p.thermal,
         limits.thermal,
-        "probe.thermal",
+        &key("thermal"),
         "thermal expansion",
     )?;
     let a = p.actual();
     if a.iter().all(|c| *c == 0.0) {
         return Err(err(
-            "probe.vector",
+            key("vector"),
             "vector + error is zero: the probe direction is undefined",
         ));
     }
@@ -647,12 +710,22 @@ pub fn write_with(arm: &Arm, uncertainty: Option<&Uncertainty>, header: &[&str])
         let _ = writeln!(s, "gravity = {}", num(j.gravity));
         let _ = writeln!(s, "thermal = {}", num(j.thermal));
     }
-    let _ = writeln!(s, "\n[probe]");
-    let _ = writeln!(s, "vector = {}", arr(&arm.probe.vector));
-    let _ = writeln!(s, "error = {}", arr(&arm.probe.error));
-    let _ = writeln!(s, "thermal = {}", num(arm.probe.thermal));
-    if arm.probe.ball_diameter != 0.0 {
-        let _ = writeln!(s, "ball_diameter = {}", num(arm.probe.ball_diameter));
+    // One probe of id 0 is written as `[probe]`, as every file before several probes were
+    // possible; otherwise one `[[probe]]` each, with its id.
+    let one = arm.more_probes.is_empty() && arm.probe.id == 0;
+    for p in arm.probes() {
+        if one {
+            let _ = writeln!(s, "\n[probe]");
+        } else {
+            let _ = writeln!(s, "\n[[probe]]");
+            let _ = writeln!(s, "id = {}", p.id);
+        }
+        let _ = writeln!(s, "vector = {}", arr(&p.vector));
+        let _ = writeln!(s, "error = {}", arr(&p.error));
+        let _ = writeln!(s, "thermal = {}", num(p.thermal));
+        if p.ball_diameter != 0.0 {
+            let _ = writeln!(s, "ball_diameter = {}", num(p.ball_diameter));
+        }
     }
     if let Some(f) = &arm.reference_frame {
         let _ = writeln!(s, "\n[reference_frame]");
@@ -660,7 +733,7 @@ pub fn write_with(arm: &Arm, uncertainty: Option<&Uncertainty>, header: &[&str])
         let _ = writeln!(s, "translation = {}", arr(&f.translation));
     }
     if let Some(u) = uncertainty {
-        crate::uncertainty::write(u, &mut s);
+        crate::uncertainty::write(u, arm, &mut s);
     }
     s
 }
@@ -927,7 +1000,7 @@ temperature_c = 0.2
                     beta: true,
                     comp: 1
                 },
-                ParamKey::ProbeError(2),
+                ParamKey::ProbeError(0, 2),
                 ParamKey::Harmonic {
                     joint: 0,
                     index: 1,
@@ -1021,5 +1094,114 @@ temperature_c = 0.2
         ))
         .unwrap_err();
         assert!(e.message.contains("positive semi-definite"), "{e}");
+    }
+
+    /// `FULL` with its `[probe]` replaced by `probes`.
+    fn with_probes(probes: &str) -> String {
+        let start = FULL.find("[probe]").unwrap();
+        let end = FULL.find("[reference_frame]").unwrap();
+        format!("{}{probes}{}", &FULL[..start], &FULL[end..])
+    }
+
+    const THREE_PROBES: &str = r#"[[probe]]
+id = 4
+vector = [0.0, 0.0, 120.0]
+error = [0.01, 0.0, -0.02]
+thermal = 1e-5
+ball_diameter = 6.0
+[[probe]]
+id = 0
+vector = [0.0, 0.0, 250.5]
+ball_diameter = 3.0
+[[probe]]
+id = 17
+vector = [40.0, 0.0, 90.0]
+error = [0.0, 0.1, 0.0]
+"#;
+
+    /// Several probes: read in file order (the first is `probe`), their ids, a round trip
+    /// bit for bit, and each one's evaluation through `for_probe`.
+    #[test]
+    fn several_probes_are_read_written_and_evaluated() {
+        let a = parse(&with_probes(THREE_PROBES)).unwrap().arm;
+        assert_eq!(a.probe_count(), 3);
+        let ids: Vec<u8> = a.probes().map(|p| p.id).collect();
+        assert_eq!(ids, [4, 0, 17]);
+        assert_eq!(a.probe_index(17), Some(2));
+        assert_eq!(a.probe_index(5), None);
+        assert_eq!(a.more_probes[0].ball_diameter, 3.0);
+        let text = write(&a, &[]);
+        assert!(text.contains("[[probe]]\nid = 17\n"), "{text}");
+        assert_eq!(parse(&text).unwrap().arm, a);
+        // Each probe is evaluated as the arm with it mounted: two probes' ball centres differ
+        // by the difference of their vectors, turned by the last joint (same length; without
+        // gravity, whose deflection depends on where the ball is).
+        let theta = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6];
+        let mut rigid = a.clone();
+        rigid.joints.iter_mut().for_each(|j| j.gravity = 0.0);
+        let tip = |k: usize| crate::forward::forward(&rigid.for_probe(k).unwrap(), &theta, 20.0).p;
+        let v = |k: usize| nalgebra::Vector3::from(a.probe_at(k).unwrap().actual());
+        for k in 1..3 {
+            let d = tip(k) - tip(0);
+            assert!((d.norm() - (v(k) - v(0)).norm()).abs() < 1e-9, "{d}");
+        }
+        assert!(a.for_probe(3).is_none());
+        // One probe of id 0 is still written as `[probe]`, as before.
+        let one = parse(FULL).unwrap().arm;
+        assert!(write(&one, &[]).contains("\n[probe]\n"));
+    }
+
+    #[test]
+    fn bad_probe_lists_are_refused_with_their_key() {
+        let cases = [
+            (THREE_PROBES.replacen("id = 0\n", "", 1), "probe[2].id"),
+            (THREE_PROBES.replacen("id = 17", "id = 4", 1), "probe[3].id"),
+            (
+                THREE_PROBES.replacen("id = 17", "id = 256", 1),
+                "probe[3].id",
+            ),
+            (
+                THREE_PROBES.replacen("id = 17", "id = \"a\"", 1),
+                "probe[3].id",
+            ),
+            (
+                THREE_PROBES.replacen("vector = [0.0, 0.0, 250.5]", "", 1),
+                "probe[2].vector",
+            ),
+            (
+                THREE_PROBES.replacen("ball_diameter = 3.0", "ball_diameter = -3.0", 1),
+                "probe[2].ball_diameter",
+            ),
+        ];
+        for (probes, path) in cases {
+            let e = parse(&with_probes(&probes)).unwrap_err();
+            assert_eq!(e.path, path, "{e}");
+        }
+        let nine: String = (0..9)
+            .map(|id| format!("[[probe]]\nid = {id}\nvector = [0.0, 0.0, 100.0]\n"))
+            .collect();
+        let e = parse(&with_probes(&nine)).unwrap_err();
+        assert_eq!(e.path, "probe", "{e}");
+        // A single `[[probe]]` needs no id (0), as `[probe]`.
+        let single = "[[probe]]\nvector = [0.0, 0.0, 100.0]\n";
+        assert_eq!(parse(&with_probes(single)).unwrap().arm.probe.id, 0);
+    }
+
+    /// `probe.ID.error.C` names another probe's error; an id the arm lacks is refused.
+    #[test]
+    fn another_probes_error_has_a_budget_name() {
+        let a = parse(&with_probes(THREE_PROBES)).unwrap().arm;
+        assert_eq!(
+            ParamKey::parse("probe.17.error.1", &a),
+            Ok(ParamKey::ProbeError(2, 1))
+        );
+        assert_eq!(ParamKey::ProbeError(2, 1).name(&a), "probe.17.error.1");
+        assert_eq!(ParamKey::ProbeError(0, 1).name(&a), "probe.error.1");
+        assert_eq!(
+            ParamKey::parse("probe.4.error.0", &a),
+            Ok(ParamKey::ProbeError(0, 0))
+        );
+        let e = ParamKey::parse("probe.5.error.0", &a).unwrap_err();
+        assert!(e.contains("4, 0, 17"), "{e}");
     }
 }

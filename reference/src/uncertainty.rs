@@ -21,8 +21,9 @@ pub enum ParamKey {
     Tilt(usize, usize),
     /// `joint.K.link_error.C`.
     LinkError(usize, usize),
-    /// `probe.error.C`.
-    ProbeError(usize),
+    /// `probe.error.C` (the arm's first probe) or `probe.ID.error.C` (the probe with id ID):
+    /// the probe's index in [`Arm::probes`] order, then C.
+    ProbeError(usize, usize),
     /// `joint.K.harmonics.H.sin` / `.cos`: the H-th entry of the joint's `harmonics`.
     Harmonic {
         /// Joint.
@@ -61,8 +62,19 @@ impl ParamKey {
                 .ok_or_else(|| format!("`{s}` is not a component: 0 to {}", n - 1))
         };
         match parts.as_slice() {
-            ["probe", "error", c] => Ok(ParamKey::ProbeError(comp(c, 3)?)),
+            ["probe", "error", c] => Ok(ParamKey::ProbeError(0, comp(c, 3)?)),
             ["probe", "thermal"] => Ok(ParamKey::Thermal(None)),
+            ["probe", id, "error", c] => {
+                let k = id
+                    .parse::<u8>()
+                    .ok()
+                    .and_then(|id| arm.probe_index(id))
+                    .ok_or_else(|| {
+                        let ids: Vec<String> = arm.probes().map(|p| p.id.to_string()).collect();
+                        format!("`{id}` is not a probe of this arm: {}", ids.join(", "))
+                    })?;
+                Ok(ParamKey::ProbeError(k, comp(c, 3)?))
+            }
             ["joint", k, rest @ ..] => {
                 let j = one_based(k, arm.dof(), || {
                     format!("`{k}` is not a joint of this arm: 1 to {}", arm.dof())
@@ -111,7 +123,11 @@ impl ParamKey {
             ParamKey::ZeroOffset(j) => arm.joints[j].zero_offset += dx,
             ParamKey::Tilt(j, c) => arm.joints[j].tilt[c] += dx,
             ParamKey::LinkError(j, c) => arm.joints[j].link_error[c] += dx,
-            ParamKey::ProbeError(c) => arm.probe.error[c] += dx,
+            ParamKey::ProbeError(k, c) => {
+                if let Some(p) = arm.probe_at_mut(k) {
+                    p.error[c] += dx;
+                }
+            }
             ParamKey::Harmonic { joint, index, cos } => {
                 let h = &mut arm.joints[joint].harmonics[index];
                 if cos {
@@ -139,13 +155,18 @@ impl ParamKey {
         }
     }
 
-    /// The name as the file writes it.
-    pub fn name(&self) -> String {
+    /// The name as the file writes it, for `arm` (a probe other than the first is named by
+    /// its id).
+    pub fn name(&self, arm: &Arm) -> String {
         match *self {
             ParamKey::ZeroOffset(j) => format!("joint.{}.zero_offset", j + 1),
             ParamKey::Tilt(j, c) => format!("joint.{}.tilt.{c}", j + 1),
             ParamKey::LinkError(j, c) => format!("joint.{}.link_error.{c}", j + 1),
-            ParamKey::ProbeError(c) => format!("probe.error.{c}"),
+            ParamKey::ProbeError(0, c) => format!("probe.error.{c}"),
+            ParamKey::ProbeError(k, c) => {
+                let id = arm.probe_at(k).map_or(u8::MAX, |p| p.id);
+                format!("probe.{id}.error.{c}")
+            }
             ParamKey::Harmonic { joint, index, cos } => format!(
                 "joint.{}.harmonics.{}.{}",
                 joint + 1,
@@ -184,7 +205,7 @@ fn unknown_name(name: &str) -> String {
         "`{name}` is not a parameter: joint.K.zero_offset, joint.K.tilt.C, \
          joint.K.link_error.C, joint.K.harmonics.H.sin|cos, joint.K.wobble.W.alpha|beta.C, \
          joint.K.gravity, joint.K.thermal, \
-         probe.error.C, probe.thermal"
+         probe.error.C, probe.ID.error.C, probe.thermal"
     )
 }
 
@@ -384,14 +405,14 @@ fn covariance(v: Option<&Value>, n: usize) -> Result<Vec<f64>, CalFileError> {
 }
 
 /// Appends the section to a calibration file's text.
-pub fn write(u: &Uncertainty, s: &mut String) {
+pub fn write(u: &Uncertainty, arm: &Arm, s: &mut String) {
     use std::fmt::Write as _;
     let num = |x: f64| format!("{x:?}");
     let _ = writeln!(s, "\n[uncertainty]");
     let names: Vec<String> = u
         .parameters
         .iter()
-        .map(|p| format!("\"{}\"", p.name()))
+        .map(|p| format!("\"{}\"", p.name(arm)))
         .collect();
     let _ = writeln!(s, "parameters = [{}]", names.join(", "));
     let n = u.parameters.len();

@@ -90,7 +90,10 @@ fn column(key: ParamKey, arm: &Arm) -> Column {
             }
         }
         ParamKey::LinkError(j, c) => shift(j, unit(c), 1.0, arm.joints[j].thermal),
-        ParamKey::ProbeError(c) => shift(n - 1, unit(c), 1.0, arm.probe.thermal),
+        ParamKey::ProbeError(k, c) => {
+            let thermal = arm.probe_at(k).map_or(0.0, |p| p.thermal);
+            shift(n - 1, unit(c), 1.0, thermal)
+        }
         ParamKey::Harmonic { joint, index, cos } => Column {
             order: arm.joints[joint].harmonics[index].order as u16,
             ..Column::new(if cos { Kind::TurnCos } else { Kind::TurnSin }, joint as u8)

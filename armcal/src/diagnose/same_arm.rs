@@ -147,7 +147,7 @@ pub fn chi2(a: &Geometry, b: &Geometry) -> Option<(f64, usize)> {
         .params
         .iter()
         .enumerate()
-        .filter(|(_, p)| !matches!(p, Param::ProbeError(_)))
+        .filter(|(_, p)| !matches!(p, Param::ProbeError(..)))
         .filter_map(|(i, p)| {
             let j = pos(b, p)?;
             let alike = a.absorbs[i].iter().all(|q| pos(b, q).is_none())

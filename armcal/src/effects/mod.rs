@@ -194,7 +194,7 @@ impl Param {
             Param::ZeroOffset(_)
             | Param::Tilt(..)
             | Param::LinkError(..)
-            | Param::ProbeError(_)
+            | Param::ProbeError(..)
             | Param::FrameRotation(_)
             | Param::FrameTranslation(_) => None,
         }

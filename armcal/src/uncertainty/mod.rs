@@ -73,7 +73,7 @@ pub fn key_of(p: Param, arm: &Arm) -> Option<ParamKey> {
         Param::ZeroOffset(j) => ParamKey::ZeroOffset(j),
         Param::Tilt(j, c) => ParamKey::Tilt(j, c),
         Param::LinkError(j, c) => ParamKey::LinkError(j, c),
-        Param::ProbeError(c) => ParamKey::ProbeError(c),
+        Param::ProbeError(k, c) => ParamKey::ProbeError(k, c),
         Param::Harmonic { joint, order, cos } => ParamKey::Harmonic {
             joint,
             index: arm.joints[joint]
@@ -104,7 +104,7 @@ pub fn param_of(k: ParamKey, arm: &Arm) -> Param {
         ParamKey::ZeroOffset(j) => Param::ZeroOffset(j),
         ParamKey::Tilt(j, c) => Param::Tilt(j, c),
         ParamKey::LinkError(j, c) => Param::LinkError(j, c),
-        ParamKey::ProbeError(c) => Param::ProbeError(c),
+        ParamKey::ProbeError(k, c) => Param::ProbeError(k, c),
         ParamKey::Harmonic { joint, index, cos } => Param::Harmonic {
             joint,
             order: arm.joints[joint].harmonics[index].order,
@@ -218,7 +218,7 @@ mod tests {
         for p in &params {
             let k = key_of(*p, &arm).unwrap();
             assert_eq!(param_of(k, &arm), *p);
-            assert_eq!(ParamKey::parse(&k.name(), &arm), Ok(k));
+            assert_eq!(ParamKey::parse(&k.name(&arm), &arm), Ok(k));
         }
         let file = b.to_file(&arm).unwrap();
         let text = quatarm_ref::calfile::write_with(&arm, Some(&file), &[]);

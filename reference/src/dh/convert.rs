@@ -168,11 +168,13 @@ fn build(dh: &DhArm, nf: &Normal, r: &Matrix3<f64>, along: f64) -> Arm {
         serial: None,
         joints,
         probe: Probe {
+            id: 0,
             vector: probe.into(),
             error: [0.0; 3],
             thermal: 0.0,
             ball_diameter: 0.0,
         },
+        more_probes: Vec::new(),
         reference_frame: None,
     }
 }
