@@ -100,9 +100,9 @@ fn first_order_against_monte_carlo(setup: &Setup) {
     let n = 100;
     for _ in 0..n {
         let th = armcal::sim::random_pose(&lim, &mut c.rng);
-        let (_, s) = propagate::point(&c.arm, &c.budget, &th, 20.0);
+        let (_, s) = propagate::point(&c.arm, 0, &c.budget, &th, 20.0);
         let fo = u95::u95(&s);
-        let mc = montecarlo::point(&c.arm, &c.budget, &root, &th, 20.0, 40_000, &mut c.rng).u95;
+        let mc = montecarlo::point(&c.arm, 0, &c.budget, &root, &th, 20.0, 40_000, &mut c.rng).u95;
         let rel = mc / fo - 1.0;
         worst = worst.max(rel.abs());
         sum += rel;

@@ -52,7 +52,6 @@ use crate::sim;
 use crate::stats::{chi2_tail, normal_tail_two_sided};
 use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, Vector3};
 use quatarm_ref::arm::{Arm, Frame};
-use quatarm_ref::forward;
 use std::f64::consts::FRAC_PI_2;
 use std::time::{Duration, Instant};
 
@@ -356,6 +355,7 @@ impl<'a> Problem<'a> {
     /// a rotation of the whole arm about its base, the symmetry such data cannot see.
     pub fn visit(&self, s: &State, jac: bool, sink: &mut dyn FnMut(&[f64], &[f64])) {
         let arm = self.arm(s);
+        let mounted = crate::probes::Mounted::new(&arm);
         let n = self.kept.len();
         let na = self.arm_params.len();
         let rot = s.frame.rot;
@@ -364,9 +364,17 @@ impl<'a> Problem<'a> {
         let mut eval = |i: usize, j: &mut [f64]| -> Vector3<f64> {
             let row = &self.data.rows[i];
             if !jac {
-                return rot * forward::forward(&arm, &row.theta, row.temp_c).p + s.frame.trans;
+                return rot * mounted.tip(row) + s.frame.trans;
             }
-            let p = tip_jacobian(&arm, &self.arm_params, &row.theta, row.temp_c, &mut cols);
+            let probe = mounted.of(row).0;
+            let p = tip_jacobian(
+                &arm,
+                probe,
+                &self.arm_params,
+                &row.theta,
+                row.temp_c,
+                &mut cols,
+            );
             j.iter_mut().for_each(|v| *v = 0.0);
             for (k, &col) in self.arm_cols.iter().enumerate() {
                 let v = rot * cols[k];
@@ -468,7 +476,9 @@ impl<'a> Problem<'a> {
             sink(&br, &bj);
         }
         for g in &self.layout.sphere {
-            let radius = (g.diameter_mm + arm.probe.ball_diameter) / 2.0;
+            // A sphere group is touched with one probe (the data reader's rule).
+            let ball = crate::probes::ball_diameter(&arm, &self.data.rows[g.rows[0]]);
+            let radius = (g.diameter_mm + ball) / 2.0;
             br.clear();
             bj.clear();
             let mut qs = Vec::with_capacity(g.rows.len());
@@ -653,6 +663,9 @@ pub fn skeleton(arm: &Arm) -> Arm {
         }
     }
     a.probe.error = [0.0; 3];
+    for p in &mut a.more_probes {
+        p.error = [0.0; 3];
+    }
     for f in FAMILIES {
         f.clear(&mut a);
     }
@@ -676,10 +689,11 @@ pub fn start_frame(arm: &Arm, data: &Dataset, layout: &Layout) -> Rigid {
     if layout.points.is_empty() {
         return Rigid::identity();
     }
+    let mounted = crate::probes::Mounted::new(arm);
     let ps: Vec<Vector3<f64>> = layout
         .points
         .iter()
-        .map(|&i| forward::forward(arm, &data.rows[i].theta, data.rows[i].temp_c).p)
+        .map(|&i| mounted.tip(&data.rows[i]))
         .collect();
     let xs: Vec<Vector3<f64>> = layout
         .points
@@ -689,12 +703,21 @@ pub fn start_frame(arm: &Arm, data: &Dataset, layout: &Layout) -> Rigid {
     best_rigid(&ps, &xs)
 }
 
-/// The unknowns a calibration of `data` with `terms` has: the arm's, then the instrument
-/// frame's six when there are `point` rows. Without them, the frame's three rotations stand
-/// for the rotation of the whole arm that `spat` and `length` data cannot see: identifiability
-/// names what they absorb, and they are never fitted.
-pub fn unknowns(terms: &Terms, data: &Dataset) -> Vec<Param> {
+/// The unknowns a calibration of `data` with `terms` has: the arm's (with the geometric model,
+/// the error of every other probe of `arm`'s that some row was taken with, beside the first's),
+/// then the instrument frame's six when there are `point` rows. Without them, the frame's
+/// three rotations stand for the rotation of the whole arm that `spat` and `length` data
+/// cannot see: identifiability names what they absorb, and they are never fitted.
+pub fn unknowns(arm: &Arm, terms: &Terms, data: &Dataset) -> Vec<Param> {
     let mut all = terms.params(data.dof);
+    if terms.geometric {
+        for k in crate::probes::used(arm, data)
+            .into_iter()
+            .filter(|&k| k > 0)
+        {
+            all.extend(crate::params::probe_params(k));
+        }
+    }
     if has_points(data) {
         all.extend(frame_params());
     } else {
@@ -966,8 +989,9 @@ fn check_structure(
             start.dof()
         )));
     }
+    crate::probes::check(start, data).map_err(|e| CalibError::Mismatch(e.to_string()))?;
     let layout = data.layout();
-    let all = unknowns(&opts.terms, data);
+    let all = unknowns(start, &opts.terms, data);
     let base = with_entries(start, &all);
     let eqs = equations(&layout);
     if opts.terms.params(data.dof).is_empty() {
@@ -1040,13 +1064,11 @@ fn check_structure(
 /// Every `sphere` group must fix a sphere at the start arm (four or more points, not in one
 /// plane), or its centre, which the fit eliminates, is not defined.
 fn check_sphere_groups(start: &Arm, data: &Dataset, layout: &Layout) -> Result<(), CalibError> {
+    let mounted = crate::probes::Mounted::new(start);
     for g in &layout.sphere {
-        let qs: Vec<Vector3<f64>> = g
-            .rows
-            .iter()
-            .map(|&i| forward::forward(start, &data.rows[i].theta, data.rows[i].temp_c).p)
-            .collect();
-        let radius = (g.diameter_mm + start.probe.ball_diameter) / 2.0;
+        let qs: Vec<Vector3<f64>> = g.rows.iter().map(|&i| mounted.tip(&data.rows[i])).collect();
+        let ball = crate::probes::ball_diameter(start, &data.rows[g.rows[0]]);
+        let radius = (g.diameter_mm + ball) / 2.0;
         if let Err(e) = crate::acceptance::fit::centre_of(&qs, radius) {
             let line = g.rows.first().map_or(0, |&i| data.rows[i].line);
             return Err(CalibError::Mismatch(format!(

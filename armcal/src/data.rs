@@ -62,6 +62,9 @@ pub struct Row {
     pub sphere: Option<Touch>,
     /// Arm temperature at the reading (°C); 20 where the file records none.
     pub temp_c: f64,
+    /// The id of the probe the row was taken with (the `probe` column); `None` for the arm's
+    /// first probe (no column, or an empty cell).
+    pub probe: Option<u8>,
     /// 1-based line of the row in its file (0 for rows made in memory).
     pub line: usize,
 }
@@ -203,6 +206,7 @@ struct Columns {
     diameter: Option<usize>,
     articulation: Option<usize>,
     temp: Option<usize>,
+    probe: Option<usize>,
 }
 
 /// Reads data from text; `file` names it in errors.
@@ -245,6 +249,7 @@ pub fn parse(text: &str, file: &str, dof: usize) -> Result<Dataset, DataError> {
                 | "articulation"
                 | "session"
                 | "temp_c"
+                | "probe"
         );
         if !known && joint_index(n, "j").is_none() {
             warnings.push(format!(
@@ -275,6 +280,7 @@ pub fn parse(text: &str, file: &str, dof: usize) -> Result<Dataset, DataError> {
         diameter: seen.get("diameter_mm").copied(),
         articulation: seen.get("articulation").copied(),
         temp: seen.get("temp_c").copied(),
+        probe: seen.get("probe").copied(),
     };
 
     let mut rows = Vec::new();
@@ -651,6 +657,10 @@ fn parse_row(
         Some(i) if !cells.text(i).is_empty() => cells.number(i, Bound::temperature())?,
         _ => quatarm_ref::forward::REFERENCE_TEMP_C,
     };
+    let probe = match c.probe {
+        Some(i) if !cells.text(i).is_empty() => Some(probe_cell(&cells, i)?),
+        _ => None,
+    };
     Ok(Row {
         kind,
         group,
@@ -660,8 +670,15 @@ fn parse_row(
         length_mm,
         sphere,
         temp_c,
+        probe,
         line,
     })
+}
+
+/// A `probe` cell: a probe id, an integer from 0 to 255 (the calibration file's `id`).
+fn probe_cell(cells: &Cells, i: usize) -> Result<u8, DataError> {
+    let id = cells.integer(i, "probe")?;
+    u8::try_from(id).map_err(|_| cells.fail("probe", format!("{id} is not a probe id: 0 to 255")))
 }
 
 /// A `point` row's reference coordinates.
@@ -776,6 +793,20 @@ fn check_groups(data: &Dataset) -> Result<(), DataError> {
                     ),
                 ));
             }
+            if r.probe != first.probe {
+                return Err(err(
+                    r,
+                    "probe",
+                    format!(
+                        "sphere group {} is touched with two probes ({} on line {}, {} here): \
+                         a sphere's radius takes one stylus ball",
+                        g.group,
+                        probe_name(first.probe),
+                        first.line,
+                        probe_name(r.probe)
+                    ),
+                ));
+            }
             if t.articulation.is_some() != articulated {
                 return Err(err(
                     r,
@@ -817,6 +848,11 @@ fn check_groups(data: &Dataset) -> Result<(), DataError> {
         }
     }
     Ok(())
+}
+
+/// A row's probe as messages name it.
+pub fn probe_name(probe: Option<u8>) -> String {
+    probe.map_or("the first probe".into(), |id| format!("probe {id}"))
 }
 
 impl Dataset {
@@ -936,6 +972,10 @@ impl Dataset {
         if self.has_temperature {
             header.push("temp_c".into());
         }
+        let has_probe = self.rows.iter().any(|r| r.probe.is_some());
+        if has_probe {
+            header.push("probe".into());
+        }
         let _ = writeln!(s, "{}", header.join(","));
         for r in &self.rows {
             let mut f: Vec<String> = vec![r.kind.name().into(), r.group.to_string()];
@@ -967,6 +1007,9 @@ impl Dataset {
             }
             if self.has_temperature {
                 f.push(r.temp_c.to_string());
+            }
+            if has_probe {
+                f.push(r.probe.map_or(String::new(), |id| id.to_string()));
             }
             let _ = writeln!(s, "{}", f.join(","));
         }

@@ -1,7 +1,9 @@
 //! `armcal eval`: joint readings (CSV) through one evaluator to XYZ and probe direction (CSV).
 //!
 //! Input columns `j1..jN` (radians) or `c1..cN` (encoder counts, 0 ≤ c < counts per
-//! revolution), optional `temp_c` (20 °C where absent or empty); other columns are ignored.
+//! revolution), optional `temp_c` (20 °C where absent or empty) and `probe` (the id of the
+//! probe the reading was taken with; the arm's first where absent or empty); other columns
+//! are ignored.
 //! `f64` runs the reference; `f32` and `fixed` run the `quatarm` quaternion chain on the binary
 //! table a board would load, with radians rounded to the nearest count and the temperature to
 //! the nearest milli-degree — the firmware's inputs — and print the firmware's integer outputs
@@ -59,8 +61,19 @@ impl Reading {
     }
 }
 
-/// Parsed input: readings with their temperature (°C).
-pub type Rows = Vec<(Reading, f64)>;
+/// One input row.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Input {
+    /// The joint reading.
+    pub reading: Reading,
+    /// Its temperature (°C).
+    pub temp_c: f64,
+    /// The index (`quatarm_ref::Arm::probes` order) of the probe it was taken with.
+    pub probe: usize,
+}
+
+/// Parsed input, in input order.
+pub type Rows = Vec<Input>;
 
 /// Reads the CSV input for an arm. The header follows the measured data's rule
 /// ([`crate::data::unique_columns`], [`crate::data::joint_columns`]): every name once, the
@@ -95,6 +108,7 @@ pub fn read_rows(arm: &Arm, mut input: impl std::io::Read) -> Result<Rows, RowEr
     let j = joint_columns(&headers, "j", n).map_err(problem)?;
     let c = joint_columns(&headers, "c", n).map_err(problem)?;
     let temp = seen.get("temp_c").copied();
+    let probe_col = seen.get("probe").copied();
     let (cols, radians) = match (j, c) {
         (Some(j), None) => (j, true),
         (None, Some(c)) => (c, false),
@@ -158,7 +172,31 @@ pub fn read_rows(arm: &Arm, mut input: impl std::io::Read) -> Result<Rows, RowEr
                 .map_err(|m| bad(col, m.to_string()))?,
             _ => quatarm_ref::forward::REFERENCE_TEMP_C,
         };
-        rows.push((reading, t));
+        let probe = match probe_col {
+            Some(col) if !field(col)?.is_empty() => {
+                let s = field(col)?;
+                s.parse::<u8>()
+                    .ok()
+                    .and_then(|id| arm.probe_index(id))
+                    .ok_or_else(|| {
+                        let ids: Vec<String> = arm.probes().map(|p| p.id.to_string()).collect();
+                        bad(
+                            col,
+                            format!(
+                                "`{}` is not a probe of the arm (its probes: {})",
+                                shown(s),
+                                ids.join(", ")
+                            ),
+                        )
+                    })?
+            }
+            _ => 0,
+        };
+        rows.push(Input {
+            reading,
+            temp_c: t,
+            probe,
+        });
     }
     Ok(rows)
 }
@@ -199,24 +237,35 @@ fn counts_of(arm: &Arm, r: &Reading) -> Vec<u32> {
     }
 }
 
-/// The firmware path `P` on the table a board would load; `calib` names the calibration in
-/// errors about it (a table it cannot become, an arm the evaluator cannot hold).
+/// The firmware path `P` on the table a board would load, with each row's probe mounted (a
+/// hub with that probe selected); `calib` names the calibration in errors about it (a table
+/// it cannot become, an arm the evaluator cannot hold).
 fn firmware<P: quatarm::Evaluator>(
     arm: &Arm,
     rows: &Rows,
     calib: &str,
     out: &mut String,
 ) -> anyhow::Result<()> {
-    let chain = crate::tablebuild::build(arm)
-        .map_err(anyhow::Error::from)
-        .and_then(|bytes| {
-            let table = Table::parse(&bytes)?;
-            Ok(Chain::<P>::new(&table)?)
-        })
-        .with_context(|| format!("{calib}: no {} evaluator for this arm", P::NAME))?;
-    for (r, t) in rows {
-        let counts = counts_of(arm, r);
-        let pt = chain.eval(&counts, temp_mc(*t))?;
+    let chain = |k: usize| -> anyhow::Result<Chain<P>> {
+        let mounted = arm
+            .for_probe(k)
+            .context("a row's probe is one of the arm's")?;
+        crate::tablebuild::build(&mounted)
+            .map_err(anyhow::Error::from)
+            .and_then(|bytes| {
+                let table = Table::parse(&bytes)?;
+                Ok(Chain::<P>::new(&table)?)
+            })
+            .with_context(|| format!("{calib}: no {} evaluator for this arm", P::NAME))
+    };
+    let mut chains: Vec<Option<Chain<P>>> = (0..arm.probe_count()).map(|_| None).collect();
+    for r in rows {
+        if chains[r.probe].is_none() {
+            chains[r.probe] = Some(chain(r.probe)?);
+        }
+        let chain = chains[r.probe].as_ref().context("built above")?;
+        let counts = counts_of(arm, &r.reading);
+        let pt = chain.eval(&counts, temp_mc(r.temp_c))?;
         let [x, y, z] = pt.xyz_nm();
         let [nx, ny, nz] = pt.dir_e9();
         let _ = writeln!(
@@ -244,8 +293,12 @@ pub fn evaluate(
     let mut out = String::from("x,y,z,nx,ny,nz\n");
     match evaluator {
         Evaluator::F64 => {
-            for (r, t) in rows {
-                let pose = quatarm_ref::forward::forward(arm, &r.radians(arm), *t);
+            for r in rows {
+                let mounted = arm
+                    .for_probe(r.probe)
+                    .context("a row's probe is one of the arm's")?;
+                let pose =
+                    quatarm_ref::forward::forward(&mounted, &r.reading.radians(arm), r.temp_c);
                 let _ = writeln!(
                     out,
                     "{:.9},{:.9},{:.9},{:.12},{:.12},{:.12}",

@@ -24,21 +24,29 @@ use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;
 use quatarm_ref::forward::{self, thermal_scale};
 
-/// The tip p at readings `theta` and temperature `temp_c`, with ∂p/∂param written into
-/// `cols` (one 3-vector per entry of `params`; zero for frame parameters).
+/// The tip p at readings `theta` and temperature `temp_c` taken with the arm's probe at
+/// index `probe` (`quatarm_ref::Arm::probes` order; `crate::probes`), with ∂p/∂param
+/// written into `cols` (one 3-vector per entry of `params`; zero for frame parameters and
+/// for the other probes' unknowns, which do not move this ball).
 pub fn tip_jacobian(
     arm: &Arm,
+    probe: usize,
     params: &[Param],
     theta: &[f64],
     temp_c: f64,
     cols: &mut [Vector3<f64>],
 ) -> Vector3<f64> {
+    let mounted = arm
+        .for_probe(probe)
+        .expect("a row's probe is one of the arm's (crate::probes::check)");
+    let arm = mounted.as_ref();
     let c = forward::evaluate(arm, theta, temp_c);
     let p = c.p;
     let n = arm.dof();
     let turn = |j: usize| -> Vector3<f64> { c.axes[j].cross(&(p - c.origins[j])) };
     let at = TipPoint {
         arm,
+        probe,
         chain: &c,
         theta,
         temp_c,
@@ -54,9 +62,8 @@ pub fn tip_jacobian(
             Param::LinkError(j, k) => {
                 c.rotations[j].column(k) * thermal_scale(arm.joints[j].thermal, temp_c)
             }
-            // The arm as it measured this reading has its probe first (`Arm::for_probe`):
-            // another probe's error does not move this ball.
-            Param::ProbeError(0, k) => {
+            // `arm` is the arm as it measured this reading, its probe mounted first.
+            Param::ProbeError(q, k) if q == probe => {
                 c.rotations[n - 1].column(k) * thermal_scale(arm.probe.thermal, temp_c)
             }
             _ => Vector3::zeros(),
@@ -73,7 +80,7 @@ mod tests {
 
     fn check(arm: &Arm, params: &[Param], theta: &[f64], temp: f64, rel_tol: f64) {
         let mut cols = vec![Vector3::zeros(); params.len()];
-        tip_jacobian(arm, params, theta, temp, &mut cols);
+        tip_jacobian(arm, 0, params, theta, temp, &mut cols);
         for (i, p) in params.iter().enumerate() {
             let h = match p.unit() {
                 "mm" => 1e-4,

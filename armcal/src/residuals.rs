@@ -86,21 +86,18 @@ pub struct Residuals {
 /// Residuals of `arm` on `data`. `point` rows go through `frame`, or through the best rigid
 /// frame for this arm when `None` (how an uncalibrated arm is judged fairly).
 pub fn residuals(arm: &Arm, data: &Dataset, frame: Option<Rigid>) -> Residuals {
-    let ps: Vec<Vector3<f64>> = data
-        .rows
-        .iter()
-        .map(|r| forward::forward(arm, &r.theta, r.temp_c).p)
-        .collect();
-    residuals_of(&ps, data, frame, arm.probe.ball_diameter)
+    let mounted = crate::probes::Mounted::new(arm);
+    let ps: Vec<Vector3<f64>> = data.rows.iter().map(|r| mounted.tip(r)).collect();
+    residuals_of(&ps, data, frame, arm)
 }
 
-/// As [`residuals`], from the model's ball centres `ps` (one per row) already computed, with
-/// the stylus ball's diameter (mm) for `sphere` rows.
+/// As [`residuals`], from the model's ball centres `ps` (one per row) already computed;
+/// `arm` gives the stylus balls' diameters (mm) for `sphere` rows.
 pub fn residuals_of(
     ps: &[Vector3<f64>],
     data: &Dataset,
     frame: Option<Rigid>,
-    ball_diameter: f64,
+    arm: &Arm,
 ) -> Residuals {
     let layout = data.layout();
     let mut rows = vec![Vector3::zeros(); data.rows.len()];
@@ -140,7 +137,8 @@ pub fn residuals_of(
     }
     for g in &layout.sphere {
         let q: Vec<Vector3<f64>> = g.rows.iter().map(|&i| ps[i]).collect();
-        let radius = (g.diameter_mm + ball_diameter) / 2.0;
+        let ball = crate::probes::ball_diameter(arm, &data.rows[g.rows[0]]);
+        let radius = (g.diameter_mm + ball) / 2.0;
         // A group whose points fix no sphere (coplanar, too few) was refused by the loader's
         // callers; its rows keep no residual rather than an invented one.
         if let Ok(c) = crate::acceptance::fit::centre_of(&q, radius) {

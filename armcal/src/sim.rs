@@ -266,6 +266,57 @@ pub struct Options {
     /// the model and the diagnosis' vocabulary do not hold, to test what a diagnosis says
     /// about what it cannot name.
     pub sag: Vec<Sag>,
+    /// The ids of the probes rows are taken with, in turn (row by row; a `sphere` group
+    /// whole): a `probe` column. Empty: the arm's first probe, and no column.
+    pub probes: Vec<u8>,
+}
+
+/// The probes a simulation takes rows with, in turn, and the arm as each measures.
+struct Turns<'a> {
+    turns: Vec<(Option<u8>, std::borrow::Cow<'a, Arm>)>,
+}
+
+impl<'a> Turns<'a> {
+    /// The probes `ids` of `truth` (the first alone, with no id, for none).
+    fn new(truth: &'a Arm, ids: &[u8]) -> Result<Turns<'a>, SimError> {
+        if ids.is_empty() {
+            return Ok(Turns {
+                turns: vec![(None, std::borrow::Cow::Borrowed(truth))],
+            });
+        }
+        let turns = ids
+            .iter()
+            .map(|&id| {
+                truth
+                    .probe_index(id)
+                    .and_then(|k| truth.for_probe(k))
+                    .map(|a| (Some(id), a))
+                    .ok_or(SimError::NoProbe(id))
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(Turns { turns })
+    }
+
+    /// The probes of the rows of `like` (the design of a calibration: identifiability must
+    /// see every probe the data has).
+    fn like(arm: &'a Arm, like: &Dataset) -> Turns<'a> {
+        let mut ids: Vec<u8> = like.rows.iter().filter_map(|r| r.probe).collect();
+        ids.sort_unstable();
+        ids.dedup();
+        let ids: Vec<u8> = ids
+            .into_iter()
+            .filter(|id| arm.probe_index(*id).is_some())
+            .collect();
+        Turns::new(arm, &ids).unwrap_or_else(|_| Turns {
+            turns: vec![(None, std::borrow::Cow::Borrowed(arm))],
+        })
+    }
+
+    /// The `i`-th turn's id and arm.
+    fn at(&self, i: usize) -> (Option<u8>, &Arm) {
+        let (id, arm) = &self.turns[i % self.turns.len()];
+        (*id, arm)
+    }
 }
 
 /// A link that sags under its own weight, on the truth side only: the end of link `link`
@@ -324,6 +375,7 @@ impl Options {
             encoder_noise_counts: 0.0,
             temp_noise_c: 0.0,
             sag: Vec::new(),
+            probes: Vec::new(),
         }
     }
 }
@@ -364,6 +416,9 @@ pub enum SimError {
     /// Sag is simulated on `point` data only.
     #[error("a sagging link is simulated on point data only, not {0}")]
     SagNeedsPoints(&'static str),
+    /// A probe the arm does not carry.
+    #[error("probe {0}: the arm has no probe of that id")]
+    NoProbe(u8),
     /// The rows made do not form valid data (the reader's own checks).
     #[error(transparent)]
     Data(#[from] crate::data::DataError),
@@ -384,6 +439,7 @@ pub fn simulate(truth: &Arm, opts: &Options, rng: &mut SimRng) -> Result<Simulat
         return Err(SimError::TooFewRows(opts.kind.name()));
     }
     let lim = limits(truth);
+    let turns = Turns::new(truth, &opts.probes)?;
     let identity = Frame {
         rotation: [1.0, 0.0, 0.0, 0.0],
         translation: [0.0; 3],
@@ -402,14 +458,15 @@ pub fn simulate(truth: &Arm, opts: &Options, rng: &mut SimRng) -> Result<Simulat
         Kind::Point => {
             let r = frame_matrix(&frame);
             let t = Vector3::from(frame.translation);
-            for _ in 0..opts.count {
+            for i in 0..opts.count {
+                let (probe, mounted) = turns.at(i);
                 let th = random_pose(&lim, rng);
                 let tc = temp(rng);
-                let p = forward::forward(truth, &th, tc).p
+                let p = forward::forward(mounted, &th, tc).p
                     + opts
                         .sag
                         .iter()
-                        .map(|s| s.displacement(truth, &th, tc))
+                        .map(|s| s.displacement(mounted, &th, tc))
                         .sum::<Vector3<f64>>();
                 let noise = Vector3::new(normal(rng), normal(rng), normal(rng)) * opts.noise_mm;
                 let x = r * p + t + noise;
@@ -422,6 +479,7 @@ pub fn simulate(truth: &Arm, opts: &Options, rng: &mut SimRng) -> Result<Simulat
                     length_mm: None,
                     sphere: None,
                     temp_c: tc,
+                    probe,
                     line: 0,
                 });
             }
@@ -433,10 +491,10 @@ pub fn simulate(truth: &Arm, opts: &Options, rng: &mut SimRng) -> Result<Simulat
                 let group = g as i64 + 1;
                 let made = match opts.kind {
                     Kind::Spat => {
-                        spat_group(truth, &lim, size, opts.noise_mm, group, &mut temp, rng)
+                        spat_group(&turns, &lim, size, opts.noise_mm, group, &mut temp, rng)
                     }
                     Kind::Sphere => sphere::group(
-                        truth,
+                        turns.at(g),
                         &lim,
                         &sphere::Test {
                             points: size,
@@ -448,7 +506,16 @@ pub fn simulate(truth: &Arm, opts: &Options, rng: &mut SimRng) -> Result<Simulat
                         &mut temp,
                         rng,
                     ),
-                    _ => length_group(truth, &lim, size, bar, opts.noise_mm, group, &mut temp, rng),
+                    _ => length_group(
+                        &turns,
+                        &lim,
+                        size,
+                        bar,
+                        opts.noise_mm,
+                        group,
+                        &mut temp,
+                        rng,
+                    ),
                 };
                 rows.extend(made.ok_or(SimError::Unreachable(group))?);
             }
@@ -494,8 +561,10 @@ pub(crate) fn probe_point(
     None
 }
 
+/// A cone probed `size` times, the rows taking the probes in turn (how the probes' vectors
+/// are told apart: each puts its ball in the same cone).
 fn spat_group(
-    truth: &Arm,
+    turns: &Turns,
     lim: &Limits,
     size: usize,
     noise_mm: f64,
@@ -503,15 +572,19 @@ fn spat_group(
     temp: &mut dyn FnMut(&mut SimRng) -> f64,
     rng: &mut SimRng,
 ) -> Option<Vec<Row>> {
+    let truth = turns.at(0).1;
     'placement: for _ in 0..20 {
         let centre = forward::forward(truth, &random_pose(lim, rng), forward::REFERENCE_TEMP_C).p;
         let mut rows = Vec::with_capacity(size);
-        for _ in 0..size {
+        for i in 0..size {
+            let (probe, mounted) = turns.at(i);
             let tc = temp(rng);
-            let Some(th) = probe_point(truth, lim, &centre, noise_mm, tc, rng) else {
+            let Some(th) = probe_point(mounted, lim, &centre, noise_mm, tc, rng) else {
                 continue 'placement;
             };
-            rows.push(row(Kind::Spat, group, &th, None, tc));
+            let mut r = row(Kind::Spat, group, &th, None, tc);
+            r.probe = probe;
+            rows.push(r);
         }
         return Some(rows);
     }
@@ -520,7 +593,7 @@ fn spat_group(
 
 #[allow(clippy::too_many_arguments)]
 fn length_group(
-    truth: &Arm,
+    turns: &Turns,
     lim: &Limits,
     size: usize,
     bar: f64,
@@ -530,6 +603,7 @@ fn length_group(
     rng: &mut SimRng,
 ) -> Option<Vec<Row>> {
     let na = size.div_ceil(2);
+    let truth = turns.at(0).1;
     'placement: for _ in 0..40 {
         let a = forward::forward(truth, &random_pose(lim, rng), forward::REFERENCE_TEMP_C).p;
         let dir = Vector3::new(normal(rng), normal(rng), normal(rng)).normalize();
@@ -537,12 +611,14 @@ fn length_group(
         let mut rows = Vec::with_capacity(size);
         for i in 0..size {
             let (end, centre) = if i < na { (End::A, &a) } else { (End::B, &b) };
+            let (probe, mounted) = turns.at(i);
             let tc = temp(rng);
-            let Some(th) = probe_point(truth, lim, centre, noise_mm, tc, rng) else {
+            let Some(th) = probe_point(mounted, lim, centre, noise_mm, tc, rng) else {
                 continue 'placement;
             };
             let mut r = row(Kind::Length, group, &th, Some(end), tc);
             r.length_mm = Some(bar);
+            r.probe = probe;
             rows.push(r);
         }
         return Some(rows);
@@ -561,6 +637,7 @@ pub(crate) fn row(kind: Kind, group: i64, th: &[f64], end: Option<End>, tc: f64)
         length_mm: None,
         sphere: None,
         temp_c: tc,
+        probe: None,
         line: 0,
     }
 }
@@ -577,12 +654,14 @@ pub fn design_like(arm: &Arm, like: &Dataset, seed: u64) -> Dataset {
         k += 1;
         temps[(k * 7919) % temps.len()]
     };
+    let turns = Turns::like(arm, like);
     let mut rows = Vec::new();
     if like.rows.iter().any(|r| r.kind == Kind::Point) {
-        for _ in 0..150 {
+        for i in 0..150 {
+            let (probe, mounted) = turns.at(i);
             let th = random_pose(&lim, &mut rng);
             let tc = next_temp(&mut rng);
-            let p = forward::forward(arm, &th, tc).p;
+            let p = forward::forward(mounted, &th, tc).p;
             rows.push(Row {
                 kind: Kind::Point,
                 group: 0,
@@ -592,13 +671,15 @@ pub fn design_like(arm: &Arm, like: &Dataset, seed: u64) -> Dataset {
                 length_mm: None,
                 sphere: None,
                 temp_c: tc,
+                probe,
                 line: 0,
             });
         }
     }
     if like.rows.iter().any(|r| r.kind == Kind::Spat) {
         for g in 0..6 {
-            if let Some(made) = spat_group(arm, &lim, 6, 0.0, 1000 + g, &mut next_temp, &mut rng) {
+            if let Some(made) = spat_group(&turns, &lim, 6, 0.0, 1000 + g, &mut next_temp, &mut rng)
+            {
                 rows.extend(made);
             }
         }
@@ -611,7 +692,7 @@ pub fn design_like(arm: &Arm, like: &Dataset, seed: u64) -> Dataset {
         .enumerate()
     {
         if let Some(made) = length_group(
-            arm,
+            &turns,
             &lim,
             6,
             *bar,
@@ -636,9 +717,14 @@ pub fn design_like(arm: &Arm, like: &Dataset, seed: u64) -> Dataset {
             articulations: None,
             noise_mm: 0.0,
         };
-        if let Some(made) =
-            sphere::group(arm, &lim, &test, 3000 + g as i64, &mut next_temp, &mut rng)
-        {
+        if let Some(made) = sphere::group(
+            turns.at(g),
+            &lim,
+            &test,
+            3000 + g as i64,
+            &mut next_temp,
+            &mut rng,
+        ) {
             rows.extend(made);
         }
     }

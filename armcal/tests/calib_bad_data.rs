@@ -52,6 +52,7 @@ fn joint3_still(n: usize) -> Dataset {
                 length_mm: None,
                 sphere: None,
                 temp_c: 20.0,
+                probe: None,
                 line: 0,
             }
         })

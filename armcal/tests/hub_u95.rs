@@ -107,8 +107,8 @@ fn hub_against_host(
             .collect();
         let temp_mc: i32 = rng.gen_range(16_000..28_000);
         let (theta, t) = (arm.counts_to_rad(&counts), f64::from(temp_mc) / 1000.0);
-        let (_, s) = propagate::point(arm, &host, &theta, t);
-        let (_, own) = propagate::point(arm, &own_only, &theta, t);
+        let (_, s) = propagate::point(arm, 0, &host, &theta, t);
+        let (_, own) = propagate::point(arm, 0, &own_only, &theta, t);
         share = share.max(1.0 - own.trace() / s.trace());
         let want_nm = u95(&s) * 1e6;
         let p32 = c32.eval(&counts, temp_mc).unwrap();

@@ -47,9 +47,9 @@ fn first_order_and_monte_carlo_agree_on_u95() {
     let lim = armcal::sim::limits(&c.arm);
     for _ in 0..6 {
         let th = armcal::sim::random_pose(&lim, &mut c.rng);
-        let (p, s) = propagate::point(&c.arm, &c.budget, &th, 20.0);
+        let (p, s) = propagate::point(&c.arm, 0, &c.budget, &th, 20.0);
         let fo = u95::u95(&s);
-        let mc = montecarlo::point(&c.arm, &c.budget, &root, &th, 20.0, 40_000, &mut c.rng);
+        let mc = montecarlo::point(&c.arm, 0, &c.budget, &root, &th, 20.0, 40_000, &mut c.rng);
         assert!((mc.p - p).norm() < 1e-12);
         assert!((mc.u95 / fo - 1.0).abs() < 0.03, "FO {fo} MC {}", mc.u95);
         for k in 0..3 {

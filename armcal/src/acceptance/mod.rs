@@ -18,7 +18,6 @@ use crate::data::Dataset;
 use mpe::{Decision, Mpe};
 use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;
-use quatarm_ref::forward;
 use statistics::{StatError, Test, Value};
 use std::collections::BTreeMap;
 use virtual_test::Interval;
@@ -80,10 +79,8 @@ pub struct EffectiveDiameter {
 /// The ball centres of every row by the calibrated model (the f64 reference, as
 /// `armcal eval` gives them).
 pub fn centres(arm: &Arm, data: &Dataset) -> Vec<Vector3<f64>> {
-    data.rows
-        .iter()
-        .map(|r| forward::forward(arm, &r.theta, r.temp_c).p)
-        .collect()
+    let mounted = crate::probes::Mounted::new(arm);
+    data.rows.iter().map(|r| mounted.tip(r)).collect()
 }
 
 /// The mean of the centres of `rows`: a bar end's, a cone's or a sphere's centroid.
@@ -101,7 +98,15 @@ pub fn check(
     prediction: Option<&BTreeMap<(Test, i64), Interval>>,
 ) -> Result<Check, StatError> {
     let d = arm.probe.ball_diameter;
-    let values = statistics::values(data, &centres(arm, data), d)?;
+    let ball = |r: &crate::data::Row| crate::probes::ball_diameter(arm, r);
+    let values = statistics::values(data, &centres(arm, data), &ball)?;
+    // The ball of a sphere group's probe (one per group: the data reader's rule).
+    let group_ball = |group: i64| {
+        data.rows
+            .iter()
+            .find(|r| r.kind == crate::data::Kind::Sphere && r.group == group)
+            .map_or(d, ball)
+    };
     let mut results = BTreeMap::new();
     let mut worst_group = BTreeMap::new();
     for t in Test::ALL {
@@ -119,7 +124,7 @@ pub fn check(
         .filter(|v| v.test == Test::PSize)
         .map(|v| EffectiveDiameter {
             group: v.group,
-            diameter_mm: d + v.value_mm,
+            diameter_mm: group_ball(v.group) + v.value_mm,
         })
         .collect();
     Ok(Check {

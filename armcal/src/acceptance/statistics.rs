@@ -2,7 +2,7 @@
 //! from the ball centres the calibrated model gives for the rows (mm inside, µm in reports).
 
 use super::fit::{self, FitError};
-use crate::data::{Dataset, Layout};
+use crate::data::{Dataset, Layout, Row};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
 
@@ -89,11 +89,12 @@ pub enum StatError {
     },
 }
 
-/// Every test value the data supports, group by group.
+/// Every test value the data supports, group by group; `ball_diameter` gives the stylus ball
+/// (mm) a row was taken with (a sphere group is touched with one probe: the data reader's rule).
 pub fn values(
     data: &Dataset,
     centres: &[Vector3<f64>],
-    ball_diameter: f64,
+    ball_diameter: &dyn Fn(&Row) -> f64,
 ) -> Result<Vec<Value>, StatError> {
     let layout = data.layout();
     let mut out = Vec::new();
@@ -140,10 +141,11 @@ fn sphere_values(
     data: &Dataset,
     layout: &Layout,
     centres: &[Vector3<f64>],
-    ball_diameter: f64,
+    ball_diameter: &dyn Fn(&Row) -> f64,
     out: &mut Vec<Value>,
 ) -> Result<(), StatError> {
     for g in &layout.sphere {
+        let ball_diameter = ball_diameter(&data.rows[g.rows[0]]);
         let p: Vec<Vector3<f64>> = g.rows.iter().map(|&i| centres[i]).collect();
         let fit_err = |source| StatError::Fit {
             group: g.group,
@@ -238,6 +240,7 @@ mod tests {
             length_mm: None,
             sphere: None,
             temp_c: 20.0,
+            probe: None,
             line: 0,
         }
     }
@@ -270,7 +273,7 @@ mod tests {
     fn spat_by_hand() {
         let d = data(vec![row(Kind::Spat, 1), row(Kind::Spat, 1)]);
         let c = [Vector3::zeros(), Vector3::new(2.0, 0.0, 0.0)];
-        let v = values(&d, &c, 0.0).unwrap();
+        let v = values(&d, &c, &|_| 0.0).unwrap();
         assert_eq!(v[0].test, Test::SpatMax);
         assert!((v[0].value_mm - 1.0).abs() < 1e-15);
         // 2 √((1² + 1²) / (2 − 1)) = 2√2.
@@ -292,7 +295,7 @@ mod tests {
             Vector3::new(0.0, 0.0, 0.001),
             Vector3::new(100.01, 0.0, 0.0),
         ];
-        let v = values(&data(rows), &c, 0.0).unwrap();
+        let v = values(&data(rows), &c, &|_| 0.0).unwrap();
         assert_eq!(v.len(), 1);
         assert_eq!((v[0].test, v[0].group), (Test::EUni, 3));
         assert!((v[0].value_mm - 0.01).abs() < 1e-9, "{}", v[0].value_mm);
@@ -304,9 +307,9 @@ mod tests {
         // D = 25, d = 2: centres at (D + d)/2 = 13.5 give P_Size 0; at 13.502 exactly +4 µm.
         let c = Vector3::new(10.0, 20.0, 30.0);
         let d = data(sphere_rows(1, 25.0, &[None; 25]));
-        let exact = values(&d, &on_sphere(c, 13.5, 25), 2.0).unwrap();
+        let exact = values(&d, &on_sphere(c, 13.5, 25), &|_| 2.0).unwrap();
         assert!(exact[0].value_mm.abs() < 1e-9 && exact[1].value_mm < 1e-9);
-        let big = values(&d, &on_sphere(c, 13.502, 25), 2.0).unwrap();
+        let big = values(&d, &on_sphere(c, 13.502, 25), &|_| 2.0).unwrap();
         assert_eq!((big[0].test, big[1].test), (Test::PSize, Test::PForm));
         assert!(
             (big[0].value_mm - 0.004).abs() < 1e-9,
@@ -318,7 +321,7 @@ mod tests {
         let mut p = on_sphere(c, 13.502, 25);
         p[3] = c + (p[3] - c).normalize() * 13.505;
         p[7] = c + (p[7] - c).normalize() * 13.500;
-        let v = values(&d, &p, 2.0).unwrap();
+        let v = values(&d, &p, &|_| 2.0).unwrap();
         assert!((v[0].value_mm - 0.004).abs() < 5e-4, "{}", v[0].value_mm);
         assert!(
             v[1].value_mm > 0.004 && v[1].value_mm <= 0.005 + 1e-9,
@@ -344,7 +347,7 @@ mod tests {
                 p.push(q);
             }
         }
-        let v = values(&data(sphere_rows(2, 25.0, &arts)), &p, 0.0).unwrap();
+        let v = values(&data(sphere_rows(2, 25.0, &arts)), &p, &|_| 0.0).unwrap();
         assert_eq!((v[0].test, v[0].group), (Test::LDia, 2));
         assert!((v[0].value_mm - 0.01).abs() < 1e-9, "{}", v[0].value_mm);
     }
@@ -355,7 +358,7 @@ mod tests {
         let few = values(
             &data(sphere_rows(1, 25.0, &[None; 24])),
             &on_sphere(c, 12.5, 24),
-            0.0,
+            &|_| 0.0,
         );
         assert_eq!(
             few.unwrap_err(),
@@ -364,7 +367,7 @@ mod tests {
         let flat: Vec<Vector3<f64>> = (0..25)
             .map(|i| Vector3::new((i as f64).cos(), (i as f64).sin(), 0.0) * 12.5)
             .collect();
-        let e = values(&data(sphere_rows(4, 25.0, &[None; 25])), &flat, 0.0).unwrap_err();
+        let e = values(&data(sphere_rows(4, 25.0, &[None; 25])), &flat, &|_| 0.0).unwrap_err();
         assert_eq!(
             e,
             StatError::Fit {
@@ -378,7 +381,7 @@ mod tests {
         let e = values(
             &data(sphere_rows(5, 25.0, &arts)),
             &on_sphere(c, 12.5, 20),
-            0.0,
+            &|_| 0.0,
         )
         .unwrap_err()
         .to_string();

@@ -43,12 +43,19 @@ pub fn predict(
     draws: usize,
     seed: u64,
 ) -> Result<BTreeMap<(Test, i64), Interval>, StatError> {
-    let d = arm.probe.ball_diameter;
     let ideal = ideal_centres(arm, data)?;
     let jac: Vec<Jacobians> = data
         .rows
         .iter()
-        .map(|r| jacobians(arm, budget, &r.theta, r.temp_c))
+        .map(|r| {
+            jacobians(
+                arm,
+                crate::probes::index(arm, r),
+                budget,
+                &r.theta,
+                r.temp_c,
+            )
+        })
         .collect();
     let root = sqrt_cov(&budget.cov);
     let sigma_theta = budget.sigma_theta(arm);
@@ -73,7 +80,7 @@ pub fn predict(
                 p + Vector3::new(normal(&mut g), normal(&mut g), normal(&mut g)) * own
             })
             .collect();
-        for v in statistics::values(data, &p, d)? {
+        for v in statistics::values(data, &p, &|r| crate::probes::ball_diameter(arm, r))? {
             samples
                 .entry((v.test, v.group))
                 .or_default()
@@ -114,7 +121,8 @@ fn ideal_centres(arm: &Arm, data: &Dataset) -> Result<Vec<Vector3<f64>>, StatErr
                 source,
             })?
             .centre;
-        let r = (g.diameter_mm + arm.probe.ball_diameter) / 2.0;
+        let ball = crate::probes::ball_diameter(arm, &data.rows[g.rows[0]]);
+        let r = (g.diameter_mm + ball) / 2.0;
         for &i in &g.rows {
             x[i] = c + (x[i] - c).normalize() * r;
         }

@@ -91,6 +91,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         &inputs,
     )?;
     let data = armcal::data::read(&a.data, start.dof())?;
+    armcal::probes::check(&start, &data)?;
     for w in &data.warnings {
         eprintln!("armcal: warning: {w}");
     }

@@ -44,6 +44,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         armcal::load::calibration_and_budget(&a.calib, a.predict.then_some("--predict"))?;
     let mpe = a.mpe.as_deref().map(Mpe::read).transpose()?;
     let data = armcal::data::read(&a.data, arm.dof())?;
+    armcal::probes::check(&arm, &data)?;
     for w in &data.warnings {
         eprintln!("armcal: warning: {w}");
     }

@@ -136,6 +136,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         }
     }
     let data = armcal::data::read(&data_path, start.dof())?;
+    armcal::probes::check(&start, &data)?;
     for w in &data.warnings {
         eprintln!("armcal: warning: {w}");
     }

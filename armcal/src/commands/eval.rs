@@ -16,7 +16,8 @@ pub struct Args {
     /// binary table a board would load.
     #[arg(long, value_enum, default_value_t = Evaluator::F64)]
     precision: Evaluator,
-    /// CSV with columns j1..jN (rad) or c1..cN (counts) and optional temp_c; stdin if absent.
+    /// CSV with columns j1..jN (rad) or c1..cN (counts), optional temp_c and probe (the id of
+    /// the probe each reading was taken with; the first where absent); stdin if absent.
     input: Option<PathBuf>,
     /// Add each point's covariance and U95 (`cxx,cyy,czz,cxy,cxz,cyz` mm², `U95` mm) from the
     /// calibration's `[uncertainty]` budget, computed on the f64 reference.

@@ -70,6 +70,11 @@ pub struct Args {
     /// diagnosis says about what it cannot name. Point data only; repeatable.
     #[arg(long, value_name = "LINK:UM", value_parser = parse_sag)]
     sag: Vec<(String, f64)>,
+    /// Take the rows with these probes of the truth's (their ids, in turn: row by row, a
+    /// sphere group whole) and write a `probe` column; without it every row is the first
+    /// probe's and there is no column.
+    #[arg(long, value_name = "ID,ID,...", value_delimiter = ',')]
+    probes: Vec<u8>,
     /// Output file (CSV of `spec/measured-data.md`).
     #[arg(short, long)]
     output: PathBuf,
@@ -207,6 +212,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     opts.articulations = a.articulations.map(|k| k as usize);
     opts.encoder_noise_counts = a.encoder_noise_counts;
     opts.temp_noise_c = a.temp_noise_c;
+    opts.probes = a.probes.clone();
     for (link, um) in &a.sag {
         let dof = truth.dof();
         let k = match link.as_str() {

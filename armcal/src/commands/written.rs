@@ -3,7 +3,8 @@
 //! here rather than a file no command can use.
 
 use anyhow::bail;
-use quatarm_ref::{calfile, forward};
+use armcal::probes::Mounted;
+use quatarm_ref::calfile;
 
 /// The calibration file's text, checked by reading it back (the budget too) and evaluating
 /// it on the first rows of the data against the fit itself.
@@ -19,10 +20,9 @@ pub fn checked_text(
     if back_budget.as_ref() != budget {
         bail!("the [uncertainty] section written does not read back the same (a bug)");
     }
+    let (back_m, arm_m) = (Mounted::new(&back), Mounted::new(arm));
     for r in data.rows.iter().take(50) {
-        let d = (forward::forward(&back, &r.theta, r.temp_c).p
-            - forward::forward(arm, &r.theta, r.temp_c).p)
-            .norm();
+        let d = (back_m.tip(r) - arm_m.tip(r)).norm();
         if d > 1e-9 {
             bail!("the calibration file written evaluates {d} mm away from the fit (a bug)");
         }

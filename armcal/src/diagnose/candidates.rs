@@ -127,7 +127,7 @@ pub fn candidates_up_to(start: &Arm, data: &Dataset, max_order: u32) -> Candidat
         }
     }
     let terms = Terms::with(&vocab);
-    let all = unknowns(&terms, data);
+    let all = unknowns(start, &terms, data);
     let (id, _) = structural(start, data, &all, 1e-8);
     // Effects of which some unknown is held, and why.
     for e in &vocab {
@@ -170,7 +170,7 @@ pub fn candidates_up_to(start: &Arm, data: &Dataset, max_order: u32) -> Candidat
         }
         // Perhaps it is inseparable only together with other candidates: alone with the
         // geometric model it may still be testable.
-        let alone = unknowns(&Terms::with(&[*e]), data);
+        let alone = unknowns(start, &Terms::with(&[*e]), data);
         let (id1, _) = structural(start, data, &alone, 1e-8);
         let blocked = held_of(&id1, &alone, *e);
         // Part of it may be geometry (the co-rotating half of an order-1 axis wobble is the

@@ -36,10 +36,10 @@ use crate::calib::{self, CalibError, Fit};
 use crate::data::Dataset;
 use crate::holdout::{self, Folds, Holdout};
 use crate::params::{Effect, Param};
+use crate::probes::Mounted;
 use crate::residuals::{residuals, summarise, Summary};
 use candidates::Candidates;
 use quatarm_ref::arm::Arm;
-use quatarm_ref::forward;
 use select::{Confirmation, Selection, Settings};
 use stats::Paired;
 
@@ -358,14 +358,11 @@ pub(crate) fn cause(
     for (p, v, _) in &values {
         p.add_to(&mut without, p.value(&fit.start) - v);
     }
+    let (with, without) = (Mounted::new(&fit.arm), Mounted::new(&without));
     let ss: f64 = data
         .rows
         .iter()
-        .map(|r| {
-            (forward::forward(&fit.arm, &r.theta, r.temp_c).p
-                - forward::forward(&without, &r.theta, r.temp_c).p)
-                .norm_squared()
-        })
+        .map(|r| (with.tip(r) - without.tip(r)).norm_squared())
         .sum();
     Cause {
         effect: c.effect,

@@ -23,6 +23,7 @@
 use super::Diagnosis;
 use crate::data::{Dataset, Kind};
 use crate::effects::{Effect, TipPoint, FAMILIES};
+use crate::probes::Mounted;
 use crate::residuals::Rigid;
 use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;
@@ -44,9 +45,11 @@ pub struct RowGeometry {
 
 /// The geometry of every row of `data` under `arm`.
 pub fn geometry(arm: &Arm, data: &Dataset) -> Vec<RowGeometry> {
+    let mounted = crate::probes::Mounted::new(arm);
     data.rows
         .iter()
         .map(|r| {
+            let (probe, arm) = mounted.of(r);
             let c = forward::evaluate(arm, &r.theta, r.temp_c);
             let n = arm.dof();
             let turn = (0..n)
@@ -61,6 +64,7 @@ pub fn geometry(arm: &Arm, data: &Dataset) -> Vec<RowGeometry> {
             links.push((c.p - c.origins[n]).try_normalize(1e-9));
             let at = TipPoint {
                 arm,
+                probe,
                 chain: &c,
                 theta: &r.theta,
                 temp_c: r.temp_c,
@@ -308,14 +312,12 @@ fn own_part(
     for (p, v, _) in &c.values {
         p.add_to(&mut without, p.value(&d.extended.fit.start) - v);
     }
+    let (with, without) = (Mounted::new(ext), Mounted::new(&without));
     let part = data
         .rows
         .iter()
         .zip(after)
-        .map(|(r, m)| {
-            m + forward::forward(ext, &r.theta, r.temp_c).p
-                - forward::forward(&without, &r.theta, r.temp_c).p
-        })
+        .map(|(r, m)| m + with.tip(r) - without.tip(r))
         .collect();
     (c.effect, part)
 }

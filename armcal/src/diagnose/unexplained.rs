@@ -32,6 +32,7 @@ use crate::data::{Dataset, Kind};
 use crate::effects::TipPoint;
 use crate::jacobian::tip_jacobian;
 use crate::params::Param;
+use crate::probes::Mounted;
 use crate::residuals::residuals;
 use crate::stats::f_tail;
 use nalgebra::{DMatrix, DVector, Vector3};
@@ -233,12 +234,15 @@ fn doubts(
         }
         let mut y = Vec::with_capacity(n);
         let mut own: Vec<Vec<Vector3<f64>>> = Vec::with_capacity(n);
+        let (with, without) = (Mounted::new(&fit.arm), Mounted::new(&without));
         for (i, r) in data.rows.iter().enumerate() {
-            let chain = forward::evaluate(&fit.arm, &r.theta, r.temp_c);
-            let part = chain.p - forward::forward(&without, &r.theta, r.temp_c).p;
+            let (probe, arm) = with.of(r);
+            let chain = forward::evaluate(arm, &r.theta, r.temp_c);
+            let part = chain.p - without.tip(r);
             y.push(miss[i] + part);
             let at = TipPoint {
-                arm: &fit.arm,
+                arm,
+                probe,
                 chain: &chain,
                 theta: &r.theta,
                 temp_c: r.temp_c,
@@ -262,7 +266,8 @@ fn doubts(
             .map(|(i, r)| {
                 let mut c = columns(s, i, geo);
                 let mut g = vec![Vector3::zeros(); others.len()];
-                let p = tip_jacobian(&fit.arm, &others, &r.theta, r.temp_c, &mut g);
+                let probe = crate::probes::index(&fit.arm, r);
+                let p = tip_jacobian(&fit.arm, probe, &others, &r.theta, r.temp_c, &mut g);
                 c.extend(g);
                 let point = r.kind == Kind::Point;
                 for ax in [Vector3::x(), Vector3::y(), Vector3::z()] {

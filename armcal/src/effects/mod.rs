@@ -226,8 +226,11 @@ pub fn vocabulary(dof: usize, thermal: bool) -> Vec<Effect> {
 /// One point of the chain, for the Jacobian columns: the arm, its evaluated chain and the
 /// reading.
 pub struct TipPoint<'a> {
-    /// The arm.
+    /// The arm as it measured the reading: its probe mounted (`Arm::for_probe`).
     pub arm: &'a Arm,
+    /// The index of that probe among the whole arm's (`crate::probes`): a term of another
+    /// probe does not move this ball.
+    pub probe: usize,
     /// Its chain at the reading.
     pub chain: &'a Chain,
     /// Joint readings (rad).

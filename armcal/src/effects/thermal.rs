@@ -201,6 +201,8 @@ impl Term for Thermal {
         let dt = at.temp_c - REFERENCE_TEMP_C;
         match self.link {
             Link::Joint(j) => at.after(j) * Vector3::from(at.arm.joints[j].actual_link()) * dt,
+            // The first probe's expansion; a reading taken with another moves none with it.
+            Link::Probe if at.probe != 0 => Vector3::zeros(),
             Link::Probe => at.after(at.arm.dof() - 1) * Vector3::from(at.arm.probe.actual()) * dt,
         }
     }

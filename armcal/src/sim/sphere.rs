@@ -41,9 +41,11 @@ pub fn directions(n: usize, turn: f64) -> Vec<Vector3<f64>> {
         .collect()
 }
 
-/// The rows of one sphere group, or `None` if no placement tried reaches every touch point.
+/// The rows of one sphere group touched with one probe (`probe`: its id, `None` for the
+/// first; `truth`: the arm as it measures with it), or `None` if no placement tried reaches
+/// every touch point.
 pub fn group(
-    truth: &Arm,
+    (probe, truth): (Option<u8>, &Arm),
     lim: &Limits,
     test: &Test,
     group: i64,
@@ -72,6 +74,7 @@ pub fn group(
                     continue 'placement;
                 };
                 let mut r = row(Kind::Sphere, group, &th, None, tc);
+                r.probe = probe;
                 r.sphere = Some(Touch {
                     diameter_mm: test.diameter_mm,
                     articulation: test.articulations.map(|_| set as i64 + 1),

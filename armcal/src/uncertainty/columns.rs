@@ -39,15 +39,16 @@ pub fn columns(
     let root = montecarlo::sqrt_cov(&budget.cov);
     let mut rng = crate::sim::rng(seed);
     rows.iter()
-        .map(|(r, t)| {
-            let th = r.radians(arm);
+        .map(|r| {
+            let th = r.reading.radians(arm);
+            let (t, probe) = (r.temp_c, r.probe);
             match method {
                 Method::FirstOrder => {
-                    let (_, s) = propagate::point(arm, budget, &th, *t);
+                    let (_, s) = propagate::point(arm, probe, budget, &th, t);
                     line(&s, u95::u95(&s))
                 }
                 Method::MonteCarlo => {
-                    let o = montecarlo::point(arm, budget, &root, &th, *t, draws, &mut rng);
+                    let o = montecarlo::point(arm, probe, budget, &root, &th, t, draws, &mut rng);
                     line(&o.cov, o.u95)
                 }
             }

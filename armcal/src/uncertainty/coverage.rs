@@ -192,7 +192,7 @@ pub fn fresh(
             (forward::REFERENCE_TEMP_C, forward::REFERENCE_TEMP_C)
         };
         let r = sim::read_encoders(truth, &th, setup.encoder_noise_counts, rng);
-        let (p, s) = propagate::point(arm, budget, &r, t_read);
+        let (p, s) = propagate::point(arm, 0, budget, &r, t_read);
         reads.push((forward::forward(truth, &th, t_true).p, p, s, r, t_read));
     }
     let est: Vec<Vector3<f64>> = reads.iter().map(|x| x.1).collect();

@@ -102,7 +102,10 @@ fn spat_probing(fit: &Fit, data: &Dataset, budget: &Budget) -> Option<(f64, usiz
         for &i in g {
             ss += res.rows[i].norm_squared();
             let r = &data.rows[i];
-            let j = propagate::jacobians(&fit.arm, budget, &r.theta, r.temp_c);
+            let j = {
+                let probe = crate::probes::index(&fit.arm, r);
+                propagate::jacobians(&fit.arm, probe, budget, &r.theta, r.temp_c)
+            };
             own += propagate::own_terms(budget, &st, &j).trace();
             rows += 1;
         }

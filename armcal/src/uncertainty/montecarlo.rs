@@ -37,9 +37,13 @@ pub struct Outcome {
     pub u95: f64,
 }
 
-/// `draws` draws for the reading (θ rad, T °C); `root` is [`sqrt_cov`] of the budget's C.
+/// `draws` draws for the reading (θ rad, T °C) taken with the arm's probe at index `probe`;
+/// `root` is [`sqrt_cov`] of the budget's C. Each draw moves the whole arm's parameters,
+/// then evaluates it with that probe mounted.
+#[allow(clippy::too_many_arguments)]
 pub fn point(
     arm: &Arm,
+    probe: usize,
     budget: &Budget,
     root: &DMatrix<f64>,
     theta: &[f64],
@@ -47,7 +51,13 @@ pub fn point(
     draws: usize,
     rng: &mut SimRng,
 ) -> Outcome {
-    let p = forward::forward(arm, theta, temp_c).p;
+    let mounted = |a: &Arm, th: &[f64], tc: f64| {
+        let a = a
+            .for_probe(probe)
+            .expect("a reading's probe is one of the arm's");
+        forward::forward(&a, th, tc).p
+    };
+    let p = mounted(arm, theta, temp_c);
     let st = budget.sigma_theta(arm);
     let extra = (budget.probing_mm.powi(2) + budget.model_mm.powi(2)).sqrt();
     let k = budget.params.len();
@@ -62,7 +72,7 @@ pub fn point(
         }
         let tc = temp_c + budget.temperature_c * normal(rng);
         let noise = Vector3::new(normal(rng), normal(rng), normal(rng)) * extra;
-        samples.push(forward::forward(&a, &th, tc).p + noise);
+        samples.push(mounted(&a, &th, tc) + noise);
     }
     let m = draws.max(1) as f64;
     let mean = samples.iter().sum::<Vector3<f64>>() / m;

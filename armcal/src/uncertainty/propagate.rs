@@ -29,13 +29,24 @@ pub struct Jacobians {
     pub temp: Vector3<f64>,
 }
 
-/// The Jacobians at a reading (θ rad, T °C).
-pub fn jacobians(arm: &Arm, budget: &Budget, theta: &[f64], temp_c: f64) -> Jacobians {
+/// The Jacobians at a reading (θ rad, T °C) taken with the arm's probe at index `probe`
+/// (`quatarm_ref::Arm::probes` order).
+pub fn jacobians(
+    arm: &Arm,
+    probe: usize,
+    budget: &Budget,
+    theta: &[f64],
+    temp_c: f64,
+) -> Jacobians {
     let n = arm.dof();
     let mut params: Vec<Param> = budget.params.clone();
     params.extend((0..n).map(Param::ZeroOffset));
     let mut cols = vec![Vector3::zeros(); params.len()];
-    let p = tip_jacobian(arm, &params, theta, temp_c, &mut cols);
+    let p = tip_jacobian(arm, probe, &params, theta, temp_c, &mut cols);
+    let mounted = arm
+        .for_probe(probe)
+        .expect("a reading's probe is one of the arm's");
+    let arm = mounted.as_ref();
     let theta_cols = cols.split_off(budget.params.len());
     let h = 1.0;
     let temp = (forward::forward(arm, theta, temp_c + h).p
@@ -73,24 +84,26 @@ pub fn own_terms(budget: &Budget, sigma_theta: &[f64], j: &Jacobians) -> Matrix3
     s + j.temp * j.temp.transpose() * budget.temperature_c.powi(2)
 }
 
-/// Σ_p of a reading, with its tip.
+/// Σ_p of a reading taken with the arm's probe at index `probe`, with its tip.
 pub fn point(
     arm: &Arm,
+    probe: usize,
     budget: &Budget,
     theta: &[f64],
     temp_c: f64,
 ) -> (Vector3<f64>, Matrix3<f64>) {
-    let j = jacobians(arm, budget, theta, temp_c);
+    let j = jacobians(arm, probe, budget, theta, temp_c);
     let s = sandwich(&j.pi, &budget.cov, &j.pi) + own_terms(budget, &budget.sigma_theta(arm), &j);
     (j.p, s)
 }
 
 /// The distance between two readings and its standard uncertainty: gauge-free, the
 /// parameters' part through the difference of the two Jacobians (what a rigid motion of the
-/// base does to both cancels), the readings' own terms independent.
+/// base does to both cancels), the readings' own terms independent. Both readings are of the
+/// first probe (a ball bar is measured with one).
 pub fn distance(arm: &Arm, budget: &Budget, a: (&[f64], f64), b: (&[f64], f64)) -> (f64, f64) {
-    let ja = jacobians(arm, budget, a.0, a.1);
-    let jb = jacobians(arm, budget, b.0, b.1);
+    let ja = jacobians(arm, 0, budget, a.0, a.1);
+    let jb = jacobians(arm, 0, budget, b.0, b.1);
     let d = ja.p - jb.p;
     let len = d.norm();
     let u = if len > 0.0 { d / len } else { Vector3::zeros() };
@@ -149,7 +162,7 @@ mod tests {
         let a = arm();
         let b = Budget::zero(6);
         let th = [0.3, -0.7, 1.1, 0.9, -2.0, 0.4];
-        let j = jacobians(&a, &b, &th, 27.0);
+        let j = jacobians(&a, 0, &b, &th, 27.0);
         for k in 0..6 {
             let h = 1e-6;
             let mut plus = th;
@@ -182,8 +195,8 @@ mod tests {
         b.probing_mm = 0.002;
         b.model_mm = 0.001;
         let th = [0.3, -0.7, 1.1, 0.9, -2.0, 0.4];
-        let (_, s) = point(&a, &b, &th, 25.0);
-        let j = jacobians(&a, &b, &th, 25.0);
+        let (_, s) = point(&a, 0, &b, &th, 25.0);
+        let j = jacobians(&a, 0, &b, &th, 25.0);
         let st = b.sigma_theta(&a);
         let mut want = Matrix3::identity() * (0.002f64.powi(2) + 0.001f64.powi(2));
         want += j.temp * j.temp.transpose() * 0.04;

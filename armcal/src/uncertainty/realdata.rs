@@ -145,7 +145,10 @@ fn socket_u95(arm: &Arm, b: &Budget, data: &Dataset, rows: &[usize]) -> Vec<(usi
     let st = b.sigma_theta(arm);
     let js: Vec<propagate::Jacobians> = rows
         .iter()
-        .map(|&i| propagate::jacobians(arm, b, &data.rows[i].theta, data.rows[i].temp_c))
+        .map(|&i| {
+            let r = &data.rows[i];
+            propagate::jacobians(arm, crate::probes::index(arm, r), b, &r.theta, r.temp_c)
+        })
         .collect();
     let own: Vec<Matrix3<f64>> = js.iter().map(|j| propagate::own_terms(b, &st, j)).collect();
     let own_mean = own.iter().sum::<Matrix3<f64>>() / (n * n);

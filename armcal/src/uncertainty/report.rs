@@ -73,7 +73,7 @@ impl BudgetReport {
         let pts: Vec<(f64, f64, f64)> = (0..POSES)
             .map(|_| {
                 let th = sim::random_pose(&lim, &mut rng);
-                let (p, s) = propagate::point(arm, b, &th, REFERENCE_TEMP_C);
+                let (p, s) = propagate::point(arm, 0, b, &th, REFERENCE_TEMP_C);
                 (p.x.hypot(p.y), p.z, u95::u95(&s) * 1e3)
             })
             .collect();
