@@ -2,10 +2,11 @@
 //! programs open as they open a USB serial port, so that the `armcal` binary drives it as a
 //! metrologist drives a hub (`armcal table send --port`, `armcal decode --port`).
 //!
-//! What a pty asks of the runner (QEMU 7.2 and 10.0):
-//! - QEMU prints `char device redirected to /dev/pts/N (label serial0)`: on stderr up to 7.2,
-//!   on stdout since (where the guest's semihosting output, the defmt log, follows it). Both
-//!   are read; stdout goes to a log file from the line after the message on.
+//! What a pty asks of the runner:
+//! - QEMU prints `char device redirected to /dev/pts/N (label serial0)` with `qemu_printf`,
+//!   on stdout (7.2 and 10.0), where the guest's semihosting output, the defmt log, follows
+//!   it; older releases wrote it on stderr. Both are read; stdout goes to a log file from the
+//!   line after the message on.
 //! - QEMU drops what the guest sends while no process holds the pty open, and a pty keeps
 //!   what was sent while one did but did not read, across a close and the next open. So the
 //!   machine starts paused (`-S`) until the test has the pty open ([`PtyHub::run`]), and a
@@ -13,7 +14,10 @@
 //! - The other way, QEMU stops reading the pty when its last holder closes it and looks again
 //!   once a second: bytes written just before a close are never read, and the first bytes
 //!   after an open wait up to a second (each `armcal` run's first answer does). A port stays
-//!   open until what it sent is answered.
+//!   open until what it sent is answered. Before QEMU 8.2 (commit 4f7689f0, "Avoid losing
+//!   bytes when the other side just (re-)connected") QEMU also dropped what the guest sent
+//!   until that poll saw the pty held: [`PtyHub::open_held`] waits it out where a `Hello`
+//!   must not be lost.
 //! - The terminal settings need nothing: QEMU makes the pty raw (no echo, no line editing,
 //!   no CR/LF translation) when it creates it, and `serialport` sets raw mode again on open.
 
@@ -154,6 +158,15 @@ impl PtyHub {
     /// Opens the pty as a program opens a serial port (see [`Port`]).
     pub fn open(&self) -> Result<Port> {
         Port::open(&self.path)
+    }
+
+    /// [`PtyHub::open`], then waits out QEMU's once-a-second poll, so that what the hub sends
+    /// next (a boot's `Hello`) reaches the port also with a QEMU before 8.2, which drops the
+    /// guest's bytes until that poll saw the pty held (10.0 checks at each write).
+    pub fn open_held(&self) -> Result<Port> {
+        let port = self.open()?;
+        std::thread::sleep(Duration::from_millis(1100));
+        Ok(port)
     }
 
     /// Sends `End` through the pty and waits for QEMU to exit; its status. The defmt log is
@@ -342,7 +355,7 @@ mod tests {
 
     #[test]
     fn the_pty_path_from_each_qemu() {
-        // QEMU 10.0 on stdout, 7.2 on stderr: the same words.
+        // On stdout (qemu_printf), and as older releases wrote it on stderr: the same words.
         assert_eq!(
             pty_path("char device redirected to /dev/pts/7 (label serial0)"),
             Some(PathBuf::from("/dev/pts/7"))

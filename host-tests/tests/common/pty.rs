@@ -203,7 +203,7 @@ pub fn table_send_over_a_pty(name: &str) {
     );
     {
         // Open before the machine runs: the boot's Hello is not lost.
-        let mut port = hub.open().unwrap();
+        let mut port = hub.open_held().unwrap();
         hub.run().unwrap();
         expect_hello(&mut port, factory, "boot");
     }
@@ -337,7 +337,7 @@ pub fn table_send_over_a_pty(name: &str) {
 
     // The table sent is what the hub boots on.
     {
-        let mut port = hub.open().unwrap();
+        let mut port = hub.open_held().unwrap();
         hub.reset().unwrap();
         expect_hello(&mut port, updated, "reset after the update");
     }
@@ -373,7 +373,7 @@ pub fn table_send_refused_over_a_pty(name: &str) {
     let log = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}-pty-defmt.bin"));
     let mut hub = PtyHub::start(&b, &b.elf(b.name), Some(&table), &log).unwrap();
     {
-        let mut port = hub.open().unwrap();
+        let mut port = hub.open_held().unwrap();
         hub.run().unwrap();
         assert!(matches!(port.next_item().unwrap(), Item::Hello(_)));
     }
