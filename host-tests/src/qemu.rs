@@ -45,15 +45,24 @@ impl Default for Options {
     }
 }
 
-/// The QEMU command line of `board` (without `-kernel`): its UART on a Unix socket at `sock`
-/// (QEMU the server, waiting for the connection), semihosting (the defmt log) on QEMU's
-/// stdout, `table` loaded into the calibration region, the monitor on a Unix socket at
-/// `monitor` if given (for resets), else none.
+/// Where QEMU connects a board's UART.
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum Uart<'a> {
+    /// A Unix socket at this path, QEMU the server, waiting for the connection before the
+    /// machine starts.
+    Socket(&'a Path),
+    /// A pseudo-terminal of its own (`-serial pty`), whose path QEMU prints at start.
+    Pty,
+}
+
+/// The QEMU command line of `board` (without `-kernel`): its UART on `uart`, semihosting (the
+/// defmt log) on QEMU's stdout, `table` loaded into the calibration region, the monitor on a
+/// Unix socket at `monitor` if given (for resets), else none.
 pub(crate) fn command(
     board: &Board,
     table: &Option<PathBuf>,
     icount: bool,
-    sock: &Path,
+    uart: Uart<'_>,
     monitor: Option<&Path>,
 ) -> Result<Command> {
     let Some(m) = board.qemu else {
@@ -69,13 +78,17 @@ pub(crate) fn command(
             .arg(format!("unix:{},server=on,wait=off", p.display())),
         None => cmd.args(["-monitor", "none"]),
     };
-    cmd.arg("-chardev")
-        .arg(format!(
-            "socket,id=uart,path={},server=on,wait=on",
-            sock.display()
-        ))
-        .args(["-serial", "chardev:uart"])
-        .args(["-semihosting-config", "enable=on,target=native"]);
+    match uart {
+        Uart::Socket(sock) => cmd
+            .arg("-chardev")
+            .arg(format!(
+                "socket,id=uart,path={},server=on,wait=on",
+                sock.display()
+            ))
+            .args(["-serial", "chardev:uart"]),
+        Uart::Pty => cmd.args(["-serial", "pty"]),
+    };
+    cmd.args(["-semihosting-config", "enable=on,target=native"]);
     if icount {
         cmd.args(["-icount", "shift=0"]);
     }
@@ -90,6 +103,43 @@ pub(crate) fn command(
         .stdout(Stdio::piped())
         .stderr(Stdio::piped());
     Ok(cmd)
+}
+
+/// Checks that `elf` is built and writes `image` (bytes as given) into `dir` for QEMU's
+/// loader; its path.
+pub(crate) fn image_file(
+    board: &Board,
+    elf: &Path,
+    image: Option<&[u8]>,
+    dir: &Path,
+) -> Result<Option<PathBuf>> {
+    if !elf.exists() {
+        bail!("{} is not built: run `cargo xtask build`", board.name);
+    }
+    image
+        .map(|t| {
+            let p = dir.join("table.bin");
+            std::fs::write(&p, t)?;
+            Ok(p)
+        })
+        .transpose()
+}
+
+/// Waits for QEMU to exit after the hub was sent `End`; kills it after
+/// [`crate::session::ANSWER_TIMEOUT`].
+pub(crate) fn wait_exit(child: &mut Child) -> Result<ExitStatus> {
+    let start = Instant::now();
+    loop {
+        if let Some(s) = child.try_wait()? {
+            return Ok(s);
+        }
+        if start.elapsed() > crate::session::ANSWER_TIMEOUT {
+            let _ = child.kill();
+            let _ = child.wait();
+            bail!("QEMU did not exit after End");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
 }
 
 /// Connects to QEMU's UART socket at `sock` once QEMU has opened it.
@@ -123,7 +173,7 @@ pub fn run(board: &Board, elf: &Path, input: &[u8], opts: &Options) -> Result<Ru
     }
     let dir = tempfile::tempdir()?;
     let sock = dir.path().join("uart.sock");
-    let mut cmd = command(board, &opts.table, opts.icount, &sock, None)?;
+    let mut cmd = command(board, &opts.table, opts.icount, Uart::Socket(&sock), None)?;
     cmd.arg("-kernel").arg(elf);
     let start = Instant::now();
     let mut child = cmd.spawn().context("starting qemu-system-arm")?;

@@ -5,7 +5,6 @@
 
 use std::io::{Read, Write};
 use std::os::unix::net::UnixStream;
-use std::path::PathBuf;
 use std::process::{Child, ExitStatus};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
 use std::thread::JoinHandle;
@@ -16,7 +15,7 @@ use quatarm::stream::{encode, ToDevice, MAX_FRAME};
 use quatarm_wire::stream_decode::{Decoder, Item};
 
 use crate::boards::Board;
-use crate::qemu::{command, connect};
+use crate::qemu::{command, connect, image_file, wait_exit, Uart};
 
 /// How long an answer may take before the session counts it as missing.
 pub const ANSWER_TIMEOUT: Duration = Duration::from_secs(30);
@@ -27,8 +26,7 @@ pub struct Session {
     uart: UnixStream,
     monitor: UnixStream,
     bytes: Receiver<Vec<u8>>,
-    pending: std::collections::VecDeque<Item>,
-    decoder: Decoder,
+    items: Items,
     log: Option<JoinHandle<Vec<u8>>>,
     _dir: tempfile::TempDir,
 }
@@ -37,21 +35,11 @@ impl Session {
     /// Starts `board`'s main binary with `image` (bytes, exactly as given: sign a table
     /// first with `e2e::signed` for a board with a key) in its calibration region (slot 0).
     pub fn start(board: &Board, elf: &std::path::Path, image: Option<&[u8]>) -> Result<Session> {
-        if !elf.exists() {
-            bail!("{} is not built: run `cargo xtask build`", board.name);
-        }
         let dir = tempfile::tempdir()?;
-        let table_path = match image {
-            Some(t) => {
-                let p = dir.path().join("table.bin");
-                std::fs::write(&p, t)?;
-                Some(p)
-            }
-            None => None::<PathBuf>,
-        };
+        let table_path = image_file(board, elf, image, dir.path())?;
         let sock = dir.path().join("uart.sock");
         let mon = dir.path().join("monitor.sock");
-        let mut cmd = command(board, &table_path, false, &sock, Some(&mon))?;
+        let mut cmd = command(board, &table_path, false, Uart::Socket(&sock), Some(&mon))?;
         cmd.arg("-kernel").arg(elf);
         let mut child = cmd.spawn().context("starting qemu-system-arm")?;
         let mut stdout = child.stdout.take().context("qemu stdout")?;
@@ -77,8 +65,7 @@ impl Session {
             uart,
             monitor,
             bytes,
-            pending: Default::default(),
-            decoder: Decoder::from_start(),
+            items: Items::default(),
             log: Some(log),
             _dir: dir,
         })
@@ -86,31 +73,18 @@ impl Session {
 
     /// Sends one message as a frame.
     pub fn send(&mut self, msg: &ToDevice) -> Result<()> {
-        let mut out = [0u8; MAX_FRAME];
-        let n = encode(msg, &mut out).context("encoding a message")?;
-        self.uart.write_all(&out[..n])?;
+        self.uart.write_all(&frame(msg)?)?;
         Ok(())
     }
 
     /// The next decoded item of the hub's stream, waiting up to [`ANSWER_TIMEOUT`].
     pub fn next_item(&mut self) -> Result<Item> {
-        let deadline = Instant::now() + ANSWER_TIMEOUT;
-        loop {
-            if let Some(item) = self.pending.pop_front() {
-                return Ok(item);
-            }
-            let left = deadline.saturating_duration_since(Instant::now());
-            match self.bytes.recv_timeout(left) {
-                Ok(chunk) => {
-                    let items = self.decoder.push_all(&chunk);
-                    self.pending.extend(items);
-                }
-                Err(RecvTimeoutError::Timeout) => {
-                    bail!("no answer from the hub in {ANSWER_TIMEOUT:?}")
-                }
-                Err(RecvTimeoutError::Disconnected) => bail!("the hub's UART closed"),
-            }
-        }
+        let bytes = &self.bytes;
+        self.items.next(|left| match bytes.recv_timeout(left) {
+            Ok(chunk) => Ok(Some(chunk)),
+            Err(RecvTimeoutError::Timeout) => Ok(None),
+            Err(RecvTimeoutError::Disconnected) => bail!("the hub's UART closed"),
+        })
     }
 
     /// Sends `msg` and returns the next item the hub sends.
@@ -128,23 +102,55 @@ impl Session {
     /// Sends `End` and waits for QEMU to exit; returns its status and the defmt log bytes.
     pub fn finish(mut self) -> Result<(ExitStatus, Vec<u8>)> {
         self.send(&ToDevice::End)?;
-        let start = Instant::now();
-        let status = loop {
-            if let Some(s) = self.child.try_wait()? {
-                break s;
-            }
-            if start.elapsed() > ANSWER_TIMEOUT {
-                let _ = self.child.kill();
-                bail!("QEMU did not exit after End");
-            }
-            std::thread::sleep(Duration::from_millis(20));
-        };
+        let status = wait_exit(&mut self.child)?;
         let log = self
             .log
             .take()
             .and_then(|h| h.join().ok())
             .unwrap_or_default();
         Ok((status, log))
+    }
+}
+
+/// `msg` as a frame on the wire.
+pub(crate) fn frame(msg: &ToDevice) -> Result<Vec<u8>> {
+    let mut out = [0u8; MAX_FRAME];
+    let n = encode(msg, &mut out).context("encoding a message")?;
+    Ok(out[..n].to_vec())
+}
+
+/// A hub's stream read item by item, each within [`ANSWER_TIMEOUT`].
+pub(crate) struct Items {
+    decoder: Decoder,
+    pending: std::collections::VecDeque<Item>,
+}
+
+impl Default for Items {
+    fn default() -> Items {
+        Items {
+            decoder: Decoder::from_start(),
+            pending: Default::default(),
+        }
+    }
+}
+
+impl Items {
+    /// The next item; `more(left)` gives the next bytes within `left`, `None` when none came.
+    pub(crate) fn next(
+        &mut self,
+        mut more: impl FnMut(Duration) -> Result<Option<Vec<u8>>>,
+    ) -> Result<Item> {
+        let deadline = Instant::now() + ANSWER_TIMEOUT;
+        loop {
+            if let Some(item) = self.pending.pop_front() {
+                return Ok(item);
+            }
+            let left = deadline.saturating_duration_since(Instant::now());
+            match more(left)? {
+                Some(chunk) => self.pending.extend(self.decoder.push_all(&chunk)),
+                None => bail!("no answer from the hub in {ANSWER_TIMEOUT:?}"),
+            }
+        }
     }
 }
 

@@ -136,7 +136,8 @@ pub fn run() -> Result<()> {
     }
 
     step("QEMU end-to-end");
-    // The tests compare the stream with what the `armcal` binary prints.
+    // The tests compare the stream with what the `armcal` binary prints, and drive the hubs
+    // with it through a pseudo-terminal (`armcal table send`, `armcal decode --port`).
     check(
         cargo().args(["build", "-p", "armcal"]),
         "cargo build -p armcal",

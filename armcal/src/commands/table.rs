@@ -66,7 +66,8 @@ pub enum Command {
         /// Baud rate of the serial port.
         #[arg(long, default_value_t = 115_200)]
         baud: u32,
-        /// Seconds to wait for each answer of the hub before giving up (the old table stays).
+        /// Seconds to wait for each answer of the hub before giving up (the old table stays),
+        /// however many reports it sends meanwhile.
         #[arg(long, default_value_t = 5.0)]
         timeout: f64,
     },
@@ -112,11 +113,12 @@ pub fn run(command: Command) -> anyhow::Result<()> {
             if !(timeout > 0.0 && timeout.is_finite()) {
                 anyhow::bail!("--timeout {timeout}: a positive number of seconds");
             }
+            let timeout = std::time::Duration::from_secs_f64(timeout);
             let mut p = serialport::new(&port, baud)
-                .timeout(std::time::Duration::from_secs_f64(timeout))
+                .timeout(timeout)
                 .open()
                 .with_context(|| format!("opening serial port {port}"))?;
-            let sent = armcal::table_send::send(&mut p, &bytes)
+            let sent = armcal::table_send::send(&mut p, &bytes, timeout)
                 .with_context(|| format!("sending {} to {port}", table.display()))?;
             println!(
                 "{}: live on the hub in slot {}, record {}, CRC {:08x} ({} steps, {} reports while it ran)",

@@ -19,17 +19,28 @@ use quatarm::update::{Accepted, Refusal};
 use quatarm_wire::stream_decode::Item;
 use quatarm_wire::tablesign;
 
+pub(crate) mod pty;
+
 /// Declares every case of this module as a test of one board: `board` (a name of
 /// `host_tests::boards`), `bounds` for its full recording, `full_recording`, the name of
 /// that test (it says the bound), and `update`, the case of its hub's update port
 /// ([`update_with_resets`] or [`update_not_supported`]), and `u95`, the case of its points'
 /// uncertainty ([`u95_matches_the_host`] or [`no_u95`]), and `wobble`, a table with an axis
-/// wobble ([`wobble_applied`] or [`wobble_refused`]). They are `#[ignore]`d for plain `cargo test`, which has
+/// wobble ([`wobble_applied`] or [`wobble_refused`]), and `table_send`, the `armcal` binary's
+/// `table send` through a pseudo-terminal ([`pty::table_send_over_a_pty`] or
+/// [`pty::table_send_refused_over_a_pty`]). They are `#[ignore]`d for plain `cargo test`, which has
 /// neither QEMU nor the cross-built board; `cargo xtask test` builds the boards and runs them
 /// with `--include-ignored`.
 macro_rules! board_tests {
     (board: $board:literal, bounds: $bounds:expr, full_recording: $full:ident,
-     update: $update:ident, u95: $u95:ident, wobble: $wobble:ident $(,)?) => {
+     update: $update:ident, u95: $u95:ident, wobble: $wobble:ident,
+     table_send: $send:ident $(,)?) => {
+        #[test]
+        #[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
+        fn armcal_table_send_through_a_pty() {
+            $crate::common::pty::$send($board);
+        }
+
         #[test]
         #[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
         fn a_table_with_an_axis_wobble() {
@@ -179,8 +190,8 @@ fn armcal_eval(precision: &str, readings: &[Reading]) -> Vec<String> {
     armcal_eval_with(precision, readings, false)
 }
 
-/// [`armcal_eval`], with `--uncertainty` where `uncertainty` is set.
-fn armcal_eval_with(precision: &str, readings: &[Reading], uncertainty: bool) -> Vec<String> {
+/// The `armcal` binary of this build (`cargo xtask test` builds it before these tests).
+fn armcal_exe() -> std::path::PathBuf {
     let exe = std::env::current_exe().unwrap();
     let armcal = exe
         .parent()
@@ -192,6 +203,12 @@ fn armcal_eval_with(precision: &str, readings: &[Reading], uncertainty: bool) ->
         "{} missing: build it with `cargo build -p armcal` (cargo xtask test does)",
         armcal.display()
     );
+    armcal
+}
+
+/// [`armcal_eval`], with `--uncertainty` where `uncertainty` is set.
+fn armcal_eval_with(precision: &str, readings: &[Reading], uncertainty: bool) -> Vec<String> {
+    let armcal = armcal_exe();
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("counts.csv");
     std::fs::write(&csv, recording::eval_csv(readings)).unwrap();
@@ -587,6 +604,52 @@ fn expect_hello(s: &mut Session, live: Option<LiveTable>, when: &str) {
     }
 }
 
+/// The tables of an update test and what a `Hello` says of each once live.
+#[allow(dead_code)] // each board's test binary uses one of the two update cases
+struct UpdateTables {
+    /// The default calibration's table: the factory's.
+    old_table: Vec<u8>,
+    /// The same with the probe 0.05 mm longer: the update's.
+    new_table: Vec<u8>,
+    /// `old_table` signed with the test key, as the hub takes it.
+    old: Vec<u8>,
+    /// `new_table` signed with the test key.
+    new: Vec<u8>,
+    /// The factory table live: slot 0, found by its contents (no record).
+    factory: Option<LiveTable>,
+    /// The update live: slot 1, record 1.
+    updated: Option<LiveTable>,
+}
+
+#[allow(dead_code)] // each board's test binary uses one of the two update cases
+fn update_tables() -> UpdateTables {
+    let (mut arm, old_table) = calibration(&default_calibration_path()).unwrap();
+    arm.probe.error[2] += 0.05;
+    let new_table = quatarm_wire::tablebuild::build(&arm).unwrap();
+    let (old, new) = (signed(&old_table).unwrap(), signed(&new_table).unwrap());
+    let live = |slot, seq, t: &[u8]| {
+        Some(LiveTable {
+            slot,
+            seq,
+            crc: table_crc(t),
+        })
+    };
+    UpdateTables {
+        factory: live(0, 0, &old),
+        updated: live(1, 1, &new),
+        old_table,
+        new_table,
+        old,
+        new,
+    }
+}
+
+/// A valid table's CRC, as `Hello` names it.
+#[allow(dead_code)] // each board's test binary uses one of the two update cases
+fn table_crc(table: &[u8]) -> u32 {
+    quatarm::table::Table::parse(table).unwrap().crc()
+}
+
 /// One reading's coordinates as the hub gives them now.
 fn point_now(s: &mut Session, r: &Reading) -> Coordinates {
     match s.ask(&ToDevice::Reading(*r)).unwrap() {
@@ -604,21 +667,14 @@ fn point_now(s: &mut Session, r: &Reading) -> Coordinates {
 #[allow(dead_code)] // each board's test binary uses one of the two update cases
 pub fn update_with_resets(name: &str) {
     let b = the_board(name);
-    let (mut arm, old_table) = calibration(&default_calibration_path()).unwrap();
-    arm.probe.error[2] += 0.05;
-    let new_table = quatarm_wire::tablebuild::build(&arm).unwrap();
-    let (old, new) = (signed(&old_table).unwrap(), signed(&new_table).unwrap());
-    let crc = |t: &[u8]| quatarm::table::Table::parse(t).unwrap().crc();
-    let factory = Some(LiveTable {
-        slot: 0,
-        seq: 0,
-        crc: crc(&old),
-    });
-    let updated = Some(LiveTable {
-        slot: 1,
-        seq: 1,
-        crc: crc(&new),
-    });
+    let UpdateTables {
+        old_table,
+        old,
+        new,
+        factory,
+        updated,
+        ..
+    } = update_tables();
     let reading = some_readings(1)[0];
     let host_old = host_points(b.precision, &old, &[reading]).unwrap()[0].unwrap();
     let host_new = host_points(b.precision, &new, &[reading]).unwrap()[0].unwrap();
