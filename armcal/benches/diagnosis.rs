@@ -171,13 +171,20 @@ fn mukca() {
                 terms: armcal::params::Terms::with(effects),
                 ..armcal::calib::Options::default()
             };
-            mukca::loso(&unit, &o).mean_after
+            mukca::loso(&unit, &o)
         };
-        let geo = score(&[]);
-        let ext = if d.causes.is_empty() {
-            geo
+        let geo_loso = score(&[]);
+        let geo = geo_loso.mean_after;
+        // A named cause's check by the authors' score: sessions better, paired p.
+        let (ext, check) = if d.causes.is_empty() {
+            (geo, String::new())
         } else {
-            score(&d.extended.effects)
+            let e = score(&d.extended.effects);
+            let v = geo_loso.versus(&e);
+            (
+                e.mean_after,
+                format!(" ({}/{} sessions, p = {:.0e})", v.better, v.sessions, v.p),
+            )
         };
         let strongest = d
             .selection
@@ -189,7 +196,7 @@ fn mukca() {
                 format!("{} ({:.1e}, {:.2})", c.effect.spec(), c.p, c.p_holdout)
             });
         println!(
-            "| {name} | {sessions} | {causes}{} | {strongest} | {:.1} → {:.1} | {geo:.3} → {ext:.3} | {dt:.1} |",
+            "| {name} | {sessions} | {causes}{} | {strongest} | {:.1} → {:.1} | {geo:.3} → {ext:.3}{check} | {dt:.1} |",
             if rejected.is_empty() {
                 String::new()
             } else {

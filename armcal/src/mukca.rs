@@ -266,6 +266,41 @@ pub struct Loso {
     pub mean_after: f64,
 }
 
+/// Two models' leave-one-session-out scores side by side: on how many sessions the second
+/// scores lower, and the one-sided paired t-test of its gain (sessions − 1 degrees of
+/// freedom; [`Paired`](crate::stats::Paired)). The check of a claimed cause by the authors'
+/// own metric, on sessions its fit did not see.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Versus {
+    /// Sessions both models scored.
+    pub sessions: usize,
+    /// Sessions the second scores lower on.
+    pub better: usize,
+    /// One-sided p of the mean gain (1 for fewer than three sessions).
+    pub p: f64,
+}
+
+impl Loso {
+    /// This model (the first) against `other` (the second), session by session.
+    pub fn versus(&self, other: &Loso) -> Versus {
+        let pairs: Vec<(f64, f64)> = self
+            .sessions
+            .iter()
+            .zip(&other.sessions)
+            .filter_map(|((_, a), (_, b))| match (a, b) {
+                (Ok((_, a)), Ok((_, b))) => Some((*a, *b)),
+                _ => None,
+            })
+            .collect();
+        let (first, second): (Vec<f64>, Vec<f64>) = pairs.iter().copied().unzip();
+        Versus {
+            sessions: pairs.len(),
+            better: pairs.iter().filter(|(a, b)| b < a).count(),
+            p: crate::stats::Paired::of(&first, &second).p_value(),
+        }
+    }
+}
+
 /// Leave-one-session-out figures for a unit (none when it has one session).
 pub fn loso(unit: &Unit, opts: &Options) -> Loso {
     let groups = unit.groups();

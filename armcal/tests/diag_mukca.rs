@@ -59,9 +59,10 @@ fn named_causes_hold_on_sessions_not_fitted() {
         };
         let geo = loso(Terms::geometric());
         let ext = loso(Terms::with(&d.extended.effects));
+        let v = geo.versus(&ext);
         println!(
-            "  MUKCa score leaving each session out: {:.3} → {:.3} mm",
-            geo.mean_after, ext.mean_after
+            "  MUKCa score leaving each session out: {:.3} → {:.3} mm, better on {}/{} sessions (p = {:.1e})",
+            geo.mean_after, ext.mean_after, v.better, v.sessions, v.p
         );
         assert!(
             ext.mean_after < geo.mean_after,
