@@ -11,9 +11,10 @@
 //!
 //! An update step that erases or programs flash stops the sampling while it runs (one loop,
 //! no interrupts doing the work): the NUCLEO's `Begin` erases a 128 KiB sector, which stalls
-//! every flash access of the core for the erase (1–4 s), so no reports come then; and the
-//! µs clock (SysTick, whose handler is in flash) misses the wraps of that time, so report
-//! times after it are behind by it. The host's `armcal table send` waits for each answer.
+//! every flash access of the core for the erase (seconds: the datasheet's t_ERASE128KB), so
+//! no reports come then; and the µs clock (SysTick, whose handler is in flash) misses the
+//! wraps of that time, so report times after it are behind by it. The host's `armcal table
+//! send` waits for each answer (5 s by default, `--timeout`).
 
 use embedded_storage::nor_flash::NorFlash;
 use quatarm::encoder::{read_joints, AbsoluteEncoder};
