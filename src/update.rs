@@ -2,13 +2,15 @@
 //! checked completely, then made live by a small state record, so that a power cut at any
 //! moment leaves the hub on a valid table, the old or the new, never a mix.
 //!
-//! - [`layout`]: where the two slots and the two copies of the state record lie.
+//! - [`layout`]: where the two slots and the two copies of the state record lie: copies in
+//!   erase units of their own, or in the last bytes of each slot (for chips of large erase
+//!   units, the STM32F4's 128 KiB sectors).
 //! - [`record`]: the state record (which slot is live, sequence number, length, CRC), its
 //!   encoding and its two copies.
 //! - [`session`]: the update state machine, `Begin` / `Chunk` / `Commit`, each answered with a
 //!   [`session::Refusal`] or accepted; the messages of the stream call it.
-//! - [`boot`]: [`boot::live_table`], the table a hub uses at boot. (Not yet called by the
-//!   boards, which still read slot 0 directly.)
+//! - [`boot`]: [`boot::live_table`], the table a hub uses at boot (every board with an update
+//!   port boots through it: `board_common::flash`).
 //!
 //! - `mock` and `fixtures` (tests, and feature `mock-flash` for the fuzz target
 //!   `update_session`): a NOR flash in RAM that can lose power part-way through any operation,

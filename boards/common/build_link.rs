@@ -16,3 +16,35 @@ fn link_scripts(files: &[&str]) {
     println!("cargo:rustc-link-arg=-Tlink.x");
     println!("cargo:rustc-link-arg=-Tdefmt.x");
 }
+
+/// Copies the arm maker's public key into `$OUT_DIR/maker.pub`, where
+/// `board_common::maker_key!` includes it: the 32-byte file `QUATARM_MAKER_KEY` names
+/// (absolute, or relative to the board's folder), else the repository's test key with a
+/// warning that the image is not for an arm (`board_common::maker_key`). A file of another
+/// length fails the build.
+#[allow(dead_code)] // the QEMU boards embed the test key directly
+fn maker_key() {
+    const VAR: &str = "QUATARM_MAKER_KEY";
+    println!("cargo:rerun-if-env-changed={VAR}");
+    let path = match std::env::var_os(VAR) {
+        Some(p) => std::path::PathBuf::from(p),
+        None => {
+            println!(
+                "cargo:warning=no {VAR}: this image trusts the repository's TEST key \
+                 (keys/test-maker.pub); set {VAR}=/path/to/maker.pub for an arm"
+            );
+            std::path::PathBuf::from("../../keys/test-maker.pub")
+        }
+    };
+    println!("cargo:rerun-if-changed={}", path.display());
+    let key = std::fs::read(&path)
+        .unwrap_or_else(|e| panic!("{VAR}: reading {}: {e}", path.display()));
+    assert!(
+        key.len() == 32,
+        "{VAR}: {} is {} bytes, not a 32-byte Ed25519 public key (armcal table keygen)",
+        path.display(),
+        key.len()
+    );
+    let out = std::path::PathBuf::from(std::env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
+    std::fs::write(out.join("maker.pub"), key).expect("write maker.pub");
+}

@@ -4,20 +4,27 @@
 //! operations (leaving the operation under way untouched, done or torn), and reboots. After
 //! every step a boot of the flash as it stands must come up on a table, and only on the old
 //! table or one whose `Commit` was accepted or under way when the power went: never a mix,
-//! never none. Never a panic.
+//! never none. Never a panic. The program's first byte picks the layout: state copies of
+//! their own (even) or in the slots' trailers (odd).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 use quatarm::table::MAX_TABLE_LEN;
-use quatarm::update::fixtures::{boot, crc_of, factory, layout, table};
+use quatarm::update::fixtures::{boot_in, crc_of, factory, layouts, table};
 use quatarm::update::mock::{Cut, MockFlash};
 use quatarm::update::session::{Accepted, Step, CHUNK_LEN};
-use quatarm::update::{Accept, Updater};
+use quatarm::update::{Accept, Layout, Updater};
 
 fuzz_target!(|program: &[u8]| {
     let (old, new) = (table(100.0), table(120.0));
+    let [regions, trailers] = layouts();
+    let layout = match program.first() {
+        Some(b) if b & 1 == 1 => trailers,
+        _ => regions,
+    };
+    let program = program.get(1..).unwrap_or_default();
     let mut flash = factory(&old);
-    let mut up = Updater::new(layout(), Accept::joints(6));
+    let mut up = Updater::new(layout.clone(), Accept::joints(6));
     let mut scratch = [0u8; MAX_TABLE_LEN];
     // What may be live: the old table, and each table a `Commit` was sent for.
     let mut may_be_live: Vec<Vec<u8>> = vec![old.clone()];
@@ -71,9 +78,9 @@ fuzz_target!(|program: &[u8]| {
             _ => {
                 // Reboot: the flash as the cut left it, powered again; a new updater.
                 flash = MockFlash::from_image(flash.mem.clone());
-                up = Updater::new(layout(), Accept::joints(6));
+                up = Updater::new(layout.clone(), Accept::joints(6));
                 sent.clear();
-                check_boot(&flash, &may_be_live, None);
+                check_boot(&layout, &flash, &may_be_live, None);
                 continue;
             }
         };
@@ -88,20 +95,20 @@ fuzz_target!(|program: &[u8]| {
                 assert_eq!(next as usize, sent.len(), "next offset is the count so far");
             }
             (_, Ok(Accepted::Committed { .. })) => {
-                check_boot(&flash, &may_be_live, Some(&sent));
+                check_boot(&layout, &flash, &may_be_live, Some(&sent));
                 continue;
             }
             _ => {}
         }
-        check_boot(&flash, &may_be_live, None);
+        check_boot(&layout, &flash, &may_be_live, None);
     }
 });
 
-/// A boot of a copy of `flash` (powered again) comes up on one of `may_be_live`, and on
+/// A boot of a copy of `flash` (powered again, read as `layout`) comes up on one of `may_be_live`, and on
 /// `exactly` where given.
-fn check_boot(flash: &MockFlash, may_be_live: &[Vec<u8>], exactly: Option<&[u8]>) {
+fn check_boot(layout: &Layout, flash: &MockFlash, may_be_live: &[Vec<u8>], exactly: Option<&[u8]>) {
     let mut copy = MockFlash::from_image(flash.mem.clone());
-    let live = boot(&mut copy).expect("a boot always finds a table");
+    let live = boot_in(layout, &mut copy).expect("a boot always finds a table");
     assert!(
         may_be_live.iter().any(|t| *t == live),
         "the boot came up on a table no commit sent ({} bytes)",

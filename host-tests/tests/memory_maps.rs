@@ -1,7 +1,9 @@
 //! Every board's `memory.x` (and the root template) gives the calibration table a region of
 //! its own that holds the largest table, outside the firmware's flash and RAM, with the two
-//! symbols the boards read. A board with a region too small or overlapping its code would
-//! only show on hardware; this checks it on every run.
+//! symbols the boards read; and the update's second slot and state record: copies in regions
+//! of their own, or (no such regions, and the board's `main.rs` asks for `trailer_map`) in the
+//! slots' trailers. A board with a region too small or overlapping its code would only show
+//! on hardware; this checks it on every run.
 
 use host_tests::boards::{self, root};
 use quatarm::table::{table_len, MAX_JOINTS};
@@ -11,7 +13,13 @@ fn region(script: &str, name: &str) -> (u64, u64) {
     boards::region(script, name).unwrap_or_else(|e| panic!("{e:#}"))
 }
 
-fn check(path: &std::path::Path) {
+/// Bytes a slot's trailer can take at most: the state record padded to the largest write unit
+/// the update supports (`quatarm::update::layout::MAX_WRITE_SIZE`, the RP2040's page).
+const MAX_TRAILER: u64 = quatarm::update::layout::MAX_WRITE_SIZE as u64;
+
+/// Checks `path`; `main` is the board's `src/main.rs` (`None` for the template, which has
+/// state regions of its own).
+fn check(path: &std::path::Path, main: Option<&str>) {
     let script = std::fs::read_to_string(path).expect("memory.x");
     let who = path.display();
     let (ct, ct_len) = region(&script, "CALTABLE");
@@ -21,68 +29,128 @@ fn check(path: &std::path::Path) {
         ct_len >= table_len(MAX_JOINTS) as u64,
         "{who}: CALTABLE of {ct_len} bytes cannot hold a {MAX_JOINTS}-joint table"
     );
-    let apart = |a: u64, al: u64, b: u64, bl: u64| a + al <= b || b + bl <= a;
-    assert!(
-        apart(ct, ct_len, flash, flash_len),
-        "{who}: CALTABLE overlaps FLASH"
-    );
-    assert!(
-        apart(ct, ct_len, ram, ram_len),
-        "{who}: CALTABLE overlaps RAM"
-    );
     for sym in ["_cal_table_start = ORIGIN(CALTABLE)", "_cal_table_end"] {
         assert!(script.contains(sym), "{who}: no `{sym}`");
     }
-    // The update's second slot and the two state-record copies (docs/update.md): each holds
-    // what it must, and no two regions share a byte.
+    // The update's second slot and the state record (docs/update.md): each holds what it
+    // must, and no two regions share a byte.
     let (b, b_len) = region(&script, "CALTABLE_B");
     assert!(
         b_len >= table_len(MAX_JOINTS) as u64,
         "{who}: CALTABLE_B of {b_len} bytes cannot hold a {MAX_JOINTS}-joint table"
     );
-    let s0 = region(&script, "CALSTATE0");
-    let s1 = region(&script, "CALSTATE1");
-    for (name, (_, len)) in [("CALSTATE0", s0), ("CALSTATE1", s1)] {
-        assert!(
-            len >= quatarm::update::record::RECORD_LEN as u64,
-            "{who}: {name} cannot hold a state record"
-        );
-    }
-    let all = [
+    let mut all = vec![
         ("FLASH", (flash, flash_len)),
         ("RAM", (ram, ram_len)),
         ("CALTABLE", (ct, ct_len)),
         ("CALTABLE_B", (b, b_len)),
-        ("CALSTATE0", s0),
-        ("CALSTATE1", s1),
     ];
+    let state_regions = boards::region(&script, "CALSTATE0").is_ok();
+    let trailers = main.is_some_and(|m| m.contains("slots::trailer_map()"));
+    if state_regions {
+        assert!(
+            !trailers,
+            "{who}: state regions of its own, but main.rs asks for `trailer_map`"
+        );
+        let s0 = region(&script, "CALSTATE0");
+        let s1 = region(&script, "CALSTATE1");
+        for (name, (_, len)) in [("CALSTATE0", s0), ("CALSTATE1", s1)] {
+            assert!(
+                len >= quatarm::update::record::RECORD_LEN as u64,
+                "{who}: {name} cannot hold a state record"
+            );
+        }
+        all.extend([("CALSTATE0", s0), ("CALSTATE1", s1)]);
+        for sym in [
+            "_cal_state0_start = ORIGIN(CALSTATE0)",
+            "_cal_state0_end",
+            "_cal_state1_start = ORIGIN(CALSTATE1)",
+            "_cal_state1_end",
+        ] {
+            assert!(script.contains(sym), "{who}: no `{sym}`");
+        }
+    } else {
+        // The record in the slots' trailers: the board must say so, no state symbol may be
+        // left (a build asking for state regions then fails to link), and each slot holds the
+        // largest table before its trailer.
+        assert!(
+            trailers,
+            "{who}: no CALSTATE0 region, so main.rs must use `slots::trailer_map()`"
+        );
+        assert!(
+            !script
+                .lines()
+                .any(|l| l.trim_start().starts_with("_cal_state")),
+            "{who}: a `_cal_state` symbol without a state region"
+        );
+        for (name, len) in [("CALTABLE", ct_len), ("CALTABLE_B", b_len)] {
+            assert!(
+                len >= table_len(MAX_JOINTS) as u64 + MAX_TRAILER,
+                "{who}: {name} of {len} bytes cannot hold a {MAX_JOINTS}-joint table and a trailer"
+            );
+        }
+    }
     for (i, (n, (x, xl))) in all.iter().enumerate() {
         for (m, (y, yl)) in &all[i + 1..] {
             assert!(apart(*x, *xl, *y, *yl), "{who}: {n} overlaps {m}");
         }
     }
-    for sym in [
-        "_cal_slot1_start = ORIGIN(CALTABLE_B)",
-        "_cal_slot1_end",
-        "_cal_state0_start = ORIGIN(CALSTATE0)",
-        "_cal_state0_end",
-        "_cal_state1_start = ORIGIN(CALSTATE1)",
-        "_cal_state1_end",
-    ] {
+    for sym in ["_cal_slot1_start = ORIGIN(CALTABLE_B)", "_cal_slot1_end"] {
         assert!(script.contains(sym), "{who}: no `{sym}`");
     }
+    // The flash driver's window starts at the lowest region and ends with the highest:
+    // nothing of the firmware may lie between.
+    let cal: Vec<_> = all.iter().skip(2).map(|(_, r)| *r).collect();
+    let lo = cal.iter().map(|r| r.0).min().unwrap_or(0);
+    let hi = cal.iter().map(|r| r.0 + r.1).max().unwrap_or(0);
+    assert!(
+        apart(lo, hi - lo, flash, flash_len),
+        "{who}: the firmware lies within the calibration regions' span"
+    );
+}
+
+fn apart(a: u64, al: u64, b: u64, bl: u64) -> bool {
+    a + al <= b || b + bl <= a
 }
 
 #[test]
 fn every_board_reserves_a_calibration_region() {
     for b in boards::boards().unwrap() {
-        check(&b.dir().join("memory.x"));
+        let main = std::fs::read_to_string(b.dir().join("src/main.rs")).expect("main.rs");
+        check(&b.dir().join("memory.x"), Some(&main));
     }
 }
 
 #[test]
 fn the_template_reserves_a_calibration_region() {
-    check(&root().join("memory.x"));
+    check(&root().join("memory.x"), None);
+}
+
+/// The STM32F446RE's sectors (16, 16, 16, 16, 64, 128, 128, 128 KiB from 0x0800_0000): the
+/// firmware has sectors 0–5 (256 KiB), the two slots are sectors 6 and 7, whole, with the
+/// state record in their trailers (docs/update.md).
+#[test]
+fn the_nucleo_gives_the_firmware_sectors_0_to_5() {
+    let b = boards::board("nucleo-f446re").unwrap();
+    let script = std::fs::read_to_string(b.dir().join("memory.x")).unwrap();
+    let k = 1024;
+    assert_eq!(region(&script, "FLASH"), (0x0800_0000, 256 * k));
+    assert_eq!(region(&script, "CALTABLE_B"), (0x0804_0000, 128 * k));
+    assert_eq!(region(&script, "CALTABLE"), (0x0806_0000, 128 * k));
+    assert!(boards::region(&script, "CALSTATE0").is_err());
+    let mut sectors = vec![];
+    let mut at = 0x0800_0000u64;
+    for len in [16, 16, 16, 16, 64, 128, 128, 128] {
+        sectors.push(at);
+        at += len * k;
+    }
+    for name in ["FLASH", "CALTABLE_B", "CALTABLE"] {
+        let (start, len) = region(&script, name);
+        assert!(
+            sectors.contains(&start) && (sectors.contains(&(start + len)) || start + len == at),
+            "{name} is not whole sectors"
+        );
+    }
 }
 
 #[test]

@@ -9,7 +9,7 @@ use super::layout::{Layout, LayoutError};
 use super::record::{self, StateRecord};
 use crate::signature::{self, SignatureError, KEY_LEN, SIGNATURE_LEN};
 use crate::stream::TableState;
-use crate::table::{Table, TableError, MAX_TABLE_LEN};
+use crate::table::{Table, TableError, MAX_JOINTS, MAX_TABLE_LEN};
 
 /// What a slot's table must be for this hub to boot on it (and an update to commit it).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -19,6 +19,11 @@ pub struct Accept {
     /// The arm maker's public key: with it, only a table signed under it is accepted
     /// ([`crate::signature`]); without it, signed and unsigned tables alike.
     pub key: Option<[u8; KEY_LEN]>,
+    /// The counts per revolution of the hub's encoders, joint 1 first (`None`: any). A table
+    /// made for other encoders would turn every count into a wrong angle: refused at commit
+    /// and passed over at boot like a corrupt one, so an update cannot leave a hub that
+    /// measures nothing.
+    pub counts: Option<[u32; MAX_JOINTS]>,
 }
 
 impl Accept {
@@ -27,6 +32,20 @@ impl Accept {
         Accept {
             joints: Some(joints),
             key: None,
+            counts: None,
+        }
+    }
+
+    /// The same, for encoders of these counts per revolution (joint 1 first; joints past the
+    /// slice's end must have 0, which no table has).
+    pub fn for_encoders(self, counts_per_rev: &[u32]) -> Accept {
+        let mut counts = [0; MAX_JOINTS];
+        for (c, &n) in counts.iter_mut().zip(counts_per_rev) {
+            *c = n;
+        }
+        Accept {
+            counts: Some(counts),
+            ..self
         }
     }
 
@@ -84,6 +103,8 @@ pub enum SlotError {
     NotRecorded,
     /// A valid table whose signature is missing or wrong, on a hub with a key.
     Signature(SignatureError),
+    /// A valid table for encoders of another resolution than the hub's.
+    Resolution,
 }
 
 impl SlotError {
@@ -92,6 +113,7 @@ impl SlotError {
         match self {
             SlotError::Flash(_) | SlotError::NotRecorded => TableState::Corrupt,
             SlotError::Table(t) => TableState::from(t),
+            SlotError::Resolution => TableState::WrongResolution,
             SlotError::Signature(SignatureError::Missing) => TableState::Unsigned,
             SlotError::Signature(_) => TableState::BadSignature,
         }
@@ -125,7 +147,8 @@ pub(crate) fn verify_slot<'b, F: NorFlash>(
     rec: Option<&StateRecord>,
     buf: &'b mut [u8; MAX_TABLE_LEN],
 ) -> Result<Table<'b>, SlotError> {
-    let region = &layout.slots[usize::from(slot & 1)];
+    // The slot's bytes a table may take (not its trailer, where the state record lies).
+    let region = layout.table_area::<F>(slot);
     let start = region.start;
     let fault = |e: F::Error| SlotError::Flash(FlashFault::of(e));
     // A slot may be smaller than the largest table (one with many parameters): read no
@@ -138,6 +161,13 @@ pub(crate) fn verify_slot<'b, F: NorFlash>(
         None => Table::parse(buf),
     }
     .map_err(SlotError::Table)?;
+    if let Some(counts) = &accept.counts {
+        let fits = (0..table.joint_count())
+            .all(|i| table.joint(i).map(|j| j.counts) == counts.get(i).copied());
+        if !fits {
+            return Err(SlotError::Resolution);
+        }
+    }
     let len = table.bytes().len() as u32;
     let signed = match rec {
         Some(r) if table.crc() != r.crc => return Err(SlotError::NotRecorded),
@@ -148,7 +178,7 @@ pub(crate) fn verify_slot<'b, F: NorFlash>(
     };
     if let Some(key) = &accept.key {
         let mut sig = [0xffu8; SIGNATURE_LEN];
-        if signed && start + len + SIGNATURE_LEN as u32 <= layout.slots[usize::from(slot & 1)].end {
+        if signed && start + len + SIGNATURE_LEN as u32 <= region.end {
             flash.read(start + len, &mut sig).map_err(fault)?;
         }
         // Erased flash reads 0xFF; QEMU's RAM-backed regions read 0 beyond a loaded file.

@@ -13,11 +13,24 @@ use crate::table::{quat_to_matrix, JointData, ProbeData, TableData, MAX_TABLE_LE
 
 pub const FLASH_LEN: usize = 8 * 1024;
 
+/// Two slots of 2 KiB and two state copies of an erase unit each.
 pub fn layout() -> Layout {
-    Layout {
+    Layout::Regions {
         slots: [0..2048, 2048..4096],
         state: [4096..5120, 5120..6144],
     }
+}
+
+/// The same slots with the state record in their trailers (the last 24 bytes of each).
+pub fn trailer_layout() -> Layout {
+    Layout::Trailers {
+        slots: [0..2048, 2048..4096],
+    }
+}
+
+/// Both layouts, the four-region one first.
+pub fn layouts() -> [Layout; 2] {
+    [layout(), trailer_layout()]
 }
 
 /// A valid table of a nominal six-joint arm whose links are `link` mm long.
@@ -36,7 +49,16 @@ pub fn table_with_budget(link: f64) -> Vec<u8> {
     encoded(link, Some(&budget))
 }
 
+/// [`table`] for encoders of `counts` per revolution (the others have 2^14).
+pub fn table_for_encoders(link: f64, counts: u32) -> Vec<u8> {
+    encoded_with(link, None, counts)
+}
+
 fn encoded(link: f64, budget: Option<&BudgetData>) -> Vec<u8> {
+    encoded_with(link, budget, 1 << 14)
+}
+
+fn encoded_with(link: f64, budget: Option<&BudgetData>, counts: u32) -> Vec<u8> {
     let mut data = TableData {
         joint_count: 6,
         ..TableData::default()
@@ -46,7 +68,7 @@ fn encoded(link: f64, budget: Option<&BudgetData>) -> Vec<u8> {
     for joint in &mut data.joints[..6] {
         *joint = JointData {
             axis: 2,
-            counts: 1 << 14,
+            counts,
             rotation: identity,
             matrix: quat_to_matrix(&identity),
             link: [link, 0.0, 0.0],
@@ -81,8 +103,14 @@ pub fn steps(t: &[u8]) -> Vec<Step> {
     Step::sequence(t).collect()
 }
 
+/// Sends `t` whole through an updater of [`layout`]; the last answer.
 pub fn update(flash: &mut MockFlash, t: &[u8]) -> Result<Accepted, Refusal> {
-    let mut up = Updater::new(layout(), Accept::joints(6));
+    update_in(&layout(), flash, t)
+}
+
+/// [`update`] on `layout`.
+pub fn update_in(layout: &Layout, flash: &mut MockFlash, t: &[u8]) -> Result<Accepted, Refusal> {
+    let mut up = Updater::new(layout.clone(), Accept::joints(6));
     let mut scratch = [0u8; MAX_TABLE_LEN];
     let mut last = Accepted::Aborted;
     for s in steps(t) {
@@ -93,8 +121,13 @@ pub fn update(flash: &mut MockFlash, t: &[u8]) -> Result<Accepted, Refusal> {
 
 /// The table the flash boots on, as bytes (`None`: no table).
 pub fn boot(flash: &mut MockFlash) -> Option<Vec<u8>> {
+    boot_in(&layout(), flash)
+}
+
+/// [`boot`] on `layout`.
+pub fn boot_in(layout: &Layout, flash: &mut MockFlash) -> Option<Vec<u8>> {
     let mut buf = [0u8; MAX_TABLE_LEN];
-    live_table(flash, &layout(), &Accept::joints(6), &mut buf)
+    live_table(flash, layout, &Accept::joints(6), &mut buf)
         .ok()
         .map(|l| l.table.bytes().to_vec())
 }

@@ -1,8 +1,10 @@
-//! Power loss at every operation of an update, and of the state record's write alone: after
-//! each cut the flash is rebooted and must come up on the old table or the new one, byte for
-//! byte (never a mix, never none), and a retried update must then succeed.
+//! Power loss at every operation of an update, and of the state record's write alone, in
+//! both layouts (state copies of their own, and in the slots' trailers): after each cut the
+//! flash is rebooted and must come up on the old table or the new one, byte for byte (never a
+//! mix, never none), and a retried update must then succeed.
 
-use super::fixtures::{boot, crc_of, factory, layout, table, update};
+use super::fixtures::{boot_in, crc_of, factory, layouts, table, update_in};
+use super::layout::Layout;
 use super::mock::{Cut, MockFlash};
 use super::record::{self, StateRecord};
 use super::session::Accepted;
@@ -15,13 +17,16 @@ const CUTS: [Cut; 4] = [
 ];
 
 /// Cuts the power at every operation of `run` on `start` (for each kind of cut), reboots,
-/// and checks the boot and a retried update. Returns (cut points, boots on a valid table).
+/// and checks the boot (on `layout`) and a retried update. Returns (cut points, boots on a
+/// valid table, operations of the uncut run).
 fn sweep(
+    layout: &Layout,
     start: &MockFlash,
     old: &[u8],
     new: &[u8],
     run: &dyn Fn(&mut MockFlash) -> bool,
-) -> (usize, usize) {
+) -> (usize, usize, usize) {
+    let boot = |f: &mut MockFlash| boot_in(layout, f);
     let mut clean = start.clone();
     assert!(run(&mut clean), "the uncut run succeeds");
     let total = clean.ops;
@@ -34,7 +39,7 @@ fn sweep(
             f.cut = Some((at, cut));
             assert!(
                 !run(&mut f),
-                "cut at {at} of {total} ({cut:?}) stops the run"
+                "{layout:?}: cut at {at} of {total} ({cut:?}) stops the run"
             );
             let mut rebooted = MockFlash::from_image(f.mem);
             tried += 1;
@@ -43,7 +48,7 @@ fn sweep(
             let is_new = got.as_deref() == Some(new);
             assert!(
                 is_old || is_new,
-                "cut at {at} of {total} ({cut:?}): no valid table"
+                "{layout:?}: cut at {at} of {total} ({cut:?}): no valid table"
             );
             valid += 1;
             saw_old |= is_old;
@@ -53,7 +58,7 @@ fn sweep(
             if at + 1 < total {
                 assert!(
                     is_old,
-                    "cut at {at} of {total} ({cut:?}): new table before its record"
+                    "{layout:?}: cut at {at} of {total} ({cut:?}): new table before its record"
                 );
             }
             if at + 1 == total {
@@ -66,8 +71,11 @@ fn sweep(
             // A retried update (after the reboot, from the start) succeeds.
             let mut retry = MockFlash::from_image(rebooted.mem.clone());
             assert!(
-                matches!(update(&mut retry, new), Ok(Accepted::Committed { .. })),
-                "retry after cut at {at} ({cut:?})"
+                matches!(
+                    update_in(layout, &mut retry, new),
+                    Ok(Accepted::Committed { .. })
+                ),
+                "{layout:?}: retry after cut at {at} ({cut:?})"
             );
             assert!(boot(&mut retry).as_deref() == Some(new));
         }
@@ -76,53 +84,73 @@ fn sweep(
             assert!(saw_new, "{cut:?}: the last cut leaves the new table");
         }
     }
-    (tried, valid)
+    (tried, valid, total)
+}
+
+/// A short name of a layout for the printed counts.
+fn name(layout: &Layout) -> &'static str {
+    match layout {
+        Layout::Regions { .. } => "state copies of their own",
+        Layout::Trailers { .. } => "state in the slots' trailers",
+    }
 }
 
 #[test]
 fn power_loss_at_every_operation_of_an_update() {
     let (a, b, c) = (table(100.0), table(120.0), table(140.0));
-    // First update of a factory board (no record yet), then the next one (a record in place,
-    // the other slot and the other record copy written).
-    let first = factory(&a);
-    let (t1, v1) = sweep(&first, &a, &b, &|f| update(f, &b).is_ok());
-    let mut second = first.clone();
-    assert_eq!(
-        update(&mut second, &b),
-        Ok(Accepted::Committed { slot: 1, seq: 1 })
-    );
-    let second = MockFlash::from_image(second.mem);
-    let (t2, v2) = sweep(&second, &b, &c, &|f| update(f, &c).is_ok());
-    let mut third = second.clone();
-    assert_eq!(
-        update(&mut third, &c),
-        Ok(Accepted::Committed { slot: 0, seq: 2 })
-    );
-    std::println!(
-        "update: {} cut points tried, {} boots on a valid table (first update {t1}/{v1}, next {t2}/{v2})",
-        t1 + t2,
-        v1 + v2
-    );
-    assert_eq!((t1, t2), (v1, v2));
+    for layout in layouts() {
+        // First update of a factory board (no record yet), then the next one (a record in
+        // place, the other slot and the other record copy written).
+        let first = factory(&a);
+        let (t1, v1, n1) = sweep(&layout, &first, &a, &b, &|f| {
+            update_in(&layout, f, &b).is_ok()
+        });
+        let mut second = first.clone();
+        assert_eq!(
+            update_in(&layout, &mut second, &b),
+            Ok(Accepted::Committed { slot: 1, seq: 1 })
+        );
+        let second = MockFlash::from_image(second.mem);
+        let (t2, v2, n2) = sweep(&layout, &second, &b, &c, &|f| {
+            update_in(&layout, f, &c).is_ok()
+        });
+        let mut third = second.clone();
+        assert_eq!(
+            update_in(&layout, &mut third, &c),
+            Ok(Accepted::Committed { slot: 0, seq: 2 })
+        );
+        std::println!(
+            "update, {}: {} cut points tried, {} boots on a valid table (first update {t1}/{v1} of {n1} operations, next {t2}/{v2} of {n2})",
+            name(&layout),
+            t1 + t2,
+            v1 + v2
+        );
+        assert_eq!((t1, t2), (v1, v2));
+    }
 }
 
 #[test]
 fn power_loss_at_every_operation_of_the_state_record() {
     let (a, b) = (table(100.0), table(120.0));
-    // Slot 0 live by record 1; slot 1 holds a complete, checked new table.
-    let mut start = factory(&a);
-    let rec = |seq, slot, t: &[u8]| StateRecord {
-        seq,
-        slot,
-        len: t.len() as u32,
-        crc: crc_of(t),
-    };
-    record::write(&mut start, &layout(), &rec(1, 0, &a)).expect("record 1");
-    start.mem[2048..2048 + b.len()].copy_from_slice(&b);
-    let start = MockFlash::from_image(start.mem);
-    let (tried, valid) = sweep(&start, &a, &b, &|f| {
-        record::write(f, &layout(), &rec(2, 1, &b)).is_ok()
-    });
-    std::println!("state record: {tried} cut points tried, {valid} boots on a valid table");
-    assert_eq!(tried, valid);
+    for layout in layouts() {
+        // Slot 0 live by record 1; slot 1 holds a complete, checked new table.
+        let mut start = factory(&a);
+        let rec = |seq, slot, t: &[u8]| StateRecord {
+            seq,
+            slot,
+            len: t.len() as u32,
+            crc: crc_of(t),
+        };
+        record::write(&mut start, &layout, &rec(1, 0, &a)).expect("record 1");
+        start.mem[2048..2048 + b.len()].copy_from_slice(&b);
+        let start = MockFlash::from_image(start.mem);
+        let (tried, valid, n) = sweep(&layout, &start, &a, &b, &|f| {
+            record::write(f, &layout, &rec(2, 1, &b)).is_ok()
+        });
+        std::println!(
+            "state record, {}: {tried} cut points tried ({n} operations), {valid} boots on a valid table",
+            name(&layout)
+        );
+        assert_eq!(tried, valid);
+    }
 }

@@ -1,7 +1,9 @@
 //! The state record: which slot holds the live table. Two copies, each in an erase unit of
-//! its own (as embassy-boot keeps its state partition apart from the images); a new record
-//! always goes into the copy that does not hold the newest valid one, so a torn erase or
-//! write spoils only the copy being written and the previous record still stands.
+//! its own (as embassy-boot keeps its state partition apart from the images) or each in the
+//! trailer of its slot ([`Layout::Trailers`]); a new record always goes into the copy that
+//! does not hold the newest valid one, so a torn erase or write spoils only the copy being
+//! written and the previous record still stands. In the trailers that copy is the new
+//! table's slot's, which the update's `Begin` erased with the slot.
 //!
 //! ```text
 //! offset size field (little-endian)
@@ -73,12 +75,14 @@ impl StateRecord {
     }
 }
 
-/// The valid record of each copy (`None` where a copy is erased, torn or unreadable).
+/// The valid record of each copy (`None` where a copy is erased, torn or unreadable; in a
+/// slot's trailer, also where it names the other slot, which no update writes).
 pub fn read_copies<F: NorFlash>(flash: &mut F, layout: &Layout) -> [Option<StateRecord>; 2] {
-    layout.state.clone().map(|r| {
+    [0, 1].map(|copy| {
         let mut b = [0u8; RECORD_LEN];
-        flash.read(r.start, &mut b).ok()?;
+        flash.read(layout.state::<F>(copy).start, &mut b).ok()?;
         StateRecord::decode(&b)
+            .filter(|r| layout.state_has_own_erase() || usize::from(r.slot) == copy)
     })
 }
 
@@ -92,20 +96,29 @@ pub fn newest(copies: &[Option<StateRecord>; 2]) -> Option<(usize, StateRecord)>
     }
 }
 
-/// Writes `rec` into the copy that does not hold the newest valid record (copy 0 when there
-/// is none): erase it, then one write of the record padded with 0xFF to the write unit.
+/// Writes `rec` into the copy that does not hold the newest valid record, then one write of
+/// the record padded with 0xFF to the write unit. With copies of their own: the other copy
+/// than the newest record's (copy 0 when there is none), erased first. In the trailers: copy
+/// `rec.slot`, the trailer of the slot the update's `Begin` erased (with the slot, so no
+/// second erase here, which would take the new table with it); the newest record is in the
+/// live slot's trailer, the other one.
 /// Crate-only: callers have checked the layout (a write unit within `MAX_WRITE_SIZE`).
 pub(crate) fn write<F: NorFlash>(
     flash: &mut F,
     layout: &Layout,
     rec: &StateRecord,
 ) -> Result<(), F::Error> {
-    let target = match newest(&read_copies(flash, layout)) {
-        Some((copy, _)) => 1 - copy,
-        None => 0,
+    let region = if layout.state_has_own_erase() {
+        let target = match newest(&read_copies(flash, layout)) {
+            Some((copy, _)) => 1 - copy,
+            None => 0,
+        };
+        let region = layout.state::<F>(target);
+        flash.erase(region.start, region.end)?;
+        region
+    } else {
+        layout.state::<F>(usize::from(rec.slot))
     };
-    let region = &layout.state[target];
-    flash.erase(region.start, region.end)?;
     let mut buf = [0xffu8; MAX_WRITE_SIZE];
     let len = RECORD_LEN.div_ceil(F::WRITE_SIZE) * F::WRITE_SIZE;
     buf[..RECORD_LEN].copy_from_slice(&rec.encode());

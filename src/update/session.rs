@@ -202,6 +202,16 @@ impl Updater {
         }
     }
 
+    /// The layout this updater writes, as the boot must read it.
+    pub fn layout(&self) -> &Layout {
+        &self.layout
+    }
+
+    /// What it requires of a table, as the boot does.
+    pub fn accept(&self) -> &Accept {
+        &self.accept
+    }
+
     /// Carries out one step. `scratch` holds a table while it is checked (`Begin` finds the
     /// live slot, `Commit` checks the new one).
     pub fn step<F: NorFlash>(
@@ -253,12 +263,15 @@ impl Updater {
             Some((_, r)) => r.seq.checked_add(1).ok_or(Refusal::SequenceExhausted)?,
             None => 1,
         };
-        let region = &self.layout.slots[usize::from(slot)];
         // A slot holds every table without a parameter block (the layout's check); one with
-        // many parameters may not fit a small board's slot.
-        if len > region.end - region.start {
+        // many parameters may not fit a small board's slot. A table never reaches into its
+        // slot's trailer: the state record goes there.
+        let area = self.layout.table_area::<F>(slot);
+        if len > area.end - area.start {
             return Err(Refusal::BadLength(len));
         }
+        // The whole slot, its trailer (and the record copy there) included.
+        let region = &self.layout.slots()[usize::from(slot)];
         flash
             .erase(region.start, region.end)
             .map_err(|e| Refusal::Flash(FlashFault::of(e)))?;
@@ -291,7 +304,7 @@ impl Updater {
         if end > len {
             return Err(Refusal::PastEnd { len });
         }
-        let base = self.layout.slots[usize::from(slot)].start;
+        let base = self.layout.slots()[usize::from(slot)].start;
         // Flash offset of the first pending byte.
         let mut at = base + written - self.pending.len() as u32;
         for &b in bytes {
@@ -334,7 +347,7 @@ impl Updater {
         }
         if !self.pending.is_empty() {
             let at =
-                self.layout.slots[usize::from(slot)].start + written - self.pending.len() as u32;
+                self.layout.slots()[usize::from(slot)].start + written - self.pending.len() as u32;
             self.pending.resize(F::WRITE_SIZE, 0xff).ok();
             let w = flash.write(at, &self.pending);
             self.pending.clear();
@@ -350,7 +363,9 @@ impl Updater {
             |e| match e {
                 SlotError::Flash(f) => Refusal::Flash(f),
                 SlotError::NotRecorded => Refusal::NotAnnounced,
-                e @ (SlotError::Table(_) | SlotError::Signature(_)) => Refusal::Table(e.state()),
+                e @ (SlotError::Table(_) | SlotError::Signature(_) | SlotError::Resolution) => {
+                    Refusal::Table(e.state())
+                }
             },
         )?;
         record::write(flash, &self.layout, &rec).map_err(|e| Refusal::Flash(FlashFault::of(e)))?;

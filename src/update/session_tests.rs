@@ -193,20 +193,97 @@ fn layouts_that_do_not_fit_are_refused() {
     let f = factory(&table(100.0));
     let ok = layout();
     assert_eq!(ok.check(&f), Ok(()));
-    let mut l = ok.clone();
-    l.state[1] = 5120..6000;
-    assert_eq!(l.check(&f), Err(LayoutError::Unaligned(3)));
-    let mut l = ok.clone();
-    l.slots[1] = 1024..3072;
-    assert_eq!(l.check(&f), Err(LayoutError::Overlap(0, 1)));
-    let mut l = ok.clone();
-    l.slots[0] = 6144..7168;
-    assert_eq!(l.check(&f), Err(LayoutError::SlotTooSmall(0)));
-    let l = Layout {
-        slots: ok.slots.clone(),
-        state: [4096..5120, 8192..9216],
+    let regions = |slots: [core::ops::Range<u32>; 2], state: [core::ops::Range<u32>; 2]| {
+        Layout::Regions { slots, state }
     };
+    let (s, st) = ([0..2048, 2048..4096], [4096..5120, 5120..6144]);
+    let l = regions(s.clone(), [4096..5120, 5120..6000]);
+    assert_eq!(l.check(&f), Err(LayoutError::Unaligned(3)));
+    let l = regions([0..2048, 1024..3072], st.clone());
+    assert_eq!(l.check(&f), Err(LayoutError::Overlap(0, 1)));
+    let l = regions([6144..7168, 2048..4096], st.clone());
+    assert_eq!(l.check(&f), Err(LayoutError::SlotTooSmall(0)));
+    let l = regions(s.clone(), [4096..5120, 8192..9216]);
     assert_eq!(l.check(&f), Err(LayoutError::OutOfFlash(3)));
+    let l = regions(s.clone(), [4096..5120, 2048..3072]);
+    assert_eq!(l.check(&f), Err(LayoutError::Overlap(1, 3)));
+
+    // The state in the slots' trailers: only the slots are regions, and a slot must hold the
+    // largest plain table before its trailer.
+    let trailers = |slots| Layout::Trailers { slots };
+    assert_eq!(trailers(s.clone()).check(&f), Ok(()));
+    assert_eq!(
+        trailers([0..2048, 2048..3072]).check(&f),
+        Err(LayoutError::SlotTooSmall(1))
+    );
+    assert_eq!(
+        trailers([0..2048, 1024..3072]).check(&f),
+        Err(LayoutError::Overlap(0, 1))
+    );
+    assert_eq!(
+        trailers([0..2048, 7168..9216]).check(&f),
+        Err(LayoutError::OutOfFlash(1))
+    );
+    assert_eq!(
+        trailers([0..2000, 2048..4096]).check(&f),
+        Err(LayoutError::Unaligned(0))
+    );
+}
+
+/// In the trailers, a table ends 24 bytes (the record, in 4-byte write units) before its
+/// slot, and each copy is the end of its slot.
+#[test]
+fn the_trailer_is_the_slot_end() {
+    use super::layout::Layout;
+    use super::mock::MockFlash;
+    let l = super::fixtures::trailer_layout();
+    assert_eq!(Layout::trailer_len::<MockFlash>(), 24);
+    assert_eq!(l.table_area::<MockFlash>(0), 0..2024);
+    assert_eq!(l.table_area::<MockFlash>(1), 2048..4072);
+    assert_eq!(l.state::<MockFlash>(0), 2024..2048);
+    assert_eq!(l.state::<MockFlash>(1), 4072..4096);
+    let r = super::fixtures::layout();
+    assert_eq!(r.table_area::<MockFlash>(1), 2048..4096);
+    assert_eq!(r.state::<MockFlash>(1), 5120..6144);
+}
+
+/// In the trailers, a record is only believed in the trailer of the slot it names (no update
+/// writes another), and an update's `Begin` erases the older record with its slot.
+#[test]
+fn trailer_records_name_their_own_slot() {
+    use super::fixtures::{boot_in, trailer_layout, update_in};
+    use super::record::{self, StateRecord};
+    let l = trailer_layout();
+    let (a, b, c) = (table(100.0), table(120.0), table(140.0));
+    let mut f = factory(&a);
+    assert_eq!(
+        update_in(&l, &mut f, &b),
+        Ok(Accepted::Committed { slot: 1, seq: 1 })
+    );
+    let rec = record::read_copies(&mut f, &l);
+    assert_eq!(rec[0], None);
+    assert_eq!(rec[1].map(|r| (r.slot, r.seq)), Some((1, 1)));
+    assert_eq!(
+        update_in(&l, &mut f, &c),
+        Ok(Accepted::Committed { slot: 0, seq: 2 })
+    );
+    let rec = record::read_copies(&mut f, &l);
+    assert_eq!(
+        rec.map(|r| r.map(|r| (r.slot, r.seq))),
+        [Some((0, 2)), Some((1, 1))]
+    );
+    assert!(boot_in(&l, &mut f).as_deref() == Some(&c[..]));
+    // A record naming slot 1 written into slot 0's trailer is not a record.
+    let mut g = factory(&a);
+    let bytes = StateRecord {
+        seq: 9,
+        slot: 1,
+        len: b.len() as u32,
+        crc: crc_of(&b),
+    }
+    .encode();
+    g.mem[2024..2048].copy_from_slice(&bytes);
+    assert_eq!(record::read_copies(&mut g, &l), [None, None]);
 }
 
 proptest::proptest! {
@@ -219,12 +296,13 @@ proptest::proptest! {
         ops in proptest::collection::vec((0u8..40, 0u32..2000, proptest::collection::vec(proptest::num::u8::ANY, 0..48)), 0..200)
     ) {
         let (a, b) = (table(100.0), table(120.0));
+        for layout in super::fixtures::layouts() {
         let mut f = factory(&a);
-        let mut up = Updater::new(layout(), Accept::joints(6));
+        let mut up = Updater::new(layout.clone(), Accept::joints(6));
         let mut s = [0u8; MAX_TABLE_LEN];
         let mut committed = false;
         let mut next = 0u32;
-        for (kind, n, bytes) in ops {
+        for (kind, n, bytes) in ops.clone() {
             let step = match kind {
                 // Mostly the right next chunk, so that some updates reach their commit.
                 0 => Step::Begin { len: b.len() as u32, crc: if n % 2 == 0 { crc_of(&b) } else { n } },
@@ -244,11 +322,58 @@ proptest::proptest! {
                 Ok(Accepted::Committed { .. }) => committed = true,
                 _ => {}
             }
-            let got = boot(&mut f);
+            let got = super::fixtures::boot_in(&layout, &mut f);
             let ok = got.as_deref() == Some(&a[..]) || (committed && got.as_deref() == Some(&b[..]));
             proptest::prop_assert!(ok, "boot on neither the old nor a committed table");
         }
+        }
     }
+}
+
+/// A hub told its encoders' resolution refuses, at commit, a table made for others (the
+/// status word's `WrongResolution`), keeps the old one live, and boots past such a slot.
+#[test]
+fn a_table_for_other_encoders_is_refused() {
+    use super::fixtures::table_for_encoders;
+    let (a, b, c) = (
+        table(100.0), // 2^14 counts per revolution
+        table_for_encoders(120.0, 1 << 12),
+        table(140.0),
+    );
+    let own = Accept::joints(6).for_encoders(&[1 << 14; 6]);
+    let mut f = factory(&a);
+    let mut buf = [0u8; MAX_TABLE_LEN];
+    let mut send = |t: &[u8]| {
+        let mut up = Updater::new(layout(), own);
+        let mut s = [0u8; MAX_TABLE_LEN];
+        let mut last = Ok(Accepted::Aborted);
+        for st in &steps(t) {
+            last = up.step(&mut f, &mut s, st);
+        }
+        let live = live_table(&mut f, &layout(), &own, &mut buf).map(|l| l.table.crc());
+        (last, live)
+    };
+    assert_eq!(
+        send(&b),
+        (
+            Err(Refusal::Table(TableState::WrongResolution)),
+            Ok(crc_of(&a))
+        )
+    );
+    let (answer, live) = send(&c);
+    assert_eq!(answer, Ok(Accepted::Committed { slot: 1, seq: 1 }));
+    assert_eq!(live, Ok(crc_of(&c)));
+    // A board whose only table is for other encoders boots on none, and says why.
+    let mut g = factory(&b);
+    match live_table(&mut g, &layout(), &own, &mut buf) {
+        Err(BootError::NoTable(why)) => assert_eq!(why[0].state(), TableState::WrongResolution),
+        r => panic!("{:?}", r.map(|l| l.slot)),
+    }
+    // Joint 6 on another encoder is enough to refuse a table.
+    let mut counts = [1 << 14; 6];
+    counts[5] = 1 << 16;
+    let odd = Accept::joints(6).for_encoders(&counts);
+    assert!(live_table(&mut factory(&a), &layout(), &odd, &mut buf).is_err());
 }
 
 #[test]

@@ -4,11 +4,14 @@
 //! - [`calibration`]: the table validated at boot and the chain built from it.
 //! - [`stack`]: stack high-water mark by painting.
 //! - [`clock`]: microseconds since boot from SysTick, whose handler it defines.
-//! - [`flash`]: the two table slots and the update's state record, the boot through them,
-//!   the QEMU boards' flash drivers.
+//! - [`flash`]: the two table slots and the update's state record, the boot and the update
+//!   port through them, the `NorFlash` window every board's flash driver is built on, the
+//!   QEMU boards' driver.
 //! - [`table_region`]: the calibration table's flash region, as `memory.x` reserves it.
-//! - [`maker_key`]: the public key the QEMU images check tables against (the test key).
-//! - [`live`]: a real hub's loop: encoders at a fixed period, replay when the host sends one.
+//! - [`maker_key`](mod@maker_key): the public key an image checks tables against (the test key on QEMU, the
+//!   maker's on the real boards, [`maker_key!`]).
+//! - [`live`]: a real hub's loop: encoders at a fixed period, replay when the host sends one,
+//!   calibration updates.
 //! - [`serve`]: the replay loop: bytes in, [`quatarm::stream::Hub`] reports out.
 //! - [`qemu`] (feature `qemu`): the QEMU images' runs, exit codes through semihosting, the
 //!   panic and fault handlers.

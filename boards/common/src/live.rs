@@ -1,20 +1,34 @@
 //! The loop of a real hub: its own encoders sampled at a fixed period with the arm's
-//! temperature, and a replay taking over whenever the host sends recorded readings
-//! (hardware-in-the-loop runs) until its `End`.
+//! temperature, a replay taking over whenever the host sends recorded readings
+//! (hardware-in-the-loop runs) until its `End`, and calibration updates over the same link
+//! (`docs/update.md`), after each of which the hub boots again on the new table.
 //!
 //! The temperature sensor is polled every [`TEMP_PERIOD_US`], not at every sample: the arm's
 //! structure changes temperature over minutes, the sensor converts once a second, and an I2C
 //! poll costs a few hundred µs of the 1 ms sample period. Between polls every sample uses the
 //! last poll's outcome; a failed poll gives `TEMP_SENSOR_FAULT` and no coordinates until a
 //! poll succeeds again (`Hub::report_sample`).
+//!
+//! An update step that erases or programs flash stops the sampling while it runs (one loop,
+//! no interrupts doing the work): the NUCLEO's `Begin` erases a 128 KiB sector, which stalls
+//! every flash access of the core for the erase (seconds: the datasheet's t_ERASE128KB), so
+//! no reports come then; and the µs clock (SysTick, whose handler is in flash) misses the
+//! wraps of that time, so report times after it are behind by it. The host's `armcal table
+//! send` waits for each answer (5 s by default, `--timeout`).
 
+use embedded_storage::nor_flash::NorFlash;
 use quatarm::encoder::{read_joints, AbsoluteEncoder};
+use quatarm::signature::KEY_LEN;
 use quatarm::stream::{Coordinates, Event, Hub, Replay, ToHost, UpdateAnswer, MAX_OUTPUT};
+use quatarm::table::MAX_TABLE_LEN;
 use quatarm::temperature::TemperatureSensor;
-use quatarm::update::Refusal;
+use quatarm::update::session::Step;
+use quatarm::update::{Accept, Layout};
 
-use crate::calibration::{self, HubEvaluator, JOINTS};
-use crate::{clock, table_region};
+use crate::calibration::{HubEvaluator, JOINTS};
+use crate::clock;
+use crate::flash::Port;
+use crate::serve::answer_update;
 
 /// How often the temperature sensor is polled.
 pub const TEMP_PERIOD_US: u64 = 250_000;
@@ -32,32 +46,52 @@ pub trait PollLink {
 }
 
 /// The whole run of a real hub once its board has set up the link, the encoders (joint 1
-/// first, one per joint of the table) and the thermometer: the table checked against the encoders' resolution, then
+/// first, one per joint of the table), the thermometer and its calibration flash (`flash`,
+/// laid out as `layout`: `slots::Map::window`): boot on the live table, one for this many
+/// joints and the encoders' resolution, signed under the arm maker's `key`; then
 /// [`serve_live`] in precision `P` with a report every `period_us`, timed by a core clock of
 /// `CORE_HZ` (a constant parameter so that the ticks-to-µs divisions, several per sample,
-/// compile to multiplications).
-pub fn run<P: HubEvaluator, const CORE_HZ: u32>(
+/// compile to multiplications), until an update commits; then boot again on the new table,
+/// as a reset would.
+pub fn run<P: HubEvaluator, const CORE_HZ: u32, F: NorFlash>(
     link: &mut impl PollLink,
     encoders: &mut [impl AbsoluteEncoder; JOINTS],
     thermometer: &mut impl TemperatureSensor,
     period_us: u64,
+    (flash, layout): (F, Layout),
+    key: [u8; KEY_LEN],
 ) -> ! {
     let resolution = encoders.each_ref().map(|e| e.counts_per_rev());
-    let cal = calibration::load_for_encoders::<P>(table_region::bytes(), &resolution);
-    let mut hub = cal.hub();
-    serve_live(
-        link,
-        &mut hub,
-        encoders,
-        period_us,
-        || clock::now_us(CORE_HZ),
-        thermometer,
-        |counts, temp_mc| cal.eval(counts, temp_mc),
-    )
+    let accept = Accept::joints(JOINTS)
+        .signed_by(key)
+        .for_encoders(&resolution);
+    // The live table (which the calibration borrows) and the update's scratch, apart
+    // (`flash::port`).
+    let mut live = [0u8; MAX_TABLE_LEN];
+    let mut scratch = [0u8; MAX_TABLE_LEN];
+    let mut port = Port::new(flash, layout, accept, &mut scratch);
+    loop {
+        let boot = port.boot::<P>(&mut live);
+        let mut hub = boot.hub();
+        let cal = &boot.calibration;
+        serve_live(
+            link,
+            &mut hub,
+            encoders,
+            period_us,
+            || clock::now_us(CORE_HZ),
+            thermometer,
+            |counts, temp_mc| cal.eval(counts, temp_mc),
+            |step| port.step(step),
+        );
+    }
 }
 
-/// Runs the hub for ever: a report every `period_us` from `encoders` (joint 1 first) and
-/// `thermometer`, or one per replayed reading while a replay is under way.
+/// Runs the hub: a report every `period_us` from `encoders` (joint 1 first) and
+/// `thermometer`, or one per replayed reading while a replay is under way; update steps
+/// carried out by `update` (`Port::step`). Returns when an update has committed a new table,
+/// for the caller to boot on.
+#[allow(clippy::too_many_arguments)] // the loop's whole world; one caller
 pub fn serve_live<L: PollLink, E: AbsoluteEncoder, T: TemperatureSensor, X>(
     link: &mut L,
     hub: &mut Hub,
@@ -66,7 +100,8 @@ pub fn serve_live<L: PollLink, E: AbsoluteEncoder, T: TemperatureSensor, X>(
     mut now_us: impl FnMut() -> u64,
     thermometer: &mut T,
     mut eval: impl FnMut(&[u32], i32) -> Result<Coordinates, X>,
-) -> ! {
+    mut update: impl FnMut(&Step) -> UpdateAnswer,
+) {
     let mut out = [0u8; MAX_OUTPUT];
     link.write(&[0]);
     link.write(hub.render(&hub.hello(), &mut out));
@@ -106,11 +141,10 @@ pub fn serve_live<L: PollLink, E: AbsoluteEncoder, T: TemperatureSensor, X>(
                     next = now_us();
                     continue;
                 }
-                // The real boards' flash drivers are not wired to the updater yet: the
-                // table changes with a debug probe, and the host is told so.
-                Some(Event::Update(_)) => {
-                    let answer: UpdateAnswer = Err(Refusal::NotSupported);
-                    link.write(hub.render(&ToHost::Update(answer), &mut out));
+                Some(Event::Update(step)) => {
+                    if answer_update(hub, &mut out, update(&step), |b| link.write(b)) {
+                        return;
+                    }
                     continue;
                 }
                 None => continue,

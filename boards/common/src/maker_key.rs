@@ -1,7 +1,23 @@
-//! The arm maker's public key the QEMU images trust: the repository's test key
-//! (`keys/README.md`), so that the end-to-end tests can sign tables. A firmware image for a
-//! real arm embeds its maker's own key instead (`armcal table keygen`).
+//! The arm maker's public key an image checks tables against ([`quatarm::update::Accept`]).
+//!
+//! The QEMU images trust the repository's test key ([`TEST_MAKER_KEY`], `keys/README.md`), so
+//! that the end-to-end tests can sign tables. A real board's image embeds the key its build
+//! was given: `QUATARM_MAKER_KEY=/path/to/maker.pub cargo xtask build --board NAME` (the
+//! 32-byte file `armcal table keygen` writes; the private key stays offline). The board's
+//! build script (`maker_key` in `boards/common/build_link.rs`) copies it beside its output,
+//! and [`maker_key!`](crate::maker_key!) includes it. Without the variable the build takes
+//! the test key and warns: such an image accepts any table signed with the published test
+//! key, so it is for the bench, never for an arm.
 
 /// The test key's 32 bytes (`keys/test-maker.pub`).
 pub const TEST_MAKER_KEY: [u8; quatarm::signature::KEY_LEN] =
     *include_bytes!("../../../keys/test-maker.pub");
+
+/// The key the board's build script chose (`QUATARM_MAKER_KEY`, else the test key), as a
+/// `[u8; 32]`: expands in the board's crate, whose build script wrote the file.
+#[macro_export]
+macro_rules! maker_key {
+    () => {
+        *include_bytes!(concat!(env!("OUT_DIR"), "/maker.pub"))
+    };
+}

@@ -6,10 +6,10 @@ use cortex_m_semihosting::debug::{self, EXIT_FAILURE, EXIT_SUCCESS};
 
 use embedded_storage::nor_flash::NorFlash;
 use quatarm::table::MAX_TABLE_LEN;
-use quatarm::update::{Accept, Refusal, Updater};
+use quatarm::update::{Accept, Refusal};
 
 use crate::calibration::{self, HubEvaluator};
-use crate::flash::{self, slots};
+use crate::flash::{slots, Map, Port};
 use crate::{bench, clock, serve, stack, table_region, Link, Served};
 
 /// The whole run of a QEMU hub image: boot on the live table, replay the recording that
@@ -23,24 +23,24 @@ use crate::{bench, clock, serve, stack, table_region, Link, Served};
 ///
 /// `open_link` sets up the board's UART; it runs after the clock has started, so that report
 /// times count from the same point on every board. `open_flash` gives the driver of the
-/// calibration flash ([`crate::flash::slots::base`], [`crate::flash::slots::span`]).
+/// calibration flash the map describes (its window from [`Map::base`], [`Map::span`] bytes).
 /// `accept` is what the hub requires of a table (its joints, its maker's key). `ram_start`
 /// is where `memory.x` puts RAM.
 pub fn hub_main<P: HubEvaluator, const CORE_HZ: u32, L: Link, F: NorFlash>(
     ram_start: usize,
     accept: Accept,
     open_link: impl FnOnce() -> L,
-    open_flash: impl FnOnce() -> F,
+    open_flash: impl FnOnce(&Map) -> F,
 ) -> ! {
     stack::paint();
     let mut link = start(open_link);
-    let mut flash = open_flash();
+    let map = slots::map();
     // The live table (which the calibration borrows) and the update's scratch, apart.
     let mut live = [0u8; MAX_TABLE_LEN];
     let mut scratch = [0u8; MAX_TABLE_LEN];
-    let mut updater = Updater::new(slots::layout(), accept);
+    let mut port = Port::new(open_flash(&map), map.layout, accept, &mut scratch);
     loop {
-        let boot = flash::boot::<P, _>(&mut flash, &accept, &mut live);
+        let boot = port.boot::<P>(&mut live);
         let mut hub = boot.hub();
         let cal = &boot.calibration;
         let served = serve(
@@ -48,7 +48,7 @@ pub fn hub_main<P: HubEvaluator, const CORE_HZ: u32, L: Link, F: NorFlash>(
             &mut hub,
             || clock::now_us(CORE_HZ),
             |counts, temp_mc| cal.eval(counts, temp_mc),
-            |step| updater.step(&mut flash, &mut scratch, step),
+            |step| port.step(step),
         );
         if let Served::Ended { .. } = served {
             break;

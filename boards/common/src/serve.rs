@@ -66,10 +66,7 @@ pub fn serve<L: Link, E>(
                 continue;
             }
             Event::Update(step) => {
-                let answer = update(&step);
-                link.write(hub.render(&ToHost::Update(answer), &mut out));
-                if let Ok(Accepted::Committed { slot, seq }) = answer {
-                    defmt::info!("update committed: slot {=u8}, record {=u32}", slot, seq);
+                if answer_update(hub, &mut out, update(&step), |b| link.write(b)) {
                     return Served::Updated;
                 }
                 continue;
@@ -85,5 +82,25 @@ pub fn serve<L: Link, E>(
         };
         link.write(hub.render(&ToHost::Report(report), &mut out));
         reports = reports.wrapping_add(1);
+    }
+}
+
+/// Sends the answer to an update step (a frame in either output mode); whether it committed a
+/// new table, which the caller then boots on (a new chain, a new `Hello`), as a reset would.
+/// The one answer of both loops, the replay's and the live hub's.
+#[inline(always)] // one caller in an image (`serve` or `serve_live`): a call would only add bytes
+pub(crate) fn answer_update(
+    hub: &Hub,
+    out: &mut [u8; MAX_OUTPUT],
+    answer: UpdateAnswer,
+    write: impl FnOnce(&[u8]),
+) -> bool {
+    write(hub.render(&ToHost::Update(answer), out));
+    match answer {
+        Ok(Accepted::Committed { slot, seq }) => {
+            defmt::info!("update committed: slot {=u8}, record {=u32}", slot, seq);
+            true
+        }
+        _ => false,
     }
 }

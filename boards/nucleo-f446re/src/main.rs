@@ -13,13 +13,20 @@
 //!   pull-ups on D14/D15: the sensor's breakout board provides them (or fit 2.2 kΩ to 3.3 V).
 //!   Without a valid reading (sensor missing, wrong part, bus error, no conversion yet in
 //!   the first second after boot) the reports carry `TEMP_SENSOR_FAULT` and no coordinates.
+//! - Calibration: the live one of the two table slots (sectors 7 and 6, the state record in
+//!   their trailers: `docs/update.md`), signed under the arm maker's key the build was given
+//!   (`QUATARM_MAKER_KEY`, `board_common::maker_key`); updates over the stream
+//!   (`armcal table send`), after which the hub boots again on the new table.
 #![no_std]
 #![no_main]
 
+mod flash;
+
 use core::cell::RefCell;
 
-use board_common::clock;
+use board_common::flash::slots;
 use board_common::live::{self, PollLink};
+use board_common::{clock, maker_key};
 use cortex_m_rt::entry;
 use embedded_hal_bus::spi::RefCellDevice;
 use embedded_hal_nb::serial::{Read, Write};
@@ -103,5 +110,16 @@ fn main() -> ! {
         defmt::warn!("TMP117 not found on I2C1 at 0x48: no coordinates until it answers");
     }
 
-    live::run::<quatarm::F32, CORE_HZ>(&mut link, &mut encoders, &mut thermometer, PERIOD_US)
+    // SAFETY: sectors 6 and 7, the calibration regions of memory.x, outside the image; only
+    // the updater writes them.
+    let cal_flash = unsafe { slots::trailer_map().window(flash::Sectors::new(dp.FLASH)) };
+
+    live::run::<quatarm::F32, CORE_HZ, _>(
+        &mut link,
+        &mut encoders,
+        &mut thermometer,
+        PERIOD_US,
+        cal_flash,
+        maker_key!(),
+    )
 }

@@ -13,13 +13,21 @@
 //!   enabled but weak for 400 kHz: the sensor's breakout board provides proper ones.
 //!   Without a valid reading (sensor missing, wrong part, bus error, no conversion yet in
 //!   the first second after boot) the reports carry `TEMP_SENSOR_FAULT` and no coordinates.
+//! - Calibration: the live one of the two table slots (the last four 4 KiB sectors: slots
+//!   and state record copies, `docs/update.md`), signed under the arm maker's key the build
+//!   was given (`QUATARM_MAKER_KEY`, `board_common::maker_key`); updates over the stream
+//!   (`armcal table send`), after which the hub boots again on the new table. No U95 and no
+//!   axis wobble (the fixed-point hub's table has neither block).
 #![no_std]
 #![no_main]
 
+mod flash;
+
 use core::cell::RefCell;
 
-use board_common::clock;
+use board_common::flash::slots;
 use board_common::live::{self, PollLink};
+use board_common::{clock, maker_key};
 use cortex_m_rt::entry;
 use embedded_hal_bus::spi::RefCellDevice;
 use embedded_hal_nb::serial::{Read, Write};
@@ -137,5 +145,16 @@ fn main() -> ! {
         defmt::warn!("TMP117 not found on I2C0 at 0x48: no coordinates until it answers");
     }
 
-    live::run::<quatarm::Fixed, CORE_HZ>(&mut link, &mut encoders, &mut thermometer, PERIOD_US)
+    // SAFETY: the calibration sectors of memory.x, outside the image; only the updater
+    // writes them; core 1 is never started and no DMA reads flash.
+    let cal_flash = unsafe { slots::map().window(flash::Qspi::new()) };
+
+    live::run::<quatarm::Fixed, CORE_HZ, _>(
+        &mut link,
+        &mut encoders,
+        &mut thermometer,
+        PERIOD_US,
+        cal_flash,
+        maker_key!(),
+    )
 }

@@ -1,18 +1,19 @@
 //! A NOR flash over RAM, for QEMU's mps2 boards, whose "flash" at address 0 is RAM: erase
 //! sets whole erase units to 0xFF, a write can only clear bits (the stored byte becomes
-//! `old & new`), and both check alignment and bounds as a real part's driver does. So the
-//! update code runs against the same rules on the emulator as on a chip, instead of against
-//! a RAM that would forgive a write without an erase.
+//! `old & new`), and both check alignment and bounds as a real part's driver does (the
+//! [`Window`] every board's driver shares). So the update code runs against the same rules on
+//! the emulator as on a chip, instead of against a RAM that would forgive a write without an
+//! erase.
 
-use embedded_storage::nor_flash::{
-    check_erase, check_read, check_write, ErrorType, NorFlash, NorFlashErrorKind, ReadNorFlash,
-};
+use embedded_storage::nor_flash::NorFlashErrorKind;
+
+use super::window::{Raw, Window};
 
 /// `ERASE` bytes per erase unit over a region of RAM.
-pub struct RamNor<const ERASE: usize> {
-    base: *mut u8,
-    len: usize,
-}
+pub type RamNor<const ERASE: usize> = Window<Ram<ERASE>>;
+
+/// RAM treated as NOR flash, 4-byte write units, `ERASE`-byte erase units.
+pub struct Ram<const ERASE: usize>;
 
 impl<const ERASE: usize> RamNor<ERASE> {
     /// The region of `len` bytes at `base`.
@@ -20,54 +21,28 @@ impl<const ERASE: usize> RamNor<ERASE> {
     /// # Safety
     /// `base..base + len` must be RAM that nothing else reads or writes while the driver
     /// lives (on mps2: the calibration regions `memory.x` reserves, outside the image).
-    pub unsafe fn new(base: usize, len: usize) -> Self {
-        RamNor {
-            base: base as *mut u8,
-            len,
-        }
+    pub unsafe fn over_ram(base: usize, len: usize) -> Self {
+        Window::new(Ram, base, len)
     }
 }
 
-impl<const ERASE: usize> ErrorType for RamNor<ERASE> {
-    type Error = NorFlashErrorKind;
-}
-
-impl<const ERASE: usize> ReadNorFlash for RamNor<ERASE> {
-    const READ_SIZE: usize = 1;
-
-    fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
-        check_read(self, offset, bytes.len())?;
-        for (i, b) in bytes.iter_mut().enumerate() {
-            // SAFETY: inside the region (checked above), which this driver owns.
-            *b = unsafe { self.base.add(offset as usize + i).read_volatile() };
-        }
-        Ok(())
-    }
-
-    fn capacity(&self) -> usize {
-        self.len
-    }
-}
-
-impl<const ERASE: usize> NorFlash for RamNor<ERASE> {
+impl<const ERASE: usize> Raw for Ram<ERASE> {
     const WRITE_SIZE: usize = 4;
     const ERASE_SIZE: usize = ERASE;
 
-    fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
-        check_erase(self, from, to)?;
-        for i in from..to {
-            // SAFETY: inside the region (checked above).
-            unsafe { self.base.add(i as usize).write_volatile(0xff) };
+    fn erase(&mut self, from: usize, to: usize) -> Result<(), NorFlashErrorKind> {
+        for a in from..to {
+            // SAFETY: inside the window (checked by it), which this driver owns.
+            unsafe { (a as *mut u8).write_volatile(0xff) };
         }
         Ok(())
     }
 
-    fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
-        check_write(self, offset, bytes.len())?;
+    fn program(&mut self, addr: usize, bytes: &[u8]) -> Result<(), NorFlashErrorKind> {
         for (i, &b) in bytes.iter().enumerate() {
-            // SAFETY: inside the region (checked above).
+            // SAFETY: inside the window (checked by it).
             unsafe {
-                let p = self.base.add(offset as usize + i);
+                let p = (addr + i) as *mut u8;
                 p.write_volatile(p.read_volatile() & b);
             }
         }
