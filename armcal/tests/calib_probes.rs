@@ -147,23 +147,13 @@ fn the_cli_carries_the_probe_from_data_to_file_to_eval() {
         quatarm_ref::calfile::write(&nominal(), &[]),
     )
     .unwrap();
-    armcal_ok(
-        &[
-            "simulate",
-            "--truth",
-            "truth.toml",
-            "--kind",
-            "point",
-            "--count",
-            "300",
-            "--seed",
-            "3",
-            "--probes",
-            "0,3,7",
-            "-o",
-            "data.csv",
-        ],
+    common::simulate(
         &dir,
+        "point",
+        "300",
+        "3",
+        &["--probes", "0,3,7"],
+        "data.csv",
     );
     let text = std::fs::read_to_string(dir.join("data.csv")).unwrap();
     assert!(
