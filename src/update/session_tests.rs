@@ -174,10 +174,10 @@ fn boot_falls_back_past_a_bad_slot() {
     let live = live_table(&mut f, &layout(), &Accept::joints(6), &mut buf).unwrap();
     assert_eq!((live.slot, live.seq), (1, Some(1)));
     assert!(live.table.bytes() == &b[..]);
-    f.mem[4096] ^= 0x01; // and record 1 (copy 0) torn: slot 1 by its contents
+    f.mem[6144] ^= 0x01; // and record 1 (copy 0) torn: slot 1 by its contents
     let live = live_table(&mut f, &layout(), &Accept::joints(6), &mut buf).unwrap();
     assert_eq!((live.slot, live.seq), (1, None));
-    f.mem[2048 + 40] ^= 0x01; // slot 1 corrupt too: nothing
+    f.mem[3072 + 40] ^= 0x01; // slot 1 corrupt too: nothing
     assert!(matches!(
         live_table(&mut f, &layout(), &Accept::joints(6), &mut buf),
         Err(BootError::NoTable([
@@ -194,17 +194,17 @@ fn layouts_that_do_not_fit_are_refused() {
     let ok = layout();
     assert_eq!(ok.check(&f), Ok(()));
     let mut l = ok.clone();
-    l.state[1] = 5120..6000;
+    l.state[1] = 7168..8000;
     assert_eq!(l.check(&f), Err(LayoutError::Unaligned(3)));
     let mut l = ok.clone();
-    l.slots[1] = 1024..3072;
+    l.slots[1] = 1024..4096;
     assert_eq!(l.check(&f), Err(LayoutError::Overlap(0, 1)));
     let mut l = ok.clone();
-    l.slots[0] = 6144..7168;
+    l.slots[0] = 8192..9216;
     assert_eq!(l.check(&f), Err(LayoutError::SlotTooSmall(0)));
     let l = Layout {
         slots: ok.slots.clone(),
-        state: [4096..5120, 8192..9216],
+        state: [6144..7168, 9216..10240],
     };
     assert_eq!(l.check(&f), Err(LayoutError::OutOfFlash(3)));
 }
