@@ -186,10 +186,12 @@ impl<P: Evaluator> Chain<P> {
                 *f = Quat::new(units::<P, 4>(quarter_half_turns(full, q), i + 1)?);
             }
             let near = near_matrix(crate::model::near_quat(j.rotation, j.axis));
+            // (prev − axis) mod 3 for axes 0..=2, without `%` (a runtime call on the M0).
+            let shift = prev + 3 - j.axis;
             *r = JointRotation {
                 full: full_q,
                 near: units::<P, 9>(near, i + 1)?,
-                shift: (prev + 3 - j.axis) % 3,
+                shift: if shift >= 3 { shift - 3 } else { shift },
             };
             prev = j.axis;
         }

@@ -287,8 +287,10 @@ pub const SECOND_ORDER_DEFLECTION: f64 = 1.4e-4;
 /// the chain's z-axis frame of that joint, P_a⁻¹ v: component k is component (k + a + 1)
 /// mod 3 of v (a = 2, z: the identity). A relabelling, exact.
 pub(crate) fn unpermute<T: Copy>(v: [T; 3], axis: u8) -> [T; 3] {
-    let a = usize::from(axis % 3);
-    [v[(a + 1) % 3], v[(a + 2) % 3], v[a % 3]]
+    // Indices from a table: `% 3` is a call to the runtime's division on the Cortex-M0.
+    const FROM: [[usize; 3]; 3] = [[1, 2, 0], [2, 0, 1], [0, 1, 2]];
+    let [i, j, k] = FROM[usize::from(axis).min(2)];
+    [v[i], v[j], v[k]]
 }
 
 /// The quaternion of P_a: a 120° turn about (1, 1, 1) for x, −120° for y, none for z.
