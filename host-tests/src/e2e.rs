@@ -153,10 +153,10 @@ pub fn replay(board: &Board, table: Option<&[u8]>, input: &[u8]) -> Result<Outco
     let mut hellos = Vec::new();
     let mut reports = Vec::new();
     for item in decoder.push_all(&run.stream) {
+        reports.extend(item.report());
         if let Item::Hello(h) = item {
             hellos.push(h);
         }
-        reports.extend(item.report());
     }
     Ok(Outcome {
         hellos,

@@ -803,6 +803,13 @@ impl<'a> Table<'a> {
         if flags & FLAG_BUDGET != 0 {
             len += budget::LEN;
             if flags & FLAG_PARAMETERS != 0 {
+                // Without the feature, refused before its length is known, as the wobble's.
+                if !cfg!(feature = "parameters") {
+                    return Err(TableError::Invalid {
+                        joint: 0,
+                        field: Field::Flags,
+                    });
+                }
                 // The block states its own size; a count that cannot be read counts as 0 and
                 // fails the length check below or the block's own.
                 let at = core_len(n) + budget::LEN;
@@ -925,12 +932,17 @@ impl<'a> Table<'a> {
                 return Err(invalid(no, Field::Harmonic));
             }
         }
-        // Every probe's values, the first's and the others' (the block's check reads them).
-        let p = self.probe();
-        check_probe(&p)?;
-        content |= p.content_flags();
+        // Every probe's values, the first's and the others', and their ids all distinct.
         if let Some(others) = self.other_probes() {
-            content |= others.check(p.id)?;
+            others.check()?;
+        }
+        for k in 0..self.probe_count() {
+            let p = self.probe_at(k).ok_or(invalid(0, Field::Probe))?;
+            check_probe(&p)?;
+            if (0..k).any(|j| self.probe_id(j) == Some(p.id)) {
+                return Err(invalid(0, Field::Probe));
+            }
+            content |= p.content_flags();
         }
         let flags = b[off::FLAGS];
         let blocks = FLAG_GEOMETRIC | FLAG_BUDGET | FLAG_PARAMETERS | FLAG_WOBBLE | FLAG_PROBES;
@@ -945,7 +957,8 @@ impl<'a> Table<'a> {
         }
         #[cfg(feature = "parameters")]
         if let Some(p) = self.parameters() {
-            p.check(self.joint_count())?;
+            let of_table = |id| (0..self.probe_count()).any(|k| self.probe_id(k) == Some(id));
+            p.check(self.joint_count(), of_table)?;
         }
         #[cfg(feature = "wobble")]
         if let Some(w) = self.wobble() {
@@ -979,13 +992,14 @@ impl<'a> Table<'a> {
     }
 
     /// Where the wobble block starts, or would: after the probe, the budget and the
-    /// parameter block.
+    /// parameter block. (A block whose feature is off is refused by its flag before this is
+    /// asked: its length need not be known.)
     fn wobble_at(&self) -> usize {
         let mut at = core_len(self.joint_count());
         if self.flags() & FLAG_BUDGET != 0 {
             at += budget::LEN;
         }
-        if self.flags() & FLAG_PARAMETERS != 0 {
+        if cfg!(feature = "parameters") && self.flags() & FLAG_PARAMETERS != 0 {
             at += parameters::len(parameters::stated_count(
                 self.bytes.get(at..).unwrap_or(&[]),
             ));
@@ -996,7 +1010,7 @@ impl<'a> Table<'a> {
     /// Where the other probes' block starts, or would: after the wobble's.
     fn probes_at(&self) -> usize {
         let at = self.wobble_at();
-        if self.flags() & FLAG_WOBBLE == 0 {
+        if !cfg!(feature = "wobble") || self.flags() & FLAG_WOBBLE == 0 {
             return at;
         }
         at + wobble::len(wobble::stated_count(self.bytes.get(at..).unwrap_or(&[])))
@@ -1027,6 +1041,14 @@ impl<'a> Table<'a> {
     /// How many probes the arm has, the first included (1..=8).
     pub fn probe_count(&self) -> usize {
         1 + self.other_probes().map_or(0, |p| p.count())
+    }
+
+    /// Probe `k`'s id (0 the first, as [`Table::probe_at`]); `None` past the last.
+    pub fn probe_id(&self, k: usize) -> Option<u8> {
+        match k {
+            0 => Some(self.bytes[off::PROBE_ID]),
+            _ => self.other_probes()?.id(k - 1),
+        }
     }
 
     /// Probe `k`: 0 the first (the one the hub mounts at boot), then the others in the

@@ -19,7 +19,8 @@
 //!                         κ_p (1/°C, f64), stylus ball diameter (mm, f64; 0 unknown)
 //! ```
 //!
-//! Every record is checked as the first probe's is ([`super::Table::parse`]). The hub mounts
+//! Every probe's values are checked as the first probe's are, and every id must differ from
+//! the others' ([`super::Table::parse`]). The hub mounts
 //! the first probe at boot and another when the host selects it by id
 //! (`ToDevice::SelectProbe`, `docs/protocol.md`): its chain then ends at that probe's ball.
 
@@ -82,47 +83,38 @@ impl<'a> Probes<'a> {
         Some(super::read_probe(r[0], &r[DATA..]))
     }
 
-    /// Checks the block of a table whose first probe has id `first`: 1..=7 probes, reserved
-    /// bytes 0, every probe's values as the first's, every id distinct. Returns the effect
-    /// flags the probes call for (their thermal expansion).
-    pub(super) fn check(&self, first: u8) -> Result<u8, TableError> {
-        let bad = TableError::Invalid {
-            joint: 0,
-            field: Field::Probe,
-        };
-        let p = self.count();
-        if !(1..MAX_PROBES).contains(&p) || self.bytes[1..HEAD_LEN].iter().any(|&b| b != 0) {
-            return Err(bad);
+    /// The `k`-th probe's id (0-based); `None` past the last.
+    pub fn id(&self, k: usize) -> Option<u8> {
+        if k >= self.count() {
+            return None;
         }
-        let mut ids = [first; MAX_PROBES];
-        let mut flags = 0;
-        for (k, r) in self.bytes[HEAD_LEN..]
-            .chunks_exact(RECORD_LEN)
-            .take(p)
-            .enumerate()
-        {
-            let probe = read_checked(r)?;
-            if ids[..=k].contains(&probe.id) {
-                return Err(bad);
-            }
-            ids[k + 1] = probe.id;
-            flags |= probe.content_flags();
-        }
-        Ok(flags)
+        self.bytes.get(HEAD_LEN + k * RECORD_LEN).copied()
     }
-}
 
-/// A record's probe, its reserved bytes 0 and its values valid.
-fn read_checked(r: &[u8]) -> Result<ProbeData, TableError> {
-    let probe = super::read_probe(r[0], &r[DATA..]);
-    if r[1..DATA].iter().any(|&b| b != 0) {
-        return Err(TableError::Invalid {
-            joint: 0,
-            field: Field::Reserved,
+    /// Checks the block's own fields: 1..=7 probes, reserved bytes 0. (The table checks
+    /// every probe's values and ids, the first's with the others'.)
+    pub(super) fn check(&self) -> Result<(), TableError> {
+        let p = self.count();
+        if !(1..MAX_PROBES).contains(&p) {
+            return Err(TableError::Invalid {
+                joint: 0,
+                field: Field::Probe,
+            });
+        }
+        // The records by index, not `chunks_exact`, whose remainder is a division by 72 (a
+        // runtime call on the Cortex-M0); the table's length gave the block all p records.
+        let reserved = (0..p).flat_map(|k| {
+            let at = HEAD_LEN + k * RECORD_LEN;
+            self.bytes.get(at + 1..at + DATA).unwrap_or(&[])
         });
+        if reserved.chain(&self.bytes[1..HEAD_LEN]).any(|&b| b != 0) {
+            return Err(TableError::Invalid {
+                joint: 0,
+                field: Field::Reserved,
+            });
+        }
+        Ok(())
     }
-    super::check_probe(&probe)?;
-    Ok(probe)
 }
 
 #[cfg(test)]
@@ -243,7 +235,11 @@ pub(crate) mod tests {
         let cases: [(&str, Edit, Option<TableError>); 14] = [
             ("count 0", |b, at, _, _| b[at] = 0, None),
             ("count past the records", |b, at, _, _| b[at] = 3, None),
-            ("block reserved", |b, at, _, _| b[at + 2] = 1, Some(probe)),
+            (
+                "block reserved",
+                |b, at, _, _| b[at + 2] = 1,
+                Some(reserved),
+            ),
             (
                 "record reserved",
                 |b, _, rec, _| b[rec + 5] = 1,

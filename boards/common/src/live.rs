@@ -9,11 +9,11 @@
 //! poll succeeds again (`Hub::report_sample`).
 
 use quatarm::encoder::{read_joints, AbsoluteEncoder};
-use quatarm::stream::{Coordinates, Event, Hub, Replay, ToHost, UpdateAnswer, MAX_OUTPUT};
+use quatarm::stream::{Event, Hub, Replay, ToHost, UpdateAnswer, MAX_OUTPUT};
 use quatarm::temperature::TemperatureSensor;
 use quatarm::update::Refusal;
 
-use crate::calibration::{self, HubEvaluator, JOINTS};
+use crate::calibration::{self, Calibration, HubEvaluator, JOINTS};
 use crate::{clock, table_region};
 
 /// How often the temperature sensor is polled.
@@ -43,7 +43,7 @@ pub fn run<P: HubEvaluator, const CORE_HZ: u32>(
     period_us: u64,
 ) -> ! {
     let resolution = encoders.each_ref().map(|e| e.counts_per_rev());
-    let cal = calibration::load_for_encoders::<P>(table_region::bytes(), &resolution);
+    let mut cal = calibration::load_for_encoders::<P>(table_region::bytes(), &resolution);
     let mut hub = cal.hub();
     serve_live(
         link,
@@ -52,20 +52,21 @@ pub fn run<P: HubEvaluator, const CORE_HZ: u32>(
         period_us,
         || clock::now_us(CORE_HZ),
         thermometer,
-        |counts, temp_mc| cal.eval(counts, temp_mc),
+        &mut cal,
     )
 }
 
 /// Runs the hub for ever: a report every `period_us` from `encoders` (joint 1 first) and
-/// `thermometer`, or one per replayed reading while a replay is under way.
-pub fn serve_live<L: PollLink, E: AbsoluteEncoder, T: TemperatureSensor, X>(
+/// `thermometer`, or one per replayed reading while a replay is under way; `cal` evaluates
+/// them and mounts the probes the host selects.
+pub fn serve_live<L: PollLink, E: AbsoluteEncoder, T: TemperatureSensor, P: HubEvaluator>(
     link: &mut L,
     hub: &mut Hub,
     encoders: &mut [E],
     period_us: u64,
     mut now_us: impl FnMut() -> u64,
     thermometer: &mut T,
-    mut eval: impl FnMut(&[u32], i32) -> Result<Coordinates, X>,
+    cal: &mut Calibration<'_, P>,
 ) -> ! {
     let mut out = [0u8; MAX_OUTPUT];
     link.write(&[0]);
@@ -86,15 +87,16 @@ pub fn serve_live<L: PollLink, E: AbsoluteEncoder, T: TemperatureSensor, X>(
     let mut counts = [0u32; quatarm::table::MAX_JOINTS];
     let joints = encoders.len().min(counts.len());
     loop {
+        let eval = |counts: &[u32], temp_mc| cal.eval(counts, temp_mc);
         let report = if let Some(byte) = link.try_read() {
             match replay.push(byte) {
                 Some(Event::Reading(r)) => {
                     replaying = true;
-                    hub.report(now_us(), Ok(&r), &mut eval)
+                    hub.report(now_us(), Ok(&r), eval)
                 }
                 Some(Event::InputError(e)) => {
                     defmt::warn!("damaged input frame: {}", e);
-                    hub.report(now_us(), Err(e), &mut eval)
+                    hub.report(now_us(), Err(e), eval)
                 }
                 Some(Event::SetMode(m)) => {
                     hub.set_mode(m);
@@ -113,6 +115,11 @@ pub fn serve_live<L: PollLink, E: AbsoluteEncoder, T: TemperatureSensor, X>(
                     link.write(hub.render(&ToHost::Update(answer), &mut out));
                     continue;
                 }
+                Some(Event::SelectProbe(id)) => {
+                    let answer = hub.select(id, |k| cal.mount(k));
+                    link.write(hub.render(&ToHost::Probe(answer), &mut out));
+                    continue;
+                }
                 None => continue,
             }
         } else if !replaying && now_us() >= next {
@@ -128,7 +135,7 @@ pub fn serve_live<L: PollLink, E: AbsoluteEncoder, T: TemperatureSensor, X>(
                 temp_ok = temp_mc.is_some();
             }
             let faults = read_joints(&mut encoders[..joints], &mut counts[..joints]);
-            hub.report_sample(now_us(), &counts[..joints], faults, temp_mc, &mut eval)
+            hub.report_sample(now_us(), &counts[..joints], faults, temp_mc, eval)
         } else {
             continue;
         };
