@@ -338,6 +338,32 @@ pub(crate) fn z_frame_matrix(m: [[f64; 3]; 3], prev_axis: u8, axis: u8) -> [[f64
     out
 }
 
+/// Puts `probe` on the last joint `jm` (joint `i` of `table`): its link carries the probe's
+/// vector and expansion, formed in f64 and rounded once; `dir` takes the probe's direction.
+/// Every value is converted before any is written, so that nothing changes on an error.
+fn put_probe<P: Physics>(
+    table: &Table<'_>,
+    i: usize,
+    jm: &mut JointModel<P>,
+    dir: &mut Vec3<P::U>,
+    probe: &ProbeData,
+) -> Result<(), ChainError> {
+    let (axis, mut link, thermal) = table
+        .joint_link(i)
+        .ok_or(ChainError::Range { joint: i as u8 + 1 })?;
+    let mut rate = link.map(|x| x * thermal);
+    for k in 0..3 {
+        link[k] += probe.vector[k];
+        rate[k] += probe.vector[k] * probe.thermal;
+    }
+    let no = i + 1;
+    let link_p = vec3::<P>(unpermute(link, axis), no)?;
+    let rate_p = rates::<P>(unpermute(rate, axis), no)?;
+    *dir = units::<P, 3>(unpermute(probe.direction, axis), 0)?;
+    (jm.link, jm.link_rate, jm.has_thermal) = (link_p, rate_p, rate != [0.0; 3]);
+    Ok(())
+}
+
 /// The axis the base frame stands for before joint 1: z (no permutation).
 pub(crate) const BASE_AXIS: u8 = 2;
 
@@ -433,14 +459,24 @@ impl<P: Physics> Model<P> {
                 });
             }
         }
-        let mut model = Model {
+        // The first probe on the last joint, converted into the joints' own array rather
+        // than into a whole model mounted afterwards: a second model on the Cortex-M0's boot
+        // stack was 840 bytes its 8 KiB do not have.
+        let last = n.clamp(1, MAX_JOINTS) - 1;
+        let mut probe_dir = [P::U::default(); 3];
+        put_probe(
+            table,
+            last,
+            &mut joints[last],
+            &mut probe_dir,
+            &table.probe(),
+        )?;
+        Ok(Model {
             n,
             joints,
-            probe_dir: [P::U::default(); 3],
+            probe_dir,
             second_order_gravity: gravity * reach > SECOND_ORDER_DEFLECTION,
-        };
-        model.mount(table, &table.probe())?;
-        Ok(model)
+        })
     }
 
     /// Mounts `probe`, one of the table's: the last joint's link carries its vector and its
@@ -450,21 +486,7 @@ impl<P: Physics> Model<P> {
     /// from, whose reach [`Model::new`] checked with the longest probe.
     pub fn mount(&mut self, table: &Table<'_>, probe: &ProbeData) -> Result<(), ChainError> {
         let i = self.n.clamp(1, MAX_JOINTS) - 1;
-        let j = table
-            .joint(i)
-            .ok_or(ChainError::Range { joint: i as u8 + 1 })?;
-        let (mut link, mut rate) = (j.link, j.link.map(|x| x * j.thermal));
-        for k in 0..3 {
-            link[k] += probe.vector[k];
-            rate[k] += probe.vector[k] * probe.thermal;
-        }
-        let no = i + 1;
-        let jm = &mut self.joints[i];
-        let link_p = vec3::<P>(unpermute(link, j.axis), no)?;
-        let rate_p = rates::<P>(unpermute(rate, j.axis), no)?;
-        self.probe_dir = units::<P, 3>(unpermute(probe.direction, j.axis), 0)?;
-        (jm.link, jm.link_rate, jm.has_thermal) = (link_p, rate_p, rate != [0.0; 3]);
-        Ok(())
+        put_probe(table, i, &mut self.joints[i], &mut self.probe_dir, probe)
     }
 
     /// Checks the reading's shape and temperature; returns the temperature offset from 20 °C.

@@ -14,4 +14,5 @@ common::board_tests! {
     update: update_not_supported,
     u95: no_u95,
     wobble: wobble_refused,
+    probes: probes_selected,
 }

@@ -14,4 +14,5 @@ common::board_tests! {
     update: update_with_resets,
     u95: u95_matches_the_host,
     wobble: wobble_applied,
+    probes: probes_selected_and_updated,
 }

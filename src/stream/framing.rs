@@ -292,6 +292,29 @@ mod tests {
                 assert_eq!(postcard::from_bytes::<Report>(bytes).unwrap(), v4);
             }
         }
+        // Where the id is not: right after the status, probe 1 before a point without U95
+        // whose direction ends at -1e-9 reads whole as an older report, with its coordinates
+        // shifted by one field (the reason the id is last).
+        let after_status = (
+            5u32,
+            77u64,
+            Status(Status::TABLE_VALID),
+            1u8,
+            Some(Coordinates {
+                xyz_nm: [10, 20, 30],
+                dir_e9: [0, 1_000_000_000, -1],
+                u95_nm: None,
+            }),
+        );
+        let bytes = postcard::to_slice(&after_status, &mut buf).unwrap();
+        match postcard::take_from_bytes::<ReportV3>(bytes) {
+            Ok((misread, [])) => assert_eq!(
+                misread.point.map(|c| c.xyz_nm),
+                Some([-1, 10, 20]),
+                "read whole, and wrong"
+            ),
+            other => panic!("{:?}", other.map(|_| ())),
+        }
     }
 
     fn read_all(reader: &mut FrameReader, bytes: &[u8]) -> Vec<Result<ToHost, FrameError>> {

@@ -1092,6 +1092,23 @@ impl<'a> Table<'a> {
         rd_u32(self.bytes, self.bytes.len() - CRC_LEN)
     }
 
+    /// Joint `i`'s axis, link vector and thermal expansion (what mounting a probe on the
+    /// last joint needs): read alone rather than as a whole [`JointData`], whose ~300 bytes
+    /// the Cortex-M0 hub's stack has no room for where a probe is mounted at boot.
+    pub fn joint_link(&self, i: usize) -> Option<(u8, [f64; 3], f64)> {
+        if i >= self.joint_count() {
+            return None;
+        }
+        let r = self
+            .bytes
+            .get(HEADER_LEN + i * JOINT_LEN..HEADER_LEN + (i + 1) * JOINT_LEN)?;
+        Some((
+            r[off::AXIS],
+            rd_f64s::<3>(r, off::LINK),
+            rd_f64(r, off::THERMAL),
+        ))
+    }
+
     /// Joint `i` (0-based); `None` past the last joint.
     pub fn joint(&self, i: usize) -> Option<JointData> {
         if i >= self.joint_count() {
