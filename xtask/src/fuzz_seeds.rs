@@ -111,7 +111,8 @@ pub fn run() -> Result<()> {
             probes.extend(frame(&ToDevice::SetMode(Mode::Text)));
         }
     }
-    write("hub_frames", "probes.bin", &picked(0, &probes))?;
+    // Pick 0x10: the hub on the three-probe table (`fuzz/fuzz_targets/hub_frames.rs`).
+    write("hub_frames", "probes.bin", &picked(0x10, &probes))?;
 
     let streams = root().join("armcal/tests/streams");
     for name in ["s-dup.bin", "s-fault-with-point.bin"] {
