@@ -27,6 +27,13 @@ fn frames(rendered: &[u8]) -> Vec<Result<ToHost, quatarm::stream::FrameError>> {
         .collect()
 }
 
+/// An answer (to an update step, a probe selection), rendered in the hub's mode, reads back as
+/// itself: a frame in either mode.
+fn answers_read_back(hub: &Hub, msg: ToHost, out: &mut [u8]) {
+    let rendered = hub.render(&msg, out);
+    assert_eq!(frames(rendered), [Ok(msg)], "an answer does not read back");
+}
+
 fuzz_target!(|bytes: &[u8]| {
     let Some((&pick, stream)) = bytes.split_first() else {
         return;
@@ -114,13 +121,7 @@ fuzz_target!(|bytes: &[u8]| {
                 if answer.is_ok() {
                     mounted = id;
                 }
-                let msg = ToHost::Probe(answer);
-                let rendered = hub.render(&msg, &mut out);
-                assert_eq!(
-                    frames(rendered),
-                    [Ok(msg)],
-                    "a probe answer does not read back"
-                );
+                answers_read_back(&hub, ToHost::Probe(answer), &mut out);
                 continue;
             }
             Event::SetMode(m) => {
@@ -134,13 +135,7 @@ fuzz_target!(|bytes: &[u8]| {
                 // board's serve loop sends them; the answer must read back as itself in
                 // either mode (update answers are frames in text mode too).
                 let answer = updater.step(&mut flash, &mut scratch, &step);
-                let msg = ToHost::Update(answer);
-                let rendered = hub.render(&msg, &mut out);
-                assert_eq!(
-                    frames(rendered),
-                    [Ok(msg)],
-                    "an update answer does not read back"
-                );
+                answers_read_back(&hub, ToHost::Update(answer), &mut out);
                 continue;
             }
         };
