@@ -14,7 +14,7 @@
 
 use super::Covariance;
 use crate::matrix::{Frames, MatrixChain};
-use crate::model::{unpermute, ChainError, BASE_AXIS, REFERENCE_TEMP_MC};
+use crate::model::{unpermute_inline, ChainError, BASE_AXIS, REFERENCE_TEMP_MC};
 use crate::physics::Physics;
 use crate::rotate::{cross, Vec3};
 use crate::scalar::F32;
@@ -157,7 +157,7 @@ impl<'a, P: Physics> ParameterPart<'a, P> {
             (true, _) => self.axes[k - 1],
             _ => self.axes[k],
         };
-        let vector = unpermute(col.vector, frame_axis);
+        let vector = unpermute_inline(col.vector, frame_axis);
         let r = &frames.rotation[k];
         let lever = sub(p, frames.origin[k]);
         let axis = [r[0][2], r[1][2], r[2][2]];
