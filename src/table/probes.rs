@@ -20,9 +20,16 @@
 //! ```
 //!
 //! Every probe's values are checked as the first probe's are, and every id must differ from
-//! the others' ([`super::Table::parse`]). The hub mounts
-//! the first probe at boot and another when the host selects it by id
-//! (`ToDevice::SelectProbe`, `docs/protocol.md`): its chain then ends at that probe's ball.
+//! the others' ([`super::Table::parse`]). The hub mounts the first probe at boot and another
+//! when the host selects it by id (`ToDevice::SelectProbe`, `docs/protocol.md`): its chain
+//! then ends at that probe's ball. The block is 4 + 72·P bytes, 508 for seven others: the
+//! largest table without a parameter block is 2,440 bytes ([`super::MAX_PLAIN_TABLE_LEN`]),
+//! which the 4 KiB slots of the fixed-point boards hold.
+//!
+//! Every board reads it, the Cortex-M0 hub too (no feature): its 32 KiB image holds it with
+//! 180 bytes to spare (rustup 1.95, `cargo xtask bench-target`: 32,588 bytes, 32,712 before
+//! the probes, the room found elsewhere; README, "Several probes"). The f32 images grew by
+//! ~8 KB (the checks and a probe's conversion in soft f64).
 
 use super::{Field, ProbeData, TableError, PROBE_LEN};
 
