@@ -32,6 +32,22 @@ pub struct CountScale {
     pow2: bool,
 }
 
+/// ⌊num / den⌋ (den ≤ 2^31) by shift and subtract, one quotient bit a step: the one 64-bit
+/// division of the chains, at boot, without the runtime's, whose code (1.3 KB with its
+/// 32-bit helper) the Cortex-M0 hub's image has no room for.
+fn div_u64(num: u64, den: u64) -> u64 {
+    let (mut q, mut r) = (0u64, 0u64);
+    for i in (0..64).rev() {
+        // r < den ≤ 2^31 before the shift: no bit is lost.
+        r = (r << 1) | ((num >> i) & 1);
+        if r >= den {
+            r -= den;
+            q |= 1 << i;
+        }
+    }
+    q
+}
+
 impl CountScale {
     /// The scale for `counts_per_rev` counts per revolution; `None` outside 2..=2^31 − 1.
     pub fn new(counts_per_rev: u32) -> Option<CountScale> {
@@ -48,7 +64,7 @@ impl CountScale {
             });
         }
         let n = u64::from(counts_per_rev);
-        let k = ((1u64 << (32 + j)) + n / 2) / n; // in [2^31, 2^32)
+        let k = div_u64((1u64 << (32 + j)) + n / 2, n); // in [2^31, 2^32)
         Some(CountScale {
             counts: counts_per_rev,
             k: k as u32,
@@ -212,6 +228,15 @@ impl<P: Arithmetic> Multiples<P> {
 mod tests {
     use super::*;
     use crate::scalar::{Fixed, F32};
+
+    proptest::proptest! {
+        /// The shift-and-subtract division is the runtime's, for every quotient a scale
+        /// takes (a numerator below 2^63, a divisor of 2..2^31).
+        #[test]
+        fn the_boot_division_is_exact(num in 0u64..(1 << 63), den in 2u64..(1 << 31)) {
+            proptest::prop_assert_eq!(div_u64(num, den), num / den);
+        }
+    }
 
     fn check_remainder<P: Arithmetic>(step: usize, tol: f64) -> f64 {
         let mut worst = 0.0f64;

@@ -186,10 +186,12 @@ impl<P: Evaluator> Chain<P> {
                 *f = Quat::new(units::<P, 4>(quarter_half_turns(full, q), i + 1)?);
             }
             let near = near_matrix(crate::model::near_quat(j.rotation, j.axis));
+            // (prev − axis) mod 3 for axes 0..=2, without `%` (a runtime call on the M0).
+            let shift = prev + 3 - j.axis;
             *r = JointRotation {
                 full: full_q,
                 near: units::<P, 9>(near, i + 1)?,
-                shift: (prev + 3 - j.axis) % 3,
+                shift: if shift >= 3 { shift - 3 } else { shift },
             };
             prev = j.axis;
         }
@@ -217,6 +219,14 @@ impl<P: Evaluator> Chain<P> {
     /// The model this chain evaluates.
     pub fn model(&self) -> &Model<P> {
         &self.model
+    }
+
+    /// Mounts the table's probe `k` (0 the first, then the others in the table's order): the
+    /// chain ends at its ball from the next reading on. `table` must be the one the chain
+    /// was built from; nothing changes on an error (a `k` past the table's probes).
+    pub fn mount(&mut self, table: &Table<'_>, k: usize) -> Result<(), ChainError> {
+        let probe = table.probe_at(k).ok_or(ChainError::Range { joint: 0 })?;
+        self.model.mount(table, &probe)
     }
 
     /// Probe-ball centre and direction for raw encoder counts (one per joint, each below its
@@ -408,5 +418,87 @@ impl<P: Evaluator> Chain<P> {
         };
         let w = v[TIP];
         Ok(Point { xyz: w, dir })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::matrix::MatrixChain;
+    use crate::table::probes::tests::several;
+    use crate::table::{TableData, MAX_TABLE_LEN};
+
+    /// `data` with its probe `k` first and the others after it in their order.
+    fn with_first(data: &TableData, k: usize) -> TableData {
+        let mut all = [data.probe; 8];
+        all[1..].copy_from_slice(&data.more_probes);
+        let n = 1 + usize::from(data.more_probe_count);
+        all[..n].rotate_left(k);
+        let mut d = *data;
+        d.probe = all[0];
+        d.more_probes.copy_from_slice(&all[1..]);
+        d
+    }
+
+    fn points<P: Evaluator>(chain: &Chain<P>) -> Vec<([i32; 3], [i32; 3])> {
+        (0..40u32)
+            .map(|i| {
+                let counts: Vec<u32> = (0..6)
+                    .map(|j| (i * 26_041 + j * 191_111) % (1 << 20))
+                    .collect();
+                let p = chain.eval(&counts, 12_000 + 500 * i as i32).unwrap();
+                (p.xyz_nm(), p.dir_e9())
+            })
+            .collect()
+    }
+
+    /// Mounting probe k gives, bit for bit, the chain of the same arm whose table has probe k
+    /// first; mounting the first again gives the boot's chain back; a probe past the table's
+    /// is refused and changes nothing. Both evaluators, both chains.
+    fn mounting<P: Evaluator>() {
+        let data = several();
+        let mut buf = [0u8; MAX_TABLE_LEN];
+        let n = data.encode(&mut buf).unwrap();
+        let table = Table::parse(&buf[..n]).unwrap();
+        let mut chain = Chain::<P>::new(&table).unwrap();
+        let mut matrix = MatrixChain::<P>::new(&table).unwrap();
+        let boot = points(&chain);
+        for k in [1, 2, 0] {
+            chain.mount(&table, k).unwrap();
+            matrix.mount(&table, k).unwrap();
+            let mut other = [0u8; MAX_TABLE_LEN];
+            let m = with_first(&data, k).encode(&mut other).unwrap();
+            let first = Table::parse(&other[..m]).unwrap();
+            let want = Chain::<P>::new(&first).unwrap();
+            assert_eq!(points(&chain), points(&want), "probe {k}");
+            let counts = [1, 2, 3, 4, 5, 6];
+            let (a, b) = (
+                matrix.eval(&counts, 20_000).unwrap(),
+                MatrixChain::<P>::new(&first)
+                    .unwrap()
+                    .eval(&counts, 20_000)
+                    .unwrap(),
+            );
+            assert_eq!(
+                (a.xyz_nm(), a.dir_e9()),
+                (b.xyz_nm(), b.dir_e9()),
+                "probe {k}"
+            );
+            if k != 0 {
+                assert_ne!(points(&chain), boot, "probe {k} moves the tip");
+            }
+        }
+        assert_eq!(points(&chain), boot);
+        assert_eq!(
+            chain.mount(&table, 3).unwrap_err(),
+            ChainError::Range { joint: 0 }
+        );
+        assert_eq!(points(&chain), boot);
+    }
+
+    #[test]
+    fn a_mounted_probe_is_the_chain_of_that_probe() {
+        mounting::<F32>();
+        mounting::<Fixed>();
     }
 }

@@ -92,6 +92,12 @@ impl<P: Physics> MatrixChain<P> {
         self.model.n
     }
 
+    /// Mounts the table's probe `k`, as [`crate::chain::Chain::mount`].
+    pub fn mount(&mut self, table: &Table<'_>, k: usize) -> Result<(), ChainError> {
+        let probe = table.probe_at(k).ok_or(ChainError::Range { joint: 0 })?;
+        self.model.mount(table, &probe)
+    }
+
     /// Probe-ball centre and direction; same contract as [`crate::chain::Chain::eval`].
     ///
     /// Gravity: the spec's first-order correction, where it is within the bounds

@@ -23,7 +23,7 @@ use crate::angle::{CountScale, Multiples, Quarter};
 use crate::physics::Physics;
 use crate::rotate::Vec3;
 use crate::scalar::{Arithmetic, Scale};
-use crate::table::{Table, MAX_HARMONICS, MAX_JOINTS};
+use crate::table::{ProbeData, Table, MAX_HARMONICS, MAX_JOINTS};
 use core::fmt;
 use core::mem::MaybeUninit;
 
@@ -159,7 +159,8 @@ pub struct JointModel<P: Physics> {
     /// Count to binary angle.
     pub scale: CountScale,
     /// Link vector with its error (mm), in the z-axis frame of the joint; for the last joint
-    /// the probe vector is added (both turn with the last joint, so one rotation serves both).
+    /// the mounted probe's vector is added (both turn with the last joint, so one rotation
+    /// serves both; [`Model::mount`]).
     pub link: Vec3<P::L>,
     /// Its thermal expansion, mm per m°C (κ v, and κ_p v_p for the probe).
     pub link_rate: Vec3<P::R>,
@@ -185,7 +186,7 @@ pub struct Model<P: Physics> {
     pub n: usize,
     /// Joints, base first.
     pub joints: [JointModel<P>; MAX_JOINTS],
-    /// Unit direction of the probe vector, in the z-axis frame of the last joint.
+    /// Unit direction of the mounted probe's vector, in the z-axis frame of the last joint.
     pub probe_dir: Vec3<P::U>,
     /// Whether the arm's deflections call for the second-order gravity terms
     /// ([`SECOND_ORDER_DEFLECTION`]).
@@ -285,9 +286,23 @@ pub const SECOND_ORDER_DEFLECTION: f64 = 1.4e-4;
 /// A vector of a joint's frame in the calibration file's coordinates (its axis x, y or z) in
 /// the chain's z-axis frame of that joint, P_a⁻¹ v: component k is component (k + a + 1)
 /// mod 3 of v (a = 2, z: the identity). A relabelling, exact.
+// Out of line: the set-up code calls it at boot, in one copy per element type (inlined at
+// each call on the Cortex-M0, its image had 312 bytes more than its room).
+#[inline(never)]
 pub(crate) fn unpermute<T: Copy>(v: [T; 3], axis: u8) -> [T; 3] {
-    let a = usize::from(axis % 3);
-    [v[(a + 1) % 3], v[(a + 2) % 3], v[a % 3]]
+    unpermute_inline(v, axis)
+}
+
+/// [`unpermute`] inlined, for a hot path (U95's columns, every point: no call, no bounds
+/// check; indices from a table cost 900 instructions a point on qemu-m4f, measured).
+#[inline(always)]
+pub(crate) fn unpermute_inline<T: Copy>(v: [T; 3], axis: u8) -> [T; 3] {
+    // Spelt out: `% 3` is a call to the runtime's division on the Cortex-M0.
+    match axis {
+        0 => [v[1], v[2], v[0]],
+        1 => [v[2], v[0], v[1]],
+        _ => v,
+    }
 }
 
 /// The quaternion of P_a: a 120° turn about (1, 1, 1) for x, −120° for y, none for z.
@@ -335,19 +350,48 @@ pub(crate) fn z_frame_matrix(m: [[f64; 3]; 3], prev_axis: u8, axis: u8) -> [[f64
     out
 }
 
+/// Puts `probe` on the last joint `jm` (joint `i` of `table`): its link carries the probe's
+/// vector and expansion, formed in f64 and rounded once; `dir` takes the probe's direction.
+/// Every value is converted before any is written, so that nothing changes on an error.
+fn put_probe<P: Physics>(
+    table: &Table<'_>,
+    i: usize,
+    jm: &mut JointModel<P>,
+    dir: &mut Vec3<P::U>,
+    probe: &ProbeData,
+) -> Result<(), ChainError> {
+    let (axis, mut link, thermal) = table
+        .joint_link(i)
+        .ok_or(ChainError::Range { joint: i as u8 + 1 })?;
+    let mut rate = link.map(|x| x * thermal);
+    for k in 0..3 {
+        link[k] += probe.vector[k];
+        rate[k] += probe.vector[k] * probe.thermal;
+    }
+    let no = i + 1;
+    let link_p = vec3::<P>(unpermute(link, axis), no)?;
+    let rate_p = rates::<P>(unpermute(rate, axis), no)?;
+    *dir = units::<P, 3>(unpermute(probe.direction, axis), 0)?;
+    (jm.link, jm.link_rate, jm.has_thermal) = (link_p, rate_p, rate != [0.0; 3]);
+    Ok(())
+}
+
 /// The axis the base frame stands for before joint 1: z (no permutation).
 pub(crate) const BASE_AXIS: u8 = 2;
 
 impl<P: Physics> Model<P> {
-    /// Converts a validated table; fails if a value does not fit this evaluator (for fixed
-    /// point: the arm's reach, over ±100 °C of thermal expansion, must stay within 2 m).
+    /// Converts a validated table with its first probe mounted; fails if a value does not fit
+    /// this evaluator (for fixed point: the arm's reach, over ±100 °C of thermal expansion,
+    /// must stay within 2 m). The reach and the sum of levers are taken with the table's
+    /// longest probe, so that every probe the table holds fits once this succeeds, and so
+    /// that whether the chains take the second-order gravity terms is the same whichever is
+    /// mounted.
     pub fn new(table: &Table<'_>) -> Result<Model<P>, ChainError> {
         let n = table.joint_count();
         let mut joints = [JointModel::<P>::default(); MAX_JOINTS];
         let mut reach = 0.0;
         let mut levers = 0.0;
         let mut gravity = 0.0;
-        let mut last_axis = BASE_AXIS;
         for (i, jm) in joints.iter_mut().enumerate().take(n) {
             let j = table
                 .joint(i)
@@ -382,16 +426,8 @@ impl<P: Physics> Model<P> {
             // Link i lies beyond joints 1..=i + 1: it is in i + 1 levers.
             levers += l1(j.link) * (i + 1) as f64;
             gravity += abs(j.gravity);
-            let (mut link, mut rate) = (j.link, j.link.map(|x| x * j.thermal));
-            if i + 1 == n {
-                let p = table.probe();
-                reach += l1(p.vector);
-                levers += l1(p.vector) * n as f64;
-                for k in 0..3 {
-                    link[k] += p.vector[k];
-                    rate[k] += p.vector[k] * p.thermal;
-                }
-            }
+            // The last joint's link takes the probe's vector when the probe is mounted, below.
+            let (link, rate) = (j.link, j.link.map(|x| x * j.thermal));
             *jm = JointModel {
                 axis: j.axis,
                 scale: conv(CountScale::new(j.counts), no)?,
@@ -404,8 +440,17 @@ impl<P: Physics> Model<P> {
                 harmonic_count: count as u8,
                 harmonic_12,
             };
-            last_axis = j.axis;
         }
+        // The longest probe: the one that reaches farthest, beyond all n joints.
+        let mut longest = 0.0;
+        for k in 0..table.probe_count() {
+            let l = table.probe_at(k).map_or(0.0, |p| l1(p.vector));
+            if l > longest {
+                longest = l;
+            }
+        }
+        reach += longest;
+        levers += longest * n as f64;
         // Finite by the table's checks; written so that NaN would be refused too.
         let reach = reach * THERMAL_MARGIN;
         let fits = reach < P::MAX_REACH_MM;
@@ -426,12 +471,34 @@ impl<P: Physics> Model<P> {
                 });
             }
         }
+        // The first probe on the last joint, converted into the joints' own array rather
+        // than into a whole model mounted afterwards: a second model on the Cortex-M0's boot
+        // stack was 840 bytes its 8 KiB do not have.
+        let last = n.clamp(1, MAX_JOINTS) - 1;
+        let mut probe_dir = [P::U::default(); 3];
+        put_probe(
+            table,
+            last,
+            &mut joints[last],
+            &mut probe_dir,
+            &table.probe(),
+        )?;
         Ok(Model {
             n,
             joints,
-            probe_dir: units::<P, 3>(unpermute(table.probe().direction, last_axis), 0)?,
+            probe_dir,
             second_order_gravity: gravity * reach > SECOND_ORDER_DEFLECTION,
         })
+    }
+
+    /// Mounts `probe`, one of the table's: the last joint's link carries its vector and its
+    /// expansion, and the chain's direction is its direction. Converted from the table's f64
+    /// when a probe is selected (rarely), rather than holding every probe converted. On an
+    /// error nothing changes; there is none for a probe of the table the model was built
+    /// from, whose reach [`Model::new`] checked with the longest probe.
+    pub fn mount(&mut self, table: &Table<'_>, probe: &ProbeData) -> Result<(), ChainError> {
+        let i = self.n.clamp(1, MAX_JOINTS) - 1;
+        put_probe(table, i, &mut self.joints[i], &mut self.probe_dir, probe)
     }
 
     /// Checks the reading's shape and temperature; returns the temperature offset from 20 °C.

@@ -14,11 +14,12 @@
 //!     no 0x00 inside                      4 bytes, LE            delimiter
 //!
 //!  ToHost::Report, the per-reading message (postcard: varints, zigzag for signed)
-//!  +-----+---------+-----------+---------+-------+-----------------------------------------+
-//!  | tag | seq u32 | time_us   | status  | point | xyz_nm [i32; 3], dir_e9 [i32; 3],       |
-//!  |  1  | varint  | u64 varint| u16 var | 0 / 1 | u95_nm 0 / 1 + u32 varint (protocol 3); |
-//!  |     |         |           |         |       | present only when point's tag is 1      |
-//!  +-----+---------+-----------+---------+-------+-----------------------------------------+
+//!  +-----+---------+-----------+---------+-------+------------------------------+---------+
+//!  | tag | seq u32 | time_us   | status  | point | xyz_nm [i32; 3],             | probe   |
+//!  |  1  | varint  | u64 varint| u16 var | 0 / 1 | dir_e9 [i32; 3], u95_nm      | u8      |
+//!  |     |         |           |         |       | 0 / 1 + u32 varint;          | (proto- |
+//!  |     |         |           |         |       | present only when point is 1 | col 4)  |
+//!  +-----+---------+-----------+---------+-------+------------------------------+---------+
 //! ```
 //!
 //! Why integers, not f32 millimetres: the fixed-point chain resolves a few nanometres, while
@@ -39,15 +40,19 @@ mod replay;
 mod status;
 
 pub use csv::{write_csv_header, write_csv_line, CSV_HEADER, MAX_CSV_LINE};
-pub use framing::{decode, encode, FrameError, FrameReader, CRC, MAX_FRAME, MAX_PAYLOAD};
+pub use framing::{
+    decode, decode_message, encode, FrameError, FrameReader, CRC, MAX_FRAME, MAX_PAYLOAD,
+};
 pub use hub::{Hub, MAX_OUTPUT, RATED_TEMP_MC};
 pub use message::{
-    Coordinates, Counts, Hello, LiveTable, Mode, NumberFormat, Reading, Report, ToDevice, ToHost,
-    UpdateAnswer,
+    Coordinates, Counts, Hello, LiveTable, Mode, NumberFormat, ProbeAnswer, ProbeRefusal, Reading,
+    Report, ToDevice, ToDeviceOf, ToHost, Unread, UpdateAnswer,
 };
-pub use replay::{Event, Replay};
+pub use replay::{Event, Replay, StepReading};
 pub use status::{Status, TableState};
 
 /// Protocol version carried in [`Hello`]; bumped on any incompatible change of a message.
-/// Version 2 added the live table to `Hello`; version 3 the point's U95 to its coordinates.
-pub const PROTOCOL_VERSION: u16 = 3;
+/// Version 2 added the live table to `Hello`; version 3 the point's U95 to its coordinates;
+/// version 4 the probes: the mounted probe's id in every report, the mounted probe and the
+/// table's in `Hello`, `ToDevice::SelectProbe` answered by `ToHost::Probe`.
+pub const PROTOCOL_VERSION: u16 = 4;

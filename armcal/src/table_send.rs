@@ -132,7 +132,8 @@ pub fn send(port: &mut impl Link, table: &[u8], timeout: Duration) -> Result<Sen
                     announced(&h)
                 ),
                 Item::Report(_) | Item::Backward { .. } | Item::Inconsistent(_) => reports += 1,
-                Item::Repeated(_) | Item::Damaged(_) => {}
+                // A probe answer is not this session's (another program selected a probe).
+                Item::Repeated(_) | Item::Damaged(_) | Item::Probe(_) => {}
             }
         };
         reports_between += reports;

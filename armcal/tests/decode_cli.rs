@@ -23,6 +23,7 @@ fn report(seq: u32, point: bool) -> ToHost {
             dir_e9: [0, 0, 1_000_000_000],
             u95_nm: Some(12_345 + seq),
         }),
+        probe: 3,
     })
 }
 
@@ -105,7 +106,8 @@ fn a_backward_step_is_not_counted_as_lost() {
 #[test]
 fn coordinates_beside_a_fault_are_not_written_as_points() {
     // ../shared/repro/s-fault-with-point.bin: statuses 0x0009 (chain error), 0x0020 (table
-    // corrupt) and 0x0101 (joint 1 encoder fault), each with coordinates.
+    // corrupt) and 0x0101 (joint 1 encoder fault), each with coordinates. A capture of
+    // protocol 3 without its Hello: read in that layout, the probe its hub's only one, id 0.
     let out = decode(&[stream_file("s-fault-with-point.bin").as_os_str()], &[]);
     assert!(out.status.success());
     let csv = text(&out.stdout);
@@ -113,9 +115,9 @@ fn coordinates_beside_a_fault_are_not_written_as_points() {
     assert_eq!(
         rows,
         [
-            "0,0,0x0009,,,,,,,",
-            "1,0,0x0020,,,,,,,",
-            "2,0,0x0101,,,,,,,"
+            "0,0,0x0009,,,,,,,,0",
+            "1,0,0x0020,,,,,,,,0",
+            "2,0,0x0101,,,,,,,,0"
         ]
     );
     let err = text(&out.stderr);
@@ -188,13 +190,13 @@ fn decodes_a_capture_counting_gaps_and_damage() {
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(
         lines[0],
-        "seq,time_us,status,x_mm,y_mm,z_mm,nx,ny,nz,u95_mm"
+        "seq,time_us,status,x_mm,y_mm,z_mm,nx,ny,nz,u95_mm,probe"
     );
     assert_eq!(
         lines[1],
-        "0,0,0x0001,1500.000000,-0.000002,0.000003,0.000000000,0.000000000,1.000000000,0.012345"
+        "0,0,0x0001,1500.000000,-0.000002,0.000003,0.000000000,0.000000000,1.000000000,0.012345,3"
     );
-    assert_eq!(lines[2], "1,1000,0x0401,,,,,,,");
+    assert_eq!(lines[2], "1,1000,0x0401,,,,,,,,3");
     assert!(lines[3].starts_with("4,4000,"));
     assert!(lines[4].starts_with("6,6000,"));
     assert_eq!(lines.len(), 5);

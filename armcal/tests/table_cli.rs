@@ -200,3 +200,40 @@ fn the_budget_goes_into_the_table_with_or_without_its_covariance() {
         String::from_utf8_lossy(&armcal_ok(&["table", "show", "own.bin"], &d).stdout).to_string();
     assert!(shown.contains("parameter covariance: none"), "{shown}");
 }
+
+/// A calibration with three probes: `table show` lists each, its id, vector, direction,
+/// thermal expansion and ball diameter, the first as the one mounted at boot.
+#[test]
+fn table_show_lists_every_probe() {
+    let d = workdir("probes");
+    let calib =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/default-6-probes.toml");
+    armcal_ok(
+        &["table", "build", calib.to_str().unwrap(), "-o", "p.bin"],
+        &d,
+    );
+    let shown =
+        String::from_utf8_lossy(&armcal_ok(&["table", "show", "p.bin"], &d).stdout).to_string();
+    let lines: Vec<&str> = shown.lines().filter(|l| l.starts_with("probe ")).collect();
+    assert_eq!(lines.len(), 3, "{shown}");
+    assert!(
+        lines[0].starts_with(
+            "probe 1 (mounted at boot): vector (mm) = [-0.237145, 0.253024, 120.022125]"
+        ),
+        "{shown}"
+    );
+    assert!(
+        lines[1].starts_with("probe 2: vector (mm) = [0.051200, -0.118400, 180.312100]"),
+        "{shown}"
+    );
+    assert!(
+        lines[2].starts_with(
+            "probe 5: vector (mm) = [50.101300, 0.020700, 99.953200], direction = [0.448105617940,"
+        ),
+        "{shown}"
+    );
+    assert!(
+        lines[2].ends_with("thermal = 2.3e-5 /degC, ball diameter = 2 mm"),
+        "{shown}"
+    );
+}

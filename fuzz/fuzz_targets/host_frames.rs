@@ -1,7 +1,7 @@
 //! The host's decoder of hub→host `ToHost` frames (`armcal::stream_decode`, what `armcal
 //! decode` runs): any bytes, read from the start and joined mid-stream. Never a panic; no
 //! report handed out with coordinates its status forbids; every frame accounted for in the
-//! counts.
+//! counts, probe answers (protocol 4) and reports of every protocol included.
 #![no_main]
 
 use armcal::stream_decode::{Decoder, Item};
@@ -12,10 +12,12 @@ fuzz_target!(|bytes: &[u8]| {
         let items = decoder.push_all(bytes);
         let s = decoder.finish();
         let (mut reports, mut points, mut damaged, mut hellos) = (0u64, 0u64, 0u64, 0u64);
+        let mut probe_answers = 0u64;
         for item in &items {
             match item {
                 Item::Damaged(_) => damaged += 1,
                 Item::Hello(_) => hellos += 1,
+                Item::Probe(_) => probe_answers += 1,
                 _ => {}
             }
             if let Some(r) = item.report() {
@@ -31,6 +33,7 @@ fuzz_target!(|bytes: &[u8]| {
             }
         }
         assert_eq!((s.reports, s.points, s.hellos), (reports, points, hellos));
+        assert_eq!(s.probe_answers, probe_answers);
         assert_eq!(s.crc_errors + s.other_errors, damaged);
         assert_eq!(s.valid_frames() + damaged, items.len() as u64);
         assert!(s.skipped_bytes + s.unterminated_bytes <= bytes.len() as u64);

@@ -39,9 +39,30 @@ fuzz_target!(|bytes: &[u8]| {
         "re-encoding an accepted table changed it"
     );
     assert_eq!(Table::parse(&out[..n]).map(|t| t.data()), Ok(data));
-    let _ = Chain::<F32>::new(&table);
-    let _ = Chain::<Fixed>::new(&table);
-    let _ = MatrixChain::<F32>::new(&table);
+    // A chain that builds mounts every probe of its table (the reach was checked with the
+    // longest), and none past them.
+    if let Ok(mut chain) = Chain::<F32>::new(&table) {
+        for k in 0..table.probe_count() {
+            chain
+                .mount(&table, k)
+                .expect("an f32 chain mounts each of its table's probes");
+        }
+        assert!(chain.mount(&table, table.probe_count()).is_err());
+    }
+    if let Ok(mut chain) = Chain::<Fixed>::new(&table) {
+        for k in 0..table.probe_count() {
+            chain
+                .mount(&table, k)
+                .expect("a fixed chain mounts each of its table's probes");
+        }
+    }
+    if let Ok(mut chain) = MatrixChain::<F32>::new(&table) {
+        for k in 0..table.probe_count() {
+            chain
+                .mount(&table, k)
+                .expect("a matrix chain mounts each of its table's probes");
+        }
+    }
     let _ = MatrixChain::<Fixed>::new(&table);
     // And its uncertainty builds or refuses cleanly, and never panics on a reading.
     if let (Ok(Some(u)), Ok(chain)) = (Uncertainty::<F32>::new(&table), Chain::<F32>::new(&table)) {

@@ -48,3 +48,15 @@ pub fn chains() -> &'static [(Chain<F32>, Chain<Fixed>)] {
             .collect()
     })
 }
+
+/// The table of the shipped calibration with three probes (`data/default-6-probes.toml`: ids
+/// 1, 2, 5), built once per process.
+pub fn probes_table() -> &'static [u8] {
+    static TABLE: OnceLock<Vec<u8>> = OnceLock::new();
+    TABLE.get_or_init(|| {
+        let arm = quatarm_ref::calfile::parse(include_str!("../../data/default-6-probes.toml"))
+            .expect("the three-probe calibration reads")
+            .arm;
+        armcal::tablebuild::build(&arm).expect("the three-probe calibration builds a table")
+    })
+}

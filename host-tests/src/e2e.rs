@@ -39,10 +39,14 @@ pub fn calibration(path: &Path) -> Result<(Arm, Vec<u8>)> {
 
 fn host_chain<P: Evaluator>(
     table: &[u8],
+    probe: usize,
     readings: &[Reading],
 ) -> Result<Vec<Result<Coordinates, ChainError>>> {
     let t = Table::parse(table).map_err(|e| anyhow::anyhow!("table: {e}"))?;
-    let chain = Chain::<P>::new(&t).map_err(|e| anyhow::anyhow!("chain: {e}"))?;
+    let mut chain = Chain::<P>::new(&t).map_err(|e| anyhow::anyhow!("chain: {e}"))?;
+    chain
+        .mount(&t, probe)
+        .map_err(|e| anyhow::anyhow!("probe {probe}: {e}"))?;
     Ok(readings
         .iter()
         .map(|r| {
@@ -64,9 +68,20 @@ pub fn host_points(
     table: &[u8],
     readings: &[Reading],
 ) -> Result<Vec<Result<Coordinates, ChainError>>> {
+    host_points_with_probe(precision, table, 0, readings)
+}
+
+/// [`host_points`] with the table's probe `probe` mounted (its index in the table: 0 the
+/// first, as the hub boots).
+pub fn host_points_with_probe(
+    precision: &str,
+    table: &[u8],
+    probe: usize,
+    readings: &[Reading],
+) -> Result<Vec<Result<Coordinates, ChainError>>> {
     match precision {
-        "f32" => host_chain::<F32>(table, readings),
-        "fixed" => host_chain::<Fixed>(table, readings),
+        "f32" => host_chain::<F32>(table, probe, readings),
+        "fixed" => host_chain::<Fixed>(table, probe, readings),
         other => anyhow::bail!("no precision {other}"),
     }
 }
@@ -153,10 +168,10 @@ pub fn replay(board: &Board, table: Option<&[u8]>, input: &[u8]) -> Result<Outco
     let mut hellos = Vec::new();
     let mut reports = Vec::new();
     for item in decoder.push_all(&run.stream) {
+        reports.extend(item.report());
         if let Item::Hello(h) = item {
             hellos.push(h);
         }
-        reports.extend(item.report());
     }
     Ok(Outcome {
         hellos,

@@ -14,5 +14,6 @@ common::board_tests! {
     update: update_not_supported,
     u95: no_u95,
     wobble: wobble_refused,
+    probes: probes_selected,
     table_send: table_send_refused_over_a_pty,
 }

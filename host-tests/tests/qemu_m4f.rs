@@ -14,5 +14,6 @@ common::board_tests! {
     update: update_with_resets,
     u95: u95_matches_the_host,
     wobble: wobble_applied,
+    probes: probes_selected_and_updated,
     table_send: table_send_over_a_pty,
 }

@@ -5,12 +5,17 @@
 //! chain may run at all, numbers the reports and renders them in the current [`Mode`]. Keeping
 //! this out of the boards means the rule "no coordinates beside a fault" is written, and tested,
 //! once.
+//!
+//! The hub also keeps the table's probes, by id ([`Hub::with_probes`]), and which one is
+//! mounted: every report carries its id, and a selection by the host ([`Hub::select`]) is
+//! checked here before the board converts the probe into its chain's numbers.
 
 use super::{
     encode, write_csv_header, write_csv_line, Coordinates, FrameError, Hello, LiveTable, Mode,
-    NumberFormat, Reading, Report, Status, TableState, ToHost, MAX_CSV_LINE, MAX_FRAME,
-    PROTOCOL_VERSION,
+    NumberFormat, ProbeAnswer, ProbeRefusal, Reading, Report, Status, TableState, ToHost,
+    MAX_CSV_LINE, MAX_FRAME, PROTOCOL_VERSION,
 };
+use crate::table::probes::MAX_PROBES;
 
 /// The rated temperature range of the thermal model, milli-degrees Celsius. Outside it the
 /// hub reports `OVER_TEMPERATURE` and no coordinates: the expansion model is only
@@ -33,6 +38,12 @@ pub struct Hub {
     precision: NumberFormat,
     mode: Mode,
     live: Option<LiveTable>,
+    /// The id of the probe mounted (0 without a valid table).
+    probe: u8,
+    /// The table's probes by id, the first first: a probe's position is its index in the
+    /// table (`Table::probe_at`). Ids only, 8 bytes and a length: the board converts a probe
+    /// from the table when it is selected, rather than holding eight converted.
+    probes: heapless::Vec<u8, MAX_PROBES>,
 }
 
 impl Hub {
@@ -50,7 +61,54 @@ impl Hub {
             precision,
             mode: Mode::Binary,
             live: None,
+            probe: 0,
+            probes: heapless::Vec::new(),
         }
+    }
+
+    /// The same hub, with the table's probes by id (`ids`: the first first, the one mounted
+    /// at boot; the ninth and later are not taken: a table holds eight). Only with a valid
+    /// table: a hub without one has no probe.
+    pub fn with_probes(mut self, ids: impl IntoIterator<Item = u8>) -> Hub {
+        if self.base.table_valid() {
+            for id in ids {
+                if self.probes.push(id).is_err() {
+                    break;
+                }
+            }
+            self.probe = self.probes.first().copied().unwrap_or(0);
+        }
+        self
+    }
+
+    /// The id of the probe mounted.
+    pub fn probe(&self) -> u8 {
+        self.probe
+    }
+
+    /// The table's probes by id, the first first.
+    pub fn probes(&self) -> &[u8] {
+        &self.probes
+    }
+
+    /// Selects the probe of id `id`: `mount` is given its index in the table and converts it
+    /// into the chain's numbers (`false`: it could not, and the probe mounted before stays).
+    /// Refused without a valid table or for an id the table does not hold; either way nothing
+    /// changes. The selection holds until the next; every report after it carries `id`.
+    pub fn select(&mut self, id: u8, mount: impl FnOnce(usize) -> bool) -> ProbeAnswer {
+        if !self.base.table_valid() {
+            return Err(ProbeRefusal::NoTable);
+        }
+        let k = self
+            .probes
+            .iter()
+            .position(|&p| p == id)
+            .ok_or(ProbeRefusal::Unknown)?;
+        if !mount(k) {
+            return Err(ProbeRefusal::Unknown);
+        }
+        self.probe = id;
+        Ok(id)
     }
 
     /// The same hub, announcing `live` as the table in use (only with a valid table: a hub
@@ -70,6 +128,8 @@ impl Hub {
             joints: self.joints,
             status: self.base,
             live: self.live,
+            probe: self.probe,
+            probes: self.probes.clone(),
         })
     }
 
@@ -170,6 +230,7 @@ impl Hub {
             time_us,
             status,
             point,
+            probe: self.probe,
         };
         self.seq = self.seq.wrapping_add(1);
         report
@@ -312,6 +373,64 @@ mod tests {
         assert!(r.status.has(Status::TEMP_SENSOR_FAULT) && r.point.is_none());
     }
 
+    /// The probe table: the first probe is mounted at boot and named in the Hello; a
+    /// selection mounts the probe at its index and every report after it carries its id; an
+    /// unknown id, a probe the board cannot mount and a hub without a table change nothing.
+    #[test]
+    fn a_selected_probe_is_mounted_and_named_in_every_report() {
+        let mut hub = Hub::new(TableState::Valid, 6, NumberFormat::Fixed).with_probes([4, 9, 0]);
+        match hub.hello() {
+            ToHost::Hello(h) => assert_eq!((h.probe, h.probes.as_slice()), (4, &[4, 9, 0][..])),
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(hub.report(0, Ok(&reading(0, 20_000)), ok_eval).probe, 4);
+        let mut mounted = None;
+        assert_eq!(hub.select(0, |k| mounted.replace(k).is_none()), Ok(0));
+        assert_eq!(mounted, Some(2), "id 0 is the table's third probe");
+        assert_eq!(hub.report(0, Ok(&reading(0, 20_000)), ok_eval).probe, 0);
+        // Refused: nothing is mounted, the probe stays.
+        let never = |_| -> bool { panic!("mounted a probe the table does not hold") };
+        assert_eq!(hub.select(5, never), Err(ProbeRefusal::Unknown));
+        assert_eq!(hub.select(9, |_| false), Err(ProbeRefusal::Unknown));
+        assert_eq!(hub.probe(), 0);
+        let r = hub.report(0, Ok(&reading(0b1, 20_000)), must_not_run);
+        assert_eq!(
+            (r.probe, r.point),
+            (0, None),
+            "a fault keeps the probe's id"
+        );
+        assert_eq!(hub.select(9, |k| k == 1), Ok(9));
+        match hub.hello() {
+            ToHost::Hello(h) => assert_eq!(h.probe, 9, "a Hello names the probe mounted"),
+            other => panic!("{other:?}"),
+        }
+        // The answer is a frame behind a lone 0x00 in either mode.
+        let mut out = [0u8; MAX_OUTPUT];
+        for mode in [Mode::Binary, Mode::Text] {
+            hub.set_mode(mode);
+            let answer = ToHost::Probe(Err(ProbeRefusal::Unknown));
+            let bytes = hub.render(&answer, &mut out);
+            assert_eq!(bytes[0], 0);
+            let mut reader = FrameReader::<MAX_FRAME>::new();
+            let got: Vec<_> = bytes
+                .iter()
+                .filter_map(|&b| reader.push::<ToHost>(b))
+                .collect();
+            assert_eq!(got, vec![Ok(answer)]);
+        }
+        // Without a valid table: no probes, and a selection says why.
+        let mut bad = Hub::new(TableState::Corrupt, 6, NumberFormat::F32).with_probes([4, 9]);
+        assert_eq!(bad.select(4, never), Err(ProbeRefusal::NoTable));
+        assert_eq!((bad.probe(), bad.probes()), (0, &[][..]));
+        assert_eq!(
+            bad.report(0, Ok(&reading(0, 20_000)), must_not_run).probe,
+            0
+        );
+        // More than eight ids: the first eight are taken.
+        let many = Hub::new(TableState::Valid, 6, NumberFormat::F32).with_probes(0..20);
+        assert_eq!(many.probes(), &[0, 1, 2, 3, 4, 5, 6, 7]);
+    }
+
     #[test]
     fn render_follows_the_mode() {
         let mut hub = Hub::new(TableState::Valid, 6, NumberFormat::F32);
@@ -327,6 +446,7 @@ mod tests {
         hub.set_mode(Mode::Text);
         let text = hub.render(&ToHost::Report(report), &mut out);
         assert!(text.starts_with(b"0,1,0x0001,0.000001,"));
+        assert!(text.ends_with(b",0.000007,0\n"), "U95, then the probe");
         // In text mode a Hello is the header line.
         assert_eq!(hub.render(&hub.hello(), &mut out), CSV_HEADER.as_bytes());
     }

@@ -7,11 +7,12 @@ use serde::de::{Error as _, SeqAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::Status;
+use crate::table::probes::MAX_PROBES;
 use crate::table::MAX_JOINTS;
 use crate::update::session::{Accepted, Refusal, Step};
 
 /// Firmware to host.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum ToHost {
     /// Sent once at boot and after every mode change: who is talking and in what state.
@@ -20,17 +21,35 @@ pub enum ToHost {
     Report(Report),
     /// The answer to one [`ToDevice::Update`] step: carried out, or refused and why.
     Update(UpdateAnswer),
+    /// The answer to a [`ToDevice::SelectProbe`] (protocol 4): the id of the probe now
+    /// mounted, or why the selection was refused (and the probe mounted before stays).
+    Probe(ProbeAnswer),
 }
 
 /// What a hub answers to an update step (`docs/update.md`).
 pub type UpdateAnswer = Result<Accepted, Refusal>;
 
+/// What a hub answers to a probe selection: the id now mounted, or why not.
+pub type ProbeAnswer = Result<u8, ProbeRefusal>;
+
+/// Why a hub refused to mount a probe. Nothing changes: the probe mounted before stays.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ProbeRefusal {
+    /// The hub's table holds no probe of this id (or, which a table the hub booted on never
+    /// gives, one its chain's numbers cannot hold: the boot checks the arm's reach with the
+    /// longest probe).
+    Unknown,
+    /// The hub has no valid table, so no probe at all.
+    NoTable,
+}
+
 /// What a hub announces at boot.
 ///
-/// It decodes from protocol 1 too (the same fields without `live`, read as `None`): the
-/// version is its first field, so a host tells the layouts apart before it reads the rest.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+/// It decodes from protocols 1 to 3 too (without `live` before protocol 2, read as `None`;
+/// without the probes before protocol 4, read as probe 0 of none announced): the version is
+/// its first field, so a host tells the layouts apart before it reads the rest.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 pub struct Hello {
     /// [`super::PROTOCOL_VERSION`] of the firmware.
     pub protocol: u16,
@@ -40,8 +59,32 @@ pub struct Hello {
     pub joints: u8,
     /// The boot check's verdict on the table (the same bits every report carries).
     pub status: Status,
-    /// Which table is live (protocols 2 and 3): `None` when there is no valid table.
+    /// Which table is live (protocols 2 to 4): `None` when there is no valid table.
     pub live: Option<LiveTable>,
+    /// The id of the probe mounted (protocol 4): the table's first at boot and after an
+    /// update, then the last one selected; 0 without a valid table.
+    pub probe: u8,
+    /// The ids of every probe the table holds, the first first (protocol 4; empty without a
+    /// valid table).
+    pub probes: heapless::Vec<u8, MAX_PROBES>,
+}
+
+// By hand: heapless's `defmt` support is for defmt 0.3, the firmware's is 1.
+#[cfg(feature = "defmt")]
+impl defmt::Format for Hello {
+    fn format(&self, f: defmt::Formatter) {
+        defmt::write!(
+            f,
+            "Hello protocol {=u16}, precision {}, joints {=u8}, status {}, live {}, probe {=u8}, probes {=[u8]}",
+            self.protocol,
+            self.precision,
+            self.joints,
+            self.status,
+            self.live,
+            self.probe,
+            self.probes.as_slice()
+        )
+    }
 }
 
 impl<'de> Deserialize<'de> for Hello {
@@ -50,7 +93,7 @@ impl<'de> Deserialize<'de> for Hello {
         impl<'de> Visitor<'de> for HelloVisitor {
             type Value = Hello;
             fn expecting(&self, f: &mut core::fmt::Formatter) -> core::fmt::Result {
-                f.write_str("a Hello of protocol 1, 2 or 3")
+                f.write_str("a Hello of protocol 1 to 4")
             }
             fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Hello, A::Error> {
                 let missing = |i| A::Error::invalid_length(i, &self);
@@ -58,24 +101,39 @@ impl<'de> Deserialize<'de> for Hello {
                 let precision = seq.next_element()?.ok_or_else(|| missing(1))?;
                 let joints = seq.next_element()?.ok_or_else(|| missing(2))?;
                 let status = seq.next_element()?.ok_or_else(|| missing(3))?;
-                // Every version starts with these four; protocols 2 and 3 have `live` after
-                // them (a Hello of another version decodes as far as they go, for a host to
-                // say which version it met).
-                let live = if protocol == 2 || protocol == 3 {
+                // Every version starts with these four; protocols 2 to 4 have `live` after
+                // them, protocol 4 the probes after it (a Hello of another version decodes as
+                // far as they go, for a host to say which version it met).
+                let live = if (2..=4).contains(&protocol) {
                     seq.next_element()?.ok_or_else(|| missing(4))?
                 } else {
                     None
                 };
+                let (mut probe, mut probes) = (0, heapless::Vec::new());
+                if protocol == 4 {
+                    probe = seq.next_element()?.ok_or_else(|| missing(5))?;
+                    probes = seq.next_element()?.ok_or_else(|| missing(6))?;
+                }
                 Ok(Hello {
                     protocol,
                     precision,
                     joints,
                     status,
                     live,
+                    probe,
+                    probes,
                 })
             }
         }
-        const FIELDS: &[&str] = &["protocol", "precision", "joints", "status", "live"];
+        const FIELDS: &[&str] = &[
+            "protocol",
+            "precision",
+            "joints",
+            "status",
+            "live",
+            "probe",
+            "probes",
+        ];
         deserializer.deserialize_struct("Hello", FIELDS, HelloVisitor)
     }
 }
@@ -107,6 +165,12 @@ pub enum NumberFormat {
 }
 
 /// One reading's outcome.
+///
+/// Protocol 4 added `probe`, last: a decoder of protocols 1 to 3 finds a byte left over in
+/// every report of protocol 4 and refuses the frame rather than misreading it (the probe
+/// before the point could, in one case, be read as an older report's option tag). A host
+/// reads a report by the protocol of the last `Hello` (`armcal decode`: older reports were
+/// all of the only probe an older table had, id 0).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Report {
@@ -118,6 +182,9 @@ pub struct Report {
     pub status: Status,
     /// The corrected point; `None` whenever the status has a fault.
     pub point: Option<Coordinates>,
+    /// The id of the probe mounted at the reading (the point is its ball's centre); 0
+    /// without a valid table.
+    pub probe: u8,
 }
 
 /// A corrected probe-ball position and probe direction, in the base frame of the arm, and
@@ -167,9 +234,14 @@ impl<'de> Deserialize<'de> for Coordinates {
 }
 
 /// Host to firmware.
+pub type ToDevice = ToDeviceOf<Step>;
+
+/// Host to firmware, with the update steps as `S`: [`Step`] ([`ToDevice`]), or, on a hub
+/// without an update port, [`Unread`] (`super::Replay::without_update`), so that its image
+/// holds no decoder of steps it would only refuse.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum ToDevice {
+pub enum ToDeviceOf<S> {
     /// A recorded reading to evaluate in place of the hub's own encoders (replay).
     Reading(Reading),
     /// Switch the output between binary frames and CSV text.
@@ -178,7 +250,26 @@ pub enum ToDevice {
     End,
     /// One step of a calibration update over the stream (`docs/update.md`); answered by
     /// [`ToHost::Update`].
-    Update(Step),
+    Update(S),
+    /// Mount the probe of this id (protocol 4); answered by [`ToHost::Probe`]. The selection
+    /// holds until another or a reboot (which mounts the table's first probe).
+    SelectProbe(u8),
+}
+
+/// The variant index of [`ToDeviceOf::Update`] on the wire: what a hub without an update port
+/// recognises an update step by, without decoding it.
+pub(super) const UPDATE_INDEX: u8 = 3;
+
+/// An update step not decoded: what a hub without an update port makes of one (it answers
+/// `NotSupported` from the frame's variant index alone). It never decodes from bytes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Unread;
+
+impl<'de> Deserialize<'de> for Unread {
+    fn deserialize<D: Deserializer<'de>>(_: D) -> Result<Unread, D::Error> {
+        Err(D::Error::custom("an update step this hub does not read"))
+    }
 }
 
 /// The hub's output format.
@@ -280,14 +371,17 @@ mod tests {
 
     /// `docs/protocol.md`'s `Hello`: the number format is one byte after the protocol varint,
     /// 0 for f32 and 1 for fixed point. The enum's name is not on the wire; its order is.
+    /// Protocol 4's probes follow `live`: the mounted id, then the ids as a sequence.
     #[test]
-    fn hello_carries_the_number_format_as_documented() {
+    fn hello_carries_the_number_format_and_the_probes_as_documented() {
         let hello = |precision| Hello {
-            protocol: 1,
+            protocol: 4,
             precision,
             joints: 6,
             status: Status::default(),
             live: None,
+            probe: 9,
+            probes: heapless::Vec::from_slice(&[4, 9, 0]).unwrap(),
         };
         let mut buf = [0u8; 16];
         let f32 = postcard::to_slice(&hello(NumberFormat::F32), &mut buf)
@@ -296,31 +390,84 @@ mod tests {
         let fixed = postcard::to_slice(&hello(NumberFormat::Fixed), &mut buf)
             .unwrap()
             .to_vec();
-        assert_eq!(f32, [1, 0, 6, 0, 0]);
-        assert_eq!(fixed, [1, 1, 6, 0, 0]);
+        assert_eq!(f32, [4, 0, 6, 0, 0, 9, 3, 4, 9, 0]);
+        assert_eq!(fixed, [4, 1, 6, 0, 0, 9, 3, 4, 9, 0]);
+        assert_eq!(
+            postcard::from_bytes::<Hello>(&f32).unwrap(),
+            hello(NumberFormat::F32)
+        );
+        // More than eight ids: refused.
+        let nine = [4, 0, 6, 0, 0, 9, 9, 1, 2, 3, 4, 5, 6, 7, 8, 9];
+        assert!(postcard::from_bytes::<Hello>(&nine).is_err());
     }
 
-    /// A protocol-1 `Hello` (no `live`) still decodes, and a protocol-2 one round-trips.
+    /// Hellos of protocols 1 to 3 (no `live` before 2, no probes before 4) still decode, each
+    /// as far as its version goes; protocol 4's round-trips.
     #[test]
-    fn hello_decodes_from_both_protocols() {
+    fn hello_decodes_from_every_protocol() {
         let v1: Hello = postcard::from_bytes(&[1, 0, 6, 1]).unwrap();
         assert_eq!((v1.protocol, v1.joints, v1.live), (1, 6, None));
-        let v2 = Hello {
-            protocol: 2,
+        assert_eq!((v1.probe, v1.probes.len()), (0, 0));
+        let live = Some(LiveTable {
+            slot: 1,
+            seq: 7,
+            crc: 0xdead_beef,
+        });
+        let v4 = Hello {
+            protocol: 4,
             precision: NumberFormat::Fixed,
             joints: 6,
             status: Status(Status::TABLE_VALID),
-            live: Some(LiveTable {
-                slot: 1,
-                seq: 7,
-                crc: 0xdead_beef,
-            }),
+            live,
+            probe: 3,
+            probes: heapless::Vec::from_slice(&[3]).unwrap(),
         };
         let mut buf = [0u8; 32];
-        let bytes = postcard::to_slice(&v2, &mut buf).unwrap();
-        assert_eq!(postcard::from_bytes::<Hello>(bytes).unwrap(), v2);
-        // A protocol-2 Hello cut before `live` is refused, not read as protocol 1.
+        let bytes = postcard::to_slice(&v4, &mut buf).unwrap().to_vec();
+        assert_eq!(postcard::from_bytes::<Hello>(&bytes).unwrap(), v4);
+        // Protocols 2 and 3: the same bytes without the probes (the last 3).
+        for v in [2, 3] {
+            let mut old = bytes[..bytes.len() - 3].to_vec();
+            old[0] = v;
+            let h = postcard::from_bytes::<Hello>(&old).unwrap();
+            assert_eq!(
+                (h.protocol, h.live, h.probe, h.probes.len()),
+                (u16::from(v), live, 0, 0)
+            );
+            // With them, a byte is left over: not a Hello of that protocol.
+            let mut more = bytes.clone();
+            more[0] = v;
+            assert!(!matches!(
+                postcard::take_from_bytes::<Hello>(&more),
+                Ok((_, []))
+            ));
+        }
+        // A protocol-2 Hello cut before `live` is refused, not read as protocol 1; so is a
+        // protocol-4 one cut before its probes.
         assert!(postcard::from_bytes::<Hello>(&[2, 0, 6, 1]).is_err());
+        assert!(postcard::from_bytes::<Hello>(&bytes[..bytes.len() - 3]).is_err());
+    }
+
+    /// A probe answer as `docs/protocol.md` spells it: `ToHost::Probe` 3, `Ok` 0 and the id,
+    /// or `Err` 1 and the refusal (0 unknown, 1 no table); `ToDevice::SelectProbe` 4 and the
+    /// id; an update step starts with [`UPDATE_INDEX`].
+    #[test]
+    fn the_probe_messages_are_encoded_as_documented() {
+        let mut buf = [0u8; 16];
+        let to = |m: &ToHost, buf: &mut [u8]| postcard::to_slice(m, buf).unwrap().to_vec();
+        assert_eq!(to(&ToHost::Probe(Ok(7)), &mut buf), [3, 0, 7]);
+        assert_eq!(
+            to(&ToHost::Probe(Err(ProbeRefusal::Unknown)), &mut buf),
+            [3, 1, 0]
+        );
+        assert_eq!(
+            to(&ToHost::Probe(Err(ProbeRefusal::NoTable)), &mut buf),
+            [3, 1, 1]
+        );
+        let select = postcard::to_slice(&ToDevice::SelectProbe(200), &mut buf).unwrap();
+        assert_eq!(select, [4, 200]);
+        let abort = postcard::to_slice(&ToDevice::Update(Step::Abort), &mut buf).unwrap();
+        assert_eq!(abort, [UPDATE_INDEX, 3]);
     }
 
     /// An update answer as `docs/protocol.md` spells it: `ToHost::Update` 2, `Err` 1,

@@ -16,12 +16,15 @@
 //!      6     1  joint count N (6 or 7)
 //!      7     1  flags: bit0 geometric errors, bit1 encoder harmonics,
 //!               bit2 gravity compliance, bit3 thermal expansion, bit4 uncertainty budget,
-//!               bit5 parameter covariance (only with bit4), bit6 axis wobble (others 0)
+//!               bit5 parameter covariance (only with bit4), bit6 axis wobble, bit7 more
+//!               probes
 //!      8    32  arm serial, UTF-8, NUL-padded
 //!     40     4  total length in bytes, CRC included (= 48 + N·248 + 64 + 4, plus the
 //!               uncertainty budget's length where flag bit4 is set, the parameter
-//!               block's where bit5 is, the wobble block's where bit6 is)
-//!     44     4  reserved, 0
+//!               block's where bit5 is, the wobble block's where bit6 is, the probes
+//!               block's where bit7 is)
+//!     44     1  the first probe's id (0 for an arm of one probe without an id)
+//!     45     3  reserved, 0
 //!     48 N·248  joint records, base first:
 //!                 +0    1  axis: 0 = x, 1 = y, 2 = z
 //!                 +1    1  harmonic count H (0..=4)
@@ -42,6 +45,8 @@
 //!                layout; its parameter count is its first field)
 //!   …            the axis wobble, where flag bit6 is set ([`wobble`]: its layout; its joint
 //!                count is its first field)
+//!   …            the arm's other probes, where flag bit7 is set ([`probes`]: its layout;
+//!                its probe count is its first field)
 //!  len−4     4  CRC-32 (ISO-HDLC, as zlib) of every byte before it
 //! ```
 //!
@@ -54,6 +59,7 @@ use core::fmt;
 
 pub mod budget;
 pub mod parameters;
+pub mod probes;
 pub mod wobble;
 
 /// The table's magic bytes.
@@ -95,7 +101,8 @@ mod off {
     pub const FLAGS: usize = 7;
     pub const SERIAL: usize = 8;
     pub const LENGTH: usize = 40;
-    pub const RESERVED: usize = 44;
+    pub const PROBE_ID: usize = 44;
+    pub const RESERVED: usize = 45;
     // Joint record.
     pub const AXIS: usize = 0;
     pub const HARMONICS: usize = 1;
@@ -134,13 +141,17 @@ pub const FLAG_BUDGET: u8 = 1 << 4;
 pub const FLAG_PARAMETERS: u8 = 1 << 5;
 /// Flag: some joint has an axis wobble ([`wobble`]: its block, after every other).
 pub const FLAG_WOBBLE: u8 = 1 << 6;
+/// Flag: the arm has more than one probe ([`probes`]: the others' block, after every other).
+pub const FLAG_PROBES: u8 = 1 << 7;
 /// Without the `parameters` or `wobble` feature, that block's flag is unknown, so refused.
-const FLAGS_KNOWN: u8 =
-    0x1f | if cfg!(feature = "parameters") {
+const FLAGS_KNOWN: u8 = 0x1f
+    | FLAG_PROBES
+    | if cfg!(feature = "parameters") {
         FLAG_PARAMETERS
     } else {
         0
-    } | if cfg!(feature = "wobble") {
+    }
+    | if cfg!(feature = "wobble") {
         FLAG_WOBBLE
     } else {
         0
@@ -332,21 +343,25 @@ pub const fn table_len(joints: usize) -> usize {
 }
 
 /// Whether a table can be `len` bytes long: 6 or 7 joints, with or without the budget, with
-/// or without a parameter block after it (what an update must be told before any byte of it
-/// arrives).
+/// or without a parameter block after it, a wobble block, a block of other probes (what an
+/// update must be told before any byte of it arrives).
 pub fn is_table_len(len: usize) -> bool {
     (MIN_JOINTS..=MAX_JOINTS).any(|n| {
         // The wobble block, of any joint count the arm has, or none.
         let wobbles = if cfg!(feature = "wobble") { n } else { 0 };
         (0..=wobbles).any(|w| {
-            let wobble = if w > 0 { wobble::len(w) } else { 0 };
-            let Some(rest) = len.checked_sub(table_len(n) + wobble) else {
-                return false;
-            };
-            // Then the budget, and the parameter block after it, or neither.
-            rest == 0
-                || rest == budget::LEN
-                || rest.checked_sub(budget::LEN).is_some_and(is_block_len)
+            // The other probes' block, of 1 to 7 probes, or none.
+            (0..probes::MAX_PROBES).any(|p| {
+                let wobble = if w > 0 { wobble::len(w) } else { 0 };
+                let others = if p > 0 { probes::len(p) } else { 0 };
+                let Some(rest) = len.checked_sub(table_len(n) + wobble + others) else {
+                    return false;
+                };
+                // Then the budget, and the parameter block after it, or neither.
+                rest == 0
+                    || rest == budget::LEN
+                    || rest.checked_sub(budget::LEN).is_some_and(is_block_len)
+            })
         })
     })
 }
@@ -368,9 +383,9 @@ const fn core_len(joints: usize) -> usize {
     HEADER_LEN + joints * JOINT_LEN + PROBE_LEN
 }
 
-/// Largest table length: 7 joints with a budget, `parameters::MAX_PARAMETERS` parameters
-/// where the `parameters` feature reads them and every joint's wobble where the `wobble`
-/// feature does (11,792 bytes with the first, 13,308 with both; without either,
+/// Largest table length: 7 joints with a budget and 8 probes, `parameters::MAX_PARAMETERS`
+/// parameters where the `parameters` feature reads them and every joint's wobble where the
+/// `wobble` feature does (12,300 bytes with the first, 13,816 with both; without either,
 /// [`MAX_PLAIN_TABLE_LEN`]).
 pub const MAX_TABLE_LEN: usize = MAX_PLAIN_TABLE_LEN
     + if cfg!(feature = "parameters") {
@@ -384,11 +399,12 @@ pub const MAX_TABLE_LEN: usize = MAX_PLAIN_TABLE_LEN
         0
     };
 
-/// Largest table without a parameter block: 7 joints with a budget (1,932 bytes). A board
-/// whose flash slots are smaller than [`MAX_TABLE_LEN`] but at least this (the fixed-point
-/// boards' 4 KiB) takes every table but those with many parameters, and its update refuses
-/// those by their length.
-pub const MAX_PLAIN_TABLE_LEN: usize = table_len(MAX_JOINTS) + budget::LEN;
+/// Largest table without a parameter block or a wobble: 7 joints with a budget and 8 probes
+/// (2,440 bytes). A board whose flash slots are smaller than [`MAX_TABLE_LEN`] but at least
+/// this (the fixed-point boards' 4 KiB) takes every table but those with many parameters,
+/// and its update refuses those by their length.
+pub const MAX_PLAIN_TABLE_LEN: usize =
+    table_len(MAX_JOINTS) + budget::LEN + probes::len(probes::MAX_PROBES - 1);
 
 /// One encoder-harmonic term: e += sin·sin(hθ) + cos·cos(hθ).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -424,9 +440,12 @@ pub struct JointData {
     pub harmonics: [Harmonic; MAX_HARMONICS],
 }
 
-/// The probe's precomputed constants.
+/// A probe's precomputed constants.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ProbeData {
+    /// Its id: what the hub's reports carry and the host selects it by (the first probe's is
+    /// the header's byte 44; 0 for an arm of one probe without an id).
+    pub id: u8,
     /// Probe vector with its error (mm).
     pub vector: [f64; 3],
     /// Its unit direction.
@@ -450,8 +469,13 @@ pub struct TableData {
     pub joint_count: u8,
     /// Joints, base first (the first `joint_count` used).
     pub joints: [JointData; MAX_JOINTS],
-    /// The probe.
+    /// The first probe: the one the hub mounts at boot.
     pub probe: ProbeData,
+    /// The arm's other probes (the first `more_probe_count`; the block is written where there
+    /// is one), ids distinct from each other and from the first's.
+    pub more_probes: [ProbeData; probes::MAX_PROBES - 1],
+    /// How many of `more_probes` the arm has (0..=7).
+    pub more_probe_count: u8,
     /// Each joint's axis wobble (count 0: none; the block is written where some joint has
     /// one).
     pub wobble: [wobble::WobbleData; MAX_JOINTS],
@@ -489,9 +513,18 @@ impl TableData {
     /// The flags that the contents call for (geometric errors are the builder's to set).
     pub fn content_flags(&self) -> u8 {
         let joints = &self.joints[..usize::from(self.joint_count).min(MAX_JOINTS)];
+        let probes = self.other_probes().iter().map(ProbeData::content_flags);
         joints
             .iter()
-            .fold(self.probe.content_flags(), |f, j| f | j.content_flags())
+            .map(JointData::content_flags)
+            .chain(probes)
+            .fold(self.probe.content_flags(), |f, c| f | c)
+    }
+
+    /// The other probes the arm has (the first `more_probe_count` of `more_probes`).
+    pub fn other_probes(&self) -> &[ProbeData] {
+        let n = usize::from(self.more_probe_count).min(self.more_probes.len());
+        &self.more_probes[..n]
     }
 
     /// Writes the table into `out`, without an uncertainty budget; returns its length. Fails
@@ -512,9 +545,10 @@ impl TableData {
     }
 
     /// Writes the table into `out` with `budget` and, after it, `parameters` (flag bits 4 and
-    /// 5 follow them); returns its length. Fails if `out` is too short, the joint count is
-    /// outside 6..=7, or there are parameters without a budget or a block of a wrong size
-    /// ([`parameters::ParameterData::block_len`]).
+    /// 5 follow them, bits 6 and 7 the wobble and the other probes); returns its length.
+    /// Fails if `out` is too short, the joint count is outside 6..=7, there are parameters
+    /// without a budget or a block of a wrong size ([`parameters::ParameterData::block_len`]),
+    /// or more than 7 other probes.
     pub fn encode_full(
         &self,
         budget: Option<&budget::BudgetData>,
@@ -541,7 +575,19 @@ impl TableData {
         } else {
             0
         };
-        let len = table_len(n) + extra + block + wobble_len;
+        if usize::from(self.more_probe_count) > self.more_probes.len() {
+            return Err(TableError::Invalid {
+                joint: 0,
+                field: Field::Probe,
+            });
+        }
+        let others = self.other_probes();
+        let probes_len = if others.is_empty() {
+            0
+        } else {
+            probes::len(others.len())
+        };
+        let len = table_len(n) + extra + block + wobble_len + probes_len;
         if out.len() < len {
             return Err(TableError::Truncated {
                 needed: len as u32,
@@ -553,12 +599,15 @@ impl TableData {
         out[off::MAGIC..off::MAGIC + 4].copy_from_slice(&MAGIC);
         out[off::VERSION..off::VERSION + 2].copy_from_slice(&VERSION.to_le_bytes());
         out[off::JOINTS] = self.joint_count;
-        out[off::FLAGS] = (self.flags & !(FLAG_BUDGET | FLAG_PARAMETERS | FLAG_WOBBLE))
+        out[off::FLAGS] = (self.flags
+            & !(FLAG_BUDGET | FLAG_PARAMETERS | FLAG_WOBBLE | FLAG_PROBES))
             | if extra > 0 { FLAG_BUDGET } else { 0 }
             | if block > 0 { FLAG_PARAMETERS } else { 0 }
-            | if wobble_len > 0 { FLAG_WOBBLE } else { 0 };
+            | if wobble_len > 0 { FLAG_WOBBLE } else { 0 }
+            | if probes_len > 0 { FLAG_PROBES } else { 0 };
         out[off::SERIAL..off::SERIAL + SERIAL_LEN].copy_from_slice(&self.serial);
         out[off::LENGTH..off::LENGTH + 4].copy_from_slice(&(len as u32).to_le_bytes());
+        out[off::PROBE_ID] = self.probe.id;
         for (i, j) in self.joints[..n].iter().enumerate() {
             let r = &mut out[HEADER_LEN + i * JOINT_LEN..HEADER_LEN + (i + 1) * JOINT_LEN];
             r[off::AXIS] = j.axis;
@@ -578,20 +627,23 @@ impl TableData {
                 put_f64s(&mut s[off::H_COS..], &[h.cos]);
             }
         }
-        let p = &mut out[HEADER_LEN + n * JOINT_LEN..core_len(n)];
-        put_f64s(&mut p[off::P_VECTOR..], &self.probe.vector);
-        put_f64s(&mut p[off::P_DIR..], &self.probe.direction);
-        put_f64s(&mut p[off::P_THERMAL..], &[self.probe.thermal]);
-        put_f64s(&mut p[off::P_BALL..], &[self.probe.ball_diameter]);
+        put_probe(
+            &mut out[HEADER_LEN + n * JOINT_LEN..core_len(n)],
+            &self.probe,
+        );
         if let Some(b) = budget {
             b.encode(&mut out[core_len(n)..core_len(n) + budget::LEN]);
         }
-        let end = len - CRC_LEN - wobble_len;
+        let probes_at = len - CRC_LEN - probes_len;
+        let end = probes_at - wobble_len;
         if let Some(p) = parameters {
             p.encode(&mut out[core_len(n) + budget::LEN..end]);
         }
         if wobble_len > 0 {
-            wobble::encode(&self.wobble[..n], &mut out[end..len - CRC_LEN]);
+            wobble::encode(&self.wobble[..n], &mut out[end..probes_at]);
+        }
+        if probes_len > 0 {
+            probes::encode(others, &mut out[probes_at..len - CRC_LEN]);
         }
         let crc = CRC.checksum(&out[..len - CRC_LEN]);
         out[len - CRC_LEN..].copy_from_slice(&crc.to_le_bytes());
@@ -603,6 +655,61 @@ fn put_f64s(out: &mut [u8], v: &[f64]) {
     for (chunk, x) in out.chunks_exact_mut(8).zip(v) {
         chunk.copy_from_slice(&x.to_le_bytes());
     }
+}
+
+/// Writes a probe record (its 64 bytes; the id is kept elsewhere).
+fn put_probe(out: &mut [u8], p: &ProbeData) {
+    put_f64s(&mut out[off::P_VECTOR..], &p.vector);
+    put_f64s(&mut out[off::P_DIR..], &p.direction);
+    put_f64s(&mut out[off::P_THERMAL..], &[p.thermal]);
+    put_f64s(&mut out[off::P_BALL..], &[p.ball_diameter]);
+}
+
+/// Reads a probe record (its 64 bytes) of the probe with id `id`.
+fn read_probe(id: u8, r: &[u8]) -> ProbeData {
+    ProbeData {
+        id,
+        vector: rd_f64s::<3>(r, off::P_VECTOR),
+        direction: rd_f64s::<3>(r, off::P_DIR),
+        thermal: rd_f64(r, off::P_THERMAL),
+        ball_diameter: rd_f64(r, off::P_BALL),
+    }
+}
+
+/// Checks a probe's values: vector and thermal coefficient in range, a unit direction along
+/// the vector, a ball diameter in 0..=100 mm. The same check for every probe of a table.
+fn check_probe(p: &ProbeData) -> Result<(), TableError> {
+    let invalid = TableError::Invalid {
+        joint: 0,
+        field: Field::Probe,
+    };
+    let ok = p.vector.iter().all(|&x| within(x, limits::LENGTH_MM))
+        && p.direction
+            .iter()
+            .all(|&x| within(x, 1.0 + limits::UNIT_TOLERANCE))
+        && within(p.thermal, limits::THERMAL)
+        && within(p.ball_diameter, limits::BALL_MM)
+        && p.ball_diameter >= 0.0;
+    if !ok {
+        return Err(invalid);
+    }
+    let [dx, dy, dz] = p.direction;
+    if abs(dx * dx + dy * dy + dz * dz - 1.0) > limits::UNIT_TOLERANCE {
+        return Err(invalid);
+    }
+    // The direction must be that of the vector: their cross product vanishes relative to
+    // the vector's length, and they point the same way.
+    let [vx, vy, vz] = p.vector;
+    let len2 = vx * vx + vy * vy + vz * vz;
+    let dot = vx * dx + vy * dy + vz * dz;
+    let cx = vy * dz - vz * dy;
+    let cy = vz * dx - vx * dz;
+    let cz = vx * dy - vy * dx;
+    let parallel = len2 > 0.0 && dot > 0.0 && (cx * cx + cy * cy + cz * cz) <= 1e-18 * len2;
+    if !parallel {
+        return Err(invalid);
+    }
+    Ok(())
 }
 
 /// A validated calibration table, borrowing its bytes (which may stay in flash).
@@ -696,6 +803,13 @@ impl<'a> Table<'a> {
         if flags & FLAG_BUDGET != 0 {
             len += budget::LEN;
             if flags & FLAG_PARAMETERS != 0 {
+                // Without the feature, refused before its length is known, as the wobble's.
+                if !cfg!(feature = "parameters") {
+                    return Err(TableError::Invalid {
+                        joint: 0,
+                        field: Field::Flags,
+                    });
+                }
                 // The block states its own size; a count that cannot be read counts as 0 and
                 // fails the length check below or the block's own.
                 let at = core_len(n) + budget::LEN;
@@ -713,6 +827,10 @@ impl<'a> Table<'a> {
             }
             let at = len - CRC_LEN;
             len += wobble::len(wobble::stated_count(bytes.get(at..).unwrap_or(&[])));
+        }
+        if flags & FLAG_PROBES != 0 {
+            let at = len - CRC_LEN;
+            len += probes::len(probes::stated_count(bytes.get(at..).unwrap_or(&[])));
         }
         let stated = rd_u32(bytes, off::LENGTH);
         if stated as usize != len {
@@ -743,13 +861,16 @@ impl<'a> Table<'a> {
         Ok(table)
     }
 
+    // With every feature every flag is known (`!FLAGS_KNOWN` is 0, the test always passes);
+    // without one, its block's flag is refused by it.
+    #[allow(clippy::bad_bit_mask)]
     fn check_values(&self) -> Result<(), TableError> {
         let invalid = |joint: usize, field| TableError::Invalid {
             joint: joint as u8,
             field,
         };
         let b = self.bytes;
-        if rd_u32(b, off::RESERVED) != 0 {
+        if b[off::RESERVED..off::RESERVED + 3].iter().any(|&x| x != 0) {
             return Err(invalid(0, Field::Reserved));
         }
         if core::str::from_utf8(self.serial()).is_err() {
@@ -814,48 +935,33 @@ impl<'a> Table<'a> {
                 return Err(invalid(no, Field::Harmonic));
             }
         }
-        let p = self.probe();
-        content |= p.content_flags();
+        // Every probe's values, the first's and the others', and their ids all distinct.
+        if let Some(others) = self.other_probes() {
+            others.check()?;
+        }
+        for k in 0..self.probe_count() {
+            let p = self.probe_at(k).ok_or(invalid(0, Field::Probe))?;
+            check_probe(&p)?;
+            if (0..k).any(|j| self.probe_id(j) == Some(p.id)) {
+                return Err(invalid(0, Field::Probe));
+            }
+            content |= p.content_flags();
+        }
         let flags = b[off::FLAGS];
-        let blocks = FLAG_GEOMETRIC | FLAG_BUDGET | FLAG_PARAMETERS | FLAG_WOBBLE;
+        let blocks = FLAG_GEOMETRIC | FLAG_BUDGET | FLAG_PARAMETERS | FLAG_WOBBLE | FLAG_PROBES;
         if flags & !FLAGS_KNOWN != 0
             || flags & !blocks != content
             || (flags & FLAG_PARAMETERS != 0 && flags & FLAG_BUDGET == 0)
         {
             return Err(invalid(0, Field::Flags));
         }
-        let ok = p.vector.iter().all(|&x| within(x, limits::LENGTH_MM))
-            && p.direction
-                .iter()
-                .all(|&x| within(x, 1.0 + limits::UNIT_TOLERANCE))
-            && within(p.thermal, limits::THERMAL)
-            && within(p.ball_diameter, limits::BALL_MM)
-            && p.ball_diameter >= 0.0;
-        if !ok {
-            return Err(invalid(0, Field::Probe));
-        }
-        let [dx, dy, dz] = p.direction;
-        if abs(dx * dx + dy * dy + dz * dz - 1.0) > limits::UNIT_TOLERANCE {
-            return Err(invalid(0, Field::Probe));
-        }
-        // The direction must be that of the vector: their cross product vanishes relative to
-        // the vector's length, and they point the same way.
-        let [vx, vy, vz] = p.vector;
-        let len2 = vx * vx + vy * vy + vz * vz;
-        let dot = vx * dx + vy * dy + vz * dz;
-        let cx = vy * dz - vz * dy;
-        let cy = vz * dx - vx * dz;
-        let cz = vx * dy - vy * dx;
-        let parallel = len2 > 0.0 && dot > 0.0 && (cx * cx + cy * cy + cz * cz) <= 1e-18 * len2;
-        if !parallel {
-            return Err(invalid(0, Field::Probe));
-        }
         if let Some(budget) = self.budget() {
             budget.check(self)?;
         }
         #[cfg(feature = "parameters")]
         if let Some(p) = self.parameters() {
-            p.check(self.joint_count())?;
+            let of_table = |id| (0..self.probe_count()).any(|k| self.probe_id(k) == Some(id));
+            p.check(self.joint_count(), of_table)?;
         }
         #[cfg(feature = "wobble")]
         if let Some(w) = self.wobble() {
@@ -888,23 +994,73 @@ impl<'a> Table<'a> {
             .map(parameters::Parameters::new)
     }
 
+    /// Where the wobble block starts, or would: after the probe, the budget and the
+    /// parameter block. (A block whose feature is off is refused by its flag before this is
+    /// asked: its length need not be known.)
+    fn wobble_at(&self) -> usize {
+        let mut at = core_len(self.joint_count());
+        if self.flags() & FLAG_BUDGET != 0 {
+            at += budget::LEN;
+        }
+        if cfg!(feature = "parameters") && self.flags() & FLAG_PARAMETERS != 0 {
+            at += parameters::len(parameters::stated_count(
+                self.bytes.get(at..).unwrap_or(&[]),
+            ));
+        }
+        at
+    }
+
+    /// Where the other probes' block starts, or would: after the wobble's.
+    fn probes_at(&self) -> usize {
+        let at = self.wobble_at();
+        if !cfg!(feature = "wobble") || self.flags() & FLAG_WOBBLE == 0 {
+            return at;
+        }
+        at + wobble::len(wobble::stated_count(self.bytes.get(at..).unwrap_or(&[])))
+    }
+
     /// The axis wobble block, where the table has one (never without the `wobble` feature,
     /// which refuses a table with the block).
     pub fn wobble(&self) -> Option<wobble::Wobble<'a>> {
         if self.flags() & FLAG_WOBBLE == 0 {
             return None;
         }
+        self.bytes
+            .get(self.wobble_at()..self.probes_at())
+            .map(wobble::Wobble::new)
+    }
+
+    /// The block of the arm's other probes, where it has more than one.
+    pub fn other_probes(&self) -> Option<probes::Probes<'a>> {
+        if self.flags() & FLAG_PROBES == 0 {
+            return None;
+        }
         let end = self.bytes.len() - CRC_LEN;
-        let mut at = core_len(self.joint_count());
-        if self.flags() & FLAG_BUDGET != 0 {
-            at += budget::LEN;
+        self.bytes
+            .get(self.probes_at()..end)
+            .map(probes::Probes::new)
+    }
+
+    /// How many probes the arm has, the first included (1..=8).
+    pub fn probe_count(&self) -> usize {
+        1 + self.other_probes().map_or(0, |p| p.count())
+    }
+
+    /// Probe `k`'s id (0 the first, as [`Table::probe_at`]); `None` past the last.
+    pub fn probe_id(&self, k: usize) -> Option<u8> {
+        match k {
+            0 => Some(self.bytes[off::PROBE_ID]),
+            _ => self.other_probes()?.id(k - 1),
         }
-        if self.flags() & FLAG_PARAMETERS != 0 {
-            at += parameters::len(parameters::stated_count(
-                self.bytes.get(at..).unwrap_or(&[]),
-            ));
+    }
+
+    /// Probe `k`: 0 the first (the one the hub mounts at boot), then the others in the
+    /// table's order; `None` past the last.
+    pub fn probe_at(&self, k: usize) -> Option<ProbeData> {
+        match k {
+            0 => Some(self.probe()),
+            _ => self.other_probes()?.probe(k - 1),
         }
-        self.bytes.get(at..end).map(wobble::Wobble::new)
     }
 
     /// Joint `i`'s axis wobble (0-based; count 0 where it has none).
@@ -937,6 +1093,23 @@ impl<'a> Table<'a> {
     /// The CRC stored in the table.
     pub fn crc(&self) -> u32 {
         rd_u32(self.bytes, self.bytes.len() - CRC_LEN)
+    }
+
+    /// Joint `i`'s axis, link vector and thermal expansion (what mounting a probe on the
+    /// last joint needs): read alone rather than as a whole [`JointData`], whose ~300 bytes
+    /// the Cortex-M0 hub's stack has no room for where a probe is mounted at boot.
+    pub fn joint_link(&self, i: usize) -> Option<(u8, [f64; 3], f64)> {
+        if i >= self.joint_count() {
+            return None;
+        }
+        let r = self
+            .bytes
+            .get(HEADER_LEN + i * JOINT_LEN..HEADER_LEN + (i + 1) * JOINT_LEN)?;
+        Some((
+            r[off::AXIS],
+            rd_f64s::<3>(r, off::LINK),
+            rd_f64(r, off::THERMAL),
+        ))
     }
 
     /// Joint `i` (0-based); `None` past the last joint.
@@ -973,15 +1146,13 @@ impl<'a> Table<'a> {
         })
     }
 
-    /// The probe.
+    /// The first probe (the one the hub mounts at boot).
     pub fn probe(&self) -> ProbeData {
         let at = HEADER_LEN + self.joint_count() * JOINT_LEN;
-        ProbeData {
-            vector: rd_f64s::<3>(self.bytes, at + off::P_VECTOR),
-            direction: rd_f64s::<3>(self.bytes, at + off::P_DIR),
-            thermal: rd_f64(self.bytes, at + off::P_THERMAL),
-            ball_diameter: rd_f64(self.bytes, at + off::P_BALL),
-        }
+        read_probe(
+            self.bytes[off::PROBE_ID],
+            self.bytes.get(at..).unwrap_or(&[]),
+        )
     }
 
     /// Everything, as plain values.
@@ -994,12 +1165,22 @@ impl<'a> Table<'a> {
                 *j = d;
             }
         }
+        let mut more_probes = [ProbeData::default(); probes::MAX_PROBES - 1];
+        let mut more_probe_count = 0;
+        for (k, p) in more_probes.iter_mut().enumerate() {
+            if let Some(d) = self.probe_at(k + 1) {
+                *p = d;
+                more_probe_count += 1;
+            }
+        }
         TableData {
             serial,
             flags: self.flags(),
             joint_count: self.bytes[off::JOINTS],
             joints,
             probe: self.probe(),
+            more_probes,
+            more_probe_count,
             wobble: core::array::from_fn(|i| {
                 if cfg!(feature = "wobble") && i < self.joint_count() {
                     self.joint_wobble(i)
@@ -1098,6 +1279,7 @@ pub(crate) mod tests {
             };
         }
         d.probe = ProbeData {
+            id: 0,
             vector: [0.0, 0.0, 120.0],
             direction: [0.0, 0.0, 1.0],
             thermal: 0.0,

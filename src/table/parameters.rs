@@ -2,10 +2,12 @@
 //! every identified parameter as the way it moves the tip, and C as its Cholesky factor.
 //!
 //! The hub does not know what a tilt or a harmonic is: the host writes, for each parameter,
-//! which of six motions it is — a turn about a joint's axis (weighed by 1, sin hθ, cos hθ or
-//! the gravity lever), a turn about a fixed axis through the joint (a tilt), a shift along a
-//! fixed vector of a frame (a link or probe error, a thermal expansion) — and the hub
-//! evaluates that column from the joints' frames at the reading ([`crate::uncertainty`]).
+//! which motion it is — a turn about a joint's axis (weighed by 1, sin hθ, cos hθ or the
+//! gravity lever), a turn about a fixed axis through the joint (a tilt, weighed by 1, sin hθ
+//! or cos hθ), a shift along a fixed vector of a frame (a link or probe error, a thermal
+//! expansion), or the shift of one probe of several, which moves the tip only while that
+//! probe is mounted — and the hub evaluates that column from the joints' frames at the
+//! reading ([`crate::uncertainty`]).
 //! The columns are the host's analytic Jacobian (`armcal::jacobian`), term for term.
 //!
 //! Why this form and not a low-rank factor of C projected on the workspace: on the shipped
@@ -23,12 +25,13 @@
 //!      4   P·24        one column record per parameter, in C's order:
 //!                        +0  1  kind (`Kind`: 0 turn, 1 turn·sin hθ, 2 turn·cos hθ,
 //!                               3 turn·gravity lever, 4 tilt, 5 shift, 6 tilt·sin hθ,
-//!                               7 tilt·cos hθ)
+//!                               7 tilt·cos hθ, 8 shift of probe ID)
 //!                        +1  1  joint k (0-based)
-//!                        +2  2  harmonic order h (kinds 1, 2, 6 and 7; else 0)
-//!                        +4 12  vector u (f32 ×3; kinds 4 to 7; else 0)
-//!                        +16 4  w0 (f32; kind 5; else 0)
-//!                        +20 4  w1 (f32, per °C; kind 5; else 0)
+//!                        +2  2  harmonic order h (kinds 1, 2, 6 and 7), the probe's id
+//!                               (kind 8, one of the table's); else 0
+//!                        +4 12  vector u (f32 ×3; kinds 4 to 8; else 0)
+//!                        +16 4  w0 (f32; kinds 5 and 8; else 0)
+//!                        +20 4  w1 (f32, per °C; kinds 5 and 8; else 0)
 //! 4+P·24  4·P(P+1)/2   L, lower triangular, C = L Lᵀ, row by row: L00, L10, L11, L20, …
 //!                      (f32, the parameters' units: rad, mm, rad/mm, 1/°C)
 //! ```
@@ -44,6 +47,11 @@
 //! | 4 tilt | (R_(k−1) u) × (p − o_k), u in the frame before joint k |
 //! | 5 shift | (w0 + w1 ΔT) · R_k u, u in the frame after joint k (the probe's is the last) |
 //! | 6, 7 wobble | sin hθ_k (cos hθ_k) · (R_(k−1) u) × (p − o_k): the tilt's column, u the fixed tilt's axis (the wobble moves it by ~1e-4 of itself, far below U95's 1e-3) |
+//! | 8 shift of probe ID | kind 5's column while the probe of that id is mounted, else 0 |
+//!
+//! The host writes a probe's error and expansion as kind 5 on an arm of one probe (so its
+//! tables are as before) and as kind 8 on an arm of several: a parameter of a probe not
+//! mounted does not move the tip.
 //!
 //! Vectors are in the calibration file's frames (each joint's axis its own x, y or z), as the
 //! host's reference has them; the hub relabels them into its chain's z-axis frames.
@@ -92,6 +100,9 @@ pub enum Kind {
     TiltSin,
     /// A turn cos(hθ_k) about the fixed axis u: an axis wobble's cos coefficient.
     TiltCos,
+    /// A [`Kind::Shift`] of the probe whose id is the record's `order`: it moves the tip only
+    /// while that probe is mounted (an arm of several probes).
+    ProbeShift,
 }
 
 impl Kind {
@@ -105,6 +116,7 @@ impl Kind {
             5 => Kind::Shift,
             6 => Kind::TiltSin,
             7 => Kind::TiltCos,
+            8 => Kind::ProbeShift,
             _ => return None,
         })
     }
@@ -123,14 +135,13 @@ pub struct Column {
     /// The joint whose frame it acts in (0-based).
     pub joint: u8,
     /// The harmonic's order (kinds [`Kind::TurnSin`], [`Kind::TurnCos`], [`Kind::TiltSin`],
-    /// [`Kind::TiltCos`]; else 0).
+    /// [`Kind::TiltCos`]), the probe's id ([`Kind::ProbeShift`]); else 0.
     pub order: u16,
-    /// The axis or shift vector (kinds [`Kind::Tilt`], [`Kind::Shift`], [`Kind::TiltSin`],
-    /// [`Kind::TiltCos`]; else 0).
+    /// The axis or shift vector (kinds [`Kind::Tilt`] to [`Kind::ProbeShift`]; else 0).
     pub vector: [f32; 3],
-    /// The shift's weight at 20 °C ([`Kind::Shift`]; else 0).
+    /// The shift's weight at 20 °C ([`Kind::Shift`], [`Kind::ProbeShift`]; else 0).
     pub w0: f32,
-    /// The shift's weight per °C ([`Kind::Shift`]; else 0).
+    /// The shift's weight per °C ([`Kind::Shift`], [`Kind::ProbeShift`]; else 0).
     pub w1: f32,
 }
 
@@ -247,10 +258,15 @@ impl<'a> Parameters<'a> {
         self.bytes.get(at..at + 4 * (i + 1)).unwrap_or(&[])
     }
 
-    /// Every record well formed and every number finite and within [`LIMIT`] (what the boot
-    /// applies to a table that has the block).
+    /// Every record well formed (a probe's shift naming one of the table's probes: `probe`
+    /// tells an id of the table's) and every number finite and within [`LIMIT`] (what the
+    /// boot applies to a table that has the block).
     #[cfg_attr(not(feature = "parameters"), allow(dead_code))] // refused by its flag there
-    pub(super) fn check(&self, joints: usize) -> Result<(), TableError> {
+    pub(super) fn check(
+        &self,
+        joints: usize,
+        probe: impl Fn(u8) -> bool,
+    ) -> Result<(), TableError> {
         let bad = TableError::Invalid {
             joint: 0,
             field: Field::Budget,
@@ -266,14 +282,15 @@ impl<'a> Parameters<'a> {
                 c.kind,
                 Kind::TurnSin | Kind::TurnCos | Kind::TiltSin | Kind::TiltCos
             );
-            let vector = matches!(
-                c.kind,
-                Kind::Tilt | Kind::Shift | Kind::TiltSin | Kind::TiltCos
-            );
-            let weights = c.kind == Kind::Shift;
+            let shift = matches!(c.kind, Kind::Shift | Kind::ProbeShift);
+            let vector = shift || matches!(c.kind, Kind::Tilt | Kind::TiltSin | Kind::TiltCos);
+            let order_ok = match c.kind {
+                Kind::ProbeShift => u8::try_from(c.order).is_ok_and(&probe),
+                _ => (c.order != 0) == harmonic && c.order <= super::MAX_HARMONIC_ORDER,
+            };
+            let weights = shift;
             let well_formed = usize::from(c.joint) < joints.min(MAX_JOINTS)
-                && (c.order != 0) == harmonic
-                && c.order <= super::MAX_HARMONIC_ORDER
+                && order_ok
                 && c.vector
                     .iter()
                     .all(|&x| ok(x) && (vector || x.to_bits() == 0))
@@ -355,6 +372,34 @@ mod tests {
             .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
             .collect();
         assert_eq!(row2, FACTOR[3..]);
+    }
+
+    /// A probe's shift names one of the table's probes by id: one of the sample's (its only
+    /// probe, id 0) is taken and reads back; another id is refused.
+    #[test]
+    fn a_probes_shift_names_a_probe_of_the_table() {
+        let mut cols = columns();
+        cols[2].kind = Kind::ProbeShift;
+        let block = ParameterData {
+            columns: &cols,
+            factor: &FACTOR,
+        };
+        let mut buf = [0u8; MAX_TABLE_LEN];
+        let n = sample()
+            .encode_full(Some(&BudgetData::default()), Some(&block), &mut buf)
+            .unwrap();
+        let t = Table::parse(&buf[..n]).unwrap();
+        assert_eq!(t.parameters().unwrap().column(2), Some(cols[2]));
+        let order = AT + 4 + 2 * COLUMN_LEN + 2;
+        buf[order] = 1;
+        recrc(&mut buf[..n]);
+        assert_eq!(
+            Table::parse(&buf[..n]).unwrap_err(),
+            TableError::Invalid {
+                joint: 6,
+                field: Field::Budget
+            }
+        );
     }
 
     /// Every malformed record or value is refused, naming the budget (and the joint where

@@ -66,6 +66,16 @@ impl<'a, P: Evaluator> Uncertainty<'a, P> {
         }))
     }
 
+    /// Follows the hub's chain to the table's probe `k` (its index in the table): the
+    /// reading's own terms take the chain they are given, the parameter part its own matrix
+    /// chain and the probe's columns. Nothing changes on an error.
+    pub fn mount(&mut self, table: &Table<'a>, k: usize) -> Result<(), ChainError> {
+        match &mut self.parameters {
+            Some(part) => part.mount(table, k),
+            None => Ok(()),
+        }
+    }
+
     /// Whether the calibration's parameter part is in (the table has a parameter block, and
     /// the `parameters` feature reads it).
     pub fn has_parameters(&self) -> bool {

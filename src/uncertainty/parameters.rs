@@ -3,7 +3,8 @@
 //!
 //! J_π's columns come from the joints' frames at the reading, which the matrix chain composes
 //! anyway ([`MatrixChain::eval_frames`]): each parameter is a turn about a joint's axis, a
-//! turn about a fixed axis, or a shift (the table's column kinds), evaluated in f32. The
+//! turn about a fixed axis, or a shift (the table's column kinds; a probe's shift only while
+//! that probe is mounted), evaluated in f32. The
 //! frames are the undeflected chain's and the harmonic weights come from micromath's
 //! `sin`/`cos`; both err by ~1e-3 of a column at most, where U95 must agree with the host to
 //! 1 % (measured: `cargo test -p armcal --test hub_u95`).
@@ -13,7 +14,7 @@
 
 use super::Covariance;
 use crate::matrix::{Frames, MatrixChain};
-use crate::model::{unpermute, ChainError, BASE_AXIS, REFERENCE_TEMP_MC};
+use crate::model::{unpermute_inline, ChainError, BASE_AXIS, REFERENCE_TEMP_MC};
 use crate::physics::Physics;
 use crate::rotate::{cross, Vec3};
 use crate::scalar::F32;
@@ -33,6 +34,8 @@ pub struct ParameterPart<'a, P: Physics> {
     axes: [u8; MAX_JOINTS],
     /// Each joint's counts per revolution, for the harmonics' angle.
     counts: [u32; MAX_JOINTS],
+    /// The id of the probe mounted: a probe's shift ([`Kind::ProbeShift`]) of another is 0.
+    probe: u8,
 }
 
 fn sub(a: Vec3<f32>, b: Vec3<f32>) -> Vec3<f32> {
@@ -67,7 +70,17 @@ impl<'a, P: Physics> ParameterPart<'a, P> {
             block,
             axes,
             counts,
+            probe: table.probe().id,
         }))
+    }
+
+    /// Follows the hub's chain to the table's probe `k`: its matrix chain mounts it, and the
+    /// columns of a probe's shift are that probe's. Nothing changes on an error.
+    pub fn mount(&mut self, table: &Table<'a>, k: usize) -> Result<(), ChainError> {
+        let probe = table.probe_at(k).ok_or(ChainError::Range { joint: 0 })?;
+        self.chain.mount(table, k)?;
+        self.probe = probe.id;
+        Ok(())
     }
 
     /// Number of parameters.
@@ -144,7 +157,7 @@ impl<'a, P: Physics> ParameterPart<'a, P> {
             (true, _) => self.axes[k - 1],
             _ => self.axes[k],
         };
-        let vector = unpermute(col.vector, frame_axis);
+        let vector = unpermute_inline(col.vector, frame_axis);
         let r = &frames.rotation[k];
         let lever = sub(p, frames.origin[k]);
         let axis = [r[0][2], r[1][2], r[2][2]];
@@ -164,7 +177,59 @@ impl<'a, P: Physics> ParameterPart<'a, P> {
             Kind::TurnGravity => scaled(turn(), axis[0] * lever[1] - axis[1] * lever[0]),
             Kind::Tilt => tilt(),
             Kind::TiltSin | Kind::TiltCos => scaled(tilt(), self.weight(col, counts, k)),
-            Kind::Shift => scaled(mat_vec(r, vector), col.w0 + col.w1 * dt),
+            Kind::ProbeShift if col.order != u16::from(self.probe) => [0.0; 3],
+            Kind::Shift | Kind::ProbeShift => scaled(mat_vec(r, vector), col.w0 + col.w1 * dt),
         }
+    }
+}
+
+#[cfg(all(test, feature = "parameters"))]
+mod tests {
+    use super::*;
+    use crate::table::budget::BudgetData;
+    use crate::table::parameters::{Column, ParameterData};
+    use crate::table::probes::tests::several;
+    use crate::table::MAX_TABLE_LEN;
+
+    /// A probe's shift moves the tip only while its probe is mounted: with the first probe
+    /// (id 4) the part is the plain shift's alone, with the extension (id 9) mounted both
+    /// shifts', with the probe of id 0 the plain one's again.
+    #[test]
+    fn a_probes_shift_counts_only_while_it_is_mounted() {
+        let shift = |kind, order| Column {
+            order,
+            vector: [1.0, 0.0, 0.0],
+            w0: 1.0,
+            w1: 0.0,
+            ..Column::new(kind, 5)
+        };
+        let columns = [shift(Kind::Shift, 0), shift(Kind::ProbeShift, 9)];
+        // Two independent parameters of 1 µm and 2 µm.
+        let factor = [1e-3, 0.0, 2e-3];
+        let block = ParameterData {
+            columns: &columns,
+            factor: &factor,
+        };
+        let mut buf = [0u8; MAX_TABLE_LEN];
+        let n = several()
+            .encode_full(Some(&BudgetData::default()), Some(&block), &mut buf)
+            .unwrap();
+        let table = Table::parse(&buf[..n]).unwrap();
+        let mut part = ParameterPart::<F32>::new(&table).unwrap().unwrap();
+        let trace = |part: &ParameterPart<'_, F32>| {
+            let mut sigma = Covariance::default();
+            part.add_to(&[1, 2, 3, 4, 5, 6], 20_000, &mut sigma)
+                .unwrap();
+            sigma.0[0] + sigma.0[1] + sigma.0[2]
+        };
+        // nm²: 1 µm alone, then 1 + 4.
+        let close = |a: f32, b: f32| (a - b).abs() < 1e-3 * b;
+        assert!(close(trace(&part), 1.0e6), "{}", trace(&part));
+        part.mount(&table, 1).unwrap();
+        assert!(close(trace(&part), 5.0e6), "{}", trace(&part));
+        part.mount(&table, 2).unwrap();
+        assert!(close(trace(&part), 1.0e6), "{}", trace(&part));
+        assert!(part.mount(&table, 3).is_err());
+        assert!(close(trace(&part), 1.0e6), "nothing changed");
     }
 }

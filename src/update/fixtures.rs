@@ -11,20 +11,21 @@ use super::{live_table, Refusal};
 use crate::table::budget::BudgetData;
 use crate::table::{quat_to_matrix, JointData, ProbeData, TableData, MAX_TABLE_LEN};
 
-pub const FLASH_LEN: usize = 8 * 1024;
+pub const FLASH_LEN: usize = 9 * 1024;
 
-/// Two slots of 2 KiB and two state copies of an erase unit each.
+/// Two 3 KiB slots (the largest table without a parameter block, 2,440 bytes with eight
+/// probes, fits one) and two 1 KiB copies of the state record, in 1 KiB erase units.
 pub fn layout() -> Layout {
     Layout::Regions {
-        slots: [0..2048, 2048..4096],
-        state: [4096..5120, 5120..6144],
+        slots: [0..3072, 3072..6144],
+        state: [6144..7168, 7168..8192],
     }
 }
 
 /// The same slots with the state record in their trailers (the last 24 bytes of each).
 pub fn trailer_layout() -> Layout {
     Layout::Trailers {
-        slots: [0..2048, 2048..4096],
+        slots: [0..3072, 3072..6144],
     }
 }
 

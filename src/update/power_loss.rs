@@ -142,7 +142,7 @@ fn power_loss_at_every_operation_of_the_state_record() {
             crc: crc_of(t),
         };
         record::write(&mut start, &layout, &rec(1, 0, &a)).expect("record 1");
-        start.mem[2048..2048 + b.len()].copy_from_slice(&b);
+        start.mem[3072..3072 + b.len()].copy_from_slice(&b);
         let start = MockFlash::from_image(start.mem);
         let (tried, valid, n) = sweep(&layout, &start, &a, &b, &|f| {
             record::write(f, &layout, &rec(2, 1, &b)).is_ok()

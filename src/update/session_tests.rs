@@ -174,10 +174,10 @@ fn boot_falls_back_past_a_bad_slot() {
     let live = live_table(&mut f, &layout(), &Accept::joints(6), &mut buf).unwrap();
     assert_eq!((live.slot, live.seq), (1, Some(1)));
     assert!(live.table.bytes() == &b[..]);
-    f.mem[4096] ^= 0x01; // and record 1 (copy 0) torn: slot 1 by its contents
+    f.mem[6144] ^= 0x01; // and record 1 (copy 0) torn: slot 1 by its contents
     let live = live_table(&mut f, &layout(), &Accept::joints(6), &mut buf).unwrap();
     assert_eq!((live.slot, live.seq), (1, None));
-    f.mem[2048 + 40] ^= 0x01; // slot 1 corrupt too: nothing
+    f.mem[3072 + 40] ^= 0x01; // slot 1 corrupt too: nothing
     assert!(matches!(
         live_table(&mut f, &layout(), &Accept::joints(6), &mut buf),
         Err(BootError::NoTable([
@@ -196,16 +196,16 @@ fn layouts_that_do_not_fit_are_refused() {
     let regions = |slots: [core::ops::Range<u32>; 2], state: [core::ops::Range<u32>; 2]| {
         Layout::Regions { slots, state }
     };
-    let (s, st) = ([0..2048, 2048..4096], [4096..5120, 5120..6144]);
-    let l = regions(s.clone(), [4096..5120, 5120..6000]);
+    let (s, st) = ([0..3072, 3072..6144], [6144..7168, 7168..8192]);
+    let l = regions(s.clone(), [6144..7168, 7168..8000]);
     assert_eq!(l.check(&f), Err(LayoutError::Unaligned(3)));
-    let l = regions([0..2048, 1024..3072], st.clone());
+    let l = regions([0..3072, 1024..4096], st.clone());
     assert_eq!(l.check(&f), Err(LayoutError::Overlap(0, 1)));
-    let l = regions([6144..7168, 2048..4096], st.clone());
+    let l = regions([8192..9216, 3072..6144], st.clone());
     assert_eq!(l.check(&f), Err(LayoutError::SlotTooSmall(0)));
-    let l = regions(s.clone(), [4096..5120, 8192..9216]);
+    let l = regions(s.clone(), [6144..7168, 9216..10240]);
     assert_eq!(l.check(&f), Err(LayoutError::OutOfFlash(3)));
-    let l = regions(s.clone(), [4096..5120, 2048..3072]);
+    let l = regions(s.clone(), [6144..7168, 3072..4096]);
     assert_eq!(l.check(&f), Err(LayoutError::Overlap(1, 3)));
 
     // The state in the slots' trailers: only the slots are regions, and a slot must hold the
@@ -213,19 +213,19 @@ fn layouts_that_do_not_fit_are_refused() {
     let trailers = |slots| Layout::Trailers { slots };
     assert_eq!(trailers(s.clone()).check(&f), Ok(()));
     assert_eq!(
-        trailers([0..2048, 2048..3072]).check(&f),
+        trailers([0..3072, 3072..5120]).check(&f),
         Err(LayoutError::SlotTooSmall(1))
     );
     assert_eq!(
-        trailers([0..2048, 1024..3072]).check(&f),
+        trailers([0..3072, 1024..4096]).check(&f),
         Err(LayoutError::Overlap(0, 1))
     );
     assert_eq!(
-        trailers([0..2048, 7168..9216]).check(&f),
+        trailers([0..3072, 8192..11264]).check(&f),
         Err(LayoutError::OutOfFlash(1))
     );
     assert_eq!(
-        trailers([0..2000, 2048..4096]).check(&f),
+        trailers([0..3000, 3072..6144]).check(&f),
         Err(LayoutError::Unaligned(0))
     );
 }
@@ -238,13 +238,13 @@ fn the_trailer_is_the_slot_end() {
     use super::mock::MockFlash;
     let l = super::fixtures::trailer_layout();
     assert_eq!(Layout::trailer_len::<MockFlash>(), 24);
-    assert_eq!(l.table_area::<MockFlash>(0), 0..2024);
-    assert_eq!(l.table_area::<MockFlash>(1), 2048..4072);
-    assert_eq!(l.state::<MockFlash>(0), 2024..2048);
-    assert_eq!(l.state::<MockFlash>(1), 4072..4096);
+    assert_eq!(l.table_area::<MockFlash>(0), 0..3048);
+    assert_eq!(l.table_area::<MockFlash>(1), 3072..6120);
+    assert_eq!(l.state::<MockFlash>(0), 3048..3072);
+    assert_eq!(l.state::<MockFlash>(1), 6120..6144);
     let r = super::fixtures::layout();
-    assert_eq!(r.table_area::<MockFlash>(1), 2048..4096);
-    assert_eq!(r.state::<MockFlash>(1), 5120..6144);
+    assert_eq!(r.table_area::<MockFlash>(1), 3072..6144);
+    assert_eq!(r.state::<MockFlash>(1), 7168..8192);
 }
 
 /// In the trailers, a record is only believed in the trailer of the slot it names (no update
@@ -282,7 +282,7 @@ fn trailer_records_name_their_own_slot() {
         crc: crc_of(&b),
     }
     .encode();
-    g.mem[2024..2048].copy_from_slice(&bytes);
+    g.mem[3048..3072].copy_from_slice(&bytes);
     assert_eq!(record::read_copies(&mut g, &l), [None, None]);
 }
 

@@ -66,6 +66,10 @@ pub fn parameter_data(u: &Uncertainty, arm: &Arm) -> Result<Option<Block>, Strin
 /// the host's analytic Jacobian (`armcal::jacobian`) written as the hub evaluates it. Every
 /// kind of parameter the calibration file can list is here: a new one fails to compile until
 /// it is.
+///
+/// A probe's error and expansion are a shift of the last joint's frame (kind 5) on an arm of
+/// one probe, as they always were; on an arm of several, a shift of that probe (kind 8, its
+/// id in `order`), which the hub counts only while that probe is mounted.
 fn column(key: ParamKey, arm: &Arm) -> Column {
     let n = arm.dof();
     let shift = |joint: usize, vector: [f64; 3], w0: f64, w1: f64| Column {
@@ -73,6 +77,17 @@ fn column(key: ParamKey, arm: &Arm) -> Column {
         w0: w0 as f32,
         w1: w1 as f32,
         ..Column::new(Kind::Shift, joint as u8)
+    };
+    let probe_shift = |k: usize, vector: [f64; 3], w0: f64, w1: f64| {
+        let c = shift(n - 1, vector, w0, w1);
+        match arm.probe_at(k) {
+            Some(p) if arm.probe_count() > 1 => Column {
+                kind: Kind::ProbeShift,
+                order: u16::from(p.id),
+                ..c
+            },
+            _ => c,
+        }
     };
     let unit = |c: usize| {
         let mut e = [0.0; 3];
@@ -92,7 +107,7 @@ fn column(key: ParamKey, arm: &Arm) -> Column {
         ParamKey::LinkError(j, c) => shift(j, unit(c), 1.0, arm.joints[j].thermal),
         ParamKey::ProbeError(k, c) => {
             let thermal = arm.probe_at(k).map_or(0.0, |p| p.thermal);
-            shift(n - 1, unit(c), 1.0, thermal)
+            probe_shift(k, unit(c), 1.0, thermal)
         }
         ParamKey::Harmonic { joint, index, cos } => Column {
             order: arm.joints[joint].harmonics[index].order as u16,
@@ -100,7 +115,7 @@ fn column(key: ParamKey, arm: &Arm) -> Column {
         },
         ParamKey::Gravity(j) => Column::new(Kind::TurnGravity, j as u8),
         ParamKey::Thermal(Some(j)) => shift(j, arm.joints[j].actual_link(), 0.0, 1.0),
-        ParamKey::Thermal(None) => shift(n - 1, arm.probe.actual(), 0.0, 1.0),
+        ParamKey::Thermal(None) => probe_shift(0, arm.probe.actual(), 0.0, 1.0),
         ParamKey::Wobble {
             joint,
             index,
@@ -154,6 +169,61 @@ fn factor(c: &DMatrix<f64>) -> Result<Vec<f32>, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A probe's error and expansion: a shift of the last frame on an arm of one probe (its
+    /// tables as before), a shift of that probe, by id, on an arm of several; and the table
+    /// takes the block.
+    #[test]
+    fn a_probes_parameters_name_their_probe_on_an_arm_of_several() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/default-6-probes.toml");
+        let arm = quatarm_ref::calfile::read(&path).unwrap().arm;
+        let keys = [
+            ParamKey::ProbeError(0, 0),
+            ParamKey::ProbeError(2, 1),
+            ParamKey::Thermal(None),
+            ParamKey::LinkError(5, 2),
+        ];
+        let budget = Uncertainty {
+            parameters: keys.to_vec(),
+            covariance: (0..16)
+                .map(|k| if k % 5 == 0 { 1e-6 } else { 0.0 })
+                .collect(),
+            encoder_counts: vec![0.3; 6],
+            probing_mm: 0.002,
+            temperature_c: 0.2,
+            model_mm: 0.0,
+        };
+        let kinds = |arm: &Arm| -> Vec<(Kind, u16, u8)> {
+            let b = parameter_data(&budget, arm).unwrap().unwrap();
+            b.columns
+                .iter()
+                .map(|c| (c.kind, c.order, c.joint))
+                .collect()
+        };
+        assert_eq!(
+            kinds(&arm),
+            [
+                (Kind::ProbeShift, 1, 5),
+                (Kind::ProbeShift, 5, 5),
+                (Kind::ProbeShift, 1, 5),
+                (Kind::Shift, 0, 5)
+            ]
+        );
+        let table = crate::tablebuild::build_with(&arm, Some(&budget)).unwrap();
+        let t = quatarm::Table::parse(&table).unwrap();
+        assert_eq!(t.parameters().unwrap().count(), 4);
+        assert_eq!(t.probe_count(), 3);
+        // One probe: shifts, as before there were several.
+        let mut one = arm.clone();
+        one.more_probes.clear();
+        let mut single = budget.clone();
+        single.parameters[1] = ParamKey::ProbeError(0, 1);
+        let b = parameter_data(&single, &one).unwrap().unwrap();
+        assert!(b.columns[..3]
+            .iter()
+            .all(|c| c.kind == Kind::Shift && c.order == 0));
+    }
 
     /// L Lᵀ gives C back, also for a singular C (one parameter a copy of another).
     #[test]

@@ -6,17 +6,26 @@
 //! The decoder's promise is the product's: it never hands out coordinates it cannot vouch
 //! for. A report whose status carries a fault but which holds coordinates anyway (a hub never
 //! sends one; a broken or foreign hub might) is handed out without them.
+//!
+//! Reports are read by the protocol the last `Hello` announced: protocol 4 ends each with the
+//! mounted probe's id, protocols 1 to 3 have none (their hubs had one probe, id 0, which the
+//! decoder gives them). After a `Hello` of a protocol it does not know, it reads this
+//! protocol's; before any `Hello` (a stream joined mid-way, a capture cut after the hub's
+//! boot), this protocol's or, failing that, an older one's: a report of either is a byte
+//! short of the other's layout or one over, so no frame reads as both.
 
 use quatarm::stream::{
-    FrameError, FrameReader, Hello, Report, ToHost, UpdateAnswer, MAX_FRAME, PROTOCOL_VERSION,
+    decode_message, Coordinates, FrameError, FrameReader, Hello, ProbeAnswer, Report, Status,
+    ToHost, UpdateAnswer, MAX_FRAME, PROTOCOL_VERSION,
 };
+use serde::Deserialize;
 
 /// A forward jump of the sequence number up to this size is a gap (lost reports); a larger
 /// one is a step backwards modulo 2^32 (at ~1,700 reports/s, 2^31 reports are two weeks).
 const MAX_FORWARD_GAP: u32 = 1 << 31;
 
 /// One item of a decoded stream.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Item {
     /// A boot or mode-change announcement.
     Hello(Hello),
@@ -40,6 +49,8 @@ pub enum Item {
     Inconsistent(Report),
     /// The hub's answer to a calibration update step (`docs/update.md`).
     Update(UpdateAnswer),
+    /// The hub's answer to a probe selection: the id now mounted, or why not.
+    Probe(ProbeAnswer),
     /// A frame that failed its checks.
     Damaged(FrameError),
 }
@@ -49,7 +60,11 @@ impl Item {
     pub fn report(&self) -> Option<&Report> {
         match self {
             Item::Report(r) | Item::Backward { report: r, .. } | Item::Inconsistent(r) => Some(r),
-            Item::Hello(_) | Item::Repeated(_) | Item::Update(_) | Item::Damaged(_) => None,
+            Item::Hello(_)
+            | Item::Repeated(_)
+            | Item::Update(_)
+            | Item::Probe(_)
+            | Item::Damaged(_) => None,
         }
     }
 }
@@ -61,6 +76,8 @@ pub struct Stats {
     pub hellos: u64,
     /// Answers to update steps decoded.
     pub updates: u64,
+    /// Answers to probe selections decoded.
+    pub probe_answers: u64,
     /// Reports decoded (repeated ones not included).
     pub reports: u64,
     /// Reports that carried coordinates, as handed out.
@@ -83,8 +100,8 @@ pub struct Stats {
     /// they mean "wrong decoder", not "bad line".
     pub undecodable: u64,
     /// `Hello`s announcing a `protocol` this decoder does not read (it reads 1 to
-    /// [`PROTOCOL_VERSION`], 3: the same messages, protocol 2 adding `Hello::live` and the
-    /// update messages, protocol 3 the coordinates' U95).
+    /// [`PROTOCOL_VERSION`], 4: the same messages, protocol 2 adding `Hello::live` and the
+    /// update messages, protocol 3 the coordinates' U95, protocol 4 the probes).
     pub foreign_protocol: u64,
     /// Bytes skipped before the first delimiter (joining a running stream).
     pub skipped_bytes: u64,
@@ -102,7 +119,7 @@ impl Stats {
 
     /// Frames that passed every check.
     pub fn valid_frames(&self) -> u64 {
-        self.hellos + self.reports + self.repeated + self.updates
+        self.hellos + self.reports + self.repeated + self.updates + self.probe_answers
     }
 }
 
@@ -113,7 +130,46 @@ pub struct Decoder {
     last: Option<Report>,
     /// Bytes since the last delimiter (after the first one when joining).
     open: u64,
+    /// The protocol the last `Hello` announced, by which reports are read (`None` before the
+    /// first).
+    protocol: Option<u16>,
     stats: Stats,
+}
+
+/// A hub→host message of protocols 1 to 3: reports without the probe's id.
+#[derive(Deserialize)]
+enum Legacy {
+    Hello(Hello),
+    Report(LegacyReport),
+    Update(UpdateAnswer),
+}
+
+/// A report of protocols 1 to 3 ([`Report`] without `probe`; its coordinates read as
+/// [`Coordinates`] reads those of every protocol).
+#[derive(Deserialize)]
+struct LegacyReport {
+    seq: u32,
+    time_us: u64,
+    status: Status,
+    point: Option<Coordinates>,
+}
+
+impl From<Legacy> for ToHost {
+    fn from(m: Legacy) -> ToHost {
+        match m {
+            Legacy::Hello(h) => ToHost::Hello(h),
+            Legacy::Update(a) => ToHost::Update(a),
+            // The only probe a table had before protocol 4: id 0 (the header's byte 44,
+            // reserved and 0 then).
+            Legacy::Report(r) => ToHost::Report(Report {
+                seq: r.seq,
+                time_us: r.time_us,
+                status: r.status,
+                point: r.point,
+                probe: 0,
+            }),
+        }
+    }
 }
 
 impl Decoder {
@@ -123,6 +179,7 @@ impl Decoder {
             reader: FrameReader::new(),
             last: None,
             open: 0,
+            protocol: None,
             stats: Stats::default(),
         }
     }
@@ -162,19 +219,33 @@ impl Decoder {
         } else {
             self.open += 1;
         }
-        let item = match self.reader.push::<ToHost>(byte)? {
+        let legacy = |body| decode_message::<Legacy>(body).map(ToHost::from);
+        let message = self
+            .reader
+            .push_message(byte)?
+            .and_then(|body| match self.protocol {
+                Some(1..=3) => legacy(body),
+                Some(_) => decode_message::<ToHost>(body),
+                None => decode_message::<ToHost>(body).or_else(|_| legacy(body)),
+            });
+        let item = match message {
             Ok(ToHost::Hello(h)) => {
                 // A hub that (re)boots numbers from 0 again.
                 self.last = None;
                 self.stats.hellos += 1;
-                self.stats.foreign_protocol +=
-                    u64::from(!(1..=PROTOCOL_VERSION).contains(&h.protocol));
+                let known = (1..=PROTOCOL_VERSION).contains(&h.protocol);
+                self.stats.foreign_protocol += u64::from(!known);
+                self.protocol = Some(if known { h.protocol } else { PROTOCOL_VERSION });
                 Item::Hello(h)
             }
             Ok(ToHost::Report(r)) => self.report(r),
             Ok(ToHost::Update(a)) => {
                 self.stats.updates += 1;
                 Item::Update(a)
+            }
+            Ok(ToHost::Probe(a)) => {
+                self.stats.probe_answers += 1;
+                Item::Probe(a)
             }
             Err(e) => {
                 match e {
@@ -248,7 +319,109 @@ mod tests {
             time_us: u64::from(seq) * 1000,
             status: Status(Status::TABLE_VALID),
             point: Some(POINT),
+            probe: 7,
         }
+    }
+
+    /// A frame of `msg` as postcard writes it (tuples field by field, as enums and structs).
+    fn raw_frame(msg: &impl serde::Serialize) -> Vec<u8> {
+        let mut out = [0u8; MAX_FRAME];
+        let n = encode(msg, &mut out).unwrap();
+        out[..n].to_vec()
+    }
+
+    /// A protocol-3 report of `seq` as an older hub sends it: no probe id after the point.
+    fn v3_frame(seq: u32, point: Option<Coordinates>) -> Vec<u8> {
+        let r = report(seq);
+        raw_frame(&(1u8, r.seq, r.time_us, r.status, point))
+    }
+
+    /// Captures of protocols 3 and 4 decode by the protocol their `Hello` announced: a
+    /// protocol-3 report with the only probe an older hub had, id 0; a protocol-4 one with
+    /// its own. A report of one layout under a `Hello` of the other is refused, not misread.
+    #[test]
+    fn reports_are_read_by_the_protocol_of_the_last_hello() {
+        let hello = |protocol: u16| raw_frame(&(0u8, protocol, 0u8, 6u8, 1u16, None::<u8>));
+        // Protocol 4's Hello: the mounted probe and the ids after `live`.
+        let v4_hello = raw_frame(&ToHost::Hello(Hello {
+            protocol: 4,
+            precision: quatarm::stream::NumberFormat::F32,
+            joints: 6,
+            status: Status(Status::TABLE_VALID),
+            live: None,
+            probe: 7,
+            probes: heapless::Vec::from_slice(&[7, 2]).unwrap(),
+        }));
+        let no_u95 = Coordinates {
+            u95_nm: None,
+            ..POINT
+        };
+        let bytes = [
+            hello(3),
+            v3_frame(0, Some(POINT)),
+            v3_frame(1, None),
+            frame(2),
+            v4_hello,
+            frame(0),
+            v3_frame(1, Some(POINT)),
+            frame_of(Report {
+                point: Some(no_u95),
+                ..report(2)
+            }),
+            hello(2),
+            v3_frame(0, Some(no_u95)),
+        ]
+        .concat();
+        let mut d = Decoder::from_start();
+        let items = d.push_all(&bytes);
+        let reports: Vec<(u32, u8, Option<u32>)> = items
+            .iter()
+            .filter_map(Item::report)
+            .map(|r| (r.seq, r.probe, r.point.and_then(|p| p.u95_nm)))
+            .collect();
+        assert_eq!(
+            reports,
+            [
+                (0, 0, Some(4_000)),
+                (1, 0, None),
+                (0, 7, Some(4_000)),
+                (2, 7, None),
+                (0, 0, None)
+            ]
+        );
+        match &items[4] {
+            Item::Hello(h) => assert_eq!((h.probe, h.probes.as_slice()), (7, &[7, 2][..])),
+            other => panic!("{other:?}"),
+        }
+        let s = d.finish();
+        assert_eq!((s.undecodable, s.foreign_protocol, s.hellos), (2, 0, 3));
+        assert!(matches!(items[3], Item::Damaged(FrameError::Decode)));
+        assert!(matches!(items[6], Item::Damaged(FrameError::Decode)));
+    }
+
+    /// Without a `Hello` (a capture joined mid-stream) both layouts are read, each report by
+    /// the one it fits; a probe selection's answer is an item of its own.
+    #[test]
+    fn without_a_hello_either_layout_is_read_and_probe_answers_are_counted() {
+        let bytes = [
+            v3_frame(0, Some(POINT)),
+            frame(1),
+            raw_frame(&ToHost::Probe(Ok(2))),
+            raw_frame(&ToHost::Probe(Err(quatarm::stream::ProbeRefusal::Unknown))),
+        ]
+        .concat();
+        let mut d = Decoder::joining();
+        let items = d.push_all(&[&[0u8][..], &bytes].concat());
+        assert_eq!(items[0].report().map(|r| r.probe), Some(0));
+        assert_eq!(items[1].report().map(|r| r.probe), Some(7));
+        assert_eq!(items[2], Item::Probe(Ok(2)));
+        assert_eq!(
+            items[3],
+            Item::Probe(Err(quatarm::stream::ProbeRefusal::Unknown))
+        );
+        let s = d.finish();
+        assert_eq!((s.reports, s.probe_answers, s.damaged()), (2, 2, 0));
+        assert_eq!(s.valid_frames(), 4);
     }
 
     fn frame_of(r: Report) -> Vec<u8> {

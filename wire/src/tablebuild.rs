@@ -4,7 +4,9 @@
 //! point: the misalignment quaternion with the zero offset folded in,
 //! M'_i = R(e1, δα) · R(e2, δβ) · R(u, Δθ) (the spec's M_i followed by the constant part of the
 //! joint rotation, which commutes with the rest of R(u, ·)), the same as a matrix, the link and
-//! probe vectors with their errors, and the probe's unit direction. Layout: `quatarm::table`.
+//! probe vectors with their errors, and each probe's unit direction. The arm's first probe is
+//! the table's (its id in the header), its other probes the block after every other
+//! (`quatarm::table::probes`). Layout: `quatarm::table`.
 
 use crate::budget::{budget_data, parameter_data};
 use quatarm::table::wobble::{WobbleData, WobbleTerm, MAX_TERMS as WOBBLE_TERMS};
@@ -15,7 +17,7 @@ use quatarm::table::{
 use quatarm_ref::arm::Wobble;
 use quatarm_ref::forward::{axis_vector, rotation};
 use quatarm_ref::uncertainty::Uncertainty;
-use quatarm_ref::{Arm, Axis, Joint};
+use quatarm_ref::{Arm, Axis, Joint, Probe};
 
 /// Why an arm cannot become a table.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -136,20 +138,52 @@ pub fn table_data(arm: &Arm) -> Result<TableData, BuildError> {
             harmonics,
         };
     }
-    let v = arm.probe.actual();
-    let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-    if len <= 0.0 {
-        return Err(err("probe.vector", "vector + error is zero"));
+    // The first probe in its record, the others in the block (the reference keeps at most
+    // seven others, ids distinct; the table's parser checks both again).
+    let several = arm.probe_count() > 1;
+    if arm.more_probes.len() > d.more_probes.len() {
+        return Err(err(
+            "probe",
+            format!(
+                "{} probes; the table holds {}",
+                arm.probe_count(),
+                d.more_probes.len() + 1
+            ),
+        ));
     }
-    geometric |= arm.probe.error != [0.0; 3];
-    d.probe = ProbeData {
-        vector: v,
-        direction: v.map(|x| x / len),
-        thermal: arm.probe.thermal,
-        ball_diameter: arm.probe.ball_diameter,
-    };
+    for (k, p) in arm.probes().enumerate() {
+        let path = if several {
+            format!("probe[{}]", k + 1)
+        } else {
+            "probe".to_owned()
+        };
+        let data = probe_data(p, &path)?;
+        match k {
+            0 => d.probe = data,
+            _ => d.more_probes[k - 1] = data,
+        }
+        geometric |= p.error != [0.0; 3];
+    }
+    d.more_probe_count = arm.more_probes.len() as u8;
     d.flags = d.content_flags() | if geometric { FLAG_GEOMETRIC } else { 0 };
     Ok(d)
+}
+
+/// A probe's record: its vector with its error, the unit direction, thermal expansion, ball
+/// diameter and id. `path` names it in errors (`probe`, or `probe[K]` of several).
+fn probe_data(p: &Probe, path: &str) -> Result<ProbeData, BuildError> {
+    let v = p.actual();
+    let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    if len <= 0.0 {
+        return Err(err(format!("{path}.vector"), "vector + error is zero"));
+    }
+    Ok(ProbeData {
+        id: p.id,
+        vector: v,
+        direction: v.map(|x| x / len),
+        thermal: p.thermal,
+        ball_diameter: p.ball_diameter,
+    })
 }
 
 /// A joint's axis wobble for the table: its non-zero terms, and the two fixed axes the chains
@@ -213,14 +247,19 @@ fn wobble_data(j: &Joint, path: &str) -> Result<WobbleData, BuildError> {
     Ok(d)
 }
 
-/// Σ |components| of the links and the probe: the reach the table limits.
+/// Σ |components| of the links and the longest probe: the reach the table limits (the
+/// firmware's chain checks it with the longest probe too).
 fn reach_mm(d: &TableData) -> f64 {
     let l1 = |v: &[f64; 3]| v.iter().map(|x| x.abs()).sum::<f64>();
+    let longest = std::iter::once(&d.probe)
+        .chain(d.other_probes())
+        .map(|p| l1(&p.vector))
+        .fold(0.0, f64::max);
     d.joints[..usize::from(d.joint_count)]
         .iter()
         .map(|j| l1(&j.link))
         .sum::<f64>()
-        + l1(&d.probe.vector)
+        + longest
 }
 
 /// The table bytes for an arm, checked by the firmware's own parser before they are returned.
@@ -241,8 +280,8 @@ pub fn build_with(arm: &Arm, budget: Option<&Uncertainty>) -> Result<Vec<u8>, Bu
             "joint.link",
             format!(
                 "the arm reaches {reach:.1} mm (sum of |components| of the links and the \
-                 probe); a table holds at most {} mm, since the stream's coordinates end at \
-                 2147.48 mm and heat may stretch the arm by 4 %",
+                 longest probe); a table holds at most {} mm, since the stream's coordinates \
+                 end at 2147.48 mm and heat may stretch the arm by 4 %",
                 quatarm::table::limits::REACH_MM
             ),
         ));
@@ -330,5 +369,83 @@ mod tests {
         many.joints[2].wobble[3].order = 65;
         let e = build_with(&many, None).unwrap_err().to_string();
         assert!(e.contains("joint[3].wobble[4].order: 65"), "{e}");
+    }
+}
+
+#[cfg(test)]
+mod probe_tests {
+    use super::*;
+    use quatarm::table::{FLAG_PROBES, FLAG_THERMAL};
+
+    fn repo(path: &str) -> std::path::PathBuf {
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("..")
+            .join(path)
+    }
+
+    fn read(path: &str) -> quatarm_ref::calfile::Parsed {
+        quatarm_ref::calfile::read(&repo(path)).unwrap()
+    }
+
+    /// Tables of one probe are byte for byte what the builder wrote before there were
+    /// several: the table fuzz target's seeds, written by it then (`cargo xtask
+    /// fuzz-seeds`), with and without a budget, 6 and 7 joints.
+    #[test]
+    fn single_probe_tables_are_unchanged() {
+        let cases = [
+            ("data/default-6-full.toml", false, "seed-default-6-full.bin"),
+            (
+                "data/default-6-full.toml",
+                true,
+                "seed-default-6-full-budget.bin",
+            ),
+            ("data/default-6.toml", false, "seed-default-6.bin"),
+            (
+                "data/mukca/mukca-panda-panda_3-repo-calibrated.toml",
+                false,
+                "seed-panda_3.bin",
+            ),
+        ];
+        for (file, budget, seed) in cases {
+            let f = read(file);
+            let built = build_with(&f.arm, f.uncertainty.as_ref().filter(|_| budget)).unwrap();
+            let before = std::fs::read(repo("fuzz/corpus/table_parse").join(seed)).unwrap();
+            assert!(built == before, "{file}: the table changed");
+        }
+    }
+
+    /// Three probes: the first's id in the header, the others in the block in file order,
+    /// each as the reference has it; the reach taken with the longest.
+    #[test]
+    fn every_probe_reaches_the_table() {
+        let arm = read("data/default-6-probes.toml").arm;
+        let bytes = build(&arm).unwrap();
+        let t = quatarm::Table::parse(&bytes).unwrap();
+        assert_ne!(t.flags() & FLAG_PROBES, 0);
+        assert_ne!(t.flags() & FLAG_THERMAL, 0);
+        assert_eq!(t.probe_count(), 3);
+        assert_eq!(bytes[44], 1);
+        for (k, p) in arm.probes().enumerate() {
+            let d = t.probe_at(k).unwrap();
+            let v = p.actual();
+            assert_eq!(
+                (d.id, d.vector, d.thermal),
+                (p.id, v, p.thermal),
+                "probe {k}"
+            );
+            assert_eq!(d.ball_diameter, p.ball_diameter);
+            let len = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+            assert_eq!(d.direction, v.map(|x| x / len));
+        }
+        // A longer probe than the arm can hold: refused by its length, naming the reach.
+        let mut long = arm.clone();
+        long.more_probes[1].vector = [0.0, 0.0, 700.0];
+        let e = build(&long).unwrap_err().to_string();
+        assert!(e.contains("longest probe"), "{e}");
+        // A zero vector names its probe.
+        let mut zero = arm.clone();
+        zero.more_probes[0].vector = [0.0; 3];
+        zero.more_probes[0].error = [0.0; 3];
+        assert_eq!(build(&zero).unwrap_err().path, "probe[2].vector");
     }
 }

@@ -8,8 +8,8 @@ use host_tests::boards::root;
 use host_tests::e2e::{calibration, default_recording_path};
 use host_tests::recording::{self, frame, replay_bytes};
 use quatarm::stream::{
-    encode, Coordinates, Hello, LiveTable, Mode, NumberFormat, Report, Status, ToDevice, ToHost,
-    MAX_FRAME,
+    encode, Coordinates, Hello, LiveTable, Mode, NumberFormat, ProbeRefusal, Report, Status,
+    ToDevice, ToHost, MAX_FRAME,
 };
 
 fn write(target: &str, name: &str, bytes: &[u8]) -> Result<()> {
@@ -51,6 +51,7 @@ pub fn run() -> Result<()> {
     for (name, path) in [
         ("default-6-full", data.join("default-6-full.toml")),
         ("default-6", data.join("default-6.toml")),
+        ("default-6-probes", data.join("default-6-probes.toml")),
         ("panda_3", panda.clone()),
     ] {
         let (_, table) = calibration(&path)?;
@@ -101,6 +102,17 @@ pub fn run() -> Result<()> {
         update.extend(frame(&ToDevice::Update(step)));
     }
     write("hub_frames", "update.bin", &picked(0, &update))?;
+    // Probe selections: known and unknown ids between readings, in both modes.
+    let mut probes = vec![0u8];
+    for (i, id) in [2u8, 9, 0, 5, 255].into_iter().enumerate() {
+        probes.extend(frame(&ToDevice::SelectProbe(id)));
+        probes.extend(frame(&ToDevice::Reading(readings[i % readings.len()])));
+        if i == 2 {
+            probes.extend(frame(&ToDevice::SetMode(Mode::Text)));
+        }
+    }
+    // Pick 0x10: the hub on the three-probe table (`fuzz/fuzz_targets/hub_frames.rs`).
+    write("hub_frames", "probes.bin", &picked(0x10, &probes))?;
 
     let streams = root().join("armcal/tests/streams");
     for name in ["s-dup.bin", "s-fault-with-point.bin"] {
@@ -117,6 +129,8 @@ pub fn run() -> Result<()> {
             seq: 3,
             crc: 0x1234_5678,
         }),
+        probe: 1,
+        probes: [1u8, 2, 5].into_iter().collect(),
     })));
     for seq in 0..4u32 {
         let fault = seq == 2;
@@ -129,7 +143,12 @@ pub fn run() -> Result<()> {
                 dir_e9: [0, -600_000_000, 800_000_000],
                 u95_nm: (seq != 1).then_some(9_800 + seq),
             }),
+            probe: if seq < 2 { 1 } else { 5 },
         })));
+        if seq == 1 {
+            session.extend(host_frame(&ToHost::Probe(Ok(5))));
+            session.extend(host_frame(&ToHost::Probe(Err(ProbeRefusal::Unknown))));
+        }
     }
     write("host_frames", "session.bin", &session)?;
 

@@ -124,7 +124,7 @@ fn open(args: &Args) -> Result<(Box<dyn Read>, bool, String)> {
 fn note(item: &Item) {
     match item {
         Item::Hello(h) => eprintln!(
-            "# hub: protocol {}, {:?}, {} joints, table {}{}",
+            "# hub: protocol {}, {:?}, {} joints, table {}{}{}",
             h.protocol,
             h.precision,
             h.joints,
@@ -135,9 +135,16 @@ fn note(item: &Item) {
                     l.slot, l.seq, l.crc
                 ),
                 None => String::new(),
+            },
+            if h.probes.is_empty() {
+                String::new()
+            } else {
+                format!(", probe {} of {:?}", h.probe, h.probes.as_slice())
             }
         ),
         Item::Update(a) => eprintln!("# update: {a:?}"),
+        Item::Probe(Ok(id)) => eprintln!("# probe {id} mounted"),
+        Item::Probe(Err(e)) => eprintln!("# probe selection refused: {e:?}"),
         Item::Damaged(e) => eprintln!("# damaged frame: {e}"),
         Item::Repeated(r) => {
             eprintln!("# report {} repeated: not written again", r.seq)

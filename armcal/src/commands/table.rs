@@ -269,12 +269,24 @@ pub fn show(t: &Table<'_>) -> String {
             );
         }
     }
-    let p = t.probe();
-    let _ = writeln!(
-        s,
-        "probe: vector (mm) = [{:.6}, {:.6}, {:.6}], direction = [{:.12}, {:.12}, {:.12}], thermal = {:e} /degC",
-        p.vector[0], p.vector[1], p.vector[2], p.direction[0], p.direction[1], p.direction[2], p.thermal
-    );
+    // Every probe, the first (mounted at boot) first.
+    for k in 0..t.probe_count() {
+        let Some(p) = t.probe_at(k) else { continue };
+        let _ = writeln!(
+            s,
+            "probe {}{}: vector (mm) = [{:.6}, {:.6}, {:.6}], direction = [{:.12}, {:.12}, {:.12}], thermal = {:e} /degC, ball diameter = {} mm",
+            p.id,
+            if k == 0 { " (mounted at boot)" } else { "" },
+            p.vector[0],
+            p.vector[1],
+            p.vector[2],
+            p.direction[0],
+            p.direction[1],
+            p.direction[2],
+            p.thermal,
+            p.ball_diameter
+        );
+    }
     match t.budget() {
         None => {
             let _ = writeln!(s, "uncertainty: none (the hub streams no U95)");

@@ -4,7 +4,9 @@
 //! (`Table::parse_for`); any refusal of the parser or of the chain's constructor becomes the
 //! [`TableState`] every report then carries, and no chain exists to produce coordinates.
 //! Where the table carries an uncertainty budget and the board's number format computes it,
-//! every point gets its U95 ([`PointUncertainty`]).
+//! every point gets its U95 ([`PointUncertainty`]). The chain ends at the table's first probe
+//! from boot; [`Calibration::mount`] converts another of the table's when the host selects
+//! it.
 
 use quatarm::stream::{self, Coordinates, Hub, TableState};
 use quatarm::uncertainty::Uncertainty;
@@ -46,6 +48,8 @@ pub trait PointUncertainty<'a, P: Evaluator>: Sized {
     fn of(table: &Table<'a>) -> Option<Self>;
     /// U95 of a point `chain` evaluated (nm); `None` where it cannot be computed.
     fn u95_nm(&self, chain: &Chain<P>, counts: &[u32], temp_mc: i32, p: &Point<P>) -> Option<u32>;
+    /// Follows the chain to the table's probe `k`; `false` where it cannot.
+    fn mount(&mut self, table: &Table<'a>, k: usize) -> bool;
 }
 
 impl<'a, P: Evaluator> PointUncertainty<'a, P> for Uncertainty<'a, P> {
@@ -56,6 +60,9 @@ impl<'a, P: Evaluator> PointUncertainty<'a, P> for Uncertainty<'a, P> {
     }
     fn u95_nm(&self, chain: &Chain<P>, counts: &[u32], temp_mc: i32, p: &Point<P>) -> Option<u32> {
         Uncertainty::u95_nm(self, chain, counts, temp_mc, p).ok()
+    }
+    fn mount(&mut self, table: &Table<'a>, k: usize) -> bool {
+        Uncertainty::mount(self, table, k).is_ok()
     }
 }
 
@@ -70,6 +77,9 @@ impl<P: Evaluator> PointUncertainty<'_, P> for NoUncertainty {
     fn u95_nm(&self, _: &Chain<P>, _: &[u32], _: i32, _: &Point<P>) -> Option<u32> {
         match *self {}
     }
+    fn mount(&mut self, _: &Table<'_>, _: usize) -> bool {
+        match *self {}
+    }
 }
 
 /// The boot check's outcome: a chain, or why there is none, and its points' uncertainty
@@ -78,6 +88,8 @@ impl<P: Evaluator> PointUncertainty<'_, P> for NoUncertainty {
 pub struct Calibration<'a, P: HubEvaluator> {
     chain: Result<Chain<P>, TableState>,
     uncertainty: Option<P::Uncertainty<'a>>,
+    /// The table the chain was built from (with the chain only), whose probes it mounts.
+    table: Option<Table<'a>>,
 }
 
 impl<'a, P: HubEvaluator> Calibration<'a, P> {
@@ -87,16 +99,40 @@ impl<'a, P: HubEvaluator> Calibration<'a, P> {
         Calibration {
             chain: Err(state),
             uncertainty: None,
+            table: None,
         }
     }
 
     fn of(table: Result<Table<'a>, TableState>) -> Calibration<'a, P> {
         let chain = table.and_then(build::<P>);
-        let uncertainty = match (&chain, table) {
-            (Ok(_), Ok(t)) => P::Uncertainty::of(&t),
-            _ => None,
+        let table = table.ok().filter(|_| chain.is_ok());
+        let uncertainty = table.as_ref().and_then(P::Uncertainty::of);
+        Calibration {
+            chain,
+            uncertainty,
+            table,
+        }
+    }
+
+    /// Mounts the table's probe `k` (its index in the table, [`Hub::select`]'s): the chain
+    /// and its points' uncertainty end at that probe from the next reading on. `false`, and
+    /// the probe before stays, where there is no chain or the probe cannot be converted
+    /// (which the boot's check of the reach with the longest probe rules out).
+    pub fn mount(&mut self, k: usize) -> bool {
+        let (Ok(chain), Some(table)) = (&mut self.chain, &self.table) else {
+            return false;
         };
-        Calibration { chain, uncertainty }
+        if chain.mount(table, k).is_err() {
+            return false;
+        }
+        // It builds on the same model as the chain, which just took the probe; were it to
+        // fail anyway, the points go without U95 rather than with one of another probe.
+        if let Some(u) = &mut self.uncertainty {
+            if !u.mount(table, k) {
+                self.uncertainty = None;
+            }
+        }
+        true
     }
 }
 
@@ -136,10 +172,15 @@ fn build<P: Evaluator>(table: Table<'_>) -> Result<Chain<P>, TableState> {
 }
 
 impl<P: HubEvaluator> Calibration<'_, P> {
-    /// A hub that reports this calibration's state, joints and precision.
+    /// A hub that reports this calibration's state, joints and precision, and the table's
+    /// probes, the first mounted.
     #[inline(always)] // called once per image: out of line it only adds a call (24 B on the M0)
     pub fn hub(&self) -> Hub {
-        Hub::new(self.state(), self.joints(), P::STREAM)
+        let hub = Hub::new(self.state(), self.joints(), P::STREAM);
+        match &self.table {
+            Some(t) => hub.with_probes((0..t.probe_count()).filter_map(|k| t.probe_id(k))),
+            None => hub,
+        }
     }
 }
 

@@ -19,13 +19,13 @@
 use embedded_storage::nor_flash::NorFlash;
 use quatarm::encoder::{read_joints, AbsoluteEncoder};
 use quatarm::signature::KEY_LEN;
-use quatarm::stream::{Coordinates, Event, Hub, Replay, ToHost, UpdateAnswer, MAX_OUTPUT};
+use quatarm::stream::{Event, Hub, Replay, ToHost, UpdateAnswer, MAX_OUTPUT};
 use quatarm::table::MAX_TABLE_LEN;
 use quatarm::temperature::TemperatureSensor;
 use quatarm::update::session::Step;
 use quatarm::update::{Accept, Layout};
 
-use crate::calibration::{HubEvaluator, JOINTS};
+use crate::calibration::{Calibration, HubEvaluator, JOINTS};
 use crate::clock;
 use crate::flash::Port;
 use crate::serve::answer_update;
@@ -71,9 +71,8 @@ pub fn run<P: HubEvaluator, const CORE_HZ: u32, F: NorFlash>(
     let mut scratch = [0u8; MAX_TABLE_LEN];
     let mut port = Port::new(flash, layout, accept, &mut scratch);
     loop {
-        let boot = port.boot::<P>(&mut live);
+        let mut boot = port.boot::<P>(&mut live);
         let mut hub = boot.hub();
-        let cal = &boot.calibration;
         serve_live(
             link,
             &mut hub,
@@ -81,25 +80,26 @@ pub fn run<P: HubEvaluator, const CORE_HZ: u32, F: NorFlash>(
             period_us,
             || clock::now_us(CORE_HZ),
             thermometer,
-            |counts, temp_mc| cal.eval(counts, temp_mc),
+            &mut boot.calibration,
             |step| port.step(step),
         );
     }
 }
 
 /// Runs the hub: a report every `period_us` from `encoders` (joint 1 first) and
-/// `thermometer`, or one per replayed reading while a replay is under way; update steps
-/// carried out by `update` (`Port::step`). Returns when an update has committed a new table,
-/// for the caller to boot on.
+/// `thermometer`, or one per replayed reading while a replay is under way; `cal` evaluates
+/// them and mounts the probes the host selects; update steps carried out by `update`
+/// (`Port::step`). Returns when an update has committed a new table, for the caller to boot
+/// on.
 #[allow(clippy::too_many_arguments)] // the loop's whole world; one caller
-pub fn serve_live<L: PollLink, E: AbsoluteEncoder, T: TemperatureSensor, X>(
+pub fn serve_live<L: PollLink, E: AbsoluteEncoder, T: TemperatureSensor, P: HubEvaluator>(
     link: &mut L,
     hub: &mut Hub,
     encoders: &mut [E],
     period_us: u64,
     mut now_us: impl FnMut() -> u64,
     thermometer: &mut T,
-    mut eval: impl FnMut(&[u32], i32) -> Result<Coordinates, X>,
+    cal: &mut Calibration<'_, P>,
     mut update: impl FnMut(&Step) -> UpdateAnswer,
 ) {
     let mut out = [0u8; MAX_OUTPUT];
@@ -121,15 +121,16 @@ pub fn serve_live<L: PollLink, E: AbsoluteEncoder, T: TemperatureSensor, X>(
     let mut counts = [0u32; quatarm::table::MAX_JOINTS];
     let joints = encoders.len().min(counts.len());
     loop {
+        let eval = |counts: &[u32], temp_mc| cal.eval(counts, temp_mc);
         let report = if let Some(byte) = link.try_read() {
             match replay.push(byte) {
                 Some(Event::Reading(r)) => {
                     replaying = true;
-                    hub.report(now_us(), Ok(&r), &mut eval)
+                    hub.report(now_us(), Ok(&r), eval)
                 }
                 Some(Event::InputError(e)) => {
                     defmt::warn!("damaged input frame: {}", e);
-                    hub.report(now_us(), Err(e), &mut eval)
+                    hub.report(now_us(), Err(e), eval)
                 }
                 Some(Event::SetMode(m)) => {
                     hub.set_mode(m);
@@ -147,6 +148,11 @@ pub fn serve_live<L: PollLink, E: AbsoluteEncoder, T: TemperatureSensor, X>(
                     }
                     continue;
                 }
+                Some(Event::SelectProbe(id)) => {
+                    let answer = hub.select(id, |k| cal.mount(k));
+                    link.write(hub.render(&ToHost::Probe(answer), &mut out));
+                    continue;
+                }
                 None => continue,
             }
         } else if !replaying && now_us() >= next {
@@ -162,7 +168,7 @@ pub fn serve_live<L: PollLink, E: AbsoluteEncoder, T: TemperatureSensor, X>(
                 temp_ok = temp_mc.is_some();
             }
             let faults = read_joints(&mut encoders[..joints], &mut counts[..joints]);
-            hub.report_sample(now_us(), &counts[..joints], faults, temp_mc, &mut eval)
+            hub.report_sample(now_us(), &counts[..joints], faults, temp_mc, eval)
         } else {
             continue;
         };

@@ -5,6 +5,7 @@
 use cortex_m_semihosting::debug::{self, EXIT_FAILURE, EXIT_SUCCESS};
 
 use embedded_storage::nor_flash::NorFlash;
+use quatarm::stream::Replay;
 use quatarm::table::MAX_TABLE_LEN;
 use quatarm::update::{Accept, Refusal};
 
@@ -40,14 +41,14 @@ pub fn hub_main<P: HubEvaluator, const CORE_HZ: u32, L: Link, F: NorFlash>(
     let mut scratch = [0u8; MAX_TABLE_LEN];
     let mut port = Port::new(open_flash(&map), map.layout, accept, &mut scratch);
     loop {
-        let boot = port.boot::<P>(&mut live);
+        let mut boot = port.boot::<P>(&mut live);
         let mut hub = boot.hub();
-        let cal = &boot.calibration;
         let served = serve(
             &mut link,
             &mut hub,
+            &mut boot.calibration,
+            Replay::new(),
             || clock::now_us(CORE_HZ),
-            |counts, temp_mc| cal.eval(counts, temp_mc),
             |step| port.step(step),
         );
         if let Served::Ended { .. } = served {
@@ -60,21 +61,23 @@ pub fn hub_main<P: HubEvaluator, const CORE_HZ: u32, L: Link, F: NorFlash>(
 
 /// The whole run of a QEMU hub image without an update port: as [`hub_main`], on the table
 /// of slot 0 (`CALTABLE`) as a debug probe flashed it; update steps are answered
-/// `NotSupported`. For the qemu-m0 hub, whose 32 KiB budget the updater does not fit
-/// (37,228 bytes with it, rustup 1.95; README, "On the targets").
+/// `NotSupported`, known by their frames' variant index without being decoded. For the
+/// qemu-m0 hub, whose 32 KiB budget the updater does not fit (37,228 bytes with it, rustup
+/// 1.95; README, "On the targets").
 pub fn hub_main_without_update<P: HubEvaluator, const CORE_HZ: u32, L: Link>(
     ram_start: usize,
     open_link: impl FnOnce() -> L,
 ) -> ! {
     stack::paint();
     let mut link = start(open_link);
-    let cal = calibration::load::<P>(table_region::bytes());
+    let mut cal = calibration::load::<P>(table_region::bytes());
     let mut hub = cal.hub();
     serve(
         &mut link,
         &mut hub,
+        &mut cal,
+        Replay::without_update(),
         || clock::now_us(CORE_HZ),
-        |counts, temp_mc| cal.eval(counts, temp_mc),
         |_| Err(Refusal::NotSupported),
     );
     log_memory(ram_start);

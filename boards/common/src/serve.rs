@@ -1,9 +1,10 @@
 //! The replay loop every board runs: read bytes, evaluate readings, send reports, carry out
-//! calibration update steps.
+//! calibration update steps and probe selections.
 
-use quatarm::stream::{Coordinates, Event, Hub, Replay, ToHost, UpdateAnswer, MAX_OUTPUT};
-use quatarm::update::session::Step;
+use quatarm::stream::{Event, Hub, Replay, StepReading, ToHost, UpdateAnswer, MAX_OUTPUT};
 use quatarm::update::Accepted;
+
+use crate::calibration::{Calibration, HubEvaluator};
 
 /// A byte link to the host (a UART).
 pub trait Link {
@@ -24,41 +25,45 @@ pub enum Served {
     Updated,
 }
 
-/// Announces the hub, then answers every incoming frame until the host sends `End` or an
-/// update commits. `now_us` stamps each report; `eval` runs the chain (it is called only for
-/// readings that may give coordinates, see [`Hub::report`]); `update` carries out one update
-/// step (`quatarm::update::Updater::step` on the board's flash). Readings keep being answered
-/// while an update is under way, on the old table, until the commit.
-pub fn serve<L: Link, E>(
+/// Announces the hub, then answers every incoming frame of `replay` until the host sends `End`
+/// or an update commits. `now_us` stamps each report; `cal` evaluates the readings that may
+/// give coordinates (see [`Hub::report`]) and mounts the probes the host selects; `update`
+/// carries out one update step (`quatarm::update::Updater::step` on the board's flash; a hub
+/// without an update port reads no step, [`Replay::without_update`], and refuses each).
+/// Readings keep being answered while an update is under way, on the old table, until the
+/// commit.
+pub fn serve<L: Link, P: HubEvaluator, S: StepReading>(
     link: &mut L,
     hub: &mut Hub,
+    cal: &mut Calibration<'_, P>,
+    mut replay: Replay<S>,
     mut now_us: impl FnMut() -> u64,
-    mut eval: impl FnMut(&[u32], i32) -> Result<Coordinates, E>,
-    mut update: impl FnMut(&Step) -> UpdateAnswer,
+    mut update: impl FnMut(&S) -> UpdateAnswer,
 ) -> Served {
     let mut out = [0u8; MAX_OUTPUT];
     // A lone delimiter first: whoever listens is in sync from the first frame on.
     link.write(&[0]);
     link.write(hub.render(&hub.hello(), &mut out));
     defmt::info!(
-        "hub up: table {}, {=u8} joints, {}",
+        "hub up: table {}, {=u8} joints, {}, probe {=u8}",
         hub.table(),
         hub.joints(),
-        hub.precision()
+        hub.precision(),
+        hub.probe()
     );
-    let mut replay = Replay::new();
     let mut reports = 0u32;
     let mut input_errors = 0u32;
     loop {
         let Some(event) = replay.push(link.read()) else {
             continue;
         };
+        let eval = |counts: &[u32], temp_mc| cal.eval(counts, temp_mc);
         let report = match event {
-            Event::Reading(r) => hub.report(now_us(), Ok(&r), &mut eval),
+            Event::Reading(r) => hub.report(now_us(), Ok(&r), eval),
             Event::InputError(e) => {
                 input_errors += 1;
                 defmt::warn!("damaged input frame: {}", e);
-                hub.report(now_us(), Err(e), &mut eval)
+                hub.report(now_us(), Err(e), eval)
             }
             Event::SetMode(m) => {
                 hub.set_mode(m);
@@ -69,6 +74,11 @@ pub fn serve<L: Link, E>(
                 if answer_update(hub, &mut out, update(&step), |b| link.write(b)) {
                     return Served::Updated;
                 }
+                continue;
+            }
+            Event::SelectProbe(id) => {
+                let answer = hub.select(id, |k| cal.mount(k));
+                link.write(hub.render(&ToHost::Probe(answer), &mut out));
                 continue;
             }
             Event::End => {

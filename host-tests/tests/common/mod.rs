@@ -7,12 +7,12 @@ use host_tests::boards::{board, Board};
 use host_tests::e2e::signed;
 use host_tests::e2e::{
     calibration, default_calibration_path, default_recording_path, deviation_um,
-    direction_deviation, host_points, reference, replay,
+    direction_deviation, host_points, host_points_with_probe, reference, replay,
 };
 use host_tests::recording::{self, frame, replay_bytes};
 use host_tests::session::Session;
 use quatarm::stream::{
-    Coordinates, LiveTable, Mode, Reading, Status, TableState, ToDevice, CSV_HEADER,
+    Coordinates, LiveTable, Mode, ProbeRefusal, Reading, Status, TableState, ToDevice, CSV_HEADER,
 };
 use quatarm::update::session::Step;
 use quatarm::update::{Accepted, Refusal};
@@ -26,19 +26,27 @@ pub(crate) mod pty;
 /// that test (it says the bound), and `update`, the case of its hub's update port
 /// ([`update_with_resets`] or [`update_not_supported`]), and `u95`, the case of its points'
 /// uncertainty ([`u95_matches_the_host`] or [`no_u95`]), and `wobble`, a table with an axis
-/// wobble ([`wobble_applied`] or [`wobble_refused`]), and `table_send`, the `armcal` binary's
-/// `table send` through a pseudo-terminal ([`pty::table_send_over_a_pty`] or
-/// [`pty::table_send_refused_over_a_pty`]). They are `#[ignore]`d for plain `cargo test`, which has
+/// wobble ([`wobble_applied`] or [`wobble_refused`]), and `probes`, a table with three probes
+/// ([`probes_selected_and_updated`] or [`probes_selected`], for a hub without an update
+/// port), and `table_send`, the `armcal` binary's `table send` through a pseudo-terminal
+/// ([`pty::table_send_over_a_pty`] or [`pty::table_send_refused_over_a_pty`]). They are
+/// `#[ignore]`d for plain `cargo test`, which has
 /// neither QEMU nor the cross-built board; `cargo xtask test` builds the boards and runs them
 /// with `--include-ignored`.
 macro_rules! board_tests {
     (board: $board:literal, bounds: $bounds:expr, full_recording: $full:ident,
      update: $update:ident, u95: $u95:ident, wobble: $wobble:ident,
-     table_send: $send:ident $(,)?) => {
+     probes: $probes:ident, table_send: $send:ident $(,)?) => {
         #[test]
         #[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
         fn armcal_table_send_through_a_pty() {
             $crate::common::pty::$send($board);
+        }
+
+        #[test]
+        #[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
+        fn a_table_with_three_probes() {
+            $crate::common::$probes($board, $bounds);
         }
 
         #[test]
@@ -159,11 +167,12 @@ pub fn full_recording(name: &str, bounds: Bounds) {
         let mut csv = [0u8; quatarm::stream::MAX_CSV_LINE];
         let n = quatarm::stream::write_csv_line(rep, &mut csv);
         let streamed = std::str::from_utf8(&csv[..n]).unwrap().trim_end();
-        // seq, time, status, the six coordinates, U95 (empty: this table has no budget).
+        // seq, time, status, the six coordinates, U95 (empty: this table has no budget), the
+        // probe (its only one, id 0).
         let fields: Vec<&str> = streamed.splitn(4, ',').collect();
         assert_eq!(
             fields[3],
-            format!("{line},"),
+            format!("{line},,0"),
             "reading {i}: stream and `armcal eval` differ"
         );
     }
@@ -291,9 +300,10 @@ pub fn u95_matches_the_host(name: &str) {
         let mut csv = [0u8; quatarm::stream::MAX_CSV_LINE];
         let n = quatarm::stream::write_csv_line(rep, &mut csv);
         let streamed = std::str::from_utf8(&csv[..n]).unwrap().trim_end();
-        let last: f64 = streamed.rsplit(',').next().unwrap().parse().unwrap();
+        // U95, then the probe's id.
+        let u95: f64 = streamed.rsplit(',').nth(1).unwrap().parse().unwrap();
         assert_eq!(
-            (last * 1e6).round() as u32,
+            (u95 * 1e6).round() as u32,
             hub_nm,
             "reading {i}: {streamed}"
         );
@@ -494,6 +504,157 @@ pub fn wobble_refused(name: &str, _bounds: Bounds) {
     }
 }
 
+/// The calibration with three probes (`data/default-6-probes.toml`: ids 1, 2, 5).
+fn probes_calibration() -> (quatarm_ref::Arm, Vec<u8>) {
+    calibration(&host_tests::boards::root().join("data/default-6-probes.toml")).unwrap()
+}
+
+/// [`probes_selected`], then an update on a hub with an update port: with another probe
+/// selected, a committed table boots on its first probe, and the `Hello` says so.
+#[allow(dead_code)] // each board's test binary uses one of the two probe cases
+pub fn probes_selected_and_updated(name: &str, bounds: Bounds) {
+    probes_selected(name, bounds);
+    let b = the_board(name);
+    let (mut arm, table) = probes_calibration();
+    arm.probe.error[2] += 0.05;
+    let new_table = quatarm_wire::tablebuild::build(&arm).unwrap();
+    let (old, new) = (signed(&table).unwrap(), signed(&new_table).unwrap());
+    let reading = some_readings(1)[0];
+    let host_new = host_points(b.precision, &new, &[reading]).unwrap()[0].unwrap();
+    let host_old_5 = host_points_with_probe(b.precision, &old, 2, &[reading]).unwrap()[0].unwrap();
+    let mut s = Session::start(&b, &b.elf(b.name), Some(&old)).unwrap();
+    assert!(matches!(s.next_item().unwrap(), Item::Hello(_)));
+    assert_eq!(
+        s.ask(&ToDevice::SelectProbe(5)).unwrap(),
+        Item::Probe(Ok(5))
+    );
+    assert_eq!(point_now(&mut s, &reading), host_old_5);
+    let steps = update_steps(&new);
+    for (i, step) in steps.iter().enumerate() {
+        let answer = s.ask(&ToDevice::Update(step.clone())).unwrap();
+        assert!(
+            matches!(answer, Item::Update(Ok(_))),
+            "step {i}: {answer:?}"
+        );
+    }
+    match s.next_item().unwrap() {
+        Item::Hello(h) => {
+            assert_eq!(h.live.map(|l| l.slot), Some(1), "{h:?}");
+            assert_eq!((h.probe, h.probes.as_slice()), (1, &[1, 2, 5][..]), "{h:?}");
+        }
+        other => panic!("expected a Hello after the commit, got {other:?}"),
+    }
+    match s.ask(&ToDevice::Reading(reading)).unwrap() {
+        Item::Report(r) => assert_eq!((r.probe, r.point), (1, Some(host_new))),
+        other => panic!("expected a report, got {other:?}"),
+    }
+    let (status, _) = s.finish().unwrap();
+    assert!(status.success(), "{status}");
+}
+
+/// A table with three probes (ids 1, 2, 5): the hub boots on the first and names all three
+/// in its `Hello`; the host selects each in turn (and an unknown id, refused without a
+/// change), each selection answered in a frame; every report carries the mounted probe's id,
+/// its points bit for bit the host build of the same chain with that probe mounted, within
+/// `bounds` of the f64 reference of the arm measuring with that probe (`Arm::for_probe`).
+pub fn probes_selected(name: &str, bounds: Bounds) {
+    let b = the_board(name);
+    let (arm, table) = probes_calibration();
+    let ids: Vec<u8> = arm.probes().map(|p| p.id).collect();
+    assert_eq!(ids, [1, 2, 5]);
+    let readings: Vec<Reading> = recording::read(&default_recording_path())
+        .unwrap()
+        .into_iter()
+        .step_by(41)
+        .take(250)
+        .collect();
+    // (selection, the probe index mounted after it); the first block before any selection.
+    let plan: [(Option<u8>, usize); 5] = [
+        (None, 0),
+        (Some(2), 1),
+        (Some(9), 1),
+        (Some(5), 2),
+        (Some(1), 0),
+    ];
+    let mut input = vec![0u8];
+    for (select, _) in plan {
+        if let Some(id) = select {
+            input.extend(frame(&ToDevice::SelectProbe(id)));
+        }
+        input.extend(readings.iter().flat_map(|r| frame(&ToDevice::Reading(*r))));
+    }
+    input.extend(frame(&ToDevice::End));
+    let file = host_tests::e2e::table_file(&table).unwrap();
+    let run = host_tests::qemu::run(
+        &b,
+        &b.elf(b.name),
+        &input,
+        &host_tests::qemu::Options {
+            table: Some(file.path().to_path_buf()),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(run.status.success(), "{:?}", run.status);
+    let mut decoder = quatarm_wire::stream_decode::Decoder::from_start();
+    let mut items = decoder.push_all(&run.stream).into_iter();
+    assert_eq!(decoder.finish().damaged(), 0);
+    match items.next() {
+        Some(Item::Hello(h)) => {
+            assert_eq!(h.status.table(), TableState::Valid, "{h:?}");
+            assert_eq!((h.probe, h.probes.as_slice()), (1, &ids[..]), "{h:?}");
+        }
+        other => panic!("expected a Hello, got {other:?}"),
+    }
+    let host: Vec<_> = (0..3)
+        .map(|k| host_points_with_probe(b.precision, &table, k, &readings).unwrap())
+        .collect();
+    assert_ne!(host[0][0], host[1][0], "the probes' points differ");
+    assert_ne!(host[1][0], host[2][0], "the probes' points differ");
+    let (mut worst_tip, mut worst_dir) = (0.0f64, 0.0f64);
+    for (select, k) in plan {
+        if let Some(id) = select {
+            let want = if ids.contains(&id) {
+                Ok(id)
+            } else {
+                Err(ProbeRefusal::Unknown)
+            };
+            assert_eq!(items.next(), Some(Item::Probe(want)), "selecting {id}");
+        }
+        let with_probe = arm.for_probe(k).unwrap();
+        for (i, (r, h)) in readings.iter().zip(&host[k]).enumerate() {
+            let rep = match items.next() {
+                Some(Item::Report(rep)) => rep,
+                other => panic!(
+                    "probe {}, reading {i}: expected a report, got {other:?}",
+                    ids[k]
+                ),
+            };
+            assert_eq!(rep.probe, ids[k], "reading {i}");
+            let c = rep
+                .point
+                .unwrap_or_else(|| panic!("probe {}, reading {i}: no coordinates", ids[k]));
+            assert_eq!(
+                Ok(c),
+                *h,
+                "probe {}, reading {i}: target and host differ",
+                ids[k]
+            );
+            let (p, n) = reference(&with_probe, r);
+            worst_tip = worst_tip.max(deviation_um(&c, &p));
+            worst_dir = worst_dir.max(direction_deviation(&c, &n));
+        }
+    }
+    assert_eq!(items.next(), None);
+    eprintln!(
+        "{name}: three probes selected in turn, {} readings each, bit-identical to the host \
+         with that probe; from f64 (Arm::for_probe): tip {worst_tip:.4} um, direction {worst_dir:.2e}",
+        readings.len()
+    );
+    assert!(worst_tip <= bounds.tip_um, "tip {worst_tip} um");
+    assert!(worst_dir <= bounds.dir, "direction {worst_dir}");
+}
+
 /// Text mode: CSV lines with the same numbers as the binary stream.
 pub fn text_mode(name: &str) {
     let b = the_board(name);
@@ -522,15 +683,15 @@ pub fn text_mode(name: &str) {
     lines.remove(0);
     assert_eq!(lines.len(), readings.len(), "{text}");
     let host = host_points(b.precision, &table, &readings).unwrap();
-    assert_eq!(CSV_HEADER.trim_end().split(',').count(), 10);
+    assert_eq!(CSV_HEADER.trim_end().split(',').count(), 11);
     for (i, line) in lines.iter().enumerate() {
         let f: Vec<&str> = line.split(',').collect();
-        assert_eq!(f.len(), 10, "{line}");
-        // This table has no budget: no U95.
-        assert_eq!(f[9], "", "{line}");
+        assert_eq!(f.len(), 11, "{line}");
+        // This table has no budget: no U95; its one probe has id 0.
+        assert_eq!((f[9], f[10]), ("", "0"), "{line}");
         assert_eq!(f[0], i.to_string());
         if i == 1 {
-            assert!(f[3..].iter().all(|x| x.is_empty()), "{line}");
+            assert!(f[3..10].iter().all(|x| x.is_empty()), "{line}");
         } else {
             let c = host[i].unwrap();
             assert_eq!(
@@ -568,7 +729,7 @@ pub fn defmt_log(name: &str) {
     let precision = if b.precision == "f32" { "F32" } else { "Fixed" };
     assert_eq!(
         lines[0],
-        format!("hub up: table Valid, 6 joints, {precision}")
+        format!("hub up: table Valid, 6 joints, {precision}, probe 0")
     );
     assert!(lines[1].starts_with("damaged input frame: "), "{lines:?}");
     assert_eq!(lines[2], "replay done: 5 reports, 1 damaged input frames");
