@@ -77,6 +77,17 @@ fn hub_against_host(
     u: &quatarm_ref::uncertainty::Uncertainty,
     seed: u64,
 ) -> (f64, f64) {
+    hub_against_host_with_probe(arm, u, 0, seed)
+}
+
+/// [`hub_against_host`] with the arm's probe at index `probe` mounted on the hub (its chains
+/// and its uncertainty, as `ToDevice::SelectProbe` does) and on the host.
+fn hub_against_host_with_probe(
+    arm: &quatarm_ref::Arm,
+    u: &quatarm_ref::uncertainty::Uncertainty,
+    probe: usize,
+    seed: u64,
+) -> (f64, f64) {
     use armcal::uncertainty::{propagate, Budget};
     use quatarm::uncertainty::Uncertainty;
     use quatarm::{Chain, Fixed, F32};
@@ -86,17 +97,23 @@ fn hub_against_host(
     let mut own_only = host.clone();
     own_only.params.clear();
     own_only.cov = nalgebra::DMatrix::zeros(0, 0);
-    let h32 = Uncertainty::<F32>::new(&table)
+    let mut h32 = Uncertainty::<F32>::new(&table)
         .unwrap()
         .expect("the table has its budget");
-    let hfx = Uncertainty::<Fixed>::new(&table)
+    let mut hfx = Uncertainty::<Fixed>::new(&table)
         .unwrap()
         .expect("the table has its budget");
     assert_eq!(h32.has_parameters(), !u.parameters.is_empty());
-    let (c32, cfx) = (
+    let (mut c32, mut cfx) = (
         Chain::<F32>::new(&table).unwrap(),
         Chain::<Fixed>::new(&table).unwrap(),
     );
+    if probe != 0 {
+        c32.mount(&table, probe).unwrap();
+        cfx.mount(&table, probe).unwrap();
+        h32.mount(&table, probe).unwrap();
+        hfx.mount(&table, probe).unwrap();
+    }
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let (mut worst, mut share): (f64, f64) = (0.0, 0.0);
     for _ in 0..200 {
@@ -107,8 +124,8 @@ fn hub_against_host(
             .collect();
         let temp_mc: i32 = rng.gen_range(16_000..28_000);
         let (theta, t) = (arm.counts_to_rad(&counts), f64::from(temp_mc) / 1000.0);
-        let (_, s) = propagate::point(arm, 0, &host, &theta, t);
-        let (_, own) = propagate::point(arm, 0, &own_only, &theta, t);
+        let (_, s) = propagate::point(arm, probe, &host, &theta, t);
+        let (_, own) = propagate::point(arm, probe, &own_only, &theta, t);
         share = share.max(1.0 - own.trace() / s.trace());
         let want_nm = u95(&s) * 1e6;
         let p32 = c32.eval(&counts, temp_mc).unwrap();
@@ -222,4 +239,73 @@ fn hub_u95_agrees_with_the_host_on_a_twisted_7_axis_arm() {
     );
     assert!(share > 0.5, "{share}");
     assert!(worst < 1e-2, "{worst}");
+}
+
+/// An arm of three probes whose budget holds every probe's error (kind 8 on the hub: a shift
+/// counted only while its probe is mounted) and the first probe's expansion: with each probe
+/// mounted, the hub's U95 is within 1 % of the host's for that probe.
+#[test]
+fn hub_u95_agrees_with_the_host_for_each_mounted_probe() {
+    use quatarm_ref::arm::Probe;
+    use quatarm_ref::uncertainty::ParamKey;
+    let mut arm = quatarm_ref::Arm::default6();
+    arm.probe.thermal = 2.3e-5;
+    let probe = |id, vector| Probe {
+        id,
+        vector,
+        error: [0.01, -0.02, 0.03],
+        thermal: 1.2e-5,
+        ball_diameter: 2.0,
+    };
+    // f32 serves a reach of 1,650 mm: a 200 mm extension on the 1,380 mm arm.
+    arm.more_probes = vec![probe(3, [0.0, 0.0, 200.0]), probe(7, [60.0, 0.0, 100.0])];
+    for (k, j) in arm.joints.iter_mut().enumerate() {
+        j.thermal = 1.1e-5;
+        j.tilt = [3e-4, -2e-4 * k as f64];
+    }
+    let n = arm.dof();
+    let mut keys = Vec::new();
+    for j in 0..n {
+        keys.extend([
+            ParamKey::ZeroOffset(j),
+            ParamKey::Tilt(j, 0),
+            ParamKey::Tilt(j, 1),
+        ]);
+        keys.extend((0..3).map(|c| ParamKey::LinkError(j, c)));
+    }
+    for k in 0..3 {
+        keys.extend((0..3).map(|c| ParamKey::ProbeError(k, c)));
+    }
+    keys.push(ParamKey::Thermal(None));
+    let p = keys.len();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(23);
+    let scale: Vec<f64> = keys
+        .iter()
+        .map(|k| match k {
+            ParamKey::LinkError(..) | ParamKey::ProbeError(..) => 3e-3,
+            ParamKey::Thermal(_) => 1e-6,
+            _ => 1e-5,
+        })
+        .collect();
+    let a = nalgebra::DMatrix::from_fn(p, p, |i, _| {
+        scale[i] * rng.gen_range(-1.0..1.0) / (p as f64).sqrt()
+    });
+    let c = &a * a.transpose();
+    let u = quatarm_ref::uncertainty::Uncertainty {
+        parameters: keys,
+        covariance: c.transpose().as_slice().to_vec(),
+        encoder_counts: vec![0.29; n],
+        probing_mm: 0.002,
+        temperature_c: 0.2,
+        model_mm: 0.0,
+    };
+    for k in 0..3 {
+        let (worst, share) = hub_against_host_with_probe(&arm, &u, k, 31 + k as u64);
+        println!(
+            "probe index {k}, {p} parameters: worst hub U95 error {worst:.2e} (parameter part up to {:.1} %)",
+            100.0 * share
+        );
+        assert!(share > 0.3, "{share}");
+        assert!(worst < 1e-2, "probe index {k}: {worst}");
+    }
 }
