@@ -195,12 +195,7 @@ fn hub_u95_agrees_with_the_host_on_a_twisted_7_axis_arm() {
     let n = arm.dof();
     let mut keys = Vec::new();
     for j in 0..n {
-        keys.extend([
-            ParamKey::ZeroOffset(j),
-            ParamKey::Tilt(j, 0),
-            ParamKey::Tilt(j, 1),
-        ]);
-        keys.extend((0..3).map(|c| ParamKey::LinkError(j, c)));
+        keys.extend(geometry_keys(j));
         keys.push(ParamKey::Harmonic {
             joint: j,
             index: 0,
@@ -210,28 +205,7 @@ fn hub_u95_agrees_with_the_host_on_a_twisted_7_axis_arm() {
     keys.extend((0..3).map(|c| ParamKey::ProbeError(0, c)));
     keys.extend([ParamKey::Thermal(Some(2)), ParamKey::Thermal(None)]);
     let p = keys.len();
-    // C = A Aᵀ with A random, each parameter at its own scale: rad ~1e-5, mm ~3e-3, 1/°C ~1e-6.
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(17);
-    let scale: Vec<f64> = keys
-        .iter()
-        .map(|k| match k {
-            ParamKey::LinkError(..) | ParamKey::ProbeError(..) => 3e-3,
-            ParamKey::Thermal(_) => 1e-6,
-            _ => 1e-5,
-        })
-        .collect();
-    let a = nalgebra::DMatrix::from_fn(p, p, |i, _| {
-        scale[i] * rng.gen_range(-1.0..1.0) / (p as f64).sqrt()
-    });
-    let c = &a * a.transpose();
-    let u = quatarm_ref::uncertainty::Uncertainty {
-        parameters: keys,
-        covariance: c.transpose().as_slice().to_vec(),
-        encoder_counts: vec![0.29; n],
-        probing_mm: 0.002,
-        temperature_c: 0.2,
-        model_mm: 0.0,
-    };
+    let u = random_budget(keys, 17, n);
     let (worst, share) = hub_against_host(&arm, &u, 9);
     println!(
         "panda_2, {p} parameters: worst hub U95 error {worst:.2e} (parameter part up to {:.1} %)",
@@ -266,19 +240,36 @@ fn hub_u95_agrees_with_the_host_for_each_mounted_probe() {
     let n = arm.dof();
     let mut keys = Vec::new();
     for j in 0..n {
-        keys.extend([
-            ParamKey::ZeroOffset(j),
-            ParamKey::Tilt(j, 0),
-            ParamKey::Tilt(j, 1),
-        ]);
-        keys.extend((0..3).map(|c| ParamKey::LinkError(j, c)));
+        keys.extend(geometry_keys(j));
     }
     for k in 0..3 {
         keys.extend((0..3).map(|c| ParamKey::ProbeError(k, c)));
     }
     keys.push(ParamKey::Thermal(None));
     let p = keys.len();
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(23);
+    let u = random_budget(keys, 23, n);
+    for k in 0..3 {
+        let (worst, share) = hub_against_host_with_probe(&arm, &u, k, 31 + k as u64);
+        println!(
+            "probe index {k}, {p} parameters: worst hub U95 error {worst:.2e} (parameter part up to {:.1} %)",
+            100.0 * share
+        );
+        assert!(share > 0.3, "{share}");
+        assert!(worst < 1e-2, "probe index {k}: {worst}");
+    }
+}
+
+/// A budget over `keys` whose covariance is C = A Aᵀ with A random (seeded), each parameter at
+/// its own scale (rad ~1e-5, mm ~3e-3, 1/°C ~1e-6), so that every correlation is exercised,
+/// with the encoder, probing and temperature terms of a typical arm of `n` joints.
+fn random_budget(
+    keys: Vec<quatarm_ref::uncertainty::ParamKey>,
+    seed: u64,
+    n: usize,
+) -> quatarm_ref::uncertainty::Uncertainty {
+    use quatarm_ref::uncertainty::ParamKey;
+    let p = keys.len();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let scale: Vec<f64> = keys
         .iter()
         .map(|k| match k {
@@ -291,21 +282,25 @@ fn hub_u95_agrees_with_the_host_for_each_mounted_probe() {
         scale[i] * rng.gen_range(-1.0..1.0) / (p as f64).sqrt()
     });
     let c = &a * a.transpose();
-    let u = quatarm_ref::uncertainty::Uncertainty {
+    quatarm_ref::uncertainty::Uncertainty {
         parameters: keys,
         covariance: c.transpose().as_slice().to_vec(),
         encoder_counts: vec![0.29; n],
         probing_mm: 0.002,
         temperature_c: 0.2,
         model_mm: 0.0,
-    };
-    for k in 0..3 {
-        let (worst, share) = hub_against_host_with_probe(&arm, &u, k, 31 + k as u64);
-        println!(
-            "probe index {k}, {p} parameters: worst hub U95 error {worst:.2e} (parameter part up to {:.1} %)",
-            100.0 * share
-        );
-        assert!(share > 0.3, "{share}");
-        assert!(worst < 1e-2, "probe index {k}: {worst}");
     }
+}
+
+/// Joint `j`'s geometric parameters: its zero offset, its two tilts and its link's three errors.
+fn geometry_keys(j: usize) -> [quatarm_ref::uncertainty::ParamKey; 6] {
+    use quatarm_ref::uncertainty::ParamKey;
+    [
+        ParamKey::ZeroOffset(j),
+        ParamKey::Tilt(j, 0),
+        ParamKey::Tilt(j, 1),
+        ParamKey::LinkError(j, 0),
+        ParamKey::LinkError(j, 1),
+        ParamKey::LinkError(j, 2),
+    ]
 }
