@@ -141,23 +141,6 @@ pub fn load<P: HubEvaluator>(region: &[u8]) -> Calibration<'_, P> {
     Calibration::of(validate(region))
 }
 
-/// Like [`load`], for a hub whose encoders have the given counts per revolution (joint 1
-/// first): a table made for other encoders would turn every count into a wrong angle.
-pub fn load_for_encoders<'a, P: HubEvaluator>(
-    region: &'a [u8],
-    counts_per_rev: &[u32],
-) -> Calibration<'a, P> {
-    Calibration::of(validate(region).and_then(|t| {
-        let fits =
-            (0..JOINTS).all(|i| t.joint(i).map(|j| j.counts) == counts_per_rev.get(i).copied());
-        if fits {
-            Ok(t)
-        } else {
-            Err(TableState::WrongResolution)
-        }
-    }))
-}
-
 // Validation and construction are kept out of line, one after the other, so that their stack
 // frames are not stacked on top of each other: on the M0 (soft f64) each needs several KiB,
 // and the hub's whole budget is 8 KiB.
