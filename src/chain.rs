@@ -225,8 +225,7 @@ impl<P: Evaluator> Chain<P> {
     /// chain ends at its ball from the next reading on. `table` must be the one the chain
     /// was built from; nothing changes on an error (a `k` past the table's probes).
     pub fn mount(&mut self, table: &Table<'_>, k: usize) -> Result<(), ChainError> {
-        let probe = table.probe_at(k).ok_or(ChainError::Range { joint: 0 })?;
-        self.model.mount(table, &probe)
+        self.model.mount(table, k)
     }
 
     /// Probe-ball centre and direction for raw encoder counts (one per joint, each below its

@@ -94,8 +94,7 @@ impl<P: Physics> MatrixChain<P> {
 
     /// Mounts the table's probe `k`, as [`crate::chain::Chain::mount`].
     pub fn mount(&mut self, table: &Table<'_>, k: usize) -> Result<(), ChainError> {
-        let probe = table.probe_at(k).ok_or(ChainError::Range { joint: 0 })?;
-        self.model.mount(table, &probe)
+        self.model.mount(table, k)
     }
 
     /// Probe-ball centre and direction; same contract as [`crate::chain::Chain::eval`].

@@ -491,14 +491,16 @@ impl<P: Physics> Model<P> {
         })
     }
 
-    /// Mounts `probe`, one of the table's: the last joint's link carries its vector and its
+    /// Mounts the table's probe `k`: the last joint's link carries its vector and its
     /// expansion, and the chain's direction is its direction. Converted from the table's f64
     /// when a probe is selected (rarely), rather than holding every probe converted. On an
-    /// error nothing changes; there is none for a probe of the table the model was built
-    /// from, whose reach [`Model::new`] checked with the longest probe.
-    pub fn mount(&mut self, table: &Table<'_>, probe: &ProbeData) -> Result<(), ChainError> {
+    /// error nothing changes: `Range` for a `k` past the table's probes, and none for a probe
+    /// of the table the model was built from, whose reach [`Model::new`] checked with the
+    /// longest probe.
+    pub fn mount(&mut self, table: &Table<'_>, k: usize) -> Result<(), ChainError> {
+        let probe = table.probe_at(k).ok_or(ChainError::Range { joint: 0 })?;
         let i = self.n.clamp(1, MAX_JOINTS) - 1;
-        put_probe(table, i, &mut self.joints[i], &mut self.probe_dir, probe)
+        put_probe(table, i, &mut self.joints[i], &mut self.probe_dir, &probe)
     }
 
     /// Checks the reading's shape and temperature; returns the temperature offset from 20 °C.

@@ -77,9 +77,9 @@ impl<'a, P: Physics> ParameterPart<'a, P> {
     /// Follows the hub's chain to the table's probe `k`: its matrix chain mounts it, and the
     /// columns of a probe's shift are that probe's. Nothing changes on an error.
     pub fn mount(&mut self, table: &Table<'a>, k: usize) -> Result<(), ChainError> {
-        let probe = table.probe_at(k).ok_or(ChainError::Range { joint: 0 })?;
+        let id = table.probe_id(k).ok_or(ChainError::Range { joint: 0 })?;
         self.chain.mount(table, k)?;
-        self.probe = probe.id;
+        self.probe = id;
         Ok(())
     }
 
