@@ -6,7 +6,7 @@
 use core::ops::Range;
 use embedded_storage::nor_flash::NorFlash;
 
-use super::record::RECORD_LEN;
+use super::record::padded_len;
 use crate::table::MAX_PLAIN_TABLE_LEN;
 
 /// Offsets (from the start of the flash device, as `NorFlash` counts them) of the regions.
@@ -23,7 +23,7 @@ pub enum Layout {
         /// The two copies of the state record.
         state: [Range<u32>; 2],
     },
-    /// Two slots only; state copy `i` is slot `i`'s trailer, its last [`RECORD_LEN`] bytes
+    /// Two slots only; state copy `i` is slot `i`'s trailer, its last [`RECORD_LEN`](super::record::RECORD_LEN) bytes
     /// rounded up to the write unit ([`Layout::trailer_len`]). Slot `i`'s erase (an update's
     /// `Begin`) erases copy `i` with it, the commit writes the record into that erased trailer
     /// without a second erase, and a table must end before the trailer. Copy `i` only ever
@@ -66,7 +66,7 @@ impl Layout {
     /// Bytes of a slot's trailer on a flash of write unit `F::WRITE_SIZE`: the record padded
     /// to whole write units, so that its one write touches nothing of the table.
     pub const fn trailer_len<F: NorFlash>() -> u32 {
-        (RECORD_LEN.div_ceil(F::WRITE_SIZE) * F::WRITE_SIZE) as u32
+        padded_len::<F>() as u32
     }
 
     /// Where state copy `copy` (0 or 1) lies.

@@ -30,6 +30,12 @@ pub const MAGIC: [u8; 4] = *b"QAST";
 /// Encoded length of a record.
 pub const RECORD_LEN: usize = 24;
 
+/// The record as written on a flash of write unit `F::WRITE_SIZE`: padded with 0xFF to whole
+/// write units, so that its one write touches nothing else (in the trailers, the table).
+pub const fn padded_len<F: NorFlash>() -> usize {
+    RECORD_LEN.div_ceil(F::WRITE_SIZE) * F::WRITE_SIZE
+}
+
 /// What a valid state record says.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -120,7 +126,7 @@ pub(crate) fn write<F: NorFlash>(
         layout.state::<F>(usize::from(rec.slot))
     };
     let mut buf = [0xffu8; MAX_WRITE_SIZE];
-    let len = RECORD_LEN.div_ceil(F::WRITE_SIZE) * F::WRITE_SIZE;
+    let len = padded_len::<F>();
     buf[..RECORD_LEN].copy_from_slice(&rec.encode());
     flash.write(region.start, &buf[..len])
 }
