@@ -6,7 +6,7 @@
 use libfuzzer_sys::fuzz_target;
 use quatarm::table::parameters::{Column, ParameterData};
 use quatarm::uncertainty::Uncertainty;
-use quatarm::{Chain, Fixed, MatrixChain, Table, F32};
+use quatarm::{Chain, ChainError, Fixed, MatrixChain, Table, F32};
 
 fuzz_target!(|bytes: &[u8]| {
     let Ok(table) = Table::parse(bytes) else {
@@ -39,29 +39,14 @@ fuzz_target!(|bytes: &[u8]| {
         "re-encoding an accepted table changed it"
     );
     assert_eq!(Table::parse(&out[..n]).map(|t| t.data()), Ok(data));
-    // A chain that builds mounts every probe of its table (the reach was checked with the
-    // longest), and none past them.
     if let Ok(mut chain) = Chain::<F32>::new(&table) {
-        for k in 0..table.probe_count() {
-            chain
-                .mount(&table, k)
-                .expect("an f32 chain mounts each of its table's probes");
-        }
-        assert!(chain.mount(&table, table.probe_count()).is_err());
+        mounts_each(&table, "an f32", |k| chain.mount(&table, k));
     }
     if let Ok(mut chain) = Chain::<Fixed>::new(&table) {
-        for k in 0..table.probe_count() {
-            chain
-                .mount(&table, k)
-                .expect("a fixed chain mounts each of its table's probes");
-        }
+        mounts_each(&table, "a fixed", |k| chain.mount(&table, k));
     }
     if let Ok(mut chain) = MatrixChain::<F32>::new(&table) {
-        for k in 0..table.probe_count() {
-            chain
-                .mount(&table, k)
-                .expect("a matrix chain mounts each of its table's probes");
-        }
+        mounts_each(&table, "a matrix", |k| chain.mount(&table, k));
     }
     let _ = MatrixChain::<Fixed>::new(&table);
     // And its uncertainty builds or refuses cleanly, and never panics on a reading.
@@ -74,3 +59,21 @@ fuzz_target!(|bytes: &[u8]| {
         }
     }
 });
+
+/// A chain built from `table` mounts each of its probes (the reach was checked with the
+/// longest) and none past them.
+fn mounts_each(
+    table: &Table<'_>,
+    chain: &str,
+    mut mount: impl FnMut(usize) -> Result<(), ChainError>,
+) {
+    for k in 0..table.probe_count() {
+        if let Err(e) = mount(k) {
+            panic!("{chain} chain does not mount its table's probe {k}: {e:?}");
+        }
+    }
+    assert!(
+        mount(table.probe_count()).is_err(),
+        "{chain} chain mounts a probe past its table's"
+    );
+}
