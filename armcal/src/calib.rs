@@ -366,9 +366,9 @@ impl<'a> Problem<'a> {
             if !jac {
                 return rot * mounted.tip(row) + s.frame.trans;
             }
-            let probe = mounted.of(row).0;
+            let (probe, with) = mounted.of(row);
             let p = tip_jacobian(
-                &arm,
+                with,
                 probe,
                 &self.arm_params,
                 &row.theta,
