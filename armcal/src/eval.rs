@@ -301,12 +301,14 @@ pub fn evaluate(
     let mut out = String::from("x,y,z,nx,ny,nz\n");
     match evaluator {
         Evaluator::F64 => {
+            let mounted: Vec<_> = (0..arm.probe_count())
+                .filter_map(|k| arm.for_probe(k))
+                .collect();
             for r in rows {
-                let mounted = arm
-                    .for_probe(r.probe)
+                let with = mounted
+                    .get(r.probe)
                     .context("a row's probe is one of the arm's")?;
-                let pose =
-                    quatarm_ref::forward::forward(&mounted, &r.reading.radians(arm), r.temp_c);
+                let pose = quatarm_ref::forward::forward(with, &r.reading.radians(arm), r.temp_c);
                 let _ = writeln!(
                     out,
                     "{:.9},{:.9},{:.9},{:.12},{:.12},{:.12}",
