@@ -10,7 +10,7 @@
 use crate::data::{probe_name, DataError, Dataset, Row};
 use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;
-use quatarm_ref::forward::{self, Chain};
+use quatarm_ref::forward;
 use std::borrow::Cow;
 
 /// The index (in [`Arm::probes`] order) of the probe `row` was taken with: its id's, or 0
@@ -80,16 +80,6 @@ impl<'a> Mounted<'a> {
     pub fn tip(&self, row: &Row) -> Vector3<f64> {
         forward::forward(self.of(row).1, &row.theta, row.temp_c).p
     }
-
-    /// The model's whole chain (origins, axes, ball) for `row`.
-    pub fn chain(&self, row: &Row) -> Chain {
-        forward::evaluate(self.of(row).1, &row.theta, row.temp_c)
-    }
-}
-
-/// The model's ball centre for `row` (one row; [`Mounted`] for many).
-pub fn tip(arm: &Arm, row: &Row) -> Vector3<f64> {
-    Mounted::new(arm).tip(row)
 }
 
 /// The stylus ball diameter of the probe `row` was taken with (mm).
