@@ -7,7 +7,7 @@
 //! module is the one place that maps a row to its probe; the calibration, the residuals, the
 //! diagnosis and the acceptance tests go through it.
 
-use crate::data::{probe_name, DataError, Dataset, Row};
+use crate::data::{probe_name, DataError, Dataset, Row, SphereGroup};
 use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;
 use quatarm_ref::forward;
@@ -86,4 +86,18 @@ impl<'a> Mounted<'a> {
 pub fn ball_diameter(arm: &Arm, row: &Row) -> f64 {
     arm.probe_at(index(arm, row))
         .map_or(arm.probe.ball_diameter, |p| p.ball_diameter)
+}
+
+/// The stylus ball diameter of the probe sphere group `g` of `data` was touched with (mm):
+/// its first row's. A sphere is touched with one stylus ball (the data reader refuses a
+/// group touched with two probes), so the first row's probe is every row's.
+pub fn sphere_ball_diameter(arm: &Arm, data: &Dataset, g: &SphereGroup) -> f64 {
+    ball_diameter(arm, &data.rows[g.rows[0]])
+}
+
+/// The radius (mm) of the sphere the ball centres of sphere group `g` lie on: (D + d) / 2,
+/// D the sphere's diameter and d the ball's of the group's one probe
+/// ([`sphere_ball_diameter`]).
+pub fn sphere_radius(arm: &Arm, data: &Dataset, g: &SphereGroup) -> f64 {
+    (g.diameter_mm + sphere_ball_diameter(arm, data, g)) / 2.0
 }
