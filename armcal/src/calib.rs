@@ -366,9 +366,9 @@ impl<'a> Problem<'a> {
             if !jac {
                 return rot * mounted.tip(row) + s.frame.trans;
             }
-            let probe = mounted.of(row).0;
+            let (probe, with) = mounted.of(row);
             let p = tip_jacobian(
-                &arm,
+                with,
                 probe,
                 &self.arm_params,
                 &row.theta,
@@ -476,9 +476,7 @@ impl<'a> Problem<'a> {
             sink(&br, &bj);
         }
         for g in &self.layout.sphere {
-            // A sphere group is touched with one probe (the data reader's rule).
-            let ball = crate::probes::ball_diameter(&arm, &self.data.rows[g.rows[0]]);
-            let radius = (g.diameter_mm + ball) / 2.0;
+            let radius = crate::probes::sphere_radius(&arm, self.data, g);
             br.clear();
             bj.clear();
             let mut qs = Vec::with_capacity(g.rows.len());
@@ -1067,8 +1065,7 @@ fn check_sphere_groups(start: &Arm, data: &Dataset, layout: &Layout) -> Result<(
     let mounted = crate::probes::Mounted::new(start);
     for g in &layout.sphere {
         let qs: Vec<Vector3<f64>> = g.rows.iter().map(|&i| mounted.tip(&data.rows[i])).collect();
-        let ball = crate::probes::ball_diameter(start, &data.rows[g.rows[0]]);
-        let radius = (g.diameter_mm + ball) / 2.0;
+        let radius = crate::probes::sphere_radius(start, data, g);
         if let Err(e) = crate::acceptance::fit::centre_of(&qs, radius) {
             let line = g.rows.first().map_or(0, |&i| data.rows[i].line);
             return Err(CalibError::Mismatch(format!(

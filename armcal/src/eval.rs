@@ -237,26 +237,34 @@ fn counts_of(arm: &Arm, r: &Reading) -> Vec<u32> {
     }
 }
 
-/// The firmware path `P` on the table a board would load, with each row's probe mounted (a
-/// hub with that probe selected); `calib` names the calibration in errors about it (a table
-/// it cannot become, an arm the evaluator cannot hold).
+/// The firmware path `P` on the table a board would load: ONE table holding all the arm's
+/// probes, as a hub loads it, with each row's probe mounted on it ([`Chain::mount`], a hub
+/// with that probe selected). The chain's model takes its reach, levers and second-order
+/// gravity from the table's longest probe, so a table per probe would not compute what the
+/// hub does. `calib` names the calibration in errors about it (a table it cannot become, an
+/// arm the evaluator cannot hold).
 fn firmware<P: quatarm::Evaluator>(
     arm: &Arm,
     rows: &Rows,
     calib: &str,
     out: &mut String,
 ) -> anyhow::Result<()> {
+    let no_evaluator = || format!("{calib}: no {} evaluator for this arm", P::NAME);
+    let bytes = crate::tablebuild::build(arm)
+        .map_err(anyhow::Error::from)
+        .with_context(no_evaluator)?;
+    let table = Table::parse(&bytes)
+        .map_err(anyhow::Error::from)
+        .with_context(no_evaluator)?;
     let chain = |k: usize| -> anyhow::Result<Chain<P>> {
-        let mounted = arm
-            .for_probe(k)
-            .context("a row's probe is one of the arm's")?;
-        crate::tablebuild::build(&mounted)
+        let mut chain = Chain::<P>::new(&table)
             .map_err(anyhow::Error::from)
-            .and_then(|bytes| {
-                let table = Table::parse(&bytes)?;
-                Ok(Chain::<P>::new(&table)?)
-            })
-            .with_context(|| format!("{calib}: no {} evaluator for this arm", P::NAME))
+            .with_context(no_evaluator)?;
+        chain
+            .mount(&table, k)
+            .map_err(anyhow::Error::from)
+            .with_context(|| format!("{calib}: probe {k} cannot be mounted"))?;
+        Ok(chain)
     };
     let mut chains: Vec<Option<Chain<P>>> = (0..arm.probe_count()).map(|_| None).collect();
     for r in rows {
@@ -293,12 +301,14 @@ pub fn evaluate(
     let mut out = String::from("x,y,z,nx,ny,nz\n");
     match evaluator {
         Evaluator::F64 => {
+            let mounted: Vec<_> = (0..arm.probe_count())
+                .filter_map(|k| arm.for_probe(k))
+                .collect();
             for r in rows {
-                let mounted = arm
-                    .for_probe(r.probe)
+                let with = mounted
+                    .get(r.probe)
                     .context("a row's probe is one of the arm's")?;
-                let pose =
-                    quatarm_ref::forward::forward(&mounted, &r.reading.radians(arm), r.temp_c);
+                let pose = quatarm_ref::forward::forward(with, &r.reading.radians(arm), r.temp_c);
                 let _ = writeln!(
                     out,
                     "{:.9},{:.9},{:.9},{:.12},{:.12},{:.12}",

@@ -24,10 +24,14 @@ use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;
 use quatarm_ref::forward::{self, thermal_scale};
 
-/// The tip p at readings `theta` and temperature `temp_c` taken with the arm's probe at
-/// index `probe` (`quatarm_ref::Arm::probes` order; `crate::probes`), with ∂p/∂param
-/// written into `cols` (one 3-vector per entry of `params`; zero for frame parameters and
-/// for the other probes' unknowns, which do not move this ball).
+/// The tip p at readings `theta` and temperature `temp_c`, with ∂p/∂param written into
+/// `cols` (one 3-vector per entry of `params`; zero for frame parameters and for the other
+/// probes' unknowns, which do not move this ball).
+///
+/// `arm` is the arm as it measured the reading, its probe already mounted
+/// ([`Arm::for_probe`], [`crate::probes::Mounted::of`]), as [`TipPoint::arm`] is; `probe` is
+/// that probe's index among the whole arm's (`quatarm_ref::Arm::probes` order), which the
+/// parameters' probe indices refer to.
 pub fn tip_jacobian(
     arm: &Arm,
     probe: usize,
@@ -36,10 +40,6 @@ pub fn tip_jacobian(
     temp_c: f64,
     cols: &mut [Vector3<f64>],
 ) -> Vector3<f64> {
-    let mounted = arm
-        .for_probe(probe)
-        .expect("a row's probe is one of the arm's (crate::probes::check)");
-    let arm = mounted.as_ref();
     let c = forward::evaluate(arm, theta, temp_c);
     let p = c.p;
     let n = arm.dof();

@@ -7,10 +7,10 @@
 //! module is the one place that maps a row to its probe; the calibration, the residuals, the
 //! diagnosis and the acceptance tests go through it.
 
-use crate::data::{probe_name, DataError, Dataset, Row};
+use crate::data::{probe_name, DataError, Dataset, Row, SphereGroup};
 use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;
-use quatarm_ref::forward::{self, Chain};
+use quatarm_ref::forward;
 use std::borrow::Cow;
 
 /// The index (in [`Arm::probes`] order) of the probe `row` was taken with: its id's, or 0
@@ -80,20 +80,24 @@ impl<'a> Mounted<'a> {
     pub fn tip(&self, row: &Row) -> Vector3<f64> {
         forward::forward(self.of(row).1, &row.theta, row.temp_c).p
     }
-
-    /// The model's whole chain (origins, axes, ball) for `row`.
-    pub fn chain(&self, row: &Row) -> Chain {
-        forward::evaluate(self.of(row).1, &row.theta, row.temp_c)
-    }
-}
-
-/// The model's ball centre for `row` (one row; [`Mounted`] for many).
-pub fn tip(arm: &Arm, row: &Row) -> Vector3<f64> {
-    Mounted::new(arm).tip(row)
 }
 
 /// The stylus ball diameter of the probe `row` was taken with (mm).
 pub fn ball_diameter(arm: &Arm, row: &Row) -> f64 {
     arm.probe_at(index(arm, row))
         .map_or(arm.probe.ball_diameter, |p| p.ball_diameter)
+}
+
+/// The stylus ball diameter of the probe sphere group `g` of `data` was touched with (mm):
+/// its first row's. A sphere is touched with one stylus ball (the data reader refuses a
+/// group touched with two probes), so the first row's probe is every row's.
+pub fn sphere_ball_diameter(arm: &Arm, data: &Dataset, g: &SphereGroup) -> f64 {
+    ball_diameter(arm, &data.rows[g.rows[0]])
+}
+
+/// The radius (mm) of the sphere the ball centres of sphere group `g` lie on: (D + d) / 2,
+/// D the sphere's diameter and d the ball's of the group's one probe
+/// ([`sphere_ball_diameter`]).
+pub fn sphere_radius(arm: &Arm, data: &Dataset, g: &SphereGroup) -> f64 {
+    (g.diameter_mm + sphere_ball_diameter(arm, data, g)) / 2.0
 }

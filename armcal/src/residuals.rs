@@ -137,8 +137,7 @@ pub fn residuals_of(
     }
     for g in &layout.sphere {
         let q: Vec<Vector3<f64>> = g.rows.iter().map(|&i| ps[i]).collect();
-        let ball = crate::probes::ball_diameter(arm, &data.rows[g.rows[0]]);
-        let radius = (g.diameter_mm + ball) / 2.0;
+        let radius = crate::probes::sphere_radius(arm, data, g);
         // A group whose points fix no sphere (coplanar, too few) was refused by the loader's
         // callers; its rows keep no residual rather than an invented one.
         if let Ok(c) = crate::acceptance::fit::centre_of(&q, radius) {

@@ -298,18 +298,21 @@ impl<'a> Turns<'a> {
     }
 
     /// The probes of the rows of `like` (the design of a calibration: identifiability must
-    /// see every probe the data has).
+    /// see every probe the data has, the first too where rows leave the probe cell empty),
+    /// in ascending order of id; the first alone, with no id, where the data use no other.
     fn like(arm: &'a Arm, like: &Dataset) -> Turns<'a> {
-        let mut ids: Vec<u8> = like.rows.iter().filter_map(|r| r.probe).collect();
-        ids.sort_unstable();
-        ids.dedup();
-        let ids: Vec<u8> = ids
+        let used = crate::probes::used(arm, like);
+        if used == [0] {
+            return Turns {
+                turns: vec![(None, std::borrow::Cow::Borrowed(arm))],
+            };
+        }
+        let mut turns: Vec<_> = used
             .into_iter()
-            .filter(|id| arm.probe_index(*id).is_some())
+            .filter_map(|k| Some((Some(arm.probe_at(k)?.id), arm.for_probe(k)?)))
             .collect();
-        Turns::new(arm, &ids).unwrap_or_else(|_| Turns {
-            turns: vec![(None, std::borrow::Cow::Borrowed(arm))],
-        })
+        turns.sort_unstable_by_key(|t| t.0);
+        Turns { turns }
     }
 
     /// The `i`-th turn's id and arm.

@@ -285,23 +285,13 @@ impl Arm {
         }
         let probe = self.more_probes.get(k - 1)?.clone();
         Some(std::borrow::Cow::Owned(Arm {
-            probe,
-            more_probes: Vec::new(),
-            ..self.clone_without_probes()
-        }))
-    }
-
-    /// A copy with the first probe and no others (the joints are what [`Arm::for_probe`]
-    /// copies).
-    fn clone_without_probes(&self) -> Arm {
-        Arm {
             name: self.name.clone(),
             serial: self.serial.clone(),
             joints: self.joints.clone(),
-            probe: self.probe.clone(),
+            probe,
             more_probes: Vec::new(),
             reference_frame: self.reference_frame.clone(),
-        }
+        }))
     }
 
     /// Number of joints N.

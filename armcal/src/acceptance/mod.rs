@@ -101,11 +101,12 @@ pub fn check(
     let ball = |r: &crate::data::Row| crate::probes::ball_diameter(arm, r);
     let values = statistics::values(data, &centres(arm, data), &ball)?;
     // The ball of a sphere group's probe (one per group: the data reader's rule).
+    let spheres = data.layout().sphere;
     let group_ball = |group: i64| {
-        data.rows
+        spheres
             .iter()
-            .find(|r| r.kind == crate::data::Kind::Sphere && r.group == group)
-            .map_or(d, ball)
+            .find(|g| g.group == group)
+            .map_or(d, |g| crate::probes::sphere_ball_diameter(arm, data, g))
     };
     let mut results = BTreeMap::new();
     let mut worst_group = BTreeMap::new();

@@ -121,8 +121,7 @@ fn ideal_centres(arm: &Arm, data: &Dataset) -> Result<Vec<Vector3<f64>>, StatErr
                 source,
             })?
             .centre;
-        let ball = crate::probes::ball_diameter(arm, &data.rows[g.rows[0]]);
-        let r = (g.diameter_mm + ball) / 2.0;
+        let r = crate::probes::sphere_radius(arm, data, g);
         for &i in &g.rows {
             x[i] = c + (x[i] - c).normalize() * r;
         }

@@ -227,6 +227,7 @@ fn doubts(
     let n = data.rows.len();
     let causes = model.effects.len().max(1) as f64;
     let mut out = Vec::new();
+    let with = Mounted::new(&fit.arm);
     for e in &model.effects {
         let mut without = fit.arm.clone();
         for p in e.params() {
@@ -234,7 +235,7 @@ fn doubts(
         }
         let mut y = Vec::with_capacity(n);
         let mut own: Vec<Vec<Vector3<f64>>> = Vec::with_capacity(n);
-        let (with, without) = (Mounted::new(&fit.arm), Mounted::new(&without));
+        let without = Mounted::new(&without);
         for (i, r) in data.rows.iter().enumerate() {
             let (probe, arm) = with.of(r);
             let chain = forward::evaluate(arm, &r.theta, r.temp_c);
@@ -266,8 +267,8 @@ fn doubts(
             .map(|(i, r)| {
                 let mut c = columns(s, i, geo);
                 let mut g = vec![Vector3::zeros(); others.len()];
-                let probe = crate::probes::index(&fit.arm, r);
-                let p = tip_jacobian(&fit.arm, probe, &others, &r.theta, r.temp_c, &mut g);
+                let (probe, arm) = with.of(r);
+                let p = tip_jacobian(arm, probe, &others, &r.theta, r.temp_c, &mut g);
                 c.extend(g);
                 let point = r.kind == Kind::Point;
                 for ax in [Vector3::x(), Vector3::y(), Vector3::z()] {

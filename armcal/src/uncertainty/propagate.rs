@@ -42,11 +42,11 @@ pub fn jacobians(
     let mut params: Vec<Param> = budget.params.clone();
     params.extend((0..n).map(Param::ZeroOffset));
     let mut cols = vec![Vector3::zeros(); params.len()];
-    let p = tip_jacobian(arm, probe, &params, theta, temp_c, &mut cols);
     let mounted = arm
         .for_probe(probe)
         .expect("a reading's probe is one of the arm's");
     let arm = mounted.as_ref();
+    let p = tip_jacobian(arm, probe, &params, theta, temp_c, &mut cols);
     let theta_cols = cols.split_off(budget.params.len());
     let h = 1.0;
     let temp = (forward::forward(arm, theta, temp_c + h).p
