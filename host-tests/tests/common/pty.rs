@@ -9,6 +9,7 @@ use std::time::{Duration, Instant};
 
 use host_tests::e2e::{calibration, default_calibration_path, host_points, signed};
 use host_tests::pty::{Port, PtyHub};
+use host_tests::qemu::wait_until;
 use quatarm::stream::{Coordinates, LiveTable, Reading, Status, ToDevice, ToHost};
 use quatarm::update::session::Step;
 use quatarm::update::Accepted;
@@ -51,19 +52,13 @@ fn wait_armcal(mut child: std::process::Child, limit: Duration, start: Instant) 
         let _ = err.read_to_string(&mut s);
         s
     });
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        if start.elapsed() > limit {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!(
-                "armcal still running after {limit:?}: it hangs (stderr so far: {})",
-                err.join().unwrap_or_default()
-            );
-        }
-        std::thread::sleep(Duration::from_millis(5));
+    // `limit` counts from `start`, which may be before the spawn.
+    let Some(status) = wait_until(&mut child, limit.saturating_sub(start.elapsed())).unwrap()
+    else {
+        panic!(
+            "armcal still running after {limit:?}: it hangs (stderr so far: {})",
+            err.join().unwrap_or_default()
+        );
     };
     Run {
         status,
