@@ -515,10 +515,7 @@ fn probes_calibration() -> (quatarm_ref::Arm, Vec<u8>) {
 pub fn probes_selected_and_updated(name: &str, bounds: Bounds) {
     probes_selected(name, bounds);
     let b = the_board(name);
-    let (mut arm, table) = probes_calibration();
-    arm.probe.error[2] += 0.05;
-    let new_table = quatarm_wire::tablebuild::build(&arm).unwrap();
-    let (old, new) = (signed(&table).unwrap(), signed(&new_table).unwrap());
+    let UpdateTables { old, new, .. } = update_tables_of(probes_calibration());
     let reading = some_readings(1)[0];
     let host_new = host_points(b.precision, &new, &[reading]).unwrap()[0].unwrap();
     let host_old_5 = host_points_with_probe(b.precision, &old, 2, &[reading]).unwrap()[0].unwrap();
@@ -768,7 +765,8 @@ fn expect_hello(s: &mut Session, live: Option<LiveTable>, when: &str) {
 /// The tables of an update test and what a `Hello` says of each once live.
 #[allow(dead_code)] // each board's test binary uses one of the two update cases
 struct UpdateTables {
-    /// The default calibration's table: the factory's.
+    /// The calibration's table (the default calibration's in [`update_tables`]): the
+    /// factory's.
     old_table: Vec<u8>,
     /// The same with the probe 0.05 mm longer: the update's.
     new_table: Vec<u8>,
@@ -784,7 +782,12 @@ struct UpdateTables {
 
 #[allow(dead_code)] // each board's test binary uses one of the two update cases
 fn update_tables() -> UpdateTables {
-    let (mut arm, old_table) = calibration(&default_calibration_path()).unwrap();
+    update_tables_of(calibration(&default_calibration_path()).unwrap())
+}
+
+/// The tables of an update from the calibration `(arm, old_table)` (its arm, its table).
+#[allow(dead_code)] // each board's test binary uses one of the two update cases
+fn update_tables_of((mut arm, old_table): (quatarm_ref::Arm, Vec<u8>)) -> UpdateTables {
     arm.probe.error[2] += 0.05;
     let new_table = quatarm_wire::tablebuild::build(&arm).unwrap();
     let (old, new) = (signed(&old_table).unwrap(), signed(&new_table).unwrap());
