@@ -753,10 +753,10 @@ fn update_steps(table: &[u8]) -> Vec<Step> {
     Step::sequence(table).collect()
 }
 
-/// The next item must be a `Hello` naming `live` as the table in use.
+/// `item` (the next of the hub's stream) must be a `Hello` naming `live` as the table in use.
 #[allow(dead_code)] // each board's test binary uses one of the two update cases
-fn expect_hello(s: &mut Session, live: Option<LiveTable>, when: &str) {
-    match s.next_item().unwrap() {
+fn expect_hello(item: Item, live: Option<LiveTable>, when: &str) {
+    match item {
         Item::Hello(h) => assert_eq!(h.live, live, "{when}: {h:?}"),
         other => panic!("{when}: expected a Hello, got {other:?}"),
     }
@@ -845,7 +845,7 @@ pub fn update_with_resets(name: &str) {
     assert_ne!(host_old, host_new);
 
     let mut s = Session::start(&b, &b.elf(b.name), Some(&old)).unwrap();
-    expect_hello(&mut s, factory, "boot");
+    expect_hello(s.next_item().unwrap(), factory, "boot");
     assert_eq!(point_now(&mut s, &reading), host_old);
     let steps = update_steps(&new);
     let commit = steps.len() - 1;
@@ -856,7 +856,7 @@ pub fn update_with_resets(name: &str) {
         }
         s.reset().unwrap();
         expect_hello(
-            &mut s,
+            s.next_item().unwrap(),
             factory,
             &format!("reset after {cut} of {commit} steps"),
         );
@@ -879,10 +879,10 @@ pub fn update_with_resets(name: &str) {
             assert!(matches!(answer, Item::Update(Ok(_))), "{answer:?}");
         }
     }
-    expect_hello(&mut s, updated, "after the commit");
+    expect_hello(s.next_item().unwrap(), updated, "after the commit");
     assert_eq!(point_now(&mut s, &reading), host_new);
     s.reset().unwrap();
-    expect_hello(&mut s, updated, "reset after the commit");
+    expect_hello(s.next_item().unwrap(), updated, "reset after the commit");
     assert_eq!(point_now(&mut s, &reading), host_new);
 
     // One byte of the table changed: refused at commit as the boot would call it.
@@ -932,7 +932,11 @@ pub fn update_with_resets(name: &str) {
         s.ask(&ToDevice::Update(step.clone())).unwrap();
     }
     s.reset().unwrap();
-    expect_hello(&mut s, updated, "reset during a second update");
+    expect_hello(
+        s.next_item().unwrap(),
+        updated,
+        "reset during a second update",
+    );
     let (status, _) = s.finish().unwrap();
     assert!(status.success(), "{status}");
 
