@@ -40,7 +40,8 @@ use quatarm_wire::stream_decode::Item;
 
 use crate::boards::Board;
 use crate::qemu::{command, connect, image_file, wait_exit, Uart};
-use crate::session::{frame, Items, ANSWER_TIMEOUT};
+use crate::recording::frame;
+use crate::session::{Items, ANSWER_TIMEOUT};
 
 /// The path in QEMU's message announcing a pty, if `line` is that message.
 pub fn pty_path(line: &str) -> Option<PathBuf> {
@@ -274,7 +275,7 @@ impl Port {
 
     /// Sends one message as a frame.
     pub fn send(&mut self, msg: &ToDevice) -> Result<()> {
-        let bytes = frame(msg)?;
+        let bytes = frame(msg);
         let mut sent = 0;
         let deadline = Instant::now() + ANSWER_TIMEOUT;
         while sent < bytes.len() {

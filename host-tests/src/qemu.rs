@@ -125,20 +125,29 @@ pub(crate) fn image_file(
         .transpose()
 }
 
-/// Waits for QEMU to exit after the hub was sent `End`; kills it after
-/// [`crate::session::ANSWER_TIMEOUT`].
-pub(crate) fn wait_exit(child: &mut Child) -> Result<ExitStatus> {
+/// Waits up to `limit` for `child` to exit, polling every 5 ms; its status, or `None` when it
+/// was still running at the limit, after killing and reaping it.
+pub fn wait_until(child: &mut Child, limit: Duration) -> Result<Option<ExitStatus>> {
     let start = Instant::now();
     loop {
         if let Some(s) = child.try_wait()? {
-            return Ok(s);
+            return Ok(Some(s));
         }
-        if start.elapsed() > crate::session::ANSWER_TIMEOUT {
+        if start.elapsed() > limit {
             let _ = child.kill();
             let _ = child.wait();
-            bail!("QEMU did not exit after End");
+            return Ok(None);
         }
-        std::thread::sleep(Duration::from_millis(20));
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+/// Waits for QEMU to exit after the hub was sent `End`; kills it after
+/// [`crate::session::ANSWER_TIMEOUT`].
+pub(crate) fn wait_exit(child: &mut Child) -> Result<ExitStatus> {
+    match wait_until(child, crate::session::ANSWER_TIMEOUT)? {
+        Some(s) => Ok(s),
+        None => bail!("QEMU did not exit after End"),
     }
 }
 
@@ -202,20 +211,13 @@ pub fn run(board: &Board, elf: &Path, input: &[u8], opts: &Options) -> Result<Ru
         let _ = uart_out.read_to_end(&mut out);
         out
     });
-    let status = loop {
-        if let Some(s) = child.try_wait()? {
-            break s;
-        }
-        if start.elapsed() > opts.timeout {
-            let _ = child.kill();
-            let _ = child.wait();
-            bail!(
-                "{} timed out after {:?} under QEMU",
-                board.name,
-                opts.timeout
-            );
-        }
-        std::thread::sleep(Duration::from_millis(20));
+    // The limit counts from the start, before QEMU opened its socket.
+    let Some(status) = wait_until(&mut child, opts.timeout.saturating_sub(start.elapsed()))? else {
+        bail!(
+            "{} timed out after {:?} under QEMU",
+            board.name,
+            opts.timeout
+        );
     };
     let elapsed = start.elapsed();
     let stream = reader.join().unwrap_or_default();

@@ -11,11 +11,12 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
-use quatarm::stream::{encode, ToDevice, MAX_FRAME};
+use quatarm::stream::ToDevice;
 use quatarm_wire::stream_decode::{Decoder, Item};
 
 use crate::boards::Board;
 use crate::qemu::{command, connect, image_file, wait_exit, Uart};
+use crate::recording::frame;
 
 /// How long an answer may take before the session counts it as missing.
 pub const ANSWER_TIMEOUT: Duration = Duration::from_secs(30);
@@ -73,7 +74,7 @@ impl Session {
 
     /// Sends one message as a frame.
     pub fn send(&mut self, msg: &ToDevice) -> Result<()> {
-        self.uart.write_all(&frame(msg)?)?;
+        self.uart.write_all(&frame(msg))?;
         Ok(())
     }
 
@@ -110,13 +111,6 @@ impl Session {
             .unwrap_or_default();
         Ok((status, log))
     }
-}
-
-/// `msg` as a frame on the wire.
-pub(crate) fn frame(msg: &ToDevice) -> Result<Vec<u8>> {
-    let mut out = [0u8; MAX_FRAME];
-    let n = encode(msg, &mut out).context("encoding a message")?;
-    Ok(out[..n].to_vec())
 }
 
 /// A hub's stream read item by item, each within [`ANSWER_TIMEOUT`].

@@ -153,6 +153,44 @@ fn the_nucleo_gives_the_firmware_sectors_0_to_5() {
     }
 }
 
+/// The NUCLEO's flash driver (`src/flash.rs`, a thumb-only crate without host tests) refuses
+/// to erase or program below its `SECTOR_6`: that bound must be where `memory.x` ends the
+/// firmware and starts the lowest slot, and its guards and sector numbers must count from it
+/// (it was sector 5's, 0x0802_0000, after the firmware had grown to sectors 0-5).
+#[test]
+fn the_nucleo_flash_driver_refuses_the_firmwares_sectors() {
+    let b = boards::board("nucleo-f446re").unwrap();
+    let script = std::fs::read_to_string(b.dir().join("memory.x")).unwrap();
+    let src = std::fs::read_to_string(b.dir().join("src/flash.rs")).unwrap();
+    let bound = src
+        .lines()
+        .find_map(|l| l.strip_prefix("const SECTOR_6: usize = "))
+        .and_then(|v| v.strip_suffix(';'))
+        .expect("no `const SECTOR_6: usize = ...;` in the NUCLEO's flash.rs");
+    let bound = boards::expr(bound).unwrap();
+    let (flash, flash_len) = region(&script, "FLASH");
+    let lowest_slot = region(&script, "CALTABLE_B")
+        .0
+        .min(region(&script, "CALTABLE").0);
+    assert_eq!(bound, 0x0804_0000, "sector 6 of the STM32F446RE");
+    assert_eq!(
+        bound,
+        flash + flash_len,
+        "the guard is not the firmware's end"
+    );
+    assert_eq!(
+        bound, lowest_slot,
+        "the guard is not the lowest slot's start"
+    );
+    for code in [
+        "from < SECTOR_6 ||",
+        "addr < SECTOR_6 ||",
+        "(6 + (at - SECTOR_6) / SECTOR_LEN)",
+    ] {
+        assert!(src.contains(code), "no `{code}` in the NUCLEO's flash.rs");
+    }
+}
+
 #[test]
 fn the_parser_reads_what_it_checks() {
     let s = "MEMORY\n{\n  FLASH : ORIGIN = 0x08000000, LENGTH = 384K\n  CALTABLE : ORIGIN = 0x0806_0000, LENGTH = 1M\n}";

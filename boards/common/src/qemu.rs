@@ -7,10 +7,10 @@ use cortex_m_semihosting::debug::{self, EXIT_FAILURE, EXIT_SUCCESS};
 use embedded_storage::nor_flash::NorFlash;
 use quatarm::stream::Replay;
 use quatarm::table::MAX_TABLE_LEN;
-use quatarm::update::{Accept, Refusal};
+use quatarm::update::{Accept, Layout, Refusal};
 
 use crate::calibration::{self, HubEvaluator};
-use crate::flash::{slots, Map, Port};
+use crate::flash::Port;
 use crate::{bench, clock, serve, stack, table_region, Link, Served};
 
 /// The whole run of a QEMU hub image: boot on the live table, replay the recording that
@@ -23,23 +23,22 @@ use crate::{bench, clock, serve, stack, table_region, Link, Served};
 /// instructions on the M0, and flash).
 ///
 /// `open_link` sets up the board's UART; it runs after the clock has started, so that report
-/// times count from the same point on every board. `open_flash` gives the driver of the
-/// calibration flash the map describes (its window from [`Map::base`], [`Map::span`] bytes).
+/// times count from the same point on every board. `flash` is the driver of the calibration
+/// flash, laid out as `layout` (`slots::Map::window`, as the real boards give `live::run`).
 /// `accept` is what the hub requires of a table (its joints, its maker's key). `ram_start`
 /// is where `memory.x` puts RAM.
 pub fn hub_main<P: HubEvaluator, const CORE_HZ: u32, L: Link, F: NorFlash>(
     ram_start: usize,
     accept: Accept,
     open_link: impl FnOnce() -> L,
-    open_flash: impl FnOnce(&Map) -> F,
+    (flash, layout): (F, Layout),
 ) -> ! {
     stack::paint();
     let mut link = start(open_link);
-    let map = slots::map();
     // The live table (which the calibration borrows) and the update's scratch, apart.
     let mut live = [0u8; MAX_TABLE_LEN];
     let mut scratch = [0u8; MAX_TABLE_LEN];
-    let mut port = Port::new(open_flash(&map), map.layout, accept, &mut scratch);
+    let mut port = Port::new(flash, layout, accept, &mut scratch);
     loop {
         let mut boot = port.boot::<P>(&mut live);
         let mut hub = boot.hub();

@@ -7,8 +7,8 @@
 //! erases whatever sector holds it, unchecked), so a wrong offset could erase the firmware,
 //! and its `read` indexes a slice and panics past the end. The window here holds only the two
 //! 128 KiB sectors (offset 0 = sector 6), where its 128 KiB erase unit is the chip's; it
-//! refuses anything below sector 5. Around each HAL call it also does what the HAL leaves
-//! out, as ST's own HAL does:
+//! refuses anything below sector 6, where the firmware's sectors 0-5 end (`memory.x`).
+//! Around each HAL call it also does what the HAL leaves out, as ST's own HAL does:
 //! - clears the status register's error flags first: they stay set until cleared, and the
 //!   HAL reads any as the failure of the operation it just started;
 //! - resets the ART accelerator's instruction and data caches after (ST's
@@ -27,14 +27,15 @@ use stm32f4xx_hal::pac::FLASH;
 
 /// Where the flash is mapped, and the HAL's offset 0.
 const FLASH_START: usize = 0x0800_0000;
-/// Sector 5, the first of the 128 KiB sectors.
-const SECTOR_5: usize = 0x0802_0000;
+/// Sector 6, the first sector after the firmware's (sectors 0-5, 256 KiB, `memory.x`): the
+/// lowest address the driver erases or programs.
+const SECTOR_6: usize = 0x0804_0000;
 /// The end of the STM32F446RE's 512 KiB.
 const FLASH_END: usize = 0x0808_0000;
 /// A 128 KiB sector.
 const SECTOR_LEN: usize = 128 * 1024;
 
-/// The flash controller, for the 128 KiB sectors only.
+/// The flash controller, for sectors 6 and 7 only.
 pub struct Sectors {
     flash: FLASH,
 }
@@ -81,13 +82,13 @@ impl Raw for Sectors {
     const ERASE_SIZE: usize = SECTOR_LEN;
 
     fn erase(&mut self, from: usize, to: usize) -> Result<(), NorFlashErrorKind> {
-        if from < SECTOR_5 || to > FLASH_END {
+        if from < SECTOR_6 || to > FLASH_END {
             return Err(NorFlashErrorKind::OutOfBounds);
         }
         for at in (from..to).step_by(SECTOR_LEN) {
-            // Sectors 5, 6, 7 from 0x0802_0000 on; `at` is sector-aligned (the window's
+            // Sectors 6, 7 from 0x0804_0000 on; `at` is sector-aligned (the window's
             // check, with its base on a sector boundary).
-            let sector = (5 + (at - SECTOR_5) / SECTOR_LEN) as u8;
+            let sector = (6 + (at - SECTOR_6) / SECTOR_LEN) as u8;
             self.clear_errors();
             let result = self.flash.unlocked().erase(sector);
             self.flush_caches();
@@ -97,7 +98,7 @@ impl Raw for Sectors {
     }
 
     fn program(&mut self, addr: usize, bytes: &[u8]) -> Result<(), NorFlashErrorKind> {
-        if addr < SECTOR_5 || addr + bytes.len() > FLASH_END {
+        if addr < SECTOR_6 || addr + bytes.len() > FLASH_END {
             return Err(NorFlashErrorKind::OutOfBounds);
         }
         self.clear_errors();

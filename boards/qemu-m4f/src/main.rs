@@ -9,7 +9,8 @@
 mod uart;
 
 use board_common::calibration::JOINTS;
-use board_common::flash::ram_nor::RamNor;
+use board_common::flash::ram_nor::Ram;
+use board_common::flash::slots;
 use board_common::maker_key::TEST_MAKER_KEY;
 use board_common::qemu;
 use cortex_m_rt::entry;
@@ -33,10 +34,8 @@ fn main() -> ! {
             // SAFETY: UART0 is used by nothing else.
             unsafe { uart::Uart::new(uart::Uart::UART0, BAUDDIV) }
         },
-        |map| {
-            // SAFETY: the calibration regions of memory.x, RAM outside the image that only
-            // the updater touches. 4 KiB: the state record's copies, the smallest regions.
-            unsafe { RamNor::<4096>::over_ram(map.base, map.span) }
-        },
+        // SAFETY: the calibration regions of memory.x, RAM outside the image that only
+        // the updater touches. 4 KiB: the state record's copies, the smallest regions.
+        unsafe { slots::map().window(Ram::<4096>) },
     )
 }

@@ -515,10 +515,7 @@ fn probes_calibration() -> (quatarm_ref::Arm, Vec<u8>) {
 pub fn probes_selected_and_updated(name: &str, bounds: Bounds) {
     probes_selected(name, bounds);
     let b = the_board(name);
-    let (mut arm, table) = probes_calibration();
-    arm.probe.error[2] += 0.05;
-    let new_table = quatarm_wire::tablebuild::build(&arm).unwrap();
-    let (old, new) = (signed(&table).unwrap(), signed(&new_table).unwrap());
+    let UpdateTables { old, new, .. } = update_tables_of(probes_calibration());
     let reading = some_readings(1)[0];
     let host_new = host_points(b.precision, &new, &[reading]).unwrap()[0].unwrap();
     let host_old_5 = host_points_with_probe(b.precision, &old, 2, &[reading]).unwrap()[0].unwrap();
@@ -756,10 +753,10 @@ fn update_steps(table: &[u8]) -> Vec<Step> {
     Step::sequence(table).collect()
 }
 
-/// The next item must be a `Hello` naming `live` as the table in use.
+/// `item` (the next of the hub's stream) must be a `Hello` naming `live` as the table in use.
 #[allow(dead_code)] // each board's test binary uses one of the two update cases
-fn expect_hello(s: &mut Session, live: Option<LiveTable>, when: &str) {
-    match s.next_item().unwrap() {
+fn expect_hello(item: Item, live: Option<LiveTable>, when: &str) {
+    match item {
         Item::Hello(h) => assert_eq!(h.live, live, "{when}: {h:?}"),
         other => panic!("{when}: expected a Hello, got {other:?}"),
     }
@@ -768,7 +765,8 @@ fn expect_hello(s: &mut Session, live: Option<LiveTable>, when: &str) {
 /// The tables of an update test and what a `Hello` says of each once live.
 #[allow(dead_code)] // each board's test binary uses one of the two update cases
 struct UpdateTables {
-    /// The default calibration's table: the factory's.
+    /// The calibration's table (the default calibration's in [`update_tables`]): the
+    /// factory's.
     old_table: Vec<u8>,
     /// The same with the probe 0.05 mm longer: the update's.
     new_table: Vec<u8>,
@@ -784,7 +782,12 @@ struct UpdateTables {
 
 #[allow(dead_code)] // each board's test binary uses one of the two update cases
 fn update_tables() -> UpdateTables {
-    let (mut arm, old_table) = calibration(&default_calibration_path()).unwrap();
+    update_tables_of(calibration(&default_calibration_path()).unwrap())
+}
+
+/// The tables of an update from the calibration `(arm, old_table)` (its arm, its table).
+#[allow(dead_code)] // each board's test binary uses one of the two update cases
+fn update_tables_of((mut arm, old_table): (quatarm_ref::Arm, Vec<u8>)) -> UpdateTables {
     arm.probe.error[2] += 0.05;
     let new_table = quatarm_wire::tablebuild::build(&arm).unwrap();
     let (old, new) = (signed(&old_table).unwrap(), signed(&new_table).unwrap());
@@ -842,7 +845,7 @@ pub fn update_with_resets(name: &str) {
     assert_ne!(host_old, host_new);
 
     let mut s = Session::start(&b, &b.elf(b.name), Some(&old)).unwrap();
-    expect_hello(&mut s, factory, "boot");
+    expect_hello(s.next_item().unwrap(), factory, "boot");
     assert_eq!(point_now(&mut s, &reading), host_old);
     let steps = update_steps(&new);
     let commit = steps.len() - 1;
@@ -853,7 +856,7 @@ pub fn update_with_resets(name: &str) {
         }
         s.reset().unwrap();
         expect_hello(
-            &mut s,
+            s.next_item().unwrap(),
             factory,
             &format!("reset after {cut} of {commit} steps"),
         );
@@ -876,10 +879,10 @@ pub fn update_with_resets(name: &str) {
             assert!(matches!(answer, Item::Update(Ok(_))), "{answer:?}");
         }
     }
-    expect_hello(&mut s, updated, "after the commit");
+    expect_hello(s.next_item().unwrap(), updated, "after the commit");
     assert_eq!(point_now(&mut s, &reading), host_new);
     s.reset().unwrap();
-    expect_hello(&mut s, updated, "reset after the commit");
+    expect_hello(s.next_item().unwrap(), updated, "reset after the commit");
     assert_eq!(point_now(&mut s, &reading), host_new);
 
     // One byte of the table changed: refused at commit as the boot would call it.
@@ -929,7 +932,11 @@ pub fn update_with_resets(name: &str) {
         s.ask(&ToDevice::Update(step.clone())).unwrap();
     }
     s.reset().unwrap();
-    expect_hello(&mut s, updated, "reset during a second update");
+    expect_hello(
+        s.next_item().unwrap(),
+        updated,
+        "reset during a second update",
+    );
     let (status, _) = s.finish().unwrap();
     assert!(status.success(), "{status}");
 

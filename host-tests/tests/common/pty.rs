@@ -8,14 +8,16 @@ use std::process::{Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
 use host_tests::e2e::{calibration, default_calibration_path, host_points, signed};
-use host_tests::pty::{Port, PtyHub};
-use quatarm::stream::{Coordinates, LiveTable, Reading, Status, ToDevice, ToHost};
+use host_tests::pty::PtyHub;
+use host_tests::qemu::wait_until;
+use quatarm::stream::{Coordinates, Reading, Status, ToDevice, ToHost};
 use quatarm::update::session::Step;
 use quatarm::update::Accepted;
 use quatarm_wire::stream_decode::Item;
 
 use super::{
-    armcal_exe, budget_table, some_readings, table_crc, the_board, update_tables, UpdateTables,
+    armcal_exe, budget_table, expect_hello, some_readings, table_crc, the_board, update_tables,
+    UpdateTables,
 };
 
 /// What an `armcal` run gave.
@@ -51,19 +53,13 @@ fn wait_armcal(mut child: std::process::Child, limit: Duration, start: Instant) 
         let _ = err.read_to_string(&mut s);
         s
     });
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        if start.elapsed() > limit {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!(
-                "armcal still running after {limit:?}: it hangs (stderr so far: {})",
-                err.join().unwrap_or_default()
-            );
-        }
-        std::thread::sleep(Duration::from_millis(5));
+    // `limit` counts from `start`, which may be before the spawn.
+    let Some(status) = wait_until(&mut child, limit.saturating_sub(start.elapsed())).unwrap()
+    else {
+        panic!(
+            "armcal still running after {limit:?}: it hangs (stderr so far: {})",
+            err.join().unwrap_or_default()
+        );
     };
     Run {
         status,
@@ -100,14 +96,6 @@ fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, bytes).unwrap();
     p
-}
-
-/// The next item must be a `Hello` naming `live`.
-fn expect_hello(port: &mut Port, live: Option<LiveTable>, when: &str) {
-    match port.next_item().unwrap() {
-        Item::Hello(h) => assert_eq!(h.live, live, "{when}: {h:?}"),
-        other => panic!("{when}: expected a Hello, got {other:?}"),
-    }
 }
 
 /// One reading's coordinates as the hub gives them now, through a port of the test's own.
@@ -205,7 +193,7 @@ pub fn table_send_over_a_pty(name: &str) {
         // Open before the machine runs: the boot's Hello is not lost.
         let mut port = hub.open_held().unwrap();
         hub.run().unwrap();
-        expect_hello(&mut port, factory, "boot");
+        expect_hello(port.next_item().unwrap(), factory, "boot");
     }
     assert_eq!(point_now(&hub, &readings[0]), host_old);
 
@@ -339,7 +327,7 @@ pub fn table_send_over_a_pty(name: &str) {
     {
         let mut port = hub.open_held().unwrap();
         hub.reset().unwrap();
-        expect_hello(&mut port, updated, "reset after the update");
+        expect_hello(port.next_item().unwrap(), updated, "reset after the update");
     }
     assert_eq!(point_now(&hub, &readings[0]), host_new[0].unwrap());
     let log_path = hub.log_path().to_path_buf();

@@ -15,4 +15,4 @@ pub mod slots;
 pub mod window;
 
 pub use port::Port;
-pub use slots::{boot, Boot, Map};
+pub use slots::{boot, Boot};

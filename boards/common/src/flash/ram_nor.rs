@@ -15,17 +15,6 @@ pub type RamNor<const ERASE: usize> = Window<Ram<ERASE>>;
 /// RAM treated as NOR flash, 4-byte write units, `ERASE`-byte erase units.
 pub struct Ram<const ERASE: usize>;
 
-impl<const ERASE: usize> RamNor<ERASE> {
-    /// The region of `len` bytes at `base`.
-    ///
-    /// # Safety
-    /// `base..base + len` must be RAM that nothing else reads or writes while the driver
-    /// lives (on mps2: the calibration regions `memory.x` reserves, outside the image).
-    pub unsafe fn over_ram(base: usize, len: usize) -> Self {
-        Window::new(Ram, base, len)
-    }
-}
-
 impl<const ERASE: usize> Raw for Ram<ERASE> {
     const WRITE_SIZE: usize = 4;
     const ERASE_SIZE: usize = ERASE;

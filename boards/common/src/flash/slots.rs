@@ -53,11 +53,11 @@ fn slot_regions() -> [(usize, usize); 2] {
 /// from that start (checked against the driver by `Layout::check` before any use).
 pub struct Map {
     /// Address of the lowest region: offset 0 of the driver.
-    pub base: usize,
+    base: usize,
     /// Bytes from `base` to the end of the highest region.
-    pub span: usize,
+    span: usize,
     /// The slots and state copies, in offsets from `base`.
-    pub layout: Layout,
+    layout: Layout,
 }
 
 /// The map of `slots` and, where the board has them, `state` regions: offsets from the lowest
