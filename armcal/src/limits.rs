@@ -8,6 +8,7 @@
 //! and a board agree; the others are bounds no real arm or instrument comes near.
 
 use quatarm::model::{REFERENCE_TEMP_MC, TEMP_RANGE_MC};
+use quatarm::table::budget::limits as budget;
 use quatarm::table::limits as table;
 use quatarm_ref::calfile::Limits;
 use std::f64::consts::TAU;
@@ -35,7 +36,10 @@ pub fn temp_range_c() -> std::ops::RangeInclusive<f64> {
 /// may name one that the firmware cannot apply), up to physical bounds: 1e-4 rad/mm droops a
 /// metre-long lever by 0.1 rad, 0.1 rad of encoder error (or of a bearing's wobble) is 6°.
 /// Angles within one turn either way (a Denavit–Hartenberg twist or θ offset is a full angle,
-/// never more than a turn).
+/// never more than a turn). The `[uncertainty]` budget's standard uncertainties are the
+/// table's budget limits (`quatarm::table::budget::limits`): a budget the hub would refuse
+/// is refused where it is read, with its key, rather than turned into an infinite
+/// covariance and a U95 of 0 (issue 27, F2).
 pub const CALFILE: Limits = Limits {
     length_mm: table::LENGTH_MM,
     angle_rad: TAU,
@@ -44,6 +48,9 @@ pub const CALFILE: Limits = Limits {
     gravity: 1.0e-4,
     thermal: table::THERMAL,
     translation_mm: COORDINATE_MM,
+    budget_counts: budget::ENCODER_COUNTS,
+    budget_mm: budget::LENGTH_MM,
+    budget_temperature_c: budget::TEMPERATURE_C,
 };
 
 /// At most this many characters of a name from the input are echoed in a message.

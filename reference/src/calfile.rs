@@ -59,6 +59,12 @@ pub struct Limits {
     pub thermal: f64,
     /// |component| of `reference_frame.translation` (mm).
     pub translation_mm: f64,
+    /// `[uncertainty]`'s `encoder_counts` (counts).
+    pub budget_counts: f64,
+    /// `[uncertainty]`'s `probing_mm` and `model_mm` (mm).
+    pub budget_mm: f64,
+    /// `[uncertainty]`'s `temperature_c` (°C).
+    pub budget_temperature_c: f64,
 }
 
 impl Limits {
@@ -71,6 +77,9 @@ impl Limits {
         gravity: f64::MAX,
         thermal: f64::MAX,
         translation_mm: f64::MAX,
+        budget_counts: f64::MAX,
+        budget_mm: f64::MAX,
+        budget_temperature_c: f64::MAX,
     };
 }
 
@@ -169,7 +178,7 @@ pub fn parse_with(text: &str, limits: &Limits) -> Result<Parsed, CalFileError> {
         reference_frame,
     };
     let uncertainty = match root.get("uncertainty") {
-        Some(Value::Table(t)) => Some(crate::uncertainty::parse(t, &arm, &mut unknown)?),
+        Some(Value::Table(t)) => Some(crate::uncertainty::parse(t, &arm, limits, &mut unknown)?),
         Some(_) => return Err(err("uncertainty", "must be a table")),
         None => None,
     };
@@ -917,6 +926,9 @@ translation = [10.0, 20.0, 30.0]
             gravity: 1e-4,
             thermal: 4e-4,
             translation_mm: 1e5,
+            budget_counts: 1e4,
+            budget_mm: 10.0,
+            budget_temperature_c: 50.0,
         };
         let cases = [
             (
@@ -1094,6 +1106,56 @@ temperature_c = 0.2
         ))
         .unwrap_err();
         assert!(e.message.contains("positive semi-definite"), "{e}");
+    }
+
+    /// Issue 27, F1: a zero variance beside a non-zero covariance (eigenvalue −0.6e-6) passed
+    /// the correlation matrix's check, which cannot see a zero variance; refused at the entry.
+    #[test]
+    fn a_zero_variance_beside_a_covariance_is_refused() {
+        let text = format!(
+            "{FULL}{}",
+            BUDGET
+                .replacen("4e-10, 1e-11", "0.0, 1e-11", 1)
+                .replacen("1e-11, 9e-10", "1e-11, 9e-10", 1)
+        );
+        let e = parse(&text).unwrap_err();
+        assert_eq!(e.path, "uncertainty.covariance[1]", "{e}");
+        assert!(e.message.contains("positive semi-definite"), "{e}");
+        // A zero variance with zero covariances is a parameter known exactly: read.
+        let exact = BUDGET.replacen("0.0, 0.0, 1e-6, 0.0", "0.0, 0.0, 0.0, 0.0", 1);
+        assert!(parse(&format!("{FULL}{exact}")).is_ok());
+    }
+
+    /// Issue 27, F2: every term of the budget within the limits the tool reads with, refused
+    /// with its key beyond them (`probing_mm = 1e200` gave a U95 of 0).
+    #[test]
+    fn budget_terms_beyond_the_limits_are_refused_with_their_key() {
+        let l = Limits {
+            budget_counts: 1e4,
+            budget_mm: 10.0,
+            budget_temperature_c: 50.0,
+            ..Limits::NONE
+        };
+        let l = Limits {
+            angle_rad: 7.0,
+            length_mm: 5000.0,
+            ..l
+        };
+        let cases = [
+            ("probing_mm = 0.002", "probing_mm = 1e200", "uncertainty.probing_mm"),
+            ("probing_mm = 0.002", "probing_mm = 0.002\nmodel_mm = 11", "uncertainty.model_mm"),
+            ("encoder_counts = 0.29", "encoder_counts = 1e300", "uncertainty.encoder_counts"),
+            ("temperature_c = 0.2", "temperature_c = 60", "uncertainty.temperature_c"),
+            ("4e-10, 1e-11", "64.0, 1e-11", "uncertainty.covariance[0]"),
+        ];
+        for (from, to, path) in cases {
+            let text = format!("{FULL}{}", BUDGET.replacen(from, to, 1));
+            assert!(parse(&text).is_ok(), "{to}: without limits");
+            let e = parse_with(&text, &l).unwrap_err();
+            assert_eq!(e.path, path, "{to}: {e}");
+            assert!(e.message.contains("limit"), "{e}");
+        }
+        assert!(parse_with(&format!("{FULL}{BUDGET}"), &l).is_ok());
     }
 
     /// `FULL` with its `[probe]` replaced by `probes`.

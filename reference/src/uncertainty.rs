@@ -7,7 +7,7 @@
 //! mean to a calibration tool (armcal's `Param`) is that tool's business.
 
 use crate::arm::Arm;
-use crate::calfile::CalFileError;
+use crate::calfile::{CalFileError, Limits};
 use nalgebra::{DMatrix, SymmetricEigen};
 use toml::{Table, Value};
 
@@ -260,7 +260,10 @@ fn err(path: impl Into<String>, message: impl Into<String>) -> CalFileError {
     }
 }
 
-fn non_negative(v: &Value, path: &str) -> Result<f64, CalFileError> {
+/// A standard uncertainty: a finite number in [0, `limit`] (the limit the tool reading the
+/// file applies: `armcal` takes the binary table's, so a budget the hub would refuse is
+/// refused on the host too, where it is read).
+fn non_negative(v: &Value, path: &str, limit: f64) -> Result<f64, CalFileError> {
     let x = match v {
         Value::Float(f) => *f,
         Value::Integer(i) => *i as f64,
@@ -272,29 +275,59 @@ fn non_negative(v: &Value, path: &str) -> Result<f64, CalFileError> {
             format!("{x} is not a standard uncertainty (finite, ≥ 0)"),
         ));
     }
+    if x > limit {
+        return Err(err(
+            path,
+            format!("{x:e} is beyond the limit of {limit} for this standard uncertainty"),
+        ));
+    }
     Ok(x)
 }
 
-/// Reads the `[uncertainty]` table for `arm`.
-pub fn parse(t: &Table, arm: &Arm, unknown: &mut Vec<String>) -> Result<Uncertainty, CalFileError> {
+impl ParamKey {
+    /// The largest |value| `limits` allow for what this key names: a standard uncertainty
+    /// larger than every value the parameter may take is no budget.
+    pub fn limit(&self, limits: &Limits) -> f64 {
+        match self {
+            ParamKey::ZeroOffset(_) | ParamKey::Tilt(..) => limits.angle_rad,
+            ParamKey::LinkError(..) | ParamKey::ProbeError(..) => limits.length_mm,
+            ParamKey::Harmonic { .. } => limits.harmonic_rad,
+            ParamKey::Wobble { .. } => limits.wobble_rad,
+            ParamKey::Gravity(_) => limits.gravity,
+            ParamKey::Thermal(_) => limits.thermal,
+        }
+    }
+}
+
+/// Reads the `[uncertainty]` table for `arm`, every term within `limits`.
+pub fn parse(
+    t: &Table,
+    arm: &Arm,
+    limits: &Limits,
+    unknown: &mut Vec<String>,
+) -> Result<Uncertainty, CalFileError> {
     for k in t.keys() {
         if !KEYS.contains(&k.as_str()) {
             unknown.push(format!("uncertainty.{k}"));
         }
     }
     let parameters = parameters(t.get("parameters"), arm)?;
-    let covariance = covariance(t.get("covariance"), parameters.len())?;
-    let opt = |key: &str| -> Result<f64, CalFileError> {
-        t.get(key)
-            .map_or(Ok(0.0), |v| non_negative(v, &format!("uncertainty.{key}")))
+    let covariance = covariance(t.get("covariance"), &parameters, limits)?;
+    let opt = |key: &str, limit: f64| -> Result<f64, CalFileError> {
+        t.get(key).map_or(Ok(0.0), |v| {
+            non_negative(v, &format!("uncertainty.{key}"), limit)
+        })
     };
+    let counts = limits.budget_counts;
     let n = arm.dof();
     let encoder_counts = match t.get("encoder_counts") {
         None => vec![0.0; n],
         Some(Value::Array(a)) if a.len() == n => a
             .iter()
             .enumerate()
-            .map(|(k, v)| non_negative(v, &format!("uncertainty.encoder_counts[{}]", k + 1)))
+            .map(|(k, v)| {
+                non_negative(v, &format!("uncertainty.encoder_counts[{}]", k + 1), counts)
+            })
             .collect::<Result<_, _>>()?,
         Some(Value::Array(a)) => {
             return Err(err(
@@ -302,15 +335,15 @@ pub fn parse(t: &Table, arm: &Arm, unknown: &mut Vec<String>) -> Result<Uncertai
                 format!("{} values for {n} joints", a.len()),
             ))
         }
-        Some(v) => vec![non_negative(v, "uncertainty.encoder_counts")?; n],
+        Some(v) => vec![non_negative(v, "uncertainty.encoder_counts", counts)?; n],
     };
     Ok(Uncertainty {
         parameters,
         covariance,
         encoder_counts,
-        probing_mm: opt("probing_mm")?,
-        temperature_c: opt("temperature_c")?,
-        model_mm: opt("model_mm")?,
+        probing_mm: opt("probing_mm", limits.budget_mm)?,
+        temperature_c: opt("temperature_c", limits.budget_temperature_c)?,
+        model_mm: opt("model_mm", limits.budget_mm)?,
     })
 }
 
@@ -334,8 +367,14 @@ fn parameters(v: Option<&Value>, arm: &Arm) -> Result<Vec<ParamKey>, CalFileErro
     Ok(out)
 }
 
-/// The covariance: n² finite numbers, symmetric, positive semi-definite to rounding.
-fn covariance(v: Option<&Value>, n: usize) -> Result<Vec<f64>, CalFileError> {
+/// The covariance: n² finite numbers, symmetric, positive semi-definite to rounding, each
+/// standard deviation within its parameter's limit.
+fn covariance(
+    v: Option<&Value>,
+    parameters: &[ParamKey],
+    limits: &Limits,
+) -> Result<Vec<f64>, CalFileError> {
+    let n = parameters.len();
     const PATH: &str = "uncertainty.covariance";
     let c: Vec<f64> = match v {
         None if n == 0 => return Ok(Vec::new()),
@@ -369,6 +408,16 @@ fn covariance(v: Option<&Value>, n: usize) -> Result<Vec<f64>, CalFileError> {
                 "a variance (diagonal) is negative",
             ));
         }
+        let limit = parameters[i].limit(limits);
+        if c[i * n + i].sqrt() > limit {
+            return Err(err(
+                format!("{PATH}[{}]", i * n + i),
+                format!(
+                    "a standard deviation of {:e} is beyond the parameter's limit of {limit}",
+                    c[i * n + i].sqrt()
+                ),
+            ));
+        }
         for j in 0..i {
             let (a, b) = (c[i * n + j], c[j * n + i]);
             let scale = (c[i * n + i] * c[j * n + j]).sqrt();
@@ -378,6 +427,22 @@ fn covariance(v: Option<&Value>, n: usize) -> Result<Vec<f64>, CalFileError> {
                     format!(
                         "{a:e} differs from its mirror [{}] = {b:e}: not symmetric",
                         j * n + i
+                    ),
+                ));
+            }
+        }
+    }
+    // A zero variance beside a non-zero covariance: not semi-definite at any tolerance (the
+    // 2×2 minor is −c²), and the correlation matrix below cannot see it.
+    for i in 0..n {
+        for j in 0..n {
+            if i != j && c[i * n + i] == 0.0 && c[i * n + j] != 0.0 {
+                return Err(err(
+                    format!("{PATH}[{}]", i * n + j),
+                    format!(
+                        "{:e} beside a zero variance [{}]: not positive semi-definite",
+                        c[i * n + j],
+                        i * n + i
                     ),
                 ));
             }

@@ -22,6 +22,12 @@ pub enum ArgError {
     NotRange(String),
     #[error("`{given}` is outside {lo}..{hi} °C, the temperatures the firmware (and the data reader) accept")]
     TemperatureOutside { given: String, lo: f64, hi: f64 },
+    #[error("`{given}` is beyond {max} {unit}, the largest such standard uncertainty a calibration file (and the hub's table) holds")]
+    BeyondBudgetLimit {
+        given: String,
+        max: f64,
+        unit: &'static str,
+    },
 }
 
 /// A finite number ≥ 0.
@@ -30,6 +36,35 @@ pub fn non_negative(s: &str) -> Result<f64, ArgError> {
         Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
         _ => Err(ArgError::NotNonNegative(s.to_string())),
     }
+}
+
+/// A standard uncertainty in [0, `max`] `unit`: the budget limits a calibration file is read
+/// with (`armcal::limits::CALFILE`), so `calibrate` never writes a budget no command reads.
+fn budget_term(s: &str, max: f64, unit: &'static str) -> Result<f64, ArgError> {
+    let x = non_negative(s)?;
+    if x > max {
+        return Err(ArgError::BeyondBudgetLimit {
+            given: s.to_string(),
+            max,
+            unit,
+        });
+    }
+    Ok(x)
+}
+
+/// A budget's standard uncertainty of a length (probing, model), mm.
+pub fn budget_mm(s: &str) -> Result<f64, ArgError> {
+    budget_term(s, armcal::limits::CALFILE.budget_mm, "mm")
+}
+
+/// A budget's standard uncertainty of a joint reading, counts.
+pub fn budget_counts(s: &str) -> Result<f64, ArgError> {
+    budget_term(s, armcal::limits::CALFILE.budget_counts, "counts")
+}
+
+/// A budget's standard uncertainty of the temperature reading, °C.
+pub fn budget_temperature_c(s: &str) -> Result<f64, ArgError> {
+    budget_term(s, armcal::limits::CALFILE.budget_temperature_c, "°C")
 }
 
 /// A finite number > 0.
@@ -61,5 +96,18 @@ mod tests {
         assert!(positive("0").is_err());
         assert!(probability("1").is_err() && probability("0").is_err());
         assert_eq!(probability("0.001"), Ok(0.001));
+    }
+
+    #[test]
+    fn budget_terms_stop_at_the_calibration_files_limits() {
+        // issue 27, F2: `calibrate --probing-mm 1e200` wrote a budget whose U95 was 0.
+        assert!(matches!(
+            budget_mm("1e200"),
+            Err(ArgError::BeyondBudgetLimit { .. })
+        ));
+        assert!(budget_counts("1e300").is_err() && budget_temperature_c("1e3").is_err());
+        assert!(budget_mm("-0.001").is_err() && budget_mm("nan").is_err());
+        assert_eq!(budget_mm("0.002"), Ok(0.002));
+        assert_eq!(budget_counts("0.29"), Ok(0.29));
     }
 }

@@ -13,17 +13,17 @@ use quatarm_ref::calfile::Uncertainty;
 pub struct BudgetArgs {
     /// Standard uncertainty of one joint reading (counts): 1/√12 is quantisation alone; an
     /// encoder with noise σ counts before quantisation has √(σ² + 1/12).
-    #[arg(long, default_value_t = QUANTISATION_COUNTS, value_parser = super::args::non_negative)]
+    #[arg(long, default_value_t = QUANTISATION_COUNTS, value_parser = super::args::budget_counts)]
     encoder_counts: f64,
     /// Standard uncertainty of the probing per axis (mm); default: from the spat scatter when
     /// the data have spat rows, else 0.
-    #[arg(long, value_parser = super::args::non_negative)]
+    #[arg(long, value_parser = super::args::budget_mm)]
     probing_mm: Option<f64>,
     /// What the model leaves unexplained per axis (mm).
-    #[arg(long, default_value_t = 0.0, value_parser = super::args::non_negative)]
+    #[arg(long, default_value_t = 0.0, value_parser = super::args::budget_mm)]
     model_mm: f64,
     /// Standard uncertainty of the temperature reading (°C).
-    #[arg(long, default_value_t = 0.0, value_parser = super::args::non_negative)]
+    #[arg(long, default_value_t = 0.0, value_parser = super::args::budget_temperature_c)]
     temperature_c: f64,
 }
 
