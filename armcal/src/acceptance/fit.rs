@@ -19,6 +19,32 @@ pub enum FitError {
     /// Gauss–Newton did not settle.
     #[error("the sphere fit did not converge")]
     NoConvergence,
+    /// A point is infinite or not a number: no fit is tried (an SVD of such points may never
+    /// return, issue 27 F3).
+    #[error("point {index} of the group is not finite ({x}, {y}, {z}): no sphere fitted")]
+    NonFinite {
+        /// 0-based index in the group.
+        index: usize,
+        /// Its coordinates (mm).
+        x: f64,
+        /// y (mm).
+        y: f64,
+        /// z (mm).
+        z: f64,
+    },
+}
+
+/// Refuses points that are not all finite, naming the first.
+fn finite(points: &[Vector3<f64>]) -> Result<(), FitError> {
+    match points.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
+        None => Ok(()),
+        Some(index) => Err(FitError::NonFinite {
+            index,
+            x: points[index].x,
+            y: points[index].y,
+            z: points[index].z,
+        }),
+    }
 }
 
 /// A fitted sphere.
@@ -36,6 +62,7 @@ const FLATNESS: f64 = 1e-9;
 
 /// The least-squares sphere of `points` (centre and radius free).
 pub fn free(points: &[Vector3<f64>]) -> Result<Sphere, FitError> {
+    finite(points)?;
     if points.len() < 4 {
         return Err(FitError::TooFew {
             have: points.len(),
@@ -100,6 +127,7 @@ pub fn with_radius(
     radius: f64,
     start: Vector3<f64>,
 ) -> Result<Vector3<f64>, FitError> {
+    finite(points)?;
     if points.len() < 3 {
         return Err(FitError::TooFew {
             have: points.len(),
@@ -140,6 +168,17 @@ pub fn distances(points: &[Vector3<f64>], centre: &Vector3<f64>) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn non_finite_points_never_reach_a_fit() {
+        let mut p = cap(Vector3::zeros(), 12.7, 80);
+        p[3].y = f64::NAN;
+        let e = free(&p).unwrap_err();
+        assert!(matches!(e, FitError::NonFinite { index: 3, .. }), "{e}");
+        p[3].y = f64::INFINITY;
+        let e = with_radius(&p, 12.7, Vector3::zeros()).unwrap_err();
+        assert!(matches!(e, FitError::NonFinite { index: 3, .. }), "{e}");
+    }
 
     fn cap(centre: Vector3<f64>, r: f64, n: usize) -> Vec<Vector3<f64>> {
         crate::sim::sphere_directions(n)
