@@ -28,6 +28,12 @@ use std::path::{Path, PathBuf};
 /// two values is too unreliable a width.
 pub const MIN_UNITS: usize = 3;
 
+/// A spread at or below this fraction of the largest |error| among the units is no spread:
+/// units that share one value differ only by the rounding of `unit − nominal` (1e-16
+/// relative), and a prior that narrow would pin the unknown (issue 27, F7: a spread of
+/// 7.7e-20 rad). 1e-9 is far above rounding and far below any real scatter between units.
+pub const SPREAD_REL_TOL: f64 = 1e-9;
+
 /// One unknown's fleet statistics.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Entry {
@@ -57,7 +63,7 @@ pub struct Entry {
 pub enum Fallback {
     /// Fewer than [`MIN_UNITS`] units determined it (0: every unit held it at nominal).
     TooFewUnits,
-    /// Every unit found the same value: no spread to weigh it by.
+    /// Every unit found the same value (to [`SPREAD_REL_TOL`]): no spread to weigh it by.
     NoSpread,
 }
 
@@ -97,6 +103,9 @@ pub enum FleetError {
     /// No units given.
     #[error("fleet prior: no calibration files given")]
     Empty,
+    /// One file given twice: it would count as two units that agree exactly.
+    #[error("fleet prior: {0} is given more than once: each unit counts once")]
+    Duplicate(String),
 }
 
 /// The error of `p` in `unit` relative to `nominal`: the whole of a link or probe component
@@ -188,7 +197,9 @@ pub fn from_arms(nominal: &Arm, units: &[(String, Arm)]) -> Result<FleetPrior, F
             };
             let fallback = if n < MIN_UNITS {
                 Some(Fallback::TooFewUnits)
-            } else if spread <= 0.0 || !spread.is_finite() {
+            } else if !spread.is_finite()
+                || spread <= SPREAD_REL_TOL * v.iter().fold(0.0f64, |m, e| m.max(e.abs()))
+            {
                 Some(Fallback::NoSpread)
             } else {
                 None
@@ -214,7 +225,14 @@ pub fn from_arms(nominal: &Arm, units: &[(String, Arm)]) -> Result<FleetPrior, F
 /// The fleet prior of calibration files of the design `nominal`; an error names the file.
 pub fn from_files(nominal: &Arm, paths: &[PathBuf]) -> Result<FleetPrior, FleetError> {
     let mut units = Vec::with_capacity(paths.len());
+    let mut seen = Vec::with_capacity(paths.len());
     for p in paths {
+        // The same file by another spelling (./a.toml, a link) is the same unit.
+        let id = std::fs::canonicalize(p).unwrap_or_else(|_| p.clone());
+        if seen.contains(&id) {
+            return Err(FleetError::Duplicate(shown(p)));
+        }
+        seen.push(id);
         units.push((shown(p), crate::load::arm(p)?));
     }
     from_arms(nominal, &units)
@@ -247,5 +265,55 @@ impl FleetPrior {
     /// The entries left to the calibration's own rule.
     pub fn fallbacks(&self) -> impl Iterator<Item = &Entry> {
         self.entries.iter().filter(|e| e.fallback.is_some())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A copy of issue 27's reproducer F7 (`../shared/repro/round2/`).
+    fn repro(name: &str) -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/repro27")
+            .join(name)
+    }
+
+    #[test]
+    fn f7_a_value_every_unit_shares_is_no_spread() {
+        let nominal = crate::load::arm(&repro("arm.toml")).unwrap();
+        let files: Vec<PathBuf> = (1..=3)
+            .map(|k| repro(&format!("f7-prior{k}.toml")))
+            .collect();
+        let f = from_files(&nominal, &files).unwrap();
+        let shared = f
+            .entries
+            .iter()
+            .find(|e| e.param == Param::ZeroOffset(0))
+            .unwrap();
+        // The three units hold one non-nominal value: its spread is rounding (1e-20 rad).
+        assert_eq!(shared.units, 3);
+        assert!(shared.mean != 0.0 && shared.spread < 1e-15, "{shared:?}");
+        assert_eq!(shared.fallback, Some(Fallback::NoSpread), "{shared:?}");
+        assert!(f.gaussians().iter().all(|(p, _)| *p != Param::ZeroOffset(0)));
+        // The link errors the units do not share keep their fleet Gaussian.
+        let link = f
+            .entries
+            .iter()
+            .find(|e| e.param == Param::LinkError(0, 0))
+            .unwrap();
+        assert_eq!(link.fallback, None, "{link:?}");
+    }
+
+    #[test]
+    fn f7_a_file_given_twice_is_refused() {
+        let nominal = crate::load::arm(&repro("arm.toml")).unwrap();
+        let one = repro("f7-prior1.toml");
+        let other = repro("f7-prior2.toml");
+        // The same file spelt another way is the same unit.
+        let again = one.parent().unwrap().join(".").join("f7-prior1.toml");
+        let e = from_files(&nominal, &[one.clone(), other, again]).unwrap_err();
+        assert!(matches!(e, FleetError::Duplicate(ref s) if s.contains("f7-prior1.toml")), "{e}");
+        assert!(from_files(&nominal, &[one.clone(), one.clone(), one]).is_err());
     }
 }
