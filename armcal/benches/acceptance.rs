@@ -68,7 +68,7 @@ fn main() {
             .expect("test set")
             .data;
         for (model, arm) in [("true", &truth), ("calibrated geometric", &fit.arm)] {
-            let c = acceptance::check(arm, &tests, None, None).expect("check");
+            let c = acceptance::check(arm, &tests, None, None, false).expect("check");
             let cells: Vec<String> = Test::ALL
                 .iter()
                 .map(|t| format!("{:.1}", c.results[t.key()]))

@@ -38,7 +38,7 @@ fn main() {
             .data;
         let p =
             virtual_test::predict(&c.arm, &c.budget, &data, draws, k as u64).expect("prediction");
-        let measured = acceptance::check(&c.arm, &data, None, None).expect("check");
+        let measured = acceptance::check(&c.arm, &data, None, None, false).expect("check");
         for r in &measured.tests {
             let i = p[&(r.test, r.group)];
             let v = r.value_um * 1e-3;

@@ -62,10 +62,20 @@ pub fn calibration_and_budget(
     path: &Path,
     needed_by: Option<&'static str>,
 ) -> Result<(Arm, Option<crate::uncertainty::Budget>), BudgetLoadError> {
+    let (arm, budget) = calibration_with_budget(path, needed_by)?;
+    Ok((arm, budget.filter(|_| needed_by.is_some())))
+}
+
+/// A calibration and its budget whenever the file has one (`check` takes U from it); a file
+/// without one is refused only where `needed_by` names an option that needs it.
+pub fn calibration_with_budget(
+    path: &Path,
+    needed_by: Option<&'static str>,
+) -> Result<(Arm, Option<crate::uncertainty::Budget>), BudgetLoadError> {
     let (arm, file) = calibration(path)?;
     let budget = match (needed_by, file) {
-        (None, _) => None,
-        (Some(_), Some(u)) => Some(crate::uncertainty::Budget::from_file(&u, &arm)),
+        (_, Some(u)) => Some(crate::uncertainty::Budget::from_file(&u, &arm)),
+        (None, None) => None,
         (Some(needed_by), None) => {
             return Err(BudgetLoadError::NoBudget {
                 path: path.display().to_string(),

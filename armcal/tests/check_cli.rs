@@ -204,6 +204,45 @@ fn the_virtual_test_needs_a_budget_and_gives_u_from_it() {
     }
 }
 
+/// Issue 27: without `test_uncertainty`, U is propagated from the calibration's budget
+/// (without `--predict` too), printed with its source and used by the decision; with it, the
+/// MPE file's value.
+#[test]
+fn u_comes_from_the_budget_unless_the_mpe_file_gives_it() {
+    let dir = workdir("u-from-budget");
+    write_truth(&dir, &truth());
+    simulate(&dir, "length", "20", &[], "bar.csv");
+    let mut text = std::fs::read_to_string(dir.join("truth.toml")).unwrap();
+    text.push_str("\n[uncertainty]\nprobing_mm = 0.002\n");
+    std::fs::write(dir.join("budget.toml"), text).unwrap();
+    let run = |mpe: &str| {
+        std::fs::write(dir.join("mpe.toml"), mpe).unwrap();
+        let args = ["check", "bar.csv", "--calib", "budget.toml", "--mpe", "mpe.toml"];
+        let v = json(&dir, &[&args[..], &["--json"]].concat());
+        let text = String::from_utf8_lossy(&armcal_ok(&args, &dir).stdout).into_owned();
+        (v, text)
+    };
+    // The noise-free bar's error is 0; U (2 sd of two means of five 2 µm probings) is
+    // 2.5 µm: against an MPE of 2 µm only U keeps the decision from a pass.
+    let (v, text) = run("E_Uni = 0.002\n");
+    for t in v["tests"].as_array().unwrap() {
+        let u = t["U_um"].as_f64().unwrap();
+        assert!((u - 2.53).abs() < 0.5, "{t}");
+        assert_eq!(t["u_source"], "budget", "{t}");
+        assert_eq!(t["decision"], "cannot decide", "{t}");
+        assert!(t.get("predicted_um").is_none(), "{t}");
+    }
+    assert!(text.contains("from the budget"), "{text}");
+    assert!(!text.contains("U = 0"), "{text}");
+    let (v, text) = run("E_Uni = 0.002\ntest_uncertainty = { E_Uni = 0.0005 }\n");
+    for t in v["tests"].as_array().unwrap() {
+        assert_eq!(t["U_um"].as_f64().unwrap(), 0.5, "{t}");
+        assert_eq!(t["u_source"], "mpe_file", "{t}");
+        assert_eq!(t["decision"], "pass", "{t}");
+    }
+    assert!(text.contains("from the MPE file"), "{text}");
+}
+
 /// `--plots`: the three pictures of a complete ISO 10360-12 test set, valid PNGs; a folder that
 /// is a file is refused and nothing is written.
 #[test]

@@ -40,7 +40,7 @@ pub struct Row {
     #[serde(rename = "U_um")]
     pub u_um: f64,
     /// Where U comes from.
-    pub u_source: &'static str,
+    pub u_source: USource,
     /// The decision, where an MPE is given.
     pub decision: Option<Decision>,
     /// The virtual test's prediction (µm), where the calibration has a budget.
@@ -88,14 +88,43 @@ pub fn mean_of(rows: &[usize], centres: &[Vector3<f64>]) -> Vector3<f64> {
     rows.iter().map(|&i| centres[i]).sum::<Vector3<f64>>() / rows.len() as f64
 }
 
+/// Where a test value's expanded uncertainty U comes from (`spec/acceptance-tests.md`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum USource {
+    /// The MPE file's `test_uncertainty`.
+    MpeFile,
+    /// Propagated from the calibration's `[uncertainty]` budget: twice the standard
+    /// deviation of the value over the virtual test's Monte Carlo draws (k = 2).
+    Budget,
+    /// Neither: U = 0, the value taken as exact.
+    None,
+}
+
+impl USource {
+    /// As the report prints it beside U.
+    pub fn words(self) -> &'static str {
+        match self {
+            USource::MpeFile => "from the MPE file",
+            USource::Budget => "from the budget",
+            USource::None => "none: U = 0",
+        }
+    }
+}
+
 /// Runs every test the data supports. U is the MPE file's `test_uncertainty` where it gives
-/// one; else, with a budget, twice the standard deviation of the value under the budget (the
-/// virtual test's spread, k = 2); else 0, said as such (`u_source`).
+/// one; else, with the calibration's budget (`prediction`, the virtual test over it), the
+/// value's propagated uncertainty: twice its standard deviation under the budget (k = 2;
+/// why Monte Carlo and not first order: `docs/spec-reading.md`, "A test value's
+/// uncertainty"); else 0, said as such (`u_source`). `show_prediction`: the virtual test's
+/// interval is printed beside the value (`check --predict`); without it the prediction only
+/// gives U.
 pub fn check(
     arm: &Arm,
     data: &Dataset,
     mpe: Option<&Mpe>,
     prediction: Option<&BTreeMap<(Test, i64), Interval>>,
+    show_prediction: bool,
 ) -> Result<Check, StatError> {
     let d = arm.probe.ball_diameter;
     let ball = |r: &crate::data::Row| crate::probes::ball_diameter(arm, r);
@@ -118,7 +147,14 @@ pub fn check(
     }
     let tests = values
         .iter()
-        .map(|v| row(v, mpe, prediction.and_then(|p| p.get(&(v.test, v.group)))))
+        .map(|v| {
+            let predicted = prediction.and_then(|p| p.get(&(v.test, v.group)));
+            let mut r = row(v, mpe, predicted);
+            if !show_prediction {
+                r.predicted_um = None;
+            }
+            r
+        })
         .collect();
     let effective_ball_diameter = values
         .iter()
@@ -141,12 +177,9 @@ fn row(v: &Value, mpe: Option<&Mpe>, predicted: Option<&Interval>) -> Row {
     let limit = mpe.and_then(|m| m.of(v));
     let given = mpe.and_then(|m| m.test_uncertainty(v.test));
     let (u, source) = match (given, predicted) {
-        (Some(u), _) => (u, "test_uncertainty of the MPE file"),
-        (None, Some(p)) => (
-            2.0 * p.sd,
-            "the calibration's budget (2 sd of the virtual test)",
-        ),
-        (None, None) => (0.0, "none given: U = 0"),
+        (Some(u), _) => (u, USource::MpeFile),
+        (None, Some(p)) => (2.0 * p.sd, USource::Budget),
+        (None, None) => (0.0, USource::None),
     };
     let um = |i: &Interval| Interval {
         mean: i.mean * 1e3,
@@ -180,8 +213,8 @@ impl Check {
         );
         let _ = writeln!(
             s,
-            "{:<9} {:>6} {:>11} {:>9} {:>8}  {:<14} predicted µm (95 %)",
-            "test", "group", "value µm", "MPE µm", "U µm", "decision"
+            "{:<9} {:>6} {:>11} {:>9} {:>8} {:<18} {:<14} predicted µm (95 %)",
+            "test", "group", "value µm", "MPE µm", "U µm", "U source", "decision"
         );
         for r in &self.tests {
             let mpe = r.mpe_um.map_or("-".to_string(), |m| format!("{m:.2}"));
@@ -191,12 +224,13 @@ impl Check {
             });
             let _ = writeln!(
                 s,
-                "{:<9} {:>6} {:>11.2} {:>9} {:>8.2}  {decision:<14} {predicted}",
+                "{:<9} {:>6} {:>11.2} {:>9} {:>8.2} {:<18} {decision:<14} {predicted}",
                 r.test.key(),
                 r.group,
                 r.value_um,
                 mpe,
-                r.u_um
+                r.u_um,
+                r.u_source.words()
             );
         }
         let _ = writeln!(s, "results:");
@@ -238,12 +272,12 @@ impl Check {
         if self
             .tests
             .iter()
-            .any(|r| r.decision.is_some() && r.u_um == 0.0)
+            .any(|r| r.decision.is_some() && r.u_source == USource::None)
         {
             let _ = writeln!(
                 s,
-                "note: U = 0 where the MPE file gives no test_uncertainty: the decision then \
-                 takes the value as exact"
+                "note: U = 0 where the MPE file gives no test_uncertainty and the calibration \
+                 file has no [uncertainty] budget: the decision then takes the value as exact"
             );
         }
         s

@@ -40,8 +40,9 @@ pub struct Args {
 
 /// Runs the subcommand: everything is read and checked before anything is printed.
 pub fn run(a: Args) -> anyhow::Result<()> {
+    // The budget, where the file has one, gives U where the MPE file has none.
     let (arm, budget) =
-        armcal::load::calibration_and_budget(&a.calib, a.predict.then_some("--predict"))?;
+        armcal::load::calibration_with_budget(&a.calib, a.predict.then_some("--predict"))?;
     let mpe = a.mpe.as_deref().map(Mpe::read).transpose()?;
     let data = armcal::data::read(&a.data, arm.dof())?;
     armcal::probes::check(&arm, &data)?;
@@ -54,7 +55,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         .map(|b| virtual_test::predict(&arm, b, &data, a.draws as usize, a.seed))
         .transpose()
         .with_context(name)?;
-    let c = acceptance::check(&arm, &data, mpe.as_ref(), prediction.as_ref()).with_context(name)?;
+    let c = acceptance::check(&arm, &data, mpe.as_ref(), prediction.as_ref(), a.predict)
+        .with_context(name)?;
     if c.tests.is_empty() {
         anyhow::bail!(
             "{}: no sphere, length or spat group: no acceptance test to run",
