@@ -55,7 +55,8 @@ fn main() {
             );
             let r = Rotation3::new(axis * 3.0);
             let lam = l.map(|x| x * scale);
-            let s = r.matrix() * Matrix3::from_diagonal(&Vector3::from(lam)) * r.matrix().transpose();
+            let s =
+                r.matrix() * Matrix3::from_diagonal(&Vector3::from(lam)) * r.matrix().transpose();
             (s, lam)
         })
         .collect();
@@ -136,19 +137,41 @@ fn main() {
     run(
         "simulate",
         &[
-            "simulate", "--truth", "data/default-6-full.toml", "--arm", "data/default-6.toml",
-            "--kind", "point", "--count", "600", "--seed", "1", "-o", &data_s,
+            "simulate",
+            "--truth",
+            "data/default-6-full.toml",
+            "--arm",
+            "data/default-6.toml",
+            "--kind",
+            "point",
+            "--count",
+            "600",
+            "--seed",
+            "1",
+            "-o",
+            &data_s,
         ],
     );
     let c = run(
         "calibrate",
-        &["calibrate", &data_s, "--arm", "data/default-6.toml", "-o", &cal_s],
+        &[
+            "calibrate",
+            &data_s,
+            "--arm",
+            "data/default-6.toml",
+            "-o",
+            &cal_s,
+        ],
     );
     println!("armcal calibrate of 600 point rows: {c:.2} s");
     let e = run(
         "eval",
         &[
-            "eval", "--calib", &cal_s, "--uncertainty", "data/recordings/default-6-session.csv",
+            "eval",
+            "--calib",
+            &cal_s,
+            "--uncertainty",
+            "data/recordings/default-6-session.csv",
         ],
     );
     println!("armcal eval --uncertainty of the 12,000-row recording: {e:.2} s");

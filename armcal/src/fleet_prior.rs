@@ -295,7 +295,10 @@ mod tests {
         assert_eq!(shared.units, 3);
         assert!(shared.mean != 0.0 && shared.spread < 1e-15, "{shared:?}");
         assert_eq!(shared.fallback, Some(Fallback::NoSpread), "{shared:?}");
-        assert!(f.gaussians().iter().all(|(p, _)| *p != Param::ZeroOffset(0)));
+        assert!(f
+            .gaussians()
+            .iter()
+            .all(|(p, _)| *p != Param::ZeroOffset(0)));
         // The link errors the units do not share keep their fleet Gaussian.
         let link = f
             .entries
@@ -313,7 +316,10 @@ mod tests {
         // The same file spelt another way is the same unit.
         let again = one.parent().unwrap().join(".").join("f7-prior1.toml");
         let e = from_files(&nominal, &[one.clone(), other, again]).unwrap_err();
-        assert!(matches!(e, FleetError::Duplicate(ref s) if s.contains("f7-prior1.toml")), "{e}");
+        assert!(
+            matches!(e, FleetError::Duplicate(ref s) if s.contains("f7-prior1.toml")),
+            "{e}"
+        );
         assert!(from_files(&nominal, &[one.clone(), one.clone(), one]).is_err());
     }
 }

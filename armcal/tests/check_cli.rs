@@ -217,7 +217,14 @@ fn u_comes_from_the_budget_unless_the_mpe_file_gives_it() {
     std::fs::write(dir.join("budget.toml"), text).unwrap();
     let run = |mpe: &str| {
         std::fs::write(dir.join("mpe.toml"), mpe).unwrap();
-        let args = ["check", "bar.csv", "--calib", "budget.toml", "--mpe", "mpe.toml"];
+        let args = [
+            "check",
+            "bar.csv",
+            "--calib",
+            "budget.toml",
+            "--mpe",
+            "mpe.toml",
+        ];
         let v = json(&dir, &[&args[..], &["--json"]].concat());
         let text = String::from_utf8_lossy(&armcal_ok(&args, &dir).stdout).into_owned();
         (v, text)

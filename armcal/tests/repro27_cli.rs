@@ -30,7 +30,11 @@ fn refused(args: &[&str], dir: &Path) -> String {
     let err = String::from_utf8_lossy(&o.stderr).into_owned();
     assert!(!err.contains("panicked"), "{err}");
     assert!(!o.status.success(), "accepted: {args:?}\n{err}");
-    assert!(matches!(o.status.code(), Some(1 | 2)), "{:?}: {err}", o.status);
+    assert!(
+        matches!(o.status.code(), Some(1 | 2)),
+        "{:?}: {err}",
+        o.status
+    );
     assert!(o.stdout.is_empty(), "partial output: {args:?}");
     err
 }
@@ -39,10 +43,23 @@ fn refused(args: &[&str], dir: &Path) -> String {
 fn f1_a_covariance_that_is_not_semi_definite_is_refused_with_its_key() {
     let d = dir_with("r27-f1", &["f1-indef-cov.toml", "reading.csv"]);
     for args in [
-        &["eval", "--calib", "f1-indef-cov.toml", "--uncertainty", "reading.csv"][..],
         &[
-            "eval", "--calib", "f1-indef-cov.toml", "--uncertainty", "--method", "monte-carlo",
-            "--draws", "100", "reading.csv",
+            "eval",
+            "--calib",
+            "f1-indef-cov.toml",
+            "--uncertainty",
+            "reading.csv",
+        ][..],
+        &[
+            "eval",
+            "--calib",
+            "f1-indef-cov.toml",
+            "--uncertainty",
+            "--method",
+            "monte-carlo",
+            "--draws",
+            "100",
+            "reading.csv",
         ],
         &["table", "build", "f1-indef-cov.toml", "-o", "f1.bin"],
     ] {
@@ -61,23 +78,46 @@ fn f1_a_covariance_that_is_not_semi_definite_is_refused_with_its_key() {
 fn f2_terms_beyond_the_tables_limits_are_refused_never_a_u95_of_0() {
     let d = dir_with(
         "r27-f2",
-        &["f2-huge-probing.toml", "f2-huge-encoder.toml", "reading.csv", "f7-data.csv", "arm.toml"],
+        &[
+            "f2-huge-probing.toml",
+            "f2-huge-encoder.toml",
+            "reading.csv",
+            "f7-data.csv",
+            "arm.toml",
+        ],
     );
     for (file, key) in [
         ("f2-huge-probing.toml", "uncertainty.probing_mm"),
         ("f2-huge-encoder.toml", "uncertainty.encoder_counts"),
     ] {
-        let err = refused(&["eval", "--calib", file, "--uncertainty", "reading.csv"], &d);
-        assert!(err.contains(file) && err.contains(key) && err.contains("limit"), "{err}");
+        let err = refused(
+            &["eval", "--calib", file, "--uncertainty", "reading.csv"],
+            &d,
+        );
+        assert!(
+            err.contains(file) && err.contains(key) && err.contains("limit"),
+            "{err}"
+        );
     }
     let err = refused(
         &[
-            "calibrate", "f7-data.csv", "--arm", "arm.toml", "--folds", "0", "--probing-mm",
-            "1e200", "-o", "f2c.toml",
+            "calibrate",
+            "f7-data.csv",
+            "--arm",
+            "arm.toml",
+            "--folds",
+            "0",
+            "--probing-mm",
+            "1e200",
+            "-o",
+            "f2c.toml",
         ],
         &d,
     );
-    assert!(err.contains("--probing-mm") && err.contains("1e200"), "{err}");
+    assert!(
+        err.contains("--probing-mm") && err.contains("1e200"),
+        "{err}"
+    );
     assert!(!d.join("f2c.toml").exists());
 }
 
@@ -87,7 +127,12 @@ fn f3_check_predict_with_such_a_budget_is_refused_not_a_hang() {
     let t = std::time::Instant::now();
     let err = refused(
         &[
-            "check", "f3-sphere.csv", "--calib", "f2-huge-probing.toml", "--predict", "--draws",
+            "check",
+            "f3-sphere.csv",
+            "--calib",
+            "f2-huge-probing.toml",
+            "--predict",
+            "--draws",
             "10",
         ],
         &d,
@@ -101,11 +146,24 @@ fn f7_a_fleet_file_given_twice_is_refused() {
     let d = dir_with("r27-f7", &["f7-data.csv", "arm.toml", "f7-prior1.toml"]);
     let err = refused(
         &[
-            "calibrate", "f7-data.csv", "--arm", "arm.toml", "--folds", "0", "-o", "f7b.toml",
-            "--fleet-prior", "f7-prior1.toml", "f7-prior1.toml", "f7-prior1.toml",
+            "calibrate",
+            "f7-data.csv",
+            "--arm",
+            "arm.toml",
+            "--folds",
+            "0",
+            "-o",
+            "f7b.toml",
+            "--fleet-prior",
+            "f7-prior1.toml",
+            "f7-prior1.toml",
+            "f7-prior1.toml",
         ],
         &d,
     );
-    assert!(err.contains("f7-prior1.toml") && err.contains("more than once"), "{err}");
+    assert!(
+        err.contains("f7-prior1.toml") && err.contains("more than once"),
+        "{err}"
+    );
     assert!(!d.join("f7b.toml").exists());
 }

@@ -1114,9 +1114,11 @@ temperature_c = 0.2
     fn a_zero_variance_beside_a_covariance_is_refused() {
         let text = format!(
             "{FULL}{}",
-            BUDGET
-                .replacen("4e-10, 1e-11", "0.0, 1e-11", 1)
-                .replacen("1e-11, 9e-10", "1e-11, 9e-10", 1)
+            BUDGET.replacen("4e-10, 1e-11", "0.0, 1e-11", 1).replacen(
+                "1e-11, 9e-10",
+                "1e-11, 9e-10",
+                1
+            )
         );
         let e = parse(&text).unwrap_err();
         assert_eq!(e.path, "uncertainty.covariance[1]", "{e}");
@@ -1142,10 +1144,26 @@ temperature_c = 0.2
             ..l
         };
         let cases = [
-            ("probing_mm = 0.002", "probing_mm = 1e200", "uncertainty.probing_mm"),
-            ("probing_mm = 0.002", "probing_mm = 0.002\nmodel_mm = 11", "uncertainty.model_mm"),
-            ("encoder_counts = 0.29", "encoder_counts = 1e300", "uncertainty.encoder_counts"),
-            ("temperature_c = 0.2", "temperature_c = 60", "uncertainty.temperature_c"),
+            (
+                "probing_mm = 0.002",
+                "probing_mm = 1e200",
+                "uncertainty.probing_mm",
+            ),
+            (
+                "probing_mm = 0.002",
+                "probing_mm = 0.002\nmodel_mm = 11",
+                "uncertainty.model_mm",
+            ),
+            (
+                "encoder_counts = 0.29",
+                "encoder_counts = 1e300",
+                "uncertainty.encoder_counts",
+            ),
+            (
+                "temperature_c = 0.2",
+                "temperature_c = 60",
+                "uncertainty.temperature_c",
+            ),
             ("4e-10, 1e-11", "64.0, 1e-11", "uncertainty.covariance[0]"),
         ];
         for (from, to, path) in cases {

@@ -78,10 +78,18 @@ fn cdf_and_density(alpha: f64, beta: f64, s: f64) -> (f64, f64) {
         if e == 0.0 {
             continue;
         }
-        let b = if beta == 0.0 { 1.0 } else { (1.0 - beta / q).max(0.0) };
+        let b = if beta == 0.0 {
+            1.0
+        } else {
+            (1.0 - beta / q).max(0.0)
+        };
         let x = c * b.sqrt();
         // erf(x)/√b, kept finite where b → 0 (q → β: a round cross-section) as c·erf(x)/x.
-        let t = if x > 0.5 { (1.0 - erfc(x)) / b.sqrt() } else { c * erf_over_x(x) };
+        let t = if x > 0.5 {
+            (1.0 - erfc(x)) / b.sqrt()
+        } else {
+            c * erf_over_x(x)
+        };
         p += e * t;
         d += e * t / (2.0 * q);
     }
@@ -206,7 +214,10 @@ mod tests {
             let fast = u95(&Matrix3::from_diagonal(&l.into()));
             assert!((fast / exact - 1.0).abs() < 1e-7, "{l:?}: {fast} {exact}");
             for r in [0.5, 1.5, 2.5, 4.0] {
-                let (p, q) = (probability_within(l, r), quadrature::probability_within(l, r));
+                let (p, q) = (
+                    probability_within(l, r),
+                    quadrature::probability_within(l, r),
+                );
                 assert!((p - q).abs() < 1e-7, "{l:?} r {r}: {p} {q}");
             }
         }
