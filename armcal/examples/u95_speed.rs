@@ -90,7 +90,7 @@ fn main() {
         let slope = (probability_within(l, r * (1.0 + h)) - probability_within(l, r * (1.0 - h)))
             / (2.0 * h);
         let e = (miss / slope).abs();
-        if !(e <= worst) {
+        if e > worst || e.is_nan() {
             worst = e;
             at = k;
         }
