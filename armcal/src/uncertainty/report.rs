@@ -28,6 +28,10 @@ pub struct BudgetReport {
     pub probing_um: f64,
     /// Model per axis (µm).
     pub model_um: f64,
+    /// Where the model term came from when it was estimated (`None`: set or assumed, as the
+    /// notes say).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model_estimated: Option<super::estimate::ModelSource>,
     /// Temperature (°C).
     pub temperature_c: f64,
     /// How each term was obtained.
@@ -94,6 +98,7 @@ impl BudgetReport {
             encoder_counts: b.encoder_counts.first().copied().unwrap_or(0.0),
             probing_um: b.probing_mm * 1e3,
             model_um: b.model_mm * 1e3,
+            model_estimated: est.model.clone(),
             temperature_c: b.temperature_c,
             notes: est.notes.clone(),
             workspace_u95_um: cells
