@@ -192,7 +192,9 @@ fn mukca() {
         per_session.extend(
             c.per_session
                 .iter()
-                .map(|(s, n, f)| format!("{}/{s}: {f:.3} of {n}", c.unit)),
+                .map(|(s, n, f, x)| {
+                    format!("{}/{s}: {f:.3} of {n}, {x:.2} extrapolated", c.unit)
+                }),
         );
         for f in &c.failed {
             println!("    not judged: {f}");

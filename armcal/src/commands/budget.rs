@@ -4,6 +4,7 @@ use armcal::calib::Fit;
 use armcal::data::Dataset;
 use armcal::holdout::Holdout;
 use armcal::uncertainty::estimate::{self, Settings};
+use armcal::uncertainty::extrapolation::Support;
 use armcal::uncertainty::report::BudgetReport;
 use armcal::uncertainty::QUANTISATION_COUNTS;
 use quatarm_ref::calfile::Uncertainty;
@@ -59,7 +60,9 @@ impl BudgetArgs {
             .budget
             .to_file(&fit.arm)
             .map_err(|e| anyhow::anyhow!("no uncertainty budget: {e}"))?;
-        Ok((file, BudgetReport::build(&est, &fit.arm)))
+        let mut report = BudgetReport::build(&est, &fit.arm);
+        report.extrapolation = Support::of(&fit.arm, data).map(|s| s.report());
+        Ok((file, report))
     }
 }
 

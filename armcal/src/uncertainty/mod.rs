@@ -4,6 +4,7 @@
 //!   place where the file's parameter names map onto armcal's unknowns.
 //! - [`estimate`]: the budget a calibration leaves (`armcal calibrate`, `diagnose -o`).
 //! - [`misfit`]: its model term, from held-out residuals.
+//! - [`extrapolation`]: a reading far from every place the calibration saw.
 //! - [`propagate`]: first-order Σ_p of a reading, and of the distance between two readings.
 //! - [`u95`]: the radius of the sphere holding 95 % of N(0, Σ).
 //! - [`montecarlo`]: GUM Supplement 1 propagation of the same budget, to check the first order.
@@ -15,6 +16,7 @@
 pub mod columns;
 pub mod coverage;
 pub mod estimate;
+pub mod extrapolation;
 pub mod misfit;
 pub mod montecarlo;
 pub mod propagate;

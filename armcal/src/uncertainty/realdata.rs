@@ -40,8 +40,9 @@ pub struct UnitCoverage {
     pub nested_u95_mm: f64,
     /// Mean nested model term (mm per axis).
     pub nested_model_mm: f64,
-    /// Per held-out session: (name, probings, fraction covered by the nested budget).
-    pub per_session: Vec<(String, usize, f64)>,
+    /// Per held-out session: (name, probings, fraction covered by the nested budget,
+    /// fraction flagged as extrapolated from the training sessions).
+    pub per_session: Vec<(String, usize, f64, f64)>,
     /// Median U95 of the probings (mm), without and with the model term.
     pub median_u95_mm: [f64; 2],
     /// RMS distance of the probings from their socket's centre (mm).
@@ -58,6 +59,8 @@ struct Held {
     budget: Budget,
     /// The budget with the nested model term.
     nested: Budget,
+    /// Fraction of the held-out probings far from every training probing.
+    far: f64,
     test: Dataset,
     /// Per probing: (row, |deviation|, predicted U95, per-axis variance the budget missed).
     probings: Vec<(usize, f64, f64, f64)>,
@@ -97,7 +100,13 @@ fn hold_out(unit: &Unit, groups: &[i64], g: i64) -> Result<Held, super::BudgetEr
             probings.push((i, d, u, (d * d - trace) / (3.0 * (1.0 - 1.0 / n))));
         }
     }
+    let far = super::extrapolation::Support::of(&fit.arm, &train_data).map_or(0.0, |sup| {
+        let m = crate::probes::Mounted::new(&fit.arm);
+        let n = test.rows.iter().filter(|r| sup.far(&m.tip(r))).count();
+        n as f64 / test.rows.len().max(1) as f64
+    });
     Ok(Held {
+        far,
         arm: fit.arm,
         budget,
         nested,
@@ -169,6 +178,7 @@ pub fn unit_coverage(unit: &Unit) -> Option<UnitCoverage> {
             unit.sessions.get(&g).cloned().unwrap_or_default(),
             n,
             k as f64 / n.max(1) as f64,
+            h.far,
         ));
     }
     let sessions = held.len().max(1) as f64;
