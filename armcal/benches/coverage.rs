@@ -77,9 +77,7 @@ fn main() {
             }
         );
     }
-    println!(
-        "  trial  sphere(U95)  ellipsoid  distance  mean U95 µm  mean |error| µm  model µm"
-    );
+    println!("  trial  sphere(U95)  ellipsoid  distance  mean U95 µm  mean |error| µm  model µm");
     let mut total = coverage::Tally::default();
     for k in 0..setup.calibrations {
         let mut c = match coverage::calibrated(&setup, k) {
@@ -192,9 +190,7 @@ fn mukca() {
         per_session.extend(
             c.per_session
                 .iter()
-                .map(|(s, n, f, x)| {
-                    format!("{}/{s}: {f:.3} of {n}, {x:.2} extrapolated", c.unit)
-                }),
+                .map(|(s, n, f, x)| format!("{}/{s}: {f:.3} of {n}, {x:.2} extrapolated", c.unit)),
         );
         for f in &c.failed {
             println!("    not judged: {f}");

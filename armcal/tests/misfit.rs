@@ -77,7 +77,14 @@ fn calibrate_estimates_the_model_term_and_model_mm_overrides_it() {
     assert!((u["model_um"].as_f64().unwrap() - written * 1e3).abs() < 1e-9);
 
     armcal_ok(
-        &["calibrate", "p.csv", "-o", "set.toml", "--model-mm", "0.0123"],
+        &[
+            "calibrate",
+            "p.csv",
+            "-o",
+            "set.toml",
+            "--model-mm",
+            "0.0123",
+        ],
         &d,
     );
     let set = quatarm_ref::calfile::read(&d.join("set.toml"))

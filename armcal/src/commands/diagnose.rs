@@ -281,9 +281,7 @@ fn stage_extended(
     // (an in-sample RMS of 0 asks for none), but its held-out residuals of the extended
     // model are what the budget's model term is estimated from.
     let fit = &d.extended.fit;
-    let made = a
-        .budget
-        .budget(fit, data, Some(&d.extended.holdout), 0.0);
+    let made = a.budget.budget(fit, data, Some(&d.extended.holdout), 0.0);
     let budget = super::budget::or_warning(made, &mut rep.uncertainty, &mut rep.warnings);
     let text = super::written::checked_text(arm, budget.as_ref(), &refs, data)?;
     files.write(out, text.as_bytes())?;

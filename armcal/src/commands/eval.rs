@@ -94,13 +94,14 @@ fn flag_far(
 ) -> anyhow::Result<String> {
     let data = armcal::data::read(seen, arm.dof())?;
     armcal::probes::check(arm, &data)?;
-    let support = armcal::uncertainty::extrapolation::Support::of(arm, &data).with_context(|| {
-        format!(
-            "{}: one unit of evidence (one point or group) gives no spacing to judge \
+    let support =
+        armcal::uncertainty::extrapolation::Support::of(arm, &data).with_context(|| {
+            format!(
+                "{}: one unit of evidence (one point or group) gives no spacing to judge \
              extrapolation by",
-            seen.display()
-        )
-    })?;
+                seen.display()
+            )
+        })?;
     let mounted: Vec<_> = (0..arm.probe_count())
         .filter_map(|k| arm.for_probe(k))
         .collect();

@@ -47,20 +47,28 @@ impl Support {
     /// The support of `data` under the calibrated `arm`; `None` with fewer than two units.
     pub fn of(arm: &Arm, data: &Dataset) -> Option<Support> {
         let mounted = crate::probes::Mounted::new(arm);
-        let mut unit = vec![0usize; data.rows.len()];
-        let units = data.layout().units();
-        for (k, u) in units.iter().enumerate() {
-            // A bar's two ends are two places.
-            let half = if u.bar.is_some() {
-                u.rows.len() / 2
-            } else {
-                usize::MAX
-            };
-            for (n, &i) in u.rows.iter().enumerate() {
-                unit[i] = 2 * k + usize::from(n >= half);
-            }
+        // One place per point row, spat point and bar end: probings of one place are one
+        // unit, a bar's two ends two.
+        let layout = data.layout();
+        let mut unit = vec![usize::MAX; data.rows.len()];
+        let places = layout
+            .points
+            .iter()
+            .map(|&i| vec![i])
+            .chain(layout.spat.iter().map(|g| g.rows.clone()))
+            .chain(
+                layout
+                    .length
+                    .iter()
+                    .flat_map(|g| [g.a.clone(), g.b.clone()]),
+            )
+            .chain(layout.sphere.iter().map(|g| g.rows.clone()));
+        let mut count = 0;
+        for (k, rows) in places.enumerate() {
+            rows.iter().for_each(|&i| unit[i] = k);
+            count += 1;
         }
-        if units.len() < 2 {
+        if count < 2 {
             return None;
         }
         let tips: Vec<Vector3<f64>> = data.rows.iter().map(|r| mounted.tip(r)).collect();

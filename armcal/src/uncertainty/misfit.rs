@@ -108,11 +108,12 @@ pub fn scores(
             m: 1.0,
         });
     }
-    let groups = layout
-        .spat
-        .iter()
-        .map(|g| g.rows.clone())
-        .chain(layout.length.iter().flat_map(|g| [g.a.clone(), g.b.clone()]));
+    let groups = layout.spat.iter().map(|g| g.rows.clone()).chain(
+        layout
+            .length
+            .iter()
+            .flat_map(|g| [g.a.clone(), g.b.clone()]),
+    );
     for rows in groups {
         if rows.len() < 2 || !rows.iter().all(|&i| judged[i]) {
             continue;
