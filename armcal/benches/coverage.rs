@@ -9,6 +9,10 @@
 //! `cargo test --profile test -p armcal --bench coverage`. Arguments: calibrations, readings, encoder noise (counts), and a temperature sensor's noise
 //! (°C) for the thermal variant;
 //! or `mukca` for the real recordings, each unit's sessions held out one at a time.
+//! `new-user` runs the issue's new user instead (`Setup::NEW_USER`: `default-6-full` as the
+//! truth, calibrated with the geometric model, the model term as `calibrate` estimates it);
+//! `held-out` runs the benchmark with the model term estimated from 5 folds as `calibrate`
+//! does (the instrument's noise declared); `held-out-undeclared` without declaring it.
 
 use armcal::uncertainty::coverage::{self, Setup};
 use armcal::uncertainty::{montecarlo, propagate, u95};
@@ -19,6 +23,13 @@ fn main() {
         return mukca();
     }
     let mut setup = Setup::BENCHMARK;
+    if std::env::args().any(|a| a == "new-user") {
+        setup = Setup::NEW_USER;
+    }
+    if std::env::args().any(|a| a.starts_with("held-out")) {
+        setup.folds = 5;
+        setup.instrument_known = !std::env::args().any(|a| a == "held-out-undeclared");
+    }
     let args: Vec<f64> = std::env::args()
         .skip(1)
         .filter_map(|a| a.parse().ok())
@@ -54,23 +65,37 @@ fn main() {
             String::new()
         }
     );
-    println!("  trial  sphere(U95)  ellipsoid  distance  mean U95 µm  mean |error| µm");
+    if setup.folds > 0 {
+        println!(
+            "  truth {}; model term from {} held-out folds, instrument noise {}",
+            setup.truth_file.unwrap_or("perturbed default-6"),
+            setup.folds,
+            if setup.instrument_known {
+                "declared"
+            } else {
+                "not declared (counted in the model term)"
+            }
+        );
+    }
+    println!("  trial  sphere(U95)  ellipsoid  distance  mean U95 µm  mean |error| µm  model µm");
     let mut total = coverage::Tally::default();
     for k in 0..setup.calibrations {
-        let t = match coverage::trial(&setup, k) {
-            Ok(t) => t,
+        let mut c = match coverage::calibrated(&setup, k) {
+            Ok(c) => c,
             Err(e) => {
                 println!("  {k:>5}  calibration failed: {e}");
                 continue;
             }
         };
+        let t = coverage::fresh(&c.truth, &c.arm, &c.budget, &setup, &mut c.rng);
         println!(
-            "  {k:>5}  {:>11.4}  {:>9.4}  {:>8.4}  {:>11.2}  {:>15.2}",
+            "  {k:>5}  {:>11.4}  {:>9.4}  {:>8.4}  {:>11.2}  {:>15.2}  {:>8.2}",
             t.sphere(),
             t.ellipsoid(),
             t.distance(),
             t.u95_sum / t.points as f64 * 1e3,
-            t.error_sum / t.points as f64 * 1e3
+            t.error_sum / t.points as f64 * 1e3,
+            c.budget.model_mm * 1e3
         );
         total.add(&t);
     }
@@ -82,7 +107,9 @@ fn main() {
         total.points,
         total.pairs
     );
-    first_order_against_monte_carlo(&setup);
+    if setup.truth_file.is_none() {
+        first_order_against_monte_carlo(&setup);
+    }
     println!("  took {:.1} s", t0.elapsed().as_secs_f64());
 }
 
@@ -124,9 +151,10 @@ fn mukca() {
     };
     println!("MUKCa, whole sessions held out: probings within their predicted 95 % region");
     println!(
-        "  unit                 sessions  probings  covered  +model  median U95 mm (+model)  \
-         RMS dev mm  probing mm  model mm"
+        "  unit                 sessions  probings  covered  +model  nested  median U95 mm \
+         (+model) [nested]  RMS dev mm  probing mm  model mm  nested model mm"
     );
+    let (mut pooled, mut judged, mut per_session) = (0.0, 0usize, Vec::new());
     for (name, _) in units {
         let unit = match armcal::mukca::load(&dir, &name) {
             Ok(u) => u,
@@ -140,20 +168,40 @@ fn mukca() {
             continue;
         };
         println!(
-            "  {:<20} {:>8}  {:>8}  {:>7.3}  {:>6.3}  {:>8.4} ({:>8.4})     {:>10.4}  {:>10.4}  {:>8.4}",
+            "  {:<20} {:>8}  {:>8}  {:>7.3}  {:>6.3}  {:>6.3}  {:>8.4} ({:>8.4}) [{:>8.4}]  {:>10.4}  {:>10.4}  {:>8.4}  {:>15.4}",
             c.unit,
             c.sessions,
             c.probings,
             c.covered,
             c.covered_with_model,
+            c.covered_nested,
             c.median_u95_mm[0],
             c.median_u95_mm[1],
+            c.nested_u95_mm,
             c.rms_deviation_mm,
             c.probing_mm,
-            c.model_mm
+            c.model_mm,
+            c.nested_model_mm
+        );
+        if c.sessions >= 3 {
+            pooled += c.covered_nested * c.probings as f64;
+            judged += c.probings;
+        }
+        per_session.extend(
+            c.per_session
+                .iter()
+                .map(|(s, n, f, x)| format!("{}/{s}: {f:.3} of {n}, {x:.2} extrapolated", c.unit)),
         );
         for f in &c.failed {
             println!("    not judged: {f}");
         }
+    }
+    println!(
+        "  pooled over units with ≥ 3 sessions, nested model term: {:.3} of {judged} probings",
+        pooled / judged.max(1) as f64
+    );
+    println!("  per held-out session (nested budget):");
+    for s in per_session {
+        println!("    {s}");
     }
 }

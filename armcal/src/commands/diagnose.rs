@@ -277,11 +277,11 @@ fn stage_extended(
         format!("model {}; {}", rep.extended.model, rep.verdict),
     ];
     let refs: Vec<&str> = header.iter().map(String::as_str).collect();
-    // The diagnosis' own held-out check compares models, not this fit's σ̂: no inflation.
+    // The diagnosis' own held-out check compares models, not this fit's σ̂: no inflation
+    // (an in-sample RMS of 0 asks for none), but its held-out residuals of the extended
+    // model are what the budget's model term is estimated from.
     let fit = &d.extended.fit;
-    let in_sample =
-        armcal::residuals::summarise(&armcal::residuals::residuals(arm, data, fit.frame), data);
-    let made = a.budget.budget(fit, data, None, in_sample.all.rms_um);
+    let made = a.budget.budget(fit, data, Some(&d.extended.holdout), 0.0);
     let budget = super::budget::or_warning(made, &mut rep.uncertainty, &mut rep.warnings);
     let text = super::written::checked_text(arm, budget.as_ref(), &refs, data)?;
     files.write(out, text.as_bytes())?;

@@ -32,6 +32,11 @@ pub struct Args {
     /// Seed of the Monte Carlo draws.
     #[arg(long, default_value_t = 0x6c_75_6d, requires = "uncertainty")]
     seed: u64,
+    /// The data the calibration was fitted on (measured-data CSV): each reading farther from
+    /// every calibration tip than twice their own spacing is flagged as extrapolated, in a
+    /// last column `far` (1: flagged) and a count on stderr.
+    #[arg(long, value_name = "DATA.csv")]
+    seen: Option<PathBuf>,
 }
 
 /// Runs the subcommand.
@@ -69,8 +74,60 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         out = joined;
     }
+    if let Some(seen) = &args.seen {
+        out = flag_far(&arm, &rows, seen, &out)?;
+    }
     let mut stdout = std::io::stdout().lock();
     stdout.write_all(out.as_bytes())?;
     stdout.flush()?;
     Ok(())
+}
+
+/// `out` with a last column `far`: 1 where the reading's tip (the f64 reference's) is far
+/// from every tip of the calibration data `seen`
+/// ([`armcal::uncertainty::extrapolation`]); the count goes to stderr.
+fn flag_far(
+    arm: &quatarm_ref::Arm,
+    rows: &armcal::eval::Rows,
+    seen: &std::path::Path,
+    out: &str,
+) -> anyhow::Result<String> {
+    let data = armcal::data::read(seen, arm.dof())?;
+    armcal::probes::check(arm, &data)?;
+    let support =
+        armcal::uncertainty::extrapolation::Support::of(arm, &data).with_context(|| {
+            format!(
+                "{}: one unit of evidence (one point or group) gives no spacing to judge \
+             extrapolation by",
+                seen.display()
+            )
+        })?;
+    let mounted: Vec<_> = (0..arm.probe_count())
+        .filter_map(|k| arm.for_probe(k))
+        .collect();
+    let mut far = 0usize;
+    let mut joined = String::with_capacity(out.len() + 2 * rows.len() + 4);
+    let mut lines = out.lines();
+    if let Some(h) = lines.next() {
+        joined.push_str(&format!("{h},far\n"));
+    }
+    for (l, r) in lines.zip(rows) {
+        let with = mounted
+            .get(r.probe)
+            .context("a row's probe is one of the arm's")?;
+        let p = quatarm_ref::forward::forward(with, &r.reading.radians(arm), r.temp_c).p;
+        let f = support.far(&p);
+        far += usize::from(f);
+        joined.push_str(&format!("{l},{}\n", u8::from(f)));
+    }
+    if far > 0 {
+        eprintln!(
+            "armcal: warning: {far} of {} readings are extrapolated: farther than {:.1} mm from \
+             every tip of {} (the budget has no held-out evidence there)",
+            rows.len(),
+            support.threshold_mm(),
+            seen.display()
+        );
+    }
+    Ok(joined)
 }

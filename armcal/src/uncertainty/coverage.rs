@@ -46,6 +46,15 @@ pub struct Setup {
     /// Error of the temperature sensor (°C, standard deviation), in the calibration's data
     /// and in the fresh readings alike; the budget's `temperature_c`.
     pub temp_noise_c: f64,
+    /// Folds of the held-out validation behind the budget's model term, as `calibrate` runs
+    /// it (0: none, the model term 0).
+    pub folds: usize,
+    /// The truth is this calibration file (under the workspace's `data/`), with effects the
+    /// calibration's geometric model misses, instead of a random geometric arm.
+    pub truth_file: Option<&'static str>,
+    /// Tell the budget the instrument's noise (`--instrument-mm`); else it is counted in the
+    /// model term, the safe side.
+    pub instrument_known: bool,
 }
 
 /// The thermal variant's temperature range (°C).
@@ -62,7 +71,37 @@ impl Setup {
         seed: 0xc0_7e,
         thermal: false,
         temp_noise_c: 0.0,
+        folds: 0,
+        truth_file: None,
+        instrument_known: true,
     };
+
+    /// The new user: `data/default-6-full.toml` (harmonics, gravity, thermal, wobble)
+    /// as the truth, 600 `point` rows with 5 µm of instrument noise, calibrated with the
+    /// geometric model and the budget `calibrate` writes by default (5 folds held out, the
+    /// instrument's noise not declared).
+    pub const NEW_USER: Setup = Setup {
+        calibrations: 4,
+        readings: 5000,
+        point_rows: 600,
+        noise_mm: 0.005,
+        encoder_noise_counts: 0.0,
+        seed: 0x0e_5e,
+        thermal: false,
+        temp_noise_c: 0.0,
+        folds: 5,
+        truth_file: Some("default-6-full.toml"),
+        instrument_known: false,
+    };
+}
+
+/// A file of the workspace's `data/` directory, as the truth of a trial.
+pub fn data_arm(name: &str) -> Result<Arm, super::BudgetError> {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join("data")
+        .join(name);
+    crate::load::arm(&path).map_err(|e| super::BudgetError::Truth(e.to_string()))
 }
 
 /// Counts of one trial, or of all.
@@ -135,7 +174,10 @@ pub struct Calibrated {
 pub fn calibrated(setup: &Setup, k: usize) -> Result<Calibrated, super::BudgetError> {
     let mut rng = sim::rng(setup.seed.wrapping_add(k as u64));
     let nominal = Arm::default6();
-    let mut truth = sim::perturb(&nominal, 3e-4, 0.3, &mut rng);
+    let mut truth = match setup.truth_file {
+        Some(name) => data_arm(name)?,
+        None => sim::perturb(&nominal, 3e-4, 0.3, &mut rng),
+    };
     let mut o = sim::Options::new(Kind::Point, setup.point_rows);
     o.noise_mm = setup.noise_mm;
     o.encoder_noise_counts = setup.encoder_noise_counts;
@@ -156,9 +198,24 @@ pub fn calibrated(setup: &Setup, k: usize) -> Result<Calibrated, super::BudgetEr
         encoder_counts: reading_sd(setup.encoder_noise_counts),
         probing_mm: Some(0.0),
         temperature_c: setup.temp_noise_c,
-        ..Settings::default()
+        instrument_mm: if setup.instrument_known {
+            setup.noise_mm
+        } else {
+            0.0
+        },
+        model_mm: (setup.folds == 0).then_some(0.0),
     };
-    let budget = estimate::from_fit(&fit, &data, None, 0.0, &settings)?.budget;
+    let held = (setup.folds > 0).then(|| {
+        let folds = crate::holdout::kfold(&data, setup.folds, 0x0f01d);
+        crate::holdout::validate(&nominal, &data, &opts, &folds)
+    });
+    let in_sample = crate::residuals::summarise(
+        &crate::residuals::residuals(&fit.arm, &data, fit.frame),
+        &data,
+    )
+    .all
+    .rms_um;
+    let budget = estimate::from_fit(&fit, &data, held.as_ref(), in_sample, &settings)?.budget;
     Ok(Calibrated {
         truth,
         arm: fit.arm,

@@ -12,9 +12,12 @@
 //!   same kind of repeated probing), less what the reading's own uncertainty explains of it,
 //!   when there are such rows; else assumed (0 unless set): `point` residuals carry the
 //!   instrument's noise and cannot tell the probing apart.
-//! - Model and temperature: assumed (0 unless set).
+//! - Model: estimated from the held-out residuals when a held-out validation was run
+//!   ([`super::misfit`]: the split-conformal isotropic term beyond the rest of the budget),
+//!   else assumed 0 and said so; set by the caller (`--model-mm`) over both.
+//! - Temperature: assumed (0 unless set).
 
-use super::{propagate, Budget, QUANTISATION_COUNTS};
+use super::{misfit, propagate, Budget, QUANTISATION_COUNTS};
 use crate::calib::Fit;
 use crate::data::{Dataset, Kind};
 use crate::holdout::Holdout;
@@ -27,8 +30,12 @@ pub struct Settings {
     pub encoder_counts: f64,
     /// Probing per axis (mm); `None`: from `spat` scatter, or 0 without `spat` rows.
     pub probing_mm: Option<f64>,
-    /// Model per axis (mm).
-    pub model_mm: f64,
+    /// Model per axis (mm); `None`: estimated from the held-out residuals.
+    pub model_mm: Option<f64>,
+    /// The reference instrument's noise per axis (mm): in a held-out `point` row's residual
+    /// but not in a reading's error, so taken out of the model term (0: a perfect instrument,
+    /// the safe side).
+    pub instrument_mm: f64,
     /// Temperature reading (°C).
     pub temperature_c: f64,
 }
@@ -38,10 +45,28 @@ impl Default for Settings {
         Settings {
             encoder_counts: QUANTISATION_COUNTS,
             probing_mm: None,
-            model_mm: 0.0,
+            model_mm: None,
+            instrument_mm: 0.0,
             temperature_c: 0.0,
         }
     }
+}
+
+/// Where an estimated model term came from (the report's provenance).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ModelSource {
+    /// Held-out rows scored.
+    pub rows: usize,
+    /// Folds (or groups) they were held out in.
+    pub folds: usize,
+    /// The conformal rank: the term covers this many of the rows.
+    pub rank: usize,
+    /// Whether rank ≤ rows (with fewer than 19 rows the finite-sample guarantee cannot hold).
+    pub exact: bool,
+    /// Fraction of the rows inside their 95 % region without the term.
+    pub covered_without: f64,
+    /// And with it.
+    pub covered_with: f64,
 }
 
 /// A budget with, per term, how it was obtained.
@@ -53,6 +78,8 @@ pub struct Estimated {
     pub notes: Vec<String>,
     /// Factor C was multiplied by after the held-out check (1: none).
     pub inflation: f64,
+    /// The model term's provenance when it was estimated.
+    pub model: Option<ModelSource>,
 }
 
 /// The parameters' covariance of a fit, marginal over the frame: (params, C).
@@ -166,7 +193,7 @@ pub fn from_fit(
         encoder_counts: vec![s.encoder_counts; data.dof],
         probing_mm: 0.0,
         temperature_c: s.temperature_c,
-        model_mm: s.model_mm,
+        model_mm: 0.0,
     };
     notes.push(format!(
         "reading: {:.3} counts, {}",
@@ -205,14 +232,35 @@ pub fn from_fit(
             0.0
         }
     };
-    notes.push(format!(
-        "model: {:.2} µm per axis, {}; temperature: {:.3} °C, {}",
-        s.model_mm * 1e3,
-        if s.model_mm == 0.0 {
-            "assumed 0 (--model-mm)"
-        } else {
-            "set by the caller"
+    let mut model = None;
+    match (s.model_mm, holdout) {
+        (Some(m), _) => {
+            budget.model_mm = m;
+            notes.push(format!(
+                "model: {:.2} µm per axis, set by the caller (--model-mm)",
+                m * 1e3
+            ));
+        }
+        (None, Some(h)) => match model_term(fit, data, h, &budget, s.instrument_mm) {
+            Some((tau, src)) => {
+                budget.model_mm = tau;
+                notes.push(model_note(tau, &src, h, s.instrument_mm));
+                model = Some(src);
+            }
+            None => notes.push(
+                "model: 0, assumed: the held-out validation judged no row it could score \
+                 (set --model-mm)"
+                    .into(),
+            ),
         },
+        (None, None) => notes.push(
+            "model: 0, assumed: no held-out validation was run (--folds 0), so nothing \
+             measured what the model leaves unexplained (set --model-mm)"
+                .into(),
+        ),
+    }
+    notes.push(format!(
+        "temperature: {:.3} °C, {}",
         s.temperature_c,
         if s.temperature_c == 0.0 {
             "assumed 0 (--temperature-c)"
@@ -224,5 +272,77 @@ pub fn from_fit(
         budget,
         notes,
         inflation,
+        model,
     })
+}
+
+/// The conformal model term of a held-out validation (see [`super::misfit`]).
+fn model_term(
+    fit: &Fit,
+    data: &Dataset,
+    h: &Holdout,
+    budget: &Budget,
+    instrument_mm: f64,
+) -> Option<(f64, ModelSource)> {
+    let sc = misfit::scores(
+        &fit.arm,
+        budget,
+        data,
+        &h.residuals.rows,
+        &h.judged,
+        instrument_mm,
+    );
+    let (tau, rank, exact) = misfit::conformal(&sc, super::u95::LEVEL)?;
+    Some((
+        tau,
+        ModelSource {
+            rows: sc.len(),
+            folds: h.folds - h.failed.len(),
+            rank,
+            exact,
+            covered_without: misfit::coverage(&sc, 0.0),
+            covered_with: misfit::coverage(&sc, tau),
+        },
+    ))
+}
+
+/// The report's line of an estimated model term.
+fn model_note(tau: f64, src: &ModelSource, h: &Holdout, instrument_mm: f64) -> String {
+    format!(
+        "model: {:.2} µm per axis, estimated from the held-out residuals of {} rows in {} \
+         folds ({} degrees of freedom between folds): the least isotropic term that puts {} of \
+         them ({:.1} %) inside their predicted 95 % region beyond the rest of the budget \
+         (split-conformal{}); without it {:.1} % were inside{}{}",
+        tau * 1e3,
+        src.rows,
+        src.folds,
+        src.folds.saturating_sub(1),
+        src.rank,
+        100.0 * src.covered_with,
+        if src.exact {
+            ""
+        } else {
+            ", too few rows for its guarantee: the largest"
+        },
+        100.0 * src.covered_without,
+        if instrument_mm > 0.0 {
+            format!(
+                "; the instrument's {:.2} µm per axis taken out",
+                instrument_mm * 1e3
+            )
+        } else if data_has_points(h) {
+            "; the reference instrument's noise counted in it (set --instrument-mm)".to_string()
+        } else {
+            String::new()
+        },
+        if h.failed.is_empty() {
+            String::new()
+        } else {
+            format!("; {} folds failed to fit", h.failed.len())
+        }
+    )
+}
+
+fn data_has_points(h: &Holdout) -> bool {
+    h.summary.point.is_some()
 }

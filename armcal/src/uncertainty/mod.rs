@@ -3,6 +3,8 @@
 //! - [`Budget`]: the `[uncertainty]` section in armcal's vocabulary ([`Param`]), and the one
 //!   place where the file's parameter names map onto armcal's unknowns.
 //! - [`estimate`]: the budget a calibration leaves (`armcal calibrate`, `diagnose -o`).
+//! - [`misfit`]: its model term, from held-out residuals.
+//! - [`extrapolation`]: a reading far from every place the calibration saw.
 //! - [`propagate`]: first-order Σ_p of a reading, and of the distance between two readings.
 //! - [`u95`]: the radius of the sphere holding 95 % of N(0, Σ).
 //! - [`montecarlo`]: GUM Supplement 1 propagation of the same budget, to check the first order.
@@ -14,6 +16,8 @@
 pub mod columns;
 pub mod coverage;
 pub mod estimate;
+pub mod extrapolation;
+pub mod misfit;
 pub mod montecarlo;
 pub mod propagate;
 pub mod realdata;
@@ -43,6 +47,9 @@ pub enum BudgetError {
     /// The terms of a coverage trial.
     #[error(transparent)]
     Terms(#[from] crate::effects::TermsError),
+    /// The truth arm of a coverage trial could not be read.
+    #[error("the truth arm: {0}")]
+    Truth(String),
 }
 
 /// Pure quantisation: the standard deviation of a uniform error of one count, 1/√12.

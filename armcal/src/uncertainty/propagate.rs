@@ -123,6 +123,41 @@ pub fn distance(arm: &Arm, budget: &Budget, a: (&[f64], f64), b: (&[f64], f64)) 
     )
 }
 
+/// The covariance of each probing's deviation from its group's centre, for the probings
+/// `rows` of `data` (one `spat` point, one bar end): r_i = p_i − (1/n) Σ_j p_j. The parameters'
+/// part goes through J_i − J̄ (what all the group's probings share cancels), the readings' own
+/// parts as (1 − 2/n) Σ_i + (1/n²) Σ_j Σ_j. How MUKCa's authors judge a session, and what a
+/// held-out group's residuals are.
+pub fn group_deviations(
+    arm: &Arm,
+    b: &Budget,
+    data: &crate::data::Dataset,
+    rows: &[usize],
+) -> Vec<(usize, Matrix3<f64>)> {
+    let n = rows.len() as f64;
+    let st = b.sigma_theta(arm);
+    let js: Vec<Jacobians> = rows
+        .iter()
+        .map(|&i| {
+            let r = &data.rows[i];
+            jacobians(arm, crate::probes::index(arm, r), b, &r.theta, r.temp_c)
+        })
+        .collect();
+    let own: Vec<Matrix3<f64>> = js.iter().map(|j| own_terms(b, &st, j)).collect();
+    let own_mean = own.iter().sum::<Matrix3<f64>>() / (n * n);
+    let k = b.params.len();
+    let mean_j: Vec<Vector3<f64>> = (0..k)
+        .map(|c| js.iter().map(|j| j.pi[c]).sum::<Vector3<f64>>() / n)
+        .collect();
+    rows.iter()
+        .zip(js.iter().zip(&own))
+        .map(|(&i, (j, o))| {
+            let g: Vec<Vector3<f64>> = j.pi.iter().zip(&mean_j).map(|(a, m)| a - m).collect();
+            (i, o * (1.0 - 2.0 / n) + own_mean + sandwich(&g, &b.cov, &g))
+        })
+        .collect()
+}
+
 /// The six covariance entries in the output's order: cxx, cyy, czz, cxy, cxz, cyz.
 pub fn entries(s: &Matrix3<f64>) -> [f64; 6] {
     [

@@ -15,7 +15,6 @@ use super::{propagate, u95, Budget};
 use crate::data::Dataset;
 use crate::mukca::{self, Unit};
 use crate::residuals::residuals;
-use nalgebra::{DVector, Matrix3, Vector3};
 use quatarm_ref::arm::Arm;
 use serde::Serialize;
 
@@ -34,6 +33,16 @@ pub struct UnitCoverage {
     pub covered: f64,
     /// The same with a model term from the other sessions' held-out excess.
     pub covered_with_model: f64,
+    /// The same with the model term `calibrate --by-group` writes, estimated on the training
+    /// sessions alone (each held out in turn: nested, the scored session never sets it).
+    pub covered_nested: f64,
+    /// Median U95 (mm) and mean model term (mm per axis) of the nested budget.
+    pub nested_u95_mm: f64,
+    /// Mean nested model term (mm per axis).
+    pub nested_model_mm: f64,
+    /// Per held-out session: (name, probings, fraction covered by the nested budget,
+    /// fraction flagged as extrapolated from the training sessions).
+    pub per_session: Vec<(String, usize, f64, f64)>,
     /// Median U95 of the probings (mm), without and with the model term.
     pub median_u95_mm: [f64; 2],
     /// RMS distance of the probings from their socket's centre (mm).
@@ -48,6 +57,10 @@ pub struct UnitCoverage {
 struct Held {
     arm: Arm,
     budget: Budget,
+    /// The budget with the nested model term.
+    nested: Budget,
+    /// Fraction of the held-out probings far from every training probing.
+    far: f64,
     test: Dataset,
     /// Per probing: (row, |deviation|, predicted U95, per-axis variance the budget missed).
     probings: Vec<(usize, f64, f64, f64)>,
@@ -57,8 +70,26 @@ struct Held {
 fn hold_out(unit: &Unit, groups: &[i64], g: i64) -> Result<Held, super::BudgetError> {
     let train: Vec<i64> = groups.iter().copied().filter(|x| *x != g).collect();
     let train_data = unit.sessions_data(&train);
-    let fit = crate::calib::calibrate(&unit.arm, &train_data, &mukca::options(None))?;
-    let budget = estimate::from_fit(&fit, &train_data, None, 0.0, &Settings::default())?.budget;
+    let opts = mukca::options(None);
+    let fit = crate::calib::calibrate(&unit.arm, &train_data, &opts)?;
+    let no_model = Settings {
+        model_mm: Some(0.0),
+        ..Settings::default()
+    };
+    let budget = estimate::from_fit(&fit, &train_data, None, 0.0, &no_model)?.budget;
+    // As `calibrate --by-group` on the training sessions: each held out in turn, the model
+    // term from their residuals.
+    let inner = crate::holdout::validate(
+        &unit.arm,
+        &train_data,
+        &opts,
+        &crate::holdout::by_group(&train_data),
+    );
+    let nested = if inner.folds > 1 {
+        estimate::from_fit(&fit, &train_data, Some(&inner), 0.0, &Settings::default())?.budget
+    } else {
+        budget.clone()
+    };
     let test = unit.sessions_data(&[g]);
     let res = residuals(&fit.arm, &test, None);
     let mut probings = Vec::new();
@@ -69,9 +100,16 @@ fn hold_out(unit: &Unit, groups: &[i64], g: i64) -> Result<Held, super::BudgetEr
             probings.push((i, d, u, (d * d - trace) / (3.0 * (1.0 - 1.0 / n))));
         }
     }
+    let far = super::extrapolation::Support::of(&fit.arm, &train_data).map_or(0.0, |sup| {
+        let m = crate::probes::Mounted::new(&fit.arm);
+        let n = test.rows.iter().filter(|r| sup.far(&m.tip(r))).count();
+        n as f64 / test.rows.len().max(1) as f64
+    });
     Ok(Held {
+        far,
         arm: fit.arm,
         budget,
+        nested,
         test,
         probings,
     })
@@ -123,8 +161,32 @@ pub fn unit_coverage(unit: &Unit) -> Option<UnitCoverage> {
             }
         }
     }
+    let (mut inside_nested, mut u_nested, mut per_session) = (0usize, Vec::new(), Vec::new());
+    for h in &held {
+        let (mut n, mut k) = (0usize, 0usize);
+        for end in h.test.layout().length.iter().flat_map(|l| [&l.a, &l.b]) {
+            for (i, u, _) in socket_u95(&h.arm, &h.nested, &h.test, end) {
+                let d = h.probings.iter().find(|p| p.0 == i).map_or(0.0, |p| p.1);
+                k += usize::from(d <= u);
+                n += 1;
+                u_nested.push(u);
+            }
+        }
+        inside_nested += k;
+        let g = h.test.rows.first().map_or(0, |r| r.group);
+        per_session.push((
+            unit.sessions.get(&g).cloned().unwrap_or_default(),
+            n,
+            k as f64 / n.max(1) as f64,
+            h.far,
+        ));
+    }
     let sessions = held.len().max(1) as f64;
     Some(UnitCoverage {
+        covered_nested: inside_nested as f64 / judged,
+        nested_u95_mm: median(u_nested),
+        nested_model_mm: held.iter().map(|h| h.nested.model_mm).sum::<f64>() / sessions,
+        per_session,
         unit: unit.name.clone(),
         sessions: held.len(),
         failed,
@@ -141,34 +203,8 @@ pub fn unit_coverage(unit: &Unit) -> Option<UnitCoverage> {
 /// (row, U95 of its deviation from the socket's centre, trace of that deviation's
 /// covariance) for the probings `rows` of a socket.
 fn socket_u95(arm: &Arm, b: &Budget, data: &Dataset, rows: &[usize]) -> Vec<(usize, f64, f64)> {
-    let n = rows.len() as f64;
-    let st = b.sigma_theta(arm);
-    let js: Vec<propagate::Jacobians> = rows
-        .iter()
-        .map(|&i| {
-            let r = &data.rows[i];
-            propagate::jacobians(arm, crate::probes::index(arm, r), b, &r.theta, r.temp_c)
-        })
-        .collect();
-    let own: Vec<Matrix3<f64>> = js.iter().map(|j| propagate::own_terms(b, &st, j)).collect();
-    let own_mean = own.iter().sum::<Matrix3<f64>>() / (n * n);
-    let k = b.params.len();
-    let mean_j: Vec<Vector3<f64>> = (0..k)
-        .map(|c| js.iter().map(|j| j.pi[c]).sum::<Vector3<f64>>() / n)
-        .collect();
-    rows.iter()
-        .zip(js.iter().zip(&own))
-        .map(|(&i, (j, o))| {
-            let mut s = o * (1.0 - 2.0 / n) + own_mean;
-            let g: Vec<DVector<f64>> = (0..3)
-                .map(|axis| DVector::from_fn(k, |c, _| j.pi[c][axis] - mean_j[c][axis]))
-                .collect();
-            for a in 0..3 {
-                for c in 0..3 {
-                    s[(a, c)] += (g[a].transpose() * &b.cov * &g[c])[(0, 0)];
-                }
-            }
-            (i, u95::u95(&s), s.trace())
-        })
+    propagate::group_deviations(arm, b, data, rows)
+        .into_iter()
+        .map(|(i, s)| (i, u95::u95(&s), s.trace()))
         .collect()
 }

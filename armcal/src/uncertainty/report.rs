@@ -28,6 +28,10 @@ pub struct BudgetReport {
     pub probing_um: f64,
     /// Model per axis (µm).
     pub model_um: f64,
+    /// Where the model term came from when it was estimated (`None`: set or assumed, as the
+    /// notes say).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model_estimated: Option<super::estimate::ModelSource>,
     /// Temperature (°C).
     pub temperature_c: f64,
     /// How each term was obtained.
@@ -41,6 +45,9 @@ pub struct BudgetReport {
     pub height_edges_mm: Vec<f64>,
     /// Median and largest U95 over the poses (µm).
     pub u95_median_um: f64,
+    /// Where a reading is flagged as extrapolated (`None`: the data are one unit).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub extrapolation: Option<super::extrapolation::ExtrapolationReport>,
     /// Largest U95 over the poses (µm).
     pub u95_max_um: f64,
 }
@@ -94,6 +101,7 @@ impl BudgetReport {
             encoder_counts: b.encoder_counts.first().copied().unwrap_or(0.0),
             probing_um: b.probing_mm * 1e3,
             model_um: b.model_mm * 1e3,
+            model_estimated: est.model.clone(),
             temperature_c: b.temperature_c,
             notes: est.notes.clone(),
             workspace_u95_um: cells
@@ -103,6 +111,7 @@ impl BudgetReport {
             reach_edges_mm: re,
             height_edges_mm: he.into_iter().rev().collect(),
             u95_max_um: all.iter().copied().fold(0.0, f64::max),
+            extrapolation: None,
             u95_median_um: median(&mut all).unwrap_or(0.0),
         }
     }
@@ -144,6 +153,19 @@ impl BudgetReport {
                 }
             }
             let _ = writeln!(s);
+        }
+        if let Some(x) = &self.extrapolation {
+            let _ = writeln!(
+                s,
+                "  extrapolation: a reading is flagged (`eval --seen`) when its tip is farther \
+                 than {:.1} mm from all {} calibration tips ({} × their spacing, {:.1} mm: the \
+                 95th percentile of each row's distance to the nearest row of another point, \
+                 bar end or group); the budget has no held-out evidence there",
+                x.threshold_mm,
+                x.rows,
+                super::extrapolation::FACTOR,
+                x.spacing_mm
+            );
         }
     }
 }

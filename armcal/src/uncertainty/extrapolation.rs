@@ -1,0 +1,117 @@
+//! Extrapolation: a reading far from every place the calibration saw.
+//!
+//! The budget's model term is estimated from held-out residuals near the calibration's
+//! poses; a reading far from all of them (a new placement of the arm's work, a raised
+//! artefact) has no such evidence behind it, and on MUKCa that is where the budget fails
+//! (a session at a new, raised placement). Such a reading is flagged rather than silently
+//! given the same U95.
+//!
+//! "Far" is measured where the misfit lives, in tip space: the distance from the reading's
+//! tip to the nearest calibration tip (each row's model ball centre, base frame), against
+//! the calibration set's own spacing — for each calibration row, the distance to the nearest
+//! row of another unit of evidence (another `point` row, another `spat` point or bar end:
+//! probings of one point are one place), and the spacing the 95th percentile of those. A
+//! reading is far beyond [`FACTOR`] spacings: twice what the calibration's own rows are from
+//! their nearest neighbour in 95 % of cases, so a reading among them is never flagged and
+//! one outside their cloud by more than their own gaps is.
+
+use crate::data::Dataset;
+use nalgebra::Vector3;
+use quatarm_ref::arm::Arm;
+use serde::Serialize;
+
+/// A reading is far beyond this many spacings.
+pub const FACTOR: f64 = 2.0;
+
+/// The calibration's tips and its spacing.
+#[derive(Clone, Debug)]
+pub struct Support {
+    tips: Vec<Vector3<f64>>,
+    /// The 95th percentile of each calibration row's distance to the nearest row of another
+    /// unit (mm).
+    pub spacing_mm: f64,
+}
+
+/// What the report says of it.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct ExtrapolationReport {
+    /// Calibration rows (tips) the distance is measured to.
+    pub rows: usize,
+    /// Their spacing (mm).
+    pub spacing_mm: f64,
+    /// Beyond this distance (mm) from every calibration tip a reading is flagged.
+    pub threshold_mm: f64,
+}
+
+impl Support {
+    /// The support of `data` under the calibrated `arm`; `None` with fewer than two units.
+    pub fn of(arm: &Arm, data: &Dataset) -> Option<Support> {
+        let mounted = crate::probes::Mounted::new(arm);
+        // One place per point row, spat point and bar end: probings of one place are one
+        // unit, a bar's two ends two.
+        let layout = data.layout();
+        let mut unit = vec![usize::MAX; data.rows.len()];
+        let places = layout
+            .points
+            .iter()
+            .map(|&i| vec![i])
+            .chain(layout.spat.iter().map(|g| g.rows.clone()))
+            .chain(
+                layout
+                    .length
+                    .iter()
+                    .flat_map(|g| [g.a.clone(), g.b.clone()]),
+            )
+            .chain(layout.sphere.iter().map(|g| g.rows.clone()));
+        let mut count = 0;
+        for (k, rows) in places.enumerate() {
+            rows.iter().for_each(|&i| unit[i] = k);
+            count += 1;
+        }
+        if count < 2 {
+            return None;
+        }
+        let tips: Vec<Vector3<f64>> = data.rows.iter().map(|r| mounted.tip(r)).collect();
+        let mut nn: Vec<f64> = (0..tips.len())
+            .filter_map(|i| {
+                (0..tips.len())
+                    .filter(|&j| unit[j] != unit[i])
+                    .map(|j| (tips[i] - tips[j]).norm())
+                    .min_by(f64::total_cmp)
+            })
+            .collect();
+        if nn.is_empty() {
+            return None;
+        }
+        nn.sort_by(f64::total_cmp);
+        let spacing_mm = nn[((nn.len() - 1) as f64 * 0.95).round() as usize];
+        Some(Support { tips, spacing_mm })
+    }
+
+    /// Distance (mm) from `p` to the nearest calibration tip.
+    pub fn distance(&self, p: &Vector3<f64>) -> f64 {
+        self.tips
+            .iter()
+            .map(|t| (t - p).norm())
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The distance beyond which a reading is far (mm).
+    pub fn threshold_mm(&self) -> f64 {
+        FACTOR * self.spacing_mm
+    }
+
+    /// Is a reading with tip `p` far from every calibration tip?
+    pub fn far(&self, p: &Vector3<f64>) -> bool {
+        self.distance(p) > self.threshold_mm()
+    }
+
+    /// The report's figures.
+    pub fn report(&self) -> ExtrapolationReport {
+        ExtrapolationReport {
+            rows: self.tips.len(),
+            spacing_mm: self.spacing_mm,
+            threshold_mm: self.threshold_mm(),
+        }
+    }
+}

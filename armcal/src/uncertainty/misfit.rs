@@ -1,0 +1,214 @@
+//! The budget's model term, estimated from held-out residuals (`spec/uncertainty.md`, "What
+//! honest means": never assumed 0 by default).
+//!
+//! Each held-out row (a `point` row of a k-fold, a probing of a held-out `spat` or `length`
+//! group, a whole held-out session) has a residual r_i that the model fitted without it left,
+//! and the rest of the budget predicts a covariance S_i for it: the parameters and the
+//! reading as Σ_p does, the instrument's own noise for a `point` row, and for a probing the
+//! deviation from its group's centre (what the group's probings share cancels; see
+//! [`propagate::group_deviations`]). An isotropic model variance τ² adds m_i τ² I to S_i
+//! (m_i = 1 for a point, 1 − 1/n for one of a group's n probings about their mean).
+//!
+//! Row i is inside its predicted 95 % region when |r_i| ≤ U95(S_i + m_i τ² I), which only gets
+//! truer as τ grows: each row has a threshold τ_i, the least τ that covers it. The model
+//! term is their split-conformal quantile: the k-th smallest of the n thresholds, k = ⌈0.95
+//! (n + 1)⌉. Were the held-out rows and a fresh reading exchangeable, a fresh reading would be
+//! inside with probability ≥ 95 % (Vovk et al.; Lei et al. 2018, distribution-free: no
+//! Gaussian tail assumed, which is the point — a geometric model's misfit is heavier-tailed
+//! than a Gaussian). Rows of a held-out session are not independent of each other; that is
+//! why the report gives the number of held-out groups beside the number of rows.
+//!
+//! Why isotropic and not a covariance: a misfit's direction depends on the pose, and one
+//! matrix for every pose would be a worse description than one radius; and the table and the
+//! hub carry `model_mm` already, so the hub streams the same U95 as `eval` with no new key.
+
+use super::{propagate, u95, Budget};
+use crate::data::Dataset;
+use nalgebra::Vector3;
+use quatarm_ref::arm::Arm;
+
+/// √χ²₃(0.95): U95 of an isotropic N(0, σ² I) is this many σ.
+const CHI3_95: f64 = 2.795_483_482_915_108;
+
+/// One held-out row's evidence.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Score {
+    /// |r_i| (mm).
+    pub deviation: f64,
+    /// Eigenvalues of S_i, largest first (mm²).
+    pub lambda: [f64; 3],
+    /// The factor of τ² in the row's covariance.
+    pub m: f64,
+}
+
+impl Score {
+    /// Is the row inside U95 with the model term τ (mm)?
+    pub fn covered(&self, tau: f64) -> bool {
+        let add = self.m * tau * tau;
+        let l = self.lambda.map(|x| x.max(0.0) + add);
+        if l[0] <= 0.0 {
+            return self.deviation <= 0.0;
+        }
+        // Inside the 95 % radius ⇔ the ball of radius |r| holds at most 95 %.
+        u95::probability_within(l, self.deviation) <= u95::LEVEL
+    }
+
+    /// (lower, upper) bounds of the threshold τ_i: U95 lies between CHI3_95·√λ_min and
+    /// CHI3_95·√λ_max of the covariance with the model term.
+    fn bounds(&self) -> (f64, f64) {
+        let d2 = (self.deviation / CHI3_95).powi(2);
+        let m = self.m.max(1e-12);
+        let lo = ((d2 - self.lambda[0].max(0.0)) / m).max(0.0).sqrt();
+        let hi = ((d2 - self.lambda[2].max(0.0)) / m).max(0.0).sqrt();
+        (lo, hi)
+    }
+
+    /// The least τ that covers the row, to a relative 1e-4 of the bracket.
+    pub fn threshold(&self) -> f64 {
+        let (mut lo, mut hi) = self.bounds();
+        if self.covered(lo) {
+            return lo;
+        }
+        while hi - lo > 1e-4 * hi.max(1e-9) {
+            let mid = 0.5 * (lo + hi);
+            if self.covered(mid) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        hi
+    }
+}
+
+/// The scores of the held-out rows of `data` (`judged`), their residuals `res` from the
+/// folds' fits, against `budget` (its model term ignored) on the calibrated `arm`;
+/// `instrument_mm` the reference instrument's noise per axis, in a `point` row's residual but
+/// not in a reading's error. `sphere` rows (a radial residual) are not used.
+pub fn scores(
+    arm: &Arm,
+    budget: &Budget,
+    data: &Dataset,
+    res: &[Vector3<f64>],
+    judged: &[bool],
+    instrument_mm: f64,
+) -> Vec<Score> {
+    let mut b = budget.clone();
+    b.model_mm = 0.0;
+    let mut out = Vec::new();
+    let layout = data.layout();
+    let inst = instrument_mm * instrument_mm;
+    for &i in layout.points.iter().filter(|&&i| judged[i]) {
+        let r = &data.rows[i];
+        let probe = crate::probes::index(arm, r);
+        let (_, s) = propagate::point(arm, probe, &b, &r.theta, r.temp_c);
+        out.push(Score {
+            deviation: res[i].norm(),
+            lambda: u95::eigenvalues(&(s + nalgebra::Matrix3::identity() * inst)),
+            m: 1.0,
+        });
+    }
+    let groups = layout.spat.iter().map(|g| g.rows.clone()).chain(
+        layout
+            .length
+            .iter()
+            .flat_map(|g| [g.a.clone(), g.b.clone()]),
+    );
+    for rows in groups {
+        if rows.len() < 2 || !rows.iter().all(|&i| judged[i]) {
+            continue;
+        }
+        let n = rows.len() as f64;
+        for (i, s) in propagate::group_deviations(arm, &b, data, &rows) {
+            out.push(Score {
+                deviation: res[i].norm(),
+                lambda: u95::eigenvalues(&s),
+                m: 1.0 - 1.0 / n,
+            });
+        }
+    }
+    out
+}
+
+/// The conformal model term of `scores`: (τ mm, the rank k used, whether k ≤ n, i.e. the
+/// finite-sample guarantee holds; with fewer than 19 rows it cannot, and τ is the largest
+/// threshold). `None` without scores.
+pub fn conformal(scores: &[Score], level: f64) -> Option<(f64, usize, bool)> {
+    let n = scores.len();
+    if n == 0 {
+        return None;
+    }
+    let k = ((level * (n + 1) as f64).ceil() as usize).max(1);
+    let exact = k <= n;
+    let k = k.min(n);
+    // Only rows whose bracket can hold the k-th threshold need their exact threshold.
+    let bounds: Vec<(f64, f64)> = scores.iter().map(Score::bounds).collect();
+    let kth = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[k - 1]
+    };
+    let lo_k = kth(bounds.iter().map(|b| b.0).collect());
+    let hi_k = kth(bounds.iter().map(|b| b.1).collect());
+    let thresholds: Vec<f64> = scores
+        .iter()
+        .zip(&bounds)
+        .map(|(s, &(lo, hi))| {
+            if hi < lo_k {
+                hi
+            } else if lo > hi_k {
+                lo
+            } else {
+                s.threshold()
+            }
+        })
+        .collect();
+    Some((kth(thresholds), k, exact))
+}
+
+/// Fraction of `scores` covered with the model term τ.
+pub fn coverage(scores: &[Score], tau: f64) -> f64 {
+    scores.iter().filter(|s| s.covered(tau)).count() as f64 / scores.len().max(1) as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Isotropic Gaussian residuals of σ = 50 µm over a budget of 5 µm: the conformal term
+    /// recovers about σ, and covers 95 % of the rows it came from.
+    #[test]
+    fn the_conformal_term_recovers_an_isotropic_misfit() {
+        let mut rng = crate::sim::rng(3);
+        let sigma = 0.05;
+        let scores: Vec<Score> = (0..4000)
+            .map(|_| {
+                let v = Vector3::from_fn(|_, _| sigma * crate::sim::normal(&mut rng));
+                Score {
+                    deviation: v.norm(),
+                    lambda: [25e-6, 25e-6, 25e-6],
+                    m: 1.0,
+                }
+            })
+            .collect();
+        let (tau, k, exact) = conformal(&scores, 0.95).unwrap();
+        assert!(exact && k == 3801);
+        let expect = (sigma * sigma - 25e-6f64).sqrt();
+        assert!((tau / expect - 1.0).abs() < 0.05, "{tau} vs {expect}");
+        let c = coverage(&scores, tau);
+        assert!((0.945..0.96).contains(&c), "{c}");
+        // A row already inside needs no term; a far one needs more than its own distance/χ.
+        let near = Score {
+            deviation: 1e-3,
+            lambda: [1e-4; 3],
+            m: 1.0,
+        };
+        assert_eq!(near.threshold(), 0.0);
+        let far = Score {
+            deviation: 1.0,
+            lambda: [1e-4, 1e-6, 1e-6],
+            m: 1.0,
+        };
+        let t = far.threshold();
+        assert!(far.covered(t) && !far.covered(0.99 * t), "{t}");
+    }
+}
