@@ -35,8 +35,10 @@
 mod csv;
 mod framing;
 mod hub;
+mod live;
 mod message;
 mod replay;
+mod serve;
 mod status;
 
 pub use csv::{write_csv_header, write_csv_line, CSV_HEADER, MAX_CSV_LINE};
@@ -48,7 +50,9 @@ pub use message::{
     Coordinates, Counts, Hello, LiveTable, Mode, NumberFormat, ProbeAnswer, ProbeRefusal, Reading,
     Report, ToDevice, ToDeviceOf, ToHost, Unread, UpdateAnswer,
 };
+pub use live::{Live, TEMP_PERIOD_US, TEMP_STALE_POLLS};
 pub use replay::{Event, Replay, StepReading};
+pub use serve::{HubLoop, Measure, Reply, Then};
 pub use status::{Status, TableState};
 
 /// Protocol version carried in [`Hello`]; bumped on any incompatible change of a message.
