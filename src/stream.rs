@@ -46,11 +46,11 @@ pub use framing::{
     decode, decode_message, encode, FrameError, FrameReader, CRC, MAX_FRAME, MAX_PAYLOAD,
 };
 pub use hub::{Hub, MAX_OUTPUT, RATED_TEMP_MC};
+pub use live::{Live, TEMP_PERIOD_US, TEMP_STALE_POLLS};
 pub use message::{
     Coordinates, Counts, Hello, LiveTable, Mode, NumberFormat, ProbeAnswer, ProbeRefusal, Reading,
     Report, ToDevice, ToDeviceOf, ToHost, Unread, UpdateAnswer,
 };
-pub use live::{Live, TEMP_PERIOD_US, TEMP_STALE_POLLS};
 pub use replay::{Event, Replay, StepReading};
 pub use serve::{HubLoop, Measure, Reply, Then};
 pub use status::{Status, TableState};

@@ -177,7 +177,10 @@ mod tests {
         };
         let chain = fake();
         let r = report(live.tick(now, &mut enc, &mut thermo, &chain));
-        assert_eq!((r.time_us, r.point.unwrap().xyz_nm), (1_000, [1, 21_000, 0]));
+        assert_eq!(
+            (r.time_us, r.point.unwrap().xyz_nm),
+            (1_000, [1, 21_000, 0])
+        );
         assert!(live.tick(now, &mut enc, &mut thermo, &chain).is_none());
         clock.set(1_999);
         assert!(live.tick(now, &mut enc, &mut thermo, &chain).is_none());

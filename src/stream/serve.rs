@@ -224,8 +224,8 @@ impl<S: StepReading> HubLoop<S> {
 pub(super) mod tests {
     use super::*;
     use crate::stream::{
-        encode, Counts, FrameReader, Mode, NumberFormat, ProbeRefusal, Reading,
-        Report, Status, TableState, ToDevice, Unread, MAX_FRAME, CSV_HEADER,
+        encode, Counts, FrameReader, Mode, NumberFormat, ProbeRefusal, Reading, Report, Status,
+        TableState, ToDevice, Unread, CSV_HEADER, MAX_FRAME,
     };
     use crate::update::session::Step;
     use crate::update::Refusal;
@@ -316,7 +316,11 @@ pub(super) mod tests {
         let mut hub = HubLoop::new(valid_hub(), Replay::new());
         let hello = hub.hub().hello();
         let bytes = hub.greeting().to_vec();
-        assert_eq!(&bytes[..2], &[0, 0], "a lone delimiter, then the Hello's own");
+        assert_eq!(
+            &bytes[..2],
+            &[0, 0],
+            "a lone delimiter, then the Hello's own"
+        );
         assert_eq!(decoded(&bytes), vec![hello]);
     }
 
