@@ -16,7 +16,8 @@
 //! - [`update`]: a new table written into the inactive one of two flash slots and made live by
 //!   a state record, safe against a power cut at any moment.
 //! - [`stream`]: the framed messages both ways (postcard, CRC-32, COBS), the hub's report
-//!   logic and the decoder of its receive side.
+//!   logic, the decoder of its receive side and the hub's loop ([`stream::HubLoop`],
+//!   [`stream::Live`]): bytes in, bytes to send out; a board only moves them.
 //! - [`encoder::AbsoluteEncoder`] and [`temperature::TemperatureSensor`]: what a hub needs of
 //!   its parts. The drivers for real parts are the crate `quatarm-drivers`, so that the chain
 //!   alone does not pull in embedded-hal.
@@ -70,18 +71,19 @@
 //! # Ok::<(), Box<dyn core::error::Error>>(())
 //! ```
 #![cfg_attr(not(test), no_std)]
+#![deny(missing_docs)]
 
 // The mock flash of the update's fuzz target lives on the heap.
 #[cfg(all(feature = "mock-flash", not(test)))]
 extern crate std;
 
-pub mod angle;
+pub(crate) mod angle;
 pub mod chain;
 pub mod encoder;
 pub mod matrix;
 pub mod model;
 pub mod physics;
-pub mod rotate;
+pub(crate) mod rotate;
 pub mod scalar;
 pub mod signature;
 pub mod stream;

@@ -12,8 +12,12 @@
 //!
 //! An axis wobble ([`crate::wobble`]) turns M̃_i's rows by −φ, so that R_i = M̃_i W_i Rot(z, θ_i).
 //!
-//! It exists to measure, on the same arm and targets, whether the quaternion chain is really
-//! as accurate and as cheap (`armcal accuracy`, `cargo xtask bench-target`).
+//! It carries two things. On the hubs that stream U95 (feature `parameters`) it is load-bearing:
+//! [`crate::uncertainty`]'s parameter part, J_π C J_πᵀ, is built on the joints' frames this
+//! chain composes anyway ([`MatrixChain::eval_frames`], [`Frames`]), so every streamed U95
+//! stands on it. And it is the comparison: on the same arm and targets it measures whether the
+//! quaternion chain is really as accurate and as cheap (`armcal accuracy`,
+//! `cargo xtask bench-target`). The hub's coordinates always come from [`crate::chain`].
 
 use crate::model::{units, ChainError, Gravity, GravityCount, Model, Point, BASE_AXIS};
 use crate::physics::Physics;

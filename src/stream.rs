@@ -35,8 +35,10 @@
 mod csv;
 mod framing;
 mod hub;
+mod live;
 mod message;
 mod replay;
+mod serve;
 mod status;
 
 pub use csv::{write_csv_header, write_csv_line, CSV_HEADER, MAX_CSV_LINE};
@@ -44,11 +46,13 @@ pub use framing::{
     decode, decode_message, encode, FrameError, FrameReader, CRC, MAX_FRAME, MAX_PAYLOAD,
 };
 pub use hub::{Hub, MAX_OUTPUT, RATED_TEMP_MC};
+pub use live::{Live, TEMP_PERIOD_US, TEMP_STALE_POLLS};
 pub use message::{
     Coordinates, Counts, Hello, LiveTable, Mode, NumberFormat, ProbeAnswer, ProbeRefusal, Reading,
     Report, ToDevice, ToDeviceOf, ToHost, Unread, UpdateAnswer,
 };
 pub use replay::{Event, Replay, StepReading};
+pub use serve::{HubLoop, Measure, Reply, Then};
 pub use status::{Status, TableState};
 
 /// Protocol version carried in [`Hello`]; bumped on any incompatible change of a message.

@@ -11,7 +11,7 @@
 //! 2 m lever; a real wobble (≤ 1e-4) leaves 1e-13.
 //!
 //! A(θ) and B(θ) take sin hθ, cos hθ from the reading's cos θ, sin θ
-//! ([`crate::angle::Multiples`], the terms sorted by order at boot), as the encoder harmonics
+//! (`angle::Multiples`, the terms sorted by order at boot), as the encoder harmonics
 //! do, of the raw reading θ (the spec's: the tilt is the bearing's at the
 //! encoder's reading, not at the corrected angle).
 //!

@@ -37,6 +37,7 @@
 //! i2c.done();
 //! ```
 #![cfg_attr(not(test), no_std)]
+#![deny(missing_docs)]
 
 pub mod as5047p;
 pub mod tmp117;

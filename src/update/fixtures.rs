@@ -11,6 +11,7 @@ use super::{live_table, Refusal};
 use crate::table::budget::BudgetData;
 use crate::table::{quat_to_matrix, JointData, ProbeData, TableData, MAX_TABLE_LEN};
 
+/// Bytes of the mock flash that [`layout`] divides.
 pub const FLASH_LEN: usize = 9 * 1024;
 
 /// Two 3 KiB slots (the largest table without a parameter block, 2,440 bytes with eight

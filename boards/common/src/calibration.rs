@@ -8,7 +8,7 @@
 //! from boot; [`Calibration::mount`] converts another of the table's when the host selects
 //! it.
 
-use quatarm::stream::{self, Coordinates, Hub, TableState};
+use quatarm::stream::{self, Coordinates, Hub, Measure, TableState};
 use quatarm::uncertainty::Uncertainty;
 use quatarm::{Chain, ChainError, Evaluator, Point, Table};
 
@@ -201,5 +201,18 @@ impl<P: HubEvaluator> Calibration<'_, P> {
                 found: counts.len() as u8,
             }),
         }
+    }
+}
+
+/// What the hub's loop runs: [`Calibration::eval`] and [`Calibration::mount`].
+impl<P: HubEvaluator> Measure for Calibration<'_, P> {
+    type Error = ChainError;
+    #[inline(always)] // a name for the loop: the call is the inherent method's
+    fn eval(&self, counts: &[u32], temp_mc: i32) -> Result<Coordinates, ChainError> {
+        Calibration::eval(self, counts, temp_mc)
+    }
+    #[inline(always)]
+    fn mount(&mut self, k: usize) -> bool {
+        Calibration::mount(self, k)
     }
 }

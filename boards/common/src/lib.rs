@@ -10,9 +10,10 @@
 //! - [`table_region`]: the calibration table's flash region, as `memory.x` reserves it.
 //! - [`maker_key`](mod@maker_key): the public key an image checks tables against (the test key on QEMU, the
 //!   maker's on the real boards, [`maker_key!`]).
-//! - [`live`]: a real hub's loop: encoders at a fixed period, replay when the host sends one,
-//!   calibration updates.
-//! - [`serve`]: the replay loop: bytes in, [`quatarm::stream::Hub`] reports out.
+//! - [`live`]: a real hub's loop: its link's bytes into [`quatarm::stream::Live`] (encoders
+//!   at a fixed period, replay when the host sends one, calibration updates) and its replies
+//!   out.
+//! - [`serve`]: the replay loop: bytes in, [`quatarm::stream::HubLoop`]'s replies out.
 //! - [`qemu`] (feature `qemu`): the QEMU images' runs, exit codes through semihosting, the
 //!   panic and fault handlers.
 //! - `rtt` (feature `rtt`): the real boards' log transport and panic handler.

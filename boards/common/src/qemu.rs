@@ -41,16 +41,15 @@ pub fn hub_main<P: HubEvaluator, const CORE_HZ: u32, L: Link, F: NorFlash>(
     let mut port = Port::new(flash, layout, accept, &mut scratch);
     loop {
         let mut boot = port.boot::<P>(&mut live);
-        let mut hub = boot.hub();
         let served = serve(
             &mut link,
-            &mut hub,
+            boot.hub(),
             &mut boot.calibration,
             Replay::new(),
             || clock::now_us(CORE_HZ),
             |step| port.step(step),
         );
-        if let Served::Ended { .. } = served {
+        if served == Served::Ended {
             break;
         }
     }
@@ -70,10 +69,10 @@ pub fn hub_main_without_update<P: HubEvaluator, const CORE_HZ: u32, L: Link>(
     stack::paint();
     let mut link = start(open_link);
     let mut cal = calibration::load::<P>(table_region::bytes());
-    let mut hub = cal.hub();
+    let hub = cal.hub();
     serve(
         &mut link,
-        &mut hub,
+        hub,
         &mut cal,
         Replay::without_update(),
         || clock::now_us(CORE_HZ),
