@@ -7,6 +7,7 @@ use std::path::PathBuf;
 
 /// Arguments of `armcal check`.
 #[derive(clap::Args)]
+#[command(after_help = EXIT_CODES)]
 pub struct Args {
     /// Measured data (`sphere`, `length` and `spat` groups; spec/measured-data.md).
     data: PathBuf,
@@ -38,8 +39,17 @@ pub struct Args {
     plots: Option<PathBuf>,
 }
 
-/// Runs the subcommand: everything is read and checked before anything is printed.
-pub fn run(a: Args) -> anyhow::Result<()> {
+/// The exit codes, as `armcal check --help` lists them.
+pub const EXIT_CODES: &str = "Exit codes (ISO 14253-1 with each value's U, against --mpe):
+  0  conforms: every value with an MPE is proven within it (also: no --mpe given, values only)
+  1  does not conform: at least one value is proven beyond its MPE
+  2  cannot decide: none proven beyond, at least one not proven within (value ± U straddles
+     the MPE), or the MPE file limits none of the data's tests
+  3  error: bad arguments, or a file that cannot be read or is refused; no verdict";
+
+/// Runs the subcommand: everything is read and checked before anything is printed. Returns
+/// the exit code of the verdict (errors are `acceptance::verdict::EXIT_ERROR`, by the caller).
+pub fn run(a: Args) -> anyhow::Result<i32> {
     let (arm, budget) =
         armcal::load::calibration_and_budget(&a.calib, a.predict.then_some("--predict"))?;
     let mpe = a.mpe.as_deref().map(Mpe::read).transpose()?;
@@ -78,5 +88,5 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     } else {
         print!("{}", c.text());
     }
-    Ok(())
+    Ok(c.verdict.exit_code)
 }
