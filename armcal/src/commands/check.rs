@@ -37,6 +37,11 @@ pub struct Args {
     /// cone's centres about their mean, from above); each only where the data has its groups.
     #[arg(long, value_name = "DIR")]
     plots: Option<PathBuf>,
+    /// Write the test report here: one self-contained HTML page (header with the arm's serial,
+    /// the files and their SHA-256, the verdict, every value with its U and decision, the
+    /// plots), which a browser shows and prints to PDF.
+    #[arg(long, value_name = "FILE.html")]
+    report: Option<PathBuf>,
 }
 
 /// The exit codes, as `armcal check --help` lists them.
@@ -50,6 +55,16 @@ pub const EXIT_CODES: &str = "Exit codes (ISO 14253-1 with each value's U, again
 /// Runs the subcommand: everything is read and checked before anything is printed. Returns
 /// the exit code of the verdict (errors are `acceptance::verdict::EXIT_ERROR`, by the caller).
 pub fn run(a: Args) -> anyhow::Result<i32> {
+    if let Some(r) = &a.report {
+        let mut inputs = vec![
+            (a.data.as_path(), "data"),
+            (a.calib.as_path(), "calibration"),
+        ];
+        if let Some(m) = &a.mpe {
+            inputs.push((m.as_path(), "MPE file"));
+        }
+        armcal::output::check(&[(r.as_path(), "report")], &inputs)?;
+    }
     let (arm, budget) =
         armcal::load::calibration_and_budget(&a.calib, a.predict.then_some("--predict"))?;
     let mpe = a.mpe.as_deref().map(Mpe::read).transpose()?;
@@ -79,8 +94,20 @@ pub fn run(a: Args) -> anyhow::Result<i32> {
         }
         None => Vec::new(),
     };
+    if let Some(r) = &a.report {
+        let prov = armcal::html::header::Provenance {
+            arm: &arm,
+            calibration: Some(&a.calib),
+            data_files: vec![&a.data],
+            data: &data,
+            mpe: a.mpe.as_deref(),
+            rule: a.mpe.is_some().then_some(acceptance::verdict::RULE),
+        };
+        let page = armcal::html::check::page(&c, &arm, &data, mpe.as_ref(), &prov);
+        files.write(r, page.as_bytes())?;
+    }
     files.commit()?;
-    for f in &written {
+    for f in written.iter().chain(&a.report) {
         eprintln!("armcal: wrote {}", f.display());
     }
     if a.json {
