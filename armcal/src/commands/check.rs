@@ -97,7 +97,7 @@ pub fn run(a: Args) -> anyhow::Result<i32> {
     if let Some(r) = &a.report {
         let prov = armcal::html::header::Provenance {
             arm: &arm,
-            calibration: Some(&a.calib),
+            arm_file: Some(("calibration file", &a.calib)),
             data_files: vec![&a.data],
             data: &data,
             mpe: a.mpe.as_deref(),

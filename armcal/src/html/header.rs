@@ -82,8 +82,9 @@ pub fn temperatures(data: &Dataset) -> String {
 pub struct Provenance<'a> {
     /// The arm (its serial, its name, its stylus ball).
     pub arm: &'a Arm,
-    /// The calibration file, where the command read one.
-    pub calibration: Option<&'a Path>,
+    /// The arm's file as the command read it, with what it is (`calibration file`, `start
+    /// arm`), where it read one.
+    pub arm_file: Option<(&'a str, &'a Path)>,
     /// The data files.
     pub data_files: Vec<&'a Path>,
     /// The data.
@@ -114,8 +115,8 @@ impl Provenance<'_> {
                 format!("armcal {}", env!("CARGO_PKG_VERSION")),
             ),
         ];
-        if let Some(c) = self.calibration {
-            f.push(("calibration file".into(), file_with_hash(c)));
+        if let Some((what, path)) = self.arm_file {
+            f.push((what.into(), file_with_hash(path)));
         }
         for d in &self.data_files {
             f.push(("data file".into(), file_with_hash(d)));

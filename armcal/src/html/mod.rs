@@ -7,10 +7,14 @@
 //!   every text escaped here, so that a file name or a serial cannot inject markup.
 //! - [`header`]: the provenance every report opens with (serial, date, data and SHA-256,
 //!   software version, temperatures, ball, MPE file, decision rule).
-//! - [`svg`]: the plots.
+//! - [`svg`]: the plots; [`residuals`]: the residual plots two reports share.
+//! - [`check`], [`calibration`], [`diagnosis`]: each command's page.
 
+pub mod calibration;
 pub mod check;
+pub mod diagnosis;
 pub mod header;
+pub mod residuals;
 pub mod svg;
 
 use std::fmt::Write as _;
