@@ -70,6 +70,7 @@ pub mod diagnose;
 pub mod effects;
 pub mod fleet_prior;
 pub mod holdout;
+pub mod html;
 pub mod ident;
 pub mod jacobian;
 pub mod kinds;

@@ -37,8 +37,36 @@ enum Command {
     Check(commands::check::Args),
 }
 
+/// Whether the command line runs `armcal check`, whose errors have an exit code of their own
+/// (3): its 1 and 2 are verdicts, which a wrong file must never look like.
+fn is_check(args: &[std::ffi::OsString]) -> bool {
+    args.iter()
+        .skip(1)
+        .find(|a| !a.to_string_lossy().starts_with('-'))
+        .is_some_and(|a| a == "check")
+}
+
 fn main() {
-    let cli = Cli::parse();
+    let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    let check = is_check(&args);
+    let error_code = if check {
+        armcal::acceptance::verdict::EXIT_ERROR
+    } else {
+        1
+    };
+    let cli = match Cli::try_parse_from(&args) {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            // Help and version are no error; a usage error is clap's 2, check's 3.
+            let code = match (e.use_stderr(), check) {
+                (false, _) => 0,
+                (true, true) => error_code,
+                (true, false) => e.exit_code(),
+            };
+            std::process::exit(code);
+        }
+    };
     let result = match cli.command {
         Command::Eval(a) => commands::eval::run(a),
         Command::Simulate(a) => commands::simulate::run(a),
@@ -47,10 +75,15 @@ fn main() {
         Command::Table(c) => commands::table::run(c),
         Command::Decode(a) => commands::decode::run(a),
         Command::Accuracy(a) => commands::accuracy::run(a),
-        Command::Check(a) => commands::check::run(a),
+        // The verdict's exit code: 0 conforms, 1 does not, 2 cannot decide.
+        Command::Check(a) => commands::check::run(a).map(|code| {
+            if code != 0 {
+                std::process::exit(code)
+            }
+        }),
     };
     if let Err(e) = result {
         eprintln!("armcal: error: {e:#}");
-        std::process::exit(1);
+        std::process::exit(error_code);
     }
 }

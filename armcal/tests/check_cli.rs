@@ -93,8 +93,7 @@ fn decisions_follow_iso_14253_1() {
     simulate(&dir, "length", "20", &[], "bar.csv");
     let decide = |mpe: &str| -> Vec<String> {
         std::fs::write(dir.join("mpe.toml"), mpe).unwrap();
-        let v = json(
-            &dir,
+        let o = armcal(
             &[
                 "check",
                 "bar.csv",
@@ -104,6 +103,14 @@ fn decisions_follow_iso_14253_1() {
                 "mpe.toml",
                 "--json",
             ],
+            &dir,
+        );
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+        // The exit code is the verdict's, which the JSON states too.
+        assert_eq!(
+            o.status.code(),
+            v["verdict"]["exit_code"].as_i64().map(|c| c as i32),
+            "{v}"
         );
         v["tests"]
             .as_array()
@@ -143,7 +150,7 @@ fn bad_input_is_refused_with_its_place() {
         &dir,
     );
     let e = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && o.stdout.is_empty());
+    assert!(o.status.code() == Some(3) && o.stdout.is_empty(), "{o:?}");
     assert!(e.contains("mpe.toml") && e.contains("P_Sise"), "{e}");
     // 24 points where P_Size needs 25: refused, naming the group.
     let text = std::fs::read_to_string(dir.join("sphere.csv")).unwrap();
@@ -304,4 +311,114 @@ fn plots_are_written_for_a_complete_test_set() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("afile"));
     assert!(o.stdout.is_empty(), "no partial output");
+}
+
+/// The exit code is the verdict (0 conforms, 1 does not, 2 cannot decide) and an error is 3,
+/// never one of them: the true arm checked with its own calibration conforms, an arm whose
+/// calibration has link 3 150 µm short fails E_Uni, and the same arm with a test uncertainty
+/// as large as its error cannot be decided.
+#[test]
+fn exit_codes_are_the_verdict_and_errors_are_3() {
+    let dir = workdir("exit-codes");
+    write_truth(&dir, &truth());
+    simulate(&dir, "length", "20", &[], "bar.csv");
+    let mut short = truth();
+    short.joints[2].link[2] -= 0.150;
+    std::fs::write(
+        dir.join("short.toml"),
+        quatarm_ref::calfile::write(&short, &["link 3 150 µm short"]),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("mpe.toml"),
+        "E_Uni = { a = 0.010, per_m = 0.005 }\ntest_uncertainty = { E_Uni = 0.002 }\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("wide.toml"),
+        "E_Uni = { a = 0.010, per_m = 0.005 }\ntest_uncertainty = { E_Uni = 0.500 }\n",
+    )
+    .unwrap();
+    let run = |calib: &str, mpe: &str| {
+        let o = armcal(&["check", "bar.csv", "--calib", calib, "--mpe", mpe], &dir);
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        (o.status.code(), text)
+    };
+    let (code, text) = run("truth.toml", "mpe.toml");
+    assert_eq!(code, Some(0), "{text}");
+    let verdict = text.lines().last().unwrap();
+    assert!(
+        verdict.starts_with("verdict: conforms (exit 0)")
+            && verdict.contains("MPE file mpe.toml")
+            && verdict.contains("ISO 14253-1"),
+        "{verdict}"
+    );
+    // The E_Uni rows carry their bar's length.
+    let row = text.lines().find(|l| l.starts_with("E_Uni")).unwrap();
+    let bar: f64 = row.split_whitespace().nth(2).unwrap().parse().unwrap();
+    assert!((200.0..=3000.0).contains(&bar), "{row}");
+    let (code, text) = run("short.toml", "mpe.toml");
+    assert_eq!(code, Some(1), "{text}");
+    assert!(
+        text.contains("verdict: does not conform (exit 1)"),
+        "{text}"
+    );
+    let (code, text) = run("short.toml", "wide.toml");
+    assert_eq!(code, Some(2), "{text}");
+    assert!(text.contains("verdict: cannot decide (exit 2)"), "{text}");
+    // Errors: a missing file, a bad argument. Never 1 or 2.
+    let (code, _) = run("missing.toml", "mpe.toml");
+    assert_eq!(code, Some(3));
+    let o = armcal(
+        &["check", "bar.csv", "--calib", "truth.toml", "--draws", "x"],
+        &dir,
+    );
+    assert_eq!(o.status.code(), Some(3));
+    // No MPE file: values only, exit 0, and the verdict line says nothing was decided.
+    let o = armcal_ok(&["check", "bar.csv", "--calib", "truth.toml"], &dir);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("verdict: no decision (exit 0)"), "{text}");
+    // --help lists the codes.
+    let o = armcal_ok(&["check", "--help"], &dir);
+    let help = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        help.contains("3  error") && help.contains("2  cannot decide"),
+        "{help}"
+    );
+}
+
+/// `--predict`: a measured value outside its predicted 95 % interval is flagged, in the text
+/// and the JSON: data of an arm with link 3 40 µm short, predicted by a calibration of the
+/// nominal link with a 2 µm probing budget.
+#[test]
+fn a_value_outside_its_prediction_is_flagged() {
+    let dir = workdir("outside");
+    let mut short = truth();
+    short.joints[2].link[2] -= 0.040;
+    write_truth(&dir, &short);
+    simulate(&dir, "length", "20", &[], "bar.csv");
+    let mut text = quatarm_ref::calfile::write(&truth(), &["nominal"]);
+    text.push_str("\n[uncertainty]\nprobing_mm = 0.002\n");
+    std::fs::write(dir.join("budget.toml"), text).unwrap();
+    let args = ["check", "bar.csv", "--calib", "budget.toml", "--predict"];
+    let v = json(&dir, &[&args[..], &["--json"]].concat());
+    let rows = v["tests"].as_array().unwrap();
+    let outside = rows
+        .iter()
+        .filter(|t| t["outside_predicted"] == true)
+        .count();
+    // The bars not along link 3 may not change; most do, by far more than 2 µm.
+    assert!(outside >= rows.len() / 2, "{v}");
+    for t in rows {
+        let (x, p) = (t["value_um"].as_f64().unwrap(), &t["predicted_um"]);
+        let inside = x >= p["lo"].as_f64().unwrap() && x <= p["hi"].as_f64().unwrap();
+        assert_eq!(t["outside_predicted"] == true, !inside, "{t}");
+    }
+    let o = armcal_ok(&args, &dir);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("OUTSIDE the predicted interval")
+            && text.contains("outside the 95 % interval the calibration's budget predicts"),
+        "{text}"
+    );
 }

@@ -1,4 +1,6 @@
-//! `cargo xtask setup`: installs what the firmware builds, QEMU runs and fuzz runs need, and only that.
+//! `cargo xtask setup`: installs what the firmware builds, QEMU runs and fuzz runs need, and
+//! the headless browser the HTML reports' test renders them with (Debian's
+//! `chromium-headless-shell`), and only that.
 //!
 //! It asks nothing and removes nothing: every `apt-get install` runs with `--no-remove`, so a
 //! package that could only go in by replacing one the machine has (a newer backport of
@@ -239,21 +241,32 @@ pub fn run(every_compiler: bool) -> Result<()> {
     if !which("qemu-system-arm") {
         install_qemu(&mut apt)?;
     }
+    if !has_browser() {
+        apt.install_or_fail(
+            &["chromium-headless-shell"],
+            "renders armcal's HTML reports in the tests (armcal/tests/report_browser.rs)",
+        )?;
+    }
     crate::fuzz::ensure_cargo_fuzz()?;
     let survey = toolchain::survey();
     survey.primary()?;
     eprintln!(
-        "xtask setup: firmware tool chains:\n{}\nxtask setup: qemu-system-arm and cargo-fuzz present",
+        "xtask setup: firmware tool chains:\n{}\nxtask setup: qemu-system-arm, chromium and cargo-fuzz present",
         survey.describe()
     );
     Ok(())
+}
+
+/// Whether a headless Chromium is there (the shell, or the full browser).
+pub fn has_browser() -> bool {
+    which("chromium-headless-shell") || which("chromium")
 }
 
 /// Runs [`run`] only if a firmware tool chain or QEMU is missing (the other commands call
 /// this first; cargo-fuzz is installed by the fuzz commands themselves when they need it, so
 /// that `cargo xtask demo` does not wait for it).
 pub fn ensure() -> Result<()> {
-    if toolchain::survey().primary().is_ok() && which("qemu-system-arm") {
+    if toolchain::survey().primary().is_ok() && which("qemu-system-arm") && has_browser() {
         return Ok(());
     }
     run(false)

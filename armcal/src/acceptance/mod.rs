@@ -7,11 +7,13 @@
 //! - [`statistics`]: each test's value per group and the test's result.
 //! - [`mpe`]: the MPE file and the decision rule.
 //! - [`virtual_test`]: each statistic predicted from the calibration's uncertainty budget.
+//! - [`verdict`]: the overall decision and `armcal check`'s exit code.
 
 pub mod fit;
 pub mod mpe;
 pub mod plots;
 pub mod statistics;
+pub mod verdict;
 pub mod virtual_test;
 
 use crate::data::Dataset;
@@ -46,6 +48,10 @@ pub struct Row {
     /// The virtual test's prediction (µm), where the calibration has a budget.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub predicted_um: Option<Interval>,
+    /// Whether the measured value lies outside its predicted 95 % interval: the arm, the
+    /// artefact or the budget is not what the calibration says.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub outside_predicted: Option<bool>,
 }
 
 /// A whole check.
@@ -61,6 +67,8 @@ pub struct Check {
     pub ball_diameter_mm: f64,
     /// The effective stylus ball diameter each plain sphere group measures (B89.4.22).
     pub effective_ball_diameter: Vec<EffectiveDiameter>,
+    /// The overall decision against the MPE file.
+    pub verdict: verdict::Verdict,
 }
 
 /// ASME B89.4.22's effective diameter test: the stylus ball's diameter as the arm probes with
@@ -145,7 +153,7 @@ pub fn check(
             worst_group.insert(t.key(), v.group);
         }
     }
-    let tests = values
+    let tests: Vec<Row> = values
         .iter()
         .map(|v| {
             let predicted = prediction.and_then(|p| p.get(&(v.test, v.group)));
@@ -156,6 +164,7 @@ pub fn check(
             r
         })
         .collect();
+    let verdict = verdict::Verdict::of(&tests, mpe.map(Mpe::path));
     let effective_ball_diameter = values
         .iter()
         .filter(|v| v.test == Test::PSize)
@@ -170,6 +179,7 @@ pub fn check(
         tests,
         ball_diameter_mm: d,
         effective_ball_diameter,
+        verdict,
     })
 }
 
@@ -187,16 +197,19 @@ fn row(v: &Value, mpe: Option<&Mpe>, predicted: Option<&Interval>) -> Row {
         hi: i.hi * 1e3,
         sd: i.sd * 1e3,
     };
+    let value_um = v.value_mm * 1e3;
+    let predicted_um = predicted.map(um);
     Row {
         test: v.test,
         group: v.group,
-        value_um: v.value_mm * 1e3,
+        value_um,
         length_mm: v.length_mm,
         mpe_um: limit.map(|l| l * 1e3),
         u_um: u * 1e3,
         u_source: source,
         decision: limit.map(|l| Decision::of(v.value_mm, u, l)),
-        predicted_um: predicted.map(um),
+        outside_predicted: predicted_um.map(|p| value_um < p.lo || value_um > p.hi),
+        predicted_um,
     }
 }
 
@@ -213,20 +226,27 @@ impl Check {
         );
         let _ = writeln!(
             s,
-            "{:<9} {:>6} {:>11} {:>9} {:>8} {:<18} {:<14} predicted µm (95 %)",
-            "test", "group", "value µm", "MPE µm", "U µm", "U source", "decision"
+            "{:<9} {:>6} {:>9} {:>11} {:>9} {:>8} {:<18} {:<14} predicted µm (95 %)",
+            "test", "group", "bar mm", "value µm", "MPE µm", "U µm", "U source", "decision"
         );
         for r in &self.tests {
             let mpe = r.mpe_um.map_or("-".to_string(), |m| format!("{m:.2}"));
+            let bar = r.length_mm.map_or("-".to_string(), |l| format!("{l:.1}"));
             let decision = r.decision.map_or("-", Decision::name);
             let predicted = r.predicted_um.map_or(String::new(), |p| {
-                format!("{:.2} [{:.2}, {:.2}]", p.mean, p.lo, p.hi)
+                let flag = if r.outside_predicted == Some(true) {
+                    "  OUTSIDE the predicted interval"
+                } else {
+                    ""
+                };
+                format!("{:.2} [{:.2}, {:.2}]{flag}", p.mean, p.lo, p.hi)
             });
             let _ = writeln!(
                 s,
-                "{:<9} {:>6} {:>11.2} {:>9} {:>8.2} {:<18} {decision:<14} {predicted}",
+                "{:<9} {:>6} {:>9} {:>11.2} {:>9} {:>8.2} {:<18} {decision:<14} {predicted}",
                 r.test.key(),
                 r.group,
+                bar,
                 r.value_um,
                 mpe,
                 r.u_um,
@@ -280,6 +300,34 @@ impl Check {
                  file has no [uncertainty] budget: the decision then takes the value as exact"
             );
         }
+        let outside: Vec<String> = self
+            .tests
+            .iter()
+            .filter(|r| r.outside_predicted == Some(true))
+            .filter_map(|r| {
+                r.predicted_um.map(|p| {
+                    format!(
+                        "{} group {}: {:.2} µm against [{:.2}, {:.2}]",
+                        r.test.key(),
+                        r.group,
+                        r.value_um,
+                        p.lo,
+                        p.hi
+                    )
+                })
+            })
+            .collect();
+        if !outside.is_empty() {
+            let _ = writeln!(
+                s,
+                "warning: {} measured value(s) outside the 95 % interval the calibration's \
+                 budget predicts ({}): the arm, the artefact or the budget is not what the \
+                 calibration says",
+                outside.len(),
+                outside.join("; ")
+            );
+        }
+        let _ = writeln!(s, "{}", self.verdict.line());
         s
     }
 }

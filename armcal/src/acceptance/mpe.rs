@@ -51,6 +51,9 @@ pub struct Mpe {
     /// U (k = 2) of each test value (mm), by test key.
     #[serde(default)]
     test_uncertainty: BTreeMap<String, f64>,
+    /// The file's name as given (the verdict and the report name it).
+    #[serde(skip)]
+    path: String,
 }
 
 /// Why an MPE file was refused.
@@ -123,10 +126,11 @@ impl Mpe {
 
     /// Parses an MPE file's text; `path` names it in errors.
     pub fn parse(text: &str, path: &str) -> Result<Mpe, MpeError> {
-        let m: Mpe = toml::from_str(text).map_err(|e| MpeError::Syntax {
+        let mut m: Mpe = toml::from_str(text).map_err(|e| MpeError::Syntax {
             path: path.to_string(),
             message: e.to_string().trim_end().to_string(),
         })?;
+        m.path = path.to_string();
         let bad = |key: &str, value: f64| MpeError::Value {
             path: path.to_string(),
             key: key.to_string(),
@@ -161,6 +165,11 @@ impl Mpe {
             }
         }
         Ok(m)
+    }
+
+    /// The file's name, as given to [`Mpe::read`] or [`Mpe::parse`].
+    pub fn path(&self) -> &str {
+        &self.path
     }
 
     /// The MPE of a test, where the file gives one.

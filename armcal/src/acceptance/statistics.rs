@@ -175,33 +175,10 @@ fn sphere_values(
             out.push(value(Test::PForm, g.group, hi - lo));
             continue;
         }
-        let mut sets: BTreeMap<i64, Vec<Vector3<f64>>> = BTreeMap::new();
-        for &i in &g.rows {
-            let a = data.rows[i]
-                .sphere
-                .and_then(|t| t.articulation)
-                .unwrap_or(0);
-            sets.entry(a).or_default().push(centres[i]);
-        }
-        if sets.len() != 5 || sets.values().any(|s| s.len() < 5) {
-            let found = sets
-                .iter()
-                .map(|(a, s)| format!("articulation {a}: {} points", s.len()))
-                .collect::<Vec<_>>()
-                .join(", ");
-            return Err(StatError::Articulations {
-                group: g.group,
-                found: format!("found {}", found),
-            });
-        }
-        // Every set's centre from the whole group's free centre: the right side of each cap.
-        let start = fit::free(&p).map_err(fit_err)?.centre;
-        let radius = (g.diameter_mm + ball_diameter) / 2.0;
-        let c: Vec<Vector3<f64>> = sets
-            .values()
-            .map(|s| fit::with_radius(s, radius, start))
-            .collect::<Result<_, _>>()
-            .map_err(fit_err)?;
+        let c: Vec<Vector3<f64>> = articulation_centres(data, g, centres, ball_diameter)?
+            .into_iter()
+            .map(|(_, c)| c)
+            .collect();
         let mut l = 0.0f64;
         for a in &c {
             for b in &c {
@@ -211,6 +188,46 @@ fn sphere_values(
         out.push(value(Test::LDia, g.group, l));
     }
     Ok(())
+}
+
+/// L_Dia's centres: each articulation's least-squares centre of a sphere group, the radius
+/// fixed at (D + d)/2, by articulation number (the report plots them too).
+pub fn articulation_centres(
+    data: &Dataset,
+    g: &crate::data::SphereGroup,
+    centres: &[Vector3<f64>],
+    ball_diameter: f64,
+) -> Result<Vec<(i64, Vector3<f64>)>, StatError> {
+    let p: Vec<Vector3<f64>> = g.rows.iter().map(|&i| centres[i]).collect();
+    let fit_err = |source| StatError::Fit {
+        group: g.group,
+        source,
+    };
+    let mut sets: BTreeMap<i64, Vec<Vector3<f64>>> = BTreeMap::new();
+    for &i in &g.rows {
+        let a = data.rows[i]
+            .sphere
+            .and_then(|t| t.articulation)
+            .unwrap_or(0);
+        sets.entry(a).or_default().push(centres[i]);
+    }
+    if sets.len() != 5 || sets.values().any(|s| s.len() < 5) {
+        let found = sets
+            .iter()
+            .map(|(a, s)| format!("articulation {a}: {} points", s.len()))
+            .collect::<Vec<_>>()
+            .join(", ");
+        return Err(StatError::Articulations {
+            group: g.group,
+            found: format!("found {}", found),
+        });
+    }
+    // Every set's centre from the whole group's free centre: the right side of each cap.
+    let start = fit::free(&p).map_err(fit_err)?.centre;
+    let radius = (g.diameter_mm + ball_diameter) / 2.0;
+    sets.iter()
+        .map(|(&a, s)| Ok((a, fit::with_radius(s, radius, start).map_err(fit_err)?)))
+        .collect()
 }
 
 /// The test's result over its groups: the group of largest |value| (sign kept for P_Size and

@@ -63,6 +63,11 @@ pub struct Args {
     /// Show progress on stderr even when it is not a terminal.
     #[arg(long)]
     progress: bool,
+    /// Write the calibration certificate here: one self-contained HTML page (header with the
+    /// arm's serial, the data file and its SHA-256, the residuals before, after and held out,
+    /// residual vectors against position, every parameter), which a browser prints to PDF.
+    #[arg(long, value_name = "FILE.html")]
+    report: Option<PathBuf>,
     #[command(flatten)]
     budget: super::budget::BudgetArgs,
 }
@@ -86,10 +91,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if let Some(arm) = &a.arm {
         inputs.push((arm.as_path(), "start arm"));
     }
-    armcal::output::check(
-        &[(&a.output, "calibration file"), (&table, "binary table")],
-        &inputs,
-    )?;
+    let mut outputs = vec![
+        (a.output.as_path(), "calibration file"),
+        (&table, "binary table"),
+    ];
+    if let Some(r) = &a.report {
+        outputs.push((r.as_path(), "report"));
+    }
+    armcal::output::check(&outputs, &inputs)?;
     let data = armcal::data::read(&a.data, start.dof())?;
     armcal::probes::check(&start, &data)?;
     for w in &data.warnings {
@@ -166,6 +175,18 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             files.remove_at_commit(&table);
             rep.warnings.push(format!("binary table not written: {e}"));
         }
+    }
+    if let Some(r) = &a.report {
+        let prov = armcal::html::header::Provenance {
+            arm: &fit.arm,
+            arm_file: a.arm.as_deref().map(|p| ("start arm", p)),
+            data_files: vec![&a.data],
+            data: &data,
+            mpe: None,
+            rule: None,
+        };
+        let page = armcal::html::calibration::page(&rep, &fit, &data, validation.as_ref(), &prov);
+        files.write(r, page.as_bytes())?;
     }
     files.commit()?;
     if a.json {

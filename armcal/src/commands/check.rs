@@ -7,6 +7,7 @@ use std::path::PathBuf;
 
 /// Arguments of `armcal check`.
 #[derive(clap::Args)]
+#[command(after_help = EXIT_CODES)]
 pub struct Args {
     /// Measured data (`sphere`, `length` and `spat` groups; spec/measured-data.md).
     data: PathBuf,
@@ -36,11 +37,35 @@ pub struct Args {
     /// cone's centres about their mean, from above); each only where the data has its groups.
     #[arg(long, value_name = "DIR")]
     plots: Option<PathBuf>,
+    /// Write the test report here: one self-contained HTML page (header with the arm's serial,
+    /// the files and their SHA-256, the verdict, every value with its U and decision, the
+    /// plots), which a browser shows and prints to PDF.
+    #[arg(long, value_name = "FILE.html")]
+    report: Option<PathBuf>,
 }
 
-/// Runs the subcommand: everything is read and checked before anything is printed.
-pub fn run(a: Args) -> anyhow::Result<()> {
+/// The exit codes, as `armcal check --help` lists them.
+pub const EXIT_CODES: &str = "Exit codes (ISO 14253-1 with each value's U, against --mpe):
+  0  conforms: every value with an MPE is proven within it (also: no --mpe given, values only)
+  1  does not conform: at least one value is proven beyond its MPE
+  2  cannot decide: none proven beyond, at least one not proven within (value ± U straddles
+     the MPE), or the MPE file limits none of the data's tests
+  3  error: bad arguments, or a file that cannot be read or is refused; no verdict";
+
+/// Runs the subcommand: everything is read and checked before anything is printed. Returns
+/// the exit code of the verdict (errors are `acceptance::verdict::EXIT_ERROR`, by the caller).
+pub fn run(a: Args) -> anyhow::Result<i32> {
     // The budget, where the file has one, gives U where the MPE file has none.
+    if let Some(r) = &a.report {
+        let mut inputs = vec![
+            (a.data.as_path(), "data"),
+            (a.calib.as_path(), "calibration"),
+        ];
+        if let Some(m) = &a.mpe {
+            inputs.push((m.as_path(), "MPE file"));
+        }
+        armcal::output::check(&[(r.as_path(), "report")], &inputs)?;
+    }
     let (arm, budget) =
         armcal::load::calibration_with_budget(&a.calib, a.predict.then_some("--predict"))?;
     let mpe = a.mpe.as_deref().map(Mpe::read).transpose()?;
@@ -71,8 +96,20 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         }
         None => Vec::new(),
     };
+    if let Some(r) = &a.report {
+        let prov = armcal::html::header::Provenance {
+            arm: &arm,
+            arm_file: Some(("calibration file", &a.calib)),
+            data_files: vec![&a.data],
+            data: &data,
+            mpe: a.mpe.as_deref(),
+            rule: a.mpe.is_some().then_some(acceptance::verdict::RULE),
+        };
+        let page = armcal::html::check::page(&c, &arm, &data, mpe.as_ref(), &prov);
+        files.write(r, page.as_bytes())?;
+    }
     files.commit()?;
-    for f in &written {
+    for f in written.iter().chain(&a.report) {
         eprintln!("armcal: wrote {}", f.display());
     }
     if a.json {
@@ -80,5 +117,5 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     } else {
         print!("{}", c.text());
     }
-    Ok(())
+    Ok(c.verdict.exit_code)
 }

@@ -63,6 +63,11 @@ pub struct Args {
     /// Write the extended calibration file here; its binary table goes beside it (`.bin`).
     #[arg(short, long, value_name = "EXTENDED.toml")]
     output: Option<PathBuf>,
+    /// Write the diagnosis report here: one self-contained HTML page (header with the arm's
+    /// serial, the data file and its SHA-256, the verdict, held-out residuals before and
+    /// after, residual vectors against position, each cause with its evidence).
+    #[arg(long, value_name = "FILE.html", conflicts_with = "fleet")]
+    report: Option<PathBuf>,
     /// Folds of held-out validation (units: a point row, a spat or length group whole).
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(0..=1000))]
     folds: u32,
@@ -118,15 +123,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if let Some(arm) = &a.arm {
         inputs.push((arm.as_path(), "start arm"));
     }
-    if let Some(out) = &a.output {
-        armcal::output::check(
-            &[
-                (out, "extended calibration file"),
-                (&out.with_extension("bin"), "binary table"),
-            ],
-            &inputs,
-        )?;
+    let table = a.output.as_ref().map(|o| o.with_extension("bin"));
+    let mut outputs = Vec::new();
+    if let (Some(out), Some(table)) = (&a.output, &table) {
+        outputs.push((out.as_path(), "extended calibration file"));
+        outputs.push((table.as_path(), "binary table"));
     }
+    if let Some(r) = &a.report {
+        outputs.push((r.as_path(), "report"));
+    }
+    armcal::output::check(&outputs, &inputs)?;
     if let Some(dir) = &a.plots {
         if dir.is_file() {
             bail!(
@@ -184,6 +190,18 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 
     if let Some(out) = &a.output {
         stage_extended(&a, out, &d, &data, &mut rep, &mut files)?;
+    }
+    if let Some(r) = &a.report {
+        let prov = armcal::html::header::Provenance {
+            arm: &d.extended.fit.arm,
+            arm_file: a.arm.as_deref().map(|p| ("start arm", p)),
+            data_files: vec![&data_path],
+            data: &data,
+            mpe: None,
+            rule: None,
+        };
+        let page = armcal::html::diagnosis::page(&rep, &d, &data, &prov);
+        files.write(r, page.as_bytes())?;
     }
     files.commit()?;
     if a.json {

@@ -1,0 +1,67 @@
+//! The diagnosis report of `armcal diagnose --report FILE.html`: the header, the verdict (the
+//! causes named and the held-out gain), held-out residuals before and after the diagnosis,
+//! the residual vectors, and the whole text report (each cause with its evidence).
+
+use super::{header::Provenance, residuals, Document, Tone};
+use crate::data::Dataset;
+use crate::diagnose::report::Report;
+use crate::diagnose::Diagnosis;
+
+/// The page.
+pub fn page(rep: &Report, d: &Diagnosis, data: &Dataset, prov: &Provenance) -> String {
+    let mut doc = Document::new("Diagnosis report");
+    doc.facts(&prov.facts());
+    doc.verdict(
+        &format!(
+            "Held-out RMS {:.2} µm → {:.2} µm ({:+.1} %)",
+            rep.baseline.holdout_rms_um,
+            rep.extended.holdout_rms_um,
+            -d.gain_percent()
+        ),
+        &rep.verdict,
+        if d.causes.is_empty() {
+            Tone::Plain
+        } else {
+            Tone::Unsure
+        },
+    );
+    for w in &rep.warnings {
+        doc.paragraph(&format!("Warning: {w}"));
+    }
+    doc.heading("Plots");
+    let arm = &d.extended.fit.arm;
+    let at = crate::acceptance::centres(arm, data);
+    let (b, e) = (&d.baseline.holdout, &d.extended.holdout);
+    let judged = |i: usize| {
+        b.judged.get(i).copied().unwrap_or(false) && e.judged.get(i).copied().unwrap_or(false)
+    };
+    let plots = vec![
+        residuals::before_after(
+            "Held-out residuals before and after the diagnosis",
+            (
+                &format!("before: {}", rep.baseline.model),
+                &format!("after: {}", rep.extended.model),
+            ),
+            &at,
+            &b.residuals.rows,
+            &e.residuals.rows,
+            &judged,
+        ),
+        residuals::vectors(
+            "Held-out residual vectors, geometric model",
+            &at,
+            &b.residuals.rows,
+            &judged,
+        ),
+        residuals::vectors(
+            "Held-out residual vectors, extended model",
+            &at,
+            &e.residuals.rows,
+            &judged,
+        ),
+    ];
+    doc.figures(&plots);
+    doc.heading("The report, in full");
+    doc.preformatted(&rep.text());
+    doc.finish()
+}

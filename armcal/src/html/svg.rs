@@ -1,0 +1,402 @@
+//! Plots as inline SVG text for the HTML reports: no file beside the report, no font or
+//! network, text the browser renders and prints sharply at any size. A plot is a set of
+//! layers on one pair of axes; `equal_aspect` gives both axes the same scale (a SPAT scatter,
+//! a map of positions), so that a circle is drawn as a circle.
+
+use super::escape;
+use std::fmt::Write as _;
+
+/// What a plot draws, in data units.
+#[derive(Clone, Debug)]
+pub enum Layer {
+    /// Dots, one colour, with a legend name.
+    Points {
+        name: String,
+        colour: &'static str,
+        points: Vec<(f64, f64)>,
+    },
+    /// A polyline (an envelope, a limit).
+    Line {
+        name: String,
+        colour: &'static str,
+        dashed: bool,
+        points: Vec<(f64, f64)>,
+    },
+    /// A circle of a radius in data units (needs `equal_aspect`).
+    Circle {
+        name: String,
+        colour: &'static str,
+        dashed: bool,
+        centre: (f64, f64),
+        radius: f64,
+    },
+    /// Arrows from each point by its vector (data units of the vector: `scale` maps them to
+    /// the axes' units), the vector's length named in the legend.
+    Arrows {
+        name: String,
+        colour: &'static str,
+        from: Vec<(f64, f64)>,
+        vector: Vec<(f64, f64)>,
+        scale: f64,
+    },
+    /// Dots coloured by a value on a diverging scale (blue − / red +), symmetric about 0.
+    Coloured {
+        name: String,
+        points: Vec<(f64, f64, f64)>,
+    },
+    /// Text labels at points.
+    Labels { labels: Vec<(f64, f64, String)> },
+}
+
+/// One plot.
+#[derive(Clone, Debug)]
+pub struct Plot {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub equal_aspect: bool,
+    pub layers: Vec<Layer>,
+}
+
+const W: f64 = 560.0;
+const H: f64 = 400.0;
+const LEFT: f64 = 70.0;
+const RIGHT: f64 = 20.0;
+const TOP: f64 = 36.0;
+const BOTTOM: f64 = 96.0;
+
+/// A "nice" tick step (1, 2 or 5 × 10^k) giving about `n` ticks over `span`.
+fn tick_step(span: f64, n: f64) -> f64 {
+    let raw = (span / n).max(f64::MIN_POSITIVE);
+    let mag = 10f64.powf(raw.log10().floor());
+    let f = raw / mag;
+    mag * if f < 1.5 {
+        1.0
+    } else if f < 3.5 {
+        2.0
+    } else if f < 7.5 {
+        5.0
+    } else {
+        10.0
+    }
+}
+
+/// Formats a tick without float noise.
+fn tick_label(v: f64, step: f64) -> String {
+    let decimals = (-step.log10().floor()).max(0.0) as usize;
+    let s = format!("{v:.decimals$}");
+    // A tick at zero reached by adding steps may be −1e-17: no "-0.0".
+    if s.starts_with('-') && s[1..].chars().all(|c| c == '0' || c == '.') {
+        s[1..].to_string()
+    } else {
+        s
+    }
+}
+
+impl Plot {
+    /// The data extent of every layer, widened a little (a zero span is widened to 1).
+    fn extent(&self) -> (f64, f64, f64, f64) {
+        let mut b = (
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        );
+        let mut add = |x: f64, y: f64| {
+            if x.is_finite() && y.is_finite() {
+                b = (b.0.min(x), b.1.max(x), b.2.min(y), b.3.max(y));
+            }
+        };
+        for l in &self.layers {
+            match l {
+                Layer::Points { points, .. } | Layer::Line { points, .. } => {
+                    points.iter().for_each(|&(x, y)| add(x, y))
+                }
+                Layer::Circle { centre, radius, .. } => {
+                    add(centre.0 - radius, centre.1 - radius);
+                    add(centre.0 + radius, centre.1 + radius);
+                }
+                Layer::Arrows {
+                    from,
+                    vector,
+                    scale,
+                    ..
+                } => {
+                    for (p, v) in from.iter().zip(vector) {
+                        add(p.0, p.1);
+                        add(p.0 + v.0 * scale, p.1 + v.1 * scale);
+                    }
+                }
+                Layer::Coloured { points, .. } => points.iter().for_each(|&(x, y, _)| add(x, y)),
+                Layer::Labels { labels } => labels.iter().for_each(|(x, y, _)| add(*x, *y)),
+            }
+        }
+        if !b.0.is_finite() {
+            b = (0.0, 1.0, 0.0, 1.0);
+        }
+        let widen = |lo: f64, hi: f64| {
+            let span = if hi > lo { hi - lo } else { lo.abs().max(1.0) };
+            (lo - 0.06 * span, hi + 0.06 * span)
+        };
+        let (x0, x1) = widen(b.0, b.1);
+        let (y0, y1) = widen(b.2, b.3);
+        (x0, x1, y0, y1)
+    }
+
+    /// The SVG element.
+    pub fn svg(&self) -> String {
+        let (mut x0, mut x1, mut y0, mut y1) = self.extent();
+        let (pw, ph) = (W - LEFT - RIGHT, H - TOP - BOTTOM);
+        if self.equal_aspect {
+            // One scale for both axes: the larger of the two, the other span widened about
+            // its middle.
+            let s = ((x1 - x0) / pw).max((y1 - y0) / ph);
+            let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+            (x0, x1) = (cx - s * pw / 2.0, cx + s * pw / 2.0);
+            (y0, y1) = (cy - s * ph / 2.0, cy + s * ph / 2.0);
+        }
+        let sx = |x: f64| LEFT + (x - x0) / (x1 - x0) * pw;
+        let sy = |y: f64| TOP + (y1 - y) / (y1 - y0) * ph;
+        // Each plot's clip path has an id of its own: ids are page-wide in HTML.
+        static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let id = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let mut s = String::new();
+        let _ = write!(
+            s,
+            r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 {W} {H}" width="{W}" height="{H}" font-family="sans-serif" font-size="12" role="img"><title>{t}</title><rect width="{W}" height="{H}" fill="white"/><text x="{cx}" y="20" text-anchor="middle" font-size="14" font-weight="bold">{t}</text>"#,
+            t = escape(&self.title),
+            cx = W / 2.0
+        );
+        // Ticks and grid.
+        let xs = tick_step(x1 - x0, 6.0);
+        let mut v = (x0 / xs).ceil() * xs;
+        while v <= x1 {
+            let _ = write!(
+                s,
+                r##"<line x1="{x:.1}" y1="{TOP}" x2="{x:.1}" y2="{b}" stroke="#e4e4e4"/><text x="{x:.1}" y="{ty}" text-anchor="middle">{l}</text>"##,
+                x = sx(v),
+                b = TOP + ph,
+                ty = TOP + ph + 16.0,
+                l = tick_label(v, xs)
+            );
+            v += xs;
+        }
+        let ys = tick_step(y1 - y0, 5.0);
+        let mut v = (y0 / ys).ceil() * ys;
+        while v <= y1 {
+            let _ = write!(
+                s,
+                r##"<line x1="{LEFT}" y1="{y:.1}" x2="{r}" y2="{y:.1}" stroke="#e4e4e4"/><text x="{tx}" y="{ty:.1}" text-anchor="end">{l}</text>"##,
+                y = sy(v),
+                r = LEFT + pw,
+                tx = LEFT - 6.0,
+                ty = sy(v) + 4.0,
+                l = tick_label(v, ys)
+            );
+            v += ys;
+        }
+        let _ = write!(
+            s,
+            r##"<rect x="{LEFT}" y="{TOP}" width="{pw}" height="{ph}" fill="none" stroke="#444"/><text x="{cx}" y="{xl}" text-anchor="middle">{xlab}</text><text transform="translate(16 {cy}) rotate(-90)" text-anchor="middle">{ylab}</text>"##,
+            cx = LEFT + pw / 2.0,
+            xl = TOP + ph + 34.0,
+            cy = TOP + ph / 2.0,
+            xlab = escape(&self.x_label),
+            ylab = escape(&self.y_label)
+        );
+        // Layers, clipped to the plot area.
+        let _ = write!(
+            s,
+            r#"<defs><clipPath id="clip{id}"><rect x="{LEFT}" y="{TOP}" width="{pw}" height="{ph}"/></clipPath></defs><g clip-path="url(#clip{id})">"#
+        );
+        let mut legend: Vec<(String, &'static str, bool)> = Vec::new();
+        for l in &self.layers {
+            match l {
+                Layer::Points {
+                    name,
+                    colour,
+                    points,
+                } => {
+                    for &(x, y) in points {
+                        let _ = write!(
+                            s,
+                            r#"<circle cx="{:.1}" cy="{:.1}" r="3" fill="{colour}" fill-opacity="0.8"/>"#,
+                            sx(x),
+                            sy(y)
+                        );
+                    }
+                    legend.push((name.clone(), colour, false));
+                }
+                Layer::Line {
+                    name,
+                    colour,
+                    dashed,
+                    points,
+                } => {
+                    let d: Vec<String> = points
+                        .iter()
+                        .map(|&(x, y)| format!("{:.1},{:.1}", sx(x), sy(y)))
+                        .collect();
+                    let _ = write!(
+                        s,
+                        r#"<polyline points="{}" fill="none" stroke="{colour}" stroke-width="1.5"{}/>"#,
+                        d.join(" "),
+                        dash(*dashed)
+                    );
+                    legend.push((name.clone(), colour, true));
+                }
+                Layer::Circle {
+                    name,
+                    colour,
+                    dashed,
+                    centre,
+                    radius,
+                } => {
+                    let _ = write!(
+                        s,
+                        r#"<circle cx="{:.1}" cy="{:.1}" r="{:.1}" fill="none" stroke="{colour}" stroke-width="1.5"{}/>"#,
+                        sx(centre.0),
+                        sy(centre.1),
+                        radius / (x1 - x0) * pw,
+                        dash(*dashed)
+                    );
+                    legend.push((name.clone(), colour, true));
+                }
+                Layer::Arrows {
+                    name,
+                    colour,
+                    from,
+                    vector,
+                    scale,
+                } => {
+                    for (p, v) in from.iter().zip(vector) {
+                        let (a, b) = (
+                            (sx(p.0), sy(p.1)),
+                            (sx(p.0 + v.0 * scale), sy(p.1 + v.1 * scale)),
+                        );
+                        let _ = write!(
+                            s,
+                            r#"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="{colour}" stroke-width="1.2"/><circle cx="{:.1}" cy="{:.1}" r="1.6" fill="{colour}"/>"#,
+                            a.0, a.1, b.0, b.1, b.0, b.1
+                        );
+                    }
+                    legend.push((name.clone(), colour, true));
+                }
+                Layer::Coloured { name, points } => {
+                    let m = points.iter().map(|p| p.2.abs()).fold(0.0f64, f64::max);
+                    for &(x, y, v) in points {
+                        let _ = write!(
+                            s,
+                            r#"<circle cx="{:.1}" cy="{:.1}" r="4" fill="{}"/>"#,
+                            sx(x),
+                            sy(y),
+                            diverging(v, m)
+                        );
+                    }
+                    legend.push((
+                        format!("{name}: blue −{m:.2} … red +{m:.2}"),
+                        "#b2182b",
+                        false,
+                    ));
+                }
+                Layer::Labels { labels } => {
+                    for (x, y, t) in labels {
+                        let _ = write!(
+                            s,
+                            r#"<text x="{:.1}" y="{:.1}" dx="6" dy="-6">{}</text>"#,
+                            sx(*x),
+                            sy(*y),
+                            escape(t)
+                        );
+                    }
+                }
+            }
+        }
+        s.push_str("</g>");
+        for (i, (name, colour, line)) in legend.iter().enumerate() {
+            let (col, row) = ((i % 2) as f64, (i / 2) as f64);
+            let (x, y) = (LEFT + col * pw / 2.0, TOP + ph + 52.0 + row * 16.0);
+            let mark = if *line {
+                format!(
+                    r#"<line x1="{x}" y1="{y}" x2="{}" y2="{y}" stroke="{colour}" stroke-width="2"/>"#,
+                    x + 18.0
+                )
+            } else {
+                format!(
+                    r#"<circle cx="{}" cy="{y}" r="4" fill="{colour}"/>"#,
+                    x + 9.0
+                )
+            };
+            let _ = write!(
+                s,
+                r#"{mark}<text x="{}" y="{}">{}</text>"#,
+                x + 24.0,
+                y + 4.0,
+                escape(name)
+            );
+        }
+        s.push_str("</svg>");
+        s
+    }
+}
+
+fn dash(dashed: bool) -> &'static str {
+    if dashed {
+        r#" stroke-dasharray="6 4""#
+    } else {
+        ""
+    }
+}
+
+/// A blue–white–red colour for `v` in [−m, m].
+fn diverging(v: f64, m: f64) -> String {
+    let t = if m > 0.0 {
+        (v / m).clamp(-1.0, 1.0)
+    } else {
+        0.0
+    };
+    let (r, g, b) = if t >= 0.0 {
+        (255.0, 255.0 * (1.0 - t), 255.0 * (1.0 - t))
+    } else {
+        (255.0 * (1.0 + t), 255.0 * (1.0 + t), 255.0)
+    };
+    format!("rgb({:.0},{:.0},{:.0})", r * 0.85, g * 0.85, b * 0.85)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks_are_round_and_text_is_escaped() {
+        assert_eq!(tick_step(10.0, 5.0), 2.0);
+        assert_eq!(tick_step(0.7, 6.0), 0.1);
+        assert_eq!(tick_label(-0.0001, 0.1), "0.0");
+        assert_eq!(tick_label(-0.5, 0.1), "-0.5");
+        let p = Plot {
+            title: "a <b> & \"c\"".into(),
+            x_label: "x".into(),
+            y_label: "y".into(),
+            equal_aspect: true,
+            layers: vec![Layer::Circle {
+                name: "r".into(),
+                colour: "red",
+                dashed: false,
+                centre: (0.0, 0.0),
+                radius: 1.0,
+            }],
+        };
+        let svg = p.svg();
+        assert!(svg.contains("a &lt;b&gt; &amp; &quot;c&quot;") && !svg.contains("<b>"));
+        // Equal aspect: the circle's radius in pixels is the same whichever axis is longer,
+        // and the whole circle is inside the plot area's height.
+        let r: f64 = svg
+            .split(" r=\"")
+            .nth(1)
+            .and_then(|t| t.split('"').next())
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(r > 100.0 && 2.0 * r <= H - TOP - BOTTOM, "{r}");
+    }
+}
