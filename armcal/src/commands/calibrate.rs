@@ -86,6 +86,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if let Some(arm) = &a.arm {
         inputs.push((arm.as_path(), "start arm"));
     }
+    for f in &a.fleet_prior {
+        inputs.push((f.as_path(), "fleet prior's calibration"));
+    }
     armcal::output::check(
         &[(&a.output, "calibration file"), (&table, "binary table")],
         &inputs,
@@ -153,7 +156,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     );
     let budget = super::budget::or_warning(made, &mut rep.uncertainty, &mut rep.warnings);
     let text = super::written::checked_text(&fit.arm, budget.as_ref(), &refs, &data)?;
-    let mut files = armcal::output::Staged::new();
+    let mut files = armcal::output::Staged::guarding(&inputs);
     files.write(&a.output, text.as_bytes())?;
     rep.output.calibration = Some(a.output.display().to_string());
     match armcal::tablebuild::build_with(&fit.arm, budget.as_ref()) {

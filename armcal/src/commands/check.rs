@@ -61,7 +61,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             a.data.display()
         );
     }
-    let mut files = armcal::output::Staged::new();
+    let mut inputs = vec![
+        (a.data.as_path(), "data"),
+        (a.calib.as_path(), "calibration"),
+    ];
+    if let Some(m) = &a.mpe {
+        inputs.push((m.as_path(), "MPE file"));
+    }
+    let mut files = armcal::output::Staged::guarding(&inputs);
     let written = match &a.plots {
         Some(dir) => {
             let figures = acceptance::plots::figures(&data, &acceptance::centres(&arm, &data));

@@ -172,7 +172,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     figures.extend(diagnose::unexplained::figure(&d.unexplained));
     let mut rep = report::build(&d, &data, &figures);
 
-    let mut files = armcal::output::Staged::new();
+    let mut files = armcal::output::Staged::guarding(&inputs);
     if let Some(dir) = &a.plots {
         let pictures = plots::write_all(&figures, dir, &mut files)?;
         rep.output.plots = pictures.iter().map(|p| p.display().to_string()).collect();
