@@ -37,7 +37,30 @@ enum Command {
     Check(commands::check::Args),
 }
 
+/// A closed pipe ends the process quietly, as it does coreutils (`armcal … | head`): the
+/// default action of SIGPIPE, which Rust's runtime sets to "ignore" (every write to the
+/// closed pipe would then fail, and `println!` panic on it). armcal writes its files before
+/// it prints, so nothing is left half-written by the signal.
+fn quiet_on_closed_pipe() {
+    #[cfg(unix)]
+    // SAFETY: called first in `main`, before any thread exists; restoring a signal's default
+    // disposition touches no memory of the program.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
+/// Whether an error is the reader's end of a pipe closing (where SIGPIPE does not end the
+/// process): nothing to report.
+fn closed_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
 fn main() {
+    quiet_on_closed_pipe();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Eval(a) => commands::eval::run(a),
@@ -50,6 +73,9 @@ fn main() {
         Command::Check(a) => commands::check::run(a),
     };
     if let Err(e) = result {
+        if closed_pipe(&e) {
+            std::process::exit(141);
+        }
         eprintln!("armcal: error: {e:#}");
         std::process::exit(1);
     }

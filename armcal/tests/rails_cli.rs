@@ -133,3 +133,48 @@ fn accuracy_write_calib_over_its_calib_is_refused() {
     );
     assert_eq!(std::fs::read(d.join("cal.toml")).unwrap(), before);
 }
+
+/// `armcal … | head`: a reader that closes the pipe ends armcal quietly, as it does coreutils
+/// (no "Broken pipe" error, no panic), with the pipe's status (141, killed by SIGPIPE).
+#[test]
+fn a_closed_pipe_ends_quietly() {
+    use std::process::{Command, Stdio};
+    let d = workdir("pipe");
+    copy_default6(&d, "cal.toml");
+    armcal_ok(
+        &[
+            "simulate",
+            "--truth",
+            "cal.toml",
+            "--seed",
+            "1",
+            "--test",
+            "iso10360-12",
+            "-o",
+            "t.csv",
+        ],
+        &d,
+    );
+    for args in [
+        &["check", "t.csv", "--calib", "cal.toml", "--json"][..],
+        &["check", "t.csv", "--calib", "cal.toml"][..],
+        &["table", "show", "--help"][..],
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_armcal"))
+            .args(args)
+            .current_dir(&d)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // The reader goes away before anything is written.
+        drop(child.stdout.take());
+        let o = child.wait_with_output().unwrap();
+        let err = stderr(&o);
+        assert!(
+            !err.contains("Broken pipe") && !err.contains("panicked"),
+            "{args:?}: {err}"
+        );
+        assert!(err.is_empty(), "{args:?}: {err}");
+    }
+}
