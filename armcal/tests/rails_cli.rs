@@ -178,3 +178,195 @@ fn a_closed_pipe_ends_quietly() {
         assert!(err.is_empty(), "{args:?}: {err}");
     }
 }
+
+/// A copy of CSV `src` with `f` applied to the cells of the columns `cols` (by header name).
+fn rewrite(src: &Path, dst: &Path, cols: &[&str], f: impl Fn(f64) -> f64) {
+    let text = std::fs::read_to_string(src).unwrap();
+    let mut idx = Vec::new();
+    let mut out = String::new();
+    for line in text.lines() {
+        if line.starts_with('#') {
+        } else if idx.is_empty() {
+            let names: Vec<&str> = line.split(',').collect();
+            idx = cols
+                .iter()
+                .map(|c| names.iter().position(|n| n == c).unwrap())
+                .collect();
+        } else {
+            let mut cells: Vec<String> = line.split(',').map(str::to_string).collect();
+            for &i in &idx {
+                if let Ok(x) = cells[i].parse::<f64>() {
+                    cells[i] = f(x).to_string();
+                }
+            }
+            out += &cells.join(",");
+            out += "\n";
+            continue;
+        }
+        out += line;
+        out += "\n";
+    }
+    std::fs::write(dst, out).unwrap();
+}
+
+/// Exit non-zero, and stderr names what looks wrong and the flag that accepts it.
+fn refused(o: &std::process::Output, names: &[&str]) {
+    let err = stderr(o);
+    assert!(!o.status.success(), "accepted: {err}");
+    for n in names {
+        assert!(err.contains(n), "`{n}` not in: {err}");
+    }
+}
+
+/// The unit mistakes of issue 29, on copies of simulated data: each refused before any fit
+/// with what looks wrong and the `--accept-…` flag; the flag lets it through.
+#[test]
+fn unit_mistakes_are_refused_before_any_fit() {
+    let d = workdir("units");
+    copy_default6(&d, "cal.toml");
+    armcal_ok(
+        &[
+            "simulate", "--truth", "cal.toml", "--seed", "2", "--kind", "point", "--count", "120",
+            "--temp", "16..28", "-o", "p.csv",
+        ],
+        &d,
+    );
+    let cal = |data: &str, extra: &[&str]| {
+        let mut args = vec!["calibrate", data, "--folds", "0", "-o", "out.toml"];
+        args.extend_from_slice(extra);
+        armcal(&args, &d)
+    };
+    // The data as simulated pass.
+    assert!(cal("p.csv", &[]).status.success());
+    std::fs::remove_file(d.join("out.toml")).unwrap();
+
+    rewrite(&d.join("p.csv"), &d.join("m.csv"), &["x", "y", "z"], |v| {
+        v / 1000.0
+    });
+    refused(
+        &cal("m.csv", &[]),
+        &["m.csv", "in metres? multiply by 1000", "--accept-units"],
+    );
+    assert!(!d.join("out.toml").exists(), "no output when refused");
+    rewrite(&d.join("p.csv"), &d.join("in.csv"), &["x", "y", "z"], |v| {
+        v / 25.4
+    });
+    refused(&cal("in.csv", &[]), &["in inches? multiply by 25.4"]);
+    let joints = ["j1", "j2", "j3", "j4", "j5", "j6"];
+    rewrite(
+        &d.join("p.csv"),
+        &d.join("deg.csv"),
+        &joints,
+        f64::to_degrees,
+    );
+    refused(
+        &cal("deg.csv", &[]),
+        &["rad on line", "in degrees?", "--accept-units"],
+    );
+    rewrite(&d.join("p.csv"), &d.join("f.csv"), &["temp_c"], |c| {
+        c * 1.8 + 32.0
+    });
+    refused(
+        &cal("f.csv", &[]),
+        &["temp_c = ", "in °F?", "--accept-temperature"],
+    );
+    // Accepted deliberately, the temperature goes on to the fit.
+    let o = cal("f.csv", &["--accept-temperature"]);
+    assert!(!stderr(&o).contains("in °F"), "{}", stderr(&o));
+    // diagnose has the same rails.
+    let o = armcal(&["diagnose", "m.csv"], &d);
+    refused(&o, &["in metres?"]);
+}
+
+/// `check`: an MPE in µm written as mm, and another arm's calibration, refused before any
+/// decision.
+#[test]
+fn check_refuses_mpe_in_the_wrong_unit_and_another_arms_calibration() {
+    let d = workdir("checkrails");
+    copy_default6(&d, "cal.toml");
+    armcal_ok(
+        &[
+            "simulate",
+            "--truth",
+            "cal.toml",
+            "--seed",
+            "1",
+            "--test",
+            "iso10360-12",
+            "-o",
+            "t.csv",
+        ],
+        &d,
+    );
+    std::fs::write(d.join("mpe.toml"), "P_Size = 20\nP_Form = 0.015\n").unwrap();
+    let o = armcal(
+        &["check", "t.csv", "--calib", "cal.toml", "--mpe", "mpe.toml"],
+        &d,
+    );
+    refused(
+        &o,
+        &["mpe.toml", "P_Size = 20 mm", "write 0.02", "--accept-mpe"],
+    );
+    assert!(o.stdout.is_empty(), "no decision printed");
+    // Another arm of six joints (MUKCa's Gen3 lite) as the calibration.
+    let other =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/mukca/mukca-gen3lite-dinova_1.toml");
+    std::fs::copy(other, d.join("other.toml")).unwrap();
+    let o = armcal(&["check", "t.csv", "--calib", "other.toml"], &d);
+    refused(&o, &["t.csv", "length group", "this arm", "--accept-units"]);
+    let o = armcal(
+        &["check", "t.csv", "--calib", "other.toml", "--accept-units"],
+        &d,
+    );
+    refused(
+        &o,
+        &["other.toml", "this arm's calibration", "--accept-misfit"],
+    );
+    assert!(o.stdout.is_empty(), "no decision printed");
+}
+
+/// MUKCa panda_3 (one arm's real data): the weak results are flagged in the calibration
+/// report, the condition number and the link 6 error of +6.3 mm ± 7.7 mm among them.
+#[test]
+fn weak_results_are_flagged_in_the_calibration_report() {
+    let d = workdir("weak");
+    let m = Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/mukca");
+    for f in ["mukca-panda-panda_3.csv", "mukca-panda-panda_3.toml"] {
+        std::fs::copy(m.join(f), d.join(f)).unwrap();
+    }
+    let o = armcal_ok(
+        &[
+            "calibrate",
+            "mukca-panda-panda_3.csv",
+            "--arm",
+            "mukca-panda-panda_3.toml",
+            "--folds",
+            "0",
+            "-o",
+            "out.toml",
+            "--json",
+        ],
+        &d,
+    );
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let weak: Vec<&str> = v["weak"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w.as_str().unwrap())
+        .collect();
+    assert!(
+        weak.iter().any(|w| w.starts_with("condition number")),
+        "{weak:?}"
+    );
+    assert!(
+        weak.iter()
+            .any(|w| w.starts_with("link 6 error along x") && w.contains("% of the link")),
+        "{weak:?}"
+    );
+    assert!(
+        weak.iter()
+            .any(|w| w.contains("no larger than their standard uncertainty")),
+        "{weak:?}"
+    );
+}

@@ -65,6 +65,8 @@ pub struct Args {
     progress: bool,
     #[command(flatten)]
     budget: super::budget::BudgetArgs,
+    #[command(flatten)]
+    accept: super::accept::AcceptArgs,
 }
 
 /// Reads the start arm: a file, or `default-6`.
@@ -95,6 +97,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     )?;
     let data = armcal::data::read(&a.data, start.dof())?;
     armcal::probes::check(&start, &data)?;
+    armcal::plausible::data(&start, &data, a.accept.accept())?;
     for w in &data.warnings {
         eprintln!("armcal: warning: {w}");
     }

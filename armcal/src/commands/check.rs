@@ -36,15 +36,42 @@ pub struct Args {
     /// cone's centres about their mean, from above); each only where the data has its groups.
     #[arg(long, value_name = "DIR")]
     plots: Option<PathBuf>,
+    #[command(flatten)]
+    accept: super::accept::AcceptArgs,
+    /// Accept MPE values outside 0.0005..1 mm (refused as µm or metres written as mm).
+    #[arg(long)]
+    accept_mpe: bool,
+    /// Accept a calibration whose test values on the data exceed 5 mm (refused as another
+    /// arm's calibration).
+    #[arg(long)]
+    accept_misfit: bool,
 }
 
 /// Runs the subcommand: everything is read and checked before anything is printed.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let (arm, budget) =
         armcal::load::calibration_and_budget(&a.calib, a.predict.then_some("--predict"))?;
+    let accept = armcal::plausible::Accept {
+        mpe: a.accept_mpe,
+        misfit: a.accept_misfit,
+        ..a.accept.accept()
+    };
     let mpe = a.mpe.as_deref().map(Mpe::read).transpose()?;
+    if let (Some(m), Some(p)) = (&mpe, &a.mpe) {
+        armcal::plausible::mpe(m, &p.display().to_string(), accept)?;
+    }
     let data = armcal::data::read(&a.data, arm.dof())?;
     armcal::probes::check(&arm, &data)?;
+    armcal::plausible::data(&arm, &data, accept)?;
+    // Another arm's calibration is refused before any prediction or decision.
+    let plain =
+        acceptance::check(&arm, &data, None, None).with_context(|| a.data.display().to_string())?;
+    armcal::plausible::misfit(
+        plain.results.iter().map(|(k, v)| (*k, *v)),
+        &a.data.display().to_string(),
+        &a.calib.display().to_string(),
+        accept,
+    )?;
     for w in &data.warnings {
         eprintln!("armcal: warning: {w}");
     }

@@ -98,6 +98,8 @@ pub struct Args {
     max_iter: u32,
     #[command(flatten)]
     budget: super::budget::BudgetArgs,
+    #[command(flatten)]
+    accept: super::accept::AcceptArgs,
 }
 
 /// Runs the subcommand. Arguments, the start arm, the outputs' names and the data are
@@ -137,6 +139,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     let data = armcal::data::read(&data_path, start.dof())?;
     armcal::probes::check(&start, &data)?;
+    armcal::plausible::data(&start, &data, a.accept.accept())?;
     for w in &data.warnings {
         eprintln!("armcal: warning: {w}");
     }
