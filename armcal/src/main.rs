@@ -59,6 +59,20 @@ fn closed_pipe(e: &anyhow::Error) -> bool {
     })
 }
 
+/// The error and its causes, each said once: a cause whose text the message already holds
+/// (an error that quotes its source, a path named by two layers) is not repeated.
+fn message(e: &anyhow::Error) -> String {
+    let mut s = e.to_string();
+    for cause in e.chain().skip(1) {
+        let t = cause.to_string();
+        if !s.contains(&t) {
+            s.push_str(": ");
+            s.push_str(&t);
+        }
+    }
+    s
+}
+
 fn main() {
     quiet_on_closed_pipe();
     let cli = Cli::parse();
@@ -76,7 +90,7 @@ fn main() {
         if closed_pipe(&e) {
             std::process::exit(141);
         }
-        eprintln!("armcal: error: {e:#}");
+        eprintln!("armcal: error: {}", message(&e));
         std::process::exit(1);
     }
 }

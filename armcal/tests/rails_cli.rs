@@ -370,3 +370,65 @@ fn weak_results_are_flagged_in_the_calibration_report() {
         "{weak:?}"
     );
 }
+
+/// A `;`-separated file (a comma-decimal spreadsheet) reads as the `,` one; a separator the
+/// reader does not know is named in the error; a missing file's path is said once.
+#[test]
+fn separators_are_detected_and_a_missing_file_is_named_once() {
+    let d = workdir("sep");
+    copy_default6(&d, "cal.toml");
+    armcal_ok(
+        &[
+            "simulate",
+            "--truth",
+            "cal.toml",
+            "--seed",
+            "3",
+            "--test",
+            "iso10360-12",
+            "-o",
+            "t.csv",
+        ],
+        &d,
+    );
+    let text = std::fs::read_to_string(d.join("t.csv")).unwrap();
+    std::fs::write(d.join("semi.csv"), text.replace(',', ";")).unwrap();
+    std::fs::write(d.join("tab.csv"), text.replace(',', "\t")).unwrap();
+    std::fs::write(d.join("bar.csv"), text.replace(',', "|")).unwrap();
+    let comma = armcal_ok(&["check", "t.csv", "--calib", "cal.toml", "--json"], &d);
+    for f in ["semi.csv", "tab.csv"] {
+        let o = armcal_ok(&["check", f, "--calib", "cal.toml", "--json"], &d);
+        assert_eq!(o.stdout, comma.stdout, "{f}");
+    }
+    let o = armcal(&["check", "bar.csv", "--calib", "cal.toml"], &d);
+    refused(
+        &o,
+        &["bar.csv", "one column", "separated by `,`, `;` or tab"],
+    );
+    for args in [
+        &["check", "nosuch.csv", "--calib", "cal.toml"][..],
+        &[
+            "check",
+            "t.csv",
+            "--calib",
+            "cal.toml",
+            "--mpe",
+            "nosuch.csv",
+        ][..],
+        &[
+            "table",
+            "sign",
+            "nosuch.csv",
+            "--key",
+            "nosuch.pem",
+            "-o",
+            "x.bin",
+        ][..],
+    ] {
+        let o = armcal(args, &d);
+        let err = stderr(&o);
+        assert!(!o.status.success());
+        assert_eq!(err.matches("nosuch").count(), 1, "{err}");
+        assert_eq!(err.matches("No such file").count(), 1, "{err}");
+    }
+}
