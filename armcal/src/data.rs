@@ -171,7 +171,7 @@ pub struct Dataset {
 
 /// Bad input: the file, line and column at fault, and why.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("{file}: line {line}, column {column}: {message}")]
+#[error("{file}: {}{message}", place(*.line, .column))]
 pub struct DataError {
     /// The file.
     pub file: String,
@@ -181,6 +181,42 @@ pub struct DataError {
     pub column: String,
     /// What is wrong.
     pub message: String,
+}
+
+/// "line L, column C: ", or nothing for the file as a whole (line 0: it cannot be read).
+fn place(line: usize, column: &str) -> String {
+    if line == 0 {
+        String::new()
+    } else {
+        format!("line {line}, column {column}: ")
+    }
+}
+
+/// The separator of a CSV text, from its header (the first line that is not a comment): the
+/// one of `,`, `;` and tab it holds most (a spreadsheet in a comma-decimal locale writes `;`),
+/// `,` when it holds none (a one-column header; the column check then names what is missing).
+pub fn separator(text: &str) -> u8 {
+    let header = text
+        .lines()
+        .find(|l| {
+            let t = l.trim();
+            !t.is_empty() && !t.starts_with('#')
+        })
+        .unwrap_or("");
+    let count = |c: char| header.matches(c).count();
+    [b',', b';', b'\t']
+        .into_iter()
+        .max_by_key(|&c| (count(char::from(c)), c == b','))
+        .unwrap_or(b',')
+}
+
+/// The separator's name in messages.
+pub fn separator_name(sep: u8) -> &'static str {
+    match sep {
+        b';' => "`;`",
+        b'\t' => "tab",
+        _ => "`,`",
+    }
 }
 
 /// Reads a data file for an arm with `dof` joints.
@@ -220,6 +256,7 @@ pub fn parse(text: &str, file: &str, dof: usize) -> Result<Dataset, DataError> {
     let cleaned = without_comments(text);
     let lines = Lines::new(&cleaned);
     let mut reader = csv::ReaderBuilder::new()
+        .delimiter(separator(&cleaned))
         .trim(csv::Trim::All)
         .flexible(true)
         .from_reader(cleaned.as_bytes());
@@ -232,6 +269,17 @@ pub fn parse(text: &str, file: &str, dof: usize) -> Result<Dataset, DataError> {
     }
     let hline = first_content_line(text).unwrap_or(1);
     let names: Vec<String> = header_line.iter().map(|s| s.to_string()).collect();
+    if let [one] = names.as_slice() {
+        return Err(err(
+            hline,
+            "(header)",
+            format!(
+                "the header is one column, `{one}`: columns are separated by `,`, `;` or tab \
+                 (read with {})",
+                separator_name(separator(&cleaned))
+            ),
+        ));
+    }
     let header_err = |h: HeaderProblem| err(hline, &h.column, h.message);
     let seen = unique_columns(&names).map_err(header_err)?;
     let mut warnings = Vec::new();

@@ -89,6 +89,7 @@ pub fn read_rows(arm: &Arm, mut input: impl std::io::Read) -> Result<Rows, RowEr
     let text = without_comments(&text);
     let lines = Lines::new(&text);
     let mut rdr = csv::ReaderBuilder::new()
+        .delimiter(crate::data::separator(&text))
         .has_headers(true)
         .trim(csv::Trim::All)
         .from_reader(text.as_bytes());

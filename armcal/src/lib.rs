@@ -80,6 +80,7 @@ pub mod load;
 pub mod mukca;
 pub mod output;
 pub mod params;
+pub mod plausible;
 pub mod probes;
 pub mod progress;
 pub mod report;

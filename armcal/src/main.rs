@@ -37,6 +37,42 @@ enum Command {
     Check(commands::check::Args),
 }
 
+/// A closed pipe ends the process quietly, as it does coreutils (`armcal … | head`): the
+/// default action of SIGPIPE, which Rust's runtime sets to "ignore" (every write to the
+/// closed pipe would then fail, and `println!` panic on it). armcal writes its files before
+/// it prints, so nothing is left half-written by the signal.
+fn quiet_on_closed_pipe() {
+    #[cfg(unix)]
+    // SAFETY: called first in `main`, before any thread exists; restoring a signal's default
+    // disposition touches no memory of the program.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
+/// Whether an error is the reader's end of a pipe closing (where SIGPIPE does not end the
+/// process): nothing to report.
+fn closed_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
+/// The error and its causes, each said once: a cause whose text the message already holds
+/// (an error that quotes its source, a path named by two layers) is not repeated.
+fn message(e: &anyhow::Error) -> String {
+    let mut s = e.to_string();
+    for cause in e.chain().skip(1) {
+        let t = cause.to_string();
+        if !s.contains(&t) {
+            s.push_str(": ");
+            s.push_str(&t);
+        }
+    }
+    s
+}
+
 /// Whether the command line runs `armcal check`, whose errors have an exit code of their own
 /// (3): its 1 and 2 are verdicts, which a wrong file must never look like.
 fn is_check(args: &[std::ffi::OsString]) -> bool {
@@ -47,6 +83,7 @@ fn is_check(args: &[std::ffi::OsString]) -> bool {
 }
 
 fn main() {
+    quiet_on_closed_pipe();
     let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
     let check = is_check(&args);
     let error_code = if check {
@@ -83,7 +120,10 @@ fn main() {
         }),
     };
     if let Err(e) = result {
-        eprintln!("armcal: error: {e:#}");
+        if closed_pipe(&e) {
+            std::process::exit(141);
+        }
+        eprintln!("armcal: error: {}", message(&e));
         std::process::exit(error_code);
     }
 }

@@ -5,7 +5,10 @@
 //! data it read. [`check`] refuses, before anything is computed, outputs that name an input
 //! or each other (`calibrate -o X.bin`, whose table would go to the same X.bin) and folders
 //! that do not exist; [`Staged`] writes every file beside its destination under a temporary
-//! name and renames them all at the end, removing the temporaries when dropped before.
+//! name and renames them all at the end, removing the temporaries when dropped before, and
+//! refuses at that last moment too any file that would land on an input it was told of (files
+//! whose names are only known late: the figures in a `--plots` folder). A private key is
+//! staged readable by its owner alone ([`Staged::write_private`]).
 
 use std::path::{Path, PathBuf};
 
@@ -44,6 +47,14 @@ pub enum OutputError {
         /// Its missing folder.
         dir: PathBuf,
     },
+    /// A file that must be new (a key) exists.
+    #[error("{}: exists; a {what} is never overwritten (move it away or name another file)", .path.display())]
+    Exists {
+        /// The existing file.
+        path: PathBuf,
+        /// What would have been written.
+        what: String,
+    },
     /// The file system refused a write, rename, removal or folder.
     #[error("{}: {source}", .path.display())]
     Io {
@@ -62,9 +73,18 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> OutputError + '_ {
     }
 }
 
-/// Whether two paths name the same file (existing files by identity, others by their
-/// absolute, normalised form).
+/// Whether two paths name the same file: existing files by identity (device and inode, so a
+/// hard link or a symbolic link is caught too), others by their absolute, normalised form.
 fn same(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if let (Ok(x), Ok(y)) = (std::fs::metadata(a), std::fs::metadata(b)) {
+            if x.dev() == y.dev() && x.ino() == y.ino() {
+                return true;
+            }
+        }
+    }
     let norm = |p: &Path| -> PathBuf {
         if let Ok(c) = p.canonicalize() {
             return c;
@@ -123,12 +143,65 @@ pub struct Staged {
     pending: Vec<(PathBuf, PathBuf)>,
     remove: Vec<PathBuf>,
     created_dirs: Vec<PathBuf>,
+    inputs: Vec<(PathBuf, String)>,
 }
 
 impl Staged {
     /// Nothing staged yet.
     pub fn new() -> Staged {
         Staged::default()
+    }
+
+    /// Nothing staged yet; [`Staged::commit`] refuses (writing nothing) any file that would
+    /// land on one of `inputs`, (path, what it is) pairs as for [`check`].
+    pub fn guarding(inputs: &[(&Path, &str)]) -> Staged {
+        let mut s = Staged::new();
+        s.inputs = inputs
+            .iter()
+            .map(|(p, w)| (p.to_path_buf(), w.to_string()))
+            .collect();
+        s
+    }
+
+    /// Stages `bytes` for `dest`, a file that must not exist yet, readable and writable by
+    /// its owner alone (mode 0600 on Unix): a private key.
+    pub fn write_private(
+        &mut self,
+        dest: &Path,
+        bytes: &[u8],
+        what: &str,
+    ) -> Result<(), OutputError> {
+        self.write_new(dest, bytes, what, 0o600)
+    }
+
+    /// Stages `bytes` for `dest`, a file that must not exist yet (a key), created with `mode`
+    /// (Unix permissions, before the umask).
+    pub fn write_new(
+        &mut self,
+        dest: &Path,
+        bytes: &[u8],
+        what: &str,
+        mode: u32,
+    ) -> Result<(), OutputError> {
+        use std::io::Write as _;
+        if dest.exists() {
+            return Err(OutputError::Exists {
+                path: dest.to_path_buf(),
+                what: what.to_string(),
+            });
+        }
+        let tmp = self.path_for(dest);
+        let mut o = std::fs::OpenOptions::new();
+        o.write(true).create_new(true);
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::OpenOptionsExt;
+            o.mode(mode);
+        }
+        #[cfg(not(unix))]
+        let _ = mode;
+        let mut f = o.open(&tmp).map_err(io(dest))?;
+        f.write_all(bytes).map_err(io(dest))
     }
 
     /// The temporary path for `dest` (same folder, same extension, hidden name), registered
@@ -176,8 +249,20 @@ impl Staged {
         self.remove.push(path.to_path_buf());
     }
 
-    /// Renames every staged file onto its destination and removes what was asked.
+    /// Renames every staged file onto its destination and removes what was asked; first
+    /// refuses, writing nothing, if a destination is one of the inputs it guards.
     pub fn commit(mut self) -> Result<(), OutputError> {
+        for (_, dest) in &self.pending {
+            for (inp, their) in &self.inputs {
+                if same(dest, inp) {
+                    return Err(OutputError::OverwritesInput {
+                        path: dest.clone(),
+                        what: "output".into(),
+                        their: their.clone(),
+                    });
+                }
+            }
+        }
         let pending = std::mem::take(&mut self.pending);
         for (i, (tmp, dest)) in pending.iter().enumerate() {
             if let Err(e) = std::fs::rename(tmp, dest) {
@@ -236,6 +321,42 @@ mod tests {
             &[(&data, "data")]
         )
         .is_ok());
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    #[test]
+    fn a_late_output_on_an_input_is_refused_at_commit_and_a_key_is_private() {
+        let d = std::env::temp_dir().join(format!("armcal-guard-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        let data = d.join("plot.png");
+        std::fs::write(&data, "input").unwrap();
+        // A hard link is the same file under another name.
+        let link = d.join("link.csv");
+        std::fs::hard_link(&data, &link).unwrap();
+        let mut s = Staged::guarding(&[(&link, "data")]);
+        s.write(&d.join("other.png"), b"fine").unwrap();
+        s.write(&data, b"figure").unwrap();
+        let e = s.commit().unwrap_err();
+        assert!(e.to_string().contains("overwrite the data"), "{e}");
+        assert_eq!(std::fs::read(&data).unwrap(), b"input");
+        assert!(!d.join("other.png").exists(), "nothing written");
+
+        let key = d.join("k.pem");
+        let mut s = Staged::new();
+        s.write_private(&key, b"secret", "private key").unwrap();
+        s.commit().unwrap();
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(&key).unwrap().permissions().mode();
+            assert_eq!(mode & 0o777, 0o600, "{mode:o}");
+        }
+        let e = Staged::new()
+            .write_private(&key, b"new", "private key")
+            .unwrap_err();
+        assert!(e.to_string().contains("never overwritten"), "{e}");
+        assert_eq!(std::fs::read(&key).unwrap(), b"secret");
         let _ = std::fs::remove_dir_all(&d);
     }
 

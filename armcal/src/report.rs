@@ -167,6 +167,9 @@ pub struct Report {
     pub output: OutputReport,
     /// Warnings (unknown columns, keys, a table not written…).
     pub warnings: Vec<String>,
+    /// What the data determine poorly ([`weak_results`]): a reader must not take these
+    /// estimates for measured errors of the arm.
+    pub weak: Vec<String>,
     /// The uncertainty budget written with the calibration (`[uncertainty]`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub uncertainty: Option<crate::uncertainty::report::BudgetReport>,
@@ -382,9 +385,78 @@ pub fn build(
         data_kinds: crate::kinds::notes(&layout),
         output: OutputReport::default(),
         warnings: data.warnings.clone(),
+        weak: weak_results(fit),
         uncertainty: None,
         prior: None,
     }
+}
+
+/// Above this condition number the fit amplifies the data's noise this many times along
+/// some combination of the unknowns: the combination is barely determined.
+pub const WEAK_CONDITION: f64 = 1e4;
+/// A link error larger than this fraction of its link's length is no manufacturing error
+/// of a real arm: more likely a compensation between weakly determined unknowns (or a wrong
+/// nominal model).
+pub const WEAK_LINK_FRACTION: f64 = 0.05;
+
+/// What a fit determines poorly, in words: a condition number above [`WEAK_CONDITION`],
+/// each link error larger than [`WEAK_LINK_FRACTION`] of its link, and the estimates no
+/// larger than their own standard uncertainty (counted, the first few named).
+pub fn weak_results(fit: &Fit) -> Vec<String> {
+    let mut weak = Vec::new();
+    let cond = fit.ident.condition_number;
+    if cond > WEAK_CONDITION {
+        weak.push(format!(
+            "condition number {cond:.0} (above {WEAK_CONDITION:.0}): some combinations of the \
+             unknowns are barely determined by these data; add poses or artefact positions, or \
+             a prior (--prior-angle/--prior-length, --ridge, --fleet-prior)"
+        ));
+    }
+    let mut within = Vec::new();
+    for &k in &fit.ident.kept {
+        let p = fit.params[k];
+        if p.is_frame() {
+            continue;
+        }
+        let (v, u) = (fit.values[k], fit.uncertainty[k].unwrap_or(f64::NAN));
+        if let crate::params::Param::LinkError(i, _) = p {
+            let link = fit
+                .start
+                .joints
+                .get(i)
+                .map_or(0.0, |j| j.link.iter().map(|x| x * x).sum::<f64>().sqrt());
+            if link > 0.0 && v.abs() > WEAK_LINK_FRACTION * link {
+                weak.push(format!(
+                    "{} {:+.4e} ± {:.2e} mm: more than {:.0} % of the link's {:.1} mm, no \
+                     manufacturing error; likely a compensation between weakly determined unknowns",
+                    p.describe(&fit.start),
+                    v,
+                    u,
+                    WEAK_LINK_FRACTION * 100.0,
+                    link
+                ));
+            }
+        }
+        if v.abs() <= u {
+            within.push(p.key());
+        }
+    }
+    if !within.is_empty() {
+        let shown: Vec<&str> = within.iter().take(6).map(String::as_str).collect();
+        weak.push(format!(
+            "{} of {} estimates are no larger than their standard uncertainty (not told from \
+             zero by these data): {}{}",
+            within.len(),
+            fit.ident.kept.len(),
+            shown.join(", "),
+            if within.len() > shown.len() {
+                ", …"
+            } else {
+                ""
+            }
+        ));
+    }
+    weak
 }
 
 fn sig(x: f64) -> String {
@@ -538,6 +610,12 @@ impl Report {
         }
         if let Some(u) = &self.uncertainty {
             u.text(&mut s);
+        }
+        if !self.weak.is_empty() {
+            let _ = writeln!(s, "\nweak results (what these data determine poorly)");
+            for w in &self.weak {
+                let _ = writeln!(s, "  {w}");
+            }
         }
         let o = &self.output;
         wrote(&mut s, o.calibration.iter().chain(&o.table));

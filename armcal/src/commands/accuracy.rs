@@ -62,8 +62,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             );
             header.push(&wobble_line);
         }
+        let inputs: Vec<(&std::path::Path, &str)> = args
+            .calib
+            .iter()
+            .map(|c| (c.as_path(), "calibration"))
+            .collect();
+        armcal::output::check(&[(path, "calibration file")], &inputs)?;
         let text = quatarm_ref::calfile::write(&arm, &header);
-        std::fs::write(path, text).with_context(|| path.display().to_string())?;
+        let mut files = armcal::output::Staged::guarding(&inputs);
+        files.write(path, text.as_bytes())?;
+        files.commit()?;
         return Ok(());
     }
     let arm = match &args.calib {

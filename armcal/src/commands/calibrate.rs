@@ -70,6 +70,8 @@ pub struct Args {
     report: Option<PathBuf>,
     #[command(flatten)]
     budget: super::budget::BudgetArgs,
+    #[command(flatten)]
+    accept: super::accept::AcceptArgs,
 }
 
 /// Reads the start arm: a file, or `default-6`.
@@ -91,6 +93,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if let Some(arm) = &a.arm {
         inputs.push((arm.as_path(), "start arm"));
     }
+    for f in &a.fleet_prior {
+        inputs.push((f.as_path(), "fleet prior's calibration"));
+    }
     let mut outputs = vec![
         (a.output.as_path(), "calibration file"),
         (&table, "binary table"),
@@ -101,6 +106,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     armcal::output::check(&outputs, &inputs)?;
     let data = armcal::data::read(&a.data, start.dof())?;
     armcal::probes::check(&start, &data)?;
+    armcal::plausible::data(&start, &data, a.accept.accept())?;
     for w in &data.warnings {
         eprintln!("armcal: warning: {w}");
     }
@@ -162,7 +168,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     );
     let budget = super::budget::or_warning(made, &mut rep.uncertainty, &mut rep.warnings);
     let text = super::written::checked_text(&fit.arm, budget.as_ref(), &refs, &data)?;
-    let mut files = armcal::output::Staged::new();
+    let mut files = armcal::output::Staged::guarding(&inputs);
     files.write(&a.output, text.as_bytes())?;
     rep.output.calibration = Some(a.output.display().to_string());
     match armcal::tablebuild::build_with(&fit.arm, budget.as_ref()) {

@@ -42,6 +42,15 @@ pub struct Args {
     /// plots), which a browser shows and prints to PDF.
     #[arg(long, value_name = "FILE.html")]
     report: Option<PathBuf>,
+    #[command(flatten)]
+    accept: super::accept::AcceptArgs,
+    /// Accept MPE values outside 0.0005..1 mm (refused as µm or metres written as mm).
+    #[arg(long)]
+    accept_mpe: bool,
+    /// Accept a calibration whose test values on the data exceed 5 mm (refused as another
+    /// arm's calibration).
+    #[arg(long)]
+    accept_misfit: bool,
 }
 
 /// The exit codes, as `armcal check --help` lists them.
@@ -55,7 +64,6 @@ pub const EXIT_CODES: &str = "Exit codes (ISO 14253-1 with each value's U, again
 /// Runs the subcommand: everything is read and checked before anything is printed. Returns
 /// the exit code of the verdict (errors are `acceptance::verdict::EXIT_ERROR`, by the caller).
 pub fn run(a: Args) -> anyhow::Result<i32> {
-    // The budget, where the file has one, gives U where the MPE file has none.
     if let Some(r) = &a.report {
         let mut inputs = vec![
             (a.data.as_path(), "data"),
@@ -66,11 +74,30 @@ pub fn run(a: Args) -> anyhow::Result<i32> {
         }
         armcal::output::check(&[(r.as_path(), "report")], &inputs)?;
     }
+    // The budget, where the file has one, gives U where the MPE file has none.
     let (arm, budget) =
         armcal::load::calibration_with_budget(&a.calib, a.predict.then_some("--predict"))?;
+    let accept = armcal::plausible::Accept {
+        mpe: a.accept_mpe,
+        misfit: a.accept_misfit,
+        ..a.accept.accept()
+    };
     let mpe = a.mpe.as_deref().map(Mpe::read).transpose()?;
+    if let (Some(m), Some(p)) = (&mpe, &a.mpe) {
+        armcal::plausible::mpe(m, &p.display().to_string(), accept)?;
+    }
     let data = armcal::data::read(&a.data, arm.dof())?;
     armcal::probes::check(&arm, &data)?;
+    armcal::plausible::data(&arm, &data, accept)?;
+    // Another arm's calibration is refused before any prediction or decision.
+    let plain = acceptance::check(&arm, &data, None, None, false)
+        .with_context(|| a.data.display().to_string())?;
+    armcal::plausible::misfit(
+        plain.results.iter().map(|(k, v)| (*k, *v)),
+        &a.data.display().to_string(),
+        &a.calib.display().to_string(),
+        accept,
+    )?;
     for w in &data.warnings {
         eprintln!("armcal: warning: {w}");
     }
@@ -88,7 +115,14 @@ pub fn run(a: Args) -> anyhow::Result<i32> {
             a.data.display()
         );
     }
-    let mut files = armcal::output::Staged::new();
+    let mut inputs = vec![
+        (a.data.as_path(), "data"),
+        (a.calib.as_path(), "calibration"),
+    ];
+    if let Some(m) = &a.mpe {
+        inputs.push((m.as_path(), "MPE file"));
+    }
+    let mut files = armcal::output::Staged::guarding(&inputs);
     let written = match &a.plots {
         Some(dir) => {
             let figures = acceptance::plots::figures(&data, &acceptance::centres(&arm, &data));

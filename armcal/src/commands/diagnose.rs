@@ -103,6 +103,8 @@ pub struct Args {
     max_iter: u32,
     #[command(flatten)]
     budget: super::budget::BudgetArgs,
+    #[command(flatten)]
+    accept: super::accept::AcceptArgs,
 }
 
 /// Runs the subcommand. Arguments, the start arm, the outputs' names and the data are
@@ -143,6 +145,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     let data = armcal::data::read(&data_path, start.dof())?;
     armcal::probes::check(&start, &data)?;
+    armcal::plausible::data(&start, &data, a.accept.accept())?;
     for w in &data.warnings {
         eprintln!("armcal: warning: {w}");
     }
@@ -178,7 +181,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     figures.extend(diagnose::unexplained::figure(&d.unexplained));
     let mut rep = report::build(&d, &data, &figures);
 
-    let mut files = armcal::output::Staged::new();
+    let mut files = armcal::output::Staged::guarding(&inputs);
     if let Some(dir) = &a.plots {
         let pictures = plots::write_all(&figures, dir, &mut files)?;
         rep.output.plots = pictures.iter().map(|p| p.display().to_string()).collect();

@@ -1,5 +1,6 @@
 //! One module per subcommand.
 
+pub mod accept;
 pub mod accuracy;
 pub mod args;
 pub mod budget;

@@ -1,7 +1,7 @@
 //! `armcal simulate`: measurements of a virtual arm (`point`, `spat` or `length` data).
 
 use super::args::ArgError;
-use anyhow::{bail, Context};
+use anyhow::bail;
 use armcal::data::Kind;
 use armcal::sim::{self, FrameChoice};
 use std::path::PathBuf;
@@ -261,7 +261,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let name = a.output.display().to_string();
     armcal::data::parse(&text, &name, truth.dof())
         .map_err(|e| anyhow::anyhow!("the simulated rows would not read back: {e}"))?;
-    std::fs::write(&a.output, text).with_context(|| name.clone())?;
+    let mut files = armcal::output::Staged::guarding(&inputs);
+    files.write(&a.output, text.as_bytes())?;
+    files.commit()?;
     eprintln!(
         "armcal: wrote {} ({} rows, {what})",
         a.output.display(),

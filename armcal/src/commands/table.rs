@@ -81,14 +81,17 @@ pub fn run(command: Command) -> anyhow::Result<()> {
             output,
             without_covariance,
         } => {
+            armcal::output::check(&[(&output, "table")], &[(&calib, "calibration file")])?;
             let (arm, mut budget) = armcal::load::calibration(&calib)?;
             if without_covariance {
                 budget = budget.map(|u| u.without_covariance());
             }
             let bytes = armcal::tablebuild::build_with(&arm, budget.as_ref())
                 .with_context(|| calib.display().to_string())?;
-            std::fs::write(&output, &bytes).with_context(|| output.display().to_string())?;
             let t = Table::parse(&bytes)?;
+            let mut files = armcal::output::Staged::guarding(&[(&calib, "calibration file")]);
+            files.write(&output, &bytes)?;
+            files.commit()?;
             println!(
                 "{}: {} bytes, {} joints, CRC {:08x}{}",
                 output.display(),
@@ -135,15 +138,15 @@ pub fn run(command: Command) -> anyhow::Result<()> {
             let (pem, public) = tablesign::keygen()?;
             let (private_path, public_path) =
                 (out.with_extension("pem"), out.with_extension("pub"));
-            for p in [&private_path, &public_path] {
-                if p.exists() {
-                    anyhow::bail!("{}: exists; a key is never overwritten", p.display());
-                }
-            }
-            std::fs::write(&private_path, pem)
-                .with_context(|| private_path.display().to_string())?;
-            std::fs::write(&public_path, public)
-                .with_context(|| public_path.display().to_string())?;
+            armcal::output::check(
+                &[(&private_path, "private key"), (&public_path, "public key")],
+                &[],
+            )?;
+            // Both new, the private one readable by its owner alone; both or neither.
+            let mut files = armcal::output::Staged::new();
+            files.write_private(&private_path, pem.as_bytes(), "private key")?;
+            files.write_new(&public_path, &public, "public key", 0o644)?;
+            files.commit()?;
             println!(
                 "{}: private key (keep it secret); {}: public key {}",
                 private_path.display(),
@@ -156,10 +159,14 @@ pub fn run(command: Command) -> anyhow::Result<()> {
             Ok(())
         }
         Command::Sign { table, key, output } => {
+            let inputs = [(table.as_path(), "table"), (key.as_path(), "private key")];
+            armcal::output::check(&[(&output, "signed table")], &inputs)?;
             let k = tablesign::read_private(&key)?;
             let bytes = std::fs::read(&table).with_context(|| table.display().to_string())?;
             let image = tablesign::sign(&k, &bytes).with_context(|| table.display().to_string())?;
-            std::fs::write(&output, &image).with_context(|| output.display().to_string())?;
+            let mut files = armcal::output::Staged::guarding(&inputs);
+            files.write(&output, &image)?;
+            files.commit()?;
             println!(
                 "{}: {} bytes, table and signature",
                 output.display(),

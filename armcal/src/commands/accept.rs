@@ -1,0 +1,25 @@
+//! The `--accept-…` flags: each accepts deliberately one kind of input that
+//! `armcal::plausible` refuses as a likely mistake. One scheme for every command.
+
+/// Flags that accept inputs refused as implausible.
+#[derive(clap::Args, Clone, Copy, Debug, Default)]
+pub struct AcceptArgs {
+    /// Accept joint readings beyond a turn and point or length data whose size is not the
+    /// arm's (refused as degrees, metres or inches).
+    #[arg(long)]
+    accept_units: bool,
+    /// Accept temperatures outside 0..45 °C (refused as °F or a sensor fault).
+    #[arg(long)]
+    accept_temperature: bool,
+}
+
+impl AcceptArgs {
+    /// What the flags accept.
+    pub fn accept(self) -> armcal::plausible::Accept {
+        armcal::plausible::Accept {
+            units: self.accept_units,
+            temperature: self.accept_temperature,
+            ..Default::default()
+        }
+    }
+}
