@@ -142,3 +142,52 @@ fn check_and_diagnose_reports_render_in_chromium() {
     );
     check_page(&browser, &dir, &dir.join("diagnose.html"), "Held-out RMS");
 }
+
+/// `calibrate --report`: the certificate names the data file with its SHA-256, holds the
+/// plots and the full report, escapes what it quotes; a report over an input is refused and
+/// nothing is written.
+#[test]
+fn calibrate_writes_a_certificate_and_never_over_an_input() {
+    let dir = workdir("certificate");
+    common::write_truth(&dir, &quatarm_ref::arm::Arm::default6());
+    common::simulate(&dir, "point", "80", "3", &[], "p<1>.csv");
+    armcal_ok(
+        &[
+            "calibrate",
+            "p<1>.csv",
+            "-o",
+            "cal.toml",
+            "--report",
+            "cal.html",
+        ],
+        &dir,
+    );
+    let html = std::fs::read_to_string(dir.join("cal.html")).unwrap();
+    let sha = armcal::html::header::sha256_hex(&std::fs::read(dir.join("p<1>.csv")).unwrap());
+    assert!(html.contains("Calibration certificate") && html.contains(&sha));
+    assert!(html.contains("p&lt;1&gt;.csv") && !html.contains("p<1>.csv"));
+    assert!(
+        html.matches("<svg").count() >= 3,
+        "vectors, before/after, held out"
+    );
+    assert!(html.contains("Residual vectors after the fit") && html.contains("<pre>"));
+    let o = armcal(
+        &[
+            "calibrate",
+            "p<1>.csv",
+            "-o",
+            "c2.toml",
+            "--report",
+            "p<1>.csv",
+        ],
+        &dir,
+    );
+    assert!(!o.status.success() && !dir.join("c2.toml").exists());
+    let o = armcal(
+        &[
+            "check", "p<1>.csv", "--calib", "cal.toml", "--report", "cal.toml",
+        ],
+        &dir,
+    );
+    assert_eq!(o.status.code(), Some(3));
+}
