@@ -284,9 +284,17 @@ fn model_term(
     budget: &Budget,
     instrument_mm: f64,
 ) -> Option<(f64, ModelSource)> {
+    // A held-out row's residual comes from a fit on the other folds: its parameter part is
+    // that of F − 1 folds' rows, F/(F − 1) times the whole fit's C (equal folds), which the
+    // model term must not take for misfit.
+    let mut b = budget.clone();
+    let f = h.folds as f64;
+    if f > 1.0 {
+        b.cov *= f / (f - 1.0);
+    }
     let sc = misfit::scores(
         &fit.arm,
-        budget,
+        &b,
         data,
         &h.residuals.rows,
         &h.judged,
