@@ -147,7 +147,7 @@ mod tests {
             length_mm: Some(500.0),
             mpe_um: decision.map(|_| 10.0),
             u_um: 1.0,
-            u_source: "test",
+            u_source: crate::acceptance::USource::MpeFile,
             decision,
             predicted_um: None,
             outside_predicted: None,

@@ -52,7 +52,7 @@ pub fn page(c: &Check, arm: &Arm, data: &Dataset, mpe: Option<&Mpe>, prov: &Prov
                 r.length_mm.map_or("-".into(), |l| format!("{l:.1}")).into(),
                 format!("{:.2}", r.value_um).into(),
                 format!("{:.2}", r.u_um).into(),
-                r.u_source.into(),
+                r.u_source.words().into(),
                 r.mpe_um.map_or("-".into(), |m| format!("{m:.2}")).into(),
                 decision,
                 predicted,
