@@ -78,6 +78,7 @@ extern crate std;
 pub mod angle;
 pub mod chain;
 pub mod encoder;
+pub mod lean;
 pub mod matrix;
 pub mod model;
 pub mod physics;
