@@ -47,12 +47,12 @@
 //! chain, on the Cortex-M0 fewer.)
 
 use crate::angle::{quarter_turns, Quarter};
+use crate::lean::{LeanF32, LeanForm, NoLean};
 use crate::model::{units, ChainError, Model, Point, BASE_AXIS};
 use crate::physics::Physics;
 use crate::rotate::{cross, Quat, Vec3};
 use crate::scalar::{Fixed, Scale, F32};
 use crate::table::{Table, MAX_JOINTS};
-use crate::lean::{LeanF32, LeanForm, NoLean};
 use crate::wobble::{small_quat, turn_small, Wobble};
 use core::mem::MaybeUninit;
 

@@ -44,8 +44,7 @@ pub trait LeanForm<P: Physics>: Copy + Debug {
     /// Whether [`LeanForm::eval`] evaluates this arm.
     fn applies(&self) -> bool;
     /// The probe-ball centre and direction, as [`crate::chain::Chain::eval`].
-    fn eval(&self, model: &Model<P>, counts: &[u32], temp_mc: i32)
-        -> Result<Point<P>, ChainError>;
+    fn eval(&self, model: &Model<P>, counts: &[u32], temp_mc: i32) -> Result<Point<P>, ChainError>;
     /// Takes the probe `model` has mounted.
     fn mount(&mut self, model: &Model<P>);
 }
@@ -255,7 +254,9 @@ impl LeanForm<F32> for LeanF32 {
         out.base = turn_of(euler[0][0])?;
         for i in 0..n {
             let no = i + 1;
-            let j = table.joint(i).ok_or(ChainError::Range { joint: no as u8 })?;
+            let j = table
+                .joint(i)
+                .ok_or(ChainError::Range { joint: no as u8 })?;
             // The next joint's first turn, a_(i+1); none after the last.
             let next = if i + 1 < n { euler[i + 1][0] } else { 0 };
             let offset = euler[i][2].wrapping_add(next);
@@ -408,7 +409,11 @@ impl LeanForm<F32> for LeanF32 {
         // Rz(a_1).
         let b = &self.base;
         let (p, q) = quarter_turns(b.q, (w[0], w[1]));
-        w = [p - (q * b.sin + p * b.omc), q + (p * b.sin - q * b.omc), w[2]];
+        w = [
+            p - (q * b.sin + p * b.omc),
+            q + (p * b.sin - q * b.omc),
+            w[2],
+        ];
         let (p, q) = quarter_turns(b.q, (d[0], d[1]));
         d = [p * b.cos - q * b.sin, p * b.sin + q * b.cos, d[2]];
         Ok(Point { xyz: w, dir: d })
@@ -433,12 +438,24 @@ mod tests {
     /// z-x-z split reproduces the matrix it came from.
     #[test]
     fn binary_angles_and_euler_split() {
-        for t in [0u32, 1, 12_345, 1 << 29, (1 << 30) + 7, 3 << 30, u32::MAX, 0x9e37_79b9] {
+        for t in [
+            0u32,
+            1,
+            12_345,
+            1 << 29,
+            (1 << 30) + 7,
+            3 << 30,
+            u32::MAX,
+            0x9e37_79b9,
+        ] {
             let (c, s) = turn_cos_sin(t);
             assert!(((c * c + s * s) - 1.0).abs() < 1e-15);
             assert_eq!(binary_angle(c, s), t, "{t}");
         }
-        let m = mat_mul(&mat_mul(&rz(0x1234_5678), &rx(0x3fff_0000)), &rz(0xdead_beef));
+        let m = mat_mul(
+            &mat_mul(&rz(0x1234_5678), &rx(0x3fff_0000)),
+            &rz(0xdead_beef),
+        );
         let [a, al, b] = euler_zxz(&m);
         let back = mat_mul(&mat_mul(&rz(a), &rx(al)), &rz(b));
         for r in 0..3 {
