@@ -382,7 +382,7 @@ impl LeanForm<F32> for LeanF32 {
             if j.has_gravity {
                 // SAFETY: the first pass wrote the vertical of every compliant joint.
                 let v = unsafe { verticals[i].assume_init_read() };
-                e = e + j.gravity * (w[0] * v[1] - w[1] * v[0]);
+                e += j.gravity * (w[0] * v[1] - w[1] * v[0]);
             }
             // The remainder r turned by e to second order (|e| ≤ 1e-3: error e³/6 < 2e-10).
             let h = 0.5 * (e * e);
