@@ -47,6 +47,7 @@
 //! chain, on the Cortex-M0 fewer.)
 
 use crate::angle::{quarter_turns, Quarter};
+use crate::lean::{LeanF32, LeanForm, NoLean};
 use crate::model::{units, ChainError, Model, Point, BASE_AXIS};
 use crate::physics::Physics;
 use crate::rotate::{cross, Quat, Vec3};
@@ -63,14 +64,19 @@ pub trait Evaluator: Physics {
     /// image must stay within 32 KiB). A build policy, not a property of the numbers: it
     /// changes no result, only size and speed.
     const SPEND_FLASH: bool;
+    /// The chain's lean form in this format ([`crate::lean`]), which [`Chain::eval`] runs
+    /// where it applies, or [`NoLean`].
+    type Lean: LeanForm<Self>;
 }
 
 impl Evaluator for F32 {
     const SPEND_FLASH: bool = true;
+    type Lean = LeanF32;
 }
 
 impl Evaluator for Fixed {
     const SPEND_FLASH: bool = false;
+    type Lean = NoLean;
 }
 
 /// One joint's constants in the quaternion chain.
@@ -100,6 +106,8 @@ pub struct Chain<P: Evaluator> {
     second_order: bool,
     /// The joints' axis wobble ([`crate::wobble`]; empty without its feature).
     wobble: Wobble<P>,
+    /// The same model in the lean form, where the evaluator has one and the arm fits it.
+    lean: P::Lean,
 }
 
 /// The f32 quaternion chain (FPU targets).
@@ -197,11 +205,13 @@ impl<P: Evaluator> Chain<P> {
         }
         let second_order = model.second_order_gravity;
         let wobble = Wobble::new(table, &model)?;
+        let lean = P::Lean::build(table, &model, !wobble.any())?;
         Ok(Chain {
             model,
             rotation,
             wobble,
             second_order,
+            lean,
         })
     }
 
@@ -225,16 +235,36 @@ impl<P: Evaluator> Chain<P> {
     /// chain ends at its ball from the next reading on. `table` must be the one the chain
     /// was built from; nothing changes on an error (a `k` past the table's probes).
     pub fn mount(&mut self, table: &Table<'_>, k: usize) -> Result<(), ChainError> {
-        self.model.mount(table, k)
+        self.model.mount(table, k)?;
+        self.lean.mount(&self.model);
+        Ok(())
+    }
+
+    /// Whether [`Chain::eval`] runs the lean form ([`crate::lean`]) for this arm, rather than
+    /// the quaternion chain.
+    pub fn is_lean(&self) -> bool {
+        self.lean.applies()
     }
 
     /// Probe-ball centre and direction for raw encoder counts (one per joint, each below its
-    /// counts per revolution) at temperature `temp_mc` (milli-degrees Celsius).
+    /// counts per revolution) at temperature `temp_mc` (milli-degrees Celsius): the lean form
+    /// where it applies ([`Chain::is_lean`]; the fewest instructions on a Cortex-M4F, same
+    /// model), else the quaternion chain ([`Chain::eval_quaternion`]).
+    #[inline(always)]
+    pub fn eval(&self, counts: &[u32], temp_mc: i32) -> Result<Point<P>, ChainError> {
+        if self.lean.applies() {
+            self.lean.eval(&self.model, counts, temp_mc)
+        } else {
+            self.eval_quaternion(counts, temp_mc)
+        }
+    }
+
+    /// [`Chain::eval`] by the quaternion chain, whatever the arm: the model's own form.
     // Out of line: inlined into a caller's loop, the evaluation competes for registers with
     // the caller's code and spills (measured on qemu-m4f: 1,404 inlined against 1,350 out of
     // line for the quaternion chain, 1,245 against 1,201 for the matrix chain).
     #[inline(never)]
-    pub fn eval(&self, counts: &[u32], temp_mc: i32) -> Result<Point<P>, ChainError> {
+    pub fn eval_quaternion(&self, counts: &[u32], temp_mc: i32) -> Result<Point<P>, ChainError> {
         if !P::SPEND_FLASH {
             self.eval_with(counts, temp_mc, self.second_order, true)
         } else if !self.second_order && !self.wobble.any() {

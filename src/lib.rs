@@ -80,6 +80,7 @@ extern crate std;
 pub(crate) mod angle;
 pub mod chain;
 pub mod encoder;
+pub mod lean;
 pub mod matrix;
 pub mod model;
 pub mod physics;

@@ -50,8 +50,11 @@ pub struct Row {
     pub statics: u64,
     /// Peak stack of the hub during a replay (QEMU boards).
     pub stack: Option<u64>,
-    /// Instructions per point: quaternion, matrix (QEMU boards).
-    pub instructions: Option<(f64, f64)>,
+    /// Instructions per point: the hub's chain (the lean form where the arm fits it),
+    /// the quaternion chain, the matrix chain (QEMU boards).
+    pub instructions: Option<(f64, f64, f64)>,
+    /// Whether the hub's chain is the lean form.
+    pub lean: bool,
     /// Instructions of one Ed25519 check of the table's signature (QEMU boards).
     pub signature: Option<f64>,
     /// Instructions per point of U95: the reading's own terms alone, and the whole U95 as the
@@ -64,8 +67,10 @@ pub struct Row {
 /// (where the table has a budget).
 /// What a bench image measured, in instructions.
 struct Measured {
-    /// Per point: quaternion chain, matrix chain.
-    chains: (f64, f64),
+    /// Per point: the hub's chain, the quaternion chain, the matrix chain.
+    chains: (f64, f64, f64),
+    /// Whether the hub's chain is the lean form.
+    lean: bool,
     /// One signature check.
     signature: f64,
     /// Per point: U95's own terms, U95 as streamed.
@@ -128,6 +133,10 @@ fn instructions(b: &Board, table: &[u8]) -> Result<Measured> {
     let sig_ticks = number_after(&lines, "bench signature").context("signature ticks")? as f64;
     let (n0, t0) = ticks_of("bench clock overhead")?;
     let (nq, tq) = ticks_of("bench quaternion")?;
+    let (nh, th) = ticks_of("bench hub chain")?;
+    let lean = lines
+        .iter()
+        .any(|l| l.starts_with("bench hub chain (lean true)"));
     let (nm, tm) = ticks_of("bench matrix")?;
     let (no, to) = ticks_of("bench u95 own terms")?;
     let (nu, tu) = ticks_of("bench u95 streamed")?;
@@ -140,9 +149,11 @@ fn instructions(b: &Board, table: &[u8]) -> Result<Measured> {
     );
     Ok(Measured {
         chains: (
+            (th / nh - overhead) * per_tick,
             (tq / nq - overhead) * per_tick,
             (tm / nm - overhead) * per_tick,
         ),
+        lean,
         signature: (sig_ticks - overhead) * per_tick,
         u95: [
             (no > 0.0).then(|| (to / no - overhead) * per_tick),
@@ -154,6 +165,7 @@ fn instructions(b: &Board, table: &[u8]) -> Result<Measured> {
 fn measure(b: &Board, tc: &Toolchain, table: &[u8]) -> Result<Row> {
     let (flash, statics) = sizes(&b.elf(b.name))?;
     let (mut stack, mut instr, mut signature, mut u95) = (None, None, None, [None; 2]);
+    let mut lean = false;
     if b.qemu.is_some() {
         let readings: Vec<_> = recording::read(&default_recording_path())?
             .into_iter()
@@ -164,6 +176,7 @@ fn measure(b: &Board, tc: &Toolchain, table: &[u8]) -> Result<Row> {
         stack = number_after(&lines, "stack peak");
         let m = instructions(b, table)?;
         instr = Some(m.chains);
+        lean = m.lean;
         signature = Some(m.signature);
         u95 = m.u95;
     }
@@ -178,6 +191,7 @@ fn measure(b: &Board, tc: &Toolchain, table: &[u8]) -> Result<Row> {
         statics,
         stack,
         instructions: instr,
+        lean,
         signature,
         u95,
     })
@@ -186,16 +200,24 @@ fn measure(b: &Board, tc: &Toolchain, table: &[u8]) -> Result<Row> {
 /// The table, as markdown.
 pub fn table(rows: &[Row]) -> String {
     let mut s = String::from(
-        "| board | compiler | chain | flash (bytes) | RAM: statics + stack peak (bytes) | quaternion chain (instr/point) | 3×4 matrix chain (instr/point) | U95, reading's own terms (instr/point) | U95 as streamed (instr/point) | Ed25519 check of the table (instr) |\n|---|---|---|---|---|---|---|---|---|---|\n",
+        "| board | compiler | chain | flash (bytes) | RAM: statics + stack peak (bytes) | hub's chain (instr/point) | quaternion chain (instr/point) | 3×4 matrix chain (instr/point) | U95, reading's own terms (instr/point) | U95 as streamed (instr/point) | Ed25519 check of the table (instr) |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let ram = match r.stack {
             Some(st) => format!("{} + {} = {}", r.statics, st, r.statics + st),
             None => format!("{} + (not run)", r.statics),
         };
-        let (q, m) = match r.instructions {
-            Some((q, m)) => (format!("{q:.0}"), format!("{m:.0}")),
-            None => ("(no QEMU model)".into(), "(no QEMU model)".into()),
+        let (h, q, m) = match r.instructions {
+            Some((h, q, m)) => (
+                format!("{h:.0} ({})", if r.lean { "lean" } else { "quaternion" }),
+                format!("{q:.0}"),
+                format!("{m:.0}"),
+            ),
+            None => (
+                "(no QEMU model)".into(),
+                "(no QEMU model)".into(),
+                "(no QEMU model)".into(),
+            ),
         };
         let sig = r
             .signature
@@ -208,8 +230,8 @@ pub fn table(rows: &[Row]) -> String {
         let own = cell(r.u95[0], "(no budget)");
         let streamed = cell(r.u95[1], "(not computed)");
         s.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
-            r.board.name, r.compiler, r.board.precision, r.flash, ram, q, m, own, streamed, sig
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            r.board.name, r.compiler, r.board.precision, r.flash, ram, h, q, m, own, streamed, sig
         ));
     }
     s

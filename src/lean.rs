@@ -1,0 +1,472 @@
+//! The lean f32 chain: the same calibrated model as [`crate::chain`], evaluated in the form
+//! that takes the fewest instructions on a Cortex-M4F, which the hub runs by default for an
+//! arm it fits (f32, no axis wobble, first-order gravity, harmonics of orders 1 and 2).
+//!
+//! **The form.** Each joint's fixed rotation in its z-axis frame ([`crate::model`]) is split
+//! at boot, in f64, into Euler angles M̃_i = Rz(a_i) Rx(α_i) Rz(b_i). A turn about z commutes
+//! into the joint's own turn, so b_i and a_(i+1) (the next joint's first turn, moved back
+//! through link i, which is turned by Rz(−a_(i+1)) at boot to match) join joint i's count as a
+//! binary-angle offset: one integer add a point. The harmonics, functions of the raw angle,
+//! take coefficients rotated by the offset (exact identities, in f64 at boot). What is left
+//! per joint is a turn about x by a constant and a turn about z by the reading:
+//!
+//! p = Rz(a_1) · [Rx(α_1) Rz(θ'_1) (v'_1 + Rx(α_2) Rz(θ'_2) (v'_2 + …))],
+//!
+//! evaluated tip to base (Horner form), the probe direction carried along as a second vector.
+//! Both turns are written as an exact quarter turn plus a small correction (|angle| ≤ π/4), as
+//! the quaternion chain does, so that each large partial sum is rounded about once a turn.
+//!
+//! **Gravity** needs the base frame's vertical in each compliant joint's frame, which only a
+//! base-to-tip pass has: a first pass turns (0, 0, 1) by Rx(−α_k) Rz(−θ'_k − e_k) (the
+//! vertical is a unit vector: rounding here scales the deflection, 1e-7 of 4e-5 rad, not the
+//! tip) and keeps the joints' angles; the second pass, tip to base, adds each deflection
+//! e_k = g_k (w × ẑ_base)·ẑ_k to its joint's angle before the turn, so the direction
+//! and the tip are both deflected exactly (no Σ e_k a_k correction afterwards).
+//!
+//! The quaternion chain stays the model's own form ([`crate::chain::Chain::eval_quaternion`]),
+//! and the hub falls back to it for any arm this form does not take. Where the two forms'
+//! costs come from: `docs/results/speed.md`.
+
+use crate::angle::{quarter_turns, CountScale, Quarter};
+use crate::model::{units, unpermute, ChainError, Model, Point, BASE_AXIS};
+use crate::physics::Physics;
+use crate::scalar::{Arithmetic, F32};
+use crate::table::{Table, MAX_JOINTS};
+use core::fmt::Debug;
+use core::mem::MaybeUninit;
+
+/// What a chain's evaluator offers as its lean form: the f32 chain of this module, or none.
+pub trait LeanForm<P: Physics>: Copy + Debug {
+    /// The lean form of `table`'s arm, or one that does not apply (`applies` false) where the
+    /// arm has what the form does not take (`eligible` false: an axis wobble or second-order
+    /// gravity).
+    fn build(table: &Table<'_>, model: &Model<P>, eligible: bool) -> Result<Self, ChainError>;
+    /// Whether [`LeanForm::eval`] evaluates this arm.
+    fn applies(&self) -> bool;
+    /// The probe-ball centre and direction, as [`crate::chain::Chain::eval`].
+    fn eval(&self, model: &Model<P>, counts: &[u32], temp_mc: i32) -> Result<Point<P>, ChainError>;
+    /// Takes the probe `model` has mounted.
+    fn mount(&mut self, model: &Model<P>);
+}
+
+/// No lean form (the fixed-point evaluator: the Cortex-M0's image has no room for a second
+/// chain).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoLean;
+
+impl<P: Physics> LeanForm<P> for NoLean {
+    fn build(_: &Table<'_>, _: &Model<P>, _: bool) -> Result<NoLean, ChainError> {
+        Ok(NoLean)
+    }
+    #[inline(always)]
+    fn applies(&self) -> bool {
+        false
+    }
+    fn eval(&self, _: &Model<P>, _: &[u32], _: i32) -> Result<Point<P>, ChainError> {
+        // Never called: `applies` is false.
+        Err(ChainError::Range { joint: 0 })
+    }
+    fn mount(&mut self, _: &Model<P>) {}
+}
+
+/// A turn as an exact quarter turn and a remainder of at most π/4: q, sin r, 1 − cos r.
+#[derive(Clone, Copy, Debug, Default)]
+struct Turn {
+    q: u8,
+    sin: f32,
+    omc: f32,
+    /// cos r = 1 − omc, for the direction's plain rotation.
+    cos: f32,
+}
+
+/// One joint's constants in the lean form.
+#[derive(Clone, Copy, Debug, Default)]
+struct LeanJoint {
+    scale: CountScale,
+    /// b_i + a_(i+1) as a binary angle (one turn = 2^32), added to the reading's.
+    offset: u32,
+    /// (s₁, c₁, 2s₂, c₂) rotated to the offset angle.
+    harmonics: [f32; 4],
+    has_harmonics: bool,
+    /// v'_i = Rz(−a_(i+1)) v_i and its thermal rate.
+    link: [f32; 3],
+    rate: [f32; 3],
+    has_thermal: bool,
+    gravity: f32,
+    has_gravity: bool,
+    /// Rx(α_i).
+    alpha: Turn,
+}
+
+/// The lean f32 chain of an arm (or none, `on` false).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LeanF32 {
+    on: bool,
+    n: usize,
+    joints: [LeanJoint; MAX_JOINTS],
+    /// Rz(a_1), applied last.
+    base: Turn,
+    probe_dir: [f32; 3],
+    /// Joints from the base up to the last compliant one: those the first pass turns the
+    /// vertical through.
+    vertical_joints: usize,
+}
+
+/// cos and sin of a binary angle t (one turn = 2^32) split as q·π/2 + r, in f64: (q, sin r,
+/// 1 − cos r), Taylor series to r^22 (|r| ≤ π/4: error under 1e-19). Boot only: the per-point
+/// path has no f64.
+fn split_turn(t: u32) -> (u8, f64, f64) {
+    let q = t.wrapping_add(1 << 29) >> 30;
+    let r = t.wrapping_sub(q << 30) as i32;
+    let x = f64::from(r) * (core::f64::consts::PI / 2_147_483_648.0);
+    let z = x * x;
+    let (mut s, mut omc) = (0.0, 0.0);
+    // Horner from the highest term: sin x = x Σ (−z)^k/(2k+1)!, 1 − cos x = −Σ_(k≥1) (−z)^k/(2k)!.
+    for k in (0..11).rev() {
+        let k = f64::from(k);
+        s = 1.0 - z * s / ((2.0 * k + 2.0) * (2.0 * k + 3.0));
+        omc = z / ((2.0 * k + 1.0) * (2.0 * k + 2.0)) * (1.0 - omc);
+    }
+    (q as u8, x * s, omc)
+}
+
+/// cos and sin of a binary angle, in f64.
+fn turn_cos_sin(t: u32) -> (f64, f64) {
+    let (q, s, omc) = split_turn(t);
+    quarter_turns(q, (1.0 - omc, s))
+}
+
+/// The binary angle nearest to the direction (c, s) (not both zero): the quadrant, then one
+/// bit a step by turning the remainder back (successive approximation), then rounding.
+fn binary_angle(c: f64, s: f64) -> u32 {
+    let q: u8 = match (c > 0.0, s >= 0.0) {
+        (true, true) => 0,
+        (false, true) => 1,
+        (false, false) => 2,
+        (true, false) => 3,
+    };
+    // Turned back by q quarter turns: the remainder's angle is in [0, π/2).
+    let (mut x, mut y) = quarter_turns(4 - q, (c, s));
+    let mut t = u32::from(q) << 30;
+    for k in (0..30).rev() {
+        // The remainder is in [0, 2β): at or past β exactly when (cos β, sin β) × (x, y) ≥ 0.
+        let (cb, sb) = turn_cos_sin(1 << k);
+        if cb * y - sb * x >= 0.0 {
+            (x, y) = (x * cb + y * sb, y * cb - x * sb);
+            t += 1 << k;
+        }
+    }
+    // The remainder is below one unit of 2π/2^32; round to the nearer.
+    if y >= x * (core::f64::consts::PI / 4_294_967_296.0) {
+        t = t.wrapping_add(1);
+    }
+    t
+}
+
+/// R(z, t) as a matrix.
+fn rz(t: u32) -> [[f64; 3]; 3] {
+    let (c, s) = turn_cos_sin(t);
+    [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
+}
+
+/// R(x, t) as a matrix.
+fn rx(t: u32) -> [[f64; 3]; 3] {
+    let (c, s) = turn_cos_sin(t);
+    [[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]]
+}
+
+fn mat_mul(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let mut out = [[0.0; 3]; 3];
+    for (r, row) in out.iter_mut().enumerate() {
+        for (c, x) in row.iter_mut().enumerate() {
+            *x = a[r][0] * b[0][c] + a[r][1] * b[1][c] + a[r][2] * b[2][c];
+        }
+    }
+    out
+}
+
+fn mat_vec(m: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
+    [0, 1, 2].map(|r| m[r][0] * v[0] + m[r][1] * v[1] + m[r][2] * v[2])
+}
+
+/// The transpose (the inverse of a rotation).
+fn transpose(m: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    [0, 1, 2].map(|r| [m[0][r], m[1][r], m[2][r]])
+}
+
+/// A rotation's z-x-z Euler angles as binary angles: m ≈ Rz(a) Rx(α) Rz(b), α ∈ [0, π]. Each
+/// angle is taken from what the previous ones leave of m, so that the three together
+/// reproduce m to their rounding even where α is near 0 or π (a and b then shared freely).
+fn euler_zxz(m: &[[f64; 3]; 3]) -> [u32; 3] {
+    // Column 2 of Rz(a) Rx(α) is (sin a sin α, −cos a sin α, cos α).
+    let a = binary_angle(-m[1][2], m[0][2]);
+    let n = mat_mul(&transpose(&rz(a)), m);
+    // Rx(α) Rz(b): column 2 is (0, −sin α, cos α).
+    let alpha = binary_angle(n[2][2], -n[1][2]);
+    let p = mat_mul(&transpose(&rx(alpha)), &n);
+    let b = binary_angle(p[0][0], p[1][0]);
+    [a, alpha, b]
+}
+
+fn turn_of(t: u32) -> Result<Turn, ChainError> {
+    let (q, s, omc) = split_turn(t);
+    let [sin, omc, cos] = units::<F32, 3>([s, omc, 1.0 - omc], 0)?;
+    Ok(Turn { q, sin, omc, cos })
+}
+
+/// One reading's angle of a joint, as the first pass leaves it for the second.
+#[derive(Clone, Copy)]
+struct Angle {
+    q: u8,
+    /// sin r and 1 − cos r of the remainder r, |r| ≤ π/4.
+    sin: f32,
+    omc: f32,
+    /// The harmonic error, rad.
+    e: f32,
+}
+
+impl LeanForm<F32> for LeanF32 {
+    fn build(table: &Table<'_>, model: &Model<F32>, eligible: bool) -> Result<Self, ChainError> {
+        let n = model.n;
+        let takes = eligible
+            && !model.second_order_gravity
+            && model.joints[..n]
+                .iter()
+                .all(|j| j.harmonic_count == 0 || j.harmonic_12.is_some());
+        if !takes {
+            return Ok(LeanF32::default());
+        }
+        let mut out = LeanF32 {
+            on: true,
+            n,
+            ..LeanF32::default()
+        };
+        let mut prev = BASE_AXIS;
+        // Each joint's Euler angles [a, α, b], in the z-axis frames.
+        let mut euler = [[0u32; 3]; MAX_JOINTS];
+        for (i, e) in euler.iter_mut().enumerate().take(n) {
+            let j = table
+                .joint(i)
+                .ok_or(ChainError::Range { joint: i as u8 + 1 })?;
+            *e = euler_zxz(&crate::model::z_frame_matrix(j.matrix, prev, j.axis));
+            prev = j.axis;
+        }
+        out.base = turn_of(euler[0][0])?;
+        for i in 0..n {
+            let no = i + 1;
+            let j = table
+                .joint(i)
+                .ok_or(ChainError::Range { joint: no as u8 })?;
+            // The next joint's first turn, a_(i+1); none after the last.
+            let next = if i + 1 < n { euler[i + 1][0] } else { 0 };
+            let offset = euler[i][2].wrapping_add(next);
+            let jm = &model.joints[i];
+            // e(θ) = Σ s_h sin hθ + c_h cos hθ with θ = θ' − c: s'_h = s_h cos hc + c_h sin hc,
+            // c'_h = c_h cos hc − s_h sin hc.
+            let (mut s, mut c) = ([0.0f64; 2], [0.0f64; 2]);
+            for h in &j.harmonics[..usize::from(j.harmonic_count)] {
+                let k = usize::from(h.order.clamp(1, 2)) - 1;
+                s[k] += h.sin;
+                c[k] += h.cos;
+            }
+            let mut rotated = [0.0f64; 4];
+            for k in 0..2 {
+                let (ch, sh) = turn_cos_sin(offset.wrapping_mul(k as u32 + 1));
+                let (s2, c2) = (s[k] * ch + c[k] * sh, c[k] * ch - s[k] * sh);
+                rotated[2 * k] = s2;
+                rotated[2 * k + 1] = c2;
+            }
+            rotated[2] *= 2.0;
+            // Link i turned back by a_(i+1); the last link (with the probe) as the model has it.
+            let (link, rate) = if i + 1 < n {
+                let (axis, link, thermal) = table
+                    .joint_link(i)
+                    .ok_or(ChainError::Range { joint: no as u8 })?;
+                let back = transpose(&rz(next));
+                let v = mat_vec(&back, unpermute(link, axis));
+                let (mut l, mut r) = ([0.0f32; 3], [0.0f32; 3]);
+                for k in 0..3 {
+                    l[k] = F32::l_from_f64(v[k]).ok_or(ChainError::Range { joint: no as u8 })?;
+                    r[k] = F32::r_from_f64(v[k] * thermal)
+                        .ok_or(ChainError::Range { joint: no as u8 })?;
+                }
+                (l, r)
+            } else {
+                (jm.link, jm.link_rate)
+            };
+            out.joints[i] = LeanJoint {
+                scale: jm.scale,
+                offset,
+                harmonics: units::<F32, 4>(rotated, no)?,
+                has_harmonics: jm.harmonic_count > 0,
+                link,
+                rate,
+                has_thermal: jm.has_thermal,
+                gravity: jm.gravity,
+                has_gravity: jm.has_gravity,
+                alpha: turn_of(euler[i][1])?,
+            };
+            if jm.has_gravity {
+                out.vertical_joints = i + 1;
+            }
+        }
+        out.probe_dir = model.probe_dir;
+        Ok(out)
+    }
+
+    #[inline(always)]
+    fn applies(&self) -> bool {
+        self.on
+    }
+
+    #[inline(never)]
+    fn eval(
+        &self,
+        model: &Model<F32>,
+        counts: &[u32],
+        temp_mc: i32,
+    ) -> Result<Point<F32>, ChainError> {
+        let dt = model.check(counts, temp_mc)?;
+        let n = counts.len().min(MAX_JOINTS);
+        let mut angles = [const { MaybeUninit::<Angle>::uninit() }; MAX_JOINTS];
+        let mut verticals = [const { MaybeUninit::<[f32; 2]>::uninit() }; MAX_JOINTS];
+        // Base to tip: the angles, and the vertical up to the last compliant joint.
+        let mut zb = [0.0f32, 0.0, 1.0];
+        for i in 0..n {
+            let (j, count) = (&self.joints[i], counts[i]);
+            if count >= j.scale.counts() {
+                return Err(ChainError::CountOutOfRange { joint: i as u8 + 1 });
+            }
+            let t = j.scale.binary(count).wrapping_add(j.offset);
+            let a = Quarter::<F32>::from_binary(t);
+            let (sin, omc) = a.double();
+            let mut e = 0.0;
+            let (c, s) = quarter_turns(a.q, (1.0 - omc, sin));
+            if j.has_harmonics {
+                let [s1, c1, s2, c2] = j.harmonics;
+                e = s * (s1 + c * s2 - s * c2) + c * (c1 + c * c2);
+            }
+            angles[i].write(Angle {
+                q: a.q,
+                sin,
+                omc,
+                e,
+            });
+            if i < self.vertical_joints {
+                // Rx(−α), then Rz(−θ' − e) with e to first order.
+                let al = &j.alpha;
+                let (ca, sa) = quarter_turns(al.q, (al.cos, al.sin));
+                let (y, z) = (ca * zb[1] + sa * zb[2], ca * zb[2] - sa * zb[1]);
+                let (x, y) = (c * zb[0] + s * y, c * y - s * zb[0]);
+                zb = [x + e * y, y - e * x, z];
+                if j.has_gravity {
+                    verticals[i].write([zb[0], zb[1]]);
+                }
+            }
+        }
+
+        // Tip to base.
+        let mut w = [0.0f32; 3];
+        let mut d = self.probe_dir;
+        for i in (0..n).rev() {
+            let j = &self.joints[i];
+            // SAFETY: the first pass wrote every angle below n (it returns early only with an
+            // error, before this pass).
+            let a = unsafe { angles[i].assume_init_read() };
+            let mut link = j.link;
+            if j.has_thermal {
+                link = [0, 1, 2].map(|k| link[k] + j.rate[k] * dt);
+            }
+            w = [w[0] + link[0], w[1] + link[1], w[2] + link[2]];
+            let mut e = a.e;
+            if j.has_gravity {
+                // SAFETY: the first pass wrote the vertical of every compliant joint.
+                let v = unsafe { verticals[i].assume_init_read() };
+                e += j.gravity * (w[0] * v[1] - w[1] * v[0]);
+            }
+            // The remainder r turned by e to second order (|e| ≤ 1e-3: error e³/6 < 2e-10).
+            let h = 0.5 * (e * e);
+            let c = 1.0 - a.omc;
+            let sin = a.sin + (c * e - a.sin * h);
+            let omc = a.omc + (a.sin * e + c * h);
+            let cos = 1.0 - omc;
+            // Rz(θ'): the quarter turns, the remainder as a correction.
+            let (p, q) = quarter_turns(a.q, (w[0], w[1]));
+            w = [p - (q * sin + p * omc), q + (p * sin - q * omc), w[2]];
+            let (p, q) = quarter_turns(a.q, (d[0], d[1]));
+            d = [p * cos - q * sin, p * sin + q * cos, d[2]];
+            // Rx(α).
+            let al = &j.alpha;
+            let (p, q) = quarter_turns(al.q, (w[1], w[2]));
+            w = [
+                w[0],
+                p - (q * al.sin + p * al.omc),
+                q + (p * al.sin - q * al.omc),
+            ];
+            let (p, q) = quarter_turns(al.q, (d[1], d[2]));
+            d = [d[0], p * al.cos - q * al.sin, p * al.sin + q * al.cos];
+        }
+        // Rz(a_1).
+        let b = &self.base;
+        let (p, q) = quarter_turns(b.q, (w[0], w[1]));
+        w = [
+            p - (q * b.sin + p * b.omc),
+            q + (p * b.sin - q * b.omc),
+            w[2],
+        ];
+        let (p, q) = quarter_turns(b.q, (d[0], d[1]));
+        d = [p * b.cos - q * b.sin, p * b.sin + q * b.cos, d[2]];
+        Ok(Point { xyz: w, dir: d })
+    }
+
+    fn mount(&mut self, model: &Model<F32>) {
+        if !self.on {
+            return;
+        }
+        let last = self.n.clamp(1, MAX_JOINTS) - 1;
+        let (jm, j) = (&model.joints[last], &mut self.joints[last]);
+        (j.link, j.rate, j.has_thermal) = (jm.link, jm.link_rate, jm.has_thermal);
+        self.probe_dir = model.probe_dir;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The boot's angles: a binary angle comes back from its own cosine and sine, and the
+    /// z-x-z split reproduces the matrix it came from.
+    #[test]
+    fn binary_angles_and_euler_split() {
+        for t in [
+            0u32,
+            1,
+            12_345,
+            1 << 29,
+            (1 << 30) + 7,
+            3 << 30,
+            u32::MAX,
+            0x9e37_79b9,
+        ] {
+            let (c, s) = turn_cos_sin(t);
+            assert!(((c * c + s * s) - 1.0).abs() < 1e-15);
+            assert_eq!(binary_angle(c, s), t, "{t}");
+        }
+        let m = mat_mul(
+            &mat_mul(&rz(0x1234_5678), &rx(0x3fff_0000)),
+            &rz(0xdead_beef),
+        );
+        let [a, al, b] = euler_zxz(&m);
+        let back = mat_mul(&mat_mul(&rz(a), &rx(al)), &rz(b));
+        for r in 0..3 {
+            for c in 0..3 {
+                assert!((back[r][c] - m[r][c]).abs() < 1e-8, "{r} {c}");
+            }
+        }
+        // Degenerate: no turn about x at all.
+        let m = rz(0x4000_1234);
+        let [a, al, b] = euler_zxz(&m);
+        assert_eq!(al, 0);
+        assert!(a.wrapping_add(b).abs_diff(0x4000_1234) <= 1);
+    }
+}
