@@ -153,13 +153,19 @@ fn note(item: &Item) {
             "# report {} where {expected} was due, without a hub restart: numbering restarts from it",
             report.seq
         ),
-        Item::Inconsistent(r) if r.status.is_measurement() => eprintln!(
-            "# report {} has no coordinates although its status {:#06x} has no fault",
-            r.seq, r.status.0
-        ),
-        Item::Inconsistent(r) => eprintln!(
-            "# report {} carries coordinates beside status {:#06x}, which forbids them: written without them",
-            r.seq, r.status.0
+        Item::Inconsistent(r, why) => eprintln!(
+            "# report {} (status {:#06x}, probe {}) {}: written without coordinates",
+            r.seq,
+            r.status.0,
+            r.probe,
+            match why {
+                Inconsistency::Status =>
+                    "has a status that contradicts itself (bit 0 means table state 0, states 9-15 are reserved)",
+                Inconsistency::Forbidden => "carries coordinates beside a status that forbids them",
+                Inconsistency::Missing => "has no coordinates although its status has no fault",
+                Inconsistency::UnknownProbe => "names a probe its hub's Hello does not list",
+                Inconsistency::Direction => "carries a direction that is no unit vector",
+            }
         ),
         Item::Report(_) => {}
     }
