@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
-use armcal::stream_decode::{Decoder, Item, Stats};
+use armcal::stream_decode::{Decoder, Inconsistency, Item, Stats};
 use quatarm::stream::{write_csv_line, CSV_HEADER, MAX_CSV_LINE, PROTOCOL_VERSION};
 
 /// Arguments of `armcal decode`.
