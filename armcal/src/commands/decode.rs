@@ -189,7 +189,7 @@ fn summarise(s: &Stats, name: &str, total: u64, head: &[u8]) -> Result<()> {
     );
     if s.foreign_protocol > 0 || s.undecodable > 0 {
         eprintln!(
-            "# {name}: {} Hello(s) of a protocol other than versions 1–{PROTOCOL_VERSION}, {} frame(s) with a good CRC that are no message of version {PROTOCOL_VERSION}: this hub speaks another protocol version",
+            "# {name}: {} Hello(s) of a protocol other than versions 1–{PROTOCOL_VERSION}, {} frame(s) with a good CRC that are no message of version {PROTOCOL_VERSION}: a hub of another protocol version, or a sender that breaks it (an option tag other than 0 or 1, an overlong varint; docs/protocol.md)",
             s.foreign_protocol, s.undecodable
         );
     }
