@@ -131,7 +131,7 @@ pub fn send(port: &mut impl Link, table: &[u8], timeout: Duration) -> Result<Sen
                     "the hub restarted while waiting for the answer to {what} ({}): an update does not survive a restart; its old table stays live, send the table again",
                     announced(&h)
                 ),
-                Item::Report(_) | Item::Backward { .. } | Item::Inconsistent(_) => reports += 1,
+                Item::Report(_) | Item::Backward { .. } | Item::Inconsistent(..) => reports += 1,
                 // A probe answer is not this session's (another program selected a probe).
                 Item::Repeated(_) | Item::Damaged(_) | Item::Probe(_) => {}
             }

@@ -218,9 +218,10 @@ impl<'de> Deserialize<'de> for Coordinates {
                 let missing = |i| A::Error::invalid_length(i, &self);
                 let xyz_nm = seq.next_element()?.ok_or_else(|| missing(0))?;
                 let dir_e9 = seq.next_element()?.ok_or_else(|| missing(1))?;
-                // Protocol 3's field, or the end of an older frame. (A frame whose bytes do
-                // not end here fails the decoder's every-byte-consumed check.)
-                let u95_nm = seq.next_element::<Option<u32>>().ok().flatten().flatten();
+                // Protocol 3's field, or the end of an older frame (protocols 1 and 2): see
+                // `U95Field`. (A frame whose bytes do not end here fails the decoder's
+                // every-byte-consumed check.)
+                let u95_nm = seq.next_element::<U95Field>()?.and_then(|f| f.0);
                 Ok(Coordinates {
                     xyz_nm,
                     dir_e9,
@@ -230,6 +231,40 @@ impl<'de> Deserialize<'de> for Coordinates {
         }
         const FIELDS: &[&str] = &["xyz_nm", "dir_e9", "u95_nm"];
         deserializer.deserialize_struct("Coordinates", FIELDS, CoordinatesVisitor)
+    }
+}
+
+/// `Coordinates::u95_nm` as it decodes: `Option<u32>`, or nothing at all where an older hub's
+/// frame ends. Only the end of the input reads as "no field": the option's tag is read as the
+/// raw byte postcard writes it as, so a tag other than 0 or 1, or a varint that overflows a
+/// `u32`, refuses the frame instead of passing for an older hub's "no U95" (F6 of
+/// `../shared/repro/round2`).
+struct U95Field(Option<u32>);
+
+impl<'de> Deserialize<'de> for U95Field {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<U95Field, D::Error> {
+        struct U95Visitor;
+        impl<'de> Visitor<'de> for U95Visitor {
+            type Value = U95Field;
+            fn expecting(&self, f: &mut core::fmt::Formatter) -> core::fmt::Result {
+                f.write_str("an option tag of 0 or 1, then a u32 after 1")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<U95Field, A::Error> {
+                match seq.next_element::<u8>() {
+                    Err(_) | Ok(None) | Ok(Some(0)) => Ok(U95Field(None)),
+                    Ok(Some(1)) => Ok(U95Field(Some(
+                        seq.next_element::<u32>()?
+                            .ok_or_else(|| A::Error::invalid_length(1, &self))?,
+                    ))),
+                    Ok(Some(tag)) => Err(A::Error::invalid_value(
+                        serde::de::Unexpected::Unsigned(u64::from(tag)),
+                        &self,
+                    )),
+                }
+            }
+        }
+        // Postcard writes a tuple as its fields in a row: the tag, then the value.
+        deserializer.deserialize_tuple(2, U95Visitor)
     }
 }
 

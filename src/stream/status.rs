@@ -167,9 +167,21 @@ impl Status {
         ((self.0 & Self::FAULT_MASK) >> Self::FAULT_SHIFT) as u8
     }
 
-    /// True if a report with this status may carry coordinates: a valid table and no fault.
+    /// True if the word can be what a hub sends: bit 0 (`TABLE_VALID`) set exactly when the
+    /// table state is 0 (valid), and a table state that is defined (0 to 8; 9 to 15 are
+    /// reserved). A hub builds its status from [`Status::for_table`], which keeps both; a word
+    /// that breaks them (F5 of `../shared/repro/round2`: bit 0 beside "bad signature") says
+    /// two things at once, and a host cannot tell which holds.
+    pub const fn is_coherent(self) -> bool {
+        let code = (self.0 & Self::TABLE_MASK) >> Self::TABLE_SHIFT;
+        TableState::from_code(code).is_some() && self.table_valid() == (code == 0)
+    }
+
+    /// True if a report with this status may carry coordinates: a valid table (bit 0 and table
+    /// state 0) and no fault.
     pub const fn is_measurement(self) -> bool {
         self.table_valid()
+            && self.0 & Self::TABLE_MASK == 0
             && self.0
                 & (Self::INPUT_ERROR
                     | Self::OVER_TEMPERATURE
@@ -193,6 +205,25 @@ mod tests {
                 assert_eq!(s.table_valid(), state == TableState::Valid);
                 assert_eq!(s.is_measurement(), state == TableState::Valid);
             }
+        }
+    }
+
+    /// F5 of `../shared/repro/round2`: bit 0 beside a table state other than 0 (0x0081 bad
+    /// signature, 0x0011 missing) is no measurement and no word a hub sends; nor is a
+    /// reserved state (9 to 15), nor state 0 without bit 0.
+    #[test]
+    fn bit_0_means_table_state_0_and_nothing_else() {
+        for code in 0..16u16 {
+            let defined = TableState::from_code(code).is_some();
+            let with_bit = Status(code << 4 | Status::TABLE_VALID);
+            let without = Status(code << 4);
+            assert_eq!(with_bit.is_coherent(), code == 0, "{with_bit:?}");
+            assert_eq!(without.is_coherent(), defined && code != 0, "{without:?}");
+            assert_eq!(with_bit.is_measurement(), code == 0, "{with_bit:?}");
+            assert!(!without.is_measurement());
+        }
+        for state in (0..9).filter_map(TableState::from_code) {
+            assert!(Status::for_table(state).is_coherent(), "{state:?}");
         }
     }
 

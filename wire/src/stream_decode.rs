@@ -18,6 +18,7 @@ use quatarm::stream::{
     decode_message, Coordinates, FrameError, FrameReader, Hello, ProbeAnswer, Report, Status,
     ToHost, UpdateAnswer, MAX_FRAME, PROTOCOL_VERSION,
 };
+use quatarm::table::probes::MAX_PROBES;
 use serde::Deserialize;
 
 /// A forward jump of the sequence number up to this size is a gap (lost reports); a larger
@@ -43,10 +44,9 @@ pub enum Item {
     /// The same report as the one before it, byte for byte (a frame repeated on the way):
     /// not a new reading, so not to be written again.
     Repeated(Report),
-    /// A report whose coordinates and status disagree: coordinates beside a fault bit or an
-    /// invalid table (here without them, as the status demands), or no coordinates without a
-    /// reason.
-    Inconsistent(Report),
+    /// A report that breaks a rule of `docs/protocol.md` that its frame's checks cannot see
+    /// (the reason is the second field): handed out without coordinates, whatever it carried.
+    Inconsistent(Report, Inconsistency),
     /// The hub's answer to a calibration update step (`docs/update.md`).
     Update(UpdateAnswer),
     /// The hub's answer to a probe selection: the id now mounted, or why not.
@@ -59,7 +59,9 @@ impl Item {
     /// The report to write out for this item, if any: every report except a repeated one.
     pub fn report(&self) -> Option<&Report> {
         match self {
-            Item::Report(r) | Item::Backward { report: r, .. } | Item::Inconsistent(r) => Some(r),
+            Item::Report(r) | Item::Backward { report: r, .. } | Item::Inconsistent(r, _) => {
+                Some(r)
+            }
             Item::Hello(_)
             | Item::Repeated(_)
             | Item::Update(_)
@@ -67,6 +69,41 @@ impl Item {
             | Item::Damaged(_) => None,
         }
     }
+}
+
+/// Why a report is [`Item::Inconsistent`]: each a rule of `docs/protocol.md` ("What a decoder
+/// refuses"), the first that applies in this order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Inconsistency {
+    /// The status word contradicts itself: bit 0 (valid table) beside a table state other
+    /// than 0, state 0 without bit 0, or a reserved state (9 to 15). F5 of
+    /// `../shared/repro/round2`.
+    Status,
+    /// Coordinates beside a status that forbids them (a fault bit, an invalid table).
+    Forbidden,
+    /// No coordinates although the status has no fault.
+    Missing,
+    /// A report of a probe the last `Hello` (protocol 4) does not list (0 where it lists none).
+    UnknownProbe,
+    /// A probe direction that is no unit vector (its length off 1 by more than
+    /// [`DIRECTION_TOLERANCE_E9`] units of 1e-9; a zero direction among them).
+    Direction,
+}
+
+/// How far a report's direction may be from unit length, in units of 1e-9 of its length
+/// (1e-3). Both chains give it within 1e-6 (`docs/protocol.md`); anything further is not a
+/// direction a hub computed.
+pub const DIRECTION_TOLERANCE_E9: i64 = 1_000_000;
+
+/// True if `dir_e9` is a unit vector within [`DIRECTION_TOLERANCE_E9`] (exact integer
+/// arithmetic: each component is an `i32`, so the squares sum in an `i128` without overflow).
+pub fn is_unit_direction(dir_e9: [i32; 3]) -> bool {
+    let len2: i128 = dir_e9.iter().map(|&c| i128::from(c) * i128::from(c)).sum();
+    let (lo, hi) = (
+        i128::from(1_000_000_000 - DIRECTION_TOLERANCE_E9),
+        i128::from(1_000_000_000 + DIRECTION_TOLERANCE_E9),
+    );
+    (lo * lo..=hi * hi).contains(&len2)
 }
 
 /// What a decoder has seen so far.
@@ -89,15 +126,16 @@ pub struct Stats {
     pub backward: u64,
     /// Reports that repeated the one before them exactly.
     pub repeated: u64,
-    /// Reports whose coordinates and status disagreed (see [`Item::Inconsistent`]).
+    /// Reports that broke a rule their frame's checks cannot see (see [`Inconsistency`]).
     pub inconsistent: u64,
     /// Frames whose CRC did not match.
     pub crc_errors: u64,
     /// Frames refused for another reason (COBS, length, undecodable after a good CRC).
     pub other_errors: u64,
     /// Of `other_errors`, frames whose CRC was good but which are not a message of this
-    /// protocol version (an unknown `ToHost` variant, a newer hub): reported apart because
-    /// they mean "wrong decoder", not "bad line".
+    /// protocol version (an unknown `ToHost` variant, a newer hub; or a field no encoder
+    /// writes: an option tag other than 0 or 1, a varint beyond its type, bytes left over):
+    /// reported apart because they mean "wrong or broken sender", not "bad line".
     pub undecodable: u64,
     /// `Hello`s announcing a `protocol` this decoder does not read (it reads 1 to
     /// [`PROTOCOL_VERSION`], 4: the same messages, protocol 2 adding `Hello::live` and the
@@ -133,6 +171,10 @@ pub struct Decoder {
     /// The protocol the last `Hello` announced, by which reports are read (`None` before the
     /// first).
     protocol: Option<u16>,
+    /// The probe ids a report may name: those the last `Hello` of protocol 4 listed (`[0]`
+    /// where it listed none: a hub without a valid table); `None` before one (a stream
+    /// joined mid-way, an older protocol), when any id passes.
+    probes: Option<heapless::Vec<u8, MAX_PROBES>>,
     stats: Stats,
 }
 
@@ -180,6 +222,7 @@ impl Decoder {
             last: None,
             open: 0,
             protocol: None,
+            probes: None,
             stats: Stats::default(),
         }
     }
@@ -236,6 +279,11 @@ impl Decoder {
                 let known = (1..=PROTOCOL_VERSION).contains(&h.protocol);
                 self.stats.foreign_protocol += u64::from(!known);
                 self.protocol = Some(if known { h.protocol } else { PROTOCOL_VERSION });
+                self.probes = match h.protocol {
+                    4 if h.probes.is_empty() => heapless::Vec::from_slice(&[0]).ok(),
+                    4 => Some(h.probes.clone()),
+                    _ => None,
+                };
                 Item::Hello(h)
             }
             Ok(ToHost::Report(r)) => self.report(r),
@@ -281,10 +329,10 @@ impl Decoder {
         }
         self.last = Some(r);
         self.stats.reports += 1;
-        if r.point.is_some() != r.status.is_measurement() {
+        if let Some(why) = self.inconsistency(&r) {
             self.stats.inconsistent += 1;
             r.point = None;
-            return Item::Inconsistent(r);
+            return Item::Inconsistent(r, why);
         }
         self.stats.points += u64::from(r.point.is_some());
         match backward {
@@ -294,6 +342,25 @@ impl Decoder {
             },
             None => Item::Report(r),
         }
+    }
+
+    /// The first rule of `docs/protocol.md` the report breaks that its frame's checks cannot
+    /// see, if any.
+    fn inconsistency(&self, r: &Report) -> Option<Inconsistency> {
+        let listed = |probes: &heapless::Vec<u8, MAX_PROBES>| probes.contains(&r.probe);
+        Some(if !r.status.is_coherent() {
+            Inconsistency::Status
+        } else if r.point.is_some() && !r.status.is_measurement() {
+            Inconsistency::Forbidden
+        } else if r.point.is_none() && r.status.is_measurement() {
+            Inconsistency::Missing
+        } else if !self.probes.as_ref().is_none_or(listed) {
+            Inconsistency::UnknownProbe
+        } else if r.point.is_some_and(|p| !is_unit_direction(p.dir_e9)) {
+            Inconsistency::Direction
+        } else {
+            return None;
+        })
     }
 
     /// Feeds a buffer; returns the items it completed.
@@ -550,7 +617,7 @@ mod tests {
         let items = d.push_all(&bytes);
         for item in &items[1..] {
             match item {
-                Item::Inconsistent(r) => assert_eq!(r.point, None),
+                Item::Inconsistent(r, _) => assert_eq!(r.point, None),
                 other => panic!("{other:?}"),
             }
         }

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
-use armcal::stream_decode::{Decoder, Item, Stats};
+use armcal::stream_decode::{Decoder, Inconsistency, Item, Stats};
 use quatarm::stream::{write_csv_line, CSV_HEADER, MAX_CSV_LINE, PROTOCOL_VERSION};
 
 /// Arguments of `armcal decode`.
@@ -153,13 +153,19 @@ fn note(item: &Item) {
             "# report {} where {expected} was due, without a hub restart: numbering restarts from it",
             report.seq
         ),
-        Item::Inconsistent(r) if r.status.is_measurement() => eprintln!(
-            "# report {} has no coordinates although its status {:#06x} has no fault",
-            r.seq, r.status.0
-        ),
-        Item::Inconsistent(r) => eprintln!(
-            "# report {} carries coordinates beside status {:#06x}, which forbids them: written without them",
-            r.seq, r.status.0
+        Item::Inconsistent(r, why) => eprintln!(
+            "# report {} (status {:#06x}, probe {}) {}: written without coordinates",
+            r.seq,
+            r.status.0,
+            r.probe,
+            match why {
+                Inconsistency::Status =>
+                    "has a status that contradicts itself (bit 0 means table state 0, states 9-15 are reserved)",
+                Inconsistency::Forbidden => "carries coordinates beside a status that forbids them",
+                Inconsistency::Missing => "has no coordinates although its status has no fault",
+                Inconsistency::UnknownProbe => "names a probe its hub's Hello does not list",
+                Inconsistency::Direction => "carries a direction that is no unit vector",
+            }
         ),
         Item::Report(_) => {}
     }
@@ -183,7 +189,7 @@ fn summarise(s: &Stats, name: &str, total: u64, head: &[u8]) -> Result<()> {
     );
     if s.foreign_protocol > 0 || s.undecodable > 0 {
         eprintln!(
-            "# {name}: {} Hello(s) of a protocol other than versions 1–{PROTOCOL_VERSION}, {} frame(s) with a good CRC that are no message of version {PROTOCOL_VERSION}: this hub speaks another protocol version",
+            "# {name}: {} Hello(s) of a protocol other than versions 1–{PROTOCOL_VERSION}, {} frame(s) with a good CRC that are no message of version {PROTOCOL_VERSION}: a hub of another protocol version, or a sender that breaks it (an option tag other than 0 or 1, an overlong varint; docs/protocol.md)",
             s.foreign_protocol, s.undecodable
         );
     }
