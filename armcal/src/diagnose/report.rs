@@ -249,6 +249,8 @@ pub struct Report {
     pub gain_percent: f64,
     /// The finding in a sentence.
     pub verdict: String,
+    /// Degrees of freedom of the held-out paired t-tests: the held-out units less one.
+    pub holdout_t_df: usize,
     /// The arm's name.
     pub arm: String,
     /// The data.
@@ -350,6 +352,7 @@ pub fn build(d: &Diagnosis, data: &Dataset, figures: &[Figure]) -> Report {
         extended: model_report(&d.extended),
         gain_percent: d.gain_percent(),
         verdict,
+        holdout_t_df: d.held_out_units.saturating_sub(1),
         arm: arm.name.clone().unwrap_or_else(|| "(unnamed)".into()),
         data: DataReport {
             file: data.source.clone(),
@@ -556,6 +559,7 @@ impl Report {
     pub fn text(&self) -> String {
         let mut s = String::new();
         self.write_data(&mut s);
+        self.write_headline(&mut s);
         self.write_models(&mut s);
         self.write_causes(&mut s);
         self.write_selection(&mut s);
@@ -695,14 +699,19 @@ impl Report {
             }
             let _ = writeln!(
                 s,
-                "    evidence: in sample F = {:.1} (p = {:.1e}); on held-out data (refits) a gain of \
-                 {:.1} standard errors (p = {:.1e})",
+                "    evidence: in sample F = {:.1} (p = {:.1e}); on held-out data (refits) paired t = {:.1} \
+                 on {} degrees of freedom (one-sided p = {:.1e})",
                 c.evidence.f_statistic,
                 c.evidence.p_value,
                 c.evidence.holdout_z,
+                self.holdout_t_df,
                 c.evidence.holdout_p_value
             );
         }
+    }
+
+    /// The headline, first: the verdict and the held-out gain.
+    fn write_headline(&self, s: &mut String) {
         let _ = writeln!(s, "\n{}", self.verdict);
         let _ = writeln!(
             s,
@@ -717,13 +726,14 @@ impl Report {
         let _ = writeln!(
             s,
             "\nselection: {} candidates; a cause needs in sample p < {:.1e} (F-test, α = {} \
-             over the candidates) and on held-out data p < {:.3} (paired t-test over the units)",
+             over the candidates) and on held-out data p < {:.3} (paired t-test over the held-out units, \
+             their number less one degrees of freedom)",
             sel.candidates, sel.p_cut, sel.alpha, sel.holdout_p_cut
         );
         for st in &sel.steps {
             let _ = writeln!(
                 s,
-                "  {:<6} {:<28} F = {:>9.1}  p = {:.1e}  held-out z = {:>5.1}  p = {:.1e}",
+                "  {:<6} {:<28} F = {:>9.1}  p = {:.1e}  held-out t = {:>5.1}  p = {:.1e} (at this step)",
                 st.action,
                 st.score.term,
                 st.score.f_statistic,
@@ -737,7 +747,7 @@ impl Report {
             for c in &sel.strongest_left_out {
                 let _ = writeln!(
                     s,
-                    "    {:<28} F = {:>9.2}  p = {:.1e}  held-out z = {:>5.1}  p = {:.1e}",
+                    "    {:<28} F = {:>9.2}  p = {:.1e}  held-out t = {:>5.1}  p = {:.1e}",
                     c.term, c.f_statistic, c.p_value, c.holdout_z, c.holdout_p_value
                 );
             }
@@ -745,7 +755,7 @@ impl Report {
         for r in &self.rejected {
             let _ = writeln!(
                 s,
-                "  rejected {}: did not hold on held-out refits (gain {:.1} standard errors, p = {:.2})",
+                "  rejected {}: did not hold on held-out refits (paired t = {:.1}, p = {:.2})",
                 r.term, r.holdout_z, r.holdout_p_value
             );
         }
