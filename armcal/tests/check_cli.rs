@@ -222,7 +222,8 @@ fn u_comes_from_the_budget_unless_the_mpe_file_gives_it() {
     let mut text = std::fs::read_to_string(dir.join("truth.toml")).unwrap();
     text.push_str("\n[uncertainty]\nprobing_mm = 0.002\n");
     std::fs::write(dir.join("budget.toml"), text).unwrap();
-    let run = |mpe: &str| {
+    // The verdict is the exit code: 2 (cannot decide) with the budget's U, 0 with the file's.
+    let run = |mpe: &str, code: i32| {
         std::fs::write(dir.join("mpe.toml"), mpe).unwrap();
         let args = [
             "check",
@@ -232,13 +233,26 @@ fn u_comes_from_the_budget_unless_the_mpe_file_gives_it() {
             "--mpe",
             "mpe.toml",
         ];
-        let v = json(&dir, &[&args[..], &["--json"]].concat());
-        let text = String::from_utf8_lossy(&armcal_ok(&args, &dir).stdout).into_owned();
-        (v, text)
+        let o = armcal(&[&args[..], &["--json"]].concat(), &dir);
+        assert_eq!(
+            o.status.code(),
+            Some(code),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+        let o = armcal(&args, &dir);
+        assert_eq!(
+            o.status.code(),
+            Some(code),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        (v, String::from_utf8_lossy(&o.stdout).into_owned())
     };
     // The noise-free bar's error is 0; U (2 sd of two means of five 2 µm probings) is
     // 2.5 µm: against an MPE of 2 µm only U keeps the decision from a pass.
-    let (v, text) = run("E_Uni = 0.002\n");
+    let (v, text) = run("E_Uni = 0.002\n", 2);
     for t in v["tests"].as_array().unwrap() {
         let u = t["U_um"].as_f64().unwrap();
         assert!((u - 2.53).abs() < 0.5, "{t}");
@@ -248,7 +262,7 @@ fn u_comes_from_the_budget_unless_the_mpe_file_gives_it() {
     }
     assert!(text.contains("from the budget"), "{text}");
     assert!(!text.contains("U = 0"), "{text}");
-    let (v, text) = run("E_Uni = 0.002\ntest_uncertainty = { E_Uni = 0.0005 }\n");
+    let (v, text) = run("E_Uni = 0.002\ntest_uncertainty = { E_Uni = 0.0005 }\n", 0);
     for t in v["tests"].as_array().unwrap() {
         assert_eq!(t["U_um"].as_f64().unwrap(), 0.5, "{t}");
         assert_eq!(t["u_source"], "mpe_file", "{t}");
