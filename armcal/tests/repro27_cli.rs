@@ -4,25 +4,15 @@
 
 mod common;
 
-use common::{armcal, workdir};
+use common::armcal;
 use std::path::{Path, PathBuf};
-
-fn repro(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data/repro27")
-        .join(name)
-}
 
 /// A folder with the reproducer files copied in.
 fn dir_with(name: &str, files: &[&str]) -> PathBuf {
-    let d = workdir(name);
-    for f in files {
-        std::fs::copy(repro(f), d.join(f)).unwrap();
-    }
-    d
+    common::repro_dir("repro27", name, files)
 }
 
-/// Runs armcal, requires a refusal (exit 1 or 2, no panic, nothing on stdout) and returns
+/// Runs armcal, requires a refusal (exit 1 or 2, `check` 3; no panic, nothing on stdout) and returns
 /// its stderr.
 #[track_caller]
 fn refused(args: &[&str], dir: &Path) -> String {

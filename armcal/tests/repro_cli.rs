@@ -8,18 +8,12 @@ use common::{armcal, armcal_ok, workdir, write_truth};
 use std::path::{Path, PathBuf};
 
 fn repro(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data/repro")
-        .join(name)
+    common::repro_file("repro", name)
 }
 
 /// A folder with the reproducer files copied in.
 fn dir_with(name: &str, files: &[&str]) -> PathBuf {
-    let d = workdir(name);
-    for f in files {
-        std::fs::copy(repro(f), d.join(f)).unwrap();
-    }
-    d
+    common::repro_dir("repro", name, files)
 }
 
 /// Runs armcal, requires a refusal (exit 1, no panic) and returns its stderr.

@@ -77,3 +77,23 @@ pub fn png_size(path: &Path) -> (u32, u32) {
     let h = u32::from_be_bytes(b[20..24].try_into().unwrap());
     (w, h)
 }
+
+/// A folder with copies of reproducer inputs: `files` from `tests/data/SET/` (each set a copy
+/// of one of `../shared/repro/`'s folders, so the tests do not need `../shared`).
+#[allow(dead_code)]
+pub fn repro_dir(set: &str, name: &str, files: &[&str]) -> PathBuf {
+    let d = workdir(name);
+    for f in files {
+        std::fs::copy(repro_file(set, f), d.join(f)).unwrap();
+    }
+    d
+}
+
+/// One reproducer input, `tests/data/SET/NAME`.
+#[allow(dead_code)]
+pub fn repro_file(set: &str, name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(set)
+        .join(name)
+}
