@@ -9,7 +9,7 @@
 //! quantisation alone give) and with the calibrated geometric one (what the effect adds).
 
 use armcal::acceptance::{self, statistics::Test};
-use armcal::calib::{calibrate, Options};
+use armcal::fit::calib::{calibrate, Options};
 use armcal::data::Kind;
 use armcal::sim::{self, perturb, protocol, rng};
 use quatarm_ref::arm::{Arm, Harmonic};

@@ -10,7 +10,7 @@
 
 use armcal::diagnose::{self, scenario};
 use armcal::params::Effect;
-use armcal::residuals::compare_aligned;
+use armcal::fit::residuals::compare_aligned;
 use quatarm_ref::arm::Arm;
 use std::time::Instant;
 
@@ -80,8 +80,8 @@ fn main() {
         let poses = scenario::fresh_poses(seed, 2000);
         let fresh_g = compare_aligned(&d.baseline.fit.arm, &s.truth, &poses).rms_um;
         let fresh_e = compare_aligned(&d.extended.fit.arm, &s.truth, &poses).rms_um;
-        let floor = armcal::residuals::summarise(
-            &armcal::residuals::residuals(&s.truth, &data, None),
+        let floor = armcal::fit::residuals::summarise(
+            &armcal::fit::residuals::residuals(&s.truth, &data, None),
             &data,
         )
         .all
@@ -167,9 +167,9 @@ fn mukca() {
             .map(|c| format!("{} rejected on refits", c.effect.spec()))
             .collect();
         let score = |effects: &[Effect]| {
-            let o = armcal::calib::Options {
+            let o = armcal::fit::calib::Options {
                 terms: armcal::params::Terms::with(effects),
-                ..armcal::calib::Options::default()
+                ..armcal::fit::calib::Options::default()
             };
             mukca::loso(&unit, &o)
         };

@@ -13,8 +13,8 @@
 //!
 //!     cargo run --release -p armcal --example fleet_prior_mukca
 
-use armcal::calib::{Options, Prior, Ridge};
-use armcal::fleet_prior::{self, FleetPrior};
+use armcal::fit::calib::{Options, Prior, Ridge};
+use armcal::fit::fleet_prior::{self, FleetPrior};
 use armcal::mukca::{self, Unit};
 use quatarm_ref::arm::Arm;
 
@@ -39,7 +39,7 @@ fn without_conflict_test(mut o: Options) -> Options {
 }
 
 /// The protocol's fit itself (to say which priors it dropped).
-fn trial_fit(p2: &Unit, opts: &Options) -> (mukca::Trial, armcal::calib::Fit) {
+fn trial_fit(p2: &Unit, opts: &Options) -> (mukca::Trial, armcal::fit::calib::Fit) {
     let train = p2.group("front_center").expect("front_center");
     let high = p2.group("high").expect("high");
     let test: Vec<i64> = p2
@@ -53,7 +53,7 @@ fn trial_fit(p2: &Unit, opts: &Options) -> (mukca::Trial, armcal::calib::Fit) {
 /// A unit calibrated on all its sessions with the default options (least squares; all
 /// sessions together are not a degenerate pose set).
 fn calibrated(unit: &Unit) -> Arm {
-    armcal::calib::calibrate(&unit.arm, &unit.data, &Options::default())
+    armcal::fit::calib::calibrate(&unit.arm, &unit.data, &Options::default())
         .unwrap_or_else(|e| panic!("{}: {e}", unit.name))
         .arm
 }

@@ -1,8 +1,7 @@
 //! armcal: the logic behind the host tool, shared with the tests.
 //!
 //! The `armcal` binary (`src/main.rs`, one file per subcommand in `src/commands/`) is a thin
-//! layer over this library: calibrating an arm from measured data ([`calib`], [`lm`],
-//! [`jacobian`], [`ident`]), diagnosing what a residual pattern points to ([`diagnose`]),
+//! layer over this library: calibrating an arm from measured data ([`fit`]), diagnosing what a residual pattern points to ([`diagnose`]),
 //! simulating measurements ([`sim`]) and evaluating readings with the f64 reference or the
 //! firmware's chains ([`eval`], [`accuracy`]). Building the firmware's binary table
 //! ([`tablebuild`]) and decoding a hub's stream ([`stream_decode`]) are `quatarm-wire`'s,
@@ -59,32 +58,24 @@
 pub mod acceptance;
 pub mod accuracy;
 pub mod eval;
+pub mod fit;
 /// The table builder and stream decoder live in `quatarm-wire`, which the QEMU tests and
 /// `cargo xtask demo` use without the rest of the host tool.
 pub use quatarm_wire::{stream_decode, tablebuild};
 pub mod uncertainty;
 
-pub mod calib;
 pub mod data;
 pub mod diagnose;
 pub mod effects;
-pub mod fleet_prior;
-pub mod holdout;
 pub mod html;
-pub mod ident;
-pub mod jacobian;
 pub mod kinds;
 pub mod limits;
-pub mod lm;
 pub mod load;
 pub mod mukca;
 pub mod output;
 pub mod params;
 pub mod plausible;
-pub mod probes;
 pub mod progress;
-pub mod report;
-pub mod residuals;
 pub mod sim;
 pub mod stats;
 pub mod table_send;

@@ -9,9 +9,9 @@
 //! utils.py`); over several sessions they take the plain mean of the session scores. Nothing
 //! of a test session is fitted but what the metric itself defines: its two centres.
 
-use crate::calib::{calibrate, CalibError, Fit, Options, Ridge};
+use crate::fit::calib::{calibrate, CalibError, Fit, Options, Ridge};
 use crate::data::{self, Dataset};
-use crate::residuals::residuals;
+use crate::fit::residuals::residuals;
 use quatarm_ref::arm::Arm;
 use quatarm_ref::calfile;
 use serde::Serialize;

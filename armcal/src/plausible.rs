@@ -12,7 +12,7 @@
 use crate::acceptance::mpe::{Limit, Mpe};
 use crate::acceptance::statistics::Test;
 use crate::data::Dataset;
-use crate::probes::Mounted;
+use crate::fit::probes::Mounted;
 use quatarm_ref::arm::Arm;
 
 /// What the user accepts deliberately (`--accept-units`, `--accept-temperature`,

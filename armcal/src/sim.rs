@@ -301,7 +301,7 @@ impl<'a> Turns<'a> {
     /// see every probe the data has, the first too where rows leave the probe cell empty),
     /// in ascending order of id; the first alone, with no id, where the data use no other.
     fn like(arm: &'a Arm, like: &Dataset) -> Turns<'a> {
-        let used = crate::probes::used(arm, like);
+        let used = crate::fit::probes::used(arm, like);
         if used == [0] {
             return Turns {
                 turns: vec![(None, std::borrow::Cow::Borrowed(arm))],

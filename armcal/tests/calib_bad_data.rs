@@ -1,6 +1,6 @@
 //! Bad data gets a plain error, never a silent wrong fit.
 
-use armcal::calib::{calibrate, CalibError, Options};
+use armcal::fit::calib::{calibrate, CalibError, Options};
 use armcal::data::{Dataset, Kind, Row};
 use armcal::sim::{self, perturb, random_pose, rng, simulate};
 use quatarm_ref::arm::Arm;

@@ -231,8 +231,8 @@ fn sphere_rows_calibrate_with_spat_rows() {
         .map(|_| (armcal::sim::random_pose(&lim, &mut r), 20.0))
         .collect();
     let nominal =
-        armcal::residuals::compare_aligned(&quatarm_ref::Arm::default6(), &truth(), &poses);
-    let fitted = armcal::residuals::compare_aligned(&cal, &truth(), &poses);
+        armcal::fit::residuals::compare_aligned(&quatarm_ref::Arm::default6(), &truth(), &poses);
+    let fitted = armcal::fit::residuals::compare_aligned(&cal, &truth(), &poses);
     assert!(
         fitted.rms_um < nominal.rms_um / 10.0,
         "{fitted:?} vs {nominal:?}"

@@ -1,9 +1,9 @@
 //! Every extended effect of the spec is fittable: hidden in simulated data, fitted with the
 //! right terms, it is recovered within its uncertainty and the model predicts the truth.
 
-use armcal::calib::{calibrate, Options};
+use armcal::fit::calib::{calibrate, Options};
 use armcal::data::Kind;
-use armcal::ident::Why;
+use armcal::fit::ident::Why;
 use armcal::params::{Link, Param, Terms};
 use armcal::sim::{self, perturb, random_pose, rng, simulate};
 use quatarm_ref::arm::{Arm, Harmonic, Wobble};
@@ -103,7 +103,7 @@ fn hidden_effects_are_recovered() {
     let poses: Vec<(Vec<f64>, f64)> = (0..3000)
         .map(|k| (random_pose(&lim, &mut r), 16.0 + 12.0 * (k as f64 / 3000.0)))
         .collect();
-    let after = armcal::residuals::compare_aligned(&fit.arm, &t, &poses);
+    let after = armcal::fit::residuals::compare_aligned(&fit.arm, &t, &poses);
     println!("fresh poses: {after:?}");
     assert!(after.rms_um < 3.0, "{after:?}");
     // The written file carries every term.
@@ -172,7 +172,7 @@ fn an_axis_wobble_is_recovered() {
     let poses: Vec<(Vec<f64>, f64)> = (0..2000)
         .map(|_| (random_pose(&lim, &mut r), 20.0))
         .collect();
-    let after = armcal::residuals::compare_aligned(&fit.arm, &t, &poses);
+    let after = armcal::fit::residuals::compare_aligned(&fit.arm, &t, &poses);
     println!("fresh poses: {after:?}");
     assert!(after.rms_um < 3.0, "{after:?}");
     // The written file carries the wobble, and reads back to the same arm.

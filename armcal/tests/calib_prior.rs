@@ -1,13 +1,13 @@
-//! The fleet prior (`armcal::fleet_prior`, `armcal calibrate --fleet-prior`): a design whose
+//! The fleet prior (`armcal::fit::fleet_prior`, `armcal calibrate --fleet-prior`): a design whose
 //! units share a systematic error and scatter about it; five units calibrated from plenty of
 //! data give the prior of the sixth, calibrated from few rows.
 
 mod common;
 
-use armcal::calib::{self, Options, Prior};
+use armcal::fit::calib::{self, Options, Prior};
 use armcal::data::{Dataset, Kind};
-use armcal::fleet_prior::{self, Fallback};
-use armcal::residuals::compare_aligned;
+use armcal::fit::fleet_prior::{self, Fallback};
+use armcal::fit::residuals::compare_aligned;
 use armcal::sim::{self, perturb, random_pose, rng, simulate};
 use quatarm_ref::arm::{Arm, Axis};
 use quatarm_ref::calfile;

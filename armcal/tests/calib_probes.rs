@@ -4,7 +4,7 @@
 
 mod common;
 
-use armcal::calib::{calibrate, Options};
+use armcal::fit::calib::{calibrate, Options};
 use armcal::data::Kind;
 use armcal::sim::{self, perturb, rng, simulate};
 use common::{armcal, armcal_ok, workdir, write_truth};
@@ -54,7 +54,7 @@ fn fresh_rms_um(fit: &Arm, truth: &Arm) -> Vec<f64> {
             .map(|th| forward::forward(&m, th, 20.0).p)
             .collect()
     };
-    let frame = armcal::residuals::best_rigid(&tips(fit, 0), &tips(truth, 0));
+    let frame = armcal::fit::residuals::best_rigid(&tips(fit, 0), &tips(truth, 0));
     (0..truth.probe_count())
         .map(|k| {
             let (f, t) = (tips(fit, k), tips(truth, k));

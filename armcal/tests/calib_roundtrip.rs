@@ -1,9 +1,9 @@
 //! Round trips through the virtual arm: simulate an arm with random geometric errors, calibrate
 //! from its data alone, and compare the calibrated model with the truth on fresh poses.
 
-use armcal::calib::{calibrate, Fit, Options};
+use armcal::fit::calib::{calibrate, Fit, Options};
 use armcal::data::{Dataset, Kind};
-use armcal::residuals::compare_aligned;
+use armcal::fit::residuals::compare_aligned;
 use armcal::sim::{self, perturb, random_pose, rng, simulate};
 use quatarm_ref::arm::Arm;
 

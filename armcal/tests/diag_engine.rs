@@ -1,13 +1,13 @@
 //! The parts of the diagnosis: which candidates the data can test, and the linearised
 //! held-out validation the selection ranks them by, against real refits.
 
-use armcal::calib::{calibrate, Options};
+use armcal::fit::calib::{calibrate, Options};
 use armcal::data::Kind;
 use armcal::diagnose::candidates::{candidates, vocabulary};
 use armcal::diagnose::linear::{Linearisation, Set};
 use armcal::diagnose::scenario;
 use armcal::diagnose::select::unit_errors;
-use armcal::holdout;
+use armcal::fit::holdout;
 use armcal::params::{Effect, Link, Terms};
 use armcal::sim;
 use quatarm_ref::arm::Arm;

@@ -10,7 +10,7 @@ use armcal::data::Dataset;
 use armcal::diagnose::scenario::{self, Family, Scenario};
 use armcal::diagnose::{self, Diagnosis};
 use armcal::params::{Effect, Link};
-use armcal::residuals::{compare_aligned, residuals, summarise};
+use armcal::fit::residuals::{compare_aligned, residuals, summarise};
 use nalgebra::Vector3;
 use quatarm_ref::arm::{Arm, Harmonic, Wobble};
 

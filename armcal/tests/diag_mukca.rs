@@ -2,7 +2,7 @@
 //! must hold on sessions it did not fit — by the authors' own score, leaving each session out,
 //! and on separate recordings of the same arm — and where nothing holds it says none.
 
-use armcal::calib::Options;
+use armcal::fit::calib::Options;
 use armcal::diagnose::{self, FoldChoice};
 use armcal::mukca;
 use armcal::params::Terms;
@@ -81,7 +81,7 @@ fn named_causes_hold_on_sessions_not_fitted() {
         .expect("panda_3 names a cause");
     let p3 = mukca::load(&dir, "panda_3").unwrap();
     let fit = |terms: Terms| {
-        armcal::calib::calibrate(
+        armcal::fit::calib::calibrate(
             &p3.arm,
             &p3.data,
             &Options {

@@ -143,7 +143,7 @@ fn probing_is_estimated_from_the_scatter_of_repeated_probings() {
     let mut o = armcal::sim::Options::new(Kind::Length, 600);
     o.encoder_noise_counts = 1.0;
     let data = armcal::sim::simulate(&truth, &o, &mut rng).unwrap().data;
-    let fit = armcal::calib::calibrate(&nominal, &data, &Default::default()).unwrap();
+    let fit = armcal::fit::calib::calibrate(&nominal, &data, &Default::default()).unwrap();
     let s = Settings {
         encoder_counts: coverage::reading_sd(1.0),
         ..Settings::default()

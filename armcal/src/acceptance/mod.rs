@@ -87,7 +87,7 @@ pub struct EffectiveDiameter {
 /// The ball centres of every row by the calibrated model (the f64 reference, as
 /// `armcal eval` gives them).
 pub fn centres(arm: &Arm, data: &Dataset) -> Vec<Vector3<f64>> {
-    let mounted = crate::probes::Mounted::new(arm);
+    let mounted = crate::fit::probes::Mounted::new(arm);
     data.rows.iter().map(|r| mounted.tip(r)).collect()
 }
 
@@ -135,7 +135,7 @@ pub fn check(
     show_prediction: bool,
 ) -> Result<Check, StatError> {
     let d = arm.probe.ball_diameter;
-    let ball = |r: &crate::data::Row| crate::probes::ball_diameter(arm, r);
+    let ball = |r: &crate::data::Row| crate::fit::probes::ball_diameter(arm, r);
     let values = statistics::values(data, &centres(arm, data), &ball)?;
     // The ball of a sphere group's probe (one per group: the data reader's rule).
     let spheres = data.layout().sphere;
@@ -143,7 +143,7 @@ pub fn check(
         spheres
             .iter()
             .find(|g| g.group == group)
-            .map_or(d, |g| crate::probes::sphere_ball_diameter(arm, data, g))
+            .map_or(d, |g| crate::fit::probes::sphere_ball_diameter(arm, data, g))
     };
     let mut results = BTreeMap::new();
     let mut worst_group = BTreeMap::new();

@@ -50,7 +50,7 @@ pub fn predict(
         .map(|r| {
             jacobians(
                 arm,
-                crate::probes::index(arm, r),
+                crate::fit::probes::index(arm, r),
                 budget,
                 &r.theta,
                 r.temp_c,
@@ -80,7 +80,7 @@ pub fn predict(
                 p + Vector3::new(normal(&mut g), normal(&mut g), normal(&mut g)) * own
             })
             .collect();
-        for v in statistics::values(data, &p, &|r| crate::probes::ball_diameter(arm, r))? {
+        for v in statistics::values(data, &p, &|r| crate::fit::probes::ball_diameter(arm, r))? {
             samples
                 .entry((v.test, v.group))
                 .or_default()
@@ -121,7 +121,7 @@ fn ideal_centres(arm: &Arm, data: &Dataset) -> Result<Vec<Vector3<f64>>, StatErr
                 source,
             })?
             .centre;
-        let r = crate::probes::sphere_radius(arm, data, g);
+        let r = crate::fit::probes::sphere_radius(arm, data, g);
         for &i in &g.rows {
             x[i] = c + (x[i] - c).normalize() * r;
         }

@@ -1,8 +1,8 @@
 //! The uncertainty budget options of `calibrate` and `diagnose -o`, and the budget they write.
 
-use armcal::calib::Fit;
+use armcal::fit::calib::Fit;
 use armcal::data::Dataset;
-use armcal::holdout::Holdout;
+use armcal::fit::holdout::Holdout;
 use armcal::uncertainty::estimate::{self, Settings};
 use armcal::uncertainty::extrapolation::Support;
 use armcal::uncertainty::report::BudgetReport;

@@ -1,11 +1,11 @@
 //! `armcal calibrate`: identify an arm's parameters from measured data.
 
 use anyhow::Context;
-use armcal::calib::{self, Prior};
-use armcal::holdout;
+use armcal::fit::calib::{self, Prior};
+use armcal::fit::holdout;
 use armcal::params::Terms;
-use armcal::report;
-use armcal::residuals::{residuals, summarise};
+use armcal::fit::report;
+use armcal::fit::residuals::{residuals, summarise};
 use quatarm_ref::arm::Arm;
 use std::path::{Path, PathBuf};
 
@@ -105,7 +105,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     armcal::output::check(&outputs, &inputs)?;
     let data = armcal::data::read(&a.data, start.dof())?;
-    armcal::probes::check(&start, &data)?;
+    armcal::fit::probes::check(&start, &data)?;
     armcal::plausible::data(&start, &data, a.accept.accept())?;
     for w in &data.warnings {
         eprintln!("armcal: warning: {w}");
@@ -113,7 +113,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let fleet = if a.fleet_prior.is_empty() {
         None
     } else {
-        Some(armcal::fleet_prior::from_files(&start, &a.fleet_prior)?)
+        Some(armcal::fit::fleet_prior::from_files(&start, &a.fleet_prior)?)
     };
     let opts = options(&a, &terms, fleet.as_ref());
     let mut observer = armcal::progress::for_command(a.progress, "calibrating");
@@ -207,7 +207,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 fn options(
     a: &Args,
     terms: &Terms,
-    fleet: Option<&armcal::fleet_prior::FleetPrior>,
+    fleet: Option<&armcal::fit::fleet_prior::FleetPrior>,
 ) -> calib::Options {
     let mut opts = calib::Options {
         terms: terms.clone(),
@@ -234,7 +234,7 @@ fn options(
 /// the fleet's statistics (`None`: plain least squares).
 fn prior_report(
     a: &Args,
-    fleet: Option<armcal::fleet_prior::FleetPrior>,
+    fleet: Option<armcal::fit::fleet_prior::FleetPrior>,
     fit: &calib::Fit,
 ) -> Option<report::PriorReport> {
     let mut rule = Vec::new();

@@ -87,7 +87,7 @@ pub fn run(a: Args) -> anyhow::Result<i32> {
         armcal::plausible::mpe(m, &p.display().to_string(), accept)?;
     }
     let data = armcal::data::read(&a.data, arm.dof())?;
-    armcal::probes::check(&arm, &data)?;
+    armcal::fit::probes::check(&arm, &data)?;
     armcal::plausible::data(&arm, &data, accept)?;
     // Another arm's calibration is refused before any prediction or decision.
     let plain = acceptance::check(&arm, &data, None, None, false)

@@ -144,7 +144,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         }
     }
     let data = armcal::data::read(&data_path, start.dof())?;
-    armcal::probes::check(&start, &data)?;
+    armcal::fit::probes::check(&start, &data)?;
     armcal::plausible::data(&start, &data, a.accept.accept())?;
     for w in &data.warnings {
         eprintln!("armcal: warning: {w}");

@@ -93,7 +93,7 @@ fn flag_far(
     out: &str,
 ) -> anyhow::Result<String> {
     let data = armcal::data::read(seen, arm.dof())?;
-    armcal::probes::check(arm, &data)?;
+    armcal::fit::probes::check(arm, &data)?;
     let support =
         armcal::uncertainty::extrapolation::Support::of(arm, &data).with_context(|| {
             format!(

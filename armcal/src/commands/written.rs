@@ -3,7 +3,7 @@
 //! here rather than a file no command can use.
 
 use anyhow::bail;
-use armcal::probes::Mounted;
+use armcal::fit::probes::Mounted;
 use quatarm_ref::calfile;
 
 /// The calibration file's text, checked by reading it back (the budget too) and evaluating

@@ -5,7 +5,7 @@
 //! carries) but not their magnitudes or their geometry. So nothing is fitted across units:
 //! every unit gets its own geometric model, and every candidate of the single-arm vocabulary
 //! ([`super::candidates`]) is tried on each unit by real refits, its sessions held out one at
-//! a time ([`crate::holdout::by_group`]). The evidence of a unit for a candidate is how much the
+//! a time ([`crate::fit::holdout::by_group`]). The evidence of a unit for a candidate is how much the
 //! candidate lowers the held-out error of each of its sessions:
 //!
 //! y_s = ½ ln(SS_before,s / SS_after,s)   (the log of the held-out RMS ratio of session s)
@@ -60,9 +60,9 @@
 use super::candidates::{self, Candidates};
 use super::select::{compare, Confirmation};
 use super::{Cause, Options as DiagOptions};
-use crate::calib::{self, CalibError, Fit};
+use crate::fit::calib::{self, CalibError, Fit};
 use crate::data::Dataset;
-use crate::holdout::{self, Folds, Holdout};
+use crate::fit::holdout::{self, Folds, Holdout};
 use crate::params::{Effect, Terms};
 use crate::stats::{normal_tail, t_tail, MIN_UNITS};
 use quatarm_ref::arm::Arm;

@@ -23,8 +23,8 @@
 use super::Diagnosis;
 use crate::data::{Dataset, Kind};
 use crate::effects::{Effect, TipPoint, FAMILIES};
-use crate::probes::Mounted;
-use crate::residuals::Rigid;
+use crate::fit::probes::Mounted;
+use crate::fit::residuals::Rigid;
 use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;
 use quatarm_ref::forward;
@@ -45,7 +45,7 @@ pub struct RowGeometry {
 
 /// The geometry of every row of `data` under `arm`.
 pub fn geometry(arm: &Arm, data: &Dataset) -> Vec<RowGeometry> {
-    let mounted = crate::probes::Mounted::new(arm);
+    let mounted = crate::fit::probes::Mounted::new(arm);
     data.rows
         .iter()
         .map(|r| {

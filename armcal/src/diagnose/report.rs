@@ -20,7 +20,7 @@ use super::{Diagnosis, Model};
 use crate::data::{Dataset, Kind};
 use crate::effects::{Effect, FAMILIES};
 use crate::params::Link;
-use crate::report::{pretty_json, wrote};
+use crate::fit::report::{pretty_json, wrote};
 use serde::Serialize;
 use serde_json::Value;
 use std::fmt::Write as _;

@@ -42,8 +42,8 @@
 //!
 //! **Gauge.** Only what both recordings identify is compared. The unknowns the data cannot see
 //! (the base's place and turn for `length` and `spat` data, a rotation about the first axis)
-//! are held by the identifiability analysis ([`crate::ident`]) at their start values, and a kept
-//! unknown then stands for itself plus the held ones it absorbs ([`crate::calib::Fit::combination`]).
+//! are held by the identifiability analysis ([`crate::fit::ident`]) at their start values, and a kept
+//! unknown then stands for itself plus the held ones it absorbs ([`crate::fit::calib::Fit::combination`]).
 //! So a kept unknown is compared only when it is kept by both recordings and absorbs, in
 //! either, no unknown that the other one fits: otherwise the two numbers are estimates of
 //! different combinations. The frame is marginalised, never compared: each recording has its
@@ -55,9 +55,9 @@
 //! link shows. An arm is named by its first recording in file order.
 
 use super::fleet::{self, FleetError, UnitData};
-use crate::calib::Fit;
+use crate::fit::calib::Fit;
 use crate::data::Dataset;
-use crate::holdout::Holdout;
+use crate::fit::holdout::Holdout;
 use crate::params::Param;
 use crate::stats::{chi2_tail, f_tail};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
@@ -85,8 +85,8 @@ pub struct Geometry {
 
 /// The identified geometry of a recording's fit (`None` without a covariance).
 pub fn geometry(fit: &Fit, data: &Dataset, baseline: Option<&Holdout>) -> Option<Geometry> {
-    let in_sample = crate::residuals::summarise(
-        &crate::residuals::residuals(&fit.arm, data, fit.frame),
+    let in_sample = crate::fit::residuals::summarise(
+        &crate::fit::residuals::residuals(&fit.arm, data, fit.frame),
         data,
     );
     let (params, cov, inflation) =
@@ -187,7 +187,7 @@ pub fn chi2(a: &Geometry, b: &Geometry) -> Option<(f64, usize)> {
 /// recordings of one arm with its tool as mounted, read on different sessions. `None` with
 /// fewer than two sessions.
 pub fn halves(data: &Dataset) -> Option<(Dataset, Dataset)> {
-    let groups: Vec<i64> = crate::holdout::by_group(data)
+    let groups: Vec<i64> = crate::fit::holdout::by_group(data)
         .iter()
         .map(|f| data.rows[f[0]].group)
         .collect();

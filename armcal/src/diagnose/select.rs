@@ -22,16 +22,16 @@
 //! ## Confirmation (real refits)
 //! The causes are then added one at a time, in the order chosen, and each model is validated
 //! by refitting it on every fold's training part and judging the held-out part
-//! ([`crate::holdout::validate`]). A cause is named only if this real held-out error drops
+//! ([`crate::fit::holdout::validate`]). A cause is named only if this real held-out error drops
 //! significantly by the same paired t-test; one that does not is reported as rejected, with
 //! the numbers.
 
 use super::candidates::{Candidate, Candidates};
 use super::linear::{Linearisation, Set};
 use super::stats::{f_tail, normal_tail, Paired};
-use crate::calib::{calibrate, CalibError, Fit, Options};
+use crate::fit::calib::{calibrate, CalibError, Fit, Options};
 use crate::data::Dataset;
-use crate::holdout::{self, Folds, Holdout};
+use crate::fit::holdout::{self, Folds, Holdout};
 use crate::params::{Effect, Param, Terms};
 use quatarm_ref::arm::Arm;
 use std::collections::BTreeMap;

@@ -162,7 +162,7 @@ impl Term for Gravity {
 
     fn add_entry(&self, _arm: &mut Arm) {}
 
-    /// The first-order lever e_k = a_k · ((p − o_k) × ẑ) of the spec (see [`crate::jacobian`]).
+    /// The first-order lever e_k = a_k · ((p − o_k) × ẑ) of the spec (see [`crate::fit::jacobian`]).
     fn column(&self, _c: usize, at: &TipPoint) -> Vector3<f64> {
         let c = at.chain;
         let j = self.joint;

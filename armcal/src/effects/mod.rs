@@ -228,7 +228,7 @@ pub fn vocabulary(dof: usize, thermal: bool) -> Vec<Effect> {
 pub struct TipPoint<'a> {
     /// The arm as it measured the reading: its probe mounted (`Arm::for_probe`).
     pub arm: &'a Arm,
-    /// The index of that probe among the whole arm's (`crate::probes`): a term of another
+    /// The index of that probe among the whole arm's (`crate::fit::probes`): a term of another
     /// probe does not move this ball.
     pub probe: usize,
     /// Its chain at the reading.

@@ -41,13 +41,13 @@
 
 use crate::data::{Dataset, Layout};
 use crate::effects::FAMILIES;
-use crate::ident::{self, Fixed, Identifiability, RFactor, Why};
-use crate::jacobian::tip_jacobian;
+use crate::fit::ident::{self, Fixed, Identifiability, RFactor, Why};
+use crate::fit::jacobian::tip_jacobian;
 use crate::kinds;
-use crate::lm::{self, Normal};
+use crate::fit::lm::{self, Normal};
 use crate::params::{apply, frame_params, Param, Terms};
 use crate::progress::{Observer, Silent};
-use crate::residuals::{best_rigid, Rigid};
+use crate::fit::residuals::{best_rigid, Rigid};
 use crate::sim;
 use crate::stats::{chi2_tail, normal_tail_two_sided};
 use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, Vector3};
@@ -132,7 +132,7 @@ impl Ridge {
 ///
 /// Two sources, one implementation: a rule by class (`angle_rad`, `length_mm`: what an arm's
 /// drawings and tolerances say, centred on the start arm), and per-unknown Gaussians
-/// (`unknowns`: e.g. [`crate::fleet_prior`], the mean and spread of other units' errors) that
+/// (`unknowns`: e.g. [`crate::fit::fleet_prior`], the mean and spread of other units' errors) that
 /// replace the class rule and the ridge for their unknowns. Each prior unknown adds the
 /// residual (σ/s)·(x − m) to the cost, σ the data's noise, m and s the prior's mean and
 /// standard deviation.
@@ -355,7 +355,7 @@ impl<'a> Problem<'a> {
     /// a rotation of the whole arm about its base, the symmetry such data cannot see.
     pub fn visit(&self, s: &State, jac: bool, sink: &mut dyn FnMut(&[f64], &[f64])) {
         let arm = self.arm(s);
-        let mounted = crate::probes::Mounted::new(&arm);
+        let mounted = crate::fit::probes::Mounted::new(&arm);
         let n = self.kept.len();
         let na = self.arm_params.len();
         let rot = s.frame.rot;
@@ -476,7 +476,7 @@ impl<'a> Problem<'a> {
             sink(&br, &bj);
         }
         for g in &self.layout.sphere {
-            let radius = crate::probes::sphere_radius(&arm, self.data, g);
+            let radius = crate::fit::probes::sphere_radius(&arm, self.data, g);
             br.clear();
             bj.clear();
             let mut qs = Vec::with_capacity(g.rows.len());
@@ -687,7 +687,7 @@ pub fn start_frame(arm: &Arm, data: &Dataset, layout: &Layout) -> Rigid {
     if layout.points.is_empty() {
         return Rigid::identity();
     }
-    let mounted = crate::probes::Mounted::new(arm);
+    let mounted = crate::fit::probes::Mounted::new(arm);
     let ps: Vec<Vector3<f64>> = layout
         .points
         .iter()
@@ -709,7 +709,7 @@ pub fn start_frame(arm: &Arm, data: &Dataset, layout: &Layout) -> Rigid {
 pub fn unknowns(arm: &Arm, terms: &Terms, data: &Dataset) -> Vec<Param> {
     let mut all = terms.params(data.dof);
     if terms.geometric {
-        for k in crate::probes::used(arm, data)
+        for k in crate::fit::probes::used(arm, data)
             .into_iter()
             .filter(|&k| k > 0)
         {
@@ -987,7 +987,7 @@ fn check_structure(
             start.dof()
         )));
     }
-    crate::probes::check(start, data).map_err(|e| CalibError::Mismatch(e.to_string()))?;
+    crate::fit::probes::check(start, data).map_err(|e| CalibError::Mismatch(e.to_string()))?;
     let layout = data.layout();
     let all = unknowns(start, &opts.terms, data);
     let base = with_entries(start, &all);
@@ -1062,10 +1062,10 @@ fn check_structure(
 /// Every `sphere` group must fix a sphere at the start arm (four or more points, not in one
 /// plane), or its centre, which the fit eliminates, is not defined.
 fn check_sphere_groups(start: &Arm, data: &Dataset, layout: &Layout) -> Result<(), CalibError> {
-    let mounted = crate::probes::Mounted::new(start);
+    let mounted = crate::fit::probes::Mounted::new(start);
     for g in &layout.sphere {
         let qs: Vec<Vector3<f64>> = g.rows.iter().map(|&i| mounted.tip(&data.rows[i])).collect();
-        let radius = crate::probes::sphere_radius(start, data, g);
+        let radius = crate::fit::probes::sphere_radius(start, data, g);
         if let Err(e) = crate::acceptance::fit::centre_of(&qs, radius) {
             let line = g.rows.first().map_or(0, |&i| data.rows[i].line);
             return Err(CalibError::Mismatch(format!(
@@ -1536,7 +1536,7 @@ pub fn rotation_angle(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
 mod tests {
     use super::*;
     use crate::data::Kind;
-    use crate::residuals::compare_aligned;
+    use crate::fit::residuals::compare_aligned;
     use crate::sim::{perturb, random_pose, rng, simulate};
 
     #[test]

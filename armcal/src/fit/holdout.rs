@@ -7,9 +7,9 @@
 //! gather, how well the bar keeps its length and how round the sphere stays). Held-out `point` rows go through the
 //! instrument frame fitted on the other folds. Sessions are held out whole by [`by_group`].
 
-use crate::calib::{calibrate, CalibError, Options};
+use crate::fit::calib::{calibrate, CalibError, Options};
 use crate::data::{Dataset, Kind};
-use crate::residuals::{residuals, summarise, Residuals, Summary};
+use crate::fit::residuals::{residuals, summarise, Residuals, Summary};
 use crate::sim;
 use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;

@@ -407,7 +407,7 @@ pub fn weakest(
 /// σ² (JᵀJ)⁻¹, computed with unit-diagonal scaling; `None` when JᵀJ is singular.
 pub fn covariance(jtj: &DMatrix<f64>, sigma: f64) -> Option<DMatrix<f64>> {
     let k = jtj.nrows();
-    let (a, s) = crate::lm::unit_diagonal(jtj);
+    let (a, s) = crate::fit::lm::unit_diagonal(jtj);
     if s.contains(&0.0) {
         return None;
     }

@@ -29,7 +29,7 @@ use quatarm_ref::forward::{self, thermal_scale};
 /// probes' unknowns, which do not move this ball).
 ///
 /// `arm` is the arm as it measured the reading, its probe already mounted
-/// ([`Arm::for_probe`], [`crate::probes::Mounted::of`]), as [`TipPoint::arm`] is; `probe` is
+/// ([`Arm::for_probe`], [`crate::fit::probes::Mounted::of`]), as [`TipPoint::arm`] is; `probe` is
 /// that probe's index among the whole arm's (`quatarm_ref::Arm::probes` order), which the
 /// parameters' probe indices refer to.
 pub fn tip_jacobian(

@@ -5,7 +5,7 @@
 //! its Jacobian. The unknowns are scaled so that JᵀJ has a unit diagonal before the damped
 //! system is factored: this is Marquardt's scaling, which makes steps independent of the
 //! units (radians against millimetres against 1/°C) and keeps the Cholesky factor accurate.
-//! Unidentifiable directions must have been removed before (see [`crate::ident`]); a system
+//! Unidentifiable directions must have been removed before (see [`crate::fit::ident`]); a system
 //! that still cannot be factored is damped further rather than solved badly.
 //!
 //! States are opaque to the solver: the problem applies a step (`step`), so that a rotation

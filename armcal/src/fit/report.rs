@@ -1,12 +1,12 @@
 //! The calibration report: what was fitted, how well, with what uncertainty, and what the data
 //! could not determine — as text a person reads, or JSON a program reads (`--json`).
 
-use crate::calib::Fit;
+use crate::fit::calib::Fit;
 use crate::data::{Dataset, Kind};
-use crate::holdout::Holdout;
-use crate::ident::{Fixed, Why};
+use crate::fit::holdout::Holdout;
+use crate::fit::ident::{Fixed, Why};
 use crate::params::Param;
-use crate::residuals::Summary;
+use crate::fit::residuals::Summary;
 use serde::Serialize;
 use std::fmt::Write as _;
 
@@ -186,12 +186,12 @@ pub struct PriorReport {
     pub rule: String,
     /// The fleet prior, when there is one: its units and every unknown's statistics.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub fleet: Option<crate::fleet_prior::FleetPrior>,
+    pub fleet: Option<crate::fit::fleet_prior::FleetPrior>,
     /// Per-unknown priors the data contradicted, left to the rule for this fit.
     pub dropped: Vec<DroppedPrior>,
 }
 
-/// A per-unknown prior the data contradicted ([`crate::calib::PRIOR_CONFLICT_SIGMAS`]).
+/// A per-unknown prior the data contradicted ([`crate::fit::calib::PRIOR_CONFLICT_SIGMAS`]).
 #[derive(Clone, Debug, Serialize)]
 pub struct DroppedPrior {
     /// The calibration-file key.

@@ -86,7 +86,7 @@ pub struct Residuals {
 /// Residuals of `arm` on `data`. `point` rows go through `frame`, or through the best rigid
 /// frame for this arm when `None` (how an uncalibrated arm is judged fairly).
 pub fn residuals(arm: &Arm, data: &Dataset, frame: Option<Rigid>) -> Residuals {
-    let mounted = crate::probes::Mounted::new(arm);
+    let mounted = crate::fit::probes::Mounted::new(arm);
     let ps: Vec<Vector3<f64>> = data.rows.iter().map(|r| mounted.tip(r)).collect();
     residuals_of(&ps, data, frame, arm)
 }
@@ -137,7 +137,7 @@ pub fn residuals_of(
     }
     for g in &layout.sphere {
         let q: Vec<Vector3<f64>> = g.rows.iter().map(|&i| ps[i]).collect();
-        let radius = crate::probes::sphere_radius(arm, data, g);
+        let radius = crate::fit::probes::sphere_radius(arm, data, g);
         // A group whose points fix no sphere (coplanar, too few) was refused by the loader's
         // callers; its rows keep no residual rather than an invented one.
         if let Ok(c) = crate::acceptance::fit::centre_of(&q, radius) {

@@ -3,10 +3,10 @@
 //! report (every parameter with its uncertainty).
 
 use super::{header::Provenance, residuals, Document, Tone};
-use crate::calib::Fit;
+use crate::fit::calib::Fit;
 use crate::data::Dataset;
-use crate::holdout::Holdout;
-use crate::report::Report;
+use crate::fit::holdout::Holdout;
+use crate::fit::report::Report;
 
 /// The page.
 pub fn page(
@@ -42,8 +42,8 @@ pub fn page(
     }
     d.heading("Plots");
     let at = crate::acceptance::centres(&fit.arm, data);
-    let before = crate::residuals::residuals(&fit.start, data, None);
-    let after = crate::residuals::residuals(&fit.arm, data, fit.frame);
+    let before = crate::fit::residuals::residuals(&fit.start, data, None);
+    let after = crate::fit::residuals::residuals(&fit.arm, data, fit.frame);
     let all = |_: usize| true;
     let mut plots = vec![
         residuals::vectors("Residual vectors after the fit", &at, &after.rows, &all),

@@ -194,7 +194,7 @@ fn plots(c: &Check, arm: &Arm, data: &Dataset, mpe: Option<&Mpe>) -> Vec<(Plot, 
             .and_then(|t| t.articulation)
             .is_some();
         if articulated {
-            let ball = crate::probes::sphere_ball_diameter(arm, data, g);
+            let ball = crate::fit::probes::sphere_ball_diameter(arm, data, g);
             let Ok(cs) = statistics::articulation_centres(data, g, &centres, ball) else {
                 continue;
             };

@@ -16,9 +16,9 @@
 
 use super::estimate::{self, Settings};
 use super::{propagate, u95};
-use crate::calib::{self, Options};
+use crate::fit::calib::{self, Options};
 use crate::data::Kind;
-use crate::residuals::best_rigid;
+use crate::fit::residuals::best_rigid;
 use crate::sim::{self, SimRng};
 use nalgebra::{Matrix3, Vector3};
 use quatarm_ref::arm::Arm;
@@ -206,11 +206,11 @@ pub fn calibrated(setup: &Setup, k: usize) -> Result<Calibrated, super::BudgetEr
         model_mm: (setup.folds == 0).then_some(0.0),
     };
     let held = (setup.folds > 0).then(|| {
-        let folds = crate::holdout::kfold(&data, setup.folds, 0x0f01d);
-        crate::holdout::validate(&nominal, &data, &opts, &folds)
+        let folds = crate::fit::holdout::kfold(&data, setup.folds, 0x0f01d);
+        crate::fit::holdout::validate(&nominal, &data, &opts, &folds)
     });
-    let in_sample = crate::residuals::summarise(
-        &crate::residuals::residuals(&fit.arm, &data, fit.frame),
+    let in_sample = crate::fit::residuals::summarise(
+        &crate::fit::residuals::residuals(&fit.arm, &data, fit.frame),
         &data,
     )
     .all

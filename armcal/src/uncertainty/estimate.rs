@@ -18,9 +18,9 @@
 //! - Temperature: assumed (0 unless set).
 
 use super::{misfit, propagate, Budget, QUANTISATION_COUNTS};
-use crate::calib::Fit;
+use crate::fit::calib::Fit;
 use crate::data::{Dataset, Kind};
-use crate::holdout::Holdout;
+use crate::fit::holdout::Holdout;
 use nalgebra::DMatrix;
 
 /// What the caller sets; `None` lets the data decide where they can.
@@ -112,7 +112,7 @@ fn held_out_excess(fit: &Fit, holdout: &Holdout, in_sample_rms_um: f64) -> Optio
 /// fixed point from another pose) and the radial scatter of the `sphere` groups about their
 /// sphere of known radius: (sd, rows used), less the reading's own part.
 fn spat_probing(fit: &Fit, data: &Dataset, budget: &Budget) -> Option<(f64, usize)> {
-    let res = crate::residuals::residuals(&fit.arm, data, fit.frame);
+    let res = crate::fit::residuals::residuals(&fit.arm, data, fit.frame);
     let layout = data.layout();
     let groups = layout
         .spat
@@ -130,7 +130,7 @@ fn spat_probing(fit: &Fit, data: &Dataset, budget: &Budget) -> Option<(f64, usiz
             ss += res.rows[i].norm_squared();
             let r = &data.rows[i];
             let j = {
-                let probe = crate::probes::index(&fit.arm, r);
+                let probe = crate::fit::probes::index(&fit.arm, r);
                 propagate::jacobians(&fit.arm, probe, budget, &r.theta, r.temp_c)
             };
             own += propagate::own_terms(budget, &st, &j).trace();

@@ -46,7 +46,7 @@ pub struct ExtrapolationReport {
 impl Support {
     /// The support of `data` under the calibrated `arm`; `None` with fewer than two units.
     pub fn of(arm: &Arm, data: &Dataset) -> Option<Support> {
-        let mounted = crate::probes::Mounted::new(arm);
+        let mounted = crate::fit::probes::Mounted::new(arm);
         // One place per point row, spat point and bar end: probings of one place are one
         // unit, a bar's two ends two.
         let layout = data.layout();

@@ -100,7 +100,7 @@ pub fn scores(
     let inst = instrument_mm * instrument_mm;
     for &i in layout.points.iter().filter(|&&i| judged[i]) {
         let r = &data.rows[i];
-        let probe = crate::probes::index(arm, r);
+        let probe = crate::fit::probes::index(arm, r);
         let (_, s) = propagate::point(arm, probe, &b, &r.theta, r.temp_c);
         out.push(Score {
             deviation: res[i].norm(),

@@ -10,7 +10,7 @@
 //! rounding.
 
 use super::Budget;
-use crate::jacobian::tip_jacobian;
+use crate::fit::jacobian::tip_jacobian;
 use crate::params::Param;
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use quatarm_ref::arm::Arm;
@@ -140,7 +140,7 @@ pub fn group_deviations(
         .iter()
         .map(|&i| {
             let r = &data.rows[i];
-            jacobians(arm, crate::probes::index(arm, r), b, &r.theta, r.temp_c)
+            jacobians(arm, crate::fit::probes::index(arm, r), b, &r.theta, r.temp_c)
         })
         .collect();
     let own: Vec<Matrix3<f64>> = js.iter().map(|j| own_terms(b, &st, j)).collect();

@@ -14,7 +14,7 @@ use super::estimate::{self, Settings};
 use super::{propagate, u95, Budget};
 use crate::data::Dataset;
 use crate::mukca::{self, Unit};
-use crate::residuals::residuals;
+use crate::fit::residuals::residuals;
 use quatarm_ref::arm::Arm;
 use serde::Serialize;
 
@@ -71,7 +71,7 @@ fn hold_out(unit: &Unit, groups: &[i64], g: i64) -> Result<Held, super::BudgetEr
     let train: Vec<i64> = groups.iter().copied().filter(|x| *x != g).collect();
     let train_data = unit.sessions_data(&train);
     let opts = mukca::options(None);
-    let fit = crate::calib::calibrate(&unit.arm, &train_data, &opts)?;
+    let fit = crate::fit::calib::calibrate(&unit.arm, &train_data, &opts)?;
     let no_model = Settings {
         model_mm: Some(0.0),
         ..Settings::default()
@@ -79,11 +79,11 @@ fn hold_out(unit: &Unit, groups: &[i64], g: i64) -> Result<Held, super::BudgetEr
     let budget = estimate::from_fit(&fit, &train_data, None, 0.0, &no_model)?.budget;
     // As `calibrate --by-group` on the training sessions: each held out in turn, the model
     // term from their residuals.
-    let inner = crate::holdout::validate(
+    let inner = crate::fit::holdout::validate(
         &unit.arm,
         &train_data,
         &opts,
-        &crate::holdout::by_group(&train_data),
+        &crate::fit::holdout::by_group(&train_data),
     );
     let nested = if inner.folds > 1 {
         estimate::from_fit(&fit, &train_data, Some(&inner), 0.0, &Settings::default())?.budget
@@ -101,7 +101,7 @@ fn hold_out(unit: &Unit, groups: &[i64], g: i64) -> Result<Held, super::BudgetEr
         }
     }
     let far = super::extrapolation::Support::of(&fit.arm, &train_data).map_or(0.0, |sup| {
-        let m = crate::probes::Mounted::new(&fit.arm);
+        let m = crate::fit::probes::Mounted::new(&fit.arm);
         let n = test.rows.iter().filter(|r| sup.far(&m.tip(r))).count();
         n as f64 / test.rows.len().max(1) as f64
     });
