@@ -9,9 +9,10 @@
 //! quantisation alone give) and with the calibrated geometric one (what the effect adds).
 
 use armcal::acceptance::{self, statistics::Test};
-use armcal::fit::calib::{calibrate, Options};
 use armcal::data::Kind;
-use armcal::sim::{self, perturb, protocol, rng};
+use armcal::fit::calib::{calibrate, Options};
+use armcal::rng::rng;
+use armcal::sim::{self, perturb, protocol};
 use quatarm_ref::arm::{Arm, Harmonic};
 
 /// Adds one hidden effect to a truth arm.

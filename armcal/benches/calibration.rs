@@ -3,11 +3,12 @@
 //! `cargo bench -p armcal --bench calibration [-- speed|roundtrip|mukca …]` (all by default).
 //! Single-threaded throughout: the times are one core's.
 
-use armcal::fit::calib::{calibrate, Options, Ridge};
 use armcal::data::{Dataset, Kind, Row};
-use armcal::mukca;
+use armcal::fit::calib::{calibrate, Options, Ridge};
 use armcal::fit::residuals::compare_aligned;
-use armcal::sim::{self, perturb, random_pose, rng, simulate};
+use armcal::mukca;
+use armcal::rng::rng;
+use armcal::sim::{self, perturb, random_pose, simulate};
 use quatarm_ref::arm::Arm;
 use std::time::{Duration, Instant};
 

@@ -9,8 +9,8 @@
 //!     cargo bench -p armcal --bench diagnosis -- mukca         # the real robots
 
 use armcal::diagnose::{self, scenario};
-use armcal::params::Effect;
 use armcal::fit::residuals::compare_aligned;
+use armcal::params::Effect;
 use quatarm_ref::arm::Arm;
 use std::time::Instant;
 

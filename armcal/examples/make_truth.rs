@@ -11,7 +11,7 @@ fn main() {
         &quatarm_ref::Arm::default6(),
         3e-4,
         0.3,
-        &mut armcal::sim::rng(seed),
+        &mut armcal::rng::rng(seed),
     );
     let header = format!("default-6 with random geometric errors, seed {seed}");
     let text = quatarm_ref::calfile::write(&truth, &[&header]);

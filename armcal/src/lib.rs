@@ -59,6 +59,7 @@ pub mod acceptance;
 pub mod accuracy;
 pub mod eval;
 pub mod fit;
+pub mod geometry;
 /// The table builder and stream decoder live in `quatarm-wire`, which the QEMU tests and
 /// `cargo xtask demo` use without the rest of the host tool.
 pub use quatarm_wire::{stream_decode, tablebuild};
@@ -76,6 +77,7 @@ pub mod output;
 pub mod params;
 pub mod plausible;
 pub mod progress;
+pub mod rng;
 pub mod sim;
 pub mod stats;
 pub mod table_send;

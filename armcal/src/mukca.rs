@@ -9,8 +9,8 @@
 //! utils.py`); over several sessions they take the plain mean of the session scores. Nothing
 //! of a test session is fitted but what the metric itself defines: its two centres.
 
-use crate::fit::calib::{calibrate, CalibError, Fit, Options, Ridge};
 use crate::data::{self, Dataset};
+use crate::fit::calib::{calibrate, CalibError, Fit, Options, Ridge};
 use crate::fit::residuals::residuals;
 use quatarm_ref::arm::Arm;
 use quatarm_ref::calfile;

@@ -18,11 +18,12 @@
 //! same file on every machine.
 
 use crate::data::{Dataset, End, Kind, Row};
-use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use crate::geometry::{frame_matrix, reach};
+use crate::rng::{normal, rng, SimRng};
+use nalgebra::{Matrix3, Vector3};
 use quatarm_ref::arm::{Arm, Frame};
 use quatarm_ref::forward;
 use rand::Rng;
-use rand_chacha::ChaCha8Rng;
 use std::f64::consts::PI;
 
 pub mod protocol;
@@ -31,15 +32,6 @@ mod sphere;
 /// The touch directions of a `sphere` group of `n` points (upper hemisphere).
 pub fn sphere_directions(n: usize) -> Vec<Vector3<f64>> {
     sphere::directions(n, 0.0)
-}
-
-/// The generator every simulation uses.
-pub type SimRng = ChaCha8Rng;
-
-/// A seeded generator.
-pub fn rng(seed: u64) -> SimRng {
-    use rand::SeedableRng;
-    ChaCha8Rng::seed_from_u64(seed)
 }
 
 /// Joint travel: readings (rad) from `lo[k]` to `hi[k]`.
@@ -58,13 +50,6 @@ pub fn limits(arm: &Arm) -> Limits {
         .map(|k| if arm.is_hinge(k) { (-h, h) } else { (-PI, PI) })
         .unzip();
     Limits { lo, hi }
-}
-
-/// A standard normal draw (Box–Muller).
-pub fn normal(rng: &mut SimRng) -> f64 {
-    let u1: f64 = 1.0 - rng.gen::<f64>();
-    let u2: f64 = rng.gen::<f64>();
-    (-2.0 * u1.ln()).sqrt() * (2.0 * PI * u2).cos()
 }
 
 /// A pose drawn uniformly inside the limits.
@@ -112,32 +97,6 @@ pub fn random_frame(rng: &mut SimRng) -> Frame {
             rng.gen_range(-2000.0..2000.0),
             rng.gen_range(-2000.0..2000.0),
         ],
-    }
-}
-
-/// R_T of a frame as a matrix.
-pub fn frame_matrix(f: &Frame) -> Matrix3<f64> {
-    let [w, x, y, z] = f.rotation;
-    UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(w, x, y, z))
-        .to_rotation_matrix()
-        .into_inner()
-}
-
-/// A frame from a rotation matrix and a translation.
-///
-/// The nearest rotation by at most 100 iterations: nalgebra's `from_matrix` iterates until
-/// convergence, which a matrix holding NaN never reaches (a start arm with a 1e300 link hung
-/// `calibrate` here). A non-finite matrix gives a non-finite frame, which the calibration
-/// file's reader refuses.
-pub fn frame_from(r: &Matrix3<f64>, t: &Vector3<f64>) -> Frame {
-    let q = UnitQuaternion::from_matrix_eps(r, f64::EPSILON, 100, UnitQuaternion::identity());
-    let mut c = [q.w, q.i, q.j, q.k];
-    if c[0] < 0.0 {
-        c = c.map(|v| -v);
-    }
-    Frame {
-        rotation: c,
-        translation: [t.x, t.y, t.z],
     }
 }
 
@@ -390,15 +349,6 @@ pub struct Simulated {
     pub data: Dataset,
     /// The instrument frame (identity for spat and length data).
     pub frame: Frame,
-}
-
-/// The arm's reach: the sum of its link and probe lengths (mm).
-pub fn reach(arm: &Arm) -> f64 {
-    arm.joints
-        .iter()
-        .map(|j| Vector3::from(j.actual_link()).norm())
-        .sum::<f64>()
-        + Vector3::from(arm.probe.actual()).norm()
 }
 
 /// Why a simulation made no data.

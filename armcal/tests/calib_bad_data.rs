@@ -1,8 +1,9 @@
 //! Bad data gets a plain error, never a silent wrong fit.
 
-use armcal::fit::calib::{calibrate, CalibError, Options};
 use armcal::data::{Dataset, Kind, Row};
-use armcal::sim::{self, perturb, random_pose, rng, simulate};
+use armcal::fit::calib::{calibrate, CalibError, Options};
+use armcal::rng::rng;
+use armcal::sim::{self, perturb, random_pose, simulate};
 use quatarm_ref::arm::Arm;
 use quatarm_ref::forward;
 

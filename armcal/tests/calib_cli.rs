@@ -10,7 +10,7 @@ fn truth() -> quatarm_ref::Arm {
         &quatarm_ref::Arm::default6(),
         3e-4,
         0.3,
-        &mut armcal::sim::rng(3),
+        &mut armcal::rng::rng(3),
     )
 }
 
@@ -226,7 +226,7 @@ fn sphere_rows_calibrate_with_spat_rows() {
     // the scale is the weakest part of such a calibration; a bar fixes it far better).
     let cal = quatarm_ref::calfile::read(&d.join("cal.toml")).unwrap().arm;
     let lim = armcal::sim::limits(&cal);
-    let mut r = armcal::sim::rng(8);
+    let mut r = armcal::rng::rng(8);
     let poses: Vec<(Vec<f64>, f64)> = (0..2000)
         .map(|_| (armcal::sim::random_pose(&lim, &mut r), 20.0))
         .collect();

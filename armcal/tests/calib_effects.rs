@@ -1,11 +1,12 @@
 //! Every extended effect of the spec is fittable: hidden in simulated data, fitted with the
 //! right terms, it is recovered within its uncertainty and the model predicts the truth.
 
-use armcal::fit::calib::{calibrate, Options};
 use armcal::data::Kind;
+use armcal::fit::calib::{calibrate, Options};
 use armcal::fit::ident::Why;
 use armcal::params::{Link, Param, Terms};
-use armcal::sim::{self, perturb, random_pose, rng, simulate};
+use armcal::rng::rng;
+use armcal::sim::{self, perturb, random_pose, simulate};
 use quatarm_ref::arm::{Arm, Harmonic, Wobble};
 use quatarm_ref::forward;
 

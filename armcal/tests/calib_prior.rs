@@ -4,11 +4,12 @@
 
 mod common;
 
-use armcal::fit::calib::{self, Options, Prior};
 use armcal::data::{Dataset, Kind};
+use armcal::fit::calib::{self, Options, Prior};
 use armcal::fit::fleet_prior::{self, Fallback};
 use armcal::fit::residuals::compare_aligned;
-use armcal::sim::{self, perturb, random_pose, rng, simulate};
+use armcal::rng::rng;
+use armcal::sim::{self, perturb, random_pose, simulate};
 use quatarm_ref::arm::{Arm, Axis};
 use quatarm_ref::calfile;
 use std::path::{Path, PathBuf};

@@ -4,9 +4,10 @@
 
 mod common;
 
-use armcal::fit::calib::{calibrate, Options};
 use armcal::data::Kind;
-use armcal::sim::{self, perturb, rng, simulate};
+use armcal::fit::calib::{calibrate, Options};
+use armcal::rng::rng;
+use armcal::sim::{self, perturb, simulate};
 use common::{armcal, armcal_ok, workdir, write_truth};
 use nalgebra::Vector3;
 use quatarm_ref::arm::{Arm, Probe};

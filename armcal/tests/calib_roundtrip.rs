@@ -1,10 +1,11 @@
 //! Round trips through the virtual arm: simulate an arm with random geometric errors, calibrate
 //! from its data alone, and compare the calibrated model with the truth on fresh poses.
 
-use armcal::fit::calib::{calibrate, Fit, Options};
 use armcal::data::{Dataset, Kind};
+use armcal::fit::calib::{calibrate, Fit, Options};
 use armcal::fit::residuals::compare_aligned;
-use armcal::sim::{self, perturb, random_pose, rng, simulate};
+use armcal::rng::rng;
+use armcal::sim::{self, perturb, random_pose, simulate};
 use quatarm_ref::arm::Arm;
 
 fn fresh_poses(arm: &Arm, n: usize, seed: u64) -> Vec<(Vec<f64>, f64)> {

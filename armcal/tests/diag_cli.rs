@@ -33,7 +33,7 @@ fn simulate(dir: &Path, truth: &Arm, seed: &str) {
 }
 
 fn truth() -> Arm {
-    let mut t = armcal::sim::perturb(&Arm::default6(), 3e-4, 0.3, &mut armcal::sim::rng(21));
+    let mut t = armcal::sim::perturb(&Arm::default6(), 3e-4, 0.3, &mut armcal::rng::rng(21));
     t.joints[1].harmonics.push(Harmonic {
         order: 1,
         sin: 5e-5,
@@ -147,7 +147,7 @@ fn the_text_report_says_what_it_found() {
 #[test]
 fn noise_alone_is_reported_as_none() {
     let d = workdir("none");
-    let t = armcal::sim::perturb(&Arm::default6(), 3e-4, 0.3, &mut armcal::sim::rng(24));
+    let t = armcal::sim::perturb(&Arm::default6(), 3e-4, 0.3, &mut armcal::rng::rng(24));
     simulate(&d, &t, "25");
     let o = armcal_ok(&["diagnose", "points.csv", "--json", "-o", "ext.toml"], &d);
     let j: Value = serde_json::from_slice(&o.stdout).unwrap();
@@ -162,7 +162,7 @@ fn noise_alone_is_reported_as_none() {
 #[test]
 fn a_term_beyond_the_table_is_reported_and_no_table_is_written() {
     let d = workdir("table");
-    let mut t = armcal::sim::perturb(&Arm::default6(), 3e-4, 0.3, &mut armcal::sim::rng(26));
+    let mut t = armcal::sim::perturb(&Arm::default6(), 3e-4, 0.3, &mut armcal::rng::rng(26));
     t.joints[1].gravity = 8e-6; // beyond the table's 3e-6 rad/mm
     simulate(&d, &t, "27");
     std::fs::write(d.join("ext.bin"), b"stale").unwrap();

@@ -1,12 +1,12 @@
 //! The parts of the diagnosis: which candidates the data can test, and the linearised
 //! held-out validation the selection ranks them by, against real refits.
 
-use armcal::fit::calib::{calibrate, Options};
 use armcal::data::Kind;
 use armcal::diagnose::candidates::{candidates, vocabulary};
 use armcal::diagnose::linear::{Linearisation, Set};
 use armcal::diagnose::scenario;
 use armcal::diagnose::select::unit_errors;
+use armcal::fit::calib::{calibrate, Options};
 use armcal::fit::holdout;
 use armcal::params::{Effect, Link, Terms};
 use armcal::sim;
@@ -66,7 +66,7 @@ fn candidates_of_default6_with_and_without_temperatures() {
     let plain = sim::simulate(
         &s.truth,
         &sim::Options::new(Kind::Point, 200),
-        &mut sim::rng(5),
+        &mut armcal::rng::rng(5),
     )
     .unwrap()
     .data;

@@ -19,7 +19,7 @@ const MAX_ORDER: u32 = 2;
 /// (rad/mm) of joint 2, measured by a tracker: `rows` points, `sessions` sessions of equal
 /// size as groups.
 fn unit(seed: u64, g: f64, rows: usize, sessions: usize) -> Dataset {
-    let mut rng = sim::rng(seed);
+    let mut rng = armcal::rng::rng(seed);
     let mut truth = sim::perturb(&Arm::default6(), 3e-4, 0.3, &mut rng);
     truth.joints[1].gravity = g;
     let d = sim::simulate(&truth, &sim::Options::new(Kind::Point, rows), &mut rng)

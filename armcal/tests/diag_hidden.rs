@@ -9,8 +9,8 @@
 use armcal::data::Dataset;
 use armcal::diagnose::scenario::{self, Family, Scenario};
 use armcal::diagnose::{self, Diagnosis};
-use armcal::params::{Effect, Link};
 use armcal::fit::residuals::{compare_aligned, residuals, summarise};
+use armcal::params::{Effect, Link};
 use nalgebra::Vector3;
 use quatarm_ref::arm::{Arm, Harmonic, Wobble};
 
@@ -372,7 +372,7 @@ fn a_seven_axis_arm_is_diagnosed_too() {
     let nominal = quatarm_ref::calfile::read(&dir.join("mukca-panda-panda_2.toml"))
         .unwrap()
         .arm;
-    let mut truth = armcal::sim::perturb(&nominal, 3e-4, 0.3, &mut armcal::sim::rng(5));
+    let mut truth = armcal::sim::perturb(&nominal, 3e-4, 0.3, &mut armcal::rng::rng(5));
     truth.joints[3].harmonics.push(Harmonic {
         order: 2,
         sin: 5e-5,
@@ -382,7 +382,7 @@ fn a_seven_axis_arm_is_diagnosed_too() {
     truth.joints[4].thermal = 2e-5;
     let mut o = armcal::sim::Options::new(armcal::data::Kind::Point, 600);
     o.temp = Some((16.0, 28.0));
-    let data = armcal::sim::simulate(&truth, &o, &mut armcal::sim::rng(6))
+    let data = armcal::sim::simulate(&truth, &o, &mut armcal::rng::rng(6))
         .unwrap()
         .data;
     let d = diagnose::diagnose(&nominal, &data, &diagnose::Options::default()).unwrap();
@@ -398,7 +398,7 @@ fn a_seven_axis_arm_is_diagnosed_too() {
     assert!(zero.contains(&Effect::Thermal(Link::Joint(1))), "{zero:?}");
     assert!(zero.contains(&Effect::Thermal(Link::Joint(6))), "{zero:?}");
     let lim = armcal::sim::limits(&nominal);
-    let mut rng = armcal::sim::rng(7);
+    let mut rng = armcal::rng::rng(7);
     let poses: Vec<(Vec<f64>, f64)> = (0..2000)
         .map(|k| {
             (

@@ -2,8 +2,8 @@
 //! must hold on sessions it did not fit — by the authors' own score, leaving each session out,
 //! and on separate recordings of the same arm — and where nothing holds it says none.
 
-use armcal::fit::calib::Options;
 use armcal::diagnose::{self, FoldChoice};
+use armcal::fit::calib::Options;
 use armcal::mukca;
 use armcal::params::Terms;
 

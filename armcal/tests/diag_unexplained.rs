@@ -40,7 +40,9 @@ fn points(truth: &Arm, seed: u64, sag: Vec<Sag>) -> Dataset {
     let mut o = sim::Options::new(Kind::Point, 600);
     o.temp = Some((16.0, 28.0));
     o.sag = sag;
-    sim::simulate(truth, &o, &mut sim::rng(seed)).unwrap().data
+    sim::simulate(truth, &o, &mut armcal::rng::rng(seed))
+        .unwrap()
+        .data
 }
 
 #[test]
@@ -188,7 +190,7 @@ fn the_report_lists_unexplained_structure_and_draws_it() {
 #[test]
 fn simulate_sag_then_diagnose_reports_it_in_json() {
     let dir = common::workdir("sag");
-    let truth = armcal::sim::perturb(&Arm::default6(), 3e-4, 0.3, &mut sim::rng(31));
+    let truth = armcal::sim::perturb(&Arm::default6(), 3e-4, 0.3, &mut armcal::rng::rng(31));
     common::write_truth(&dir, &truth);
     let sim_args = |extra: &[&str]| {
         let mut v = vec![

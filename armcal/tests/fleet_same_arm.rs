@@ -13,13 +13,13 @@ use serde_json::Value;
 
 /// An arm of `default-6` with its own geometric errors (seed `arm`).
 fn arm(seed: u64) -> Arm {
-    sim::perturb(&Arm::default6(), 3e-4, 0.3, &mut sim::rng(seed))
+    sim::perturb(&Arm::default6(), 3e-4, 0.3, &mut armcal::rng::rng(seed))
 }
 
 /// A recording of `truth` by a tracker in a frame of its own: `rows` points of new poses and
 /// noise (seed `seed`), `sessions` sessions as groups.
 fn record(truth: &Arm, seed: u64, rows: usize, sessions: usize) -> Dataset {
-    let mut rng = sim::rng(seed);
+    let mut rng = armcal::rng::rng(seed);
     let d = sim::simulate(truth, &sim::Options::new(Kind::Point, rows), &mut rng)
         .unwrap()
         .data;

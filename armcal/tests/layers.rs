@@ -265,7 +265,9 @@ fn problems(
     }
     for (f, t) in known {
         if !edges.iter().any(|e| e.from == *f && e.to == *t) {
-            out.push(format!("known edge `{f} -> {t}` no longer occurs: remove it"));
+            out.push(format!(
+                "known edge `{f} -> {t}` no longer occurs: remove it"
+            ));
         }
     }
     let kept: Vec<&Edge> = edges.iter().filter(|e| !tolerated(e)).collect();

@@ -35,7 +35,7 @@ fn the_new_users_budget_covers_fresh_readings() {
     // Without the term the same budget is the false promise the issue reports.
     let mut b = c.budget.clone();
     b.model_mm = 0.0;
-    let mut rng = armcal::sim::rng(1);
+    let mut rng = armcal::rng::rng(1);
     let t0 = coverage::fresh(&c.truth, &c.arm, &b, &setup, &mut rng);
     assert!(t0.sphere() < 0.5, "{}", t0.sphere());
 }

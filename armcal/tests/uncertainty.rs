@@ -68,7 +68,7 @@ fn calibrate_writes_the_budget_and_eval_uses_it() {
         &quatarm_ref::Arm::default6(),
         3e-4,
         0.3,
-        &mut armcal::sim::rng(5),
+        &mut armcal::rng::rng(5),
     );
     write_truth(&d, &truth);
     #[rustfmt::skip]
@@ -138,7 +138,7 @@ fn probing_is_estimated_from_the_scatter_of_repeated_probings() {
     use armcal::data::Kind;
     use armcal::uncertainty::estimate::{from_fit, Settings};
     let nominal = quatarm_ref::Arm::default6();
-    let mut rng = armcal::sim::rng(8);
+    let mut rng = armcal::rng::rng(8);
     let truth = armcal::sim::perturb(&nominal, 3e-4, 0.3, &mut rng);
     let mut o = armcal::sim::Options::new(Kind::Length, 600);
     o.encoder_noise_counts = 1.0;

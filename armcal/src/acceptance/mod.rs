@@ -9,7 +9,6 @@
 //! - [`virtual_test`]: each statistic predicted from the calibration's uncertainty budget.
 //! - [`verdict`]: the overall decision and `armcal check`'s exit code.
 
-pub mod fit;
 pub mod mpe;
 pub mod plots;
 pub mod statistics;
@@ -140,10 +139,9 @@ pub fn check(
     // The ball of a sphere group's probe (one per group: the data reader's rule).
     let spheres = data.layout().sphere;
     let group_ball = |group: i64| {
-        spheres
-            .iter()
-            .find(|g| g.group == group)
-            .map_or(d, |g| crate::fit::probes::sphere_ball_diameter(arm, data, g))
+        spheres.iter().find(|g| g.group == group).map_or(d, |g| {
+            crate::fit::probes::sphere_ball_diameter(arm, data, g)
+        })
     };
     let mut results = BTreeMap::new();
     let mut worst_group = BTreeMap::new();

@@ -12,7 +12,7 @@
 //! A file is written only where the data has the groups it shows.
 
 use crate::data::Dataset;
-use crate::diagnose::patterns::{Figure, Legend, Panel};
+use crate::effects::figure::{Figure, Legend, Panel};
 use nalgebra::Vector3;
 
 /// A panel of measured points only.
@@ -55,7 +55,7 @@ pub fn figures(data: &Dataset, centres: &[Vector3<f64>]) -> Vec<Figure> {
         .iter()
         .filter_map(|g| {
             let pts: Vec<Vector3<f64>> = g.rows.iter().map(|&i| centres[i]).collect();
-            let s = super::fit::free(&pts).ok()?;
+            let s = crate::geometry::sphere::free(&pts).ok()?;
             let points = pts
                 .iter()
                 .map(|p| {

@@ -1,8 +1,8 @@
 //! The statistics of `spec/acceptance-tests.md`, each computed exactly as the spec writes it,
 //! from the ball centres the calibrated model gives for the rows (mm inside, µm in reports).
 
-use super::fit::{self, FitError};
 use crate::data::{Dataset, Layout, Row};
+use crate::geometry::sphere::{self as fit, FitError};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
 

@@ -14,7 +14,7 @@
 
 use super::statistics::{self, StatError, Test};
 use crate::data::Dataset;
-use crate::sim::{normal, rng};
+use crate::rng::{normal, rng};
 use crate::uncertainty::montecarlo::sqrt_cov;
 use crate::uncertainty::propagate::{jacobians, Jacobians};
 use crate::uncertainty::Budget;
@@ -115,7 +115,7 @@ fn ideal_centres(arm: &Arm, data: &Dataset) -> Result<Vec<Vector3<f64>>, StatErr
     let layout = data.layout();
     for g in &layout.sphere {
         let p: Vec<Vector3<f64>> = g.rows.iter().map(|&i| x[i]).collect();
-        let c = super::fit::free(&p)
+        let c = crate::geometry::sphere::free(&p)
             .map_err(|source| StatError::Fit {
                 group: g.group,
                 source,

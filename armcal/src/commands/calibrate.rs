@@ -3,9 +3,9 @@
 use anyhow::Context;
 use armcal::fit::calib::{self, Prior};
 use armcal::fit::holdout;
-use armcal::params::Terms;
 use armcal::fit::report;
 use armcal::fit::residuals::{residuals, summarise};
+use armcal::params::Terms;
 use quatarm_ref::arm::Arm;
 use std::path::{Path, PathBuf};
 
@@ -113,7 +113,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let fleet = if a.fleet_prior.is_empty() {
         None
     } else {
-        Some(armcal::fit::fleet_prior::from_files(&start, &a.fleet_prior)?)
+        Some(armcal::fit::fleet_prior::from_files(
+            &start,
+            &a.fleet_prior,
+        )?)
     };
     let opts = options(&a, &terms, fleet.as_ref());
     let mut observer = armcal::progress::for_command(a.progress, "calibrating");

@@ -229,7 +229,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             mm: um * 1e-3,
         });
     }
-    let mut rng = sim::rng(a.seed);
+    let mut rng = armcal::rng::rng(a.seed);
     let s = match a.test {
         Some(_) => sim::protocol::iso_10360_12(&truth, &opts, &mut rng)?,
         None => sim::simulate(&truth, &opts, &mut rng)?,

@@ -20,8 +20,8 @@
 //!   whose unknowns the geometry absorbs (an order-1 axis wobble: its co-rotating half is the
 //!   next link's frame turned) is tested with that part held.
 
-use crate::fit::calib::{structural, unknowns};
 use crate::data::Dataset;
+use crate::fit::calib::{structural, unknowns};
 use crate::fit::ident::{Fixed, Identifiability, Why};
 use crate::params::{Effect, Param, Terms};
 use quatarm_ref::arm::Arm;

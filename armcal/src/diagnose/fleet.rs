@@ -60,8 +60,8 @@
 use super::candidates::{self, Candidates};
 use super::select::{compare, Confirmation};
 use super::{Cause, Options as DiagOptions};
-use crate::fit::calib::{self, CalibError, Fit};
 use crate::data::Dataset;
+use crate::fit::calib::{self, CalibError, Fit};
 use crate::fit::holdout::{self, Folds, Holdout};
 use crate::params::{Effect, Terms};
 use crate::stats::{normal_tail, t_tail, MIN_UNITS};

@@ -22,8 +22,8 @@
 use super::fleet::{Fleet, Level, Pooled, Pooling, UnitResult, UnitTest};
 use super::report::{cause_report, CauseReport};
 use super::same_arm::{Arms, Pair};
-use crate::params::Effect;
 use crate::fit::report::pretty_json;
+use crate::params::Effect;
 use serde::Serialize;
 use serde_json::Value;
 use std::fmt::Write as _;

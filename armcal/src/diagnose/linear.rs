@@ -16,12 +16,12 @@
 //! diagnosis gives are still checked with real refits on held-out data before they are
 //! reported ([`super::select`]).
 
-use crate::fit::calib::{Fit, Problem, State};
 use crate::data::Dataset;
+use crate::fit::calib::{Fit, Problem, State};
 use crate::fit::holdout::Folds;
 use crate::fit::lm::unit_diagonal;
-use crate::params::Param;
 use crate::fit::residuals::Rigid;
+use crate::params::Param;
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 
 /// A linear model around the fit: the columns fitted freely, and columns held at a fixed step

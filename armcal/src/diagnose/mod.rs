@@ -32,12 +32,12 @@ pub mod select;
 pub mod unexplained;
 pub use crate::stats;
 
-use crate::fit::calib::{self, CalibError, Fit};
 use crate::data::Dataset;
+use crate::fit::calib::{self, CalibError, Fit};
 use crate::fit::holdout::{self, Folds, Holdout};
-use crate::params::{Effect, Param};
 use crate::fit::probes::Mounted;
 use crate::fit::residuals::{residuals, summarise, Summary};
+use crate::params::{Effect, Param};
 use candidates::Candidates;
 use quatarm_ref::arm::Arm;
 use select::{Confirmation, Selection, Settings};

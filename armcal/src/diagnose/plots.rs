@@ -6,7 +6,7 @@
 //! through plotters' `ab_glyph` support, so the pictures come out the same on a machine with
 //! no fonts installed (plotters' default `ttf` feature asks the system for them).
 
-use super::patterns::{Figure, Legend, Panel};
+use crate::effects::figure::{Figure, Legend, Panel};
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 use std::path::{Path, PathBuf};

@@ -15,12 +15,12 @@
 //! compliance g (rad/mm) or an expansion coefficient κ (1/°C), as the extended calibration file
 //! holds it (for an indistinguishable pair: the named link carrying the pair's expansion).
 
-use super::patterns::Figure;
 use super::{Diagnosis, Model};
 use crate::data::{Dataset, Kind};
+use crate::effects::figure::Figure;
 use crate::effects::{Effect, FAMILIES};
-use crate::params::Link;
 use crate::fit::report::{pretty_json, wrote};
+use crate::params::Link;
 use serde::Serialize;
 use serde_json::Value;
 use std::fmt::Write as _;

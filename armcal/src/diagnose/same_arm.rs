@@ -55,8 +55,8 @@
 //! link shows. An arm is named by its first recording in file order.
 
 use super::fleet::{self, FleetError, UnitData};
-use crate::fit::calib::Fit;
 use crate::data::Dataset;
+use crate::fit::calib::Fit;
 use crate::fit::holdout::Holdout;
 use crate::params::Param;
 use crate::stats::{chi2_tail, f_tail};

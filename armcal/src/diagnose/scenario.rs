@@ -20,7 +20,8 @@
 
 use crate::data::Kind;
 use crate::params::{Effect, Link};
-use crate::sim::{self, SimRng};
+use crate::rng::SimRng;
+use crate::sim;
 use quatarm_ref::arm::Arm;
 use rand::Rng;
 
@@ -103,7 +104,7 @@ fn set(arm: &mut Arm, e: Effect, rng: &mut SimRng) {
 
 /// A scenario with effects of the given families (empty: the null case).
 pub fn with_families(seed: u64, families: &[Family]) -> Scenario {
-    let mut rng = sim::rng(seed);
+    let mut rng = crate::rng::rng(seed);
     let mut truth = sim::perturb(&Arm::default6(), 3e-4, 0.3, &mut rng);
     let mut hidden: Vec<Effect> = Vec::new();
     for &f in families {
@@ -127,7 +128,7 @@ pub fn with_families(seed: u64, families: &[Family]) -> Scenario {
 
 /// A scenario of one or two effects of random families.
 pub fn draw(seed: u64) -> Scenario {
-    let mut rng = sim::rng(seed ^ 0x5ce7a410);
+    let mut rng = crate::rng::rng(seed ^ 0x5ce7a410);
     let pick = |rng: &mut SimRng| match rng.gen_range(0..3) {
         0 => Family::Harmonic,
         1 => Family::Gravity,
@@ -143,14 +144,14 @@ pub fn draw(seed: u64) -> Scenario {
 pub fn points(s: &Scenario, count: usize) -> crate::data::Dataset {
     let mut o = sim::Options::new(Kind::Point, count);
     o.temp = Some((16.0, 28.0));
-    sim::simulate(&s.truth, &o, &mut sim::rng(s.seed.wrapping_add(1)))
+    sim::simulate(&s.truth, &o, &mut crate::rng::rng(s.seed.wrapping_add(1)))
         .expect("simulating point data")
         .data
 }
 
 /// `spat` and `length` readings of the scenario's truth (no instrument), 16–28 °C.
 pub fn spat_length(s: &Scenario, spat: usize, length: usize) -> crate::data::Dataset {
-    let mut rng = sim::rng(s.seed.wrapping_add(2));
+    let mut rng = crate::rng::rng(s.seed.wrapping_add(2));
     let mut o = sim::Options::new(Kind::Spat, spat);
     o.temp = Some((16.0, 28.0));
     let a = sim::simulate(&s.truth, &o, &mut rng)
@@ -175,7 +176,7 @@ pub fn spat_length(s: &Scenario, spat: usize, length: usize) -> crate::data::Dat
 pub fn fresh_poses(seed: u64, count: usize) -> Vec<(Vec<f64>, f64)> {
     let arm = Arm::default6();
     let lim = sim::limits(&arm);
-    let mut rng = sim::rng(seed.wrapping_add(3));
+    let mut rng = crate::rng::rng(seed.wrapping_add(3));
     (0..count)
         .map(|_| {
             let th = sim::random_pose(&lim, &mut rng);

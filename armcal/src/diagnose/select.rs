@@ -29,8 +29,8 @@
 use super::candidates::{Candidate, Candidates};
 use super::linear::{Linearisation, Set};
 use super::stats::{f_tail, normal_tail, Paired};
-use crate::fit::calib::{calibrate, CalibError, Fit, Options};
 use crate::data::Dataset;
+use crate::fit::calib::{calibrate, CalibError, Fit, Options};
 use crate::fit::holdout::{self, Folds, Holdout};
 use crate::params::{Effect, Param, Terms};
 use quatarm_ref::arm::Arm;

@@ -26,14 +26,15 @@
 //! test of every variable is one family: Holm's step-down at level `alpha` (default
 //! [`ALPHA`], the selection's in-sample level), and the p reported is Holm-adjusted.
 
-use super::patterns::{binned, geometry, missing, Figure, Panel};
+use super::patterns::{geometry, missing};
 use super::Model;
 use crate::data::{Dataset, Kind};
+use crate::effects::figure::{binned, Figure, Panel, RowGeometry};
 use crate::effects::TipPoint;
 use crate::fit::jacobian::tip_jacobian;
-use crate::params::Param;
 use crate::fit::probes::Mounted;
 use crate::fit::residuals::residuals;
+use crate::params::Param;
 use crate::stats::f_tail;
 use nalgebra::{DMatrix, DVector, Vector3};
 use quatarm_ref::forward;
@@ -218,7 +219,7 @@ fn doubts(
     model: &Model,
     data: &Dataset,
     miss: &[Vector3<f64>],
-    geo: &[super::patterns::RowGeometry],
+    geo: &[RowGeometry],
     centrings: usize,
     s: &Test,
     alpha: f64,
@@ -347,10 +348,10 @@ fn least_squares(cols: &[Vec<Vector3<f64>>], y: &[Vector3<f64>]) -> Option<Solve
 }
 
 /// Every test the data support.
-fn tests(model: &Model, data: &Dataset, geo: &[super::patterns::RowGeometry]) -> Vec<Test> {
+fn tests(model: &Model, data: &Dataset, geo: &[RowGeometry]) -> Vec<Test> {
     let n = data.rows.len();
     let dof = data.dof;
-    let reach = crate::sim::reach(&model.fit.arm);
+    let reach = crate::geometry::reach(&model.fit.arm);
     let mut out = Vec::new();
     for k in 0..dof {
         // A joint whose axis passes through the ball (|t_k| ≈ 0) shows no angle.
@@ -513,7 +514,7 @@ fn span(x: &[f64]) -> (f64, f64) {
 }
 
 /// The test's columns at row i: 3-vectors.
-fn columns(t: &Test, i: usize, geo: &[super::patterns::RowGeometry]) -> Vec<Vector3<f64>> {
+fn columns(t: &Test, i: usize, geo: &[RowGeometry]) -> Vec<Vector3<f64>> {
     match t.form {
         Form::Angle(k) => t.functions.iter().map(|f| geo[i].turn[k] * f[i]).collect(),
         Form::Displacement => t
@@ -530,12 +531,7 @@ fn columns(t: &Test, i: usize, geo: &[super::patterns::RowGeometry]) -> Vec<Vect
 
 /// The least-squares fit of the residuals `miss` on the test's columns and its F-test; `held`
 /// counts the degrees of freedom the model's fit took. `None`: nothing to fit.
-fn regress(
-    t: &Test,
-    miss: &[Vector3<f64>],
-    geo: &[super::patterns::RowGeometry],
-    held: usize,
-) -> Option<Fitted> {
+fn regress(t: &Test, miss: &[Vector3<f64>], geo: &[RowGeometry], held: usize) -> Option<Fitted> {
     let n = miss.len();
     let cols: Vec<Vec<Vector3<f64>>> = (0..n).map(|i| columns(t, i, geo)).collect();
     let Solved {
@@ -566,7 +562,7 @@ fn structure(
     f: &Fitted,
     p: f64,
     miss: &[Vector3<f64>],
-    geo: &[super::patterns::RowGeometry],
+    geo: &[RowGeometry],
     n: usize,
 ) -> Structure {
     let rms_um = 1e3 * (f.ss / n.max(1) as f64).sqrt();
@@ -651,7 +647,7 @@ pub fn figure(s: &Search) -> Option<Figure> {
         })
         .collect();
     Some(Figure {
-        legend: super::patterns::Legend::Unexplained,
+        legend: crate::effects::figure::Legend::Unexplained,
         file: FILE.into(),
         title: "What the named causes leave, against the variables it depends on".into(),
         caption: format!(

@@ -1,10 +1,12 @@
 //! `gravity_compliance`: a hinge bends under the weight beyond it, by g (rad/mm) times its
 //! gravity lever a · ((p − o) × ẑ). One unknown per joint: g.
 
-use super::{joint_args, joints_of, Effect, Family, Term, TermsError, TipPoint};
-use crate::diagnose::patterns::{Figure, Patterns};
+use super::figure::{Figure, Legend, Patterns};
+use super::{
+    joint_args, joints_of, Describe, Draw, Effect, Family, Simulate, Term, TermsError, TipPoint,
+};
 use crate::params::{Link, Param};
-use crate::sim::SimRng;
+use crate::rng::SimRng;
 use nalgebra::Vector3;
 use quatarm::table::limits::GRAVITY;
 use quatarm_ref::arm::Arm;
@@ -45,38 +47,6 @@ impl Family for Compliances {
         (0..dof).map(Effect::Gravity).collect()
     }
 
-    fn figure(&self, at: &Patterns) -> Option<Figure> {
-        let geo = &at.geo;
-        let mut panels = Vec::new();
-        for k in 0..at.data.dof {
-            let span = geo.iter().map(|g| g.lever[k].abs()).fold(0.0, f64::max);
-            if span < 1.0 {
-                continue;
-            }
-            let Some(cut) = at.cut_of(k) else { continue };
-            panels.push(at.panel(
-                format!("joint {}", k + 1),
-                format!("joint {} gravity lever a·((p − o) × z) (mm)", k + 1),
-                "apparent angle error (µrad)".into(),
-                Some(Effect::Gravity(k)).filter(|e| at.named(*e)),
-                &|i, m| {
-                    let t = geo[i].turn[k];
-                    let t2 = t.norm_squared();
-                    (t2.sqrt() >= cut && t2 > 0.0).then(|| (geo[i].lever[k], 1e6 * t.dot(m) / t2))
-                },
-            ));
-        }
-        Some(Figure {
-            legend: crate::diagnose::patterns::Legend::Models,
-            file: "residuals_vs_gravity_lever.png".into(),
-            title: "What the model misses, as each joint's angle error, against its gravity lever"
-                .into(),
-            caption: "A gravity compliance shows as a straight line through 0 (slope g in µrad/mm)"
-                .into(),
-            panels,
-        })
-    }
-
     fn beyond_table(&self, arm: &Arm, at: Link) -> Vec<String> {
         let Link::Joint(k) = at else {
             return Vec::new();
@@ -99,29 +69,43 @@ impl Family for Compliances {
     }
 }
 
+impl Draw for Compliances {
+    fn figure(&self, at: &Patterns) -> Option<Figure> {
+        let geo = &at.geo;
+        let mut panels = Vec::new();
+        for k in 0..at.data.dof {
+            let span = geo.iter().map(|g| g.lever[k].abs()).fold(0.0, f64::max);
+            if span < 1.0 {
+                continue;
+            }
+            let Some(cut) = at.cut_of(k) else { continue };
+            panels.push(at.panel(
+                format!("joint {}", k + 1),
+                format!("joint {} gravity lever a·((p − o) × z) (mm)", k + 1),
+                "apparent angle error (µrad)".into(),
+                Some(Effect::Gravity(k)).filter(|e| at.named(*e)),
+                &|i, m| {
+                    let t = geo[i].turn[k];
+                    let t2 = t.norm_squared();
+                    (t2.sqrt() >= cut && t2 > 0.0).then(|| (geo[i].lever[k], 1e6 * t.dot(m) / t2))
+                },
+            ));
+        }
+        Some(Figure {
+            legend: Legend::Models,
+            file: "residuals_vs_gravity_lever.png".into(),
+            title: "What the model misses, as each joint's angle error, against its gravity lever"
+                .into(),
+            caption: "A gravity compliance shows as a straight line through 0 (slope g in µrad/mm)"
+                .into(),
+            panels,
+        })
+    }
+}
+
 impl Term for Gravity {
     fn family(&self) -> &'static dyn Family {
         &FAMILY
-    }
-
-    fn spec(&self) -> String {
-        format!("+{KEY}:{}", self.joint + 1)
-    }
-
-    fn describe(&self) -> String {
-        format!("joint {} gravity compliance", self.joint + 1)
-    }
-
-    fn physical(&self) -> &'static str {
-        " (the joint bends under the weight beyond it)"
-    }
-
-    fn location(&self) -> Value {
-        Value::from(self.joint + 1)
-    }
-
-    fn order(&self) -> Option<u32> {
-        None
     }
 
     fn coefficients(&self) -> usize {
@@ -134,10 +118,6 @@ impl Term for Gravity {
 
     fn key(&self, _c: usize) -> String {
         format!("joint[{}].gravity", self.joint + 1)
-    }
-
-    fn describe_param(&self, _c: usize) -> String {
-        self.describe()
     }
 
     fn unit(&self) -> &'static str {
@@ -169,13 +149,27 @@ impl Term for Gravity {
         let lever = c.axes[j].dot(&(c.p - c.origins[j]).cross(&Vector3::z()));
         at.turn(j) * lever
     }
+}
 
-    fn magnitude(&self, values: &[(f64, f64)], _rho: f64) -> (f64, f64) {
-        values[0]
+impl Describe for Gravity {
+    fn spec(&self) -> String {
+        format!("+{KEY}:{}", self.joint + 1)
     }
 
-    fn phasor(&self, _values: &[f64]) -> Option<(f64, f64)> {
-        None
+    fn describe(&self) -> String {
+        format!("joint {} gravity compliance", self.joint + 1)
+    }
+
+    fn physical(&self) -> &'static str {
+        " (the joint bends under the weight beyond it)"
+    }
+
+    fn location(&self) -> Value {
+        Value::from(self.joint + 1)
+    }
+
+    fn describe_param(&self, _c: usize) -> String {
+        self.describe()
     }
 
     fn no_effect_reason(&self, _arm: &Arm, _thermal: bool) -> Option<String> {
@@ -185,7 +179,9 @@ impl Term for Gravity {
             self.joint + 1
         ))
     }
+}
 
+impl Simulate for Gravity {
     fn set_typical(&self, arm: &mut Arm, rng: &mut SimRng) {
         arm.joints[self.joint].gravity = rng.gen_range(2e-8..4e-8);
     }

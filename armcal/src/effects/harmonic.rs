@@ -2,13 +2,14 @@
 //! e(θ) = s·sin(hθ) + c·cos(hθ) (rad), added to the joint's angle. Order 1 is the disc's
 //! eccentricity, order 2 its ellipticity. Two unknowns per term: s (0) and c (1).
 
+use super::figure::{Figure, Legend, Patterns};
 use super::{
-    parse_periodic, periodic_entry, periodic_vocabulary, Effect, Family, Term, TermsError, TipPoint,
+    parse_periodic, periodic_entry, periodic_vocabulary, Describe, Draw, Effect, Family, Simulate,
+    Term, TermsError, TipPoint,
 };
 use crate::data::Dataset;
-use crate::diagnose::patterns::{Figure, Patterns};
 use crate::params::{Link, Param};
-use crate::sim::SimRng;
+use crate::rng::SimRng;
 use nalgebra::Vector3;
 use quatarm::table::limits::HARMONIC_SUM;
 use quatarm_ref::arm::{Arm, Harmonic as Entry};
@@ -100,6 +101,43 @@ impl Family for Harmonics {
         })
     }
 
+    fn beyond_table(&self, arm: &Arm, at: Link) -> Vec<String> {
+        let Link::Joint(k) = at else {
+            return Vec::new();
+        };
+        let j = &arm.joints[k];
+        let mut out = Vec::new();
+        let n = j
+            .harmonics
+            .iter()
+            .filter(|h| h.sin != 0.0 || h.cos != 0.0)
+            .count();
+        if n > quatarm::table::MAX_HARMONICS {
+            out.push(format!(
+                "joint {} has {n} harmonic terms; the table holds {}",
+                k + 1,
+                quatarm::table::MAX_HARMONICS
+            ));
+        }
+        let sum: f64 = j.harmonics.iter().map(|h| h.sin.abs() + h.cos.abs()).sum();
+        if sum > HARMONIC_SUM {
+            out.push(format!(
+                "joint {} harmonics: Σ|coefficients| = {sum:.3e} rad; the table holds {HARMONIC_SUM:e} rad",
+                k + 1
+            ));
+        }
+        out
+    }
+
+    fn clear(&self, arm: &mut Arm) {
+        for h in arm.joints.iter_mut().flat_map(|j| &mut j.harmonics) {
+            h.sin = 0.0;
+            h.cos = 0.0;
+        }
+    }
+}
+
+impl Draw for Harmonics {
     fn figure(&self, at: &Patterns) -> Option<Figure> {
         let (data, geo) = (at.data, &at.geo);
         let mut skipped = Vec::new();
@@ -143,7 +181,7 @@ impl Family for Harmonics {
             );
         }
         Some(Figure {
-            legend: crate::diagnose::patterns::Legend::Models,
+            legend: Legend::Models,
             file: "residuals_vs_joint_angle.png".into(),
             title:
                 "What the model misses, as each joint's angle error, against the joint's reading"
@@ -152,74 +190,11 @@ impl Family for Harmonics {
             panels,
         })
     }
-
-    fn beyond_table(&self, arm: &Arm, at: Link) -> Vec<String> {
-        let Link::Joint(k) = at else {
-            return Vec::new();
-        };
-        let j = &arm.joints[k];
-        let mut out = Vec::new();
-        let n = j
-            .harmonics
-            .iter()
-            .filter(|h| h.sin != 0.0 || h.cos != 0.0)
-            .count();
-        if n > quatarm::table::MAX_HARMONICS {
-            out.push(format!(
-                "joint {} has {n} harmonic terms; the table holds {}",
-                k + 1,
-                quatarm::table::MAX_HARMONICS
-            ));
-        }
-        let sum: f64 = j.harmonics.iter().map(|h| h.sin.abs() + h.cos.abs()).sum();
-        if sum > HARMONIC_SUM {
-            out.push(format!(
-                "joint {} harmonics: Σ|coefficients| = {sum:.3e} rad; the table holds {HARMONIC_SUM:e} rad",
-                k + 1
-            ));
-        }
-        out
-    }
-
-    fn clear(&self, arm: &mut Arm) {
-        for h in arm.joints.iter_mut().flat_map(|j| &mut j.harmonics) {
-            h.sin = 0.0;
-            h.cos = 0.0;
-        }
-    }
 }
 
 impl Term for Harmonic {
     fn family(&self) -> &'static dyn Family {
         &FAMILY
-    }
-
-    fn spec(&self) -> String {
-        format!("+{KEY}:{}:{}", self.joint + 1, self.order)
-    }
-
-    fn describe(&self) -> String {
-        format!(
-            "joint {} encoder harmonic of order {}",
-            self.joint + 1,
-            self.order
-        )
-    }
-
-    fn physical(&self) -> &'static str {
-        match self.order {
-            1 => " (encoder disc eccentricity)",
-            2 => " (encoder disc ellipticity)",
-            _ => "",
-        }
-    }
-
-    fn location(&self) -> Value {
-        Value::from(self.joint + 1)
-    }
-
-    fn order(&self) -> Option<u32> {
-        Some(self.order)
     }
 
     fn coefficients(&self) -> usize {
@@ -237,15 +212,6 @@ impl Term for Harmonic {
     fn key(&self, c: usize) -> String {
         format!(
             "joint[{}].harmonics(order={}).{}",
-            self.joint + 1,
-            self.order,
-            sin_cos(c)
-        )
-    }
-
-    fn describe_param(&self, c: usize) -> String {
-        format!(
-            "joint {} encoder harmonic order {} ({})",
             self.joint + 1,
             self.order,
             sin_cos(c)
@@ -300,6 +266,45 @@ impl Term for Harmonic {
         let a = f64::from(self.order) * at.theta[self.joint];
         at.turn(self.joint) * if c == 1 { a.cos() } else { a.sin() }
     }
+}
+
+impl Describe for Harmonic {
+    fn spec(&self) -> String {
+        format!("+{KEY}:{}:{}", self.joint + 1, self.order)
+    }
+
+    fn describe(&self) -> String {
+        format!(
+            "joint {} encoder harmonic of order {}",
+            self.joint + 1,
+            self.order
+        )
+    }
+
+    fn physical(&self) -> &'static str {
+        match self.order {
+            1 => " (encoder disc eccentricity)",
+            2 => " (encoder disc ellipticity)",
+            _ => "",
+        }
+    }
+
+    fn location(&self) -> Value {
+        Value::from(self.joint + 1)
+    }
+
+    fn order(&self) -> Option<u32> {
+        Some(self.order)
+    }
+
+    fn describe_param(&self, c: usize) -> String {
+        format!(
+            "joint {} encoder harmonic order {} ({})",
+            self.joint + 1,
+            self.order,
+            sin_cos(c)
+        )
+    }
 
     fn magnitude(&self, values: &[(f64, f64)], rho: f64) -> (f64, f64) {
         let ((s, us), (co, uc)) = (values[0], values[1]);
@@ -312,11 +317,9 @@ impl Term for Harmonic {
     fn phasor(&self, values: &[f64]) -> Option<(f64, f64)> {
         Some((values[0], values[1]))
     }
+}
 
-    fn no_effect_reason(&self, _arm: &Arm, _thermal: bool) -> Option<String> {
-        None
-    }
-
+impl Simulate for Harmonic {
     fn set_typical(&self, arm: &mut Arm, rng: &mut SimRng) {
         let amp = rng.gen_range(25e-6..120e-6);
         let phase = rng.gen_range(0.0..std::f64::consts::TAU);

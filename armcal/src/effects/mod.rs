@@ -3,26 +3,35 @@
 //!
 //! An effect is a family of terms of `spec/arm-model.md` beyond the geometric model (an encoder
 //! harmonic, a gravity compliance, a thermal expansion). Each lives in one module that
-//! implements two traits:
-//! - [`Family`]: what holds for every term of the effect — its key, how `--terms` spells it,
-//!   the candidates a diagnosis tries, the figure its residual pattern shows in, the firmware
-//!   table's limits, how a skeleton arm clears it;
-//! - [`Term`]: one term (joint 2's harmonic of order 1) — its unknowns with their keys, units,
-//!   plausible sizes and Jacobian columns, its description, its magnitude in a report.
+//! implements its contract, split by concern:
+//! - [`Family`]: what holds for every term of the effect — its key, how `--terms` spells and
+//!   parses it, the candidates a diagnosis tries, the firmware table's limits, how a skeleton
+//!   arm clears it;
+//! - [`Draw`]: the figure its residual pattern shows in, drawn from the [`figure::Patterns`]
+//!   the diagnosis computes (default: none);
+//! - [`Term`]: the model's maths of one term (joint 2's harmonic of order 1) — its unknowns
+//!   with their keys, units, plausible sizes, values in an arm and Jacobian columns;
+//! - [`Describe`]: the term in words and its magnitude in a report (defaults for a term of one
+//!   unknown that is not periodic);
+//! - [`Simulate`]: a typical size of the term, for the diagnosis's scenarios.
 //!
-//! Neither trait has default methods, so a new effect must answer every question; and the only
-//! exhaustive matches over [`Effect`] and the effect unknowns of [`Param`] are in this file, so
-//! a new variant that is not registered here does not compile. `docs/adding-an-effect.md` lists
-//! the steps.
+//! Defaults are given only where one answer is right for most effects; every other question a
+//! new effect must answer. The only exhaustive matches over [`Effect`] and the effect unknowns
+//! of [`Param`] are in this file, so a new variant that is not registered here does not
+//! compile. `docs/adding-an-effect.md` lists the steps.
+//!
+//! This is the model layer: the effects import the parameters, the data and the leaf modules
+//! ([`crate::rng`]), never the fit, the diagnosis or the simulation.
 
+pub mod figure;
 pub mod gravity;
 pub mod harmonic;
 pub mod thermal;
 pub mod wobble;
 
-use crate::diagnose::patterns::{Figure, Patterns};
 use crate::params::{Link, Param};
-use crate::sim::SimRng;
+use crate::rng::SimRng;
+use figure::{Figure, Patterns};
 use nalgebra::{Matrix3, Vector3};
 use quatarm_ref::arm::Arm;
 use quatarm_ref::forward::{tilt_axis, Chain};
@@ -58,9 +67,11 @@ pub enum Effect {
 #[error("{0}")]
 pub struct TermsError(pub String);
 
-/// What holds for every term of one effect. Implemented by a unit struct per effect module and
-/// registered once in [`FAMILIES`].
-pub trait Family: Sync {
+/// What holds for every term of one effect: how `--terms` spells and parses it, which terms
+/// there are, what the firmware's table holds of it. Implemented by a unit struct per effect
+/// module and registered once in [`FAMILIES`]; how the diagnosis draws the effect is its
+/// supertrait [`Draw`].
+pub trait Family: Draw + Sync {
     /// The spec's key, as `--terms` and the diagnosis report spell it.
     fn key(&self) -> &'static str;
     /// The `--terms` form, for the list of known terms (e.g. `+KEY:J`).
@@ -71,9 +82,6 @@ pub trait Family: Sync {
     /// Every term a diagnosis tries for `dof` joints; `thermal`: the data have a temperature
     /// spread.
     fn vocabulary(&self, dof: usize, thermal: bool) -> Vec<Effect>;
-    /// The figure of the diagnosis in which the effect's residual pattern shows (`None`: none
-    /// for these data).
-    fn figure(&self, at: &Patterns) -> Option<Figure>;
     /// What of `arm` at joint `at` (or the probe) the firmware's binary table cannot hold, in
     /// words, from `quatarm::table`'s own limits.
     fn beyond_table(&self, arm: &Arm, at: Link) -> Vec<String>;
@@ -81,28 +89,28 @@ pub trait Family: Sync {
     fn clear(&self, arm: &mut Arm);
 }
 
-/// One term of an effect. Its unknowns are numbered 0..[`Term::coefficients`].
-pub trait Term {
+/// How the diagnosis draws an effect: the figure its residual pattern shows in.
+pub trait Draw {
+    /// The figure of the diagnosis in which the effect's residual pattern shows, drawn from
+    /// the patterns the diagnosis computed (`None`, the default: the effect has no figure, or
+    /// none for these data).
+    fn figure(&self, _at: &Patterns) -> Option<Figure> {
+        None
+    }
+}
+
+/// The model's maths of one term of an effect: its unknowns, numbered 0..[`Term::coefficients`],
+/// their values in an arm and their Jacobian columns. How the term is told in words is its
+/// supertrait [`Describe`], how a simulation sets it [`Simulate`].
+pub trait Term: Describe + Simulate {
     /// Its family.
     fn family(&self) -> &'static dyn Family;
-    /// The `--terms` spelling, e.g. `+KEY:4` (joint 1-based).
-    fn spec(&self) -> String;
-    /// In words, joints 1-based.
-    fn describe(&self) -> String;
-    /// Its physical cause in a few words, with a leading space and in parentheses (or empty).
-    fn physical(&self) -> &'static str;
-    /// Where it acts, for the report: the 1-based joint, or `"probe"`.
-    fn location(&self) -> Value;
-    /// The order of a periodic term (`None` for others).
-    fn order(&self) -> Option<u32>;
     /// How many unknowns it adds.
     fn coefficients(&self) -> usize;
     /// Its unknown `c`.
     fn param(&self, c: usize) -> Param;
     /// The calibration-file key unknown `c` adjusts (joints 1-based).
     fn key(&self, c: usize) -> String;
-    /// Unknown `c` in words.
-    fn describe_param(&self, c: usize) -> String;
     /// Unit of its unknowns' values.
     fn unit(&self) -> &'static str;
     /// A size beyond which a value is not physically plausible.
@@ -119,16 +127,45 @@ pub trait Term {
     fn add_entry(&self, arm: &mut Arm);
     /// ∂p/∂(unknown `c`) at one point of the chain.
     fn column(&self, c: usize, at: &TipPoint) -> Vector3<f64>;
+}
+
+/// How one term is told in reports: its spelling, its words, its size.
+pub trait Describe {
+    /// The `--terms` spelling, e.g. `+KEY:4` (joint 1-based).
+    fn spec(&self) -> String;
+    /// In words, joints 1-based.
+    fn describe(&self) -> String;
+    /// Its physical cause in a few words, with a leading space and in parentheses (or empty).
+    fn physical(&self) -> &'static str;
+    /// Where it acts, for the report: the 1-based joint, or `"probe"`.
+    fn location(&self) -> Value;
+    /// The order of a periodic term (`None`, the default: not periodic).
+    fn order(&self) -> Option<u32> {
+        None
+    }
+    /// Unknown `c` in words.
+    fn describe_param(&self, c: usize) -> String;
     /// Its magnitude and standard uncertainty from its unknowns' (value, uncertainty) and, for
-    /// two unknowns, their correlation `rho`.
-    fn magnitude(&self, values: &[(f64, f64)], rho: f64) -> (f64, f64);
-    /// The (sin, cos) coefficients of a single sinusoid, for the report (`None`: not one).
-    fn phasor(&self, values: &[f64]) -> Option<(f64, f64)>;
+    /// two unknowns, their correlation `rho`. The default is for a term of one unknown: that
+    /// unknown's value and uncertainty.
+    fn magnitude(&self, values: &[(f64, f64)], _rho: f64) -> (f64, f64) {
+        values[0]
+    }
+    /// The (sin, cos) coefficients of a single sinusoid, for the report (`None`, the default:
+    /// not one).
+    fn phasor(&self, _values: &[f64]) -> Option<(f64, f64)> {
+        None
+    }
     /// Why it cannot change any residual, when the structural analysis says so and the effect
-    /// knows a specific reason (`None`: the generic one).
-    fn no_effect_reason(&self, arm: &Arm, thermal: bool) -> Option<String>;
-    /// Sets it in `arm` to a random size of the kind a hub-class arm shows (the diagnosis
-    /// scenarios).
+    /// knows a specific reason (`None`, the default: the generic one).
+    fn no_effect_reason(&self, _arm: &Arm, _thermal: bool) -> Option<String> {
+        None
+    }
+}
+
+/// How a simulation sets one term: the diagnosis's scenarios draw arms with it.
+pub trait Simulate {
+    /// Sets it in `arm` to a random size of the kind a hub-class arm shows.
     fn set_typical(&self, arm: &mut Arm, rng: &mut SimRng);
 }
 

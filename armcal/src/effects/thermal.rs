@@ -1,10 +1,10 @@
 //! `thermal_expansion`: a link (or the probe) lengthens by κ (1/°C) per degree from the
 //! reference temperature. One unknown per link: κ.
 
-use super::{joint_args, Effect, Family, Term, TermsError, TipPoint};
-use crate::diagnose::patterns::{Figure, Patterns};
+use super::figure::{Figure, Legend, Patterns};
+use super::{joint_args, Describe, Draw, Effect, Family, Simulate, Term, TermsError, TipPoint};
 use crate::params::{Link, Param};
-use crate::sim::SimRng;
+use crate::rng::SimRng;
 use nalgebra::Vector3;
 use quatarm::table::limits::THERMAL;
 use quatarm_ref::arm::Arm;
@@ -53,47 +53,6 @@ impl Family for Expansions {
             .collect()
     }
 
-    fn figure(&self, at: &Patterns) -> Option<Figure> {
-        if !at.d.candidates.thermal {
-            return None;
-        }
-        let (data, geo, n) = (at.data, &at.geo, at.data.dof);
-        let mut panels = Vec::new();
-        for l in 0..=n {
-            if geo.iter().all(|g| g.links[l].is_none()) {
-                continue;
-            }
-            let (name, link) = if l == n {
-                ("probe".to_string(), Link::Probe)
-            } else {
-                (format!("link {}", l + 1), Link::Joint(l))
-            };
-            let cause =
-                at.d.causes
-                    .iter()
-                    .find(|c| {
-                        c.effect == Effect::Thermal(link)
-                            || c.indistinguishable.contains(&Effect::Thermal(link))
-                    })
-                    .map(|c| c.effect);
-            panels.push(at.panel(
-                name.clone(),
-                "temperature (°C)".into(),
-                format!("apparent {name} elongation (µm)"),
-                cause,
-                &|i, m| geo[i].links[l].map(|dir| (data.rows[i].temp_c, 1e3 * dir.dot(m))),
-            ));
-        }
-        Some(Figure {
-            legend: crate::diagnose::patterns::Legend::Models,
-            file: "residuals_vs_temperature.png".into(),
-            title: "What the model misses, as each link's elongation, against temperature".into(),
-            caption: "A thermal expansion shows as a line rising with temperature (slope κ·L)"
-                .into(),
-            panels,
-        })
-    }
-
     fn beyond_table(&self, arm: &Arm, at: Link) -> Vec<String> {
         let (kappa, name) = match at {
             Link::Joint(k) => (arm.joints[k].thermal, format!("link {}", k + 1)),
@@ -116,38 +75,52 @@ impl Family for Expansions {
     }
 }
 
+impl Draw for Expansions {
+    fn figure(&self, at: &Patterns) -> Option<Figure> {
+        if !at.thermal {
+            return None;
+        }
+        let (data, geo, n) = (at.data, &at.geo, at.data.dof);
+        let mut panels = Vec::new();
+        for l in 0..=n {
+            if geo.iter().all(|g| g.links[l].is_none()) {
+                continue;
+            }
+            let (name, link) = if l == n {
+                ("probe".to_string(), Link::Probe)
+            } else {
+                (format!("link {}", l + 1), Link::Joint(l))
+            };
+            let cause = at
+                .causes
+                .iter()
+                .find(|c| {
+                    c.effect == Effect::Thermal(link)
+                        || c.indistinguishable.contains(&Effect::Thermal(link))
+                })
+                .map(|c| c.effect);
+            panels.push(at.panel(
+                name.clone(),
+                "temperature (°C)".into(),
+                format!("apparent {name} elongation (µm)"),
+                cause,
+                &|i, m| geo[i].links[l].map(|dir| (data.rows[i].temp_c, 1e3 * dir.dot(m))),
+            ));
+        }
+        Some(Figure {
+            legend: Legend::Models,
+            file: "residuals_vs_temperature.png".into(),
+            title: "What the model misses, as each link's elongation, against temperature".into(),
+            caption: "A thermal expansion shows as a line rising with temperature (slope κ·L)"
+                .into(),
+            panels,
+        })
+    }
+}
+
 impl Term for Thermal {
     fn family(&self) -> &'static dyn Family {
         &FAMILY
-    }
-
-    fn spec(&self) -> String {
-        match self.link {
-            Link::Joint(j) => format!("+{KEY}:{}", j + 1),
-            Link::Probe => format!("+{KEY}:probe"),
-        }
-    }
-
-    fn describe(&self) -> String {
-        match self.link {
-            Link::Joint(j) => format!("link {} thermal expansion", j + 1),
-            Link::Probe => "probe thermal expansion".into(),
-        }
-    }
-
-    fn physical(&self) -> &'static str {
-        " (the link lengthens with temperature)"
-    }
-
-    fn location(&self) -> Value {
-        match self.link {
-            Link::Joint(j) => Value::from(j + 1),
-            Link::Probe => Value::from("probe"),
-        }
-    }
-
-    fn order(&self) -> Option<u32> {
-        None
     }
 
     fn coefficients(&self) -> usize {
@@ -163,10 +136,6 @@ impl Term for Thermal {
             Link::Joint(j) => format!("joint[{}].thermal", j + 1),
             Link::Probe => "probe.thermal".into(),
         }
-    }
-
-    fn describe_param(&self, _c: usize) -> String {
-        self.describe()
     }
 
     fn unit(&self) -> &'static str {
@@ -206,13 +175,36 @@ impl Term for Thermal {
             Link::Probe => at.after(at.arm.dof() - 1) * Vector3::from(at.arm.probe.actual()) * dt,
         }
     }
+}
 
-    fn magnitude(&self, values: &[(f64, f64)], _rho: f64) -> (f64, f64) {
-        values[0]
+impl Describe for Thermal {
+    fn spec(&self) -> String {
+        match self.link {
+            Link::Joint(j) => format!("+{KEY}:{}", j + 1),
+            Link::Probe => format!("+{KEY}:probe"),
+        }
     }
 
-    fn phasor(&self, _values: &[f64]) -> Option<(f64, f64)> {
-        None
+    fn describe(&self) -> String {
+        match self.link {
+            Link::Joint(j) => format!("link {} thermal expansion", j + 1),
+            Link::Probe => "probe thermal expansion".into(),
+        }
+    }
+
+    fn physical(&self) -> &'static str {
+        " (the link lengthens with temperature)"
+    }
+
+    fn location(&self) -> Value {
+        match self.link {
+            Link::Joint(j) => Value::from(j + 1),
+            Link::Probe => Value::from("probe"),
+        }
+    }
+
+    fn describe_param(&self, _c: usize) -> String {
+        self.describe()
     }
 
     fn no_effect_reason(&self, arm: &Arm, thermal: bool) -> Option<String> {
@@ -226,7 +218,9 @@ impl Term for Thermal {
             _ => None,
         }
     }
+}
 
+impl Simulate for Thermal {
     fn set_typical(&self, arm: &mut Arm, rng: &mut SimRng) {
         let kappa = rng.gen_range(1.5e-5..2.5e-5);
         match self.link {

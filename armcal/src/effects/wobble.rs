@@ -4,12 +4,13 @@
 //! a cone once a turn), order 2 an oval race, order 3 a tri-lobed one. Four unknowns per term:
 //! a, b (δα's sin and cos), c, d (δβ's).
 
+use super::figure::{Figure, Legend, Patterns};
 use super::{
-    parse_periodic, periodic_entry, periodic_vocabulary, Effect, Family, Term, TermsError, TipPoint,
+    parse_periodic, periodic_entry, periodic_vocabulary, Describe, Draw, Effect, Family, Simulate,
+    Term, TermsError, TipPoint,
 };
-use crate::diagnose::patterns::{Figure, Legend, Patterns};
 use crate::params::{Link, Param};
-use crate::sim::SimRng;
+use crate::rng::SimRng;
 use nalgebra::Vector3;
 use quatarm_ref::arm::{Arm, Wobble as Entry};
 use rand::Rng;
@@ -71,41 +72,6 @@ impl Family for Wobbles {
         })
     }
 
-    fn figure(&self, at: &Patterns) -> Option<Figure> {
-        let (data, geo) = (at.data, &at.geo);
-        let mut panels = Vec::new();
-        for k in 0..data.dof {
-            let Some(cut) = at.cut_of(k) else { continue };
-            let wobble = (1..=VOCABULARY_MAX_ORDER)
-                .map(|order| Effect::Wobble { joint: k, order })
-                .find(|e| at.named(*e));
-            for (c, symbol) in SYMBOL.iter().enumerate() {
-                panels.push(at.panel(
-                    format!("joint {} {symbol}", k + 1),
-                    format!("joint {} reading θ{} (deg)", k + 1, k + 1),
-                    format!("apparent tilt {symbol} (µrad)"),
-                    wobble,
-                    &|i, m| {
-                        let t = geo[i].tilt[k][c];
-                        let t2 = t.norm_squared();
-                        (t2.sqrt() >= cut && t2 > 0.0)
-                            .then(|| (data.rows[i].theta[k].to_degrees(), 1e6 * t.dot(m) / t2))
-                    },
-                ));
-            }
-        }
-        (!panels.is_empty()).then(|| Figure {
-            legend: Legend::Models,
-            file: "residuals_vs_joint_tilt.png".into(),
-            title: "What the model misses, as each joint's tilt, against the joint's reading"
-                .into(),
-            caption: "An axis wobble shows as a wave of its order (cycles per turn) in δα, δβ \
-                      or both; an encoder harmonic shows in the angle figure instead"
-                .into(),
-            panels,
-        })
-    }
-
     fn beyond_table(&self, arm: &Arm, at: Link) -> Vec<String> {
         let Link::Joint(k) = at else {
             return Vec::new();
@@ -157,38 +123,46 @@ impl Family for Wobbles {
     }
 }
 
+impl Draw for Wobbles {
+    fn figure(&self, at: &Patterns) -> Option<Figure> {
+        let (data, geo) = (at.data, &at.geo);
+        let mut panels = Vec::new();
+        for k in 0..data.dof {
+            let Some(cut) = at.cut_of(k) else { continue };
+            let wobble = (1..=VOCABULARY_MAX_ORDER)
+                .map(|order| Effect::Wobble { joint: k, order })
+                .find(|e| at.named(*e));
+            for (c, symbol) in SYMBOL.iter().enumerate() {
+                panels.push(at.panel(
+                    format!("joint {} {symbol}", k + 1),
+                    format!("joint {} reading θ{} (deg)", k + 1, k + 1),
+                    format!("apparent tilt {symbol} (µrad)"),
+                    wobble,
+                    &|i, m| {
+                        let t = geo[i].tilt[k][c];
+                        let t2 = t.norm_squared();
+                        (t2.sqrt() >= cut && t2 > 0.0)
+                            .then(|| (data.rows[i].theta[k].to_degrees(), 1e6 * t.dot(m) / t2))
+                    },
+                ));
+            }
+        }
+        (!panels.is_empty()).then(|| Figure {
+            legend: Legend::Models,
+            file: "residuals_vs_joint_tilt.png".into(),
+            title: "What the model misses, as each joint's tilt, against the joint's reading"
+                .into(),
+            caption: "An axis wobble shows as a wave of its order (cycles per turn) in δα, δβ \
+                      or both; an encoder harmonic shows in the angle figure instead"
+                .into(),
+            panels,
+        })
+    }
+}
+
 impl Term for Wobble {
     fn family(&self) -> &'static dyn Family {
         &FAMILY
-    }
-
-    fn spec(&self) -> String {
-        format!("+{KEY}:{}:{}", self.joint + 1, self.order)
-    }
-
-    fn describe(&self) -> String {
-        format!(
-            "joint {} axis wobble of order {}",
-            self.joint + 1,
-            self.order
-        )
-    }
-
-    fn physical(&self) -> &'static str {
-        match self.order {
-            1 => " (the bearing's axis cones once a turn: an inclined race)",
-            2 => " (the bearing's axis wobbles twice a turn: an oval race)",
-            3 => " (the bearing's axis wobbles three times a turn: a tri-lobed race)",
-            _ => " (the bearing's axis wobbles as it turns)",
-        }
-    }
-
-    fn location(&self) -> Value {
-        Value::from(self.joint + 1)
-    }
-
-    fn order(&self) -> Option<u32> {
-        Some(self.order)
     }
 
     fn coefficients(&self) -> usize {
@@ -210,17 +184,6 @@ impl Term for Wobble {
             self.joint + 1,
             self.order,
             COMPONENT[t]
-        )
-    }
-
-    fn describe_param(&self, c: usize) -> String {
-        let (t, w) = split(c);
-        format!(
-            "joint {} axis wobble order {} ({} {})",
-            self.joint + 1,
-            self.order,
-            SYMBOL[t],
-            WAVE[w]
         )
     }
 
@@ -275,6 +238,48 @@ impl Term for Wobble {
         let a = f64::from(self.order) * at.theta[self.joint];
         at.tilt_turn(self.joint, t) * if w == 1 { a.cos() } else { a.sin() }
     }
+}
+
+impl Describe for Wobble {
+    fn spec(&self) -> String {
+        format!("+{KEY}:{}:{}", self.joint + 1, self.order)
+    }
+
+    fn describe(&self) -> String {
+        format!(
+            "joint {} axis wobble of order {}",
+            self.joint + 1,
+            self.order
+        )
+    }
+
+    fn physical(&self) -> &'static str {
+        match self.order {
+            1 => " (the bearing's axis cones once a turn: an inclined race)",
+            2 => " (the bearing's axis wobbles twice a turn: an oval race)",
+            3 => " (the bearing's axis wobbles three times a turn: a tri-lobed race)",
+            _ => " (the bearing's axis wobbles as it turns)",
+        }
+    }
+
+    fn location(&self) -> Value {
+        Value::from(self.joint + 1)
+    }
+
+    fn order(&self) -> Option<u32> {
+        Some(self.order)
+    }
+
+    fn describe_param(&self, c: usize) -> String {
+        let (t, w) = split(c);
+        format!(
+            "joint {} axis wobble order {} ({} {})",
+            self.joint + 1,
+            self.order,
+            SYMBOL[t],
+            WAVE[w]
+        )
+    }
 
     /// The quadrature sum of the δα and δβ amplitudes, √(a² + b² + c² + d²): √2 times the RMS
     /// of the axis's excursion over a turn. Order 1 counts only its counter-rotating part
@@ -319,15 +324,9 @@ impl Term for Wobble {
             / a2.max(1e-300);
         (a2.sqrt(), var.max(0.0).sqrt())
     }
+}
 
-    fn phasor(&self, _values: &[f64]) -> Option<(f64, f64)> {
-        None
-    }
-
-    fn no_effect_reason(&self, _arm: &Arm, _thermal: bool) -> Option<String> {
-        None
-    }
-
+impl Simulate for Wobble {
     /// 20–100 µrad of tilt variation, in a random direction and phase: what a hub-class
     /// arm's angular-contact bearings show.
     fn set_typical(&self, arm: &mut Arm, rng: &mut SimRng) {

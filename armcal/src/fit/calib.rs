@@ -43,11 +43,11 @@ use crate::data::{Dataset, Layout};
 use crate::effects::FAMILIES;
 use crate::fit::ident::{self, Fixed, Identifiability, RFactor, Why};
 use crate::fit::jacobian::tip_jacobian;
-use crate::kinds;
 use crate::fit::lm::{self, Normal};
+use crate::fit::residuals::{best_rigid, Rigid};
+use crate::kinds;
 use crate::params::{apply, frame_params, Param, Terms};
 use crate::progress::{Observer, Silent};
-use crate::fit::residuals::{best_rigid, Rigid};
 use crate::sim;
 use crate::stats::{chi2_tail, normal_tail_two_sided};
 use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, Vector3};
@@ -487,7 +487,7 @@ impl<'a> Problem<'a> {
             }
             // Validated before any fit (`check_sphere_groups`); a group whose centre is lost
             // on the way keeps its mean, which the solver sees as a large residual.
-            let c = crate::acceptance::fit::centre_of(&qs, radius)
+            let c = crate::geometry::sphere::centre_of(&qs, radius)
                 .unwrap_or_else(|_| qs.iter().sum::<Vector3<f64>>() / qs.len() as f64);
             let us: Vec<Vector3<f64>> = qs
                 .iter()
@@ -821,7 +821,8 @@ impl Fit {
 
     /// The calibrated instrument frame as the file stores it.
     pub fn reference_frame(&self) -> Option<Frame> {
-        self.frame.map(|f| sim::frame_from(&f.rot, &f.trans))
+        self.frame
+            .map(|f| crate::geometry::frame_from(&f.rot, &f.trans))
     }
 }
 
@@ -1066,7 +1067,7 @@ fn check_sphere_groups(start: &Arm, data: &Dataset, layout: &Layout) -> Result<(
     for g in &layout.sphere {
         let qs: Vec<Vector3<f64>> = g.rows.iter().map(|&i| mounted.tip(&data.rows[i])).collect();
         let radius = crate::fit::probes::sphere_radius(start, data, g);
-        if let Err(e) = crate::acceptance::fit::centre_of(&qs, radius) {
+        if let Err(e) = crate::geometry::sphere::centre_of(&qs, radius) {
             let line = g.rows.first().map_or(0, |&i| data.rows[i].line);
             return Err(CalibError::Mismatch(format!(
                 "{}: sphere group {} (line {line}): {e}",
@@ -1424,7 +1425,7 @@ fn finish(s: Structure, f: Fitted, iterations: usize, rms_before: f64, t0: Insta
     }
     let mut arm = f.arm;
     let frame = (!layout.points.is_empty()).then_some(f.state.frame);
-    arm.reference_frame = frame.map(|f| sim::frame_from(&f.rot, &f.trans));
+    arm.reference_frame = frame.map(|f| crate::geometry::frame_from(&f.rot, &f.trans));
     let mut values = f.state.x.clone();
     for (i, p) in all.iter().enumerate() {
         if p.is_frame() {
@@ -1537,7 +1538,8 @@ mod tests {
     use super::*;
     use crate::data::Kind;
     use crate::fit::residuals::compare_aligned;
-    use crate::sim::{perturb, random_pose, rng, simulate};
+    use crate::rng::rng;
+    use crate::sim::{perturb, random_pose, simulate};
 
     #[test]
     fn the_ridge_is_mukcas_penalty_in_millimetres() {

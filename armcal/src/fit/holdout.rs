@@ -7,10 +7,9 @@
 //! gather, how well the bar keeps its length and how round the sphere stays). Held-out `point` rows go through the
 //! instrument frame fitted on the other folds. Sessions are held out whole by [`by_group`].
 
-use crate::fit::calib::{calibrate, CalibError, Options};
 use crate::data::{Dataset, Kind};
+use crate::fit::calib::{calibrate, CalibError, Options};
 use crate::fit::residuals::{residuals, summarise, Residuals, Summary};
-use crate::sim;
 use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;
 use rand::seq::SliceRandom;
@@ -24,7 +23,7 @@ pub type Folds = Vec<Vec<usize>>;
 pub fn kfold(data: &Dataset, k: usize, seed: u64) -> Folds {
     let layout = data.layout();
     let mut units: Vec<Vec<usize>> = layout.units().into_iter().map(|u| u.rows).collect();
-    let mut rng = sim::rng(seed);
+    let mut rng = crate::rng::rng(seed);
     units.shuffle(&mut rng);
     let k = k.min(units.len()).max(1);
     let mut folds = vec![Vec::new(); k];

@@ -1,12 +1,12 @@
 //! The calibration report: what was fitted, how well, with what uncertainty, and what the data
 //! could not determine — as text a person reads, or JSON a program reads (`--json`).
 
-use crate::fit::calib::Fit;
 use crate::data::{Dataset, Kind};
+use crate::fit::calib::Fit;
 use crate::fit::holdout::Holdout;
 use crate::fit::ident::{Fixed, Why};
-use crate::params::Param;
 use crate::fit::residuals::Summary;
+use crate::params::Param;
 use serde::Serialize;
 use std::fmt::Write as _;
 

@@ -140,7 +140,7 @@ pub fn residuals_of(
         let radius = crate::fit::probes::sphere_radius(arm, data, g);
         // A group whose points fix no sphere (coplanar, too few) was refused by the loader's
         // callers; its rows keep no residual rather than an invented one.
-        if let Ok(c) = crate::acceptance::fit::centre_of(&q, radius) {
+        if let Ok(c) = crate::geometry::sphere::centre_of(&q, radius) {
             for (&i, p) in g.rows.iter().zip(&q) {
                 let d = p - c;
                 let dist = d.norm();

@@ -3,8 +3,8 @@
 //! report (every parameter with its uncertainty).
 
 use super::{header::Provenance, residuals, Document, Tone};
-use crate::fit::calib::Fit;
 use crate::data::Dataset;
+use crate::fit::calib::Fit;
 use crate::fit::holdout::Holdout;
 use crate::fit::report::Report;
 

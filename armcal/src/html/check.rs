@@ -6,8 +6,9 @@ use super::{header::Provenance, Cell, Document, Tone};
 use crate::acceptance::mpe::{Decision, Mpe};
 use crate::acceptance::statistics::{self, Test};
 use crate::acceptance::verdict::Outcome;
-use crate::acceptance::{fit, mean_of, Check};
+use crate::acceptance::{mean_of, Check};
 use crate::data::Dataset;
+use crate::geometry::sphere as fit;
 use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;
 

@@ -72,7 +72,7 @@ pub fn iso_10360_12(truth: &Arm, base: &Options, rng: &mut SimRng) -> Result<Sim
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::rng;
+    use crate::rng::rng;
 
     #[test]
     fn has_every_test_of_the_standard() {

@@ -37,7 +37,7 @@ pub fn columns(
     seed: u64,
 ) -> Vec<String> {
     let root = montecarlo::sqrt_cov(&budget.cov);
-    let mut rng = crate::sim::rng(seed);
+    let mut rng = crate::rng::rng(seed);
     rows.iter()
         .map(|r| {
             let th = r.reading.radians(arm);

@@ -16,10 +16,11 @@
 
 use super::estimate::{self, Settings};
 use super::{propagate, u95};
-use crate::fit::calib::{self, Options};
 use crate::data::Kind;
+use crate::fit::calib::{self, Options};
 use crate::fit::residuals::best_rigid;
-use crate::sim::{self, SimRng};
+use crate::rng::SimRng;
+use crate::sim;
 use nalgebra::{Matrix3, Vector3};
 use quatarm_ref::arm::Arm;
 use quatarm_ref::forward;
@@ -172,7 +173,7 @@ pub struct Calibrated {
 
 /// Calibration `k` of the setup.
 pub fn calibrated(setup: &Setup, k: usize) -> Result<Calibrated, super::BudgetError> {
-    let mut rng = sim::rng(setup.seed.wrapping_add(k as u64));
+    let mut rng = crate::rng::rng(setup.seed.wrapping_add(k as u64));
     let nominal = Arm::default6();
     let mut truth = match setup.truth_file {
         Some(name) => data_arm(name)?,
@@ -184,7 +185,7 @@ pub fn calibrated(setup: &Setup, k: usize) -> Result<Calibrated, super::BudgetEr
     let mut opts = Options::default();
     if setup.thermal {
         for j in &mut truth.joints {
-            j.thermal = 2.3e-5 + 2e-6 * sim::normal(&mut rng);
+            j.thermal = 2.3e-5 + 2e-6 * crate::rng::normal(&mut rng);
         }
         truth.probe.thermal = 1e-5;
         o.temp = Some(TEMPS);
@@ -244,7 +245,7 @@ pub fn fresh(
         let th = sim::random_pose(&lim, rng);
         let (t_true, t_read) = if setup.thermal {
             let t = rng.gen_range(TEMPS.0..TEMPS.1);
-            (t, t + setup.temp_noise_c * sim::normal(rng))
+            (t, t + setup.temp_noise_c * crate::rng::normal(rng))
         } else {
             (forward::REFERENCE_TEMP_C, forward::REFERENCE_TEMP_C)
         };

@@ -18,8 +18,8 @@
 //! - Temperature: assumed (0 unless set).
 
 use super::{misfit, propagate, Budget, QUANTISATION_COUNTS};
-use crate::fit::calib::Fit;
 use crate::data::{Dataset, Kind};
+use crate::fit::calib::Fit;
 use crate::fit::holdout::Holdout;
 use nalgebra::DMatrix;
 

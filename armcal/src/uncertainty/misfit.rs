@@ -178,11 +178,11 @@ mod tests {
     /// recovers about σ, and covers 95 % of the rows it came from.
     #[test]
     fn the_conformal_term_recovers_an_isotropic_misfit() {
-        let mut rng = crate::sim::rng(3);
+        let mut rng = crate::rng::rng(3);
         let sigma = 0.05;
         let scores: Vec<Score> = (0..4000)
             .map(|_| {
-                let v = Vector3::from_fn(|_, _| sigma * crate::sim::normal(&mut rng));
+                let v = Vector3::from_fn(|_, _| sigma * crate::rng::normal(&mut rng));
                 Score {
                     deviation: v.norm(),
                     lambda: [25e-6, 25e-6, 25e-6],

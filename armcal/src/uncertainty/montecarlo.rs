@@ -11,7 +11,7 @@
 
 use super::Budget;
 use crate::params::apply;
-use crate::sim::{normal, SimRng};
+use crate::rng::{normal, SimRng};
 use nalgebra::{DMatrix, DVector, Matrix3, SymmetricEigen, Vector3};
 use quatarm_ref::arm::Arm;
 use quatarm_ref::forward;

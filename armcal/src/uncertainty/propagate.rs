@@ -140,7 +140,13 @@ pub fn group_deviations(
         .iter()
         .map(|&i| {
             let r = &data.rows[i];
-            jacobians(arm, crate::fit::probes::index(arm, r), b, &r.theta, r.temp_c)
+            jacobians(
+                arm,
+                crate::fit::probes::index(arm, r),
+                b,
+                &r.theta,
+                r.temp_c,
+            )
         })
         .collect();
     let own: Vec<Matrix3<f64>> = js.iter().map(|j| own_terms(b, &st, j)).collect();

@@ -13,8 +13,8 @@
 use super::estimate::{self, Settings};
 use super::{propagate, u95, Budget};
 use crate::data::Dataset;
-use crate::mukca::{self, Unit};
 use crate::fit::residuals::residuals;
+use crate::mukca::{self, Unit};
 use quatarm_ref::arm::Arm;
 use serde::Serialize;
 

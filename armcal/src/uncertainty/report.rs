@@ -76,7 +76,7 @@ impl BudgetReport {
     pub fn build(est: &Estimated, arm: &Arm) -> BudgetReport {
         let b: &Budget = &est.budget;
         let lim = sim::limits(arm);
-        let mut rng = sim::rng(0x0095);
+        let mut rng = crate::rng::rng(0x0095);
         let pts: Vec<(f64, f64, f64)> = (0..POSES)
             .map(|_| {
                 let th = sim::random_pose(&lim, &mut rng);

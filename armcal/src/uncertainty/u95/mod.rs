@@ -203,7 +203,7 @@ mod tests {
             [1.0, 1.0, 1.0],
             [1.0, 0.3, 0.0],
         ];
-        let mut rng = crate::sim::rng(3);
+        let mut rng = crate::rng::rng(3);
         let random = (0..40).map(|_| {
             use rand::Rng;
             let a: f64 = rng.gen();
@@ -267,13 +267,13 @@ mod tests {
         // An elongated Σ against a sampled estimate (200,000 draws: ±0.0005 at 95 %).
         let l = [100.0, 4.0, 0.25];
         let r = u95(&Matrix3::from_diagonal(&l.into()));
-        let mut rng = crate::sim::rng(7);
+        let mut rng = crate::rng::rng(7);
         let n = 200_000;
         let inside = (0..n)
             .filter(|_| {
                 let q: f64 = l
                     .iter()
-                    .map(|v| v * crate::sim::normal(&mut rng).powi(2))
+                    .map(|v| v * crate::rng::normal(&mut rng).powi(2))
                     .sum();
                 q <= r * r
             })
