@@ -75,8 +75,10 @@ pub fn run(a: Args) -> anyhow::Result<i32> {
         armcal::output::check(&[(r.as_path(), "report")], &inputs)?;
     }
     // The budget, where the file has one, gives U where the MPE file has none.
-    let (arm, budget) =
-        armcal::load::calibration_with_budget(&a.calib, a.predict.then_some("--predict"))?;
+    let (arm, budget) = armcal::uncertainty::load::calibration_with_budget(
+        &a.calib,
+        a.predict.then_some("--predict"),
+    )?;
     let accept = armcal::plausible::Accept {
         mpe: a.accept_mpe,
         misfit: a.accept_misfit,

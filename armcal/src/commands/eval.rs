@@ -41,7 +41,7 @@ pub struct Args {
 
 /// Runs the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let (arm, budget) = armcal::load::calibration_and_budget(
+    let (arm, budget) = armcal::uncertainty::load::calibration_and_budget(
         &args.calib,
         args.uncertainty.then_some("--uncertainty"),
     )?;

@@ -17,6 +17,7 @@ pub mod columns;
 pub mod coverage;
 pub mod estimate;
 pub mod extrapolation;
+pub mod load;
 pub mod misfit;
 pub mod montecarlo;
 pub mod propagate;
