@@ -6,7 +6,10 @@
 //! - an import from a module to one of a higher layer (a back edge), and
 //! - an import cycle between modules, whatever their layers,
 //!
-//! each named with the file and line that makes it. `super::` and `self::` paths are not read:
+//! each named with the file and line that makes it. Items under `#[cfg(test)]` are not read:
+//! a module's unit tests may build their inputs with a higher layer (the fit's tests simulate
+//! data), as the integration tests do; the product code may not. `super::` and `self::` paths
+//! are not read:
 //! a child reaching its parent is how a folder's trait and its implementations are written,
 //! and a parent's use of its child is its own business. Comments are skipped (a doc link to a
 //! higher layer is a pointer for the reader, not a dependency). `main.rs` is a crate of its
@@ -52,7 +55,21 @@ const LAYERS: &[(&str, &[&str])] = &[
 
 /// Edges the check tolerates for now, each with why; an entry that no longer occurs fails the
 /// check too (so the list only shrinks). Format: `from -> to` as module paths.
-const KNOWN: &[(&str, &str)] = &[];
+const KNOWN: &[(&str, &str)] = &[
+    // The structure check compares the data with a well-spread design of the same kinds
+    // (`sim::design_like`), made by the simulation's pose and group generators (the numeric
+    // inverse, the spat, length and sphere groups). The way out: those generators become a
+    // `fit::design` module that the simulation builds on, adding noise and an instrument.
+    ("fit::calib", "sim"),
+    // The calibration report carries the budget's report (`BudgetReport`) as one of its
+    // sections, in the text and in the JSON at its place. The way out: the command assembles
+    // the two (the JSON's key order must stay, so not through `serde_json::Value`).
+    ("fit::report", "uncertainty::report"),
+    // `params.rs` re-exports `Effect` and parses `--terms` through the effects, which are
+    // written in its `Param` and `Link`: one cycle inside the model layer. `params.rs` belongs
+    // to the work on one parameter vocabulary across crates (issue 28), which moves `Param`.
+    ("params", "effects"),
+];
 
 /// A module path (`fit::calib`) from a file under `src` (`fit/calib.rs`, `fit/mod.rs`).
 fn module_of(rel: &str) -> String {
@@ -116,6 +133,37 @@ fn strip_comments(src: &str) -> String {
         let ch = src[i..].chars().next().unwrap_or(' ');
         out.push(ch);
         i += ch.len_utf8();
+    }
+    out
+}
+
+/// `code` with every item under `#[cfg(test)]` blanked (its lines kept, so that line numbers
+/// hold): from the attribute to the end of the item, the `;` or the brace that closes its
+/// first `{`.
+fn without_tests(code: &str) -> String {
+    let mut out = code.to_string();
+    let mut from = 0;
+    while let Some(k) = out[from..].find("#[cfg(test)]") {
+        let start = from + k;
+        let b = out.as_bytes();
+        let (mut i, mut depth) = (start + "#[cfg(test)]".len(), 0usize);
+        while i < b.len() {
+            match b[i] {
+                b'{' => depth += 1,
+                b'}' if depth == 1 => break,
+                b'}' => depth = depth.saturating_sub(1),
+                b';' if depth == 0 => break,
+                _ => {}
+            }
+            i += 1;
+        }
+        let end = (i + 1).min(out.len());
+        let blank: String = out[start..end]
+            .chars()
+            .map(|c| if c == '\n' { '\n' } else { ' ' })
+            .collect();
+        out.replace_range(start..end, &blank);
+        from = end;
     }
     out
 }
@@ -218,7 +266,7 @@ fn edges(files: &[(String, String)]) -> Vec<Edge> {
     let mut out = BTreeMap::new();
     for (file, src) in files {
         let from = module_of(file);
-        for (path, line) in crate_paths(&strip_comments(src)) {
+        for (path, line) in crate_paths(&without_tests(&strip_comments(src))) {
             let Some(to) = target(&modules, &path) else {
                 continue; // a re-export of another crate (`tablebuild`) or a macro's path
             };
@@ -417,6 +465,19 @@ mod checker {
         assert!(problems(&files, TWO, &[("util", "a")]).is_empty());
         let p = problems(&files, TWO, &[("util", "a"), ("a", "b")]);
         assert_eq!(p, ["known edge `a -> b` no longer occurs: remove it"]);
+    }
+
+    #[test]
+    fn unit_tests_may_use_a_higher_layer_product_code_may_not() {
+        let low = "use crate::util::f;\n#[cfg(test)]\nmod tests {\n    use crate::b::g;\n    fn t() { let s = \"}\"; }\n}\n#[cfg(test)]\nuse crate::b::h;\nfn k() { crate::b::late(); }\n";
+        let files = tree_of(&[("a.rs", low), ("b.rs", ""), ("util.rs", "")]);
+        let p = problems(&files, TWO, &[]);
+        assert_eq!(
+            p,
+            ["src/a.rs:9: back edge: `a` (low) imports `b` (high)"],
+            "{}",
+            without_tests(low)
+        );
     }
 
     #[test]
