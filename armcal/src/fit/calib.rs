@@ -282,6 +282,72 @@ pub struct Problem<'a> {
     prior: Vec<(f64, f64)>,
 }
 
+/// Evaluates the rows `idx` of one fixed point (a spat group, a bar's end) through `eval` and
+/// appends them centred on their mean to `br` (residuals) and, with `jac`, their Jacobian rows
+/// (each 3 × `n`) centred on their mean to `bj`; returns the mean centre and leaves the mean
+/// Jacobian in `mj`. The fixed point's unknown position drops out this way.
+fn centred(
+    eval: &mut dyn FnMut(usize, &mut [f64]) -> Vector3<f64>,
+    jac: bool,
+    n: usize,
+    idx: &[usize],
+    br: &mut Vec<f64>,
+    bj: &mut Vec<f64>,
+    mj: &mut [f64],
+) -> Vector3<f64> {
+    let r0 = br.len();
+    let j0 = bj.len();
+    let mut m = Vector3::zeros();
+    for &i in idx {
+        bj.resize(bj.len() + if jac { 3 * n } else { 0 }, 0.0);
+        let len = bj.len();
+        let q = eval(i, if jac { &mut bj[len - 3 * n..] } else { &mut [] });
+        br.extend_from_slice(&[q.x, q.y, q.z]);
+        m += q;
+    }
+    let k = idx.len() as f64;
+    m /= k;
+    for row in br[r0..].chunks_mut(3) {
+        for c in 0..3 {
+            row[c] -= m[c];
+        }
+    }
+    if jac {
+        mj.iter_mut().for_each(|v| *v = 0.0);
+        for block in bj[j0..].chunks(3 * n) {
+            for (a, b) in mj.iter_mut().zip(block) {
+                *a += b;
+            }
+        }
+        mj.iter_mut().for_each(|v| *v /= k);
+        for block in bj[j0..].chunks_mut(3 * n) {
+            for (a, b) in block.iter_mut().zip(mj.iter()) {
+                *a -= b;
+            }
+        }
+    }
+    m
+}
+
+/// A sphere group's radial rows u_iᵀ J_i (`us` the unit directions from the centre, `bj` the
+/// rows' 3 × `n` Jacobian blocks), with the centre's three unknowns projected out (the
+/// centre is fitted for every state, so the solver must not move along it).
+fn radial_rows(us: &[Vector3<f64>], bj: &[f64], n: usize) -> DMatrix<f64> {
+    let mut radial = DMatrix::zeros(us.len(), n);
+    for (k, u) in us.iter().enumerate() {
+        let block = &bj[k * 3 * n..(k + 1) * 3 * n];
+        for col in 0..n {
+            radial[(k, col)] = (0..3).map(|c| u[c] * block[c * n + col]).sum();
+        }
+    }
+    let a = DMatrix::from_fn(us.len(), 3, |k, c| -us[k][c]);
+    let ata = a.transpose() * &a;
+    if let Some(inv) = ata.try_inverse() {
+        radial -= &a * (inv * (a.transpose() * &radial));
+    }
+    radial
+}
+
 impl<'a> Problem<'a> {
     /// A problem over the unknowns `kept` (positions in `all`).
     pub fn new(
@@ -407,54 +473,18 @@ impl<'a> Problem<'a> {
         let mut br: Vec<f64> = Vec::new();
         let mut bj: Vec<f64> = Vec::new();
         let mut mj = vec![0.0; 3 * n];
-        // Appends the centred rows of one fixed point; returns the mean centre and leaves the
-        // mean Jacobian in `mj`.
-        let mut centred = |idx: &[usize], br: &mut Vec<f64>, bj: &mut Vec<f64>, mj: &mut [f64]| {
-            let r0 = br.len();
-            let j0 = bj.len();
-            let mut m = Vector3::zeros();
-            for &i in idx {
-                bj.resize(bj.len() + if jac { 3 * n } else { 0 }, 0.0);
-                let len = bj.len();
-                let q = eval(i, if jac { &mut bj[len - 3 * n..] } else { &mut [] });
-                br.extend_from_slice(&[q.x, q.y, q.z]);
-                m += q;
-            }
-            let k = idx.len() as f64;
-            m /= k;
-            for row in br[r0..].chunks_mut(3) {
-                for c in 0..3 {
-                    row[c] -= m[c];
-                }
-            }
-            if jac {
-                mj.iter_mut().for_each(|v| *v = 0.0);
-                for block in bj[j0..].chunks(3 * n) {
-                    for (a, b) in mj.iter_mut().zip(block) {
-                        *a += b;
-                    }
-                }
-                mj.iter_mut().for_each(|v| *v /= k);
-                for block in bj[j0..].chunks_mut(3 * n) {
-                    for (a, b) in block.iter_mut().zip(mj.iter()) {
-                        *a -= b;
-                    }
-                }
-            }
-            m
-        };
         for g in &self.layout.spat {
             br.clear();
             bj.clear();
-            centred(&g.rows, &mut br, &mut bj, &mut mj);
+            centred(&mut eval, jac, n, &g.rows, &mut br, &mut bj, &mut mj);
             sink(&br, &bj);
         }
         let mut mja = vec![0.0; 3 * n];
         for g in &self.layout.length {
             br.clear();
             bj.clear();
-            let ma = centred(&g.a, &mut br, &mut bj, &mut mja);
-            let mb = centred(&g.b, &mut br, &mut bj, &mut mj);
+            let ma = centred(&mut eval, jac, n, &g.a, &mut br, &mut bj, &mut mja);
+            let mb = centred(&mut eval, jac, n, &g.b, &mut br, &mut bj, &mut mj);
             // The bar: √(n_a n_b / (n_a + n_b)) (|m_a − m_b| − L).
             let w = ((g.a.len() * g.b.len()) as f64 / (g.a.len() + g.b.len()) as f64).sqrt();
             let d = ma - mb;
@@ -495,19 +525,7 @@ impl<'a> Problem<'a> {
                 .collect();
             br.extend(qs.iter().map(|q| (q - c).norm() - radius));
             if jac {
-                // Radial rows u_iᵀ J_i, then the centre projected out.
-                let mut radial = DMatrix::zeros(qs.len(), n);
-                for (k, u) in us.iter().enumerate() {
-                    let block = &bj[k * 3 * n..(k + 1) * 3 * n];
-                    for col in 0..n {
-                        radial[(k, col)] = (0..3).map(|c| u[c] * block[c * n + col]).sum();
-                    }
-                }
-                let a = DMatrix::from_fn(qs.len(), 3, |k, c| -us[k][c]);
-                let ata = a.transpose() * &a;
-                if let Some(inv) = ata.try_inverse() {
-                    radial -= &a * (inv * (a.transpose() * &radial));
-                }
+                let radial = radial_rows(&us, &bj, n);
                 bj.clear();
                 bj.extend(radial.transpose().iter());
             }
