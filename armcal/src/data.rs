@@ -541,16 +541,23 @@ pub enum CellError {
     /// Beyond a symmetric bound.
     #[error("{value} is beyond ±{limit} {what}")]
     Beyond {
+        /// The value as written.
         value: String,
+        /// The bound.
         limit: f64,
+        /// The bound's unit and what it bounds.
         what: &'static str,
     },
     /// Outside a range.
     #[error("{value} is outside {lo}..{hi} {what}")]
     Outside {
+        /// The value as written.
         value: String,
+        /// The range's lower end.
         lo: f64,
+        /// The range's upper end.
         hi: f64,
+        /// The range's unit and what it bounds.
         what: &'static str,
     },
 }

@@ -55,11 +55,13 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+#![deny(missing_docs)]
+
 pub mod acceptance;
 pub mod accuracy;
 pub mod eval;
 pub mod fit;
-pub mod geometry;
+pub(crate) mod geometry;
 /// The table builder and stream decoder live in `quatarm-wire`, which the QEMU tests and
 /// `cargo xtask demo` use without the rest of the host tool.
 pub use quatarm_wire::{stream_decode, tablebuild};

@@ -62,18 +62,28 @@ pub enum MpeError {
     /// Unreadable.
     #[error("{path}: cannot read: {source}")]
     Io {
+        /// The file.
         path: String,
         #[source]
+        /// Why it could not be read.
         source: std::io::Error,
     },
     /// Not TOML of the MPE file's keys (toml's message names the line, column and key).
     #[error("{path}: {message}")]
-    Syntax { path: String, message: String },
+    Syntax {
+        /// The file.
+        path: String,
+        /// toml's message.
+        message: String,
+    },
     /// A value that is no limit.
     #[error("{path}: key {key}: {value} is not a limit (a finite number ≥ 0, mm)")]
     Value {
+        /// The file.
         path: String,
+        /// The key, as the file spells it.
         key: String,
+        /// Its value.
         value: f64,
     },
 }

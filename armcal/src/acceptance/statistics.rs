@@ -76,14 +76,26 @@ pub struct Value {
 pub enum StatError {
     /// A sphere group without articulations needs 25 points.
     #[error("sphere group {group}: {have} points; P_Size and P_Form need 25 or more")]
-    SphereTooFew { group: i64, have: usize },
+    SphereTooFew {
+        /// The group's number in the data.
+        group: i64,
+        /// Its points.
+        have: usize,
+    },
     /// L_Dia needs five articulations of five points.
     #[error("sphere group {group}: L_Dia needs 5 articulations of 5 points or more, {found}")]
-    Articulations { group: i64, found: String },
+    Articulations {
+        /// The group's number in the data.
+        group: i64,
+        /// What the group has, in words.
+        found: String,
+    },
     /// The fit failed.
     #[error("sphere group {group}: {source}")]
     Fit {
+        /// The group's number in the data.
         group: i64,
+        /// Why the sphere fit failed.
         #[source]
         source: FitError,
     },

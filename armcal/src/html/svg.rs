@@ -11,50 +11,77 @@ use std::fmt::Write as _;
 pub enum Layer {
     /// Dots, one colour, with a legend name.
     Points {
+        /// Legend name.
         name: String,
+        /// CSS colour.
         colour: &'static str,
+        /// The points (data units).
         points: Vec<(f64, f64)>,
     },
     /// A polyline (an envelope, a limit).
     Line {
+        /// Legend name.
         name: String,
+        /// CSS colour.
         colour: &'static str,
+        /// Drawn dashed.
         dashed: bool,
+        /// The points (data units).
         points: Vec<(f64, f64)>,
     },
     /// A circle of a radius in data units (needs `equal_aspect`).
     Circle {
+        /// Legend name.
         name: String,
+        /// CSS colour.
         colour: &'static str,
+        /// Drawn dashed.
         dashed: bool,
+        /// Centre (data units).
         centre: (f64, f64),
+        /// Radius (data units).
         radius: f64,
     },
     /// Arrows from each point by its vector (data units of the vector: `scale` maps them to
     /// the axes' units), the vector's length named in the legend.
     Arrows {
+        /// Legend name.
         name: String,
+        /// CSS colour.
         colour: &'static str,
+        /// Where each arrow starts.
         from: Vec<(f64, f64)>,
+        /// Each arrow's vector.
         vector: Vec<(f64, f64)>,
+        /// Axis units per vector unit.
         scale: f64,
     },
     /// Dots coloured by a value on a diverging scale (blue − / red +), symmetric about 0.
     Coloured {
+        /// Legend name.
         name: String,
+        /// The points and their values (x, y, value).
         points: Vec<(f64, f64, f64)>,
     },
     /// Text labels at points.
-    Labels { labels: Vec<(f64, f64, String)> },
+    Labels {
+        /// Each label's place and text.
+        labels: Vec<(f64, f64, String)>,
+    },
 }
 
 /// One plot.
 #[derive(Clone, Debug)]
 pub struct Plot {
+    /// Title.
     pub title: String,
+    /// X axis label with unit.
     pub x_label: String,
+    /// Y axis label with unit.
     pub y_label: String,
+    /// One unit the same length on both axes (circles stay round).
     pub equal_aspect: bool,
+    /// What it draws, in order.
     pub layers: Vec<Layer>,
 }
 
