@@ -3,7 +3,8 @@
 //! computed from the ball centres the calibrated model gives for measured rows, with the
 //! ISO 14253-1 decision against maximum permissible errors.
 //!
-//! - [`fit`]: least-squares spheres (free, and with a known radius).
+//! - `geometry::sphere` (a leaf module, shared with the fit): least-squares spheres (free, and
+//!   with a known radius).
 //! - [`statistics`]: each test's value per group and the test's result.
 //! - [`mpe`]: the MPE file and the decision rule.
 //! - [`virtual_test`]: each statistic predicted from the calibration's uncertainty budget.

@@ -13,7 +13,7 @@
 //!   16–28 °C;
 //! - axis wobble: any joint, order 1–3, 20–100 µrad in a random direction and phase.
 //!
-//! The sizes are each effect's [`crate::effects::Term::set_typical`].
+//! The sizes are each effect's [`crate::effects::Simulate::set_typical`].
 //!
 //! Two effects never share a family and joint, nor a collinear thermal pair (which would be one
 //! cause).
