@@ -1,0 +1,37 @@
+//! The measured data of `calibrate`, `diagnose` and `check`, read the one way: one file or
+//! several (each file's groups kept apart, `armcal::data::read_all`), radians or counts,
+//! then the probes and plausibility checked before any fit or decision.
+
+use armcal::data::Dataset;
+use armcal::plausible::Accept;
+use quatarm_ref::arm::Arm;
+use std::path::{Path, PathBuf};
+
+/// The files as one dataset for `arm`, checked; its notes (renumbered groups) and the reader's
+/// warnings are printed on stderr, each naming its file once.
+pub fn read(paths: &[PathBuf], arm: &Arm, accept: Accept) -> anyhow::Result<Dataset> {
+    let (data, notes) = armcal::data::read_all(paths, arm)?;
+    armcal::probes::check(arm, &data)?;
+    armcal::plausible::data(arm, &data, accept)?;
+    for n in &notes {
+        eprintln!("armcal: note: {n}");
+    }
+    for w in &data.warnings {
+        eprintln!("armcal: warning: {w}");
+    }
+    Ok(data)
+}
+
+/// The files as the output guard lists them (no output may overwrite one).
+pub fn inputs(paths: &[PathBuf]) -> Vec<(&Path, &'static str)> {
+    paths.iter().map(|p| (p.as_path(), "data")).collect()
+}
+
+/// The files as messages and a calibration's header name them: `a.csv + b.csv`.
+pub fn names(paths: &[PathBuf]) -> String {
+    paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(" + ")
+}
