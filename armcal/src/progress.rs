@@ -113,3 +113,117 @@ pub fn for_command(asked: bool, prefix: &str) -> Box<dyn Observer> {
         Box::new(Silent)
     }
 }
+
+/// Progress over a known count of items (rows, fits): a bar with the count and the time left
+/// on a terminal; with `--progress` but no terminal (a pipe, a log), a line every few seconds
+/// with the count and the time left; else nothing. Estimated from the mean time per item so
+/// far, which is what indicatif does too.
+pub struct Counter {
+    shown: Shown,
+    total: u64,
+    done: u64,
+}
+
+enum Shown {
+    Bar(indicatif::ProgressBar),
+    Lines {
+        prefix: String,
+        what: String,
+        start: Instant,
+        last: Instant,
+    },
+    Nothing,
+}
+
+/// Seconds between two lines of a [`Counter`] without a terminal.
+const LINE_EVERY: Duration = Duration::from_secs(5);
+
+impl Counter {
+    /// A counter of `total` `what` (e.g. "rows") for the command `prefix`; `asked`: the
+    /// user gave `--progress`.
+    pub fn new(asked: bool, prefix: &str, what: &str, total: u64) -> Counter {
+        let shown = if std::io::stderr().is_terminal() {
+            let bar = indicatif::ProgressBar::new(total);
+            bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+            bar.set_style(
+                indicatif::ProgressStyle::with_template(&format!(
+                    "{prefix}: {{bar:30}} {{pos}}/{{len}} {what} [{{elapsed}}, {{eta}} left]"
+                ))
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            );
+            Shown::Bar(bar)
+        } else if asked {
+            let now = Instant::now();
+            Shown::Lines {
+                prefix: prefix.to_string(),
+                what: what.to_string(),
+                start: now,
+                last: now,
+            }
+        } else {
+            Shown::Nothing
+        };
+        Counter {
+            shown,
+            total,
+            done: 0,
+        }
+    }
+
+    /// One more item done.
+    pub fn tick(&mut self) {
+        self.done += 1;
+        match &mut self.shown {
+            Shown::Bar(bar) => bar.inc(1),
+            Shown::Lines {
+                prefix,
+                what,
+                start,
+                last,
+            } => {
+                if last.elapsed() >= LINE_EVERY || self.done == self.total {
+                    *last = Instant::now();
+                    eprintln!(
+                        "armcal: {prefix}: {} of {} {what}{}",
+                        self.done,
+                        self.total,
+                        eta(start.elapsed(), self.done, self.total)
+                    );
+                }
+            }
+            Shown::Nothing => {}
+        }
+    }
+}
+
+/// ", about N s left" from the time `elapsed` over `done` of `total` items (nothing when
+/// all are done or none yet).
+fn eta(elapsed: Duration, done: u64, total: u64) -> String {
+    if done == 0 || done >= total {
+        return String::new();
+    }
+    let left = elapsed.as_secs_f64() / done as f64 * (total - done) as f64;
+    format!(", about {left:.0} s left")
+}
+
+impl Drop for Counter {
+    fn drop(&mut self) {
+        if let Shown::Bar(bar) = &self.shown {
+            bar.finish_and_clear();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn eta_is_the_mean_time_per_item_times_the_items_left() {
+        let e = super::eta(std::time::Duration::from_secs(10), 1000, 3000);
+        assert_eq!(e, ", about 20 s left");
+        assert_eq!(super::eta(std::time::Duration::from_secs(10), 0, 3000), "");
+        assert_eq!(
+            super::eta(std::time::Duration::from_secs(10), 3000, 3000),
+            ""
+        );
+    }
+}
