@@ -260,16 +260,28 @@ impl Joints<'_> {
 /// an earlier file is renumbered (every group of that file moved by the same multiple of
 /// 1000), and the returned notes say so. `point` rows come from one file only: they share one
 /// instrument frame, which two recordings need not.
-pub fn read_all(
-    paths: &[std::path::PathBuf],
-    arm: &quatarm_ref::Arm,
-) -> Result<(Dataset, Vec<String>), DataError> {
+pub fn read_all(paths: &[std::path::PathBuf], arm: &quatarm_ref::Arm) -> Result<Files, DataError> {
     let mut notes = Vec::new();
+    let mut parts = Vec::new();
     let mut merged: Option<Dataset> = None;
     let mut point_file: Option<String> = None;
+    let mut seen: Vec<(std::path::PathBuf, String)> = Vec::new();
     for path in paths {
         let file = path.display().to_string();
+        // The same recording twice would count every row twice and look twice as certain.
+        if let Ok(real) = std::fs::canonicalize(path) {
+            if let Some((_, earlier)) = seen.iter().find(|(p, _)| *p == real) {
+                return Err(DataError {
+                    file,
+                    line: 0,
+                    column: "(file)".into(),
+                    message: format!("given twice (also as {earlier}): each file is read once"),
+                });
+            }
+            seen.push((real, file.clone()));
+        }
         let mut part = parse_with(&read_text(path)?, &file, Joints::RadiansOrCounts(arm))?;
+        parts.push(part.clone());
         if let Some(first) = part.rows.iter().find(|r| r.kind == Kind::Point) {
             match &point_file {
                 Some(earlier) => {
@@ -348,7 +360,18 @@ pub fn read_all(
         message: "no data file given".into(),
     })?;
     check_groups(&data)?;
-    Ok((data, notes))
+    Ok(Files { data, notes, parts })
+}
+
+/// Several files read as one ([`read_all`]).
+pub struct Files {
+    /// Every file's rows, groups renumbered where two files share a number.
+    pub data: Dataset,
+    /// What was renumbered, for the user.
+    pub notes: Vec<String>,
+    /// Each file as read, its own groups and lines, for checks whose messages name a row's
+    /// file and line.
+    pub parts: Vec<Dataset>,
 }
 
 /// The group numbers of a dataset's `spat`, `length` and `sphere` rows.
@@ -402,6 +425,13 @@ fn parse_with(text: &str, file: &str, joints_as: Joints) -> Result<Dataset, Data
         .headers()
         .map_err(|e| err(lines.of_error(&e), "(header)", format!("not CSV: {e}")))?
         .clone();
+    if cleaned.trim().is_empty() {
+        return Err(err(
+            0,
+            "(file)",
+            "empty: no header and no rows (was it saved?)".into(),
+        ));
+    }
     if header_line.is_empty() || header_line.iter().all(str::is_empty) {
         return Err(err(1, "(header)", "no header row".into()));
     }

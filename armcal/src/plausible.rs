@@ -27,6 +27,8 @@ pub struct Accept {
     pub mpe: bool,
     /// A calibration that does not fit the data it is checked with.
     pub misfit: bool,
+    /// Rows that repeat an earlier row's joint readings exactly.
+    pub duplicates: bool,
 }
 
 /// The largest joint reading (rad) of an arm that does not turn a joint past a full turn
@@ -78,6 +80,9 @@ pub fn data(arm: &Arm, data: &Dataset, accept: Accept) -> Result<(), Implausible
         })
         .collect();
     readings(&data.source, &placed, accept)?;
+    if !accept.duplicates {
+        duplicates(std::slice::from_ref(data))?;
+    }
     if !accept.units {
         if let Some(ratio) = point_size_ratio(arm, data) {
             if !(1.0 / SIZE_RATIO..=SIZE_RATIO).contains(&ratio) {
@@ -172,6 +177,42 @@ pub fn readings(file: &str, rows: &[Reading], accept: Accept) -> Result<(), Impl
                 "temperatures are in °C: in °F? (°C = (°F − 32) / 1.8)",
                 "temperature",
             ));
+        }
+    }
+    Ok(())
+}
+
+/// No row repeats an earlier row's kind and joint readings exactly, in one file or across
+/// the files of one recording (`parts`, in the order given). Encoders of 2^20 counts a turn
+/// never read the same six angles in two probings, so an exact repeat is a copy: a row
+/// pasted twice, or a file given twice under two names.
+pub fn duplicates(parts: &[Dataset]) -> Result<(), Implausible> {
+    let mut seen: std::collections::HashMap<(crate::data::Kind, Vec<u64>), (usize, usize)> =
+        std::collections::HashMap::new();
+    for (f, part) in parts.iter().enumerate() {
+        for r in &part.rows {
+            let key = (
+                r.kind,
+                r.theta.iter().map(|t| t.to_bits()).collect::<Vec<_>>(),
+            );
+            if let Some(&(ff, line)) = seen.get(&key) {
+                let earlier = if ff == f {
+                    format!("line {line}")
+                } else {
+                    format!("line {line} of {}", parts[ff].source)
+                };
+                return Err(Implausible {
+                    file: part.source.clone(),
+                    what: format!(
+                        "line {} repeats {earlier} (the same kind and the same joint readings \
+                         to the last digit, which two probings never give)",
+                        r.line
+                    ),
+                    hint: "a row pasted twice, or one recording given twice?".into(),
+                    flag: "duplicates",
+                });
+            }
+            seen.insert(key, (f, r.line));
         }
     }
     Ok(())

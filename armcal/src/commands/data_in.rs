@@ -1,6 +1,6 @@
 //! The measured data of `calibrate`, `diagnose` and `check`, read the one way: one file or
 //! several (each file's groups kept apart, `armcal::data::read_all`), radians or counts,
-//! then the probes and plausibility checked before any fit or decision.
+//! then the probes and plausibility checked, file by file, before any fit or decision.
 
 use armcal::data::Dataset;
 use armcal::plausible::Accept;
@@ -10,16 +10,22 @@ use std::path::{Path, PathBuf};
 /// The files as one dataset for `arm`, checked; its notes (renumbered groups) and the reader's
 /// warnings are printed on stderr, each naming its file once.
 pub fn read(paths: &[PathBuf], arm: &Arm, accept: Accept) -> anyhow::Result<Dataset> {
-    let (data, notes) = armcal::data::read_all(paths, arm)?;
-    armcal::probes::check(arm, &data)?;
-    armcal::plausible::data(arm, &data, accept)?;
-    for n in &notes {
+    let files = armcal::data::read_all(paths, arm)?;
+    // File by file, so that a message names the file and the line of the row at fault.
+    for part in &files.parts {
+        armcal::probes::check(arm, part)?;
+        armcal::plausible::data(arm, part, accept)?;
+    }
+    if !accept.duplicates {
+        armcal::plausible::duplicates(&files.parts)?;
+    }
+    for n in &files.notes {
         eprintln!("armcal: note: {n}");
     }
-    for w in &data.warnings {
+    for w in &files.data.warnings {
         eprintln!("armcal: warning: {w}");
     }
-    Ok(data)
+    Ok(files.data)
 }
 
 /// The files as the output guard lists them (no output may overwrite one).
