@@ -8,7 +8,7 @@
 #[allow(dead_code)]
 mod common;
 
-use common::{armcal, armcal_ok, refused, stderr, with_copies};
+use common::{armcal, armcal_ok, refused_with, stderr, with_copies};
 use std::path::Path;
 
 /// `check FILES… --calib default-6.toml --json` in `d`, required to succeed; its JSON.
@@ -102,7 +102,7 @@ fn check_of(name: &str, files: &[&str], extra: &[&str]) -> std::process::Output 
 #[test]
 fn decimal_commas_are_named_with_their_place() {
     let o = check_of("comma", &["comma-decimal.csv"], &[]);
-    refused(
+    refused_with(
         &o,
         3,
         &["comma-decimal.csv: line 3, column j1", "a decimal comma?"],
@@ -112,14 +112,14 @@ fn decimal_commas_are_named_with_their_place() {
 #[test]
 fn an_empty_file_is_said_to_be_empty() {
     let o = check_of("empty", &["empty.csv"], &[]);
-    let e = refused(&o, 3, &["empty.csv: empty"]);
+    let e = refused_with(&o, 3, &["empty.csv: empty"]);
     assert_eq!(e.matches("empty.csv").count(), 1, "{e}");
 }
 
 #[test]
-fn radians_and_counts_together_or_a_count_past_a_turn_are_refused() {
+fn radians_and_counts_together_or_a_count_past_a_turn_are_refused_with() {
     let o = check_of("both", &["both-j-and-c.csv"], &[]);
-    refused(
+    refused_with(
         &o,
         3,
         &[
@@ -128,7 +128,7 @@ fn radians_and_counts_together_or_a_count_past_a_turn_are_refused() {
         ],
     );
     let o = check_of("turn", &["count-past-a-turn.csv"], &[]);
-    refused(
+    refused_with(
         &o,
         3,
         &[
@@ -141,7 +141,7 @@ fn radians_and_counts_together_or_a_count_past_a_turn_are_refused() {
 #[test]
 fn a_row_pasted_twice_is_refused_unless_accepted() {
     let o = check_of("dup", &["sphere-duplicate.csv"], &[]);
-    refused(
+    refused_with(
         &o,
         3,
         &[
@@ -158,9 +158,9 @@ fn a_row_pasted_twice_is_refused_unless_accepted() {
 }
 
 #[test]
-fn one_recording_twice_is_refused() {
+fn one_recording_twice_is_refused_with() {
     let o = check_of("twice", &["sphere.csv", "./sphere.csv"], &[]);
-    refused(&o, 3, &["./sphere.csv: given twice (also as sphere.csv)"]);
+    refused_with(&o, 3, &["./sphere.csv: given twice (also as sphere.csv)"]);
     // A copy under another name: its rows repeat the first file's.
     let d = with_copies("data-in", "copy", &["sphere.csv"]);
     std::fs::copy(d.join("sphere.csv"), d.join("again.csv")).unwrap();
@@ -174,13 +174,13 @@ fn one_recording_twice_is_refused() {
         ],
         &d,
     );
-    refused(&o, 3, &["again.csv: line 3 repeats line 3 of sphere.csv"]);
+    refused_with(&o, 3, &["again.csv: line 3 repeats line 3 of sphere.csv"]);
 }
 
 #[test]
-fn point_rows_in_two_files_are_refused() {
+fn point_rows_in_two_files_are_refused_with() {
     let o = check_of("points", &["points-a.csv", "points-b.csv"], &[]);
-    refused(
+    refused_with(
         &o,
         3,
         &[
@@ -193,7 +193,7 @@ fn point_rows_in_two_files_are_refused() {
 
 /// F8 (issue 29, round 2): `E_Uni = { a, per_m, per_km }` read as { a, per_m }.
 #[test]
-fn an_unknown_key_inside_an_mpe_limit_is_refused() {
+fn an_unknown_key_inside_an_mpe_limit_is_refused_with() {
     let d = with_copies("data-in", "per-km-mpe", &["whole.csv", "mpe-per-km.toml"]);
     let o = armcal(
         &[
@@ -206,7 +206,7 @@ fn an_unknown_key_inside_an_mpe_limit_is_refused() {
         ],
         &d,
     );
-    refused(
+    refused_with(
         &o,
         3,
         &[
@@ -229,7 +229,7 @@ fn eval_refuses_degrees_and_fahrenheit_unless_accepted() {
         args.extend_from_slice(extra);
         armcal(&args, &d)
     };
-    refused(
+    refused_with(
         &run("eval-degrees.csv", &[]),
         1,
         &[
@@ -238,7 +238,7 @@ fn eval_refuses_degrees_and_fahrenheit_unless_accepted() {
             "--accept-units",
         ],
     );
-    refused(
+    refused_with(
         &run("eval-fahrenheit.csv", &[]),
         1,
         &[
