@@ -166,7 +166,7 @@ pub fn decide(
     let mut results = BTreeMap::new();
     let mut worst_group = BTreeMap::new();
     for t in Test::ALL {
-        if let Some(v) = statistics::result(&values, t) {
+        if let Some(v) = statistics::result(values, t) {
             results.insert(t.key(), v.value_mm * 1e3);
             worst_group.insert(t.key(), v.group);
         }
