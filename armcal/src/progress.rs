@@ -10,6 +10,28 @@ pub trait Observer {
     fn stage(&mut self, _what: &str) {}
     /// The solver's iteration `iteration` left an RMS residual of `rms_mm`.
     fn iteration(&mut self, _iteration: usize, _rms_mm: f64) {}
+    /// Step `done + 1` of `total` like steps begins (validation folds): a stage named with
+    /// its count; the observers that show one add the time left.
+    fn step(&mut self, what: &str, done: usize, total: usize) {
+        self.stage(&format!("{what} {} of {total}", done + 1));
+    }
+}
+
+/// The stage of a counted step, with the time left once a step is done: the mean time of the
+/// steps so far times the steps left. `since` keeps when the first step of `what` began.
+fn counted(since: &mut Option<(String, Instant)>, what: &str, done: usize, total: usize) -> String {
+    let start = match since {
+        Some((w, t)) if w == what && done > 0 => *t,
+        _ => {
+            *since = Some((what.to_string(), Instant::now()));
+            return format!("{what} {} of {total}", done + 1);
+        }
+    };
+    format!(
+        "{what} {} of {total}{}",
+        done + 1,
+        eta(start.elapsed(), done as u64, total as u64)
+    )
 }
 
 /// Sees nothing.
@@ -21,6 +43,7 @@ impl Observer for Silent {}
 pub struct Spinner {
     bar: indicatif::ProgressBar,
     stage: String,
+    steps: Option<(String, Instant)>,
 }
 
 impl Spinner {
@@ -38,6 +61,7 @@ impl Spinner {
         Spinner {
             bar,
             stage: String::new(),
+            steps: None,
         }
     }
 }
@@ -54,6 +78,11 @@ impl Observer for Spinner {
             self.stage
         ));
     }
+
+    fn step(&mut self, what: &str, done: usize, total: usize) {
+        let s = counted(&mut self.steps, what, done, total);
+        self.stage(&s);
+    }
 }
 
 impl Drop for Spinner {
@@ -67,6 +96,7 @@ pub struct Log {
     prefix: String,
     stage: String,
     last: Option<Instant>,
+    steps: Option<(String, Instant)>,
 }
 
 impl Log {
@@ -76,6 +106,7 @@ impl Log {
             prefix: prefix.to_string(),
             stage: String::new(),
             last: None,
+            steps: None,
         }
     }
 }
@@ -98,6 +129,11 @@ impl Observer for Log {
             "armcal: {}: {}: iteration {iteration}, RMS {rms_mm:.4} mm",
             self.prefix, self.stage
         );
+    }
+
+    fn step(&mut self, what: &str, done: usize, total: usize) {
+        let s = counted(&mut self.steps, what, done, total);
+        self.stage(&s);
     }
 }
 
@@ -224,6 +260,21 @@ mod tests {
         assert_eq!(
             super::eta(std::time::Duration::from_secs(10), 3000, 3000),
             ""
+        );
+    }
+
+    #[test]
+    fn a_counted_stage_adds_the_time_left_from_its_second_step() {
+        let mut since = None;
+        assert_eq!(super::counted(&mut since, "fold", 0, 5), "fold 1 of 5");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+        let second = super::counted(&mut since, "fold", 1, 5);
+        assert!(second.starts_with("fold 2 of 5, about "), "{second}");
+        assert!(second.ends_with(" s left"), "{second}");
+        // Another stage starts its own clock.
+        assert_eq!(
+            super::counted(&mut since, "session", 1, 3),
+            "session 2 of 3"
         );
     }
 }
