@@ -219,16 +219,168 @@ pub fn separator_name(sep: u8) -> &'static str {
     }
 }
 
-/// Reads a data file for an arm with `dof` joints.
+/// Reads a data file for an arm with `dof` joints (joint columns `j1..jN` in radians; count
+/// columns need the arm's encoders: [`read_all`]).
 pub fn read(path: &std::path::Path, dof: usize) -> Result<Dataset, DataError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| DataError {
-        file: file.clone(),
+    parse_with(&read_text(path)?, &file, Joints::Radians(dof))
+}
+
+/// A file's text, or the error naming it.
+fn read_text(path: &std::path::Path) -> Result<String, DataError> {
+    std::fs::read_to_string(path).map_err(|e| DataError {
+        file: path.display().to_string(),
         line: 0,
         column: "(file)".into(),
         message: format!("cannot read: {e}"),
+    })
+}
+
+/// How a file's joint readings are read: radians only, or radians (`j1..jN`) or encoder
+/// counts (`c1..cN`, converted with the arm's counts per revolution).
+#[derive(Clone, Copy)]
+enum Joints<'a> {
+    Radians(usize),
+    RadiansOrCounts(&'a quatarm_ref::Arm),
+}
+
+impl Joints<'_> {
+    fn dof(&self) -> usize {
+        match self {
+            Joints::Radians(n) => *n,
+            Joints::RadiansOrCounts(arm) => arm.dof(),
+        }
+    }
+}
+
+/// Several data files read as one dataset for `arm`, as a recording comes (`simulate` writes
+/// one kind per file; a session may be saved in parts). Each file is read and checked on its
+/// own first (its errors name it); joint readings may be radians (`j1..jN`) or encoder counts
+/// (`c1..cN`), file by file. Each file's groups stay apart: a group number a file shares with
+/// an earlier file is renumbered (every group of that file moved by the same multiple of
+/// 1000), and the returned notes say so. `point` rows come from one file only: they share one
+/// instrument frame, which two recordings need not.
+pub fn read_all(paths: &[std::path::PathBuf], arm: &quatarm_ref::Arm) -> Result<Files, DataError> {
+    let mut notes = Vec::new();
+    let mut parts = Vec::new();
+    let mut merged: Option<Dataset> = None;
+    let mut point_file: Option<String> = None;
+    let mut seen: Vec<(std::path::PathBuf, String)> = Vec::new();
+    for path in paths {
+        let file = path.display().to_string();
+        // The same recording twice would count every row twice and look twice as certain.
+        if let Ok(real) = std::fs::canonicalize(path) {
+            if let Some((_, earlier)) = seen.iter().find(|(p, _)| *p == real) {
+                return Err(DataError {
+                    file,
+                    line: 0,
+                    column: "(file)".into(),
+                    message: format!("given twice (also as {earlier}): each file is read once"),
+                });
+            }
+            seen.push((real, file.clone()));
+        }
+        let mut part = parse_with(&read_text(path)?, &file, Joints::RadiansOrCounts(arm))?;
+        parts.push(part.clone());
+        if let Some(first) = part.rows.iter().find(|r| r.kind == Kind::Point) {
+            match &point_file {
+                Some(earlier) => {
+                    return Err(DataError {
+                        file: file.clone(),
+                        line: first.line,
+                        column: "kind".into(),
+                        message: format!(
+                            "`point` rows here and in {earlier}: point rows share one \
+                             instrument frame; put them in one file"
+                        ),
+                    })
+                }
+                None => point_file = Some(file.clone()),
+            }
+        }
+        let Some(all) = merged.as_mut() else {
+            merged = Some(part);
+            continue;
+        };
+        let taken = groups(all);
+        let mine = groups(&part);
+        let clash: Vec<String> = mine.intersection(&taken).map(i64::to_string).collect();
+        if !clash.is_empty() {
+            let (lo, hi) = (mine.first().copied(), taken.last().copied());
+            let shift = match (lo, hi) {
+                (Some(lo), Some(hi)) => ((hi - lo) / 1000 + 1) * 1000,
+                _ => 1000,
+            };
+            for r in &mut part.rows {
+                if r.kind != Kind::Point {
+                    r.group += shift;
+                }
+            }
+            notes.push(format!(
+                "{file}: group{} {} also in an earlier file: every group of this file is \
+                 renumbered + {shift} (group g is read as g + {shift}), so that no two files' \
+                 groups merge",
+                if clash.len() == 1 { "" } else { "s" },
+                if clash.len() > 6 {
+                    format!("{}, … ({} in all) are", clash[..6].join(", "), clash.len())
+                } else {
+                    format!(
+                        "{} {}",
+                        clash.join(", "),
+                        if clash.len() == 1 { "is" } else { "are" }
+                    )
+                }
+            ));
+        }
+        if all.has_temperature != part.has_temperature {
+            notes.push(format!(
+                "{file}: {} a temp_c column, an earlier file {}: rows without one are taken \
+                 at 20 °C",
+                if part.has_temperature {
+                    "has"
+                } else {
+                    "has no"
+                },
+                if part.has_temperature {
+                    "has none"
+                } else {
+                    "has one"
+                },
+            ));
+        }
+        all.rows.append(&mut part.rows);
+        all.warnings.append(&mut part.warnings);
+        all.has_temperature |= part.has_temperature;
+        all.source = format!("{} + {file}", all.source);
+    }
+    let data = merged.ok_or_else(|| DataError {
+        file: "(no file)".into(),
+        line: 0,
+        column: "(file)".into(),
+        message: "no data file given".into(),
     })?;
-    parse(&text, &file, dof)
+    check_groups(&data)?;
+    Ok(Files { data, notes, parts })
+}
+
+/// Several files read as one ([`read_all`]).
+pub struct Files {
+    /// Every file's rows, groups renumbered where two files share a number.
+    pub data: Dataset,
+    /// What was renumbered, for the user.
+    pub notes: Vec<String>,
+    /// Each file as read, its own groups and lines, for checks whose messages name a row's
+    /// file and line.
+    pub parts: Vec<Dataset>,
+}
+
+/// The group numbers of a dataset's `spat`, `length` and `sphere` rows.
+fn groups(data: &Dataset) -> std::collections::BTreeSet<i64> {
+    data.rows
+        .iter()
+        .filter(|r| r.kind != Kind::Point)
+        .map(|r| r.group)
+        .collect()
 }
 
 /// Column positions found in the header.
@@ -236,6 +388,8 @@ struct Columns {
     kind: usize,
     group: usize,
     joints: Vec<usize>,
+    /// The arm whose encoders convert them where the joint columns are counts (`c1..cN`).
+    counts_of: Option<quatarm_ref::Arm>,
     xyz: Option<[usize; 3]>,
     end: Option<usize>,
     length: Option<usize>,
@@ -247,6 +401,13 @@ struct Columns {
 
 /// Reads data from text; `file` names it in errors.
 pub fn parse(text: &str, file: &str, dof: usize) -> Result<Dataset, DataError> {
+    parse_with(text, file, Joints::Radians(dof))
+}
+
+fn parse_with(text: &str, file: &str, joints_as: Joints) -> Result<Dataset, DataError> {
+    let dof = joints_as.dof();
+    // A spreadsheet's UTF-8 byte order mark would glue itself to the first column's name.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let err = |line: usize, column: &str, message: String| DataError {
         file: file.to_string(),
         line,
@@ -264,6 +425,13 @@ pub fn parse(text: &str, file: &str, dof: usize) -> Result<Dataset, DataError> {
         .headers()
         .map_err(|e| err(lines.of_error(&e), "(header)", format!("not CSV: {e}")))?
         .clone();
+    if cleaned.trim().is_empty() {
+        return Err(err(
+            0,
+            "(file)",
+            "empty: no header and no rows (was it saved?)".into(),
+        ));
+    }
     if header_line.is_empty() || header_line.iter().all(str::is_empty) {
         return Err(err(1, "(header)", "no header row".into()));
     }
@@ -299,7 +467,8 @@ pub fn parse(text: &str, file: &str, dof: usize) -> Result<Dataset, DataError> {
                 | "temp_c"
                 | "probe"
         );
-        if !known && joint_index(n, "j").is_none() {
+        let counts = matches!(joints_as, Joints::RadiansOrCounts(_));
+        if !known && joint_index(n, "j").is_none() && !(counts && joint_index(n, "c").is_some()) {
             warnings.push(format!(
                 "{file}: line {hline}: unknown column `{}` ignored",
                 shown(n)
@@ -311,14 +480,33 @@ pub fn parse(text: &str, file: &str, dof: usize) -> Result<Dataset, DataError> {
             .copied()
             .ok_or_else(|| err(hline, name, "missing column".into()))
     };
-    let joints = match joint_columns(&names, "j", dof).map_err(header_err)? {
-        Some(j) => j,
-        None => return Err(err(hline, "j1", missing_joint(1, 0, dof))),
+    let counts = match joints_as {
+        Joints::RadiansOrCounts(_) => joint_columns(&names, "c", dof).map_err(header_err)?,
+        Joints::Radians(_) => None,
+    };
+    let (joints, counts_of) = match (
+        joint_columns(&names, "j", dof).map_err(header_err)?,
+        counts,
+        joints_as,
+    ) {
+        (Some(j), None, _) => (j, None),
+        (None, Some(c), Joints::RadiansOrCounts(arm)) => (c, Some(arm.clone())),
+        (Some(_), Some(_), _) => {
+            return Err(err(
+                hline,
+                "c1",
+                format!(
+                    "both j1..j{dof} (radians) and c1..c{dof} (counts): give one reading per joint"
+                ),
+            ))
+        }
+        _ => return Err(err(hline, "j1", missing_joint(1, 0, dof))),
     };
     let columns = Columns {
         kind: need("kind")?,
         group: need("group")?,
         joints,
+        counts_of,
         xyz: match (seen.get("x"), seen.get("y"), seen.get("z")) {
             (Some(&x), Some(&y), Some(&z)) => Some([x, y, z]),
             _ => None,
@@ -538,6 +726,20 @@ pub enum CellError {
     /// Not a number at all.
     #[error("`{0}` is not a number")]
     NotNumber(String),
+    /// A number written with a decimal comma (`0,5`): a spreadsheet of a comma-decimal locale.
+    #[error("`{0}` is not a number: a decimal comma? numbers are written with a point (`{1}`)")]
+    DecimalComma(String, String),
+    /// Not an encoder count.
+    #[error("`{0}` is not a count (an integer ≥ 0)")]
+    NotCount(String),
+    /// A count of a turn or more.
+    #[error("count {count} is not below the joint's {per_rev} counts per revolution")]
+    CountBeyond {
+        /// The count read.
+        count: u32,
+        /// The joint's counts per revolution.
+        per_rev: u32,
+    },
     /// Beyond a symmetric bound.
     #[error("{value} is beyond ±{limit} {what}")]
     Beyond {
@@ -568,7 +770,16 @@ pub fn number_cell(s: &str, bound: &Bound) -> Result<f64, CellError> {
         Ok(x) if x.is_finite() => x,
         Ok(_) => return Err(CellError::NotFinite(shown(s))),
         Err(_) if s.is_empty() => return Err(CellError::Empty),
-        Err(_) => return Err(CellError::NotNumber(shown(s))),
+        Err(_) => {
+            let pointed = s.replacen(',', ".", 1);
+            return Err(
+                if s.matches(',').count() == 1 && pointed.parse::<f64>().is_ok() {
+                    CellError::DecimalComma(shown(s), shown(&pointed))
+                } else {
+                    CellError::NotNumber(shown(s))
+                },
+            );
+        }
     };
     match bound {
         Bound::Abs(limit, what) if x.abs() > *limit => Err(CellError::Beyond {
@@ -584,6 +795,17 @@ pub fn number_cell(s: &str, bound: &Bound) -> Result<f64, CellError> {
         }),
         _ => Ok(x),
     }
+}
+
+/// An encoder count cell: an integer from 0 to below `per_rev`, the joint's counts per
+/// revolution. The one reading of count columns (`c1..cN`), for measured data and `eval`;
+/// the counts become radians through `quatarm_ref::Arm::counts_to_rad`.
+pub fn count_cell(s: &str, per_rev: u32) -> Result<u32, CellError> {
+    let count: u32 = s.parse().map_err(|_| CellError::NotCount(shown(s)))?;
+    if count >= per_rev {
+        return Err(CellError::CountBeyond { count, per_rev });
+    }
+    Ok(count)
 }
 
 fn missing_joint(k: usize, file_dof: usize, dof: usize) -> String {
@@ -688,11 +910,24 @@ fn parse_row(
         }
     };
     let group = cells.integer(c.group, "group")?;
-    let theta = c
-        .joints
-        .iter()
-        .map(|&i| cells.number(i, Bound::joint()))
-        .collect::<Result<Vec<_>, _>>()?;
+    let theta = match &c.counts_of {
+        None => c
+            .joints
+            .iter()
+            .map(|&i| cells.number(i, Bound::joint()))
+            .collect::<Result<Vec<_>, _>>()?,
+        Some(arm) => {
+            let mut counts = Vec::with_capacity(c.joints.len());
+            for (&i, j) in c.joints.iter().zip(&arm.joints) {
+                counts.push(
+                    count_cell(cells.text(i), j.encoder_counts)
+                        .map_err(|m| cells.fail(&shown(&cells.names[i]), m.to_string()))?,
+                );
+            }
+            // The one conversion of counts, `eval`'s too.
+            arm.counts_to_rad(&counts)
+        }
+    };
     let xyz = match kind {
         Kind::Point => Some(point_cells(&cells, c)?),
         _ => None,

@@ -11,7 +11,8 @@
 //! evaluated before anything is written: a bad row gives an error and no partial output.
 
 use crate::data::{
-    joint_columns, number_cell, unique_columns, without_comments, Bound, HeaderProblem, Lines,
+    count_cell, joint_columns, number_cell, unique_columns, without_comments, Bound, HeaderProblem,
+    Lines,
 };
 use crate::limits::shown;
 use anyhow::Context as _;
@@ -86,7 +87,8 @@ pub fn read_rows(arm: &Arm, mut input: impl std::io::Read) -> Result<Rows, RowEr
         column: "(input)".into(),
         message: format!("cannot read: {e}"),
     })?;
-    let text = without_comments(&text);
+    // A spreadsheet's UTF-8 byte order mark would glue itself to the first column's name.
+    let text = without_comments(text.strip_prefix('\u{feff}').unwrap_or(&text));
     let lines = Lines::new(&text);
     let mut rdr = csv::ReaderBuilder::new()
         .delimiter(crate::data::separator(&text))
@@ -153,18 +155,8 @@ pub fn read_rows(arm: &Arm, mut input: impl std::io::Read) -> Result<Rows, RowEr
         } else {
             let mut v = Vec::with_capacity(n);
             for (k, &col) in cols.iter().enumerate() {
-                let s = field(col)?;
-                let x: u32 = s.parse().map_err(|_| {
-                    bad(col, format!("`{}` is not a count (integer ≥ 0)", shown(s)))
-                })?;
                 let per_rev = arm.joints[k].encoder_counts;
-                if x >= per_rev {
-                    return Err(bad(
-                        col,
-                        format!("count {x} is not below {per_rev} per revolution"),
-                    ));
-                }
-                v.push(x);
+                v.push(count_cell(field(col)?, per_rev).map_err(|m| bad(col, m.to_string()))?);
             }
             Reading::Counts(v)
         };

@@ -27,6 +27,8 @@ pub struct Accept {
     pub mpe: bool,
     /// A calibration that does not fit the data it is checked with.
     pub misfit: bool,
+    /// Rows that repeat an earlier row's joint readings exactly.
+    pub duplicates: bool,
 }
 
 /// The largest joint reading (rad) of an arm that does not turn a joint past a full turn
@@ -68,27 +70,20 @@ pub fn data(arm: &Arm, data: &Dataset, accept: Accept) -> Result<(), Implausible
         hint: hint.to_string(),
         flag,
     };
+    let placed: Vec<Reading> = data
+        .rows
+        .iter()
+        .map(|r| Reading {
+            theta: &r.theta,
+            temp_c: data.has_temperature.then_some(r.temp_c),
+            place: format!("line {}", r.line),
+        })
+        .collect();
+    readings(&data.source, &placed, accept)?;
+    if !accept.duplicates {
+        duplicates(std::slice::from_ref(data))?;
+    }
     if !accept.units {
-        for j in 0..data.dof {
-            let worst = data
-                .rows
-                .iter()
-                .filter_map(|r| r.theta.get(j).map(|t| (t.abs(), r.line)))
-                .fold((0.0, 0), |a, b| if b.0 > a.0 { b } else { a });
-            if worst.0 > TURN_RAD {
-                return Err(refuse(
-                    format!(
-                        "joint {} reads {:.4} rad on line {} (more than a turn, {:.1} turns)",
-                        j + 1,
-                        worst.0,
-                        worst.1,
-                        worst.0 / std::f64::consts::TAU
-                    ),
-                    "joint readings are in radians: in degrees? multiply by π/180",
-                    "units",
-                ));
-            }
-        }
         if let Some(ratio) = point_size_ratio(arm, data) {
             if !(1.0 / SIZE_RATIO..=SIZE_RATIO).contains(&ratio) {
                 return Err(refuse(
@@ -120,19 +115,104 @@ pub fn data(arm: &Arm, data: &Dataset, accept: Accept) -> Result<(), Implausible
             }
         }
     }
-    if !accept.temperature && data.has_temperature {
-        if let Some(r) = data.rows.iter().find(|r| !TEMP_C.contains(&r.temp_c)) {
+    Ok(())
+}
+
+/// A joint reading with its temperature (where the input has one) and its place in the
+/// input for messages (`line 5`, `row 3`).
+pub struct Reading<'a> {
+    /// Joint angles (rad).
+    pub theta: &'a [f64],
+    /// Temperature (°C), where the input records one.
+    pub temp_c: Option<f64>,
+    /// Where it is.
+    pub place: String,
+}
+
+/// Joint readings in radians (no joint past a turn: [`TURN_RAD`]) and temperatures in °C
+/// where arms are used ([`TEMP_C`]): the measured data's rule and `eval`'s input's.
+pub fn readings(file: &str, rows: &[Reading], accept: Accept) -> Result<(), Implausible> {
+    let refuse = |what: String, hint: &str, flag| Implausible {
+        file: file.to_string(),
+        what,
+        hint: hint.to_string(),
+        flag,
+    };
+    if !accept.units {
+        let dof = rows.iter().map(|r| r.theta.len()).max().unwrap_or(0);
+        for j in 0..dof {
+            let worst = rows
+                .iter()
+                .filter_map(|r| r.theta.get(j).map(|t| (t.abs(), r)))
+                .fold(None, |a: Option<(f64, &Reading)>, b| match a {
+                    Some(a) if a.0 >= b.0 => Some(a),
+                    _ => Some(b),
+                });
+            if let Some((t, r)) = worst.filter(|w| w.0 > TURN_RAD) {
+                return Err(refuse(
+                    format!(
+                        "joint {} reads {t:.4} rad on {} (more than a turn, {:.1} turns)",
+                        j + 1,
+                        r.place,
+                        t / std::f64::consts::TAU
+                    ),
+                    "joint readings are in radians: in degrees? multiply by π/180",
+                    "units",
+                ));
+            }
+        }
+    }
+    if !accept.temperature {
+        let outside = rows
+            .iter()
+            .find_map(|r| r.temp_c.filter(|t| !TEMP_C.contains(t)).map(|t| (t, r)));
+        if let Some((t, r)) = outside {
             return Err(refuse(
                 format!(
-                    "temp_c = {} °C on line {}, outside {}..{} °C where arms are used",
-                    r.temp_c,
-                    r.line,
+                    "temp_c = {t} °C on {}, outside {}..{} °C where arms are used",
+                    r.place,
                     TEMP_C.start(),
                     TEMP_C.end()
                 ),
                 "temperatures are in °C: in °F? (°C = (°F − 32) / 1.8)",
                 "temperature",
             ));
+        }
+    }
+    Ok(())
+}
+
+/// No row repeats an earlier row's kind and joint readings exactly, in one file or across
+/// the files of one recording (`parts`, in the order given). Encoders of 2^20 counts a turn
+/// never read the same six angles in two probings, so an exact repeat is a copy: a row
+/// pasted twice, or a file given twice under two names.
+pub fn duplicates(parts: &[Dataset]) -> Result<(), Implausible> {
+    let mut seen: std::collections::HashMap<(crate::data::Kind, Vec<u64>), (usize, usize)> =
+        std::collections::HashMap::new();
+    for (f, part) in parts.iter().enumerate() {
+        for r in &part.rows {
+            let key = (
+                r.kind,
+                r.theta.iter().map(|t| t.to_bits()).collect::<Vec<_>>(),
+            );
+            if let Some(&(ff, line)) = seen.get(&key) {
+                let earlier = if ff == f {
+                    format!("line {line}")
+                } else {
+                    format!("line {line} of {}", parts[ff].source)
+                };
+                return Err(Implausible {
+                    file: part.source.clone(),
+                    what: format!(
+                        "line {} repeats {earlier} (the same kind and the same joint readings \
+                         to the last digit, which two probings never give)",
+                        r.line
+                    ),
+                    hint: "a row pasted twice, or one recording given twice?".into(),
+                    flag: "duplicates",
+                });
+            }
+            seen.insert(key, (f, r.line));
         }
     }
     Ok(())

@@ -199,3 +199,25 @@ fn bad_groupings_are_refused_with_the_option_and_recording_named() {
     let err = run(&["--same-arm", "x=a,b", "--each-file-an-arm"]);
     assert!(err.contains("--each-file-an-arm"), "{err}");
 }
+
+/// Issue 29, F8: a "fleet" whose recordings are all one arm has no spread between arms (its
+/// pooled test printed `± inf, p = 1.0`): refused, with what to run instead.
+#[test]
+fn a_fleet_of_one_arm_is_refused_with_what_to_run() {
+    let dir = common::workdir("one-arm");
+    let recs = fleet_of_five(30, 3);
+    let files = write(&dir, &recs[..2]);
+    let mut args = vec!["diagnose", "--fleet"];
+    args.extend(files.iter().map(String::as_str));
+    args.extend(["--same-arm", "ab=a,b", "--max-order", "1"]);
+    let o = common::armcal(&args, &dir);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("the 2 recordings are all one arm (ab)")
+            && err.contains("armcal diagnose fleet-a.csv fleet-b.csv")
+            && err.contains("--each-file-an-arm"),
+        "{err}"
+    );
+    assert!(o.stdout.is_empty(), "a report was printed: {err}");
+}

@@ -5,16 +5,12 @@
 #[allow(dead_code)]
 mod common;
 
-use common::{armcal, armcal_ok, workdir};
+use common::{armcal, armcal_ok, refused, stderr, workdir};
 use std::path::Path;
 
 fn copy_default6(d: &Path, name: &str) {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/default-6.toml");
     std::fs::copy(src, d.join(name)).unwrap();
-}
-
-fn stderr(o: &std::process::Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 /// F4: `table build CAL.toml -o CAL.toml` and `table sign T.bin --key K.pem -o K.pem` are
@@ -207,15 +203,6 @@ fn rewrite(src: &Path, dst: &Path, cols: &[&str], f: impl Fn(f64) -> f64) {
         out += "\n";
     }
     std::fs::write(dst, out).unwrap();
-}
-
-/// Exit non-zero, and stderr names what looks wrong and the flag that accepts it.
-fn refused(o: &std::process::Output, names: &[&str]) {
-    let err = stderr(o);
-    assert!(!o.status.success(), "accepted: {err}");
-    for n in names {
-        assert!(err.contains(n), "`{n}` not in: {err}");
-    }
 }
 
 /// The unit mistakes of issue 29, on copies of simulated data: each refused before any fit

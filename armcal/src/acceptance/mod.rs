@@ -134,9 +134,27 @@ pub fn check(
     prediction: Option<&BTreeMap<(Test, i64), Interval>>,
     show_prediction: bool,
 ) -> Result<Check, StatError> {
-    let d = arm.probe.ball_diameter;
+    let values = measure(arm, data)?;
+    Ok(decide(arm, data, &values, mpe, prediction, show_prediction))
+}
+
+/// Every test value the data supports, with the calibrated model: what [`check`] decides on,
+/// computed once where a command looks at the values before deciding (`check`'s misfit rail).
+pub fn measure(arm: &Arm, data: &Dataset) -> Result<Vec<Value>, StatError> {
     let ball = |r: &crate::data::Row| crate::fit::probes::ball_diameter(arm, r);
-    let values = statistics::values(data, &centres(arm, data), &ball)?;
+    statistics::values(data, &centres(arm, data), &ball)
+}
+
+/// The report and decision of [`check`] on values already [`measure`]d.
+pub fn decide(
+    arm: &Arm,
+    data: &Dataset,
+    values: &[Value],
+    mpe: Option<&Mpe>,
+    prediction: Option<&BTreeMap<(Test, i64), Interval>>,
+    show_prediction: bool,
+) -> Check {
+    let d = arm.probe.ball_diameter;
     // The ball of a sphere group's probe (one per group: the data reader's rule).
     let spheres = data.layout().sphere;
     let group_ball = |group: i64| {
@@ -147,7 +165,7 @@ pub fn check(
     let mut results = BTreeMap::new();
     let mut worst_group = BTreeMap::new();
     for t in Test::ALL {
-        if let Some(v) = statistics::result(&values, t) {
+        if let Some(v) = statistics::result(values, t) {
             results.insert(t.key(), v.value_mm * 1e3);
             worst_group.insert(t.key(), v.group);
         }
@@ -172,14 +190,14 @@ pub fn check(
             diameter_mm: group_ball(v.group) + v.value_mm,
         })
         .collect();
-    Ok(Check {
+    Check {
         results,
         worst_group,
         tests,
         ball_diameter_mm: d,
         effective_ball_diameter,
         verdict,
-    })
+    }
 }
 
 fn row(v: &Value, mpe: Option<&Mpe>, predicted: Option<&Interval>) -> Row {

@@ -7,19 +7,62 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 /// An MPE: a constant, or for E_Uni a + L/1000 · per_m (mm).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
-#[serde(untagged)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Limit {
     /// A constant (mm).
     Constant(f64),
     /// a + L / 1000 mm · per_m.
-    #[serde(rename_all = "snake_case")]
     Linear {
         /// The constant part (mm).
         a: f64,
         /// The part per metre of length (mm).
         per_m: f64,
     },
+}
+
+/// What a limit may be, as its error says.
+const LIMIT_FORMS: &str = "a limit is a number (mm) or { a = …, per_m = … } (mm, mm per metre)";
+
+/// Read by hand rather than as an untagged enum: serde's untagged error ("did not match any
+/// variant of untagged enum Limit") names no key, and an untagged struct variant ignores a key
+/// it does not know (`per_km = 5` was silently dropped: issue 29, F8). toml adds the line and
+/// the key this is under.
+impl<'de> serde::Deserialize<'de> for Limit {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Limit, D::Error> {
+        use serde::de::Error;
+        let number = |v: &toml::Value| match v {
+            toml::Value::Float(x) => Some(*x),
+            toml::Value::Integer(i) => Some(*i as f64),
+            _ => None,
+        };
+        let value = toml::Value::deserialize(d)?;
+        if let Some(x) = number(&value) {
+            return Ok(Limit::Constant(x));
+        }
+        let toml::Value::Table(t) = &value else {
+            return Err(D::Error::custom(format!(
+                "`{value}` is not a limit: {LIMIT_FORMS}"
+            )));
+        };
+        if let Some(k) = t.keys().find(|k| !matches!(k.as_str(), "a" | "per_m")) {
+            return Err(D::Error::custom(format!(
+                "unknown key `{}` in a limit: {LIMIT_FORMS}",
+                crate::limits::shown(k)
+            )));
+        }
+        let part = |k: &str| match t.get(k) {
+            None => Err(D::Error::custom(format!(
+                "missing key `{k}`: {LIMIT_FORMS}"
+            ))),
+            Some(v) => number(v).ok_or_else(|| {
+                D::Error::custom(format!("`{k} = {v}` is not a number: {LIMIT_FORMS}"))
+            }),
+        };
+        Ok(Limit::Linear {
+            a: part("a")?,
+            per_m: part("per_m")?,
+        })
+    }
 }
 
 impl Limit {

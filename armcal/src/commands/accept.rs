@@ -11,6 +11,10 @@ pub struct AcceptArgs {
     /// Accept temperatures outside 0..45 °C (refused as °F or a sensor fault).
     #[arg(long)]
     accept_temperature: bool,
+    /// Accept rows that repeat an earlier row's joint readings exactly (refused as a row
+    /// pasted twice).
+    #[arg(long)]
+    accept_duplicates: bool,
 }
 
 impl AcceptArgs {
@@ -19,6 +23,7 @@ impl AcceptArgs {
         armcal::plausible::Accept {
             units: self.accept_units,
             temperature: self.accept_temperature,
+            duplicates: self.accept_duplicates,
             ..Default::default()
         }
     }

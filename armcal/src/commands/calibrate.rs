@@ -12,8 +12,11 @@ use std::path::{Path, PathBuf};
 /// Arguments of `armcal calibrate`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Measured data (CSV of `spec/measured-data.md`): any mix of point, spat and length rows.
-    data: PathBuf,
+    /// Measured data (CSV of `spec/measured-data.md`): any mix of point, spat and length rows,
+    /// in one file or several (`simulate` writes one kind per file); each file's groups are
+    /// kept apart, joint readings in radians (`j1..jN`) or encoder counts (`c1..cN`).
+    #[arg(required = true, num_args = 1..)]
+    data: Vec<PathBuf>,
     /// The arm to start from (its nominal geometry, or an earlier calibration); default the
     /// spec's `default-6`.
     #[arg(long)]
@@ -89,7 +92,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let start = start_arm(a.arm.as_deref())?;
     let terms = Terms::parse(&a.terms, start.dof())?;
     let table = a.output.with_extension("bin");
-    let mut inputs = vec![(a.data.as_path(), "data")];
+    let mut inputs = super::data_in::inputs(&a.data);
     if let Some(arm) = &a.arm {
         inputs.push((arm.as_path(), "start arm"));
     }
@@ -104,12 +107,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         outputs.push((r.as_path(), "report"));
     }
     armcal::output::check(&outputs, &inputs)?;
-    let data = armcal::data::read(&a.data, start.dof())?;
-    armcal::fit::probes::check(&start, &data)?;
-    armcal::plausible::data(&start, &data, a.accept.accept())?;
-    for w in &data.warnings {
-        eprintln!("armcal: warning: {w}");
-    }
+    let data = super::data_in::read(&a.data, &start, a.accept.accept())?;
     let fleet = if a.fleet_prior.is_empty() {
         None
     } else {
@@ -121,7 +119,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let opts = options(&a, &terms, fleet.as_ref());
     let mut observer = armcal::progress::for_command(a.progress, "calibrating");
     let fit = calib::calibrate_observed(&start, &data, &opts, observer.as_mut())
-        .with_context(|| format!("cannot calibrate from {}", a.data.display()))?;
+        .with_context(|| format!("cannot calibrate from {}", super::data_in::names(&a.data)))?;
 
     let before = summarise(&residuals(&fit.start, &data, None), &data);
     let after = summarise(&residuals(&fit.arm, &data, fit.frame), &data);
@@ -152,7 +150,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 
     // The calibration file, checked by reading it back and evaluating it.
     let header = [
-        format!("calibrated by armcal calibrate from {}", a.data.display()),
+        format!(
+            "calibrated by armcal calibrate from {}",
+            super::data_in::names(&a.data)
+        ),
         format!(
             "terms {}; {} of {} unknowns fitted; RMS residual {:.2} µm before, {:.2} µm after",
             terms.spec(),
@@ -189,7 +190,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         let prov = armcal::html::header::Provenance {
             arm: &fit.arm,
             arm_file: a.arm.as_deref().map(|p| ("start arm", p)),
-            data_files: vec![&a.data],
+            data_files: a.data.iter().map(PathBuf::as_path).collect(),
             data: &data,
             mpe: None,
             rule: None,

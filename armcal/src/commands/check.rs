@@ -9,8 +9,11 @@ use std::path::PathBuf;
 #[derive(clap::Args)]
 #[command(after_help = EXIT_CODES)]
 pub struct Args {
-    /// Measured data (`sphere`, `length` and `spat` groups; spec/measured-data.md).
-    data: PathBuf,
+    /// Measured data (`sphere`, `length` and `spat` groups; spec/measured-data.md), in one file
+    /// or several (each file's groups kept apart), joint readings in radians (`j1..jN`) or
+    /// encoder counts (`c1..cN`).
+    #[arg(required = true, num_args = 1..)]
+    data: Vec<PathBuf>,
     /// The calibration the ball centres are evaluated with.
     #[arg(long)]
     calib: PathBuf,
@@ -64,14 +67,12 @@ pub const EXIT_CODES: &str = "Exit codes (ISO 14253-1 with each value's U, again
 /// Runs the subcommand: everything is read and checked before anything is printed. Returns
 /// the exit code of the verdict (errors are `acceptance::verdict::EXIT_ERROR`, by the caller).
 pub fn run(a: Args) -> anyhow::Result<i32> {
+    let mut inputs = super::data_in::inputs(&a.data);
+    inputs.push((a.calib.as_path(), "calibration"));
+    if let Some(m) = &a.mpe {
+        inputs.push((m.as_path(), "MPE file"));
+    }
     if let Some(r) = &a.report {
-        let mut inputs = vec![
-            (a.data.as_path(), "data"),
-            (a.calib.as_path(), "calibration"),
-        ];
-        if let Some(m) = &a.mpe {
-            inputs.push((m.as_path(), "MPE file"));
-        }
         armcal::output::check(&[(r.as_path(), "report")], &inputs)?;
     }
     // The budget, where the file has one, gives U where the MPE file has none.
@@ -88,41 +89,34 @@ pub fn run(a: Args) -> anyhow::Result<i32> {
     if let (Some(m), Some(p)) = (&mpe, &a.mpe) {
         armcal::plausible::mpe(m, &p.display().to_string(), accept)?;
     }
-    let data = armcal::data::read(&a.data, arm.dof())?;
-    armcal::fit::probes::check(&arm, &data)?;
-    armcal::plausible::data(&arm, &data, accept)?;
-    // Another arm's calibration is refused before any prediction or decision.
-    let plain = acceptance::check(&arm, &data, None, None, false)
-        .with_context(|| a.data.display().to_string())?;
+    let data = super::data_in::read(&a.data, &arm, accept)?;
+    let names = super::data_in::names(&a.data);
+    // The values once: another arm's calibration is refused on them before any prediction or
+    // decision, and the decision below reuses them.
+    let values = acceptance::measure(&arm, &data).with_context(|| names.clone())?;
     armcal::plausible::misfit(
-        plain.results.iter().map(|(k, v)| (*k, *v)),
-        &a.data.display().to_string(),
+        acceptance::statistics::Test::ALL.iter().filter_map(|&t| {
+            acceptance::statistics::result(&values, t).map(|v| (t.key(), v.value_mm * 1e3))
+        }),
+        &names,
         &a.calib.display().to_string(),
         accept,
     )?;
-    for w in &data.warnings {
-        eprintln!("armcal: warning: {w}");
-    }
-    let name = || a.data.display().to_string();
     let prediction = budget
         .as_ref()
         .map(|b| virtual_test::predict(&arm, b, &data, a.draws as usize, a.seed))
         .transpose()
-        .with_context(name)?;
-    let c = acceptance::check(&arm, &data, mpe.as_ref(), prediction.as_ref(), a.predict)
-        .with_context(name)?;
+        .with_context(|| names.clone())?;
+    let c = acceptance::decide(
+        &arm,
+        &data,
+        &values,
+        mpe.as_ref(),
+        prediction.as_ref(),
+        a.predict,
+    );
     if c.tests.is_empty() {
-        anyhow::bail!(
-            "{}: no sphere, length or spat group: no acceptance test to run",
-            a.data.display()
-        );
-    }
-    let mut inputs = vec![
-        (a.data.as_path(), "data"),
-        (a.calib.as_path(), "calibration"),
-    ];
-    if let Some(m) = &a.mpe {
-        inputs.push((m.as_path(), "MPE file"));
+        anyhow::bail!("{names}: no sphere, length or spat group: no acceptance test to run");
     }
     let mut files = armcal::output::Staged::guarding(&inputs);
     let written = match &a.plots {
@@ -136,7 +130,7 @@ pub fn run(a: Args) -> anyhow::Result<i32> {
         let prov = armcal::html::header::Provenance {
             arm: &arm,
             arm_file: Some(("calibration file", &a.calib)),
-            data_files: vec![&a.data],
+            data_files: a.data.iter().map(PathBuf::as_path).collect(),
             data: &data,
             mpe: a.mpe.as_deref(),
             rule: a.mpe.is_some().then_some(acceptance::verdict::RULE),

@@ -13,9 +13,11 @@ use std::path::{Path, PathBuf};
 /// Arguments of `armcal diagnose`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Measured data (CSV of `spec/measured-data.md`): any mix of point, spat and length rows.
-    #[arg(required_unless_present = "fleet")]
-    data: Option<PathBuf>,
+    /// Measured data (CSV of `spec/measured-data.md`): any mix of point, spat and length rows,
+    /// in one file or several (each file's groups kept apart), joint readings in radians
+    /// (`j1..jN`) or encoder counts (`c1..cN`).
+    #[arg(required_unless_present = "fleet", num_args = 1..)]
+    data: Vec<PathBuf>,
     /// Diagnose several units of one design instead, one file per recording (its `group`s
     /// are its sessions): which causes the design has (random-effects pooling of every unit's
     /// held-out gain) and which single units have. A recording is named by its file stem
@@ -114,14 +116,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if !a.fleet.is_empty() {
         return run_fleet(&a);
     }
-    let Some(data_path) = a.data.clone() else {
+    if a.data.is_empty() {
         bail!("no data file given");
-    };
+    }
     if a.folds < 2 && !a.by_group {
         bail!("--folds must be 2 or more: a diagnosis needs held-out data");
     }
     let start = super::calibrate::start_arm(a.arm.as_deref())?;
-    let mut inputs = vec![(data_path.as_path(), "data")];
+    let mut inputs = super::data_in::inputs(&a.data);
     if let Some(arm) = &a.arm {
         inputs.push((arm.as_path(), "start arm"));
     }
@@ -143,12 +145,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             );
         }
     }
-    let data = armcal::data::read(&data_path, start.dof())?;
-    armcal::fit::probes::check(&start, &data)?;
-    armcal::plausible::data(&start, &data, a.accept.accept())?;
-    for w in &data.warnings {
-        eprintln!("armcal: warning: {w}");
-    }
+    let data = super::data_in::read(&a.data, &start, a.accept.accept())?;
     let mut opts = diagnose::Options {
         folds: if a.by_group {
             FoldChoice::ByGroup
@@ -172,7 +169,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         pb
     });
     let d = diagnose::diagnose(&start, &data, &opts)
-        .with_context(|| format!("cannot diagnose {}", data_path.display()));
+        .with_context(|| format!("cannot diagnose {}", super::data_in::names(&a.data)));
     if let Some(pb) = &spinner {
         pb.finish_and_clear();
     }
@@ -198,7 +195,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         let prov = armcal::html::header::Provenance {
             arm: &d.extended.fit.arm,
             arm_file: a.arm.as_deref().map(|p| ("start arm", p)),
-            data_files: vec![&data_path],
+            data_files: a.data.iter().map(PathBuf::as_path).collect(),
             data: &data,
             mpe: None,
             rule: None,
@@ -255,6 +252,24 @@ fn run_fleet(a: &Args) -> anyhow::Result<()> {
     });
     let run = || -> anyhow::Result<_> {
         let arms = same_arm::group(&start, &files, &opts, &grouping)?;
+        if arms.groups.len() < 2 {
+            return Err(anyhow::anyhow!(
+                "the {} recordings are all one arm ({}): a fleet needs two arms or more to tell a \
+                 design's causes from a unit's (one arm's fleet test has no spread: ± inf). Diagnose \
+                 the arm with `armcal diagnose {}` (several files are read as one dataset), or say \
+                 they are different arms with --each-file-an-arm or --same-arm",
+                files.len(),
+                arms.groups
+                    .first()
+                    .map_or_else(|| "none fitted".to_string(), |g| g.arm.clone()),
+                a.fleet
+                    .iter()
+                    .map(|p| p.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            ));
+        }
+
         let f = diagnose::fleet::diagnose_arms(&start, &files, &arms.list(), &opts)
             .context("cannot diagnose the fleet")?;
         Ok((arms, f))
@@ -293,7 +308,7 @@ fn stage_extended(
     let header = [
         format!(
             "extended calibration by armcal diagnose from {}",
-            a.data.as_deref().unwrap_or(Path::new("?")).display()
+            super::data_in::names(&a.data)
         ),
         format!("model {}; {}", rep.extended.model, rep.verdict),
     ];

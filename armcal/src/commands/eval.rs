@@ -2,7 +2,7 @@
 
 use anyhow::Context;
 use armcal::eval::{evaluate, read_rows, Evaluator};
-use armcal::uncertainty::columns::{columns, Method, HEADER};
+use armcal::uncertainty::columns::{columns_observed, Method, HEADER};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -37,6 +37,12 @@ pub struct Args {
     /// last column `far` (1: flagged) and a count on stderr.
     #[arg(long, value_name = "DATA.csv")]
     seen: Option<PathBuf>,
+    /// Show the count of rows done and the time left on stderr even when it is not a terminal
+    /// (on a terminal it is always shown for `--uncertainty`).
+    #[arg(long)]
+    progress: bool,
+    #[command(flatten)]
+    accept: super::accept::AcceptArgs,
 }
 
 /// Runs the subcommand.
@@ -56,6 +62,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ),
     };
     let rows = rows.with_context(|| name.clone())?;
+    let radians: Vec<Vec<f64>> = rows.iter().map(|r| r.reading.radians(&arm)).collect();
+    let placed: Vec<armcal::plausible::Reading> = rows
+        .iter()
+        .zip(&radians)
+        .enumerate()
+        .map(|(k, (r, theta))| armcal::plausible::Reading {
+            theta,
+            temp_c: Some(r.temp_c),
+            place: format!("data row {}", k + 1),
+        })
+        .collect();
+    armcal::plausible::readings(&name, &placed, args.accept.accept())?;
     let mut out = evaluate(
         &arm,
         &rows,
@@ -63,7 +81,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         &args.calib.display().to_string(),
     )?;
     if let Some(b) = &budget {
-        let extra = columns(&arm, b, &rows, args.method, args.draws as usize, args.seed);
+        let mut counter =
+            armcal::progress::Counter::new(args.progress, "eval", "rows", rows.len() as u64);
+        let extra = columns_observed(
+            &arm,
+            b,
+            &rows,
+            args.method,
+            args.draws as usize,
+            args.seed,
+            &mut || counter.tick(),
+        );
+        drop(counter);
         let mut joined = String::with_capacity(out.len() * 2);
         let mut lines = out.lines();
         if let Some(h) = lines.next() {

@@ -6,6 +6,7 @@ pub mod args;
 pub mod budget;
 pub mod calibrate;
 pub mod check;
+pub mod data_in;
 pub mod decode;
 pub mod diagnose;
 pub mod eval;

@@ -86,11 +86,7 @@ pub fn validate_observed(
         let mut left = vec![false; n];
         out.iter().for_each(|&i| left[i] = true);
         let train: Vec<usize> = (0..n).filter(|&i| !left[i]).collect();
-        observer.stage(&format!(
-            "held-out validation, fold {} of {}",
-            f + 1,
-            folds.len()
-        ));
+        observer.step("held-out validation, fold", f, folds.len());
         let fit = match calibrate(start, &data.subset(&train), &opts) {
             Ok(fit) => fit,
             Err(e) => {

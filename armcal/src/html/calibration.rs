@@ -16,8 +16,6 @@ pub fn page(
     validation: Option<&Holdout>,
     prov: &Provenance,
 ) -> String {
-    let mut d = Document::new("Calibration certificate");
-    d.facts(&prov.facts());
     let r = &rep.residuals;
     let held = r
         .holdout
@@ -28,18 +26,17 @@ pub fn page(
                 h.residuals.all.rms_um, h.method
             )
         });
-    d.verdict(
-        &format!("Residual {held}"),
-        &format!(
-            "RMS residual on the data fitted: {:.2} µm before, {:.2} µm after the fit; {} of {} \
-             unknowns fitted; terms {}",
-            r.before.all.rms_um, r.after.all.rms_um, rep.fitted, rep.unknowns, rep.terms
-        ),
-        Tone::Plain,
+    let detail = format!(
+        "RMS residual on the data fitted: {:.2} µm before, {:.2} µm after the fit; {} of {} \
+         unknowns fitted; terms {}",
+        r.before.all.rms_um, r.after.all.rms_um, rep.fitted, rep.unknowns, rep.terms
     );
-    for w in &rep.warnings {
-        d.paragraph(&format!("Warning: {w}"));
-    }
+    let mut d = Document::opening(
+        "Calibration certificate",
+        prov,
+        (&format!("Residual {held}"), &detail, Tone::Plain),
+        &rep.warnings,
+    );
     d.heading("Plots");
     let at = crate::acceptance::centres(&fit.arm, data);
     let before = crate::fit::residuals::residuals(&fit.start, data, None);
@@ -66,7 +63,5 @@ pub fn page(
         ));
     }
     d.figures(&plots);
-    d.heading("The report, in full");
-    d.preformatted(&rep.text());
-    d.finish()
+    d.closing(&rep.text())
 }

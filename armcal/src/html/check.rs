@@ -14,8 +14,6 @@ use quatarm_ref::arm::Arm;
 
 /// The page.
 pub fn page(c: &Check, arm: &Arm, data: &Dataset, mpe: Option<&Mpe>, prov: &Provenance) -> String {
-    let mut d = Document::new("Acceptance test report (ISO 10360-12, ASME B89.4.22)");
-    d.facts(&prov.facts());
     let tone = match c.verdict.outcome {
         Outcome::Conforms => Tone::Good,
         Outcome::DoesNotConform => Tone::Bad,
@@ -27,7 +25,12 @@ pub fn page(c: &Check, arm: &Arm, data: &Dataset, mpe: Option<&Mpe>, prov: &Prov
         c.verdict.outcome.name().to_uppercase(),
         c.verdict.exit_code
     );
-    d.verdict(&headline, &c.verdict.line(), tone);
+    let mut d = Document::opening(
+        "Acceptance test report (ISO 10360-12, ASME B89.4.22)",
+        prov,
+        (&headline, &c.verdict.line(), tone),
+        &[],
+    );
     d.heading("Values");
     let rows = c
         .tests

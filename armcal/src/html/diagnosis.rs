@@ -9,25 +9,23 @@ use crate::diagnose::Diagnosis;
 
 /// The page.
 pub fn page(rep: &Report, d: &Diagnosis, data: &Dataset, prov: &Provenance) -> String {
-    let mut doc = Document::new("Diagnosis report");
-    doc.facts(&prov.facts());
-    doc.verdict(
-        &format!(
-            "Held-out RMS {:.2} µm → {:.2} µm ({:+.1} %)",
-            rep.baseline.holdout_rms_um,
-            rep.extended.holdout_rms_um,
-            -d.gain_percent()
-        ),
-        &rep.verdict,
-        if d.causes.is_empty() {
-            Tone::Plain
-        } else {
-            Tone::Unsure
-        },
+    let headline = format!(
+        "Held-out RMS {:.2} µm → {:.2} µm ({:+.1} %)",
+        rep.baseline.holdout_rms_um,
+        rep.extended.holdout_rms_um,
+        -d.gain_percent()
     );
-    for w in &rep.warnings {
-        doc.paragraph(&format!("Warning: {w}"));
-    }
+    let tone = if d.causes.is_empty() {
+        Tone::Plain
+    } else {
+        Tone::Unsure
+    };
+    let mut doc = Document::opening(
+        "Diagnosis report",
+        prov,
+        (&headline, &rep.verdict, tone),
+        &rep.warnings,
+    );
     doc.heading("Plots");
     let arm = &d.extended.fit.arm;
     let at = crate::acceptance::centres(arm, data);
@@ -61,7 +59,5 @@ pub fn page(rep: &Report, d: &Diagnosis, data: &Dataset, prov: &Provenance) -> S
         ),
     ];
     doc.figures(&plots);
-    doc.heading("The report, in full");
-    doc.preformatted(&rep.text());
-    doc.finish()
+    doc.closing(&rep.text())
 }

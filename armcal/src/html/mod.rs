@@ -100,6 +100,31 @@ impl Document {
         }
     }
 
+    /// The opening every report shares, in one place so that the certificate, the diagnosis
+    /// and the test report read alike: the title, the header of where it comes from
+    /// ([`header::Provenance`]), the verdict box and the warnings under it.
+    pub fn opening(
+        title: &str,
+        prov: &header::Provenance,
+        verdict: (&str, &str, Tone),
+        warnings: &[String],
+    ) -> Document {
+        let mut d = Document::new(title);
+        d.facts(&prov.facts());
+        d.verdict(verdict.0, verdict.1, verdict.2);
+        for w in warnings {
+            d.paragraph(&format!("Warning: {w}"));
+        }
+        d
+    }
+
+    /// The ending of the reports that carry a command's text report: it, whole, and the page.
+    pub fn closing(mut self, text: &str) -> String {
+        self.heading("The report, in full");
+        self.preformatted(text);
+        self.finish()
+    }
+
     /// A section heading.
     pub fn heading(&mut self, text: &str) {
         let _ = writeln!(self.body, "<h2>{}</h2>", escape(text));

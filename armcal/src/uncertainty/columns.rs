@@ -36,13 +36,26 @@ pub fn columns(
     draws: usize,
     seed: u64,
 ) -> Vec<String> {
+    columns_observed(arm, budget, rows, method, draws, seed, &mut || {})
+}
+
+/// As [`columns`], calling `done` after each row (a progress counter).
+pub fn columns_observed(
+    arm: &Arm,
+    budget: &Budget,
+    rows: &Rows,
+    method: Method,
+    draws: usize,
+    seed: u64,
+    done: &mut dyn FnMut(),
+) -> Vec<String> {
     let root = montecarlo::sqrt_cov(&budget.cov);
     let mut rng = crate::rng::rng(seed);
     rows.iter()
         .map(|r| {
             let th = r.reading.radians(arm);
             let (t, probe) = (r.temp_c, r.probe);
-            match method {
+            let out = match method {
                 Method::FirstOrder => {
                     let (_, s) = propagate::point(arm, probe, budget, &th, t);
                     line(&s, u95::u95(&s))
@@ -51,7 +64,9 @@ pub fn columns(
                     let o = montecarlo::point(arm, probe, budget, &root, &th, t, draws, &mut rng);
                     line(&o.cov, o.u95)
                 }
-            }
+            };
+            done();
+            out
         })
         .collect()
 }

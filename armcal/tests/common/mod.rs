@@ -97,3 +97,56 @@ pub fn repro_file(set: &str, name: &str) -> PathBuf {
         .join(set)
         .join(name)
 }
+
+/// armcal's stderr, as text.
+#[allow(dead_code)]
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Requires that armcal refused: a non-zero exit that is no panic, nothing on stdout (no
+/// partial output), and a message holding every one of `needles` (what looks wrong, the file,
+/// the flag to accept it…); returns the message. The one shape of every refusal test.
+#[allow(dead_code)]
+#[track_caller]
+pub fn refused(o: &Output, needles: &[&str]) -> String {
+    let e = stderr(o);
+    assert!(!o.status.success(), "accepted: {e}");
+    assert!(!e.contains("panicked"), "{e}");
+    assert!(
+        o.stdout.is_empty(),
+        "partial output: {}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    for n in needles {
+        assert!(e.contains(n), "`{n}` not in: {e}");
+    }
+    e
+}
+
+/// [`refused`] with exit code `code` (`check`'s errors are 3: its 1 and 2 are verdicts).
+#[allow(dead_code)]
+#[track_caller]
+pub fn refused_with(o: &Output, code: i32, needles: &[&str]) -> String {
+    let e = refused(o, needles);
+    assert_eq!(o.status.code(), Some(code), "{e}");
+    e
+}
+
+/// A fresh folder for the test `name` holding copies of `files` from `armcal/tests/data/SET/`
+/// and of the project's `data/default-6.toml` as `default-6.toml`.
+#[allow(dead_code)]
+pub fn with_copies(set: &str, name: &str, files: &[&str]) -> PathBuf {
+    let d = workdir(name);
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for f in files {
+        std::fs::copy(root.join("tests/data").join(set).join(f), d.join(f))
+            .unwrap_or_else(|e| panic!("copy {set}/{f}: {e}"));
+    }
+    std::fs::copy(
+        root.join("../data/default-6.toml"),
+        d.join("default-6.toml"),
+    )
+    .unwrap();
+    d
+}
