@@ -155,6 +155,7 @@ fn mukca() {
          (+model) [nested]  RMS dev mm  probing mm  model mm  nested model mm"
     );
     let (mut pooled, mut judged, mut per_session) = (0.0, 0usize, Vec::new());
+    let mut sweep = [0.0; 6];
     for (name, _) in units {
         let unit = match armcal::mukca::load(&dir, &name) {
             Ok(u) => u,
@@ -183,7 +184,23 @@ fn mukca() {
             c.model_mm,
             c.nested_model_mm
         );
+        println!(
+            "    pose term: scale per held-out session {}; nested coverage with m × its σ: {}",
+            c.pose_scale
+                .iter()
+                .map(|(k, v)| format!("{k:.2}{}", if *v { "" } else { "*" }))
+                .collect::<Vec<_>>()
+                .join(" "),
+            c.pose_sweep
+                .iter()
+                .map(|(m, f)| format!("m={m}: {f:.3}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
         if c.sessions >= 3 {
+            for (k, (_, f)) in c.pose_sweep.iter().enumerate() {
+                sweep[k] += f * c.probings as f64;
+            }
             pooled += c.covered_nested * c.probings as f64;
             judged += c.probings;
         }
@@ -199,6 +216,15 @@ fn mukca() {
     println!(
         "  pooled over units with ≥ 3 sessions, nested model term: {:.3} of {judged} probings",
         pooled / judged.max(1) as f64
+    );
+    println!(
+        "  pooled, m × the pose term's σ (m = 0, 0.5, 1, 1.5, 2, 3): {}  (* in the scales: \
+         not validated, two training sessions)",
+        sweep
+            .iter()
+            .map(|f| format!("{:.3}", f / judged.max(1) as f64))
+            .collect::<Vec<_>>()
+            .join(" ")
     );
     println!("  per held-out session (nested budget):");
     for s in per_session {
