@@ -204,11 +204,12 @@ fn mukca() {
             pooled += c.covered_nested * c.probings as f64;
             judged += c.probings;
         }
-        per_session.extend(
-            c.per_session
-                .iter()
-                .map(|(s, n, f, x)| format!("{}/{s}: {f:.3} of {n}, {x:.2} extrapolated", c.unit)),
-        );
+        per_session.extend(c.per_session.iter().map(|(s, n, f, x, j)| {
+            format!(
+                "{}/{s}: {f:.3} of {n}, extrapolated {x:.2} (tip) {j:.2} (joints)",
+                c.unit
+            )
+        }));
         for f in &c.failed {
             println!("    not judged: {f}");
         }

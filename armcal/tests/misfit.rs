@@ -112,7 +112,8 @@ fn eval_flags_a_far_reading_and_not_a_near_one() {
     std::fs::write(d.join("seen.csv"), seen).unwrap();
     std::fs::write(
         d.join("q.csv"),
-        "j1,j2,j3,j4,j5,j6\n0.3,0.51,-0.4,0.3,0.2,0.7\n1.8,0.51,-0.4,0.3,0.2,0.7\n",
+        "j1,j2,j3,j4,j5,j6\n0.3,0.51,-0.4,0.3,0.2,0.7\n1.8,0.51,-0.4,0.3,0.2,0.7\n\
+         0.3,0.9,-0.4,0.3,0.2,0.7\n",
     )
     .unwrap();
     let cal = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../data/default-6.toml");
@@ -130,11 +131,19 @@ fn eval_flags_a_far_reading_and_not_a_near_one() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let out = String::from_utf8_lossy(&o.stdout).to_string();
     let lines: Vec<&str> = out.lines().collect();
-    assert_eq!(lines[0], "x,y,z,nx,ny,nz,far");
-    assert!(lines[1].ends_with(",0"), "{out}");
-    assert!(lines[2].ends_with(",1"), "{out}");
+    assert_eq!(lines[0], "x,y,z,nx,ny,nz,far,far_joints");
+    assert!(lines[1].ends_with(",0,0"), "{out}");
+    // Round the base axis: far in tip space; j1 never moved in `seen`, so the joint spread
+    // cannot judge it.
+    assert!(lines[2].ends_with(",1,0"), "{out}");
+    // The shoulder 0.36 rad beyond the calibration's 0.04: both.
+    assert!(lines[3].ends_with(",1,1"), "{out}");
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("1 of 2 readings are extrapolated"), "{err}");
+    assert!(err.contains("2 of 3 readings are extrapolated"), "{err}");
+    assert!(
+        err.contains("1 of 3 readings are in a joint configuration"),
+        "{err}"
+    );
 }
 
 /// The pose-dependent term (`uncertainty::pose`): five sessions of 60 `point` rows, each

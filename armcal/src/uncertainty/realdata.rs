@@ -47,8 +47,9 @@ pub struct UnitCoverage {
     /// validated (≥ 3 training sessions).
     pub pose_scale: Vec<(f64, bool)>,
     /// Per held-out session: (name, probings, fraction covered by the nested budget,
-    /// fraction flagged as extrapolated from the training sessions).
-    pub per_session: Vec<(String, usize, f64, f64)>,
+    /// fraction flagged as extrapolated from the training sessions in tip space, and in
+    /// joint space).
+    pub per_session: Vec<(String, usize, f64, f64, f64)>,
     /// Median U95 of the probings (mm), without and with the model term.
     pub median_u95_mm: [f64; 2],
     /// RMS distance of the probings from their socket's centre (mm).
@@ -71,6 +72,8 @@ struct Held {
     pose_scale: (f64, bool),
     /// Fraction of the held-out probings far from every training probing.
     far: f64,
+    /// Fraction outside the training sessions' joint-space spread.
+    joint_far: f64,
     test: Dataset,
     /// Per probing: (row, |deviation|, predicted U95, per-axis variance the budget missed).
     probings: Vec<(usize, f64, f64, f64)>,
@@ -124,7 +127,12 @@ fn hold_out(unit: &Unit, groups: &[i64], g: i64) -> Result<Held, super::BudgetEr
         let n = test.rows.iter().filter(|r| sup.far(&m.tip(r))).count();
         n as f64 / test.rows.len().max(1) as f64
     });
+    let joint_far = super::extrapolation::JointSupport::of(&train_data).map_or(0.0, |sup| {
+        let n = test.rows.iter().filter(|r| sup.far(&r.theta)).count();
+        n as f64 / test.rows.len().max(1) as f64
+    });
     Ok(Held {
+        joint_far,
         pose,
         pose_scale,
         far,
@@ -200,6 +208,7 @@ pub fn unit_coverage(unit: &Unit) -> Option<UnitCoverage> {
             n,
             k as f64 / n.max(1) as f64,
             h.far,
+            h.joint_far,
         ));
     }
     let pose_sweep = [0.0, 0.5, 1.0, 1.5, 2.0, 3.0]
