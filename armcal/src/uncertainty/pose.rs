@@ -283,3 +283,69 @@ pub fn estimate(
         source,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use quatarm_ref::arm::Arm;
+
+    fn fold(z: [f64; 2], fitted: &[Param]) -> FoldFit {
+        let mut arm = Arm::default6();
+        arm.joints[0].zero_offset = z[0];
+        arm.joints[1].zero_offset = z[1];
+        FoldFit {
+            rows: vec![0],
+            arm,
+            fitted: fitted.to_vec(),
+        }
+    }
+
+    /// S_b is (G − 1)² times the sample covariance of the leave-one-group-out values, shrunk
+    /// with weight 1/G towards C at C's own scale; an unknown a fold held has no deviation.
+    #[test]
+    fn the_between_group_spread_is_the_jackknife_one_shrunk_towards_c() {
+        let p = [Param::ZeroOffset(0), Param::ZeroOffset(1)];
+        let fits = [
+            fold([1e-4, 0.0], &p),
+            fold([-1e-4, 2e-4], &p),
+            fold([3e-4, -2e-4], &p),
+        ];
+        let refs: Vec<&FoldFit> = fits.iter().collect();
+        let c = DMatrix::from_diagonal_element(2, 2, 1e-10);
+        let s = between(&p, &refs, 3, &c);
+        // Sample covariance (divisor 2) of x = (1, −1, 3)e-4, y = (0, 2, −2)e-4: var x 4e-8,
+        // var y 4e-8, cov −4e-8; times (3 − 1)² = 4.
+        let raw = DMatrix::from_row_slice(2, 2, &[16e-8, -16e-8, -16e-8, 16e-8]);
+        let t = (raw[(0, 0)] + raw[(1, 1)]) / 1e-10 / 2.0;
+        let expect = &raw * (2.0 / 3.0) + &c * (t / 3.0);
+        assert!(
+            (&s - &expect).norm() < 1e-12 * expect.norm(),
+            "{s} vs {expect}"
+        );
+        // A fold that held ZeroOffset(1): its y is no evidence, and y's spread is that of
+        // the other two.
+        let held = [fold([1e-4, 0.0], &p), fold([-1e-4, 9.0], &p[..1])];
+        let refs: Vec<&FoldFit> = held.iter().collect();
+        let d = deviations(&p, &refs);
+        assert_eq!(d[1][1], 0.0);
+        assert_eq!(d[0][1], 0.0);
+        assert!((d[0][0] - 1e-4).abs() < 1e-15);
+    }
+
+    /// κ is the least scale that covers: more than 0 for a far row, and covering there.
+    #[test]
+    fn the_least_scale_covers_and_no_less_does() {
+        let s = Matrix3::identity() * 1e-6;
+        let p = Matrix3::from_diagonal(&nalgebra::Vector3::new(1e-2, 1e-4, 1e-4));
+        assert_eq!(least_scale(&s, &p, 1e-3), 0.0);
+        let k = least_scale(&s, &p, 0.3);
+        assert!(k > 0.0 && k.is_finite(), "{k}");
+        let covered = |k: f64| {
+            let l = u95::eigenvalues(&(s + p * (k * k)));
+            u95::probability_within(l, 0.3) <= u95::LEVEL
+        };
+        assert!(covered(k) && !covered(0.99 * k));
+        // No direction to grow in: never covered.
+        assert!(least_scale(&s, &Matrix3::zeros(), 0.3).is_infinite());
+    }
+}
