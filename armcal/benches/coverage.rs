@@ -8,7 +8,9 @@
 //! `cargo bench -p armcal --bench coverage` (release), or, reusing the test profile's build,
 //! `cargo test --profile test -p armcal --bench coverage`. Arguments: calibrations, readings, encoder noise (counts), and a temperature sensor's noise
 //! (°C) for the thermal variant;
-//! or `mukca` for the real recordings, each unit's sessions held out one at a time.
+//! or `mukca` for the real recordings, each unit's sessions held out one at a time (the nested
+//! budget with the pose-dependent term, its scale per session, the pooled coverage with the
+//! term's σ multiplied by m = 0…3 as a sensitivity, and both extrapolation flags per session).
 //! `new-user` runs the new user instead (`Setup::NEW_USER`: `default-6-full` as the
 //! truth, calibrated with the geometric model, the model term as `calibrate` estimates it);
 //! `held-out` runs the benchmark with the model term estimated from 5 folds as `calibrate`

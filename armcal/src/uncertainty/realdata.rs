@@ -9,6 +9,10 @@
 //! to first order with its own covariance: the parameters' part through J_i − J̄ (what all
 //! the socket's probings share cancels), the readings' own parts as (1 − 2/n) Σ_i +
 //! (1/n²) Σ_j Σ_j. A probing is covered when |r_i| is within the U95 of that covariance.
+//!
+//! The nested budget is what `calibrate --by-group` writes from the training sessions alone:
+//! the pose-dependent term ([`super::pose`]) and the isotropic term from their own
+//! leave-one-session-out fits, so the scored session never sets either.
 
 use super::estimate::{self, Settings};
 use super::{propagate, u95, Budget};
