@@ -8,7 +8,9 @@
 //! `cargo bench -p armcal --bench coverage` (release), or, reusing the test profile's build,
 //! `cargo test --profile test -p armcal --bench coverage`. Arguments: calibrations, readings, encoder noise (counts), and a temperature sensor's noise
 //! (°C) for the thermal variant;
-//! or `mukca` for the real recordings, each unit's sessions held out one at a time.
+//! or `mukca` for the real recordings, each unit's sessions held out one at a time (the nested
+//! budget with the pose-dependent term, its scale per session, the pooled coverage with the
+//! term's σ multiplied by m = 0…3 as a sensitivity, and both extrapolation flags per session).
 //! `new-user` runs the issue's new user instead (`Setup::NEW_USER`: `default-6-full` as the
 //! truth, calibrated with the geometric model, the model term as `calibrate` estimates it);
 //! `held-out` runs the benchmark with the model term estimated from 5 folds as `calibrate`
@@ -155,6 +157,7 @@ fn mukca() {
          (+model) [nested]  RMS dev mm  probing mm  model mm  nested model mm"
     );
     let (mut pooled, mut judged, mut per_session) = (0.0, 0usize, Vec::new());
+    let mut sweep = [0.0; 6];
     for (name, _) in units {
         let unit = match armcal::mukca::load(&dir, &name) {
             Ok(u) => u,
@@ -183,15 +186,32 @@ fn mukca() {
             c.model_mm,
             c.nested_model_mm
         );
+        println!(
+            "    pose term: scale per held-out session {}; nested coverage with m × its σ: {}",
+            c.pose_scale
+                .iter()
+                .map(|(k, v)| format!("{k:.2}{}", if *v { "" } else { "*" }))
+                .collect::<Vec<_>>()
+                .join(" "),
+            c.pose_sweep
+                .iter()
+                .map(|(m, f)| format!("m={m}: {f:.3}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
         if c.sessions >= 3 {
+            for (k, (_, f)) in c.pose_sweep.iter().enumerate() {
+                sweep[k] += f * c.probings as f64;
+            }
             pooled += c.covered_nested * c.probings as f64;
             judged += c.probings;
         }
-        per_session.extend(
-            c.per_session
-                .iter()
-                .map(|(s, n, f, x)| format!("{}/{s}: {f:.3} of {n}, {x:.2} extrapolated", c.unit)),
-        );
+        per_session.extend(c.per_session.iter().map(|(s, n, f, x, j)| {
+            format!(
+                "{}/{s}: {f:.3} of {n}, extrapolated {x:.2} (tip) {j:.2} (joints)",
+                c.unit
+            )
+        }));
         for f in &c.failed {
             println!("    not judged: {f}");
         }
@@ -199,6 +219,15 @@ fn mukca() {
     println!(
         "  pooled over units with ≥ 3 sessions, nested model term: {:.3} of {judged} probings",
         pooled / judged.max(1) as f64
+    );
+    println!(
+        "  pooled, m × the pose term's σ (m = 0, 0.5, 1, 1.5, 2, 3): {}  (* in the scales: \
+         not validated, two training sessions)",
+        sweep
+            .iter()
+            .map(|f| format!("{:.3}", f / judged.max(1) as f64))
+            .collect::<Vec<_>>()
+            .join(" ")
     );
     println!("  per held-out session (nested budget):");
     for s in per_session {

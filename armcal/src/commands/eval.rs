@@ -34,7 +34,8 @@ pub struct Args {
     seed: u64,
     /// The data the calibration was fitted on (measured-data CSV): each reading farther from
     /// every calibration tip than twice their own spacing is flagged as extrapolated, in a
-    /// last column `far` (1: flagged) and a count on stderr.
+    /// column `far` (1: flagged), and each in a joint configuration outside the calibration's
+    /// spread in a last column `far_joints`; counts on stderr.
     #[arg(long, value_name = "DATA.csv")]
     seen: Option<PathBuf>,
     /// Show the count of rows done and the time left on stderr even when it is not a terminal
@@ -112,8 +113,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `out` with a last column `far`: 1 where the reading's tip (the f64 reference's) is far
-/// from every tip of the calibration data `seen`
+/// `out` with two last columns: `far`, 1 where the reading's tip (the f64 reference's) is far
+/// from every tip of the calibration data `seen`, and `far_joints`, 1 where its joint angles
+/// are outside their spread
 /// ([`armcal::uncertainty::extrapolation`]); the count goes to stderr.
 fn flag_far(
     arm: &quatarm_ref::Arm,
@@ -134,20 +136,31 @@ fn flag_far(
     let mounted: Vec<_> = (0..arm.probe_count())
         .filter_map(|k| arm.for_probe(k))
         .collect();
-    let mut far = 0usize;
+    let (mut far, mut new_config) = (0usize, 0usize);
     let mut joined = String::with_capacity(out.len() + 2 * rows.len() + 4);
     let mut lines = out.lines();
     if let Some(h) = lines.next() {
-        joined.push_str(&format!("{h},far\n"));
+        joined.push_str(&format!("{h},far,far_joints\n"));
     }
     for (l, r) in lines.zip(rows) {
         let with = mounted
             .get(r.probe)
             .context("a row's probe is one of the arm's")?;
-        let p = quatarm_ref::forward::forward(with, &r.reading.radians(arm), r.temp_c).p;
+        let theta = r.reading.radians(arm);
+        let p = quatarm_ref::forward::forward(with, &theta, r.temp_c).p;
         let f = support.far(&p);
+        let j = support.joints.as_ref().is_some_and(|s| s.far(&theta));
         far += usize::from(f);
-        joined.push_str(&format!("{l},{}\n", u8::from(f)));
+        new_config += usize::from(j);
+        joined.push_str(&format!("{l},{},{}\n", u8::from(f), u8::from(j)));
+    }
+    if new_config > 0 {
+        eprintln!(
+            "armcal: warning: {new_config} of {} readings are in a joint configuration outside \
+             every row of {} (the model's misfit grows there)",
+            rows.len(),
+            seen.display()
+        );
     }
     if far > 0 {
         eprintln!(

@@ -59,6 +59,20 @@ pub struct Holdout {
     pub summary: Summary,
     /// Folds whose training part could not be calibrated, with the reason.
     pub failed: Vec<String>,
+    /// Every fold that fitted: what it left out and what its training part gave (the
+    /// between-group spread of the parameters, [`crate::uncertainty::pose`]).
+    pub fits: Vec<FoldFit>,
+}
+
+/// One fold's fit on the other folds.
+#[derive(Clone, Debug)]
+pub struct FoldFit {
+    /// The rows left out (ascending).
+    pub rows: Vec<usize>,
+    /// The arm the other folds calibrated.
+    pub arm: Arm,
+    /// The unknowns that fit estimated (the others held at their start value).
+    pub fitted: Vec<crate::params::Param>,
 }
 
 /// Fits `start` on all folds but one and judges the one left out, for every fold.
@@ -79,6 +93,7 @@ pub fn validate_observed(
     let mut judged = vec![false; n];
     let mut lengths = Vec::new();
     let mut failed = Vec::new();
+    let mut fits = Vec::new();
     let mut opts = opts.clone();
     opts.design_check = false;
     opts.allow_degenerate = true;
@@ -108,6 +123,11 @@ pub fn validate_observed(
             judged[i] = true;
         }
         lengths.extend(res.lengths);
+        fits.push(FoldFit {
+            rows: out.clone(),
+            fitted: fit.ident.kept.iter().map(|&k| fit.params[k]).collect(),
+            arm: fit.arm,
+        });
     }
     let residuals = Residuals {
         rows,
@@ -130,6 +150,7 @@ pub fn validate_observed(
         judged,
         summary,
         failed,
+        fits,
     }
 }
 

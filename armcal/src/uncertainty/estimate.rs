@@ -67,6 +67,8 @@ pub struct ModelSource {
     pub covered_without: f64,
     /// And with it.
     pub covered_with: f64,
+    /// The pose-dependent part, when the rows were held out by group.
+    pub pose: Option<super::pose::PoseSource>,
 }
 
 /// A budget with, per term, how it was obtained.
@@ -242,7 +244,11 @@ pub fn from_fit(
             ));
         }
         (None, Some(h)) => match model_term(fit, data, h, &budget, s.instrument_mm) {
-            Some((tau, src)) => {
+            Some((tau, src, pose)) => {
+                if let Some(p) = pose {
+                    budget.cov += &p.cov;
+                    notes.push(pose_note(&p.source));
+                }
                 budget.model_mm = tau;
                 notes.push(model_note(tau, &src, h, s.instrument_mm));
                 model = Some(src);
@@ -276,14 +282,16 @@ pub fn from_fit(
     })
 }
 
-/// The conformal model term of a held-out validation (see [`super::misfit`]).
+/// The model term of a held-out validation: the pose-dependent part when the folds were
+/// groups ([`super::pose`], added to C), then the conformal isotropic term on top for what
+/// remains ([`super::misfit`]).
 fn model_term(
     fit: &Fit,
     data: &Dataset,
     h: &Holdout,
     budget: &Budget,
     instrument_mm: f64,
-) -> Option<(f64, ModelSource)> {
+) -> Option<(f64, ModelSource, Option<super::pose::PoseTerm>)> {
     // A held-out row's residual comes from a fit on the other folds: its parameter part is
     // that of F − 1 folds' rows, F/(F − 1) times the whole fit's C (equal folds), which the
     // model term must not take for misfit.
@@ -292,26 +300,49 @@ fn model_term(
     if f > 1.0 {
         b.cov *= f / (f - 1.0);
     }
-    let sc = misfit::scores(
-        &fit.arm,
-        &b,
-        data,
-        &h.residuals.rows,
-        &h.judged,
-        instrument_mm,
-    );
+    let rows = misfit::row_covariances(&fit.arm, &b, data, &h.judged, instrument_mm);
+    let pose = super::pose::estimate(&fit.arm, &budget.params, &budget.cov, data, h, &rows);
+    let zero = nalgebra::Matrix3::zeros();
+    let sc: Vec<misfit::Score> = rows
+        .iter()
+        .enumerate()
+        .map(|(k, r)| {
+            let extra = pose.as_ref().map_or(&zero, |p| &p.extra[k]);
+            r.score(&h.residuals.rows, extra)
+        })
+        .collect();
     let (tau, rank, exact) = misfit::conformal(&sc, super::u95::LEVEL)?;
-    Some((
-        tau,
-        ModelSource {
-            rows: sc.len(),
-            folds: h.folds - h.failed.len(),
-            rank,
-            exact,
-            covered_without: misfit::coverage(&sc, 0.0),
-            covered_with: misfit::coverage(&sc, tau),
-        },
-    ))
+    let src = ModelSource {
+        rows: sc.len(),
+        folds: h.folds - h.failed.len(),
+        rank,
+        exact,
+        covered_without: misfit::coverage(&sc, 0.0),
+        covered_with: misfit::coverage(&sc, tau),
+        pose: pose.as_ref().map(|p| p.source.clone()),
+    };
+    Some((tau, src, pose))
+}
+
+/// The report's line of a pose-dependent term.
+fn pose_note(p: &super::pose::PoseSource) -> String {
+    format!(
+        "model, pose-dependent: the spread of the parameters between the {} groups held out \
+         (S_b from their leave-one-group-out fits) times {:.3}², added to the parameters' \
+         covariance; {:.2} µm per axis RMS at the held-out rows, which it brings from {:.1} % \
+         to {:.1} % inside their 95 % region; {}",
+        p.groups,
+        p.scale,
+        p.rms_mm * 1e3,
+        100.0 * p.covered[0],
+        100.0 * p.covered[1],
+        if p.validated {
+            "its scale set by split-conformal prediction on rows scored without their own \
+             group's spread"
+        } else {
+            "not validated: two groups, no row can be scored without its own group (scale 1)"
+        }
+    )
 }
 
 /// The report's line of an estimated model term.

@@ -24,7 +24,7 @@
 
 use super::{propagate, u95, Budget};
 use crate::data::Dataset;
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use quatarm_ref::arm::Arm;
 
 /// √χ²₃(0.95): U95 of an isotropic N(0, σ² I) is this many σ.
@@ -93,6 +93,43 @@ pub fn scores(
     judged: &[bool],
     instrument_mm: f64,
 ) -> Vec<Score> {
+    row_covariances(arm, budget, data, judged, instrument_mm)
+        .into_iter()
+        .map(|r| r.score(res, &Matrix3::zeros()))
+        .collect()
+}
+
+/// One held-out row's predicted covariance.
+#[derive(Clone, Copy, Debug)]
+pub struct RowCov {
+    /// The row in the data.
+    pub row: usize,
+    /// What the budget predicts for its residual (mm²).
+    pub s: Matrix3<f64>,
+    /// The factor of an isotropic term's variance in it.
+    pub m: f64,
+}
+
+impl RowCov {
+    /// The row's score with `extra` added to its covariance.
+    pub fn score(&self, res: &[Vector3<f64>], extra: &Matrix3<f64>) -> Score {
+        Score {
+            deviation: res[self.row].norm(),
+            lambda: u95::eigenvalues(&(self.s + extra)),
+            m: self.m,
+        }
+    }
+}
+
+/// What `budget` (its model term ignored) predicts for each held-out row's residual (see
+/// [`scores`]), in the order `point` rows, then the `spat` groups and bar ends judged whole.
+pub fn row_covariances(
+    arm: &Arm,
+    budget: &Budget,
+    data: &Dataset,
+    judged: &[bool],
+    instrument_mm: f64,
+) -> Vec<RowCov> {
     let mut b = budget.clone();
     b.model_mm = 0.0;
     let mut out = Vec::new();
@@ -102,9 +139,9 @@ pub fn scores(
         let r = &data.rows[i];
         let probe = crate::fit::probes::index(arm, r);
         let (_, s) = propagate::point(arm, probe, &b, &r.theta, r.temp_c);
-        out.push(Score {
-            deviation: res[i].norm(),
-            lambda: u95::eigenvalues(&(s + nalgebra::Matrix3::identity() * inst)),
+        out.push(RowCov {
+            row: i,
+            s: s + Matrix3::identity() * inst,
             m: 1.0,
         });
     }
@@ -120,9 +157,9 @@ pub fn scores(
         }
         let n = rows.len() as f64;
         for (i, s) in propagate::group_deviations(arm, &b, data, &rows) {
-            out.push(Score {
-                deviation: res[i].norm(),
-                lambda: u95::eigenvalues(&s),
+            out.push(RowCov {
+                row: i,
+                s,
                 m: 1.0 - 1.0 / n,
             });
         }

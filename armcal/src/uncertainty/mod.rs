@@ -4,6 +4,7 @@
 //!   place where the file's parameter names map onto armcal's unknowns.
 //! - [`estimate`]: the budget a calibration leaves (`armcal calibrate`, `diagnose -o`).
 //! - [`misfit`]: its model term, from held-out residuals.
+//! - [`pose`]: the model term's pose-dependent part, the parameters' spread between groups.
 //! - [`extrapolation`]: a reading far from every place the calibration saw.
 //! - [`propagate`]: first-order Σ_p of a reading, and of the distance between two readings.
 //! - [`u95`]: the radius of the sphere holding 95 % of N(0, Σ).
@@ -20,6 +21,7 @@ pub mod extrapolation;
 pub mod load;
 pub mod misfit;
 pub mod montecarlo;
+pub mod pose;
 pub mod propagate;
 pub mod realdata;
 pub mod report;

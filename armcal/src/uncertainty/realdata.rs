@@ -9,6 +9,10 @@
 //! to first order with its own covariance: the parameters' part through J_i − J̄ (what all
 //! the socket's probings share cancels), the readings' own parts as (1 − 2/n) Σ_i +
 //! (1/n²) Σ_j Σ_j. A probing is covered when |r_i| is within the U95 of that covariance.
+//!
+//! The nested budget is what `calibrate --by-group` writes from the training sessions alone:
+//! the pose-dependent term ([`super::pose`]) and the isotropic term from their own
+//! leave-one-session-out fits, so the scored session never sets either.
 
 use super::estimate::{self, Settings};
 use super::{propagate, u95, Budget};
@@ -40,9 +44,16 @@ pub struct UnitCoverage {
     pub nested_u95_mm: f64,
     /// Mean nested model term (mm per axis).
     pub nested_model_mm: f64,
+    /// Sensitivity of the nested coverage to the pose term: (factor m on its standard
+    /// deviation, coverage with m² times the pose term in C). m = 1 is `covered_nested`.
+    pub pose_sweep: Vec<(f64, f64)>,
+    /// The nested pose term's scale κ per held-out session (0: none) and whether it was
+    /// validated (≥ 3 training sessions).
+    pub pose_scale: Vec<(f64, bool)>,
     /// Per held-out session: (name, probings, fraction covered by the nested budget,
-    /// fraction flagged as extrapolated from the training sessions).
-    pub per_session: Vec<(String, usize, f64, f64)>,
+    /// fraction flagged as extrapolated from the training sessions in tip space, and in
+    /// joint space).
+    pub per_session: Vec<(String, usize, f64, f64, f64)>,
     /// Median U95 of the probings (mm), without and with the model term.
     pub median_u95_mm: [f64; 2],
     /// RMS distance of the probings from their socket's centre (mm).
@@ -59,8 +70,14 @@ struct Held {
     budget: Budget,
     /// The budget with the nested model term.
     nested: Budget,
+    /// Its pose-dependent part of C (zero when there is none).
+    pose: nalgebra::DMatrix<f64>,
+    /// The pose term's scale and whether it was validated.
+    pose_scale: (f64, bool),
     /// Fraction of the held-out probings far from every training probing.
     far: f64,
+    /// Fraction outside the training sessions' joint-space spread.
+    joint_far: f64,
     test: Dataset,
     /// Per probing: (row, |deviation|, predicted U95, per-axis variance the budget missed).
     probings: Vec<(usize, f64, f64, f64)>,
@@ -85,10 +102,19 @@ fn hold_out(unit: &Unit, groups: &[i64], g: i64) -> Result<Held, super::BudgetEr
         &opts,
         &crate::fit::holdout::by_group(&train_data),
     );
-    let nested = if inner.folds > 1 {
-        estimate::from_fit(&fit, &train_data, Some(&inner), 0.0, &Settings::default())?.budget
+    let (nested, pose, pose_scale) = if inner.folds > 1 {
+        let e = estimate::from_fit(&fit, &train_data, Some(&inner), 0.0, &Settings::default())?;
+        let without = estimate::from_fit(&fit, &train_data, Some(&inner), 0.0, &no_model)?;
+        let scale = e
+            .model
+            .as_ref()
+            .and_then(|m| m.pose.as_ref())
+            .map_or((0.0, false), |p| (p.scale, p.validated));
+        let pose = &e.budget.cov - &without.budget.cov;
+        (e.budget, pose, scale)
     } else {
-        budget.clone()
+        let n = budget.params.len();
+        (budget.clone(), nalgebra::DMatrix::zeros(n, n), (0.0, false))
     };
     let test = unit.sessions_data(&[g]);
     let res = residuals(&fit.arm, &test, None);
@@ -105,7 +131,14 @@ fn hold_out(unit: &Unit, groups: &[i64], g: i64) -> Result<Held, super::BudgetEr
         let n = test.rows.iter().filter(|r| sup.far(&m.tip(r))).count();
         n as f64 / test.rows.len().max(1) as f64
     });
+    let joint_far = super::extrapolation::JointSupport::of(&train_data).map_or(0.0, |sup| {
+        let n = test.rows.iter().filter(|r| sup.far(&r.theta)).count();
+        n as f64 / test.rows.len().max(1) as f64
+    });
     Ok(Held {
+        joint_far,
+        pose,
+        pose_scale,
         far,
         arm: fit.arm,
         budget,
@@ -179,10 +212,30 @@ pub fn unit_coverage(unit: &Unit) -> Option<UnitCoverage> {
             n,
             k as f64 / n.max(1) as f64,
             h.far,
+            h.joint_far,
         ));
     }
+    let pose_sweep = [0.0, 0.5, 1.0, 1.5, 2.0, 3.0]
+        .into_iter()
+        .map(|m: f64| {
+            let mut inside = 0usize;
+            for h in &held {
+                let mut b = h.nested.clone();
+                b.cov = &b.cov + &h.pose * (m * m - 1.0);
+                for end in h.test.layout().length.iter().flat_map(|l| [&l.a, &l.b]) {
+                    for (i, u, _) in socket_u95(&h.arm, &b, &h.test, end) {
+                        let d = h.probings.iter().find(|p| p.0 == i).map_or(0.0, |p| p.1);
+                        inside += usize::from(d <= u);
+                    }
+                }
+            }
+            (m, inside as f64 / judged)
+        })
+        .collect();
     let sessions = held.len().max(1) as f64;
     Some(UnitCoverage {
+        pose_sweep,
+        pose_scale: held.iter().map(|h| h.pose_scale).collect(),
         covered_nested: inside_nested as f64 / judged,
         nested_u95_mm: median(u_nested),
         nested_model_mm: held.iter().map(|h| h.nested.model_mm).sum::<f64>() / sessions,

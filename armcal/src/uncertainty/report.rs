@@ -166,6 +166,15 @@ impl BudgetReport {
                 super::extrapolation::FACTOR,
                 x.spacing_mm
             );
+            if let Some(j) = x.joint_threshold {
+                let _ = writeln!(
+                    s,
+                    "  new configuration: a reading is flagged (`eval --seen`, column far_joints) \
+                     when its joint angles are farther than {j:.2} (Mahalanobis, the largest of \
+                     the calibration's own rows) from the calibration's; on real arms the \
+                     model's misfit grows there"
+                );
+            }
         }
     }
 }

@@ -1,0 +1,351 @@
+//! The pose-dependent model term: how much the model's parameters move from one group of the
+//! data to another (a session, an artefact placement), propagated to the tip by the chain's
+//! Jacobian (`spec/uncertainty.md`, real arms; argued in `docs/spec-reading.md`).
+//!
+//! A geometric model that misses an effect (compliance, a harmonic, a thermal drift) fits
+//! each placement of the work with slightly different parameters: what it cannot represent
+//! is absorbed differently where the arm is posed differently. At a new placement the error
+//! is then that of a new draw of the parameters, which is large where the chain amplifies
+//! it (a raised artefact, full reach) and small near the base: a pose-dependent error that
+//! one isotropic radius cannot describe.
+//!
+//! - **Its estimate.** Held-out validation by group fits the model on all groups but g, for
+//!   each g: θ₋g. Were a fit the mean of per-group parameters θ_h, θ₋g − mean = (mean −
+//!   θ_g)/(G − 1), so the between-group covariance of the θ_h is S_b = (G − 1)² · the sample
+//!   covariance of the θ₋g (the jackknife's pseudo-values, without fitting any group alone,
+//!   which a single degenerate session could not support). A new group's parameters differ
+//!   from the fit on all G by S_b (1 + 1/G): that is what joins the budget's C, so the
+//!   table's format and the hub are unchanged (the hub propagates C).
+//! - **Its scale, nested.** S_b has G − 1 degrees of freedom and is noisy with few groups.
+//!   With G ≥ 3 its scale κ is set by split-conformal prediction on the held-out rows: each
+//!   row of group g is scored against S_b estimated *without* g (from the other θ₋h, in
+//!   which g's own parameters cancel) times (1 + 1/(G − 1)), and κ is the ⌈0.95 (n + 1)⌉-th
+//!   smallest of the rows' least covering scales. The held-out spread has one degree of
+//!   freedom fewer than the one written, so κ carries the few-groups correction a Student-t
+//!   factor would (measured, not assumed). With G = 2 no row can be scored without its own
+//!   group, κ = 1 and the report says the term was not validated.
+//! - **Shrunk.** With few groups S_b has rank G − 1: no spread in the directions the groups
+//!   did not happen to differ in. It is shrunk towards the fit's own covariance C, scaled to
+//!   the same size in C's metric, with the weight of one group ([`shrink`]).
+//! - An unknown a fold's fit held (not identified without that group) has no value there
+//!   and no deviation.
+
+use super::misfit::RowCov;
+use super::{u95, Budget};
+use crate::data::Dataset;
+use crate::holdout::{FoldFit, Holdout};
+use crate::params::Param;
+use nalgebra::{DMatrix, DVector, Matrix3};
+use std::collections::BTreeSet;
+
+/// Largest scale κ tried: a row the term cannot cover within it is left to the isotropic
+/// term.
+pub const SCALE_MAX: f64 = 30.0;
+
+/// Where the term came from (the report's provenance).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct PoseSource {
+    /// Groups whose held-out fits gave it.
+    pub groups: usize,
+    /// κ, the factor of S_b (1 + 1/G) (its square multiplies the covariance).
+    pub scale: f64,
+    /// Whether κ was set on rows scored without their own group's spread (G ≥ 3).
+    pub validated: bool,
+    /// Held-out rows scored.
+    pub rows: usize,
+    /// Fraction of them inside their 95 % region without the term, and with it.
+    pub covered: [f64; 2],
+    /// RMS of the tip's standard deviation the term adds at the held-out rows (mm per axis).
+    pub rms_mm: f64,
+}
+
+/// The term.
+#[derive(Clone, Debug)]
+pub struct PoseTerm {
+    /// To add to the budget's C (the budget's parameter order).
+    pub cov: DMatrix<f64>,
+    /// Per row of the `rows` it was estimated on: the term's part of that row's prediction.
+    pub extra: Vec<Matrix3<f64>>,
+    /// Its provenance.
+    pub source: PoseSource,
+}
+
+/// The group of each fold that fitted, when each left out one whole group.
+fn fold_groups(data: &Dataset, fits: &[FoldFit]) -> Option<Vec<i64>> {
+    let mut seen = BTreeSet::new();
+    let mut out = Vec::new();
+    for f in fits {
+        let g = data.rows.get(*f.rows.first()?)?.group;
+        if !f.rows.iter().all(|&i| data.rows[i].group == g) || !seen.insert(g) {
+            return None;
+        }
+        out.push(g);
+    }
+    (out.len() >= 2).then_some(out)
+}
+
+/// Each fit's parameters `params` less their mean over the fits that estimated them.
+fn deviations(params: &[Param], fits: &[&FoldFit]) -> Vec<DVector<f64>> {
+    let vals: Vec<Vec<Option<f64>>> = fits
+        .iter()
+        .map(|f| {
+            params
+                .iter()
+                .map(|q| f.fitted.contains(q).then(|| q.value(&f.arm)))
+                .collect()
+        })
+        .collect();
+    let mut out = vec![DVector::zeros(params.len()); fits.len()];
+    for k in 0..params.len() {
+        let have: Vec<f64> = vals.iter().filter_map(|v| v[k]).collect();
+        if have.len() < 2 {
+            continue;
+        }
+        let mean = have.iter().sum::<f64>() / have.len() as f64;
+        for (d, v) in out.iter_mut().zip(&vals) {
+            if let Some(x) = v[k] {
+                d[k] = x - mean;
+            }
+        }
+    }
+    out
+}
+
+/// S_b from the leave-one-group-out fits `fits` of `groups` groups in all: (G − 1)² times
+/// their sample covariance, shrunk towards the fit's own covariance `c` (see [`shrink`]).
+pub fn between(
+    params: &[Param],
+    fits: &[&FoldFit],
+    groups: usize,
+    c: &DMatrix<f64>,
+) -> DMatrix<f64> {
+    let p = params.len();
+    let mut s = DMatrix::zeros(p, p);
+    if fits.len() < 2 {
+        return s;
+    }
+    for d in deviations(params, fits) {
+        s += &d * d.transpose();
+    }
+    let g = groups as f64 - 1.0;
+    shrink(s * (g * g / (fits.len() - 1) as f64), c, fits.len() - 1)
+}
+
+/// A spread `s` of ν degrees of freedom shrunk towards the shape of `c`:
+/// (1 − λ) s + λ t c with t = tr(c⁻¹ s)/p (the same size in the metric of c) and
+/// λ = 1/(ν + 1), a prior worth one group. With few groups s has rank ν and no spread at
+/// all in the directions the groups did not happen to differ in; a new group will differ
+/// there too, and the fit's own covariance is the best shape known for them. `s` unchanged
+/// when `c` is not positive definite.
+pub fn shrink(s: DMatrix<f64>, c: &DMatrix<f64>, nu: usize) -> DMatrix<f64> {
+    let p = s.nrows();
+    let Some(ch) = c.clone().cholesky() else {
+        return s;
+    };
+    let t = ch.solve(&s).trace() / p.max(1) as f64;
+    if !(t.is_finite() && t > 0.0) {
+        return s;
+    }
+    let lambda = 1.0 / (nu as f64 + 1.0);
+    s * (1.0 - lambda) + c * (lambda * t)
+}
+
+/// What a covariance `cov` of the parameters alone predicts for the rows `judged`, in the
+/// order of [`super::misfit::row_covariances`].
+fn tip_part(
+    arm: &quatarm_ref::arm::Arm,
+    params: &[Param],
+    cov: DMatrix<f64>,
+    data: &Dataset,
+    judged: &[bool],
+) -> Vec<RowCov> {
+    let b = Budget {
+        params: params.to_vec(),
+        cov,
+        encoder_counts: vec![0.0; data.dof],
+        probing_mm: 0.0,
+        temperature_c: 0.0,
+        model_mm: 0.0,
+    };
+    super::misfit::row_covariances(arm, &b, data, judged, 0.0)
+}
+
+/// The least κ in [0, [`SCALE_MAX`]] with |r| inside U95(s + κ² p); infinite when none.
+fn least_scale(s: &Matrix3<f64>, p: &Matrix3<f64>, deviation: f64) -> f64 {
+    let covered = |k: f64| {
+        let l = u95::eigenvalues(&(s + p * (k * k))).map(|x| x.max(0.0));
+        if l[0] <= 0.0 {
+            return deviation <= 0.0;
+        }
+        u95::probability_within(l, deviation) <= u95::LEVEL
+    };
+    if covered(0.0) {
+        return 0.0;
+    }
+    if !covered(SCALE_MAX) {
+        return f64::INFINITY;
+    }
+    let (mut lo, mut hi) = (0.0, SCALE_MAX);
+    while hi - lo > 1e-4 * hi {
+        let mid = 0.5 * (lo + hi);
+        if covered(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    hi
+}
+
+/// The pose term of a held-out validation by group `h` of `data`, for the budget's `params`
+/// on the calibrated `arm`; `rows` what the rest of the budget predicts for the held-out rows
+/// ([`super::misfit::row_covariances`]). `None` unless the folds were whole groups, at least
+/// two of them fitted and the term is not zero.
+pub fn estimate(
+    arm: &quatarm_ref::arm::Arm,
+    params: &[Param],
+    c: &DMatrix<f64>,
+    data: &Dataset,
+    h: &Holdout,
+    rows: &[RowCov],
+) -> Option<PoseTerm> {
+    let groups = fold_groups(data, &h.fits)?;
+    let g_all = groups.len();
+    let all: Vec<&FoldFit> = h.fits.iter().collect();
+    let sb = between(params, &all, g_all, c);
+    if sb.iter().all(|x| *x == 0.0) || rows.is_empty() {
+        return None;
+    }
+    let validated = g_all >= 3;
+    // Each held-out row's part of the term, from the spread of the groups other than its
+    // own (G ≥ 3), or of all (G = 2, in-sample).
+    let mut extra = vec![Matrix3::zeros(); rows.len()];
+    let at: std::collections::HashMap<usize, usize> =
+        rows.iter().enumerate().map(|(k, r)| (r.row, k)).collect();
+    for (f, fit) in h.fits.iter().enumerate() {
+        let cov = if validated {
+            let others: Vec<&FoldFit> = (0..g_all).filter(|&o| o != f).map(|o| all[o]).collect();
+            between(params, &others, g_all, c)
+        } else {
+            sb.clone()
+        } * (1.0 + 1.0 / (g_all as f64 - 1.0));
+        let mut judged = vec![false; data.rows.len()];
+        fit.rows.iter().for_each(|&i| judged[i] = h.judged[i]);
+        for r in tip_part(arm, params, cov, data, &judged) {
+            if let Some(&k) = at.get(&r.row) {
+                extra[k] = r.s;
+            }
+        }
+    }
+    let deviation = |r: &RowCov| h.residuals.rows[r.row].norm();
+    let scale = if validated {
+        let mut t: Vec<f64> = rows
+            .iter()
+            .zip(&extra)
+            .map(|(r, p)| least_scale(&r.s, p, deviation(r)))
+            .collect();
+        t.sort_by(f64::total_cmp);
+        let n = t.len();
+        let k = ((u95::LEVEL * (n + 1) as f64).ceil() as usize).clamp(1, n);
+        // Rows the term cannot cover at all are left to the isotropic term.
+        let finite = t
+            .iter()
+            .copied()
+            .filter(|x| x.is_finite())
+            .fold(0.0, f64::max);
+        t[k - 1].min(finite)
+    } else {
+        1.0
+    };
+    let covered = |k: f64| {
+        rows.iter()
+            .zip(&extra)
+            .filter(|(r, p)| {
+                let l = u95::eigenvalues(&(r.s + *p * (k * k))).map(|x| x.max(0.0));
+                l[0] > 0.0 && u95::probability_within(l, deviation(r)) <= u95::LEVEL
+            })
+            .count() as f64
+            / rows.len() as f64
+    };
+    let source = PoseSource {
+        groups: g_all,
+        scale,
+        validated,
+        rows: rows.len(),
+        covered: [covered(0.0), covered(scale)],
+        rms_mm: (extra.iter().map(|p| p.trace() / 3.0).sum::<f64>() / rows.len() as f64).sqrt()
+            * scale,
+    };
+    let k2 = scale * scale;
+    Some(PoseTerm {
+        cov: sb * (k2 * (1.0 + 1.0 / g_all as f64)),
+        extra: extra.into_iter().map(|p| p * k2).collect(),
+        source,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use quatarm_ref::arm::Arm;
+
+    fn fold(z: [f64; 2], fitted: &[Param]) -> FoldFit {
+        let mut arm = Arm::default6();
+        arm.joints[0].zero_offset = z[0];
+        arm.joints[1].zero_offset = z[1];
+        FoldFit {
+            rows: vec![0],
+            arm,
+            fitted: fitted.to_vec(),
+        }
+    }
+
+    /// S_b is (G − 1)² times the sample covariance of the leave-one-group-out values, shrunk
+    /// with weight 1/G towards C at C's own scale; an unknown a fold held has no deviation.
+    #[test]
+    fn the_between_group_spread_is_the_jackknife_one_shrunk_towards_c() {
+        let p = [Param::ZeroOffset(0), Param::ZeroOffset(1)];
+        let fits = [
+            fold([1e-4, 0.0], &p),
+            fold([-1e-4, 2e-4], &p),
+            fold([3e-4, -2e-4], &p),
+        ];
+        let refs: Vec<&FoldFit> = fits.iter().collect();
+        let c = DMatrix::from_diagonal_element(2, 2, 1e-10);
+        let s = between(&p, &refs, 3, &c);
+        // Sample covariance (divisor 2) of x = (1, −1, 3)e-4, y = (0, 2, −2)e-4: var x 4e-8,
+        // var y 4e-8, cov −4e-8; times (3 − 1)² = 4.
+        let raw = DMatrix::from_row_slice(2, 2, &[16e-8, -16e-8, -16e-8, 16e-8]);
+        let t = (raw[(0, 0)] + raw[(1, 1)]) / 1e-10 / 2.0;
+        let expect = &raw * (2.0 / 3.0) + &c * (t / 3.0);
+        assert!(
+            (&s - &expect).norm() < 1e-12 * expect.norm(),
+            "{s} vs {expect}"
+        );
+        // A fold that held ZeroOffset(1): its y is no evidence, and y's spread is that of
+        // the other two.
+        let held = [fold([1e-4, 0.0], &p), fold([-1e-4, 9.0], &p[..1])];
+        let refs: Vec<&FoldFit> = held.iter().collect();
+        let d = deviations(&p, &refs);
+        assert_eq!(d[1][1], 0.0);
+        assert_eq!(d[0][1], 0.0);
+        assert!((d[0][0] - 1e-4).abs() < 1e-15);
+    }
+
+    /// κ is the least scale that covers: more than 0 for a far row, and covering there.
+    #[test]
+    fn the_least_scale_covers_and_no_less_does() {
+        let s = Matrix3::identity() * 1e-6;
+        let p = Matrix3::from_diagonal(&nalgebra::Vector3::new(1e-2, 1e-4, 1e-4));
+        assert_eq!(least_scale(&s, &p, 1e-3), 0.0);
+        let k = least_scale(&s, &p, 0.3);
+        assert!(k > 0.0 && k.is_finite(), "{k}");
+        let covered = |k: f64| {
+            let l = u95::eigenvalues(&(s + p * (k * k)));
+            u95::probability_within(l, 0.3) <= u95::LEVEL
+        };
+        assert!(covered(k) && !covered(0.99 * k));
+        // No direction to grow in: never covered.
+        assert!(least_scale(&s, &Matrix3::zeros(), 0.3).is_infinite());
+    }
+}
