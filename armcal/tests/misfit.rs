@@ -157,7 +157,7 @@ fn the_pose_term_is_estimated_from_sessions_and_covers_a_new_one() {
     use armcal::sim::{self, FrameChoice};
     use armcal::uncertainty::estimate::{self, Settings};
     let nominal = quatarm_ref::arm::Arm::default6();
-    let mut rng = sim::rng(11);
+    let mut rng = armcal::rng::rng(11);
     let centre = sim::perturb(&nominal, 3e-4, 0.3, &mut rng);
     let mut data: Option<Dataset> = None;
     for g in 0..5 {
@@ -172,9 +172,9 @@ fn the_pose_term_is_estimated_from_sessions_and_covers_a_new_one() {
         }
     }
     let data = data.unwrap();
-    let opts = armcal::calib::Options::default();
-    let fit = armcal::calib::calibrate(&nominal, &data, &opts).unwrap();
-    let h = armcal::holdout::validate(&nominal, &data, &opts, &armcal::holdout::by_group(&data));
+    let opts = armcal::fit::calib::Options::default();
+    let fit = armcal::fit::calib::calibrate(&nominal, &data, &opts).unwrap();
+    let h = armcal::fit::holdout::validate(&nominal, &data, &opts, &armcal::fit::holdout::by_group(&data));
     let s = Settings {
         instrument_mm: 0.005,
         ..Settings::default()
@@ -202,8 +202,8 @@ fn the_pose_term_is_estimated_from_sessions_and_covers_a_new_one() {
         ..Setup::BENCHMARK
     };
     let fresh = sim::perturb(&centre, 1e-4, 0.05, &mut rng);
-    let t_with = coverage::fresh(&fresh, &fit.arm, &with.budget, &setup, &mut sim::rng(2));
-    let t_without = coverage::fresh(&fresh, &fit.arm, &without.budget, &setup, &mut sim::rng(2));
+    let t_with = coverage::fresh(&fresh, &fit.arm, &with.budget, &setup, &mut armcal::rng::rng(2));
+    let t_without = coverage::fresh(&fresh, &fit.arm, &without.budget, &setup, &mut armcal::rng::rng(2));
     eprintln!(
         "pose {pose:?}; fresh session covered {} with the term, {} without",
         t_with.sphere(),

@@ -33,7 +33,7 @@
 use super::misfit::RowCov;
 use super::{u95, Budget};
 use crate::data::Dataset;
-use crate::holdout::{FoldFit, Holdout};
+use crate::fit::holdout::{FoldFit, Holdout};
 use crate::params::Param;
 use nalgebra::{DMatrix, DVector, Matrix3};
 use std::collections::BTreeSet;
