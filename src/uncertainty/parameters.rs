@@ -22,9 +22,11 @@ use crate::scalar::F32;
 use crate::table::parameters::{factor_len, Column, Kind, Parameters, MAX_PARAMETERS};
 use crate::table::{Table, MAX_JOINTS};
 
-/// Columns of L whose sums J_π L's block accumulates at once: 8 × 3 accumulators, a column
-/// of J_π and an entry of L fill 28 of the Cortex-M4F's 32 single-precision registers.
-pub const BLOCK: usize = 8;
+/// Columns of L whose sums J_π L's block accumulates at once: 6 × 3 accumulators, a column
+/// of J_π and a row's 6 entries of L fill 27 of the Cortex-M4F's 32 single-precision
+/// registers (with 8, 24 sums and their operands did not fit: the compiler shuffled
+/// registers at every row, ~9 instructions an entry of L; measured on qemu-m4f).
+pub const BLOCK: usize = 6;
 
 /// The parameter part of a table with a parameter block, built at boot. It borrows the
 /// block (the columns' records and the factor, read at every point) rather than copying it:
@@ -97,6 +99,29 @@ fn full_rows(g: &mut [[f32; 3]; BLOCK], d: &[[f32; 3]], factor: &[u8], first: us
     *g = acc;
 }
 
+/// g_b += L_(k0 + r, k0 + b) d_(k0 + r) for the rows r = 0, 1, … of the block's triangle
+/// (row k0 + r holds r + 1 of the block's `width` entries), indexed by constants as
+/// [`full_rows`].
+#[inline(never)]
+fn triangle_rows(
+    g: &mut [[f32; 3]; BLOCK],
+    d: &[[f32; 3]],
+    factor: &[u8],
+    k0: usize,
+    width: usize,
+) {
+    let mut acc = *g;
+    for (r, di) in d.iter().enumerate() {
+        let at = 4 * (factor_len(k0 + r) + k0);
+        let m = (r + 1).min(width);
+        for (b, gb) in acc.iter_mut().enumerate() {
+            let l = factor.get(at + 4 * b..at + 4 * b + 4).filter(|_| b < m);
+            accumulate(gb, di, l.map_or(0.0, |l| entry(l, 0)));
+        }
+    }
+    *g = acc;
+}
+
 /// An entry of L from its four little-endian bytes.
 #[inline(always)]
 fn entry(b: &[u8], k: usize) -> f32 {
@@ -161,13 +186,7 @@ impl<'a> ParameterPart<'a> {
             let mut g = [[0.0f32; 3]; BLOCK];
             let width = (n - k0).min(BLOCK);
             let top = if width == BLOCK { k0 + BLOCK - 1 } else { n };
-            for (i, di) in d.iter().enumerate().take(top).skip(k0) {
-                let row = factor.get(4 * (factor_len(i) + k0)..).unwrap_or(&[]);
-                let m = (i + 1 - k0).min(width).min(row.len() / 4);
-                for (b, gb) in g.iter_mut().enumerate().take(m) {
-                    accumulate(gb, di, entry(row, b));
-                }
-            }
+            triangle_rows(&mut g, d.get(k0..top).unwrap_or(&[]), factor, k0, width);
             full_rows(&mut g, d.get(top..n).unwrap_or(&[]), factor, top, k0);
             for gb in &g[..width] {
                 sigma.add_outer(*gb, 1.0);
@@ -277,7 +296,7 @@ mod tests {
     /// last narrow block).
     #[test]
     fn the_blocked_product_is_the_plain_one() {
-        for p in [1, 7, 8, 9, 19, 52] {
+        for p in [1, 5, 6, 7, 8, 9, 13, 19, 52] {
             // Tilts and shifts on several joints, with vectors and factor entries that vary.
             let columns: std::vec::Vec<Column> = (0..p)
                 .map(|i| {
