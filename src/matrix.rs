@@ -37,7 +37,19 @@ pub struct Frames {
     pub rotation: [[[f32; 3]; 3]; MAX_JOINTS],
     /// Joint i's origin o_i (mm, base frame).
     pub origin: [[f32; 3]; MAX_JOINTS],
+    /// cos θ_i and sin θ_i of joint i's raw reading (the harmonics' angle), which the chain
+    /// forms anyway: the harmonic columns of the parameter part take their weights from
+    /// them instead of a sine and cosine of their own.
+    pub turn: [[f32; 2]; MAX_JOINTS],
+    /// ∂p/∂T, the tip's thermal expansion (mm per 10 °C, base frame): Σ_i R_0i κ_i v_i, the
+    /// links' expansion rates turned by the frames (the probe's with the last link). The
+    /// links are linear in T, so this is the temperature's column of the Jacobian exactly
+    /// (up to the gravity correction's 1e-5 of it).
+    pub expansion: [f32; 3],
 }
+
+/// The temperature step of [`Frames::expansion`] (m°C).
+pub const EXPANSION_STEP_MC: i32 = 10_000;
 
 /// One reading as a pass of the chain takes it: the counts, the temperature offset, and
 /// whether the pass applies the wobble (a constant in each copy of the code).
@@ -112,7 +124,7 @@ impl<P: Physics> MatrixChain<P> {
     // line for the quaternion chain, 1,245 against 1,201 for the matrix chain).
     #[inline(never)]
     pub fn eval(&self, counts: &[u32], temp_mc: i32) -> Result<Point<P>, ChainError> {
-        self.eval_seen(counts, temp_mc, &mut |_, _, _| {})
+        self.eval_seen(counts, temp_mc, &mut |_, _, _, _| {})
     }
 
     /// As [`Self::eval`], with the joints' frames of the (last) pass in `frames`: the
@@ -124,12 +136,33 @@ impl<P: Physics> MatrixChain<P> {
         temp_mc: i32,
         frames: &mut Frames,
     ) -> Result<Point<P>, ChainError> {
-        self.eval_seen(counts, temp_mc, &mut |i, r, o| {
-            if let (Some(fr), Some(fo)) = (frames.rotation.get_mut(i), frames.origin.get_mut(i)) {
-                *fr = r.map(|row| row.map(P::u_to_f32));
-                *fo = o.map(P::l_to_f32);
+        let step = P::temperature(EXPANSION_STEP_MC);
+        // A second pass (second-order gravity) sees every joint again: the sum restarts.
+        let mut rate = [0.0f32; 3];
+        let tip = self.eval_seen(counts, temp_mc, &mut |i, r, o, (c, s)| {
+            if i == 0 {
+                rate = [0.0; 3];
             }
-        })
+            let (Some(fr), Some(fo), Some(ft), Some(j)) = (
+                frames.rotation.get_mut(i),
+                frames.origin.get_mut(i),
+                frames.turn.get_mut(i),
+                self.model.joints.get(i),
+            ) else {
+                return;
+            };
+            *fr = r.map(|row| row.map(P::u_to_f32));
+            *fo = o.map(P::l_to_f32);
+            *ft = [P::u_to_f32(c), P::u_to_f32(s)];
+            if j.has_thermal {
+                let v = j.link_rate.map(|x| P::l_to_f32(P::expansion(x, step)));
+                for (x, row) in rate.iter_mut().zip(fr.iter()) {
+                    *x += row[0] * v[0] + row[1] * v[1] + row[2] * v[2];
+                }
+            }
+        })?;
+        frames.expansion = rate;
+        Ok(tip)
     }
 
     #[inline(always)]
@@ -137,7 +170,7 @@ impl<P: Physics> MatrixChain<P> {
         &self,
         counts: &[u32],
         temp_mc: i32,
-        seen: &mut impl FnMut(usize, &Mat<P>, &Vec3<P::L>),
+        seen: &mut impl FnMut(usize, &Mat<P>, &Vec3<P::L>, (P::U, P::U)),
     ) -> Result<Point<P>, ChainError> {
         // A copy without the wobble's tests for the arms that have none (always, without the
         // feature: `any` is then `false` at compile time and the other copy is not built).
@@ -156,7 +189,7 @@ impl<P: Physics> MatrixChain<P> {
         &self,
         counts: &[u32],
         temp_mc: i32,
-        seen: &mut impl FnMut(usize, &Mat<P>, &Vec3<P::L>),
+        seen: &mut impl FnMut(usize, &Mat<P>, &Vec3<P::L>, (P::U, P::U)),
     ) -> Result<Point<P>, ChainError> {
         self.eval_seen_with(counts, temp_mc, true, seen)
     }
@@ -167,7 +200,7 @@ impl<P: Physics> MatrixChain<P> {
         counts: &[u32],
         temp_mc: i32,
         wobble: bool,
-        seen: &mut impl FnMut(usize, &Mat<P>, &Vec3<P::L>),
+        seen: &mut impl FnMut(usize, &Mat<P>, &Vec3<P::L>, (P::U, P::U)),
     ) -> Result<Point<P>, ChainError> {
         let m = &self.model;
         let dt = m.check(counts, temp_mc)?;
@@ -188,7 +221,7 @@ impl<P: Physics> MatrixChain<P> {
     /// The chain base to tip: tip and direction. With `deflections` (one per compliant
     /// joint, base first) they join the joints' angles; without, the compliant joints'
     /// axes and origins are recorded for the first-order correction. `seen` gets each joint's
-    /// frame after its turn and its origin.
+    /// frame after its turn, its origin, and cos θ, sin θ of its raw reading.
     #[inline(always)]
     fn pass(
         &self,
@@ -196,7 +229,7 @@ impl<P: Physics> MatrixChain<P> {
         deflections: Option<&[P::U; MAX_JOINTS]>,
         gravity: &mut Gravity<P>,
         gravity_count: &mut GravityCount,
-        seen: &mut impl FnMut(usize, &Mat<P>, &Vec3<P::L>),
+        seen: &mut impl FnMut(usize, &Mat<P>, &Vec3<P::L>, (P::U, P::U)),
     ) -> Result<Point<P>, ChainError> {
         let (m, counts, dt) = (&self.model, at.counts, at.dt);
         let zero = P::U::default();
@@ -208,6 +241,7 @@ impl<P: Physics> MatrixChain<P> {
             let j = &m.joints[i];
             let jr = j.reading(i, count, dt, true)?;
             let (mut c, mut sn) = jr.full.unwrap_or((P::ONE, zero));
+            let raw = (c, sn);
             let wobbled;
             let mj = if at.wobble && self.wobble.has(i) {
                 // M̃ W: each row r of M̃ times W is Wᵀ r, r turned by −φ.
@@ -263,7 +297,7 @@ impl<P: Physics> MatrixChain<P> {
             if j.has_gravity && deflections.is_none() {
                 gravity.push(gravity_count, j.gravity, [r[0][2], r[1][2], r[2][2]], o);
             }
-            seen(i, &r, &o);
+            seen(i, &r, &o, raw);
             let v = mat_vec::<P, P::L>(&r, &jr.link);
             o = [o[0] + v[0], o[1] + v[1], o[2] + v[2]];
         }

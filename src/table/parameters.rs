@@ -252,6 +252,15 @@ impl<'a> Parameters<'a> {
         })
     }
 
+    /// L whole, row after row, as raw little-endian bytes: row `i` starts at byte
+    /// 4 · [`factor_len`]`(i)` (empty if the block is shorter than its count states).
+    pub fn factor(&self) -> &'a [u8] {
+        let at = HEAD_LEN + self.count() * COLUMN_LEN;
+        self.bytes
+            .get(at..at + 4 * factor_len(self.count()))
+            .unwrap_or(&[])
+    }
+
     /// L's row `i` (its first i + 1 entries), as raw little-endian bytes.
     pub fn factor_row(&self, i: usize) -> &'a [u8] {
         let at = HEAD_LEN + self.count() * COLUMN_LEN + 4 * factor_len(i);

@@ -1,13 +1,16 @@
 //! The uncertainty of every point the hub streams (`spec/uncertainty.md`): Σ_p and U95.
 //!
 //! Σ_p = J_π C J_πᵀ + J_θ diag(σ_θ²) J_θᵀ + J_T σ_T² J_Tᵀ + (σ_probe² + σ_model²) I₃, in two
-//! parts from the table: the reading's own terms ([`own`], from the budget: the firmware's own
-//! chain differenced), and the calibration's parameter part ([`parameters`], from the
-//! parameter block: analytic columns on the matrix chain's frames, with C's Cholesky factor).
-//! [`radius::u95`] gives the radius of the 95 % sphere.
+//! parts from the table: the reading's own terms ([`own`], from the budget) and the
+//! calibration's parameter part ([`parameters`], from the parameter block, with C's Cholesky
+//! factor). Both take their Jacobian columns analytically from one pass of the matrix chain
+//! that keeps its frames ([`MatrixChain::eval_frames`]): the joints' axes and origins, cos θ
+//! and sin θ of the readings, the links' expansion. [`radius::u95`] gives the radius of the
+//! 95 % sphere.
 //!
 //! Measured against the host's first order (`cargo test -p armcal --test hub_u95 --
-//! --nocapture`): the numbers are in the README, "The uncertainty of every point".
+//! --nocapture`), and its cost on qemu-m4f (`cargo xtask bench-target`): the numbers are in
+//! `docs/results/speed.md`.
 
 pub mod own;
 pub mod parameters;
@@ -15,8 +18,9 @@ pub mod radius;
 
 mod grid;
 
-use crate::chain::{Chain, Evaluator};
-use crate::model::{ChainError, Point};
+use crate::chain::Evaluator;
+use crate::matrix::{Frames, MatrixChain};
+use crate::model::ChainError;
 use crate::table::Table;
 
 pub use own::OwnTerms;
@@ -49,8 +53,10 @@ impl Covariance {
 /// it borrows the table's parameter block.
 #[derive(Clone, Debug)]
 pub struct Uncertainty<'a, P: Evaluator> {
+    /// The matrix chain whose frames give every column (mounted with the hub's probe).
+    chain: MatrixChain<P>,
     own: OwnTerms,
-    parameters: Option<ParameterPart<'a, P>>,
+    parameters: Option<ParameterPart<'a>>,
 }
 
 impl<'a, P: Evaluator> Uncertainty<'a, P> {
@@ -61,19 +67,23 @@ impl<'a, P: Evaluator> Uncertainty<'a, P> {
             return Ok(None);
         };
         Ok(Some(Uncertainty {
+            chain: MatrixChain::new(table)?,
             own,
             parameters: ParameterPart::new(table)?,
         }))
     }
 
-    /// Follows the hub's chain to the table's probe `k` (its index in the table): the
-    /// reading's own terms take the chain they are given, the parameter part its own matrix
-    /// chain and the probe's columns. Nothing changes on an error.
+    /// Follows the hub's chain to the table's probe `k` (its index in the table): the frames'
+    /// chain mounts it, and the parameter part takes that probe's columns. Nothing changes on
+    /// an error.
     pub fn mount(&mut self, table: &Table<'a>, k: usize) -> Result<(), ChainError> {
-        match &mut self.parameters {
-            Some(part) => part.mount(table, k),
-            None => Ok(()),
+        let mut chain = self.chain;
+        chain.mount(table, k)?;
+        if let Some(part) = &mut self.parameters {
+            part.mount(table, k)?;
         }
+        self.chain = chain;
+        Ok(())
     }
 
     /// Whether the calibration's parameter part is in (the table has a parameter block, and
@@ -82,33 +92,22 @@ impl<'a, P: Evaluator> Uncertainty<'a, P> {
         self.parameters.is_some()
     }
 
-    /// Σ_p of a reading (`counts`, `temp_mc`) whose point `chain` gave.
-    pub fn covariance(
-        &self,
-        chain: &Chain<P>,
-        counts: &[u32],
-        temp_mc: i32,
-        point: &Point<P>,
-    ) -> Result<Covariance, ChainError> {
-        let mut sigma = self.own.covariance(chain, counts, temp_mc, point)?;
+    /// Σ_p of a reading (`counts`, `temp_mc`): one pass of the matrix chain for the frames,
+    /// then the columns. An error is the chain's (a reading it refuses).
+    pub fn covariance(&self, counts: &[u32], temp_mc: i32) -> Result<Covariance, ChainError> {
+        let mut frames = Frames::default();
+        let tip = self.chain.eval_frames(counts, temp_mc, &mut frames)?;
+        let p = tip.xyz.map(P::l_to_f32);
+        let mut sigma = self.own.covariance(&frames, p);
         if let Some(part) = &self.parameters {
-            part.add_to(counts, temp_mc, &mut sigma)?;
+            part.add_to(&frames, p, temp_mc, &mut sigma);
         }
         Ok(sigma)
     }
 
     /// U95 of a reading, in whole nanometres (rounded up: never below the computed radius).
-    pub fn u95_nm(
-        &self,
-        chain: &Chain<P>,
-        counts: &[u32],
-        temp_mc: i32,
-        point: &Point<P>,
-    ) -> Result<u32, ChainError> {
-        let u = self
-            .covariance(chain, counts, temp_mc, point)?
-            .u95_nm()
-            .max(0.0);
+    pub fn u95_nm(&self, counts: &[u32], temp_mc: i32) -> Result<u32, ChainError> {
+        let u = self.covariance(counts, temp_mc)?.u95_nm().max(0.0);
         // f32 → u32 saturates; a U95 beyond 4.29 m is not a measurement anyway.
         Ok(micromath::F32Ext::ceil(u) as u32)
     }

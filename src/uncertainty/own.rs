@@ -1,42 +1,36 @@
 //! The reading's own terms of Σ_p: the encoder, the temperature sensor, the probing and the
-//! model, each Jacobian taken from the firmware's own chain by differences.
+//! model, each Jacobian column analytic, from the joints' frames the matrix chain composes
+//! for the parameter part anyway ([`Frames`]).
 //!
-//! - **Joints**: the chain at the reading with joint i stepped by k_i counts (≈ 1 mrad), less
-//!   the point, is k_i counts of J_θ's column i; σ_θ is in counts already, so
-//!   Σ += (σ_counts / k_i)² d dᵀ. A milliradian moves the tip by up to 1.5 mm: far above the
-//!   chain's rounding (0.1 µm, 1e-4), far below where the chain bends (second-order terms
-//!   ~5e-4 of the step).
-//! - **Temperature**: the chain at T ± 10 °C (thermal expansion is linear in T).
+//! - **Joints**: ∂p/∂θ_i = a_i × (p − o_i), the turn of everything beyond joint i about its
+//!   axis; σ_θ is in counts, 2π / counts per revolution a count, so
+//!   Σ += (2π σ_counts / counts)² d dᵀ. What it leaves out: the harmonics' slope
+//!   (1 + Σ h (a_h cos hθ − b_h sin hθ), ~1e-4 off 1 for a calibration's tens of µrad) and
+//!   the gravity deflection's change with the pose (g·L ≈ 1e-5): both far below U95's 1e-3.
+//! - **Temperature**: ∂p/∂T = Σ_i R_0i κ_i v_i ([`Frames::expansion`]): the links are linear
+//!   in T.
 //!
-//! Every difference is of integer nanometres (`Point::xyz_nm`), so the f32 and the fixed-point
-//! chain feed the same f32 arithmetic here.
+//! Before, each column was the hub's chain differenced (stepped by ~1 mrad, by 10 °C): seven
+//! chains a point, 10,895 instructions on qemu-m4f; these columns cost a cross product each.
 
 use super::Covariance;
-use crate::chain::{Chain, Evaluator};
-use crate::model::{ChainError, Point};
+use crate::matrix::{Frames, EXPANSION_STEP_MC};
+use crate::rotate::{cross, Vec3};
+use crate::scalar::F32;
 use crate::table::{Table, FLAG_THERMAL, MAX_JOINTS};
-use heapless::Vec;
 
-/// One joint's reading term: the step k (counts), its joint's counts per revolution, and
-/// (σ_counts / k)².
-#[derive(Clone, Copy, Debug, Default)]
-struct JointTerm {
-    step: u32,
-    counts: u32,
-    weight: f32,
-}
-
-/// The temperature step of the thermal term (m°C).
-const TEMPERATURE_STEP_MC: i32 = 10_000;
-/// The joint step: about a milliradian, counts per revolution / 2π·1000.
-const STEPS_PER_TURN: u32 = 6283;
+/// mm² → nm².
+const NM2_PER_MM2: f64 = 1.0e12;
 
 /// What the hub needs to give every point the reading's own part of Σ_p: built once at
 /// boot from the table's budget, the same for either evaluator's chain.
 #[derive(Clone, Debug)]
 pub struct OwnTerms {
-    joints: Vec<JointTerm, MAX_JOINTS>,
-    /// (σ_T / step)², where the table has thermal expansion.
+    /// Joints in the table.
+    n: usize,
+    /// Per joint, (2π σ_counts / counts)² in nm² per mm² of the column (rad² · 10^12).
+    joints: [f32; MAX_JOINTS],
+    /// (σ_T / [`EXPANSION_STEP_MC`])² · 10^12, where the table has thermal expansion.
     temperature: Option<f32>,
     /// σ_probe² + σ_model² (nm²).
     isotropic: f32,
@@ -47,71 +41,43 @@ impl OwnTerms {
     /// (soft-float on every target) runs once, at boot.
     pub fn new(table: &Table<'_>) -> Option<OwnTerms> {
         let budget = table.budget()?;
-        let n = table.joint_count();
-        let mut joints = Vec::new();
-        for i in 0..n {
-            let counts = table.joint(i).map_or(2, |j| j.counts);
-            let step = (counts / STEPS_PER_TURN).max(1);
-            let sigma = budget.encoder_counts(i) / f64::from(step);
-            let _ = joints.push(JointTerm {
-                step,
-                counts,
-                weight: (sigma * sigma) as f32,
-            });
+        let n = table.joint_count().min(MAX_JOINTS);
+        let mut joints = [0.0; MAX_JOINTS];
+        for (i, w) in joints.iter_mut().enumerate().take(n) {
+            let counts = table.joint(i).map_or(2, |j| j.counts).max(1);
+            let sigma = budget.encoder_counts(i) * core::f64::consts::TAU / f64::from(counts);
+            *w = (sigma * sigma * NM2_PER_MM2) as f32;
         }
         let thermal = table.flags() & FLAG_THERMAL != 0;
-        let t = budget.temperature_c() * 1000.0 / f64::from(TEMPERATURE_STEP_MC);
-        let temperature = (thermal && t > 0.0).then_some((t * t) as f32);
+        let t = budget.temperature_c() * 1000.0 / f64::from(EXPANSION_STEP_MC);
+        let temperature = (thermal && t > 0.0).then_some((t * t * NM2_PER_MM2) as f32);
         let iso_mm2 =
             budget.probing_mm() * budget.probing_mm() + budget.model_mm() * budget.model_mm();
         Some(OwnTerms {
+            n,
             joints,
             temperature,
-            isotropic: (iso_mm2 * 1.0e12) as f32,
+            isotropic: (iso_mm2 * NM2_PER_MM2) as f32,
         })
     }
 
-    /// The reading's own part of Σ_p (`counts`, `temp_mc`; `chain` gave `point` for it).
-    pub fn covariance<P: Evaluator>(
-        &self,
-        chain: &Chain<P>,
-        counts: &[u32],
-        temp_mc: i32,
-        point: &Point<P>,
-    ) -> Result<Covariance, ChainError> {
-        let p = point.xyz_nm();
-        let diff = |q: Point<P>| {
-            let q = q.xyz_nm();
-            [0, 1, 2].map(|k| q[k].wrapping_sub(p[k]) as f32)
-        };
+    /// The reading's own part of Σ_p (nm²) at the frames of a reading whose tip is `p` (mm).
+    pub fn covariance(&self, frames: &Frames, p: Vec3<f32>) -> Covariance {
         let iso = self.isotropic;
         let mut c = Covariance([iso, iso, iso, 0.0, 0.0, 0.0]);
-        let mut stepped = [0u32; MAX_JOINTS];
-        let n = counts.len().min(MAX_JOINTS);
-        stepped[..n].copy_from_slice(&counts[..n]);
-        for (i, j) in self.joints.iter().enumerate().take(n) {
-            if j.weight == 0.0 {
+        for i in 0..self.n {
+            let w = self.joints[i];
+            if w == 0.0 {
                 continue;
             }
-            // c0 is below counts per revolution by the chain's check (the point was
-            // evaluated) and the step is at most a sixth of a turn, so one subtraction wraps
-            // it (no division: software on the Cortex-M0).
-            let c0 = stepped[i];
-            let s = c0 + j.step;
-            stepped[i] = if s >= j.counts { s - j.counts } else { s };
-            c.add_outer(diff(chain.eval(&stepped[..n], temp_mc)?), j.weight);
-            stepped[i] = c0;
+            let (r, o) = (&frames.rotation[i], &frames.origin[i]);
+            let axis = [r[0][2], r[1][2], r[2][2]];
+            let lever = [p[0] - o[0], p[1] - o[1], p[2] - o[2]];
+            c.add_outer(cross::<F32>(&axis, &lever), w);
         }
         if let Some(w) = self.temperature {
-            let up = chain.eval(counts, temp_mc.saturating_add(TEMPERATURE_STEP_MC));
-            let q = match up {
-                Err(ChainError::Temperature) => {
-                    chain.eval(counts, temp_mc.saturating_sub(TEMPERATURE_STEP_MC))?
-                }
-                other => other?,
-            };
-            c.add_outer(diff(q), w);
+            c.add_outer(frames.expansion, w);
         }
-        Ok(c)
+        c
     }
 }

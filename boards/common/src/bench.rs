@@ -8,13 +8,15 @@
 //! start, gives the instructions per tick instead of trusting the machine's nominal clock.
 //! The Ed25519 check of the table's signature is timed once the same way, and, where the
 //! table carries an uncertainty budget, each point's U95 after its quaternion chain: the
-//! reading's own terms alone (Σ_p from the chain differenced, and the radius) on every
+//! reading's own terms alone (the matrix chain's frames, Σ_p's own terms from them, and the
+//! radius) on every
 //! board, and the whole U95 as the hub streams it (with the parameter part where the table
 //! has the block) where the hub computes one. Results go to the defmt log (`cargo xtask
 //! bench-target` decodes it).
 
 use quatarm::signature::{self, KEY_LEN, SIGNATURE_LEN};
 use quatarm::stream::{Event, Replay};
+use quatarm::matrix::Frames;
 use quatarm::uncertainty::OwnTerms;
 use quatarm::{Chain, MatrixChain, Table};
 
@@ -129,10 +131,14 @@ pub fn run<L: Link, P: HubEvaluator>(link: &mut L, region: &[u8], key: &[u8; KEY
         hub.ticks += b - a;
         hub.failures += u32::from(res.is_err());
 
-        if let (Some(u), Ok(p)) = (&own, &res) {
+        if let (Some(u), Ok(_)) = (&own, &res) {
             let a = clock::ticks();
-            let got =
-                core::hint::black_box(u.covariance(&quat, counts, temp, p).map(|c| c.u95_nm()));
+            let mut frames = Frames::default();
+            let got = core::hint::black_box(
+                matrix
+                    .eval_frames(counts, temp, &mut frames)
+                    .map(|t| u.covariance(&frames, t.xyz.map(P::l_to_f32)).u95_nm()),
+            );
             let b = clock::ticks();
             own_sum.points += 1;
             own_sum.ticks += b - a;
