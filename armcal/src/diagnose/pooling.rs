@@ -1,0 +1,241 @@
+//! Partial pooling of one effect's size over the arms of a design: power from the fleet.
+//!
+//! An arm with few sessions cannot tell a small effect from its noise alone (four sessions:
+//! no sign test below 0.0625). Its siblings of the same design carry information about it, but
+//! not its value: MUKCa's Pandas have shoulder compliances from −4.0 to +1.3 µrad/mm, so
+//! forcing one shared value on them ([`super::fleet`]'s design test of a common gain) has
+//! little to find. The normal–normal hierarchical model says what is shared:
+//!
+//! y_u ~ N(θ_u, s_u²),  θ_u ~ N(μ, τ²)
+//!
+//! each arm's estimate y_u (standard error s_u, from its own sessions) measures its own true
+//! value θ_u, and the θ_u are drawn from the design's distribution (mean μ, spread τ). μ and τ²
+//! are estimated from all arms together (empirical Bayes: DerSimonian–Laird's moment estimator
+//! and Hartung–Knapp's standard error of μ̂, [`super::fleet::dersimonian_laird`]); each arm's
+//! pooled estimate is then its posterior mean
+//!
+//! θ̃_u = μ̂ + (1 − B_u)(y_u − μ̂),  B_u = s_u² / (s_u² + τ̂²)
+//!
+//! an arm measured precisely keeps its own value (B → 0), one measured poorly borrows from the
+//! design (B → 1), and with τ̂² = 0 every arm gets μ̂. Its standard error is Morris's
+//! (1 − B_u) s_u² + B_u² se(μ̂)² (the first-order term of the uncertainty of μ̂; the one of τ̂²
+//! is left out, so it is somewhat short with few arms).
+//!
+//! **What is named.** The design's mean is tested first (t = μ̂ / se_HK, arms − 1 degrees of
+//! freedom, two-sided at `alpha`); only when it passes is the effect named for an arm, and then
+//! for every arm whose pooled interval θ̃_u ± t·se excludes zero. The gate keeps the chance of
+//! naming the effect anywhere in a null fleet at `alpha`, not `alpha` per arm.
+//!
+//! **The design's spread** has a Q-profile interval (Viechtbauer 2007): the τ² at which the
+//! generalised Q statistic equals the χ²_{k−1} quantiles.
+
+use super::fleet::dersimonian_laird;
+use crate::stats::{chi2_tail, t_tail};
+
+/// One arm, alone and pooled.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Arm {
+    /// Its own estimate.
+    pub estimate: f64,
+    /// Its standard error.
+    pub se: f64,
+    /// Whether its own estimate differs from zero at `alpha` (two-sided, normal).
+    pub named_alone: bool,
+    /// The shrinkage factor B (0: its own value kept, 1: the design's mean).
+    pub shrinkage: f64,
+    /// The pooled estimate θ̃.
+    pub pooled: f64,
+    /// Its standard error.
+    pub pooled_se: f64,
+    /// Whether the pooled model names the effect for this arm.
+    pub named_pooled: bool,
+}
+
+/// The design's distribution of the effect.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Design {
+    /// Arms pooled.
+    pub arms: usize,
+    /// The mean μ̂.
+    pub mean: f64,
+    /// Its standard error (Hartung–Knapp).
+    pub mean_se: f64,
+    /// The interval of μ at 1 − `alpha` (Student's t, arms − 1 degrees of freedom).
+    pub mean_interval: [f64; 2],
+    /// Two-sided p of μ = 0.
+    pub mean_p: f64,
+    /// The spread τ̂ (the square root of DerSimonian–Laird's τ̂²).
+    pub spread: f64,
+    /// The interval of τ at 1 − `alpha` (Q-profile).
+    pub spread_interval: [f64; 2],
+    /// Whether the design's mean passes at `alpha` (the gate for naming per arm).
+    pub named: bool,
+}
+
+/// The two-sided critical value of Student's t with `df` degrees of freedom at `alpha`.
+pub fn t_critical(alpha: f64, df: f64) -> f64 {
+    let target = alpha / 2.0;
+    let (mut lo, mut hi) = (0.0f64, 1e3f64);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if t_tail(mid, df) > target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The generalised Q at `tau2`: Σ w (y − μ̂(τ²))², w = 1 / (v + τ²).
+fn q_at(y: &[f64], v: &[f64], tau2: f64) -> f64 {
+    let w: Vec<f64> = v.iter().map(|v| 1.0 / (v.max(1e-300) + tau2)).collect();
+    let sw: f64 = w.iter().sum();
+    let mu = w.iter().zip(y).map(|(w, y)| w * y).sum::<f64>() / sw;
+    w.iter().zip(y).map(|(w, y)| w * (y - mu).powi(2)).sum()
+}
+
+/// The τ² at which Q equals `target` (Q falls as τ² grows); 0 when Q(0) is already below.
+fn tau2_for(y: &[f64], v: &[f64], target: f64) -> f64 {
+    if q_at(y, v, 0.0) <= target {
+        return 0.0;
+    }
+    let spread = y
+        .iter()
+        .map(|a| y.iter().map(|b| (a - b).powi(2)).fold(0.0, f64::max))
+        .fold(0.0, f64::max);
+    let (mut lo, mut hi) = (0.0f64, spread.max(1e-300) * 1e3);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if q_at(y, v, mid) > target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The χ²_k quantile with upper tail `p` (bisection on [`chi2_tail`]).
+fn chi2_upper(p: f64, k: usize) -> f64 {
+    let (mut lo, mut hi) = (0.0f64, 1e4f64);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if chi2_tail(mid, k) > p {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// Pools the arms' estimates `y` with standard errors `se` (see the module's text). `None`
+/// with fewer than [`super::fleet::MIN_FLEET_UNITS`] arms, or when some standard error is not
+/// a positive finite number (an arm whose estimate has no error bar cannot be weighed).
+pub fn pool(y: &[f64], se: &[f64], alpha: f64) -> Option<(Design, Vec<Arm>)> {
+    let k = y.len();
+    if k < super::fleet::MIN_FLEET_UNITS
+        || se.len() != k
+        || se.iter().any(|s| !(s.is_finite() && *s > 0.0))
+        || y.iter().any(|v| !v.is_finite())
+    {
+        return None;
+    }
+    let v: Vec<f64> = se.iter().map(|s| s * s).collect();
+    let (mu, mu_se, tau2, _q) = dersimonian_laird(y, &v);
+    let df = (k - 1) as f64;
+    let tc = t_critical(alpha, df);
+    let mean_p = 2.0 * t_tail((mu / mu_se).abs(), df);
+    let named = mean_p < alpha;
+    let lo = tau2_for(y, &v, chi2_upper(alpha / 2.0, k - 1));
+    let hi = tau2_for(y, &v, chi2_upper(1.0 - alpha / 2.0, k - 1));
+    let design = Design {
+        arms: k,
+        mean: mu,
+        mean_se: mu_se,
+        mean_interval: [mu - tc * mu_se, mu + tc * mu_se],
+        mean_p,
+        spread: tau2.sqrt(),
+        spread_interval: [lo.sqrt(), hi.sqrt()],
+        named,
+    };
+    let z = t_critical(alpha, 1e12);
+    let arms = y
+        .iter()
+        .zip(&v)
+        .map(|(&y, &v)| {
+            let b = v / (v + tau2);
+            let pooled = mu + (1.0 - b) * (y - mu);
+            let pooled_se = ((1.0 - b) * v + b * b * mu_se * mu_se).sqrt();
+            Arm {
+                estimate: y,
+                se: v.sqrt(),
+                named_alone: (y / v.sqrt()).abs() > z,
+                shrinkage: b,
+                pooled,
+                pooled_se,
+                named_pooled: named && (pooled / pooled_se).abs() > tc,
+            }
+        })
+        .collect();
+    Some((design, arms))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn t_critical_matches_tables() {
+        for (df, t) in [(2.0, 4.303), (7.0, 2.365), (30.0, 2.042), (1e12, 1.960)] {
+            assert!(
+                (t_critical(0.05, df) - t).abs() < 2e-3,
+                "{df}: {}",
+                t_critical(0.05, df)
+            );
+        }
+    }
+
+    #[test]
+    fn arms_that_agree_are_pooled_to_the_mean_and_named_together() {
+        // Eight arms, true values 1 ± 50 %, each measured with an error of 0.6: alone, few are
+        // two errors from zero; pooled, all are.
+        let y = [0.5, 1.4, 0.9, 1.2, 0.6, 1.5, 0.8, 1.1];
+        let se = [0.6; 8];
+        let (d, arms) = pool(&y, &se, 0.05).unwrap();
+        assert!(d.named && d.mean_p < 0.01, "{d:?}");
+        assert!((d.mean - 1.0).abs() < 1e-12);
+        // The arms scatter less than their errors say: no spread between them is seen.
+        assert_eq!(d.spread, 0.0);
+        assert_eq!(d.spread_interval[0], 0.0);
+        assert!(d.spread_interval[1] > 0.0);
+        assert!(arms.iter().filter(|a| a.named_alone).count() < 4);
+        assert!(arms.iter().all(|a| a.named_pooled && a.shrinkage == 1.0));
+        assert!(arms
+            .iter()
+            .all(|a| (a.pooled - 1.0).abs() < 1e-12 && a.pooled_se < 0.6));
+    }
+
+    #[test]
+    fn a_precise_arm_keeps_its_own_value_and_a_spread_is_seen() {
+        let y = [-4.0, -1.3, 1.34, 0.5, -2.0];
+        let se = [0.1, 0.1, 0.1, 3.0, 0.2];
+        let (d, arms) = pool(&y, &se, 0.05).unwrap();
+        assert!(d.spread > 1.0 && d.spread_interval[0] > 0.5, "{d:?}");
+        assert!(d.spread_interval[0] <= d.spread && d.spread <= d.spread_interval[1]);
+        // Precise arms keep their values; the poorly measured one is pulled to the mean.
+        assert!((arms[0].pooled + 4.0).abs() < 0.02);
+        assert!(arms[3].shrinkage > 0.5);
+        assert!((arms[3].pooled - d.mean).abs() < (arms[3].estimate - d.mean).abs());
+        // The mean is not distinguishable from zero: the gate names no arm.
+        assert!(!d.named && arms.iter().all(|a| !a.named_pooled));
+    }
+
+    #[test]
+    fn too_few_arms_or_bad_errors_are_refused() {
+        assert!(pool(&[1.0, 2.0], &[1.0, 1.0], 0.05).is_none());
+        assert!(pool(&[1.0, 2.0, 3.0], &[1.0, 0.0, 1.0], 0.05).is_none());
+        assert!(pool(&[1.0, f64::NAN, 3.0], &[1.0, 1.0, 1.0], 0.05).is_none());
+    }
+}
