@@ -131,7 +131,7 @@ impl Nested {
 
 /// Squared error of `fit` on `session` (mm²: every row's distance squared, and every bar's
 /// length error squared), or why it cannot be judged.
-fn session_ss(fit: &Fit, session: &Dataset) -> Result<f64, String> {
+pub fn session_ss(fit: &Fit, session: &Dataset) -> Result<f64, String> {
     if session.rows.iter().any(|r| r.kind == Kind::Point) && fit.frame.is_none() {
         return Err(
             "point rows held out, but the other sessions have none to fix the frame".into(),

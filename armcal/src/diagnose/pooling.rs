@@ -30,6 +30,9 @@
 //! generalised Q statistic equals the χ²_{k−1} quantiles.
 
 use super::fleet::dersimonian_laird;
+use crate::calib::{self, CalibError};
+use crate::data::Dataset;
+use crate::params::{Effect, Terms};
 use crate::stats::{chi2_tail, t_tail};
 
 /// One arm, alone and pooled.
@@ -142,14 +145,20 @@ pub fn pool(y: &[f64], se: &[f64], alpha: f64) -> Option<(Design, Vec<Arm>)> {
     {
         return None;
     }
+    // In units of the largest standard error: `dersimonian_laird` floors variances at 1e-12
+    // (for log-ratios near one), which a compliance of 1e-8 rad/mm would fall under.
+    let unit = se.iter().copied().fold(0.0, f64::max);
+    let ys: Vec<f64> = y.iter().map(|v| v / unit).collect();
+    let vs: Vec<f64> = se.iter().map(|s| (s / unit).powi(2)).collect();
+    let (mu, mu_se, tau2, _q) = dersimonian_laird(&ys, &vs);
+    let (mu, mu_se, tau2) = (mu * unit, mu_se * unit, tau2 * unit * unit);
     let v: Vec<f64> = se.iter().map(|s| s * s).collect();
-    let (mu, mu_se, tau2, _q) = dersimonian_laird(y, &v);
     let df = (k - 1) as f64;
     let tc = t_critical(alpha, df);
     let mean_p = 2.0 * t_tail((mu / mu_se).abs(), df);
     let named = mean_p < alpha;
-    let lo = tau2_for(y, &v, chi2_upper(alpha / 2.0, k - 1));
-    let hi = tau2_for(y, &v, chi2_upper(1.0 - alpha / 2.0, k - 1));
+    let lo = unit * unit * tau2_for(&ys, &vs, chi2_upper(alpha / 2.0, k - 1));
+    let hi = unit * unit * tau2_for(&ys, &vs, chi2_upper(1.0 - alpha / 2.0, k - 1));
     let design = Design {
         arms: k,
         mean: mu,
@@ -180,6 +189,111 @@ pub fn pool(y: &[f64], se: &[f64], alpha: f64) -> Option<(Design, Vec<Arm>)> {
         })
         .collect();
     Some((design, arms))
+}
+
+/// One arm's estimate of a one-unknown `effect` (a gravity compliance) from its sessions: the
+/// value fitted on all of them with the geometric model, and its jackknife standard error over
+/// the sessions (each left out in turn): √((n − 1)/n Σ (θ₋ₛ − θ̄)²). The sessions, not the rows,
+/// are the replications (the in-sample error of a fit on real data is far too small: its
+/// residuals are not white). `None` below [`crate::stats::MIN_UNITS`] sessions or for an
+/// effect of more than one unknown.
+pub fn estimate(
+    start: &quatarm_ref::arm::Arm,
+    data: &Dataset,
+    opts: &calib::Options,
+    effect: Effect,
+) -> Result<Option<(f64, f64)>, CalibError> {
+    let params = effect.params();
+    let folds = crate::holdout::by_group(data);
+    if params.len() != 1 || folds.len() < crate::stats::MIN_UNITS {
+        return Ok(None);
+    }
+    let o = calib::Options {
+        terms: Terms::with(&[effect]),
+        ..opts.clone()
+    };
+    let all = calib::calibrate(start, data, &o)?;
+    let value = params[0].value(&all.arm);
+    let n = data.rows.len();
+    let mut loo = Vec::new();
+    for out in &folds {
+        let keep: Vec<usize> = (0..n).filter(|i| !out.contains(i)).collect();
+        let fit = calib::calibrate(start, &data.subset(&keep), &o)?;
+        loo.push(params[0].value(&fit.arm));
+    }
+    let k = loo.len() as f64;
+    let mean = loo.iter().sum::<f64>() / k;
+    let se = ((k - 1.0) / k * loo.iter().map(|x| (x - mean).powi(2)).sum::<f64>()).sqrt();
+    Ok(Some((value, se)))
+}
+
+/// One session of an arm scored with the pooled value fixed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PooledFold {
+    /// The session (group number).
+    pub group: i64,
+    /// The pooled value fixed in the model (from the arm's other sessions and the other arms).
+    pub value: f64,
+    /// Held-out mean squared error per row (mm²) of the geometric model fitted on the others.
+    pub before_ms: f64,
+    /// The same with the effect fixed at `value`.
+    pub after_ms: f64,
+}
+
+/// The held-out gain of the pooled estimate on one arm, nested: for each session, the arm's
+/// estimate from its other sessions ([`estimate`]) is pooled with the other arms' `others`
+/// (value, standard error), the pooled value θ̃ is fixed in the arm's model, the geometric
+/// unknowns are fitted on the other sessions, and the session is scored against the
+/// geometric model fitted on the same sessions. The held-out session never informs θ̃.
+/// Sessions whose training part cannot be estimated (fewer than three sessions left) or pooled
+/// are skipped.
+pub fn pooled_holdout(
+    start: &quatarm_ref::arm::Arm,
+    data: &Dataset,
+    opts: &calib::Options,
+    effect: Effect,
+    others: &[(f64, f64)],
+    alpha: f64,
+) -> Result<Vec<PooledFold>, CalibError> {
+    let params = effect.params();
+    if params.len() != 1 {
+        return Ok(Vec::new());
+    }
+    let geometric = calib::Options {
+        terms: Terms::geometric(),
+        ..opts.clone()
+    };
+    let n = data.rows.len();
+    let mut out = Vec::new();
+    for held in crate::holdout::by_group(data) {
+        let keep: Vec<usize> = (0..n).filter(|i| !held.contains(i)).collect();
+        let train = data.subset(&keep);
+        let Some(own) = estimate(start, &train, opts, effect)? else {
+            continue;
+        };
+        let (mut y, mut se): (Vec<f64>, Vec<f64>) = others.iter().copied().unzip();
+        y.push(own.0);
+        se.push(own.1);
+        let Some((_, arms)) = pool(&y, &se, alpha) else {
+            continue;
+        };
+        let value = arms.last().map_or(own.0, |a| a.pooled);
+        let mut fixed = start.clone();
+        params[0].add_to(&mut fixed, value - params[0].value(start));
+        let session = data.subset(&held);
+        let base = calib::calibrate(start, &train, &geometric)?;
+        let with = calib::calibrate(&fixed, &train, &geometric)?;
+        let rows = held.len().max(1) as f64;
+        out.push(PooledFold {
+            group: data.rows[held[0]].group,
+            value,
+            before_ms: super::nested::session_ss(&base, &session).map_err(CalibError::Mismatch)?
+                / rows,
+            after_ms: super::nested::session_ss(&with, &session).map_err(CalibError::Mismatch)?
+                / rows,
+        });
+    }
+    Ok(out)
 }
 
 #[cfg(test)]
@@ -230,6 +344,24 @@ mod tests {
         assert!((arms[3].pooled - d.mean).abs() < (arms[3].estimate - d.mean).abs());
         // The mean is not distinguishable from zero: the gate names no arm.
         assert!(!d.named && arms.iter().all(|a| !a.named_pooled));
+    }
+
+    #[test]
+    fn the_scale_of_the_effect_does_not_matter() {
+        // The same fleet in rad/mm (1e-8) gives the same pooling, scaled.
+        let y = [-4.0, -1.3, 1.34, 0.5, -2.0];
+        let se = [0.1, 0.1, 0.1, 3.0, 0.2];
+        let (d, arms) = pool(&y, &se, 0.05).unwrap();
+        let ys: Vec<f64> = y.iter().map(|v| v * 1e-8).collect();
+        let ses: Vec<f64> = se.iter().map(|v| v * 1e-8).collect();
+        let (ds, arms_s) = pool(&ys, &ses, 0.05).unwrap();
+        assert!((ds.spread / 1e-8 - d.spread).abs() < 1e-9 * d.spread.max(1.0));
+        assert!((ds.mean_se / 1e-8 - d.mean_se).abs() < 1e-9);
+        for (a, b) in arms.iter().zip(&arms_s) {
+            assert!((b.pooled / 1e-8 - a.pooled).abs() < 1e-9);
+            assert!((b.pooled_se / 1e-8 - a.pooled_se).abs() < 1e-9);
+            assert_eq!(a.named_pooled, b.named_pooled);
+        }
     }
 
     #[test]
