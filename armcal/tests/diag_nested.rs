@@ -2,6 +2,8 @@
 //! rerun without each session finds a real cause in every fold and predicts every held-out
 //! session better; on an arm with nothing hidden it names nothing and claims nothing.
 
+mod common;
+
 use armcal::data::{Dataset, Kind};
 use armcal::diagnose::{nested, Options};
 use armcal::params::Effect;
@@ -77,4 +79,36 @@ fn one_session_is_refused() {
     let data = arm_data(302, 0.0, 40, 1);
     let e = nested::nested(&Arm::default6(), &data, &options()).unwrap_err();
     assert!(e.to_string().contains("single group"), "{e}");
+}
+
+#[test]
+fn diagnose_by_group_reports_the_nested_test() {
+    let dir = common::workdir("nested-cli");
+    let data = arm_data(303, 4.0e-8, 160, 4);
+    std::fs::write(dir.join("arm.csv"), data.to_csv(&["simulated arm"])).unwrap();
+    let out = common::armcal_ok(
+        &[
+            "diagnose",
+            "arm.csv",
+            "--by-group",
+            "--json",
+            "--max-order",
+            "1",
+        ],
+        &dir,
+    );
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let n = &j["nested"];
+    assert_eq!(n["sessions"], 4, "{j:#}");
+    assert_eq!(n["t_df"], 3);
+    assert_eq!(n["smallest_possible_p"], 0.0625);
+    assert_eq!(n["per_session"].as_array().unwrap().len(), 4);
+    assert!(n["summary"]
+        .as_str()
+        .unwrap()
+        .contains("4 sessions: no sign test can reach p < 0.062"));
+    // Without --by-group there are no sessions to rerun the selection without.
+    let out = common::armcal_ok(&["diagnose", "arm.csv", "--json", "--max-order", "1"], &dir);
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(j.get("nested").is_none());
 }

@@ -209,7 +209,7 @@ pub fn summarise(folds: Vec<Fold>, failed: Vec<(i64, String)>) -> Nested {
         }
     }
     let mut chosen: Vec<(Effect, usize)> = counts.into_iter().collect();
-    chosen.sort_by(|a, b| b.1.cmp(&a.1));
+    chosen.sort_by_key(|c| std::cmp::Reverse(c.1));
     let better = folds.iter().filter(|f| f.after_ms < f.before_ms).count();
     let ties = folds.iter().filter(|f| f.after_ms == f.before_ms).count();
     let before: Vec<f64> = folds.iter().map(|f| f.before_ms).collect();
