@@ -110,6 +110,11 @@ impl Nested {
     /// test p = 0.109 (6 sessions: no sign test can reach p < 0.0156)".
     pub fn headline(&self) -> String {
         let n = self.sessions();
+        if n == 0 {
+            return "no session could be scored: the other sessions could not be diagnosed \
+                    without it (a diagnosis needs two sessions to hold out)"
+                .into();
+        }
         let (b, a) = self.rms_um();
         let t = if self.df() >= 1 && self.paired.se.is_finite() {
             format!(
