@@ -1,6 +1,7 @@
 //! Every distribution the tool uses, in one place: the F, t, normal and χ² tails (a cause's
-//! in-sample test, a calibration's significance test), and the paired comparison of held-out
-//! errors a diagnosis's out-of-sample test rests on.
+//! in-sample test, a calibration's significance test), the paired comparison of held-out
+//! errors a diagnosis's out-of-sample test rests on, and the exact sign test with the smallest
+//! p a number of sessions allows.
 
 /// ln Γ(x) for x > 0 (Lanczos, g = 7, nine terms; relative error below 1e-14).
 pub fn ln_gamma(x: f64) -> f64 {
@@ -153,6 +154,72 @@ pub fn erfc(x: f64) -> f64 {
     }
 }
 
+/// Exact one-sided sign test: P(X ≥ `better`) for X ~ Binomial(`n`, ½), the chance that a
+/// model no better than the other wins on at least `better` of `n` independent units (held-out
+/// sessions). It assumes nothing about the size or the distribution of the differences, only
+/// that each unit is a fair coin under the null, so it is the test an outside reader checks by
+/// hand. Ties are the caller's to count: [`crate::diagnose::nested`] counts a tie as a loss,
+/// which can only make the p larger.
+pub fn sign_test_p(better: usize, n: usize) -> f64 {
+    if n == 0 || better == 0 {
+        return 1.0;
+    }
+    let better = better.min(n);
+    if n <= 1000 {
+        // Σ_{k ≥ better} C(n, k) / 2ⁿ from the top term ½ⁿ down, C(n, k−1) = C(n, k) k / (n − k + 1):
+        // exact to rounding (½ⁿ for n of n), no overflow.
+        let mut term = 0.5f64.powi(n as i32);
+        let mut sum = term;
+        for k in (better + 1..=n).rev() {
+            term *= k as f64 / (n - k + 1) as f64;
+            sum += term;
+        }
+        return sum.min(1.0);
+    }
+    let ln_choose = |k: usize| {
+        ln_gamma(n as f64 + 1.0) - ln_gamma(k as f64 + 1.0) - ln_gamma((n - k) as f64 + 1.0)
+    };
+    let ln_half = n as f64 * 0.5f64.ln();
+    (better..=n)
+        .map(|k| (ln_choose(k) + ln_half).exp())
+        .sum::<f64>()
+        .min(1.0)
+}
+
+/// The smallest one-sided p any test that only uses the signs (or the sign-flips) of `n`
+/// paired units can give: ½ⁿ, when every unit goes one way. With 4 sessions no such test can
+/// reach p < 0.0625, so a claim at 5 % needs 5 sessions or more; the t-test can go lower only
+/// by assuming the differences are normal.
+pub fn min_sign_p(n: usize) -> f64 {
+    0.5f64.powi(n.min(i32::MAX as usize) as i32)
+}
+
+/// Percentile bootstrap interval of the mean of `x` (units resampled with replacement,
+/// `draws` times, from a seeded ChaCha8 generator so the figure is reproducible): the
+/// (1 − `level`)/2 and (1 + `level`)/2 quantiles of the resampled means. With few units
+/// (7 test sessions) it is narrower than it should be (the resamples cannot go beyond the
+/// units seen); it is reported beside the paired t- and sign tests, not instead of them.
+/// `None` for no units.
+pub fn bootstrap_mean_interval(
+    x: &[f64],
+    level: f64,
+    draws: usize,
+    seed: u64,
+) -> Option<(f64, f64)> {
+    use rand::{Rng, SeedableRng};
+    if x.is_empty() || draws == 0 {
+        return None;
+    }
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let n = x.len();
+    let mut means: Vec<f64> = (0..draws)
+        .map(|_| (0..n).map(|_| x[rng.gen_range(0..n)]).sum::<f64>() / n as f64)
+        .collect();
+    means.sort_by(f64::total_cmp);
+    let q = |p: f64| means[((p * draws as f64).floor() as usize).min(draws - 1)];
+    Some((q((1.0 - level) / 2.0), q((1.0 + level) / 2.0)))
+}
+
 /// Fewest held-out units for held-out evidence.
 pub const MIN_UNITS: usize = 3;
 
@@ -281,5 +348,54 @@ mod tests {
         // Two units prove nothing, however consistent.
         assert_eq!(Paired::of(&[5.0, 5.1], &[1.0, 1.0]).p_value(), 1.0);
         assert!(Paired::of(&[5.0, 5.1, 5.05], &[1.0, 1.0, 1.0]).p_value() < 1e-3);
+    }
+
+    #[test]
+    fn sign_test_is_the_binomial_tail() {
+        // 6 of 6: 1/64; 5 of 6: 7/64; 4 of 4: 1/16; 3 of 4: 5/16; 0 of n: 1.
+        assert!((sign_test_p(6, 6) - 1.0 / 64.0).abs() < 1e-12);
+        assert!((sign_test_p(5, 6) - 7.0 / 64.0).abs() < 1e-12);
+        assert!((sign_test_p(4, 4) - 0.0625).abs() < 1e-12);
+        assert!((sign_test_p(3, 4) - 5.0 / 16.0).abs() < 1e-12);
+        assert_eq!(sign_test_p(0, 5), 1.0);
+        assert_eq!(sign_test_p(0, 0), 1.0);
+        // 8 of 10: (45 + 10 + 1) / 1024.
+        assert!((sign_test_p(8, 10) - 56.0 / 1024.0).abs() < 1e-12);
+        // Large n stays finite and matches the symmetric middle: P(X ≥ 100 | n = 200) > ½.
+        let p = sign_test_p(100, 200);
+        assert!(p > 0.5 && p < 0.56, "{p}");
+        let p = sign_test_p(1000, 2000);
+        assert!(p > 0.5 && p < 0.52, "{p}");
+    }
+
+    #[test]
+    fn the_smallest_p_sessions_allow() {
+        assert_eq!(min_sign_p(4), 0.0625);
+        assert!((min_sign_p(6) - 1.0 / 64.0).abs() < 1e-15);
+        // It is the sign test's p when every unit goes one way.
+        for n in 1..12 {
+            assert!((sign_test_p(n, n) - min_sign_p(n)).abs() < 1e-12, "{n}");
+        }
+        // Four sessions cannot reach 5 %, five can.
+        assert!(min_sign_p(4) > 0.05 && min_sign_p(5) < 0.05);
+    }
+
+    #[test]
+    fn bootstrap_interval_holds_the_mean_and_shrinks_with_units() {
+        let x: Vec<f64> = (0..7).map(|i| i as f64).collect();
+        let (lo, hi) = bootstrap_mean_interval(&x, 0.95, 4000, 1).unwrap();
+        assert!(lo < 3.0 && hi > 3.0 && lo >= 0.0 && hi <= 6.0, "{lo} {hi}");
+        // Reproducible from its seed.
+        assert_eq!(bootstrap_mean_interval(&x, 0.95, 4000, 1), Some((lo, hi)));
+        // Four times the units (same spread): about half the width.
+        let y: Vec<f64> = (0..28).map(|i| (i % 7) as f64).collect();
+        let (a, b) = bootstrap_mean_interval(&y, 0.95, 4000, 1).unwrap();
+        let ratio = (b - a) / (hi - lo);
+        assert!(ratio > 0.35 && ratio < 0.65, "{ratio}");
+        assert_eq!(bootstrap_mean_interval(&[], 0.95, 100, 1), None);
+        assert_eq!(
+            bootstrap_mean_interval(&[2.0; 3], 0.95, 100, 1),
+            Some((2.0, 2.0))
+        );
     }
 }

@@ -229,4 +229,6 @@ fn two_sessions_are_reported_as_cannot_test() {
     let o = armcal_ok(&[&args[..], &["--by-group"]].concat(), &d);
     let text = String::from_utf8(o.stdout).unwrap();
     assert!(!text.contains("\n  none\n"), "{text}");
+    // Nor can the selection be rerun without a session: one session left cannot be diagnosed.
+    assert!(text.contains("no session could be scored"), "{text}");
 }

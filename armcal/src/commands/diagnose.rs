@@ -177,6 +177,23 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut figures = patterns::figures(&d, &data);
     figures.extend(diagnose::unexplained::figure(&d.unexplained));
     let mut rep = report::build(&d, &data, &figures);
+    if a.by_group {
+        // The headline test with sessions: the whole selection rerun without each one.
+        let pb = (!a.json).then(|| {
+            let pb = indicatif::ProgressBar::new_spinner();
+            pb.set_message("rerunning the diagnosis without each session…");
+            pb.enable_steady_tick(std::time::Duration::from_millis(200));
+            pb
+        });
+        let n = diagnose::nested::nested(&start, &data, &opts);
+        if let Some(pb) = &pb {
+            pb.finish_and_clear();
+        }
+        rep.nested = Some(
+            n.with_context(|| format!("cannot rerun the diagnosis of {}", data_path.display()))?
+                .report(),
+        );
+    }
 
     let mut files = armcal::output::Staged::guarding(&inputs);
     if let Some(dir) = &a.plots {

@@ -249,6 +249,10 @@ pub struct Report {
     pub gain_percent: f64,
     /// The finding in a sentence.
     pub verdict: String,
+    /// The headline test with sessions: the whole selection rerun without each session
+    /// ([`super::nested`]); absent when the folds are not whole groups.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub nested: Option<super::nested::NestedReport>,
     /// Degrees of freedom of the held-out paired t-tests: the held-out units less one.
     pub holdout_t_df: usize,
     /// The arm's name.
@@ -352,6 +356,7 @@ pub fn build(d: &Diagnosis, data: &Dataset, figures: &[Figure]) -> Report {
         extended: model_report(&d.extended),
         gain_percent: d.gain_percent(),
         verdict,
+        nested: None,
         holdout_t_df: d.held_out_units.saturating_sub(1),
         arm: arm.name.clone().unwrap_or_else(|| "(unnamed)".into()),
         data: DataReport {
@@ -718,6 +723,9 @@ impl Report {
             "  gain on held-out data: {:.1} % ({:.2} → {:.2} µm RMS)",
             self.gain_percent, self.baseline.holdout_rms_um, self.extended.holdout_rms_um
         );
+        if let Some(n) = &self.nested {
+            n.write_text(s);
+        }
     }
 
     /// The selection's steps, the strongest left out and the rejected.

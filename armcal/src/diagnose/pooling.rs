@@ -1,0 +1,373 @@
+//! Partial pooling of one effect's size over the arms of a design: power from the fleet.
+//!
+//! An arm with few sessions cannot tell a small effect from its noise alone (four sessions:
+//! no sign test below 0.0625). Its siblings of the same design carry information about it, but
+//! not its value: MUKCa's Pandas have shoulder compliances from −4.0 to +1.3 µrad/mm, so
+//! forcing one shared value on them ([`super::fleet`]'s design test of a common gain) has
+//! little to find. The normal–normal hierarchical model says what is shared:
+//!
+//! y_u ~ N(θ_u, s_u²),  θ_u ~ N(μ, τ²)
+//!
+//! each arm's estimate y_u (standard error s_u, from its own sessions) measures its own true
+//! value θ_u, and the θ_u are drawn from the design's distribution (mean μ, spread τ). μ and τ²
+//! are estimated from all arms together (empirical Bayes: DerSimonian–Laird's moment estimator
+//! and Hartung–Knapp's standard error of μ̂, [`super::fleet::dersimonian_laird`]); each arm's
+//! pooled estimate is then its posterior mean
+//!
+//! θ̃_u = μ̂ + (1 − B_u)(y_u − μ̂),  B_u = s_u² / (s_u² + τ̂²)
+//!
+//! an arm measured precisely keeps its own value (B → 0), one measured poorly borrows from the
+//! design (B → 1), and with τ̂² = 0 every arm gets μ̂. Its standard error is Morris's
+//! (1 − B_u) s_u² + B_u² se(μ̂)² (the first-order term of the uncertainty of μ̂; the one of τ̂²
+//! is left out, so it is somewhat short with few arms).
+//!
+//! **What is named.** The design's mean is tested first (t = μ̂ / se_HK, arms − 1 degrees of
+//! freedom, two-sided at `alpha`); only when it passes is the effect named for an arm, and then
+//! for every arm whose pooled interval θ̃_u ± t·se excludes zero. The gate keeps the chance of
+//! naming the effect anywhere in a null fleet at `alpha`, not `alpha` per arm.
+//!
+//! **The design's spread** has a Q-profile interval (Viechtbauer 2007): the τ² at which the
+//! generalised Q statistic equals the χ²_{k−1} quantiles.
+
+use super::fleet::dersimonian_laird;
+use crate::calib::{self, CalibError};
+use crate::data::Dataset;
+use crate::params::{Effect, Terms};
+use crate::stats::{chi2_tail, t_tail};
+
+/// One arm, alone and pooled.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Arm {
+    /// Its own estimate.
+    pub estimate: f64,
+    /// Its standard error.
+    pub se: f64,
+    /// Whether its own estimate differs from zero at `alpha` (two-sided, normal).
+    pub named_alone: bool,
+    /// The shrinkage factor B (0: its own value kept, 1: the design's mean).
+    pub shrinkage: f64,
+    /// The pooled estimate θ̃.
+    pub pooled: f64,
+    /// Its standard error.
+    pub pooled_se: f64,
+    /// Whether the pooled model names the effect for this arm.
+    pub named_pooled: bool,
+}
+
+/// The design's distribution of the effect.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Design {
+    /// Arms pooled.
+    pub arms: usize,
+    /// The mean μ̂.
+    pub mean: f64,
+    /// Its standard error (Hartung–Knapp).
+    pub mean_se: f64,
+    /// The interval of μ at 1 − `alpha` (Student's t, arms − 1 degrees of freedom).
+    pub mean_interval: [f64; 2],
+    /// Two-sided p of μ = 0.
+    pub mean_p: f64,
+    /// The spread τ̂ (the square root of DerSimonian–Laird's τ̂²).
+    pub spread: f64,
+    /// The interval of τ at 1 − `alpha` (Q-profile).
+    pub spread_interval: [f64; 2],
+    /// Whether the design's mean passes at `alpha` (the gate for naming per arm).
+    pub named: bool,
+}
+
+/// The two-sided critical value of Student's t with `df` degrees of freedom at `alpha`.
+pub fn t_critical(alpha: f64, df: f64) -> f64 {
+    let target = alpha / 2.0;
+    let (mut lo, mut hi) = (0.0f64, 1e3f64);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if t_tail(mid, df) > target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The generalised Q at `tau2`: Σ w (y − μ̂(τ²))², w = 1 / (v + τ²).
+fn q_at(y: &[f64], v: &[f64], tau2: f64) -> f64 {
+    let w: Vec<f64> = v.iter().map(|v| 1.0 / (v.max(1e-300) + tau2)).collect();
+    let sw: f64 = w.iter().sum();
+    let mu = w.iter().zip(y).map(|(w, y)| w * y).sum::<f64>() / sw;
+    w.iter().zip(y).map(|(w, y)| w * (y - mu).powi(2)).sum()
+}
+
+/// The τ² at which Q equals `target` (Q falls as τ² grows); 0 when Q(0) is already below.
+fn tau2_for(y: &[f64], v: &[f64], target: f64) -> f64 {
+    if q_at(y, v, 0.0) <= target {
+        return 0.0;
+    }
+    let spread = y
+        .iter()
+        .map(|a| y.iter().map(|b| (a - b).powi(2)).fold(0.0, f64::max))
+        .fold(0.0, f64::max);
+    let (mut lo, mut hi) = (0.0f64, spread.max(1e-300) * 1e3);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if q_at(y, v, mid) > target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The χ²_k quantile with upper tail `p` (bisection on [`chi2_tail`]).
+fn chi2_upper(p: f64, k: usize) -> f64 {
+    let (mut lo, mut hi) = (0.0f64, 1e4f64);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if chi2_tail(mid, k) > p {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// Pools the arms' estimates `y` with standard errors `se` (see the module's text). `None`
+/// with fewer than [`super::fleet::MIN_FLEET_UNITS`] arms, or when some standard error is not
+/// a positive finite number (an arm whose estimate has no error bar cannot be weighed).
+pub fn pool(y: &[f64], se: &[f64], alpha: f64) -> Option<(Design, Vec<Arm>)> {
+    let k = y.len();
+    if k < super::fleet::MIN_FLEET_UNITS
+        || se.len() != k
+        || se.iter().any(|s| !(s.is_finite() && *s > 0.0))
+        || y.iter().any(|v| !v.is_finite())
+    {
+        return None;
+    }
+    // In units of the largest standard error: `dersimonian_laird` floors variances at 1e-12
+    // (for log-ratios near one), which a compliance of 1e-8 rad/mm would fall under.
+    let unit = se.iter().copied().fold(0.0, f64::max);
+    let ys: Vec<f64> = y.iter().map(|v| v / unit).collect();
+    let vs: Vec<f64> = se.iter().map(|s| (s / unit).powi(2)).collect();
+    let (mu, mu_se, tau2, _q) = dersimonian_laird(&ys, &vs);
+    let (mu, mu_se, tau2) = (mu * unit, mu_se * unit, tau2 * unit * unit);
+    let v: Vec<f64> = se.iter().map(|s| s * s).collect();
+    let df = (k - 1) as f64;
+    let tc = t_critical(alpha, df);
+    let mean_p = 2.0 * t_tail((mu / mu_se).abs(), df);
+    let named = mean_p < alpha;
+    let lo = unit * unit * tau2_for(&ys, &vs, chi2_upper(alpha / 2.0, k - 1));
+    let hi = unit * unit * tau2_for(&ys, &vs, chi2_upper(1.0 - alpha / 2.0, k - 1));
+    let design = Design {
+        arms: k,
+        mean: mu,
+        mean_se: mu_se,
+        mean_interval: [mu - tc * mu_se, mu + tc * mu_se],
+        mean_p,
+        spread: tau2.sqrt(),
+        spread_interval: [lo.sqrt(), hi.sqrt()],
+        named,
+    };
+    let z = t_critical(alpha, 1e12);
+    let arms = y
+        .iter()
+        .zip(&v)
+        .map(|(&y, &v)| {
+            let b = v / (v + tau2);
+            let pooled = mu + (1.0 - b) * (y - mu);
+            let pooled_se = ((1.0 - b) * v + b * b * mu_se * mu_se).sqrt();
+            Arm {
+                estimate: y,
+                se: v.sqrt(),
+                named_alone: (y / v.sqrt()).abs() > z,
+                shrinkage: b,
+                pooled,
+                pooled_se,
+                named_pooled: named && (pooled / pooled_se).abs() > tc,
+            }
+        })
+        .collect();
+    Some((design, arms))
+}
+
+/// One arm's estimate of a one-unknown `effect` (a gravity compliance) from its sessions: the
+/// value fitted on all of them with the geometric model, and its jackknife standard error over
+/// the sessions (each left out in turn): √((n − 1)/n Σ (θ₋ₛ − θ̄)²). The sessions, not the rows,
+/// are the replications (the in-sample error of a fit on real data is far too small: its
+/// residuals are not white). `None` below [`crate::stats::MIN_UNITS`] sessions or for an
+/// effect of more than one unknown.
+pub fn estimate(
+    start: &quatarm_ref::arm::Arm,
+    data: &Dataset,
+    opts: &calib::Options,
+    effect: Effect,
+) -> Result<Option<(f64, f64)>, CalibError> {
+    let params = effect.params();
+    let folds = crate::holdout::by_group(data);
+    if params.len() != 1 || folds.len() < crate::stats::MIN_UNITS {
+        return Ok(None);
+    }
+    let o = calib::Options {
+        terms: Terms::with(&[effect]),
+        ..opts.clone()
+    };
+    let all = calib::calibrate(start, data, &o)?;
+    let value = params[0].value(&all.arm);
+    let n = data.rows.len();
+    let mut loo = Vec::new();
+    for out in &folds {
+        let keep: Vec<usize> = (0..n).filter(|i| !out.contains(i)).collect();
+        let fit = calib::calibrate(start, &data.subset(&keep), &o)?;
+        loo.push(params[0].value(&fit.arm));
+    }
+    let k = loo.len() as f64;
+    let mean = loo.iter().sum::<f64>() / k;
+    let se = ((k - 1.0) / k * loo.iter().map(|x| (x - mean).powi(2)).sum::<f64>()).sqrt();
+    Ok(Some((value, se)))
+}
+
+/// One session of an arm scored with the pooled value fixed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PooledFold {
+    /// The session (group number).
+    pub group: i64,
+    /// The pooled value fixed in the model (from the arm's other sessions and the other arms).
+    pub value: f64,
+    /// Held-out mean squared error per row (mm²) of the geometric model fitted on the others.
+    pub before_ms: f64,
+    /// The same with the effect fixed at `value`.
+    pub after_ms: f64,
+}
+
+/// The held-out gain of the pooled estimate on one arm, nested: for each session, the arm's
+/// estimate from its other sessions ([`estimate`]) is pooled with the other arms' `others`
+/// (value, standard error), the pooled value θ̃ is fixed in the arm's model, the geometric
+/// unknowns are fitted on the other sessions, and the session is scored against the
+/// geometric model fitted on the same sessions. The held-out session never informs θ̃.
+/// Sessions whose training part cannot be estimated (fewer than three sessions left) or pooled
+/// are skipped.
+pub fn pooled_holdout(
+    start: &quatarm_ref::arm::Arm,
+    data: &Dataset,
+    opts: &calib::Options,
+    effect: Effect,
+    others: &[(f64, f64)],
+    alpha: f64,
+) -> Result<Vec<PooledFold>, CalibError> {
+    let params = effect.params();
+    if params.len() != 1 {
+        return Ok(Vec::new());
+    }
+    let geometric = calib::Options {
+        terms: Terms::geometric(),
+        ..opts.clone()
+    };
+    let n = data.rows.len();
+    let mut out = Vec::new();
+    for held in crate::holdout::by_group(data) {
+        let keep: Vec<usize> = (0..n).filter(|i| !held.contains(i)).collect();
+        let train = data.subset(&keep);
+        let Some(own) = estimate(start, &train, opts, effect)? else {
+            continue;
+        };
+        let (mut y, mut se): (Vec<f64>, Vec<f64>) = others.iter().copied().unzip();
+        y.push(own.0);
+        se.push(own.1);
+        let Some((_, arms)) = pool(&y, &se, alpha) else {
+            continue;
+        };
+        let value = arms.last().map_or(own.0, |a| a.pooled);
+        let mut fixed = start.clone();
+        params[0].add_to(&mut fixed, value - params[0].value(start));
+        let session = data.subset(&held);
+        let base = calib::calibrate(start, &train, &geometric)?;
+        let with = calib::calibrate(&fixed, &train, &geometric)?;
+        let rows = held.len().max(1) as f64;
+        out.push(PooledFold {
+            group: data.rows[held[0]].group,
+            value,
+            before_ms: super::nested::session_ss(&base, &session).map_err(CalibError::Mismatch)?
+                / rows,
+            after_ms: super::nested::session_ss(&with, &session).map_err(CalibError::Mismatch)?
+                / rows,
+        });
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn t_critical_matches_tables() {
+        for (df, t) in [(2.0, 4.303), (7.0, 2.365), (30.0, 2.042), (1e12, 1.960)] {
+            assert!(
+                (t_critical(0.05, df) - t).abs() < 2e-3,
+                "{df}: {}",
+                t_critical(0.05, df)
+            );
+        }
+    }
+
+    #[test]
+    fn arms_that_agree_are_pooled_to_the_mean_and_named_together() {
+        // Eight arms, true values 1 ± 50 %, each measured with an error of 0.6: alone, few are
+        // two errors from zero; pooled, all are.
+        let y = [0.5, 1.4, 0.9, 1.2, 0.6, 1.5, 0.8, 1.1];
+        let se = [0.6; 8];
+        let (d, arms) = pool(&y, &se, 0.05).unwrap();
+        assert!(d.named && d.mean_p < 0.01, "{d:?}");
+        assert!((d.mean - 1.0).abs() < 1e-12);
+        // The arms scatter less than their errors say: no spread between them is seen.
+        assert_eq!(d.spread, 0.0);
+        assert_eq!(d.spread_interval[0], 0.0);
+        assert!(d.spread_interval[1] > 0.0);
+        assert!(arms.iter().filter(|a| a.named_alone).count() < 4);
+        assert!(arms.iter().all(|a| a.named_pooled && a.shrinkage == 1.0));
+        assert!(arms
+            .iter()
+            .all(|a| (a.pooled - 1.0).abs() < 1e-12 && a.pooled_se < 0.6));
+    }
+
+    #[test]
+    fn a_precise_arm_keeps_its_own_value_and_a_spread_is_seen() {
+        let y = [-4.0, -1.3, 1.34, 0.5, -2.0];
+        let se = [0.1, 0.1, 0.1, 3.0, 0.2];
+        let (d, arms) = pool(&y, &se, 0.05).unwrap();
+        assert!(d.spread > 1.0 && d.spread_interval[0] > 0.5, "{d:?}");
+        assert!(d.spread_interval[0] <= d.spread && d.spread <= d.spread_interval[1]);
+        // Precise arms keep their values; the poorly measured one is pulled to the mean.
+        assert!((arms[0].pooled + 4.0).abs() < 0.02);
+        assert!(arms[3].shrinkage > 0.5);
+        assert!((arms[3].pooled - d.mean).abs() < (arms[3].estimate - d.mean).abs());
+        // The mean is not distinguishable from zero: the gate names no arm.
+        assert!(!d.named && arms.iter().all(|a| !a.named_pooled));
+    }
+
+    #[test]
+    fn the_scale_of_the_effect_does_not_matter() {
+        // The same fleet in rad/mm (1e-8) gives the same pooling, scaled.
+        let y = [-4.0, -1.3, 1.34, 0.5, -2.0];
+        let se = [0.1, 0.1, 0.1, 3.0, 0.2];
+        let (d, arms) = pool(&y, &se, 0.05).unwrap();
+        let ys: Vec<f64> = y.iter().map(|v| v * 1e-8).collect();
+        let ses: Vec<f64> = se.iter().map(|v| v * 1e-8).collect();
+        let (ds, arms_s) = pool(&ys, &ses, 0.05).unwrap();
+        assert!((ds.spread / 1e-8 - d.spread).abs() < 1e-9 * d.spread.max(1.0));
+        assert!((ds.mean_se / 1e-8 - d.mean_se).abs() < 1e-9);
+        for (a, b) in arms.iter().zip(&arms_s) {
+            assert!((b.pooled / 1e-8 - a.pooled).abs() < 1e-9);
+            assert!((b.pooled_se / 1e-8 - a.pooled_se).abs() < 1e-9);
+            assert_eq!(a.named_pooled, b.named_pooled);
+        }
+    }
+
+    #[test]
+    fn too_few_arms_or_bad_errors_are_refused() {
+        assert!(pool(&[1.0, 2.0], &[1.0, 1.0], 0.05).is_none());
+        assert!(pool(&[1.0, 2.0, 3.0], &[1.0, 0.0, 1.0], 0.05).is_none());
+        assert!(pool(&[1.0, f64::NAN, 3.0], &[1.0, 1.0, 1.0], 0.05).is_none());
+    }
+}
