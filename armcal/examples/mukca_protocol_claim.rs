@@ -18,8 +18,8 @@
 //!
 //!     cargo run --release -p armcal --example mukca_protocol_claim
 
-use armcal::calib::{Options, Prior, Ridge};
-use armcal::fleet_prior;
+use armcal::fit::calib::{Options, Prior, Ridge};
+use armcal::fit::fleet_prior;
 use armcal::mukca::{self, Unit};
 use armcal::stats::{bootstrap_mean_interval, min_sign_p, sign_test_p, t_tail, Paired};
 use quatarm_ref::arm::Arm;
@@ -63,7 +63,7 @@ fn cv_score(unit: &Unit, train: i64, opts: &Options) -> f64 {
     for f in 0..FOLDS {
         let fit_rows: Vec<usize> = (0..n).filter(|i| i % FOLDS != f).collect();
         let held: Vec<usize> = (0..n).filter(|i| i % FOLDS == f).collect();
-        match armcal::calib::calibrate(&unit.arm, &session.subset(&fit_rows), opts) {
+        match armcal::fit::calib::calibrate(&unit.arm, &session.subset(&fit_rows), opts) {
             Ok(fit) => {
                 total += mukca::session_score(&fit.arm, &session.subset(&held));
                 k += 1;
@@ -88,7 +88,7 @@ fn choose<'a>(unit: &Unit, train: i64, settings: &'a [Setting]) -> &'a Setting {
 }
 
 fn calibrated(unit: &Unit) -> Arm {
-    armcal::calib::calibrate(&unit.arm, &unit.data, &Options::default())
+    armcal::fit::calib::calibrate(&unit.arm, &unit.data, &Options::default())
         .unwrap_or_else(|e| panic!("{}: {e}", unit.name))
         .arm
 }

@@ -6,10 +6,10 @@
 //!
 //!     cargo run --release -p armcal --example pooling_fleet [seeds [mean compliance]]
 
-use armcal::calib::Options as CalibOptions;
 use armcal::data::{Dataset, Kind};
 use armcal::diagnose::pooling::{self, Arm as Pooled, Design};
 use armcal::diagnose::{self, FoldChoice};
+use armcal::fit::calib::Options as CalibOptions;
 use armcal::mukca;
 use armcal::params::Effect;
 use armcal::sim;
@@ -23,7 +23,7 @@ const SESSIONS: usize = 4;
 /// A `default-6` arm with its own geometric errors and a shoulder compliance `g` (rad/mm):
 /// `ROWS` tracker points in `SESSIONS` sessions.
 fn arm_data(seed: u64, g: f64) -> Dataset {
-    let mut rng = sim::rng(seed);
+    let mut rng = armcal::rng::rng(seed);
     let mut truth = sim::perturb(&Arm::default6(), 3e-4, 0.3, &mut rng);
     truth.joints[1].gravity = g;
     let d = sim::simulate(&truth, &sim::Options::new(Kind::Point, ROWS), &mut rng)

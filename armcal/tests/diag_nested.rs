@@ -13,7 +13,7 @@ use quatarm_ref::arm::Arm;
 /// A `default-6` arm with its own geometric errors (seed `seed`) and a shoulder compliance
 /// `g` (rad/mm), measured by a tracker: `rows` points in `sessions` sessions.
 fn arm_data(seed: u64, g: f64, rows: usize, sessions: usize) -> Dataset {
-    let mut rng = sim::rng(seed);
+    let mut rng = armcal::rng::rng(seed);
     let mut truth = sim::perturb(&Arm::default6(), 3e-4, 0.3, &mut rng);
     truth.joints[1].gravity = g;
     let d = sim::simulate(&truth, &sim::Options::new(Kind::Point, rows), &mut rng)

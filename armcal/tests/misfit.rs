@@ -174,7 +174,12 @@ fn the_pose_term_is_estimated_from_sessions_and_covers_a_new_one() {
     let data = data.unwrap();
     let opts = armcal::fit::calib::Options::default();
     let fit = armcal::fit::calib::calibrate(&nominal, &data, &opts).unwrap();
-    let h = armcal::fit::holdout::validate(&nominal, &data, &opts, &armcal::fit::holdout::by_group(&data));
+    let h = armcal::fit::holdout::validate(
+        &nominal,
+        &data,
+        &opts,
+        &armcal::fit::holdout::by_group(&data),
+    );
     let s = Settings {
         instrument_mm: 0.005,
         ..Settings::default()
@@ -202,8 +207,20 @@ fn the_pose_term_is_estimated_from_sessions_and_covers_a_new_one() {
         ..Setup::BENCHMARK
     };
     let fresh = sim::perturb(&centre, 1e-4, 0.05, &mut rng);
-    let t_with = coverage::fresh(&fresh, &fit.arm, &with.budget, &setup, &mut armcal::rng::rng(2));
-    let t_without = coverage::fresh(&fresh, &fit.arm, &without.budget, &setup, &mut armcal::rng::rng(2));
+    let t_with = coverage::fresh(
+        &fresh,
+        &fit.arm,
+        &with.budget,
+        &setup,
+        &mut armcal::rng::rng(2),
+    );
+    let t_without = coverage::fresh(
+        &fresh,
+        &fit.arm,
+        &without.budget,
+        &setup,
+        &mut armcal::rng::rng(2),
+    );
     eprintln!(
         "pose {pose:?}; fresh session covered {} with the term, {} without",
         t_with.sphere(),

@@ -190,8 +190,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             pb.finish_and_clear();
         }
         rep.nested = Some(
-            n.with_context(|| format!("cannot rerun the diagnosis of {}", data_path.display()))?
-                .report(),
+            n.with_context(|| {
+                format!(
+                    "cannot rerun the diagnosis of {}",
+                    super::data_in::names(&a.data)
+                )
+            })?
+            .report(),
         );
     }
 

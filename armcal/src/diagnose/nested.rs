@@ -26,10 +26,10 @@
 //!   stable, one chosen in half of them is the selection's noise as much as the arm's.
 
 use super::{diagnose, FoldChoice, Options};
-use crate::calib::{CalibError, Fit};
 use crate::data::{Dataset, Kind};
+use crate::fit::calib::{CalibError, Fit};
+use crate::fit::residuals::residuals;
 use crate::params::Effect;
-use crate::residuals::residuals;
 use crate::stats::{min_sign_p, sign_test_p, Paired};
 use quatarm_ref::arm::Arm;
 use std::collections::BTreeMap;
@@ -183,7 +183,7 @@ fn fold(
 /// number, each diagnosed with `opts` (its inner folds are forced to one group at a time).
 /// Refused when the data have fewer than two groups.
 pub fn nested(start: &Arm, data: &Dataset, opts: &Options) -> Result<Nested, CalibError> {
-    let folds = crate::holdout::by_group(data);
+    let folds = crate::fit::holdout::by_group(data);
     if folds.len() < 2 {
         return Err(CalibError::Mismatch(
             "cannot rerun the selection inside held-out folds: the data form a single group".into(),

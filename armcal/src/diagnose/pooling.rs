@@ -30,8 +30,8 @@
 //! generalised Q statistic equals the χ²_{k−1} quantiles.
 
 use super::fleet::dersimonian_laird;
-use crate::calib::{self, CalibError};
 use crate::data::Dataset;
+use crate::fit::calib::{self, CalibError};
 use crate::params::{Effect, Terms};
 use crate::stats::{chi2_tail, t_tail};
 
@@ -204,7 +204,7 @@ pub fn estimate(
     effect: Effect,
 ) -> Result<Option<(f64, f64)>, CalibError> {
     let params = effect.params();
-    let folds = crate::holdout::by_group(data);
+    let folds = crate::fit::holdout::by_group(data);
     if params.len() != 1 || folds.len() < crate::stats::MIN_UNITS {
         return Ok(None);
     }
@@ -265,7 +265,7 @@ pub fn pooled_holdout(
     };
     let n = data.rows.len();
     let mut out = Vec::new();
-    for held in crate::holdout::by_group(data) {
+    for held in crate::fit::holdout::by_group(data) {
         let keep: Vec<usize> = (0..n).filter(|i| !held.contains(i)).collect();
         let train = data.subset(&keep);
         let Some(own) = estimate(start, &train, opts, effect)? else {
