@@ -226,7 +226,7 @@ pub(crate) mod tests {
     #[test]
     fn bad_blocks_are_refused() {
         let (good, n) = encoded(None);
-        let at = n - 4 - len(2);
+        let at = n - crate::table::TAIL_LEN - len(2);
         let rec = at + HEAD_LEN;
         let data = rec + DATA;
         let f64_at = |b: &mut [u8], o: usize, v: f64| b[o..o + 8].copy_from_slice(&v.to_le_bytes());
@@ -349,13 +349,15 @@ pub(crate) mod tests {
         assert_eq!(t.probe_at(7).map(|p| p.id), Some(16));
         // A count of 8 with eight records' bytes (a length that adds up): refused by value.
         let mut big = [0u8; MAX_TABLE_LEN + RECORD_LEN];
-        big[..n - 4].copy_from_slice(&buf[..n - 4]);
-        let at = n - 4 - len(7);
+        let tail = crate::table::TAIL_LEN;
+        big[..n - tail].copy_from_slice(&buf[..n - tail]);
+        let at = n - tail - len(7);
         big[at] = 8;
         let rec8 = at + len(7);
         big[rec8..rec8 + RECORD_LEN].copy_from_slice(&buf[at + HEAD_LEN..at + len(1)]);
         big[rec8] = 30;
         let m = n + RECORD_LEN;
+        big[m - tail..m - 4].copy_from_slice(&buf[n - tail..n - 4]);
         big[40..44].copy_from_slice(&(m as u32).to_le_bytes());
         recrc(&mut big[..m]);
         assert_eq!(
