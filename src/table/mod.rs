@@ -1626,7 +1626,10 @@ pub(crate) mod tests {
             let mut c = b;
             c[off::VERSION..off::VERSION + 2].copy_from_slice(&v.to_le_bytes());
             recrc(&mut c[..n]);
-            assert_eq!(Table::parse(&c[..n]).unwrap_err(), TableError::UnsupportedVersion(v));
+            assert_eq!(
+                Table::parse(&c[..n]).unwrap_err(),
+                TableError::UnsupportedVersion(v)
+            );
         }
         assert!(Release::date_is_valid(20261204) && Release::date_is_valid(0));
         assert!(!Release::date_is_valid(20261304) && !Release::date_is_valid(2026120));
