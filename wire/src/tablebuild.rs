@@ -16,6 +16,7 @@ use quatarm::table::{
 };
 use quatarm_ref::arm::Wobble;
 use quatarm_ref::forward::{axis_vector, rotation};
+use quatarm_ref::release::Release;
 use quatarm_ref::uncertainty::Uncertainty;
 use quatarm_ref::{Arm, Axis, Joint, Probe};
 
@@ -271,7 +272,21 @@ pub fn build(arm: &Arm) -> Result<Vec<u8>, BuildError> {
 /// own terms, and the parameter covariance where the budget lists parameters), checked by
 /// the firmware's own parser.
 pub fn build_with(arm: &Arm, budget: Option<&Uncertainty>) -> Result<Vec<u8>, BuildError> {
-    let data = table_data(arm)?;
+    build_release(arm, budget, &Release::default())
+}
+
+/// [`build_with`], the table carrying the calibration's number and date (`[calibration]` of
+/// the file, `quatarm_ref::release`): what a hub's anti-rollback compares.
+pub fn build_release(
+    arm: &Arm,
+    budget: Option<&Uncertainty>,
+    release: &Release,
+) -> Result<Vec<u8>, BuildError> {
+    let mut data = table_data(arm)?;
+    data.release = quatarm::table::Release {
+        number: release.number,
+        date: release.date.map_or(0, |d| d.yyyymmdd()),
+    };
     let reach = reach_mm(&data);
     // Finite by `table_data`'s checks; written so that NaN would be refused too.
     let fits = reach <= quatarm::table::limits::REACH_MM;
@@ -304,6 +319,30 @@ pub fn build_with(arm: &Arm, budget: Option<&Uncertainty>) -> Result<Vec<u8>, Bu
         other => err("(table)", other.to_string()),
     })?;
     Ok(buf)
+}
+
+#[cfg(test)]
+mod release_tests {
+    use super::*;
+
+    /// `[calibration]`'s number and date reach the table; a file without it is number 0.
+    #[test]
+    fn the_number_and_date_reach_the_table() {
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../data/default-6.toml"
+        ))
+        .unwrap();
+        let with = format!("{text}\n[calibration]\nnumber = 41\ndate = 2026-12-04\n");
+        let p = quatarm_ref::calfile::parse(&with).unwrap();
+        let t = build_release(&p.arm, None, &p.release).unwrap();
+        let r = quatarm::Table::parse(&t).unwrap().release();
+        assert_eq!((r.number, r.date), (41, 20261204));
+        let p = quatarm_ref::calfile::parse(&text).unwrap();
+        let t = build_release(&p.arm, None, &p.release).unwrap();
+        let r = quatarm::Table::parse(&t).unwrap().release();
+        assert_eq!((r.number, r.date), (0, 0));
+    }
 }
 
 #[cfg(test)]
