@@ -23,7 +23,7 @@
 //! the others' ([`super::Table::parse`]). The hub mounts the first probe at boot and another
 //! when the host selects it by id (`ToDevice::SelectProbe`, `docs/protocol.md`): its chain
 //! then ends at that probe's ball. The block is 4 + 72·P bytes, 508 for seven others: the
-//! largest table without a parameter block is 2,440 bytes ([`super::MAX_PLAIN_TABLE_LEN`]),
+//! largest table without a parameter block is 2,448 bytes ([`super::MAX_PLAIN_TABLE_LEN`]),
 //! which the 4 KiB slots of the fixed-point boards hold.
 //!
 //! Every board reads it, the Cortex-M0 hub too (no feature): its 32 KiB image holds it with
