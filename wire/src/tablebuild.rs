@@ -422,6 +422,19 @@ mod probe_tests {
             .join(path)
     }
 
+    /// A format-4 table as format 3: without the release fields before the CRC, version 3,
+    /// its length and CRC rewritten.
+    fn as_format_3(t: &[u8]) -> Vec<u8> {
+        use quatarm::table::{CRC, OLD_VERSION, RELEASE_LEN};
+        let n = t.len() - RELEASE_LEN;
+        let mut out = t[..n - 4].to_vec();
+        out[4..6].copy_from_slice(&OLD_VERSION.to_le_bytes());
+        out[40..44].copy_from_slice(&(n as u32).to_le_bytes());
+        let crc = CRC.checksum(&out);
+        out.extend_from_slice(&crc.to_le_bytes());
+        out
+    }
+
     fn read(path: &str) -> quatarm_ref::calfile::Parsed {
         quatarm_ref::calfile::read(&repo(path)).unwrap()
     }
@@ -449,7 +462,9 @@ mod probe_tests {
             let f = read(file);
             let built = build_with(&f.arm, f.uncertainty.as_ref().filter(|_| budget)).unwrap();
             let before = std::fs::read(repo("fuzz/corpus/table_parse").join(seed)).unwrap();
-            assert!(built == before, "{file}: the table changed");
+            // The seeds are format 3: the format-4 table without its release fields (number
+            // and date, 0 here) must be them byte for byte.
+            assert!(as_format_3(&built) == before, "{file}: the table changed");
         }
     }
 
