@@ -58,8 +58,10 @@ pub fn due_warning(
 }
 
 /// Reads `path`'s `[calibration]` and prints [`due_warning`] for today, if any.
+/// (Read without [`calibration`]'s unknown-key warnings: the command reads the file again
+/// for its arm and prints them then.)
 pub fn warn_if_due(path: &Path) -> Result<(), calfile::CalFileError> {
-    let (_, _, release) = calibration_release(path)?;
+    let release = calfile::read_with(path, &CALFILE)?.release;
     if let Some(w) = due_warning(path, &release, quatarm_ref::release::Date::today()) {
         eprintln!("{w}");
     }
