@@ -30,11 +30,13 @@ pub mod mock;
 #[cfg(test)]
 mod power_loss;
 pub mod record;
+#[cfg(test)]
+mod rollback_tests;
 pub mod session;
 #[cfg(test)]
 mod session_tests;
 
-pub use boot::{live_slot, live_table, Accept, BootError, Live};
+pub use boot::{key_generation, live_slot, live_table, Accept, BootError, Keys, Live};
 pub use layout::{Layout, LayoutError};
 pub use record::StateRecord;
 pub use session::{Accepted, Refusal, Updater};

@@ -142,7 +142,10 @@ pub fn send(port: &mut impl Link, table: &[u8], timeout: Duration) -> Result<Sen
             Ok(a) => bail!(
                 "the hub answered {a:?} to {what}, which is not that step's answer (one left from an earlier session, or a hub out of step); the update is not done"
             ),
-            Err(why) => bail!("the hub refused {what}: {why:?}; its old table stays live"),
+            Err(why) => bail!(
+                "the hub refused {what}: {why:?}{}; its old table stays live",
+                why_refused(&why)
+            ),
         }
     }
     // The hub boots on the new table and announces it.
@@ -254,5 +257,17 @@ impl<P: Link> Stream<'_, P> {
                 Err(e) => return Err(e).context("reading the port"),
             }
         }
+    }
+}
+
+/// What a refusal means for the person sending, where its name alone does not say it.
+pub fn why_refused(why: &quatarm::update::Refusal) -> String {
+    use quatarm::update::Refusal;
+    match why {
+        Refusal::Rollback { live, offered } => format!(
+            " (anti-rollback: this table is calibration number {offered}, below number {live}, the highest this hub has made live; to return to older values the maker re-issues them under a number of at least {live} and signs them anew)"
+        ),
+        Refusal::RetiredKey => " (the table is signed by a maker's key this hub has retired: sign it with the current key)".into(),
+        _ => String::new(),
     }
 }

@@ -237,3 +237,42 @@ fn table_show_lists_every_probe() {
         "{shown}"
     );
 }
+
+/// `[calibration]`'s number and date go into the table, and `table build` and `table show`
+/// print them; a bad date is refused with its key and no table is written.
+#[test]
+fn the_calibration_number_and_date_are_built_and_shown() {
+    let d = workdir("release");
+    let base = quatarm_ref::calfile::write(&quatarm_ref::Arm::default6(), &[]);
+    std::fs::write(
+        d.join("numbered.toml"),
+        format!("{base}\n[calibration]\nnumber = 12\ndate = 2026-12-04\ndue = 2027-12-04\n"),
+    )
+    .unwrap();
+    let out = armcal_ok(&["table", "build", "numbered.toml", "-o", "t.bin"], &d);
+    let built = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        built.contains("calibration number 12, dated 2026-12-04"),
+        "{built}"
+    );
+    let t = std::fs::read(d.join("t.bin")).unwrap();
+    let r = quatarm::Table::parse(&t).unwrap().release();
+    assert_eq!((r.number, r.date), (12, 20261204));
+    let out = armcal_ok(&["table", "show", "t.bin"], &d);
+    let shown = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        shown.contains("quatarm calibration table v4")
+            && shown.contains("calibration number 12, dated 2026-12-04\n"),
+        "{shown}"
+    );
+    std::fs::write(
+        d.join("bad.toml"),
+        format!("{base}\n[calibration]\nnumber = 12\ndate = \"04.12.2026\"\n"),
+    )
+    .unwrap();
+    let o = armcal(&["table", "build", "bad.toml", "-o", "bad.bin"], &d);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("bad.toml: calibration.date"), "{err}");
+    assert!(!d.join("bad.bin").exists());
+}

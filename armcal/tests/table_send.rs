@@ -224,6 +224,25 @@ fn a_refused_step_is_named_and_nothing_goes_live() {
     assert!(live_table(&mut port.flash, &layout(), &Accept::joints(7), &mut scratch).is_err());
 }
 
+/// An older calibration sent back is refused at commit, and the error says why and what a
+/// deliberate return to older values takes.
+#[test]
+fn an_older_calibration_number_is_refused_with_the_reason() {
+    use quatarm::update::fixtures::numbered;
+    let mut port = PortHub::new(&numbered(100.0, 3));
+    send(&mut port, &numbered(110.0, 4), TIMEOUT).unwrap();
+    let old = numbered(100.0, 3);
+    let err = format!("{:#}", send(&mut port, &old, TIMEOUT).unwrap_err());
+    assert!(
+        err.contains("Rollback { live: 4, offered: 3 }")
+            && err.contains("anti-rollback")
+            && err.contains("re-issues them under a number of at least 4")
+            && err.contains("old table stays live"),
+        "{err}"
+    );
+    assert_eq!(boot(&mut port.flash), Some(numbered(110.0, 4)));
+}
+
 #[test]
 fn an_invalid_file_is_refused_before_a_byte_is_sent() {
     let mut port = PortHub::new(&table(100.0));

@@ -17,3 +17,11 @@ common::board_tests! {
     probes: probes_selected_and_updated,
     table_send: table_send_over_a_pty,
 }
+
+/// Anti-rollback end to end: a newer calibration number committed, the older one refused with
+/// its status, before and after a reset (`common::rollback_refused`).
+#[test]
+#[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
+fn an_older_calibration_number_is_refused() {
+    common::rollback_refused("qemu-m4f");
+}

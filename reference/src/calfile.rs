@@ -35,6 +35,8 @@ pub struct Parsed {
     pub unknown_keys: Vec<String>,
     /// The `[uncertainty]` budget, when the file has one.
     pub uncertainty: Option<Uncertainty>,
+    /// `[calibration]`: its number, date and due date (number 0, no dates, without it).
+    pub release: crate::release::Release,
 }
 
 /// Physical bounds on a file's values, beyond the format's own checks (numbers finite, counts
@@ -111,6 +113,7 @@ pub fn parse_with(text: &str, limits: &Limits) -> Result<Parsed, CalFileError> {
                 | "probe"
                 | "reference_frame"
                 | "uncertainty"
+                | "calibration"
         ) {
             unknown.push(key.clone());
         }
@@ -182,10 +185,12 @@ pub fn parse_with(text: &str, limits: &Limits) -> Result<Parsed, CalFileError> {
         Some(_) => return Err(err("uncertainty", "must be a table")),
         None => None,
     };
+    let release = crate::release::parse(root.get("calibration"), &mut unknown)?;
     Ok(Parsed {
         arm,
         unknown_keys: unknown,
         uncertainty,
+        release,
     })
 }
 

@@ -40,6 +40,7 @@ pub mod calfile;
 pub mod dh;
 pub mod forward;
 pub mod orientation;
+pub mod release;
 pub mod uncertainty;
 
 pub use arm::{Arm, Axis, Frame, Harmonic, Joint, Probe};

@@ -47,8 +47,14 @@
 //!                count is its first field)
 //!   …            the arm's other probes, where flag bit7 is set ([`probes`]: its layout;
 //!                its probe count is its first field)
+//!  len−12    4  calibration number (version 4 only): monotonic per arm, the hub's
+//!               anti-rollback counter ([`Release`]; `docs/update.md`)
+//!  len−8     4  calibration date (version 4 only) as the decimal number YYYYMMDD, 0 unknown
 //!  len−4     4  CRC-32 (ISO-HDLC, as zlib) of every byte before it
 //! ```
+//!
+//! A version-3 table (no number, no date) is still read, as number 0 and no date: it can go
+//! live only on a hub whose live number is 0, so it never replaces a numbered calibration.
 //!
 //! [`Table::parse`] is a checked constructor in the manner of smoltcp's `new_checked`: it
 //! validates length, magic, version, CRC, joint count and every value's range once; after it
@@ -72,7 +78,15 @@ pub const MAGIC: [u8; 4] = *b"QATB";
 /// Version 3 added the stylus ball diameter to the probe record (the sphere tests of
 /// `spec/acceptance-tests.md` compensate it) and the optional uncertainty budget
 /// ([`budget`]); a version-2 table is refused like a version-1 one.
-pub const VERSION: u16 = 3;
+///
+/// Version 4 added the calibration number and date before the CRC ([`Release`]), inside what
+/// the signature covers; every block before them kept its place, so version 3 is still read
+/// (as number 0, no date: [`OLD_VERSION`]).
+pub const VERSION: u16 = 4;
+/// The older format version still read: a version-4 table without the release fields.
+pub const OLD_VERSION: u16 = 3;
+/// Bytes of the release fields (calibration number, date) of a version-4 table.
+pub const RELEASE_LEN: usize = 8;
 /// Most joints a table holds.
 pub const MAX_JOINTS: usize = 7;
 /// Fewest joints a table holds.
@@ -93,6 +107,8 @@ pub const PROBE_LEN: usize = 64;
 /// Length of one harmonic slot.
 pub const HARMONIC_LEN: usize = 24;
 const CRC_LEN: usize = 4;
+/// What follows the last block: the release fields and the CRC (of a version-4 table).
+pub(crate) const TAIL_LEN: usize = RELEASE_LEN + CRC_LEN;
 
 mod off {
     pub const MAGIC: usize = 0;
@@ -308,7 +324,7 @@ impl fmt::Display for TableError {
             TableError::UnsupportedVersion(v) => {
                 write!(
                     f,
-                    "calibration table format version {v}, this firmware reads only {VERSION} \
+                    "calibration table format version {v}, this firmware reads {OLD_VERSION} and {VERSION} \
                      (rebuild the table from its calibration file: armcal table build)"
                 )
             }
@@ -339,13 +355,18 @@ pub const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
 
 /// Table length for `joints` joints, without an uncertainty budget.
 pub const fn table_len(joints: usize) -> usize {
-    core_len(joints) + CRC_LEN
+    core_len(joints) + TAIL_LEN
 }
 
 /// Whether a table can be `len` bytes long: 6 or 7 joints, with or without the budget, with
 /// or without a parameter block after it, a wobble block, a block of other probes (what an
 /// update must be told before any byte of it arrives).
+/// A version-3 table is [`RELEASE_LEN`] bytes shorter than the same version-4 one.
 pub fn is_table_len(len: usize) -> bool {
+    is_v4_len(len) || is_v4_len(len + RELEASE_LEN)
+}
+
+fn is_v4_len(len: usize) -> bool {
     (MIN_JOINTS..=MAX_JOINTS).any(|n| {
         // The wobble block, of any joint count the arm has, or none.
         let wobbles = if cfg!(feature = "wobble") { n } else { 0 };
@@ -378,6 +399,15 @@ fn is_block_len(_: usize) -> bool {
     false
 }
 
+/// The bytes after the last block: the release fields (version 4) and the CRC.
+const fn tail_len(version: u16) -> usize {
+    if version == OLD_VERSION {
+        CRC_LEN
+    } else {
+        TAIL_LEN
+    }
+}
+
 /// Where the budget starts: the header, the joints and the probe.
 const fn core_len(joints: usize) -> usize {
     HEADER_LEN + joints * JOINT_LEN + PROBE_LEN
@@ -385,7 +415,7 @@ const fn core_len(joints: usize) -> usize {
 
 /// Largest table length: 7 joints with a budget and 8 probes, `parameters::MAX_PARAMETERS`
 /// parameters where the `parameters` feature reads them and every joint's wobble where the
-/// `wobble` feature does (12,300 bytes with the first, 13,816 with both; without either,
+/// `wobble` feature does (12,308 bytes with the first, 13,824 with both; without either,
 /// [`MAX_PLAIN_TABLE_LEN`]).
 pub const MAX_TABLE_LEN: usize = MAX_PLAIN_TABLE_LEN
     + if cfg!(feature = "parameters") {
@@ -400,7 +430,7 @@ pub const MAX_TABLE_LEN: usize = MAX_PLAIN_TABLE_LEN
     };
 
 /// Largest table without a parameter block or a wobble: 7 joints with a budget and 8 probes
-/// (2,440 bytes). A board whose flash slots are smaller than [`MAX_TABLE_LEN`] but at least
+/// (2,448 bytes). A board whose flash slots are smaller than [`MAX_TABLE_LEN`] but at least
 /// this (the fixed-point boards' 4 KiB) takes every table but those with many parameters,
 /// and its update refuses those by their length.
 pub const MAX_PLAIN_TABLE_LEN: usize =
@@ -479,6 +509,28 @@ pub struct TableData {
     /// Each joint's axis wobble (count 0: none; the block is written where some joint has
     /// one).
     pub wobble: [wobble::WobbleData; MAX_JOINTS],
+    /// The calibration's number and date (version 4; zeros read from a version-3 table).
+    pub release: Release,
+}
+
+/// Which calibration of the arm a table is: what the hub's anti-rollback compares
+/// (`docs/update.md`, "Anti-rollback"). Both fields are inside the CRC and the signature.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Release {
+    /// The calibration number, monotonic per arm (the maker's certificate number): a hub
+    /// refuses a table whose number is below the live one's. 0 for a version-3 table.
+    pub number: u32,
+    /// The calibration date as the decimal number YYYYMMDD (20261204); 0 unknown. Only the
+    /// host reads it (the hub has no calendar).
+    pub date: u32,
+}
+
+impl Release {
+    /// Whether `date` is 0 or a plausible YYYYMMDD (month 1–12, day 1–31, year 1900–9999).
+    pub fn date_is_valid(date: u32) -> bool {
+        let (y, m, d) = (date / 10_000, date / 100 % 100, date % 100);
+        date == 0 || ((1900..=9999).contains(&y) && (1..=12).contains(&m) && (1..=31).contains(&d))
+    }
 }
 
 impl JointData {
@@ -634,7 +686,7 @@ impl TableData {
         if let Some(b) = budget {
             b.encode(&mut out[core_len(n)..core_len(n) + budget::LEN]);
         }
-        let probes_at = len - CRC_LEN - probes_len;
+        let probes_at = len - TAIL_LEN - probes_len;
         let end = probes_at - wobble_len;
         if let Some(p) = parameters {
             p.encode(&mut out[core_len(n) + budget::LEN..end]);
@@ -643,8 +695,10 @@ impl TableData {
             wobble::encode(&self.wobble[..n], &mut out[end..probes_at]);
         }
         if probes_len > 0 {
-            probes::encode(others, &mut out[probes_at..len - CRC_LEN]);
+            probes::encode(others, &mut out[probes_at..len - TAIL_LEN]);
         }
+        out[len - TAIL_LEN..len - CRC_LEN - 4].copy_from_slice(&self.release.number.to_le_bytes());
+        out[len - CRC_LEN - 4..len - CRC_LEN].copy_from_slice(&self.release.date.to_le_bytes());
         let crc = CRC.checksum(&out[..len - CRC_LEN]);
         out[len - CRC_LEN..].copy_from_slice(&crc.to_le_bytes());
         Ok(len)
@@ -790,16 +844,19 @@ impl<'a> Table<'a> {
             return Err(TableError::BadMagic);
         }
         let version = rd_u16(bytes, off::VERSION);
-        if version != VERSION {
+        if version != VERSION && version != OLD_VERSION {
             return Err(TableError::UnsupportedVersion(version));
         }
+        // The release fields and the CRC after the last block; a version-3 table has no
+        // release fields.
+        let tail = tail_len(version);
         let n8 = bytes[off::JOINTS];
         let n = usize::from(n8);
         if !(MIN_JOINTS..=MAX_JOINTS).contains(&n) {
             return Err(TableError::BadJointCount(n8));
         }
         let flags = bytes[off::FLAGS];
-        let mut len = table_len(n);
+        let mut len = core_len(n) + tail;
         if flags & FLAG_BUDGET != 0 {
             len += budget::LEN;
             if flags & FLAG_PARAMETERS != 0 {
@@ -825,11 +882,11 @@ impl<'a> Table<'a> {
                     field: Field::Flags,
                 });
             }
-            let at = len - CRC_LEN;
+            let at = len - tail;
             len += wobble::len(wobble::stated_count(bytes.get(at..).unwrap_or(&[])));
         }
         if flags & FLAG_PROBES != 0 {
-            let at = len - CRC_LEN;
+            let at = len - tail;
             len += probes::len(probes::stated_count(bytes.get(at..).unwrap_or(&[])));
         }
         let stated = rd_u32(bytes, off::LENGTH);
@@ -1035,7 +1092,7 @@ impl<'a> Table<'a> {
         if self.flags() & FLAG_PROBES == 0 {
             return None;
         }
-        let end = self.bytes.len() - CRC_LEN;
+        let end = self.bytes.len() - self.tail();
         self.bytes
             .get(self.probes_at()..end)
             .map(probes::Probes::new)
@@ -1088,6 +1145,27 @@ impl<'a> Table<'a> {
         let s = &self.bytes[off::SERIAL..off::SERIAL + SERIAL_LEN];
         let end = s.iter().position(|&b| b == 0).unwrap_or(SERIAL_LEN);
         &s[..end]
+    }
+
+    /// The format version (4, or 3 read without release fields).
+    pub fn version(&self) -> u16 {
+        rd_u16(self.bytes, off::VERSION)
+    }
+
+    fn tail(&self) -> usize {
+        tail_len(self.version())
+    }
+
+    /// The calibration number and date (zeros for a version-3 table).
+    pub fn release(&self) -> Release {
+        if self.version() == OLD_VERSION {
+            return Release::default();
+        }
+        let at = self.bytes.len() - TAIL_LEN;
+        Release {
+            number: rd_u32(self.bytes, at),
+            date: rd_u32(self.bytes, at + 4),
+        }
     }
 
     /// The CRC stored in the table.
@@ -1188,6 +1266,7 @@ impl<'a> Table<'a> {
                     wobble::WobbleData::default()
                 }
             }),
+            release: self.release(),
         }
     }
 }
@@ -1321,7 +1400,7 @@ pub(crate) mod tests {
             .copy_from_slice(b"panda_1_with_sensor-0123456789ab");
         let mut b = [0u8; MAX_TABLE_LEN];
         let n = d.encode(&mut b).unwrap();
-        assert_eq!(n, HEADER_LEN + 6 * JOINT_LEN + PROBE_LEN + CRC_LEN);
+        assert_eq!(n, HEADER_LEN + 6 * JOINT_LEN + PROBE_LEN + TAIL_LEN);
         let t = Table::parse(&b[..n]).unwrap();
         assert_eq!(t.serial(), b"panda_1_with_sensor-0123456789ab");
         assert_eq!(t.data(), d);
@@ -1402,7 +1481,7 @@ pub(crate) mod tests {
         assert_eq!(Table::parse(&b).unwrap_err(), TableError::BadMagic);
         // Versions 1 (the 16-byte serial) and 2 (no ball diameter, no budget) and any unknown
         // version are refused by number, with a CRC that matches, before any field is read.
-        for v in [1u8, 2, 4, 0xff] {
+        for v in [1u8, 2, 5, 0xff] {
             let mut b = buf;
             b[4] = v;
             recrc(&mut b[..n]);
@@ -1411,7 +1490,7 @@ pub(crate) mod tests {
             let msg = std::format!("{e}");
             assert!(
                 msg.contains(&std::format!("version {v},"))
-                    && msg.contains("reads only 3")
+                    && msg.contains("reads 3 and 4")
                     && msg.contains("armcal table build"),
                 "{msg}"
             );
@@ -1494,6 +1573,66 @@ pub(crate) mod tests {
                 field: Field::Harmonic
             }
         );
+    }
+
+    /// `v4` (a version-4 table) as the version-3 table of the same contents: without the
+    /// release fields, version 3, its length and CRC rewritten. Returns its length in `out`.
+    pub(crate) fn as_version_3(v4: &[u8], out: &mut [u8]) -> usize {
+        let n = v4.len() - RELEASE_LEN;
+        out[..n - CRC_LEN].copy_from_slice(&v4[..n - CRC_LEN]);
+        out[off::VERSION..off::VERSION + 2].copy_from_slice(&OLD_VERSION.to_le_bytes());
+        out[off::LENGTH..off::LENGTH + 4].copy_from_slice(&(n as u32).to_le_bytes());
+        recrc(&mut out[..n]);
+        n
+    }
+
+    /// The number and date round-trip, are covered by the CRC, and a version-3 table (no
+    /// release fields) is read with its blocks in place, as number 0 and no date.
+    #[test]
+    fn release_round_trips_and_version_3_reads_as_number_0() {
+        let mut d = probes::tests::several();
+        d.release = Release {
+            number: 7,
+            date: 20261204,
+        };
+        let mut b = [0u8; MAX_TABLE_LEN];
+        let n = d.encode(&mut b).unwrap();
+        let t = Table::parse(&b[..n]).unwrap();
+        assert_eq!(t.version(), VERSION);
+        assert_eq!(t.release(), d.release);
+        assert_eq!(t.data().release, d.release);
+        for at in n - TAIL_LEN..n - CRC_LEN {
+            let mut c = b;
+            c[at] ^= 1;
+            assert!(matches!(Table::parse(&c[..n]), Err(TableError::Crc { .. })));
+        }
+        let mut old = [0u8; MAX_TABLE_LEN];
+        let m = as_version_3(&b[..n], &mut old);
+        assert_eq!(m, n - RELEASE_LEN);
+        assert!(is_table_len(m) && is_table_len(n));
+        let t3 = Table::parse(&old[..m]).unwrap();
+        assert_eq!(t3.version(), OLD_VERSION);
+        assert_eq!(t3.release(), Release::default());
+        assert_eq!(t3.probe_count(), 1 + usize::from(d.more_probe_count));
+        assert_eq!(
+            t3.data(),
+            TableData {
+                release: Release::default(),
+                ..t.data()
+            }
+        );
+        // Version 2, and 5, are refused.
+        for v in [2u16, 5] {
+            let mut c = b;
+            c[off::VERSION..off::VERSION + 2].copy_from_slice(&v.to_le_bytes());
+            recrc(&mut c[..n]);
+            assert_eq!(
+                Table::parse(&c[..n]).unwrap_err(),
+                TableError::UnsupportedVersion(v)
+            );
+        }
+        assert!(Release::date_is_valid(20261204) && Release::date_is_valid(0));
+        assert!(!Release::date_is_valid(20261304) && !Release::date_is_valid(2026120));
     }
 
     #[test]

@@ -367,7 +367,7 @@ mod tests {
     #[test]
     fn a_block_round_trips() {
         let (buf, n) = encoded();
-        assert_eq!(n, 48 + 6 * 248 + 64 + 80 + len(3) + 4);
+        assert_eq!(n, 48 + 6 * 248 + 64 + 80 + len(3) + crate::table::TAIL_LEN);
         assert!(crate::table::is_table_len(n));
         let t = Table::parse(&buf[..n]).unwrap();
         let p = t.parameters().unwrap();

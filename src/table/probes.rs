@@ -23,7 +23,7 @@
 //! the others' ([`super::Table::parse`]). The hub mounts the first probe at boot and another
 //! when the host selects it by id (`ToDevice::SelectProbe`, `docs/protocol.md`): its chain
 //! then ends at that probe's ball. The block is 4 + 72·P bytes, 508 for seven others: the
-//! largest table without a parameter block is 2,440 bytes ([`super::MAX_PLAIN_TABLE_LEN`]),
+//! largest table without a parameter block is 2,448 bytes ([`super::MAX_PLAIN_TABLE_LEN`]),
 //! which the 4 KiB slots of the fixed-point boards hold.
 //!
 //! Every board reads it, the Cortex-M0 hub too (no feature): its 32 KiB image holds it with
@@ -226,7 +226,7 @@ pub(crate) mod tests {
     #[test]
     fn bad_blocks_are_refused() {
         let (good, n) = encoded(None);
-        let at = n - 4 - len(2);
+        let at = n - crate::table::TAIL_LEN - len(2);
         let rec = at + HEAD_LEN;
         let data = rec + DATA;
         let f64_at = |b: &mut [u8], o: usize, v: f64| b[o..o + 8].copy_from_slice(&v.to_le_bytes());
@@ -349,13 +349,15 @@ pub(crate) mod tests {
         assert_eq!(t.probe_at(7).map(|p| p.id), Some(16));
         // A count of 8 with eight records' bytes (a length that adds up): refused by value.
         let mut big = [0u8; MAX_TABLE_LEN + RECORD_LEN];
-        big[..n - 4].copy_from_slice(&buf[..n - 4]);
-        let at = n - 4 - len(7);
+        let tail = crate::table::TAIL_LEN;
+        big[..n - tail].copy_from_slice(&buf[..n - tail]);
+        let at = n - tail - len(7);
         big[at] = 8;
         let rec8 = at + len(7);
         big[rec8..rec8 + RECORD_LEN].copy_from_slice(&buf[at + HEAD_LEN..at + len(1)]);
         big[rec8] = 30;
         let m = n + RECORD_LEN;
+        big[m - tail..m - 4].copy_from_slice(&buf[n - tail..n - 4]);
         big[40..44].copy_from_slice(&(m as u32).to_le_bytes());
         recrc(&mut big[..m]);
         assert_eq!(

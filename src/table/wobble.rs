@@ -304,7 +304,7 @@ mod tests {
     #[test]
     fn bad_blocks_are_refused_naming_the_joint() {
         let (good, n) = encoded(None);
-        let at = n - 4 - len(2);
+        let at = n - crate::table::TAIL_LEN - len(2);
         let rec = at + HEAD_LEN;
         let slot = rec + off::SLOTS;
         let f64_at = |b: &mut [u8], o: usize, v: f64| b[o..o + 8].copy_from_slice(&v.to_le_bytes());

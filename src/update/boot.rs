@@ -16,9 +16,10 @@ use crate::table::{Table, TableError, MAX_JOINTS, MAX_TABLE_LEN};
 pub struct Accept {
     /// The joint count the hub drives (`None`: any the format allows).
     pub joints: Option<usize>,
-    /// The arm maker's public key: with it, only a table signed under it is accepted
-    /// ([`crate::signature`]); without it, signed and unsigned tables alike.
-    pub key: Option<[u8; KEY_LEN]>,
+    /// The arm maker's public keys: with them, only a table signed under the key of the
+    /// hub's generation is accepted ([`crate::signature`], [`Keys`]); without them, signed
+    /// and unsigned tables alike.
+    pub keys: Option<Keys>,
     /// The counts per revolution of the hub's encoders, joint 1 first (`None`: any). A table
     /// made for other encoders would turn every count into a wrong angle: refused at commit
     /// and passed over at boot like a corrupt one, so an update cannot leave a hub that
@@ -31,7 +32,7 @@ impl Accept {
     pub const fn joints(joints: usize) -> Accept {
         Accept {
             joints: Some(joints),
-            key: None,
+            keys: None,
             counts: None,
         }
     }
@@ -49,13 +50,70 @@ impl Accept {
         }
     }
 
-    /// The same, and signed under `key`.
+    /// The same, and signed under `key` (generation 0, no next key).
     pub const fn signed_by(self, key: [u8; KEY_LEN]) -> Accept {
+        self.signed_by_keys(Keys {
+            generation: 0,
+            current: key,
+            next: None,
+        })
+    }
+
+    /// The same, and signed under the key of the hub's generation among `keys`.
+    pub const fn signed_by_keys(self, keys: Keys) -> Accept {
         Accept {
-            key: Some(key),
+            keys: Some(keys),
             ..self
         }
     }
+
+    /// The key a table must be signed under on a hub at key generation `gen` (`None`: no
+    /// key of this image, so no signed table is accepted; also `None` on a hub without keys).
+    fn key_of(&self, gen: u8) -> Option<&[u8; KEY_LEN]> {
+        self.keys.as_ref().and_then(|k| k.of(gen))
+    }
+}
+
+/// The maker's keys an image holds: the current one and the one that replaces it when it
+/// leaks or expires (`docs/update.md`, "Key rotation"). A hub trusts exactly one of them at a
+/// time, the key of its generation, persisted in the state record: `generation` until a table
+/// signed by `next` is committed, `generation + 1` from then on, for good (the record's
+/// generation never goes down, and the retired key is never tried again but to name a
+/// refusal). An image built later with the next pair (`generation + 1`, a newer next) takes
+/// over a hub that rotated; a hub whose generation is past both keys of its image accepts no
+/// table until reflashed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Keys {
+    /// The generation of `current` (0 for an image's first key).
+    pub generation: u8,
+    /// The key of `generation`.
+    pub current: [u8; KEY_LEN],
+    /// The key of `generation + 1`, where the image has one.
+    pub next: Option<[u8; KEY_LEN]>,
+}
+
+impl Keys {
+    /// The key of generation `gen`, where this image holds it.
+    pub fn of(&self, gen: u8) -> Option<&[u8; KEY_LEN]> {
+        if gen == self.generation {
+            Some(&self.current)
+        } else if Some(gen) == self.generation.checked_add(1) {
+            self.next.as_ref()
+        } else {
+            None
+        }
+    }
+}
+
+/// The key generation a hub is at: the highest of the valid records' and the image's own
+/// (an image built with newer keys moves the hub forward; nothing moves it back).
+pub fn key_generation(accept: &Accept, copies: &[Option<StateRecord>; 2]) -> u8 {
+    let image = accept.keys.map_or(0, |k| k.generation);
+    copies
+        .iter()
+        .flatten()
+        .map(|r| r.key_gen)
+        .fold(image, u8::max)
 }
 
 /// A flash operation failed; what the driver said, in a form a stream message can carry.
@@ -133,8 +191,8 @@ pub struct Live<'b> {
 }
 
 /// Reads slot `slot` into `buf` and checks it completely: as `accept` says (joints, the
-/// signature), and against the record's length and CRC if given. The one check of a slot,
-/// used by the boot and by the update's commit.
+/// signature under the key of generation `gen`), and against the record's length and CRC if
+/// given. The one check of a slot, used by the boot and by the update's commit.
 ///
 /// A record's length is the table's, or the table's plus [`SIGNATURE_LEN`] for a signed one;
 /// without a record (a table flashed by a probe) the bytes after the table are its signature
@@ -144,6 +202,7 @@ pub(crate) fn verify_slot<'b, F: NorFlash>(
     layout: &Layout,
     slot: u8,
     accept: &Accept,
+    gen: u8,
     rec: Option<&StateRecord>,
     buf: &'b mut [u8; MAX_TABLE_LEN],
 ) -> Result<Table<'b>, SlotError> {
@@ -176,7 +235,7 @@ pub(crate) fn verify_slot<'b, F: NorFlash>(
         Some(_) => return Err(SlotError::NotRecorded),
         None => true,
     };
-    if let Some(key) = &accept.key {
+    if accept.keys.is_some() {
         let mut sig = [0xffu8; SIGNATURE_LEN];
         if signed && start + len + SIGNATURE_LEN as u32 <= region.end {
             flash.read(start + len, &mut sig).map_err(fault)?;
@@ -185,6 +244,10 @@ pub(crate) fn verify_slot<'b, F: NorFlash>(
         if !signed || sig.iter().all(|&b| b == 0xff) || sig.iter().all(|&b| b == 0) {
             return Err(SlotError::Signature(SignatureError::Missing));
         }
+        // No key of this generation in the image: nothing verifies.
+        let key = accept
+            .key_of(gen)
+            .ok_or(SlotError::Signature(SignatureError::Invalid))?;
         signature::verify(key, table.bytes(), &sig).map_err(SlotError::Signature)?;
     }
     Ok(table)
@@ -201,16 +264,18 @@ pub fn live_slot<F: NorFlash>(
 ) -> Result<(u8, Option<StateRecord>), BootError> {
     layout.check(flash).map_err(BootError::Layout)?;
     let copies = record::read_copies(flash, layout);
+    // One key for both slots and every rule: a table signed by a retired key never boots.
+    let gen = key_generation(accept, &copies);
     if let Some((first, _)) = record::newest(&copies) {
         for rec in [copies[first], copies[1 - first]].into_iter().flatten() {
-            if verify_slot(flash, layout, rec.slot, accept, Some(&rec), buf).is_ok() {
+            if verify_slot(flash, layout, rec.slot, accept, gen, Some(&rec), buf).is_ok() {
                 return Ok((rec.slot, Some(rec)));
             }
         }
     }
     let mut why = [SlotError::Table(TableError::Blank); 2];
     for slot in 0..2u8 {
-        match verify_slot(flash, layout, slot, accept, None, buf) {
+        match verify_slot(flash, layout, slot, accept, gen, None, buf) {
             Ok(_) => return Ok((slot, None)),
             Err(e) => why[usize::from(slot)] = e,
         }
@@ -227,8 +292,9 @@ pub fn live_table<'b, F: NorFlash>(
     buf: &'b mut [u8; MAX_TABLE_LEN],
 ) -> Result<Live<'b>, BootError> {
     let (slot, rec) = live_slot(flash, layout, accept, buf)?;
+    let gen = key_generation(accept, &record::read_copies(flash, layout));
     // Read again for the borrow of `buf`: `live_slot` may have tried another slot last.
-    let table = verify_slot(flash, layout, slot, accept, rec.as_ref(), buf).map_err(|e| {
+    let table = verify_slot(flash, layout, slot, accept, gen, rec.as_ref(), buf).map_err(|e| {
         let mut why = [SlotError::Table(TableError::Blank); 2];
         why[usize::from(slot)] = e;
         BootError::NoTable(why)

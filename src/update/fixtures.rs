@@ -9,12 +9,12 @@ use super::mock::MockFlash;
 use super::session::{Accepted, Step, Updater};
 use super::{live_table, Refusal};
 use crate::table::budget::BudgetData;
-use crate::table::{quat_to_matrix, JointData, ProbeData, TableData, MAX_TABLE_LEN};
+use crate::table::{quat_to_matrix, JointData, ProbeData, Release, TableData, MAX_TABLE_LEN};
 
 /// Bytes of the mock flash that [`layout`] divides.
 pub const FLASH_LEN: usize = 9 * 1024;
 
-/// Two 3 KiB slots (the largest table without a parameter block, 2,440 bytes with eight
+/// Two 3 KiB slots (the largest table without a parameter block, 2,448 bytes with eight
 /// probes, fits one) and two 1 KiB copies of the state record, in 1 KiB erase units.
 pub fn layout() -> Layout {
     Layout::Regions {
@@ -23,7 +23,7 @@ pub fn layout() -> Layout {
     }
 }
 
-/// The same slots with the state record in their trailers (the last 24 bytes of each).
+/// The same slots with the state record in their trailers (the last 28 bytes of each).
 pub fn trailer_layout() -> Layout {
     Layout::Trailers {
         slots: [0..3072, 3072..6144],
@@ -56,13 +56,36 @@ pub fn table_for_encoders(link: f64, counts: u32) -> Vec<u8> {
     encoded_with(link, None, counts)
 }
 
+/// [`table`] of calibration number `number` (dated 2026-12-04).
+pub fn numbered(link: f64, number: u32) -> Vec<u8> {
+    encoded_release(
+        link,
+        None,
+        1 << 14,
+        Release {
+            number,
+            date: 20261204,
+        },
+    )
+}
+
 fn encoded(link: f64, budget: Option<&BudgetData>) -> Vec<u8> {
     encoded_with(link, budget, 1 << 14)
 }
 
 fn encoded_with(link: f64, budget: Option<&BudgetData>, counts: u32) -> Vec<u8> {
+    encoded_release(link, budget, counts, Release::default())
+}
+
+fn encoded_release(
+    link: f64,
+    budget: Option<&BudgetData>,
+    counts: u32,
+    release: Release,
+) -> Vec<u8> {
     let mut data = TableData {
         joint_count: 6,
+        release,
         ..TableData::default()
     };
     data.serial[..4].copy_from_slice(b"SN-9");
@@ -112,7 +135,17 @@ pub fn update(flash: &mut MockFlash, t: &[u8]) -> Result<Accepted, Refusal> {
 
 /// [`update`] on `layout`.
 pub fn update_in(layout: &Layout, flash: &mut MockFlash, t: &[u8]) -> Result<Accepted, Refusal> {
-    let mut up = Updater::new(layout.clone(), Accept::joints(6));
+    update_with(layout, &Accept::joints(6), flash, t)
+}
+
+/// [`update_in`] by a hub that requires `accept` (its keys).
+pub fn update_with(
+    layout: &Layout,
+    accept: &Accept,
+    flash: &mut MockFlash,
+    t: &[u8],
+) -> Result<Accepted, Refusal> {
+    let mut up = Updater::new(layout.clone(), *accept);
     let mut scratch = [0u8; MAX_TABLE_LEN];
     let mut last = Accepted::Aborted;
     for s in steps(t) {
@@ -128,8 +161,13 @@ pub fn boot(flash: &mut MockFlash) -> Option<Vec<u8>> {
 
 /// [`boot`] on `layout`.
 pub fn boot_in(layout: &Layout, flash: &mut MockFlash) -> Option<Vec<u8>> {
+    boot_with(layout, &Accept::joints(6), flash)
+}
+
+/// [`boot_in`] by a hub that requires `accept` (its keys).
+pub fn boot_with(layout: &Layout, accept: &Accept, flash: &mut MockFlash) -> Option<Vec<u8>> {
     let mut buf = [0u8; MAX_TABLE_LEN];
-    live_table(flash, layout, &Accept::joints(6), &mut buf)
+    live_table(flash, layout, accept, &mut buf)
         .ok()
         .map(|l| l.table.bytes().to_vec())
 }

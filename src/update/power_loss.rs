@@ -140,6 +140,8 @@ fn power_loss_at_every_operation_of_the_state_record() {
             slot,
             len: t.len() as u32,
             crc: crc_of(t),
+            floor: 0,
+            key_gen: 0,
         };
         record::write(&mut start, &layout, &rec(1, 0, &a)).expect("record 1");
         start.mem[3072..3072 + b.len()].copy_from_slice(&b);

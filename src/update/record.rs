@@ -10,11 +10,21 @@
 //!      0    4 magic "QAST"
 //!      4    4 sequence number (the highest valid one wins)
 //!      8    1 slot (0 or 1)
-//!      9    3 reserved, 0
+//!      9    1 key generation: which of the maker's keys the hub trusts (never goes down)
+//!     10    2 reserved, 0
 //!     12    4 table length in bytes
 //!     16    4 table CRC-32 (the table's own last four bytes)
-//!     20    4 CRC-32 (ISO-HDLC) of bytes 0..20
+//!     20    4 floor: the highest calibration number ever made live (the anti-rollback
+//!             counter; never goes down)
+//!     24    4 CRC-32 (ISO-HDLC) of bytes 0..24
 //! ```
+//!
+//! The floor and the key generation are persisted in the same record, in the same write, as
+//! the slot they came with: a power cut leaves the previous record (previous table, previous
+//! floor, previous key) or the new one, never a new table with an old floor. MCUboot keeps
+//! its security counter apart from the image swap and its users report it raised before an
+//! interrupted upgrade was confirmed (`docs/update.md`, "Anti-rollback"); here they cannot
+//! part. The magic is `QAS2`: a record of the 24-byte format (`QAST`) is no record.
 //!
 //! Its CRC is written in the same flash write as the rest, after it in address order; a cut
 //! that leaves any part unwritten, or bits of an erase, fails the CRC (erased flash, all
@@ -26,9 +36,9 @@ use super::layout::{Layout, MAX_WRITE_SIZE};
 use crate::table::CRC;
 
 /// The record's magic bytes.
-pub const MAGIC: [u8; 4] = *b"QAST";
+pub const MAGIC: [u8; 4] = *b"QAS2";
 /// Encoded length of a record.
-pub const RECORD_LEN: usize = 24;
+pub const RECORD_LEN: usize = 28;
 
 /// The record as written on a flash of write unit `F::WRITE_SIZE`: padded with 0xFF to whole
 /// write units, so that its one write touches nothing else (in the trailers, the table).
@@ -48,6 +58,12 @@ pub struct StateRecord {
     pub len: u32,
     /// The table's CRC-32 (its last four bytes, over everything before them).
     pub crc: u32,
+    /// The highest calibration number made live on this hub: an update offering a lower one
+    /// is refused (`Refusal::Rollback`).
+    pub floor: u32,
+    /// The generation of the maker's key the hub trusts ([`super::boot::Keys`]); it only
+    /// grows, when a table signed by the next key is committed.
+    pub key_gen: u8,
 }
 
 impl StateRecord {
@@ -57,10 +73,12 @@ impl StateRecord {
         b[0..4].copy_from_slice(&MAGIC);
         b[4..8].copy_from_slice(&self.seq.to_le_bytes());
         b[8] = self.slot;
+        b[9] = self.key_gen;
         b[12..16].copy_from_slice(&self.len.to_le_bytes());
         b[16..20].copy_from_slice(&self.crc.to_le_bytes());
-        let crc = CRC.checksum(&b[..20]);
-        b[20..24].copy_from_slice(&crc.to_le_bytes());
+        b[20..24].copy_from_slice(&self.floor.to_le_bytes());
+        let crc = CRC.checksum(&b[..24]);
+        b[24..28].copy_from_slice(&crc.to_le_bytes());
         b
     }
 
@@ -69,14 +87,16 @@ impl StateRecord {
     pub fn decode(b: &[u8; RECORD_LEN]) -> Option<StateRecord> {
         let u32_at = |at: usize| u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]);
         let valid = b[0..4] == MAGIC
-            && CRC.checksum(&b[..20]) == u32_at(20)
+            && CRC.checksum(&b[..24]) == u32_at(24)
             && b[8] <= 1
-            && b[9..12] == [0; 3];
+            && b[10..12] == [0; 2];
         valid.then(|| StateRecord {
             seq: u32_at(4),
             slot: b[8],
             len: u32_at(12),
             crc: u32_at(16),
+            floor: u32_at(20),
+            key_gen: b[9],
         })
     }
 }
@@ -142,6 +162,8 @@ mod tests {
             slot: 1,
             len: 1596,
             crc: 0xdead_beef,
+            floor: 12,
+            key_gen: 1,
         };
         let b = r.encode();
         assert_eq!(StateRecord::decode(&b), Some(r));
@@ -164,6 +186,8 @@ mod tests {
                 slot: 0,
                 len: 0,
                 crc: 0,
+                floor: 0,
+                key_gen: 0,
             })
         };
         assert_eq!(newest(&[r(3), r(4)]).map(|x| x.0), Some(1));

@@ -17,7 +17,7 @@ use super::boot::{self, Accept, FlashFault, SlotError};
 use super::layout::{Layout, LayoutError, MAX_WRITE_SIZE};
 use super::record::{self, StateRecord};
 
-use crate::signature::SIGNATURE_LEN;
+use crate::signature::{SignatureError, SIGNATURE_LEN};
 use crate::stream::TableState;
 use crate::table::{is_table_len, Table, MAX_TABLE_LEN};
 
@@ -165,6 +165,18 @@ pub enum Refusal {
     /// This hub takes no update over the stream (its board has no flash driver wired to
     /// [`Updater`]); the table is changed with a debug probe.
     NotSupported,
+    /// The table's calibration number is below the highest this hub has made live: an older
+    /// calibration sent back (anti-rollback, `docs/update.md`). Nothing changed. A deliberate
+    /// return to older values is the maker's re-issue of them under a new, higher number.
+    Rollback {
+        /// The hub's floor: the highest calibration number it has made live.
+        live: u32,
+        /// The number of the table sent.
+        offered: u32,
+    },
+    /// The table is signed by a maker's key this hub has retired (it moved to the next key):
+    /// refused for good, whatever its number.
+    RetiredKey,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -176,6 +188,11 @@ enum State {
         crc: u32,
         seq: u32,
         written: u32,
+        /// The anti-rollback floor at `Begin`: the newest record's, or the live table's
+        /// number where that is higher (a factory table, no record).
+        floor: u32,
+        /// The hub's key generation at `Begin`.
+        gen: u8,
     },
 }
 
@@ -254,15 +271,21 @@ impl Updater {
         }
         let live = boot::live_table(flash, &self.layout, &self.accept, scratch)
             .ok()
-            .map(|l| l.slot);
+            .map(|l| (l.slot, l.table.release().number));
         let slot = match live {
-            Some(s) => 1 - s,
+            Some((s, _)) => 1 - s,
             None => 0,
         };
-        let seq = match record::newest(&record::read_copies(flash, &self.layout)) {
-            Some((_, r)) => r.seq.checked_add(1).ok_or(Refusal::SequenceExhausted)?,
+        let copies = record::read_copies(flash, &self.layout);
+        let gen = boot::key_generation(&self.accept, &copies);
+        let newest = record::newest(&copies).map(|(_, r)| r);
+        let seq = match newest {
+            Some(r) => r.seq.checked_add(1).ok_or(Refusal::SequenceExhausted)?,
             None => 1,
         };
+        let floor = newest
+            .map_or(0, |r| r.floor)
+            .max(live.map_or(0, |(_, n)| n));
         // A slot holds every table without a parameter block (the layout's check); one with
         // many parameters may not fit a small board's slot. A table never reaches into its
         // slot's trailer: the state record goes there.
@@ -281,6 +304,8 @@ impl Updater {
             crc,
             seq,
             written: 0,
+            floor,
+            gen,
         };
         Ok(Accepted::Begun { slot })
     }
@@ -335,6 +360,8 @@ impl Updater {
             crc,
             seq,
             written,
+            floor,
+            gen,
         } = self.state
         else {
             return Err(Refusal::NotBegun);
@@ -353,21 +380,23 @@ impl Updater {
             self.pending.clear();
             w.map_err(|e| Refusal::Flash(FlashFault::of(e)))?;
         }
-        let rec = StateRecord {
+        let mut rec = StateRecord {
             seq,
             slot,
             len,
             crc,
+            floor,
+            key_gen: gen,
         };
-        boot::verify_slot(flash, &self.layout, slot, &self.accept, Some(&rec), scratch).map_err(
-            |e| match e {
-                SlotError::Flash(f) => Refusal::Flash(f),
-                SlotError::NotRecorded => Refusal::NotAnnounced,
-                e @ (SlotError::Table(_) | SlotError::Signature(_) | SlotError::Resolution) => {
-                    Refusal::Table(e.state())
-                }
-            },
-        )?;
+        let (number, key_gen) = self.check_new(flash, scratch, &rec)?;
+        if number < floor {
+            return Err(Refusal::Rollback {
+                live: floor,
+                offered: number,
+            });
+        }
+        rec.floor = number.max(floor);
+        rec.key_gen = key_gen;
         record::write(flash, &self.layout, &rec).map_err(|e| Refusal::Flash(FlashFault::of(e)))?;
         // Read back: the record just written must be the one the boot will follow.
         match record::newest(&record::read_copies(flash, &self.layout)) {
@@ -376,5 +405,53 @@ impl Updater {
         }
         self.state = State::Idle;
         Ok(Accepted::Committed { slot, seq })
+    }
+
+    /// The commit's check of the written slot (`rec`: the record it would get, at the hub's
+    /// key generation): the table's calibration number and the key generation it is signed
+    /// at. A table that fails under the hub's key is tried under the next key (a rotation:
+    /// the new table becomes the first signed by it, and its record retires the old key), and
+    /// under the key just retired, to name the refusal.
+    fn check_new<F: NorFlash>(
+        &self,
+        flash: &mut F,
+        scratch: &mut [u8; MAX_TABLE_LEN],
+        rec: &StateRecord,
+    ) -> Result<(u32, u8), Refusal> {
+        let refusal = |e: SlotError| match e {
+            SlotError::Flash(f) => Refusal::Flash(f),
+            SlotError::NotRecorded => Refusal::NotAnnounced,
+            e @ (SlotError::Table(_) | SlotError::Signature(_) | SlotError::Resolution) => {
+                Refusal::Table(e.state())
+            }
+        };
+        let (layout, accept, gen) = (&self.layout, &self.accept, rec.key_gen);
+        let mut verify = |gen: u8| {
+            boot::verify_slot(
+                flash,
+                layout,
+                rec.slot,
+                accept,
+                gen,
+                Some(rec),
+                &mut *scratch,
+            )
+            .map(|t| t.release().number)
+        };
+        let first = verify(gen);
+        if first != Err(SlotError::Signature(SignatureError::Invalid)) {
+            return first.map(|n| (n, gen)).map_err(refusal);
+        }
+        if let Some(next) = gen.checked_add(1) {
+            if let Ok(n) = verify(next) {
+                return Ok((n, next));
+            }
+        }
+        if let Some(retired) = gen.checked_sub(1) {
+            if verify(retired).is_ok() {
+                return Err(Refusal::RetiredKey);
+            }
+        }
+        first.map(|n| (n, gen)).map_err(refusal)
     }
 }

@@ -230,18 +230,18 @@ fn layouts_that_do_not_fit_are_refused() {
     );
 }
 
-/// In the trailers, a table ends 24 bytes (the record, in 4-byte write units) before its
+/// In the trailers, a table ends 28 bytes (the record, in 4-byte write units) before its
 /// slot, and each copy is the end of its slot.
 #[test]
 fn the_trailer_is_the_slot_end() {
     use super::layout::Layout;
     use super::mock::MockFlash;
     let l = super::fixtures::trailer_layout();
-    assert_eq!(Layout::trailer_len::<MockFlash>(), 24);
-    assert_eq!(l.table_area::<MockFlash>(0), 0..3048);
-    assert_eq!(l.table_area::<MockFlash>(1), 3072..6120);
-    assert_eq!(l.state::<MockFlash>(0), 3048..3072);
-    assert_eq!(l.state::<MockFlash>(1), 6120..6144);
+    assert_eq!(Layout::trailer_len::<MockFlash>(), 28);
+    assert_eq!(l.table_area::<MockFlash>(0), 0..3044);
+    assert_eq!(l.table_area::<MockFlash>(1), 3072..6116);
+    assert_eq!(l.state::<MockFlash>(0), 3044..3072);
+    assert_eq!(l.state::<MockFlash>(1), 6116..6144);
     let r = super::fixtures::layout();
     assert_eq!(r.table_area::<MockFlash>(1), 3072..6144);
     assert_eq!(r.state::<MockFlash>(1), 7168..8192);
@@ -280,9 +280,11 @@ fn trailer_records_name_their_own_slot() {
         slot: 1,
         len: b.len() as u32,
         crc: crc_of(&b),
+        floor: 0,
+        key_gen: 0,
     }
     .encode();
-    g.mem[3048..3072].copy_from_slice(&bytes);
+    g.mem[3072 - bytes.len()..3072].copy_from_slice(&bytes);
     assert_eq!(record::read_copies(&mut g, &l), [None, None]);
 }
 

@@ -16,6 +16,7 @@ use quatarm::table::{
 };
 use quatarm_ref::arm::Wobble;
 use quatarm_ref::forward::{axis_vector, rotation};
+use quatarm_ref::release::Release;
 use quatarm_ref::uncertainty::Uncertainty;
 use quatarm_ref::{Arm, Axis, Joint, Probe};
 
@@ -271,7 +272,21 @@ pub fn build(arm: &Arm) -> Result<Vec<u8>, BuildError> {
 /// own terms, and the parameter covariance where the budget lists parameters), checked by
 /// the firmware's own parser.
 pub fn build_with(arm: &Arm, budget: Option<&Uncertainty>) -> Result<Vec<u8>, BuildError> {
-    let data = table_data(arm)?;
+    build_release(arm, budget, &Release::default())
+}
+
+/// [`build_with`], the table carrying the calibration's number and date (`[calibration]` of
+/// the file, `quatarm_ref::release`): what a hub's anti-rollback compares.
+pub fn build_release(
+    arm: &Arm,
+    budget: Option<&Uncertainty>,
+    release: &Release,
+) -> Result<Vec<u8>, BuildError> {
+    let mut data = table_data(arm)?;
+    data.release = quatarm::table::Release {
+        number: release.number,
+        date: release.date.map_or(0, |d| d.yyyymmdd()),
+    };
     let reach = reach_mm(&data);
     // Finite by `table_data`'s checks; written so that NaN would be refused too.
     let fits = reach <= quatarm::table::limits::REACH_MM;
@@ -304,6 +319,30 @@ pub fn build_with(arm: &Arm, budget: Option<&Uncertainty>) -> Result<Vec<u8>, Bu
         other => err("(table)", other.to_string()),
     })?;
     Ok(buf)
+}
+
+#[cfg(test)]
+mod release_tests {
+    use super::*;
+
+    /// `[calibration]`'s number and date reach the table; a file without it is number 0.
+    #[test]
+    fn the_number_and_date_reach_the_table() {
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../data/default-6.toml"
+        ))
+        .unwrap();
+        let with = format!("{text}\n[calibration]\nnumber = 41\ndate = 2026-12-04\n");
+        let p = quatarm_ref::calfile::parse(&with).unwrap();
+        let t = build_release(&p.arm, None, &p.release).unwrap();
+        let r = quatarm::Table::parse(&t).unwrap().release();
+        assert_eq!((r.number, r.date), (41, 20261204));
+        let p = quatarm_ref::calfile::parse(&text).unwrap();
+        let t = build_release(&p.arm, None, &p.release).unwrap();
+        let r = quatarm::Table::parse(&t).unwrap().release();
+        assert_eq!((r.number, r.date), (0, 0));
+    }
 }
 
 #[cfg(test)]
@@ -383,6 +422,19 @@ mod probe_tests {
             .join(path)
     }
 
+    /// A format-4 table as format 3: without the release fields before the CRC, version 3,
+    /// its length and CRC rewritten.
+    fn as_format_3(t: &[u8]) -> Vec<u8> {
+        use quatarm::table::{CRC, OLD_VERSION, RELEASE_LEN};
+        let n = t.len() - RELEASE_LEN;
+        let mut out = t[..n - 4].to_vec();
+        out[4..6].copy_from_slice(&OLD_VERSION.to_le_bytes());
+        out[40..44].copy_from_slice(&(n as u32).to_le_bytes());
+        let crc = CRC.checksum(&out);
+        out.extend_from_slice(&crc.to_le_bytes());
+        out
+    }
+
     fn read(path: &str) -> quatarm_ref::calfile::Parsed {
         quatarm_ref::calfile::read(&repo(path)).unwrap()
     }
@@ -410,6 +462,13 @@ mod probe_tests {
             let f = read(file);
             let built = build_with(&f.arm, f.uncertainty.as_ref().filter(|_| budget)).unwrap();
             let before = std::fs::read(repo("fuzz/corpus/table_parse").join(seed)).unwrap();
+            // Seeds written before format 4 are format 3: the format-4 table without its
+            // release fields (number and date, 0 here) must be them byte for byte.
+            let built = if before.get(4) == Some(&3) {
+                as_format_3(&built)
+            } else {
+                built
+            };
             assert!(built == before, "{file}: the table changed");
         }
     }

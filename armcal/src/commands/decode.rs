@@ -31,6 +31,10 @@ pub struct Args {
     /// port is joined mid-stream (bytes before the first delimiter are skipped).
     #[arg(long)]
     from_start: bool,
+    /// The calibration file of the arm whose hub is read: a warning on stderr when it is
+    /// past the due date its `[calibration]` gives.
+    #[arg(long)]
+    calib: Option<PathBuf>,
 }
 
 /// Runs the subcommand.
@@ -38,6 +42,9 @@ pub struct Args {
 /// Nothing goes to stdout until the first report: a run that fails (an unreadable input, a
 /// capture in which no frame passed its checks) leaves no partial CSV behind.
 pub fn run(args: Args) -> Result<()> {
+    if let Some(calib) = &args.calib {
+        armcal::load::warn_if_due(calib)?;
+    }
     let (mut source, joining, name) = open(&args)?;
     let mut decoder = if joining {
         Decoder::joining()

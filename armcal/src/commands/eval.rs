@@ -48,6 +48,7 @@ pub struct Args {
 
 /// Runs the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    armcal::load::warn_if_due(&args.calib)?;
     let (arm, budget) = armcal::uncertainty::load::calibration_and_budget(
         &args.calib,
         args.uncertainty.then_some("--uncertainty"),

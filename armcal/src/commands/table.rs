@@ -82,22 +82,23 @@ pub fn run(command: Command) -> anyhow::Result<()> {
             without_covariance,
         } => {
             armcal::output::check(&[(&output, "table")], &[(&calib, "calibration file")])?;
-            let (arm, mut budget) = armcal::load::calibration(&calib)?;
+            let (arm, mut budget, release) = armcal::load::calibration_release(&calib)?;
             if without_covariance {
                 budget = budget.map(|u| u.without_covariance());
             }
-            let bytes = armcal::tablebuild::build_with(&arm, budget.as_ref())
+            let bytes = armcal::tablebuild::build_release(&arm, budget.as_ref(), &release)
                 .with_context(|| calib.display().to_string())?;
             let t = Table::parse(&bytes)?;
             let mut files = armcal::output::Staged::guarding(&[(&calib, "calibration file")]);
             files.write(&output, &bytes)?;
             files.commit()?;
             println!(
-                "{}: {} bytes, {} joints, CRC {:08x}{}",
+                "{}: {} bytes, {} joints, CRC {:08x}, {}{}",
                 output.display(),
                 bytes.len(),
                 t.joint_count(),
                 t.crc(),
+                release_line(&t),
                 if t.wobble().is_some() {
                     " (with an axis wobble: the f32 hubs apply it; the Cortex-M0 hubs refuse the table)"
                 } else {
@@ -194,6 +195,21 @@ pub fn run(command: Command) -> anyhow::Result<()> {
     }
 }
 
+/// The table's calibration number and date, as `table build` and `table show` print them.
+pub fn release_line(t: &Table<'_>) -> String {
+    let r = t.release();
+    let date = quatarm_ref::release::Date::from_yyyymmdd(r.date)
+        .map_or_else(|| "no date".to_string(), |d| format!("dated {d}"));
+    if t.version() == quatarm::table::OLD_VERSION {
+        format!(
+            "calibration number 0, no date (a version-{} table: a hub with a numbered table refuses it)",
+            t.version()
+        )
+    } else {
+        format!("calibration number {}, {date}", r.number)
+    }
+}
+
 /// A person-readable listing of a validated table.
 pub fn show(t: &Table<'_>) -> String {
     use std::fmt::Write as _;
@@ -213,10 +229,11 @@ pub fn show(t: &Table<'_>) -> String {
     let _ = writeln!(
         s,
         "quatarm calibration table v{}, {} bytes, CRC {:08x} (valid)",
-        quatarm::table::VERSION,
+        t.version(),
         t.bytes().len(),
         t.crc()
     );
+    let _ = writeln!(s, "{}", release_line(t));
     let _ = writeln!(s, "serial: {}", String::from_utf8_lossy(t.serial()));
     let _ = writeln!(s, "joints: {}", t.joint_count());
     let _ = writeln!(

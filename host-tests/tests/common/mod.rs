@@ -976,3 +976,63 @@ pub fn update_not_supported(name: &str) {
     let (status, _) = s.finish().unwrap();
     assert!(status.success(), "{status}");
 }
+
+/// Anti-rollback on a hub under QEMU (`docs/update.md`): on a factory table of calibration
+/// number 5, a table of number 6 is committed and its points follow; the number-5 table sent
+/// back (validly signed) is refused at commit as `Rollback { live: 6, offered: 5 }`, the points
+/// stay the new table's, and after a reset the hub still boots on number 6 and refuses the
+/// number-5 table again. Key rotation is not run here: the QEMU image holds one key.
+#[allow(dead_code)] // qemu-m4f only (qemu-m0 has no update port)
+pub fn rollback_refused(name: &str) {
+    use quatarm_ref::release::{Date, Release};
+    let b = the_board(name);
+    let arm = calibration(&default_calibration_path()).unwrap().0;
+    let numbered = |arm: &quatarm_ref::Arm, number| {
+        let release = Release {
+            number,
+            date: Date::new(2026, 12, 4),
+            due: None,
+        };
+        signed(&quatarm_wire::tablebuild::build_release(arm, None, &release).unwrap()).unwrap()
+    };
+    let mut newer_arm = arm.clone();
+    newer_arm.probe.error[2] += 0.05;
+    let (five, six) = (numbered(&arm, 5), numbered(&newer_arm, 6));
+    let reading = some_readings(1)[0];
+    let host_five = host_points(b.precision, &five, &[reading]).unwrap()[0].unwrap();
+    let host_six = host_points(b.precision, &six, &[reading]).unwrap()[0].unwrap();
+    assert_ne!(host_five, host_six);
+    let send = |s: &mut Session, image: &[u8]| {
+        let mut last = None;
+        for step in &update_steps(image) {
+            last = Some(s.ask(&ToDevice::Update(step.clone())).unwrap());
+        }
+        last
+    };
+
+    let mut s = Session::start(&b, &b.elf(b.name), Some(&five)).unwrap();
+    let _hello = s.next_item().unwrap();
+    assert_eq!(point_now(&mut s, &reading), host_five);
+    assert_eq!(
+        send(&mut s, &six),
+        Some(Item::Update(Ok(Accepted::Committed { slot: 1, seq: 1 })))
+    );
+    let _hello = s.next_item().unwrap();
+    assert_eq!(point_now(&mut s, &reading), host_six);
+    let refused = Some(Item::Update(Err(Refusal::Rollback {
+        live: 6,
+        offered: 5,
+    })));
+    assert_eq!(send(&mut s, &five), refused);
+    assert_eq!(
+        point_now(&mut s, &reading),
+        host_six,
+        "a refused rollback changes nothing"
+    );
+    s.reset().unwrap();
+    let _hello = s.next_item().unwrap();
+    assert_eq!(point_now(&mut s, &reading), host_six, "after a reset");
+    assert_eq!(send(&mut s, &five), refused, "after a reset");
+    let (status, _) = s.finish().unwrap();
+    assert!(status.success(), "{status}");
+}

@@ -18,8 +18,8 @@
 //! - one path for every board (`update::live_table`, which reads and checks into a buffer),
 //!   tested on qemu-m4f end to end.
 //!
-//! It costs `MAX_TABLE_LEN` bytes of RAM (13,816 on the f32 hubs with U95 and the wobble,
-//! 2,440 on the fixed-point ones, room for eight probes) of the NUCLEO's 128 KiB and the Pico's 264 KiB.
+//! It costs `MAX_TABLE_LEN` bytes of RAM (13,824 on the f32 hubs with U95 and the wobble,
+//! 2,448 on the fixed-point ones, room for eight probes) of the NUCLEO's 128 KiB and the Pico's 264 KiB.
 
 use embedded_storage::nor_flash::NorFlash;
 use quatarm::stream::UpdateAnswer;
