@@ -45,7 +45,7 @@ use crate::ident::{self, Fixed, Identifiability, RFactor, Why};
 use crate::jacobian::tip_jacobian;
 use crate::kinds;
 use crate::lm::{self, Normal};
-use crate::params::{apply, frame_params, Param, Terms};
+use crate::params::{apply, frame_params, Param, ParamExt, Terms};
 use crate::progress::{Observer, Silent};
 use crate::residuals::{best_rigid, Rigid};
 use crate::sim;

@@ -7,6 +7,7 @@ mod common;
 use armcal::calib::{self, Options, Prior};
 use armcal::data::{Dataset, Kind};
 use armcal::fleet_prior::{self, Fallback};
+use armcal::params::ParamExt as _;
 use armcal::residuals::compare_aligned;
 use armcal::sim::{self, perturb, random_pose, rng, simulate};
 use quatarm_ref::arm::{Arm, Axis};

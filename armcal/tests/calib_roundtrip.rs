@@ -3,6 +3,7 @@
 
 use armcal::calib::{calibrate, Fit, Options};
 use armcal::data::{Dataset, Kind};
+use armcal::params::ParamExt as _;
 use armcal::residuals::compare_aligned;
 use armcal::sim::{self, perturb, random_pose, rng, simulate};
 use quatarm_ref::arm::Arm;

@@ -35,7 +35,7 @@ pub use crate::stats;
 use crate::calib::{self, CalibError, Fit};
 use crate::data::Dataset;
 use crate::holdout::{self, Folds, Holdout};
-use crate::params::{Effect, Param};
+use crate::params::{Effect, Param, ParamExt};
 use crate::probes::Mounted;
 use crate::residuals::{residuals, summarise, Summary};
 use candidates::Candidates;

@@ -23,6 +23,7 @@
 use super::Diagnosis;
 use crate::data::{Dataset, Kind};
 use crate::effects::{Effect, TipPoint, FAMILIES};
+use crate::params::ParamExt as _;
 use crate::probes::Mounted;
 use crate::residuals::Rigid;
 use nalgebra::Vector3;

@@ -31,7 +31,7 @@ use super::Model;
 use crate::data::{Dataset, Kind};
 use crate::effects::TipPoint;
 use crate::jacobian::tip_jacobian;
-use crate::params::Param;
+use crate::params::{Param, ParamExt};
 use crate::probes::Mounted;
 use crate::residuals::residuals;
 use crate::stats::f_tail;

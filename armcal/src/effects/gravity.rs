@@ -132,10 +132,6 @@ impl Term for Gravity {
         Param::Gravity(self.joint)
     }
 
-    fn key(&self, _c: usize) -> String {
-        format!("joint[{}].gravity", self.joint + 1)
-    }
-
     fn describe_param(&self, _c: usize) -> String {
         self.describe()
     }

@@ -234,15 +234,6 @@ impl Term for Harmonic {
         }
     }
 
-    fn key(&self, c: usize) -> String {
-        format!(
-            "joint[{}].harmonics(order={}).{}",
-            self.joint + 1,
-            self.order,
-            sin_cos(c)
-        )
-    }
-
     fn describe_param(&self, c: usize) -> String {
         format!(
             "joint {} encoder harmonic order {} ({})",

@@ -158,13 +158,6 @@ impl Term for Thermal {
         Param::Thermal(self.link)
     }
 
-    fn key(&self, _c: usize) -> String {
-        match self.link {
-            Link::Joint(j) => format!("joint[{}].thermal", j + 1),
-            Link::Probe => "probe.thermal".into(),
-        }
-    }
-
     fn describe_param(&self, _c: usize) -> String {
         self.describe()
     }

@@ -44,7 +44,6 @@ fn split(c: usize) -> (usize, usize) {
     (c / 2, c % 2)
 }
 
-const COMPONENT: [&str; 2] = ["alpha", "beta"];
 const SYMBOL: [&str; 2] = ["δα", "δβ"];
 const WAVE: [&str; 2] = ["sin", "cos"];
 
@@ -201,16 +200,6 @@ impl Term for Wobble {
             order: self.order,
             coef: c as u8,
         }
-    }
-
-    fn key(&self, c: usize) -> String {
-        let (t, w) = split(c);
-        format!(
-            "joint[{}].wobble(order={}).{}[{w}]",
-            self.joint + 1,
-            self.order,
-            COMPONENT[t]
-        )
     }
 
     fn describe_param(&self, c: usize) -> String {
