@@ -47,15 +47,29 @@ pub trait ParamExt: Copy {
     fn add_to(self, arm: &mut Arm, dx: f64);
 }
 
+/// The extended effects' unknowns, which their effect answers for ([`effects::Term`]).
+macro_rules! effect_params {
+    () => {
+        Param::Harmonic { .. } | Param::Wobble { .. } | Param::Gravity(_) | Param::Thermal(_)
+    };
+}
+
+/// Asks the term an effect unknown belongs to, with the unknown's number within it.
+fn term<R>(p: Param, f: impl FnOnce(&dyn effects::Term, usize) -> R) -> R {
+    let Some((e, c)) = effects::effect_of(p) else {
+        unreachable!("{p} is not an effect's unknown")
+    };
+    e.with(|t| f(t, c))
+}
+
+// Every match here names every kind of parameter (no catch-all): a new kind makes the
+// compiler stop at each answer it must give.
 impl ParamExt for Param {
     fn effect(self) -> Option<(Effect, usize)> {
         effects::effect_of(self)
     }
 
     fn describe(self, arm: &Arm) -> String {
-        if let Some((e, c)) = self.effect() {
-            return e.with(|t| t.describe_param(c));
-        }
         match self {
             Param::ZeroOffset(j) => format!("joint {} zero offset Δθ", j + 1),
             Param::Tilt(j, c) => {
@@ -79,62 +93,51 @@ impl ParamExt for Param {
                     XYZ[c]
                 )
             }
-            _ => unreachable!("effect unknowns are answered by their effect"),
+            effect_params!() => term(self, |t, c| t.describe_param(c)),
         }
     }
 
     fn unit(self) -> &'static str {
-        if let Some((e, _)) = self.effect() {
-            return e.with(|t| t.unit());
-        }
         match self {
             Param::ZeroOffset(_) | Param::Tilt(..) | Param::FrameRotation(_) => "rad",
-            _ => "mm",
+            Param::LinkError(..) | Param::ProbeError(..) | Param::FrameTranslation(_) => "mm",
+            effect_params!() => term(self, |t, _| t.unit()),
         }
     }
 
     fn plausible(self) -> f64 {
-        if let Some((e, _)) = self.effect() {
-            return e.with(|t| t.plausible());
-        }
         match self {
             Param::ZeroOffset(_) | Param::Tilt(..) => 0.05,
             Param::FrameRotation(_) => 10.0,
             Param::FrameTranslation(_) => 1e6,
-            _ => 20.0,
+            Param::LinkError(..) | Param::ProbeError(..) => 20.0,
+            effect_params!() => term(self, |t, _| t.plausible()),
         }
     }
 
     fn priority(self) -> u32 {
-        if let Some((e, _)) = self.effect() {
-            return e.with(|t| t.priority());
-        }
         match self {
+            Param::FrameRotation(_) | Param::FrameTranslation(_) => 0,
             Param::ZeroOffset(_) => 1,
             Param::ProbeError(..) => 2,
             Param::LinkError(..) => 3,
             Param::Tilt(..) => 4,
-            _ => 0,
+            effect_params!() => term(self, |t, _| t.priority()),
         }
     }
 
     fn value(self, arm: &Arm) -> f64 {
-        if let Some((e, c)) = self.effect() {
-            return e.with(|t| t.value(arm, c));
-        }
         match self {
             Param::ZeroOffset(j) => arm.joints[j].zero_offset,
             Param::Tilt(j, c) => arm.joints[j].tilt[c],
             Param::LinkError(j, c) => arm.joints[j].link_error[c],
             Param::ProbeError(k, c) => arm.probe_at(k).map_or(0.0, |p| p.error[c]),
-            _ => 0.0,
+            Param::FrameRotation(_) | Param::FrameTranslation(_) => 0.0,
+            effect_params!() => term(self, |t, c| t.value(arm, c)),
         }
     }
 
     fn add_to(self, arm: &mut Arm, dx: f64) {
-        if let Some((e, c)) = self.effect() {
-            return e.with(|t| t.add_to(arm, c, dx));
-        }
         match self {
             Param::ZeroOffset(j) => arm.joints[j].zero_offset += dx,
             Param::Tilt(j, c) => arm.joints[j].tilt[c] += dx,
@@ -144,7 +147,8 @@ impl ParamExt for Param {
                     p.error[c] += dx;
                 }
             }
-            _ => {}
+            Param::FrameRotation(_) | Param::FrameTranslation(_) => {}
+            effect_params!() => term(self, |t, c| t.add_to(arm, c, dx)),
         }
     }
 }
