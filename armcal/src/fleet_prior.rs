@@ -157,7 +157,7 @@ fn check_design(name: &str, unit: &Arm, nominal: &Arm) -> Result<(), FleetError>
         if !e.is_finite() || e.abs() > p.plausible() {
             return Err(other(format!(
                 "{} differs from the nominal arm's by {e:.6} {}, beyond the plausible {} {}",
-                p.to_string(),
+                p,
                 p.unit(),
                 p.plausible(),
                 p.unit()
