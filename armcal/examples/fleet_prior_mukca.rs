@@ -164,7 +164,7 @@ fn main() {
                 println!(
                     "      prior dropped, contradicted by front_center: {} data {:+.4e} ± {:.1e}, \
                      fleet {:+.4e} ± {:.1e} ({:.1} σ)",
-                    fit.params[c.index].key(),
+                    fit.params[c.index],
                     c.data,
                     c.data_sd,
                     c.prior.mean,

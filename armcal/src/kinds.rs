@@ -41,7 +41,15 @@ pub fn scale_direction(arm: &Arm, params: &[Param]) -> Vec<f64> {
         .map(|p| match *p {
             Param::LinkError(j, c) => arm.joints[j].actual_link()[c],
             Param::ProbeError(k, c) => arm.probe_at(k).map_or(0.0, |p| p.actual()[c]),
-            _ => 0.0,
+            // Angles, the effects' coefficients and the frame do not scale with the arm.
+            Param::ZeroOffset(_)
+            | Param::Tilt(..)
+            | Param::Harmonic { .. }
+            | Param::Wobble { .. }
+            | Param::Gravity(_)
+            | Param::Thermal(_)
+            | Param::FrameRotation(_)
+            | Param::FrameTranslation(_) => 0.0,
         })
         .collect()
 }

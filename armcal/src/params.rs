@@ -8,105 +8,68 @@
 //!
 //! The same list names the instrument frame's six unknowns, so that identifiability can speak
 //! of "joint 1's zero offset against the frame's rotation about z" in one vocabulary.
+//!
+//! The unknowns themselves, [`Param`] and [`Link`], are the workspace's one vocabulary of
+//! parameters (crate `quatarm-params`, joints 0-based, named by the calibration file's keys),
+//! which the reference's budget lists and the table builder writes columns for; [`ParamExt`]
+//! adds what only armcal knows of them.
 
 pub use crate::effects::Effect;
 use crate::effects::{self, TermsError};
+use quatarm_params::XYZ;
+pub use quatarm_params::{Link, Param};
 use quatarm_ref::arm::Arm;
-use std::fmt;
 
-/// A link that can expand with temperature: one of the joints' links, or the probe.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Link {
-    /// The link after joint i (0-based).
-    Joint(usize),
-    /// The probe vector.
-    Probe,
-}
-
-/// One unknown of a calibration. Joint indices are 0-based here; names and reports say
-/// joint numbers 1-based as the spec does.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Param {
-    /// Δθ_i (rad).
-    ZeroOffset(usize),
-    /// δα_i (component 0) or δβ_i (component 1) of `tilt` (rad).
-    Tilt(usize, usize),
-    /// Component c of Δv_i (mm).
-    LinkError(usize, usize),
-    /// Component c (the second field) of Δv_p of the arm's probe at index k (the first;
-    /// `quatarm_ref::Arm::probes` order, 0 the first probe) (mm).
-    ProbeError(usize, usize),
-    /// One coefficient of an encoder harmonic ([`effects::harmonic`], rad): of sin(hθ) or of
-    /// cos(hθ).
-    Harmonic {
-        /// Joint (0-based).
-        joint: usize,
-        /// Order h ≥ 1.
-        order: u32,
-        /// `true` for the cos coefficient, `false` for sin.
-        cos: bool,
-    },
-    /// One coefficient of an axis wobble ([`effects::wobble`], rad): `coef` 0 and 1 are δα's
-    /// sin(hθ) and cos(hθ) coefficients, 2 and 3 δβ's.
-    Wobble {
-        /// Joint (0-based).
-        joint: usize,
-        /// Order h ≥ 1.
-        order: u32,
-        /// 0..4: α sin, α cos, β sin, β cos.
-        coef: u8,
-    },
-    /// A gravity compliance g_i ([`effects::gravity`], rad/mm).
-    Gravity(usize),
-    /// A thermal expansion κ ([`effects::thermal`], 1/°C) of a link or the probe.
-    Thermal(Link),
-    /// Instrument frame: a small rotation about the arm's base axis c, before the frame's
-    /// current transform (rad).
-    FrameRotation(usize),
-    /// Instrument frame: a small translation along the arm's base axis c, before the frame's
-    /// current transform (mm).
-    FrameTranslation(usize),
-}
-
-const XYZ: [&str; 3] = ["x", "y", "z"];
-
-impl Param {
-    /// Whether the parameter belongs to the instrument frame rather than the arm.
-    pub fn is_frame(self) -> bool {
-        matches!(self, Param::FrameRotation(_) | Param::FrameTranslation(_))
-    }
-
-    /// Whether the parameter is one of the geometric model's (`spec/arm-model.md`).
-    pub fn is_geometric(self) -> bool {
-        matches!(
-            self,
-            Param::ZeroOffset(_) | Param::Tilt(..) | Param::LinkError(..) | Param::ProbeError(..)
-        )
-    }
-
-    /// The calibration-file key it adjusts, e.g. `joint[2].zero_offset`, `joint[3].tilt[0]`
-    /// (joints 1-based, array elements 0-based as in the file reader's messages).
-    pub fn key(self) -> String {
-        if let Some((e, c)) = self.effect() {
-            return e.with(|t| t.key(c));
-        }
-        match self {
-            Param::ZeroOffset(j) => format!("joint[{}].zero_offset", j + 1),
-            Param::Tilt(j, c) => format!("joint[{}].tilt[{c}]", j + 1),
-            Param::LinkError(j, c) => format!("joint[{}].link_error[{c}]", j + 1),
-            Param::ProbeError(0, c) => format!("probe.error[{c}]"),
-            Param::ProbeError(k, c) => format!("probe[{}].error[{c}]", k + 1),
-            Param::FrameRotation(c) => format!("reference_frame.rotation_{}", XYZ[c]),
-            Param::FrameTranslation(c) => format!("reference_frame.translation[{c}]"),
-            _ => unreachable!("effect unknowns are answered by their effect"),
-        }
-    }
-
+/// The unknowns' answers that need armcal: words, units, plausible sizes, and the arm's
+/// keys they read and move. An extension of [`Param`], which is the workspace's one
+/// vocabulary (`quatarm-params`): the name of a parameter is its `Display`, the calibration
+/// file's key (`joint[2].zero_offset`).
+pub trait ParamExt: Copy {
+    /// The effect an unknown belongs to and its number within it (`None`: a geometric or
+    /// frame unknown).
+    fn effect(self) -> Option<(Effect, usize)>;
     /// The parameter in words, for reports.
-    pub fn describe(self, arm: &Arm) -> String {
-        if let Some((e, c)) = self.effect() {
-            return e.with(|t| t.describe_param(c));
-        }
+    fn describe(self, arm: &Arm) -> String;
+    /// Unit of the parameter's value.
+    fn unit(self) -> &'static str;
+    /// A size beyond which a value is not physically plausible for the term. Identifiability
+    /// uses it to call a direction the data cannot pin down better than this "not
+    /// identified".
+    fn plausible(self) -> f64;
+    /// Which parameter to keep when the data cannot separate two: lower keeps first. The
+    /// frame is kept (it must absorb whatever the data cannot tell from it), then the
+    /// encoder's zero offsets, the probe, the links, the tilts, and the extended effects last.
+    fn priority(self) -> u32;
+    /// The parameter's current value in an arm (the whole key: nominal and error for `tilt`).
+    /// Frame parameters are local increments and read 0.
+    fn value(self, arm: &Arm) -> f64;
+    /// Adds `dx` to the parameter's key in `arm` (frame parameters: nothing).
+    fn add_to(self, arm: &mut Arm, dx: f64);
+}
+
+/// The extended effects' unknowns, which their effect answers for ([`effects::Term`]).
+macro_rules! effect_params {
+    () => {
+        Param::Harmonic { .. } | Param::Wobble { .. } | Param::Gravity(_) | Param::Thermal(_)
+    };
+}
+
+/// Asks the term an effect unknown belongs to, with the unknown's number within it.
+fn term<R>(p: Param, f: impl FnOnce(&dyn effects::Term, usize) -> R) -> R {
+    let Some((e, c)) = effects::effect_of(p) else {
+        unreachable!("{p} is not an effect's unknown")
+    };
+    e.with(|t| f(t, c))
+}
+
+// Every match here names every kind of parameter (no catch-all): a new kind makes the
+// compiler stop at each answer it must give.
+impl ParamExt for Param {
+    fn effect(self) -> Option<(Effect, usize)> {
+        effects::effect_of(self)
+    }
+
+    fn describe(self, arm: &Arm) -> String {
         match self {
             Param::ZeroOffset(j) => format!("joint {} zero offset Δθ", j + 1),
             Param::Tilt(j, c) => {
@@ -130,71 +93,51 @@ impl Param {
                     XYZ[c]
                 )
             }
-            _ => unreachable!("effect unknowns are answered by their effect"),
+            effect_params!() => term(self, |t, c| t.describe_param(c)),
         }
     }
 
-    /// Unit of the parameter's value.
-    pub fn unit(self) -> &'static str {
-        if let Some((e, _)) = self.effect() {
-            return e.with(|t| t.unit());
-        }
+    fn unit(self) -> &'static str {
         match self {
             Param::ZeroOffset(_) | Param::Tilt(..) | Param::FrameRotation(_) => "rad",
-            _ => "mm",
+            Param::LinkError(..) | Param::ProbeError(..) | Param::FrameTranslation(_) => "mm",
+            effect_params!() => term(self, |t, _| t.unit()),
         }
     }
 
-    /// A size beyond which a value is not physically plausible for the term. Identifiability
-    /// uses it to call a direction the data cannot pin down better than this "not identified".
-    pub fn plausible(self) -> f64 {
-        if let Some((e, _)) = self.effect() {
-            return e.with(|t| t.plausible());
-        }
+    fn plausible(self) -> f64 {
         match self {
             Param::ZeroOffset(_) | Param::Tilt(..) => 0.05,
             Param::FrameRotation(_) => 10.0,
             Param::FrameTranslation(_) => 1e6,
-            _ => 20.0,
+            Param::LinkError(..) | Param::ProbeError(..) => 20.0,
+            effect_params!() => term(self, |t, _| t.plausible()),
         }
     }
 
-    /// Which parameter to keep when the data cannot separate two: lower keeps first. The frame
-    /// is kept (it must absorb whatever the data cannot tell from it), then the encoder's zero
-    /// offsets, the probe, the links, the tilts, and the extended effects last.
-    pub fn priority(self) -> u32 {
-        if let Some((e, _)) = self.effect() {
-            return e.with(|t| t.priority());
-        }
+    fn priority(self) -> u32 {
         match self {
+            Param::FrameRotation(_) | Param::FrameTranslation(_) => 0,
             Param::ZeroOffset(_) => 1,
             Param::ProbeError(..) => 2,
             Param::LinkError(..) => 3,
             Param::Tilt(..) => 4,
-            _ => 0,
+            effect_params!() => term(self, |t, _| t.priority()),
         }
     }
 
-    /// The parameter's current value in an arm (the whole key: nominal and error for `tilt`).
-    /// Frame parameters are local increments and read 0.
-    pub fn value(self, arm: &Arm) -> f64 {
-        if let Some((e, c)) = self.effect() {
-            return e.with(|t| t.value(arm, c));
-        }
+    fn value(self, arm: &Arm) -> f64 {
         match self {
             Param::ZeroOffset(j) => arm.joints[j].zero_offset,
             Param::Tilt(j, c) => arm.joints[j].tilt[c],
             Param::LinkError(j, c) => arm.joints[j].link_error[c],
             Param::ProbeError(k, c) => arm.probe_at(k).map_or(0.0, |p| p.error[c]),
-            _ => 0.0,
+            Param::FrameRotation(_) | Param::FrameTranslation(_) => 0.0,
+            effect_params!() => term(self, |t, c| t.value(arm, c)),
         }
     }
 
-    /// Adds `dx` to the parameter's key in `arm` (frame parameters: nothing).
-    pub fn add_to(self, arm: &mut Arm, dx: f64) {
-        if let Some((e, c)) = self.effect() {
-            return e.with(|t| t.add_to(arm, c, dx));
-        }
+    fn add_to(self, arm: &mut Arm, dx: f64) {
         match self {
             Param::ZeroOffset(j) => arm.joints[j].zero_offset += dx,
             Param::Tilt(j, c) => arm.joints[j].tilt[c] += dx,
@@ -204,14 +147,9 @@ impl Param {
                     p.error[c] += dx;
                 }
             }
-            _ => {}
+            Param::FrameRotation(_) | Param::FrameTranslation(_) => {}
+            effect_params!() => term(self, |t, c| t.add_to(arm, c, dx)),
         }
-    }
-}
-
-impl fmt::Display for Param {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.key())
     }
 }
 

@@ -8,6 +8,7 @@ use armcal::data::{Dataset, Kind};
 use armcal::fit::calib::{self, Options, Prior};
 use armcal::fit::fleet_prior::{self, Fallback};
 use armcal::fit::residuals::compare_aligned;
+use armcal::params::ParamExt as _;
 use armcal::rng::rng;
 use armcal::sim::{self, perturb, random_pose, simulate};
 use quatarm_ref::arm::{Arm, Axis};

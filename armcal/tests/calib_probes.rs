@@ -83,7 +83,7 @@ fn point_data_of_three_probes_calibrate_each_probe() {
         "the rows take the probes in turn"
     );
     let fit = calibrate(&nominal(), &data, &Options::default()).unwrap();
-    let fitted: Vec<String> = fit.params.iter().map(|p| p.key()).collect();
+    let fitted: Vec<String> = fit.params.iter().map(|p| p.to_string()).collect();
     for key in ["probe.error[0]", "probe[2].error[1]", "probe[3].error[2]"] {
         assert!(fitted.iter().any(|k| k == key), "{key} in {fitted:?}");
     }

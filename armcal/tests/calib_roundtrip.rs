@@ -4,6 +4,7 @@
 use armcal::data::{Dataset, Kind};
 use armcal::fit::calib::{calibrate, Fit, Options};
 use armcal::fit::residuals::compare_aligned;
+use armcal::params::ParamExt as _;
 use armcal::rng::rng;
 use armcal::sim::{self, perturb, random_pose, simulate};
 use quatarm_ref::arm::Arm;

@@ -93,7 +93,7 @@ fn hub_against_host_with_probe(
     use quatarm::{Chain, Fixed, F32};
     let bytes = armcal::tablebuild::build_with(arm, Some(u)).unwrap();
     let table = quatarm::Table::parse(&bytes).unwrap();
-    let host = Budget::from_file(u, arm);
+    let host = Budget::from_file(u);
     let mut own_only = host.clone();
     own_only.params.clear();
     own_only.cov = nalgebra::DMatrix::zeros(0, 0);
@@ -175,7 +175,7 @@ fn hub_own_terms_agree_with_the_host() {
 /// correlations: the frames' relabelling and every column kind against the host.
 #[test]
 fn hub_u95_agrees_with_the_host_on_a_twisted_7_axis_arm() {
-    use quatarm_ref::uncertainty::ParamKey;
+    use quatarm_ref::uncertainty::{Link, Param};
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../data/mukca/mukca-panda-panda_2-repo-calibrated.toml");
     let mut arm = quatarm_ref::calfile::read(&path).unwrap().arm;
@@ -193,14 +193,14 @@ fn hub_u95_agrees_with_the_host_on_a_twisted_7_axis_arm() {
     let mut keys = Vec::new();
     for j in 0..n {
         keys.extend(geometry_keys(j));
-        keys.push(ParamKey::Harmonic {
+        keys.push(Param::Harmonic {
             joint: j,
-            index: 0,
+            order: 1 + j as u32,
             cos: j % 2 == 1,
         });
     }
-    keys.extend((0..3).map(|c| ParamKey::ProbeError(0, c)));
-    keys.extend([ParamKey::Thermal(Some(2)), ParamKey::Thermal(None)]);
+    keys.extend((0..3).map(|c| Param::ProbeError(0, c)));
+    keys.extend([Param::Thermal(Link::Joint(2)), Param::Thermal(Link::Probe)]);
     let p = keys.len();
     let u = random_budget(keys, 17, n);
     let (worst, share) = hub_against_host(&arm, &u, 9);
@@ -218,7 +218,7 @@ fn hub_u95_agrees_with_the_host_on_a_twisted_7_axis_arm() {
 #[test]
 fn hub_u95_agrees_with_the_host_for_each_mounted_probe() {
     use quatarm_ref::arm::Probe;
-    use quatarm_ref::uncertainty::ParamKey;
+    use quatarm_ref::uncertainty::{Link, Param};
     let mut arm = quatarm_ref::Arm::default6();
     arm.probe.thermal = 2.3e-5;
     let probe = |id, vector| Probe {
@@ -240,9 +240,9 @@ fn hub_u95_agrees_with_the_host_for_each_mounted_probe() {
         keys.extend(geometry_keys(j));
     }
     for k in 0..3 {
-        keys.extend((0..3).map(|c| ParamKey::ProbeError(k, c)));
+        keys.extend((0..3).map(|c| Param::ProbeError(k, c)));
     }
-    keys.push(ParamKey::Thermal(None));
+    keys.push(Param::Thermal(Link::Probe));
     let p = keys.len();
     let u = random_budget(keys, 23, n);
     for k in 0..3 {
@@ -260,18 +260,18 @@ fn hub_u95_agrees_with_the_host_for_each_mounted_probe() {
 /// its own scale (rad ~1e-5, mm ~3e-3, 1/°C ~1e-6), so that every correlation is exercised,
 /// with the encoder, probing and temperature terms of a typical arm of `n` joints.
 fn random_budget(
-    keys: Vec<quatarm_ref::uncertainty::ParamKey>,
+    keys: Vec<quatarm_ref::uncertainty::Param>,
     seed: u64,
     n: usize,
 ) -> quatarm_ref::uncertainty::Uncertainty {
-    use quatarm_ref::uncertainty::ParamKey;
+    use quatarm_ref::uncertainty::Param;
     let p = keys.len();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let scale: Vec<f64> = keys
         .iter()
         .map(|k| match k {
-            ParamKey::LinkError(..) | ParamKey::ProbeError(..) => 3e-3,
-            ParamKey::Thermal(_) => 1e-6,
+            Param::LinkError(..) | Param::ProbeError(..) => 3e-3,
+            Param::Thermal(_) => 1e-6,
             _ => 1e-5,
         })
         .collect();
@@ -290,14 +290,14 @@ fn random_budget(
 }
 
 /// Joint `j`'s geometric parameters: its zero offset, its two tilts and its link's three errors.
-fn geometry_keys(j: usize) -> [quatarm_ref::uncertainty::ParamKey; 6] {
-    use quatarm_ref::uncertainty::ParamKey;
+fn geometry_keys(j: usize) -> [quatarm_ref::uncertainty::Param; 6] {
+    use quatarm_ref::uncertainty::Param;
     [
-        ParamKey::ZeroOffset(j),
-        ParamKey::Tilt(j, 0),
-        ParamKey::Tilt(j, 1),
-        ParamKey::LinkError(j, 0),
-        ParamKey::LinkError(j, 1),
-        ParamKey::LinkError(j, 2),
+        Param::ZeroOffset(j),
+        Param::Tilt(j, 0),
+        Param::Tilt(j, 1),
+        Param::LinkError(j, 0),
+        Param::LinkError(j, 1),
+        Param::LinkError(j, 2),
     ]
 }

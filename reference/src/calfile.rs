@@ -9,7 +9,7 @@
 use crate::arm::{
     Arm, Axis, Frame, Harmonic, Joint, Probe, Wobble, DEFAULT_COUNTS, JOINT_COUNTS, MAX_PROBES,
 };
-pub use crate::uncertainty::{ParamKey, Uncertainty};
+pub use crate::uncertainty::{Param, Uncertainty};
 use std::fmt::Write as _;
 use toml::{Table, Value};
 
@@ -1010,17 +1010,18 @@ temperature_c = 0.2
         assert_eq!(
             u.parameters,
             vec![
-                ParamKey::Tilt(0, 0),
-                ParamKey::Wobble {
+                Param::Tilt(0, 0),
+                // `wobble.1`: the first entry, of order 2; β's cos coefficient.
+                Param::Wobble {
                     joint: 0,
-                    index: 0,
-                    beta: true,
-                    comp: 1
+                    order: 2,
+                    coef: 3
                 },
-                ParamKey::ProbeError(0, 2),
-                ParamKey::Harmonic {
+                Param::ProbeError(0, 2),
+                // `harmonics.2`: the second entry, of order 3.
+                Param::Harmonic {
                     joint: 0,
-                    index: 1,
+                    order: 3,
                     cos: false
                 }
             ]
@@ -1268,18 +1269,26 @@ error = [0.0, 0.1, 0.0]
     /// `probe.ID.error.C` names another probe's error; an id the arm lacks is refused.
     #[test]
     fn another_probes_error_has_a_budget_name() {
+        use crate::uncertainty::name;
         let a = parse(&with_probes(THREE_PROBES)).unwrap().arm;
         assert_eq!(
-            ParamKey::parse("probe.17.error.1", &a),
-            Ok(ParamKey::ProbeError(2, 1))
+            crate::uncertainty::parse_name("probe.17.error.1", &a),
+            Ok(Param::ProbeError(2, 1))
         );
-        assert_eq!(ParamKey::ProbeError(2, 1).name(&a), "probe.17.error.1");
-        assert_eq!(ParamKey::ProbeError(0, 1).name(&a), "probe.error.1");
         assert_eq!(
-            ParamKey::parse("probe.4.error.0", &a),
-            Ok(ParamKey::ProbeError(0, 0))
+            name(Param::ProbeError(2, 1), &a).as_deref(),
+            Some("probe.17.error.1")
         );
-        let e = ParamKey::parse("probe.5.error.0", &a).unwrap_err();
+        assert_eq!(
+            name(Param::ProbeError(0, 1), &a).as_deref(),
+            Some("probe.error.1")
+        );
+        assert_eq!(name(Param::ProbeError(3, 1), &a), None);
+        assert_eq!(
+            crate::uncertainty::parse_name("probe.4.error.0", &a),
+            Ok(Param::ProbeError(0, 0))
+        );
+        let e = crate::uncertainty::parse_name("probe.5.error.0", &a).unwrap_err();
         assert!(e.contains("4, 0, 17"), "{e}");
     }
 }

@@ -1,194 +1,150 @@
 //! The `[uncertainty]` section of the calibration file (`spec/uncertainty.md`): the budget a
 //! calibration leaves for every later point.
 //!
-//! The reader owns the names' grammar (`joint.K.tilt.0`, `joint.K.harmonics.H.sin`, …) and
-//! checks every name against the arm it belongs to, so a name pointing at a joint or harmonic
-//! the file does not have is refused with its key, like any other bad value. What the names
-//! mean to a calibration tool (armcal's `Param`) is that tool's business.
+//! The parameters are the workspace's one vocabulary, [`Param`] (`quatarm-params`); this
+//! module owns the budget's text grammar for them (`joint.K.tilt.0`,
+//! `joint.K.harmonics.H.sin`, …: [`parse_name`], [`name`]) and checks every name against the
+//! arm it belongs to, so a name pointing at a joint or harmonic the file does not have is
+//! refused with its key, like any other bad value. The text names a periodic term by its
+//! place H in the joint's list; the [`Param`] by its order, which the arm translates.
 
 use crate::arm::Arm;
 use crate::calfile::{CalFileError, Limits};
 use nalgebra::{DMatrix, SymmetricEigen};
+pub use quatarm_params::{Link, Param};
 use toml::{Table, Value};
 
-/// One parameter of the budget, as the file names it. Indices are 0-based here; the text is
-/// 1-based for joints and harmonics, 0-based for vector components (the spec's convention).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum ParamKey {
-    /// `joint.K.zero_offset`.
-    ZeroOffset(usize),
-    /// `joint.K.tilt.C` (C 0: δα, 1: δβ).
-    Tilt(usize, usize),
-    /// `joint.K.link_error.C`.
-    LinkError(usize, usize),
-    /// `probe.error.C` (the arm's first probe) or `probe.ID.error.C` (the probe with id ID):
-    /// the probe's index in [`Arm::probes`] order, then C.
-    ProbeError(usize, usize),
-    /// `joint.K.harmonics.H.sin` / `.cos`: the H-th entry of the joint's `harmonics`.
-    Harmonic {
-        /// Joint.
-        joint: usize,
-        /// Entry of the joint's `harmonics` list.
-        index: usize,
-        /// The cos coefficient (else sin).
-        cos: bool,
-    },
-    /// `joint.K.wobble.W.alpha.C` / `.beta.C`: component C (0: sin, 1: cos) of the W-th entry
-    /// of the joint's `wobble`.
-    Wobble {
-        /// Joint.
-        joint: usize,
-        /// Entry of the joint's `wobble` list.
-        index: usize,
-        /// The β pair (else α).
-        beta: bool,
-        /// 0: the sin coefficient, 1: the cos one.
-        comp: usize,
-    },
-    /// `joint.K.gravity`.
-    Gravity(usize),
-    /// `joint.K.thermal`, or `probe.thermal` (`None`).
-    Thermal(Option<usize>),
+/// Parses a budget's parameter name and checks that `arm` has what it points at.
+pub fn parse_name(name: &str, arm: &Arm) -> Result<Param, String> {
+    let parts: Vec<&str> = name.split('.').collect();
+    let comp = |s: &str, n: usize| -> Result<usize, String> {
+        s.parse::<usize>()
+            .ok()
+            .filter(|c| *c < n)
+            .ok_or_else(|| format!("`{s}` is not a component: 0 to {}", n - 1))
+    };
+    let key = |p: Param| p.file_key();
+    match parts.as_slice() {
+        ["probe", k, c] if *k == key(Param::ProbeError(0, 0)) => {
+            Ok(Param::ProbeError(0, comp(c, 3)?))
+        }
+        ["probe", k] if *k == key(Param::Thermal(Link::Probe)) => Ok(Param::Thermal(Link::Probe)),
+        ["probe", id, k, c] if *k == key(Param::ProbeError(0, 0)) => {
+            let k = id
+                .parse::<u8>()
+                .ok()
+                .and_then(|id| arm.probe_index(id))
+                .ok_or_else(|| {
+                    let ids: Vec<String> = arm.probes().map(|p| p.id.to_string()).collect();
+                    format!("`{id}` is not a probe of this arm: {}", ids.join(", "))
+                })?;
+            Ok(Param::ProbeError(k, comp(c, 3)?))
+        }
+        ["joint", k, rest @ ..] => {
+            let j = one_based(k, arm.dof(), || {
+                format!("`{k}` is not a joint of this arm: 1 to {}", arm.dof())
+            })?;
+            let joint = &arm.joints[j];
+            match rest {
+                [k] if *k == key(Param::ZeroOffset(j)) => Ok(Param::ZeroOffset(j)),
+                [k, c] if *k == key(Param::Tilt(j, 0)) => Ok(Param::Tilt(j, comp(c, 2)?)),
+                [k, c] if *k == key(Param::LinkError(j, 0)) => Ok(Param::LinkError(j, comp(c, 3)?)),
+                [k] if *k == key(Param::Gravity(j)) => Ok(Param::Gravity(j)),
+                [k] if *k == key(Param::Thermal(Link::Joint(j))) => {
+                    Ok(Param::Thermal(Link::Joint(j)))
+                }
+                [k, h, sc] if *k == joint_key(PeriodicKey::Harmonics) => {
+                    let n = joint.harmonics.len();
+                    let index = one_based(h, n, || {
+                        format!("joint {} has {n} harmonics; `{h}` is not one", j + 1)
+                    })?;
+                    let cos = quatarm_params::SIN_COS
+                        .iter()
+                        .position(|s| s == sc)
+                        .ok_or_else(|| unknown_name(name))?;
+                    Ok(Param::Harmonic {
+                        joint: j,
+                        order: joint.harmonics[index].order,
+                        cos: cos == 1,
+                    })
+                }
+                [k, w, ab, c] if *k == joint_key(PeriodicKey::Wobble) => {
+                    let n = joint.wobble.len();
+                    let index = one_based(w, n, || {
+                        format!("joint {} has {n} wobble terms; `{w}` is not one", j + 1)
+                    })?;
+                    let t = quatarm_params::WOBBLE_COMPONENT
+                        .iter()
+                        .position(|s| s == ab)
+                        .ok_or_else(|| unknown_name(name))?;
+                    Ok(Param::Wobble {
+                        joint: j,
+                        order: joint.wobble[index].order,
+                        coef: (2 * t + comp(c, 2)?) as u8,
+                    })
+                }
+                _ => Err(unknown_name(name)),
+            }
+        }
+        _ => Err(unknown_name(name)),
+    }
 }
 
-impl ParamKey {
-    /// Parses a name and checks that `arm` has what it points at.
-    pub fn parse(name: &str, arm: &Arm) -> Result<ParamKey, String> {
-        let parts: Vec<&str> = name.split('.').collect();
-        let comp = |s: &str, n: usize| -> Result<usize, String> {
-            s.parse::<usize>()
-                .ok()
-                .filter(|c| *c < n)
-                .ok_or_else(|| format!("`{s}` is not a component: 0 to {}", n - 1))
-        };
-        match parts.as_slice() {
-            ["probe", "error", c] => Ok(ParamKey::ProbeError(0, comp(c, 3)?)),
-            ["probe", "thermal"] => Ok(ParamKey::Thermal(None)),
-            ["probe", id, "error", c] => {
-                let k = id
-                    .parse::<u8>()
-                    .ok()
-                    .and_then(|id| arm.probe_index(id))
-                    .ok_or_else(|| {
-                        let ids: Vec<String> = arm.probes().map(|p| p.id.to_string()).collect();
-                        format!("`{id}` is not a probe of this arm: {}", ids.join(", "))
-                    })?;
-                Ok(ParamKey::ProbeError(k, comp(c, 3)?))
-            }
-            ["joint", k, rest @ ..] => {
-                let j = one_based(k, arm.dof(), || {
-                    format!("`{k}` is not a joint of this arm: 1 to {}", arm.dof())
-                })?;
-                match rest {
-                    ["zero_offset"] => Ok(ParamKey::ZeroOffset(j)),
-                    ["tilt", c] => Ok(ParamKey::Tilt(j, comp(c, 2)?)),
-                    ["link_error", c] => Ok(ParamKey::LinkError(j, comp(c, 3)?)),
-                    ["gravity"] => Ok(ParamKey::Gravity(j)),
-                    ["thermal"] => Ok(ParamKey::Thermal(Some(j))),
-                    ["harmonics", h, sc @ ("sin" | "cos")] => {
-                        let n = arm.joints[j].harmonics.len();
-                        let index = one_based(h, n, || {
-                            format!("joint {} has {n} harmonics; `{h}` is not one", j + 1)
-                        })?;
-                        Ok(ParamKey::Harmonic {
-                            joint: j,
-                            index,
-                            cos: *sc == "cos",
-                        })
-                    }
-                    ["wobble", w, ab @ ("alpha" | "beta"), c] => {
-                        let n = arm.joints[j].wobble.len();
-                        let index = one_based(w, n, || {
-                            format!("joint {} has {n} wobble terms; `{w}` is not one", j + 1)
-                        })?;
-                        Ok(ParamKey::Wobble {
-                            joint: j,
-                            index,
-                            beta: *ab == "beta",
-                            comp: comp(c, 2)?,
-                        })
-                    }
-                    _ => Err(unknown_name(name)),
-                }
-            }
-            _ => Err(unknown_name(name)),
-        }
-    }
+/// The two periodic kinds, whose keys a name matches before it knows the order.
+enum PeriodicKey {
+    Harmonics,
+    Wobble,
+}
 
-    /// Adds `dx` to the value this key names in `arm` (which [`ParamKey::parse`] checked has
-    /// it): how a budget's direction in parameter space becomes an arm (the hub's factor
-    /// tables, `quatarm_wire::budget`).
-    pub fn add_to(&self, arm: &mut Arm, dx: f64) {
-        match *self {
-            ParamKey::ZeroOffset(j) => arm.joints[j].zero_offset += dx,
-            ParamKey::Tilt(j, c) => arm.joints[j].tilt[c] += dx,
-            ParamKey::LinkError(j, c) => arm.joints[j].link_error[c] += dx,
-            ParamKey::ProbeError(k, c) => {
-                if let Some(p) = arm.probe_at_mut(k) {
-                    p.error[c] += dx;
-                }
-            }
-            ParamKey::Harmonic { joint, index, cos } => {
-                let h = &mut arm.joints[joint].harmonics[index];
-                if cos {
-                    h.cos += dx;
-                } else {
-                    h.sin += dx;
-                }
-            }
-            ParamKey::Wobble {
-                joint,
-                index,
-                beta,
-                comp,
-            } => {
-                let w = &mut arm.joints[joint].wobble[index];
-                if beta {
-                    w.beta[comp] += dx;
-                } else {
-                    w.alpha[comp] += dx;
-                }
-            }
-            ParamKey::Gravity(j) => arm.joints[j].gravity += dx,
-            ParamKey::Thermal(Some(j)) => arm.joints[j].thermal += dx,
-            ParamKey::Thermal(None) => arm.probe.thermal += dx,
-        }
+/// The file key of a periodic kind: [`Param::file_key`] of any of its parameters.
+fn joint_key(k: PeriodicKey) -> &'static str {
+    match k {
+        PeriodicKey::Harmonics => Param::Harmonic {
+            joint: 0,
+            order: 1,
+            cos: false,
+        },
+        PeriodicKey::Wobble => Param::Wobble {
+            joint: 0,
+            order: 1,
+            coef: 0,
+        },
     }
+    .file_key()
+}
 
-    /// The name as the file writes it, for `arm` (a probe other than the first is named by
-    /// its id).
-    pub fn name(&self, arm: &Arm) -> String {
-        match *self {
-            ParamKey::ZeroOffset(j) => format!("joint.{}.zero_offset", j + 1),
-            ParamKey::Tilt(j, c) => format!("joint.{}.tilt.{c}", j + 1),
-            ParamKey::LinkError(j, c) => format!("joint.{}.link_error.{c}", j + 1),
-            ParamKey::ProbeError(0, c) => format!("probe.error.{c}"),
-            ParamKey::ProbeError(k, c) => {
-                let id = arm.probe_at(k).map_or(u8::MAX, |p| p.id);
-                format!("probe.{id}.error.{c}")
-            }
-            ParamKey::Harmonic { joint, index, cos } => format!(
-                "joint.{}.harmonics.{}.{}",
-                joint + 1,
-                index + 1,
-                if cos { "cos" } else { "sin" }
-            ),
-            ParamKey::Wobble {
-                joint,
-                index,
-                beta,
-                comp,
-            } => format!(
-                "joint.{}.wobble.{}.{}.{comp}",
-                joint + 1,
-                index + 1,
-                if beta { "beta" } else { "alpha" }
-            ),
-            ParamKey::Gravity(j) => format!("joint.{}.gravity", j + 1),
-            ParamKey::Thermal(Some(j)) => format!("joint.{}.thermal", j + 1),
-            ParamKey::Thermal(None) => "probe.thermal".to_string(),
-        }
+/// The name a budget writes for `p`, for `arm` (a probe other than the first is named by its
+/// id, a periodic term by its place in the joint's list). `None` where the budget cannot
+/// list it: the instrument frame's unknowns, a periodic term of an order the arm has no entry
+/// for, a probe the arm does not have.
+pub fn name(p: Param, arm: &Arm) -> Option<String> {
+    let key = p.file_key();
+    // The 1-based place of the entry of `order` in a joint's list.
+    fn place(mut orders: impl Iterator<Item = u32>, order: u32) -> Option<usize> {
+        orders.position(|o| o == order).map(|i| i + 1)
     }
+    Some(match p {
+        Param::ZeroOffset(j) | Param::Gravity(j) | Param::Thermal(Link::Joint(j)) => {
+            format!("joint.{}.{key}", j + 1)
+        }
+        Param::Tilt(j, c) | Param::LinkError(j, c) => format!("joint.{}.{key}.{c}", j + 1),
+        Param::ProbeError(0, c) => format!("probe.{key}.{c}"),
+        Param::ProbeError(k, c) => format!("probe.{}.{key}.{c}", arm.probe_at(k)?.id),
+        Param::Thermal(Link::Probe) => format!("probe.{key}"),
+        Param::Harmonic { joint, order, cos } => {
+            let h = arm.joints.get(joint)?;
+            let index = place(h.harmonics.iter().map(|e| e.order), order)?;
+            let sc = quatarm_params::SIN_COS[usize::from(cos)];
+            format!("joint.{}.{key}.{index}.{sc}", joint + 1)
+        }
+        Param::Wobble { joint, order, coef } => {
+            let w = arm.joints.get(joint)?;
+            let index = place(w.wobble.iter().map(|e| e.order), order)?;
+            let ab = quatarm_params::WOBBLE_COMPONENT[usize::from(coef / 2) % 2];
+            format!("joint.{}.{key}.{index}.{ab}.{}", joint + 1, coef % 2)
+        }
+        Param::FrameRotation(_) | Param::FrameTranslation(_) => return None,
+    })
 }
 
 /// The 0-based position a name's 1-based number `s` (1 to `n`) points at, or `refuse`'s message.
@@ -213,7 +169,7 @@ fn unknown_name(name: &str) -> String {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Uncertainty {
     /// The identified parameters, in the covariance's order.
-    pub parameters: Vec<ParamKey>,
+    pub parameters: Vec<Param>,
     /// Their covariance, row-major, `parameters.len()²` values (units²).
     pub covariance: Vec<f64>,
     /// Standard uncertainty of each joint's reading (counts), one per joint.
@@ -284,18 +240,18 @@ fn non_negative(v: &Value, path: &str, limit: f64) -> Result<f64, CalFileError> 
     Ok(x)
 }
 
-impl ParamKey {
-    /// The largest |value| `limits` allow for what this key names: a standard uncertainty
-    /// larger than every value the parameter may take is no budget.
-    pub fn limit(&self, limits: &Limits) -> f64 {
-        match self {
-            ParamKey::ZeroOffset(_) | ParamKey::Tilt(..) => limits.angle_rad,
-            ParamKey::LinkError(..) | ParamKey::ProbeError(..) => limits.length_mm,
-            ParamKey::Harmonic { .. } => limits.harmonic_rad,
-            ParamKey::Wobble { .. } => limits.wobble_rad,
-            ParamKey::Gravity(_) => limits.gravity,
-            ParamKey::Thermal(_) => limits.thermal,
-        }
+/// The largest |value| `limits` allow for what `p` names: a standard uncertainty larger
+/// than every value the parameter may take is no budget. The instrument frame, which no
+/// budget lists, has no limit.
+pub fn limit(p: Param, limits: &Limits) -> f64 {
+    match p {
+        Param::ZeroOffset(_) | Param::Tilt(..) => limits.angle_rad,
+        Param::LinkError(..) | Param::ProbeError(..) => limits.length_mm,
+        Param::Harmonic { .. } => limits.harmonic_rad,
+        Param::Wobble { .. } => limits.wobble_rad,
+        Param::Gravity(_) => limits.gravity,
+        Param::Thermal(_) => limits.thermal,
+        Param::FrameRotation(_) | Param::FrameTranslation(_) => f64::INFINITY,
     }
 }
 
@@ -347,18 +303,18 @@ pub fn parse(
     })
 }
 
-fn parameters(v: Option<&Value>, arm: &Arm) -> Result<Vec<ParamKey>, CalFileError> {
+fn parameters(v: Option<&Value>, arm: &Arm) -> Result<Vec<Param>, CalFileError> {
     let Some(v) = v else {
         return Ok(Vec::new());
     };
     let a = v
         .as_array()
         .ok_or_else(|| err("uncertainty.parameters", "must be an array of names"))?;
-    let mut out: Vec<ParamKey> = Vec::with_capacity(a.len());
+    let mut out: Vec<Param> = Vec::with_capacity(a.len());
     for (k, v) in a.iter().enumerate() {
         let path = format!("uncertainty.parameters[{k}]");
         let s = v.as_str().ok_or_else(|| err(&path, "must be a string"))?;
-        let p = ParamKey::parse(s, arm).map_err(|m| err(&path, m))?;
+        let p = parse_name(s, arm).map_err(|m| err(&path, m))?;
         if out.contains(&p) {
             return Err(err(&path, format!("`{s}` is listed twice")));
         }
@@ -371,7 +327,7 @@ fn parameters(v: Option<&Value>, arm: &Arm) -> Result<Vec<ParamKey>, CalFileErro
 /// standard deviation within its parameter's limit.
 fn covariance(
     v: Option<&Value>,
-    parameters: &[ParamKey],
+    parameters: &[Param],
     limits: &Limits,
 ) -> Result<Vec<f64>, CalFileError> {
     let n = parameters.len();
@@ -408,7 +364,7 @@ fn covariance(
                 "a variance (diagonal) is negative",
             ));
         }
-        let limit = parameters[i].limit(limits);
+        let limit = limit(parameters[i], limits);
         if c[i * n + i].sqrt() > limit {
             return Err(err(
                 format!("{PATH}[{}]", i * n + i),
@@ -477,7 +433,7 @@ pub fn write(u: &Uncertainty, arm: &Arm, s: &mut String) {
     let names: Vec<String> = u
         .parameters
         .iter()
-        .map(|p| format!("\"{}\"", p.name(arm)))
+        .map(|p| format!("\"{}\"", name(*p, arm).unwrap_or_else(|| p.to_string())))
         .collect();
     let _ = writeln!(s, "parameters = [{}]", names.join(", "));
     let n = u.parameters.len();

@@ -7,7 +7,7 @@ use quatarm::table::budget::BudgetData;
 use quatarm::table::parameters::{Column, Kind, ParameterData, MAX_PARAMETERS};
 use quatarm::table::MAX_JOINTS;
 use quatarm_ref::forward::tilt_axis;
-use quatarm_ref::uncertainty::{ParamKey, Uncertainty};
+use quatarm_ref::uncertainty::{Link, Param, Uncertainty};
 use quatarm_ref::Arm;
 
 /// The table's budget of a calibration file's `[uncertainty]` section.
@@ -57,20 +57,25 @@ pub fn parameter_data(u: &Uncertainty, arm: &Arm) -> Result<Option<Block>, Strin
         ));
     }
     Ok(Some(Block {
-        columns: u.parameters.iter().map(|k| column(*k, arm)).collect(),
+        columns: u
+            .parameters
+            .iter()
+            .map(|p| column(*p, arm))
+            .collect::<Result<_, _>>()?,
         factor: factor(&u.matrix())?,
     }))
 }
 
-/// How parameter `key` moves the tip (`quatarm::table::parameters`, its table of kinds):
-/// the host's analytic Jacobian (`armcal::jacobian`) written as the hub evaluates it. Every
-/// kind of parameter the calibration file can list is here: a new one fails to compile until
-/// it is.
+/// How parameter `p` moves the tip (`quatarm::table::parameters`, its table of kinds):
+/// the host's analytic Jacobian (`armcal::jacobian`) written as the hub evaluates it. The
+/// match over [`Param`] is exhaustive, without a catch-all: a new kind of parameter fails to
+/// compile here until it says its column. `Err` for the instrument frame's unknowns, which no
+/// budget lists (the reader refuses them).
 ///
 /// A probe's error and expansion are a shift of the last joint's frame (kind 5) on an arm of
 /// one probe, as they always were; on an arm of several, a shift of that probe (kind 8, its
 /// id in `order`), which the hub counts only while that probe is mounted.
-fn column(key: ParamKey, arm: &Arm) -> Column {
+fn column(p: Param, arm: &Arm) -> Result<Column, String> {
     let n = arm.dof();
     let shift = |joint: usize, vector: [f64; 3], w0: f64, w1: f64| Column {
         vector: vector.map(|x| x as f32),
@@ -94,9 +99,9 @@ fn column(key: ParamKey, arm: &Arm) -> Column {
         e[c] = 1.0;
         e
     };
-    match key {
-        ParamKey::ZeroOffset(j) => Column::new(Kind::Turn, j as u8),
-        ParamKey::Tilt(j, c) => {
+    Ok(match p {
+        Param::ZeroOffset(j) => Column::new(Kind::Turn, j as u8),
+        Param::Tilt(j, c) => {
             let joint = &arm.joints[j];
             let w = tilt_axis(joint.axis, joint.tilt, c);
             Column {
@@ -104,40 +109,40 @@ fn column(key: ParamKey, arm: &Arm) -> Column {
                 ..Column::new(Kind::Tilt, j as u8)
             }
         }
-        ParamKey::LinkError(j, c) => shift(j, unit(c), 1.0, arm.joints[j].thermal),
-        ParamKey::ProbeError(k, c) => {
+        Param::LinkError(j, c) => shift(j, unit(c), 1.0, arm.joints[j].thermal),
+        Param::ProbeError(k, c) => {
             let thermal = arm.probe_at(k).map_or(0.0, |p| p.thermal);
             probe_shift(k, unit(c), 1.0, thermal)
         }
-        ParamKey::Harmonic { joint, index, cos } => Column {
-            order: arm.joints[joint].harmonics[index].order as u16,
+        Param::Harmonic { joint, order, cos } => Column {
+            order: order as u16,
             ..Column::new(if cos { Kind::TurnCos } else { Kind::TurnSin }, joint as u8)
         },
-        ParamKey::Gravity(j) => Column::new(Kind::TurnGravity, j as u8),
-        ParamKey::Thermal(Some(j)) => shift(j, arm.joints[j].actual_link(), 0.0, 1.0),
-        ParamKey::Thermal(None) => probe_shift(0, arm.probe.actual(), 0.0, 1.0),
-        ParamKey::Wobble {
-            joint,
-            index,
-            beta,
-            comp,
-        } => {
+        Param::Gravity(j) => Column::new(Kind::TurnGravity, j as u8),
+        Param::Thermal(Link::Joint(j)) => shift(j, arm.joints[j].actual_link(), 0.0, 1.0),
+        Param::Thermal(Link::Probe) => probe_shift(0, arm.probe.actual(), 0.0, 1.0),
+        Param::Wobble { joint, order, coef } => {
             // The tilt's column at the fixed tilt, weighed by sin or cos hθ (the wobble moves
             // the axis by ~1e-4 of itself: far below U95's 1e-3).
             let j = &arm.joints[joint];
-            let w = tilt_axis(j.axis, j.tilt, usize::from(beta));
-            let kind = if comp == 0 {
+            let w = tilt_axis(j.axis, j.tilt, usize::from(coef / 2));
+            let kind = if coef % 2 == 0 {
                 Kind::TiltSin
             } else {
                 Kind::TiltCos
             };
             Column {
                 vector: [w.x as f32, w.y as f32, w.z as f32],
-                order: j.wobble[index].order as u16,
+                order: order as u16,
                 ..Column::new(kind, joint as u8)
             }
         }
-    }
+        Param::FrameRotation(_) | Param::FrameTranslation(_) => {
+            return Err(format!(
+                "{p} belongs to the instrument frame, not the arm: a table has no column for it"
+            ))
+        }
+    })
 }
 
 /// L with C = L Lᵀ, lower triangular, row by row. C is a covariance, positive semidefinite
@@ -179,10 +184,10 @@ mod tests {
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/default-6-probes.toml");
         let arm = quatarm_ref::calfile::read(&path).unwrap().arm;
         let keys = [
-            ParamKey::ProbeError(0, 0),
-            ParamKey::ProbeError(2, 1),
-            ParamKey::Thermal(None),
-            ParamKey::LinkError(5, 2),
+            Param::ProbeError(0, 0),
+            Param::ProbeError(2, 1),
+            Param::Thermal(Link::Probe),
+            Param::LinkError(5, 2),
         ];
         let budget = Uncertainty {
             parameters: keys.to_vec(),
@@ -218,7 +223,7 @@ mod tests {
         let mut one = arm.clone();
         one.more_probes.clear();
         let mut single = budget.clone();
-        single.parameters[1] = ParamKey::ProbeError(0, 1);
+        single.parameters[1] = Param::ProbeError(0, 1);
         let b = parameter_data(&single, &one).unwrap().unwrap();
         assert!(b.columns[..3]
             .iter()

@@ -23,7 +23,7 @@
 use crate::data::Dataset;
 use crate::fit::calib::{structural, unknowns};
 use crate::fit::ident::{Fixed, Identifiability, Why};
-use crate::params::{Effect, Param, Terms};
+use crate::params::{Effect, Param, ParamExt, Terms};
 use quatarm_ref::arm::Arm;
 
 /// Highest harmonic order tried by default.

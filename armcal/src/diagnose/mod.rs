@@ -39,7 +39,7 @@ use crate::fit::calib::{self, CalibError, Fit};
 use crate::fit::holdout::{self, Folds, Holdout};
 use crate::fit::probes::Mounted;
 use crate::fit::residuals::{residuals, summarise, Summary};
-use crate::params::{Effect, Param};
+use crate::params::{Effect, Param, ParamExt};
 use candidates::Candidates;
 use quatarm_ref::arm::Arm;
 use select::{Confirmation, Selection, Settings};

@@ -26,6 +26,7 @@ use crate::effects::figure::{Figure, Named, Patterns, RowGeometry};
 use crate::effects::{Effect, TipPoint, FAMILIES};
 use crate::fit::probes::Mounted;
 use crate::fit::residuals::Rigid;
+use crate::params::ParamExt as _;
 use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;
 use quatarm_ref::forward;

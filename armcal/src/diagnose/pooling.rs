@@ -32,7 +32,7 @@
 use super::fleet::dersimonian_laird;
 use crate::data::Dataset;
 use crate::fit::calib::{self, CalibError};
-use crate::params::{Effect, Terms};
+use crate::params::{Effect, ParamExt, Terms};
 use crate::stats::{chi2_tail, t_tail};
 
 /// One arm, alone and pooled.

@@ -34,7 +34,7 @@ use crate::effects::TipPoint;
 use crate::fit::jacobian::tip_jacobian;
 use crate::fit::probes::Mounted;
 use crate::fit::residuals::residuals;
-use crate::params::Param;
+use crate::params::{Param, ParamExt};
 use crate::stats::f_tail;
 use nalgebra::{DMatrix, DVector, Vector3};
 use quatarm_ref::forward;

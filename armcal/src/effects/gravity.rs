@@ -116,10 +116,6 @@ impl Term for Gravity {
         Param::Gravity(self.joint)
     }
 
-    fn key(&self, _c: usize) -> String {
-        format!("joint[{}].gravity", self.joint + 1)
-    }
-
     fn unit(&self) -> &'static str {
         "rad/mm"
     }

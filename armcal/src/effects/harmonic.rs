@@ -209,15 +209,6 @@ impl Term for Harmonic {
         }
     }
 
-    fn key(&self, c: usize) -> String {
-        format!(
-            "joint[{}].harmonics(order={}).{}",
-            self.joint + 1,
-            self.order,
-            sin_cos(c)
-        )
-    }
-
     fn unit(&self) -> &'static str {
         "rad"
     }

@@ -109,8 +109,6 @@ pub trait Term: Describe + Simulate {
     fn coefficients(&self) -> usize;
     /// Its unknown `c`.
     fn param(&self, c: usize) -> Param;
-    /// The calibration-file key unknown `c` adjusts (joints 1-based).
-    fn key(&self, c: usize) -> String;
     /// Unit of its unknowns' values.
     fn unit(&self) -> &'static str;
     /// A size beyond which a value is not physically plausible.
@@ -215,26 +213,24 @@ impl fmt::Display for Effect {
     }
 }
 
-impl Param {
-    /// The effect an unknown belongs to and its number within it (`None`: a geometric or frame
-    /// unknown).
-    pub fn effect(self) -> Option<(Effect, usize)> {
-        match self {
-            Param::Harmonic { joint, order, cos } => {
-                Some((Effect::Harmonic { joint, order }, usize::from(cos)))
-            }
-            Param::Gravity(j) => Some((Effect::Gravity(j), 0)),
-            Param::Thermal(l) => Some((Effect::Thermal(l), 0)),
-            Param::Wobble { joint, order, coef } => {
-                Some((Effect::Wobble { joint, order }, usize::from(coef)))
-            }
-            Param::ZeroOffset(_)
-            | Param::Tilt(..)
-            | Param::LinkError(..)
-            | Param::ProbeError(..)
-            | Param::FrameRotation(_)
-            | Param::FrameTranslation(_) => None,
+/// The effect an unknown belongs to and its number within it (`None`: a geometric or frame
+/// unknown).
+pub fn effect_of(p: Param) -> Option<(Effect, usize)> {
+    match p {
+        Param::Harmonic { joint, order, cos } => {
+            Some((Effect::Harmonic { joint, order }, usize::from(cos)))
         }
+        Param::Gravity(j) => Some((Effect::Gravity(j), 0)),
+        Param::Thermal(l) => Some((Effect::Thermal(l), 0)),
+        Param::Wobble { joint, order, coef } => {
+            Some((Effect::Wobble { joint, order }, usize::from(coef)))
+        }
+        Param::ZeroOffset(_)
+        | Param::Tilt(..)
+        | Param::LinkError(..)
+        | Param::ProbeError(..)
+        | Param::FrameRotation(_)
+        | Param::FrameTranslation(_) => None,
     }
 }
 

@@ -131,13 +131,6 @@ impl Term for Thermal {
         Param::Thermal(self.link)
     }
 
-    fn key(&self, _c: usize) -> String {
-        match self.link {
-            Link::Joint(j) => format!("joint[{}].thermal", j + 1),
-            Link::Probe => "probe.thermal".into(),
-        }
-    }
-
     fn unit(&self) -> &'static str {
         "1/°C"
     }

@@ -45,7 +45,6 @@ fn split(c: usize) -> (usize, usize) {
     (c / 2, c % 2)
 }
 
-const COMPONENT: [&str; 2] = ["alpha", "beta"];
 const SYMBOL: [&str; 2] = ["δα", "δβ"];
 const WAVE: [&str; 2] = ["sin", "cos"];
 
@@ -175,16 +174,6 @@ impl Term for Wobble {
             order: self.order,
             coef: c as u8,
         }
-    }
-
-    fn key(&self, c: usize) -> String {
-        let (t, w) = split(c);
-        format!(
-            "joint[{}].wobble(order={}).{}[{w}]",
-            self.joint + 1,
-            self.order,
-            COMPONENT[t]
-        )
     }
 
     fn unit(&self) -> &'static str {

@@ -46,7 +46,7 @@ use crate::fit::jacobian::tip_jacobian;
 use crate::fit::lm::{self, Normal};
 use crate::fit::residuals::{best_rigid, Rigid};
 use crate::kinds;
-use crate::params::{apply, frame_params, Param, Terms};
+use crate::params::{apply, frame_params, Param, ParamExt, Terms};
 use crate::progress::{Observer, Silent};
 use crate::sim;
 use crate::stats::{chi2_tail, normal_tail_two_sided};

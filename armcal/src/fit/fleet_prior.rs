@@ -19,7 +19,7 @@
 //! pull the mean towards nominal and shrink the spread.
 
 use crate::fit::calib::Gaussian;
-use crate::params::{geometric_params, Param};
+use crate::params::{geometric_params, Param, ParamExt};
 use quatarm_ref::arm::Arm;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -157,7 +157,7 @@ fn check_design(name: &str, unit: &Arm, nominal: &Arm) -> Result<(), FleetError>
         if !e.is_finite() || e.abs() > p.plausible() {
             return Err(other(format!(
                 "{} differs from the nominal arm's by {e:.6} {}, beyond the plausible {} {}",
-                p.key(),
+                p,
                 p.unit(),
                 p.plausible(),
                 p.unit()
@@ -205,7 +205,7 @@ pub fn from_arms(nominal: &Arm, units: &[(String, Arm)]) -> Result<FleetPrior, F
                 None
             };
             Entry {
-                key: p.key(),
+                key: p.to_string(),
                 param: p,
                 units: n,
                 mean,

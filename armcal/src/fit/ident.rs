@@ -18,7 +18,7 @@
 //! A second, statistical test applies after a fit ([`weakest`]): a direction the data pin
 //! down only to more than a plausible size of the terms involved is not identified either.
 
-use crate::params::Param;
+use crate::params::{Param, ParamExt};
 use nalgebra::{DMatrix, SymmetricEigen};
 
 /// Accumulates the R factor of a tall matrix given in blocks of rows (TSQR).

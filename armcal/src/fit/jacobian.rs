@@ -19,7 +19,7 @@
 //! converges, because residuals are always evaluated exactly.
 
 use crate::effects::TipPoint;
-use crate::params::Param;
+use crate::params::{Param, ParamExt};
 use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;
 use quatarm_ref::forward::{self, thermal_scale};

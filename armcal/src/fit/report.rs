@@ -6,7 +6,7 @@ use crate::fit::calib::Fit;
 use crate::fit::holdout::Holdout;
 use crate::fit::ident::{Fixed, Why};
 use crate::fit::residuals::Summary;
-use crate::params::Param;
+use crate::params::{Param, ParamExt};
 use serde::Serialize;
 use std::fmt::Write as _;
 
@@ -214,7 +214,7 @@ impl DroppedPrior {
         fit.prior_conflicts
             .iter()
             .map(|c| DroppedPrior {
-                key: fit.params[c.index].key(),
+                key: fit.params[c.index].to_string(),
                 data: c.data,
                 data_sd: c.data_sd,
                 prior_mean: c.prior.mean,
@@ -252,7 +252,7 @@ fn held_report(f: &Fixed, fit: &Fit, has_points: bool) -> HeldReport {
         .absorbed_by
         .iter()
         .map(|&(k, c)| Absorbed {
-            key: fit.params[k].key(),
+            key: fit.params[k].to_string(),
             description: words(fit.params[k], fit, has_points),
             coefficient: c,
             unit: unit_ratio(fit.params[k].unit(), p.unit()),
@@ -300,7 +300,7 @@ fn held_report(f: &Fixed, fit: &Fit, has_points: bool) -> HeldReport {
         ),
     };
     HeldReport {
-        key: p.key(),
+        key: p.to_string(),
         description: p.describe(&fit.start),
         reason: reason.into(),
         explanation,
@@ -327,7 +327,7 @@ pub fn build(
         let start = p.value(&fit.start);
         let value = p.value(&fit.arm);
         parameters.push(ParamReport {
-            key: p.key(),
+            key: p.to_string(),
             description: p.describe(&fit.start),
             unit: p.unit().into(),
             start,
@@ -438,7 +438,7 @@ pub fn weak_results(fit: &Fit) -> Vec<String> {
             }
         }
         if v.abs() <= u {
-            within.push(p.key());
+            within.push(p.to_string());
         }
     }
     if !within.is_empty() {

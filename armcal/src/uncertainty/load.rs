@@ -43,7 +43,7 @@ pub fn calibration_with_budget(
 ) -> Result<(Arm, Option<Budget>), BudgetLoadError> {
     let (arm, file) = calibration(path)?;
     let budget = match (needed_by, file) {
-        (_, Some(u)) => Some(Budget::from_file(&u, &arm)),
+        (_, Some(u)) => Some(Budget::from_file(&u)),
         (None, None) => None,
         (Some(needed_by), None) => {
             return Err(BudgetLoadError::NoBudget {

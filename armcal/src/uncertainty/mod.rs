@@ -1,7 +1,7 @@
 //! The uncertainty of every measured point (`spec/uncertainty.md`).
 //!
-//! - [`Budget`]: the `[uncertainty]` section in armcal's vocabulary ([`Param`]), and the one
-//!   place where the file's parameter names map onto armcal's unknowns.
+//! - [`Budget`]: the `[uncertainty]` section as armcal holds it (the same [`Param`]s as the
+//!   file's reader, `quatarm_ref::uncertainty`, which owns their text names).
 //! - [`estimate`]: the budget a calibration leaves (`armcal calibrate`, `diagnose -o`).
 //! - [`misfit`]: its model term, from held-out residuals.
 //! - [`pose`]: the model term's pose-dependent part, the parameters' spread between groups.
@@ -27,10 +27,11 @@ pub mod realdata;
 pub mod report;
 pub mod u95;
 
-use crate::params::{Link, Param};
+use crate::params::Param;
 use nalgebra::DMatrix;
 use quatarm_ref::arm::Arm;
-use quatarm_ref::calfile::{ParamKey, Uncertainty};
+use quatarm_ref::calfile::Uncertainty;
+use quatarm_ref::uncertainty;
 
 /// Why no budget (or no coverage trial) could be made.
 #[derive(Debug, thiserror::Error)]
@@ -75,67 +76,6 @@ pub struct Budget {
     pub model_mm: f64,
 }
 
-/// The file's name of an armcal unknown, for `arm` (a harmonic is named by its place in the
-/// joint's list, armcal knows it by its order). `None` for the instrument frame, which a
-/// budget never lists, and for a harmonic the arm has no entry for.
-pub fn key_of(p: Param, arm: &Arm) -> Option<ParamKey> {
-    Some(match p {
-        Param::ZeroOffset(j) => ParamKey::ZeroOffset(j),
-        Param::Tilt(j, c) => ParamKey::Tilt(j, c),
-        Param::LinkError(j, c) => ParamKey::LinkError(j, c),
-        Param::ProbeError(k, c) => ParamKey::ProbeError(k, c),
-        Param::Harmonic { joint, order, cos } => ParamKey::Harmonic {
-            joint,
-            index: arm.joints[joint]
-                .harmonics
-                .iter()
-                .position(|h| h.order == order)?,
-            cos,
-        },
-        Param::Wobble { joint, order, coef } => ParamKey::Wobble {
-            joint,
-            index: arm.joints[joint]
-                .wobble
-                .iter()
-                .position(|w| w.order == order)?,
-            beta: coef >= 2,
-            comp: usize::from(coef % 2),
-        },
-        Param::Gravity(j) => ParamKey::Gravity(j),
-        Param::Thermal(Link::Joint(j)) => ParamKey::Thermal(Some(j)),
-        Param::Thermal(Link::Probe) => ParamKey::Thermal(None),
-        Param::FrameRotation(_) | Param::FrameTranslation(_) => return None,
-    })
-}
-
-/// The armcal unknown of a file's name (the reader has checked it against `arm`).
-pub fn param_of(k: ParamKey, arm: &Arm) -> Param {
-    match k {
-        ParamKey::ZeroOffset(j) => Param::ZeroOffset(j),
-        ParamKey::Tilt(j, c) => Param::Tilt(j, c),
-        ParamKey::LinkError(j, c) => Param::LinkError(j, c),
-        ParamKey::ProbeError(k, c) => Param::ProbeError(k, c),
-        ParamKey::Harmonic { joint, index, cos } => Param::Harmonic {
-            joint,
-            order: arm.joints[joint].harmonics[index].order,
-            cos,
-        },
-        ParamKey::Wobble {
-            joint,
-            index,
-            beta,
-            comp,
-        } => Param::Wobble {
-            joint,
-            order: arm.joints[joint].wobble[index].order,
-            coef: 2 * u8::from(beta) + comp as u8,
-        },
-        ParamKey::Gravity(j) => Param::Gravity(j),
-        ParamKey::Thermal(Some(j)) => Param::Thermal(Link::Joint(j)),
-        ParamKey::Thermal(None) => Param::Thermal(Link::Probe),
-    }
-}
-
 impl Budget {
     /// No uncertainty at all (a file without `[uncertainty]`).
     pub fn zero(dof: usize) -> Budget {
@@ -149,10 +89,10 @@ impl Budget {
         }
     }
 
-    /// From the file's section, for the arm it was read with.
-    pub fn from_file(u: &Uncertainty, arm: &Arm) -> Budget {
+    /// From the file's section.
+    pub fn from_file(u: &Uncertainty) -> Budget {
         Budget {
-            params: u.parameters.iter().map(|k| param_of(*k, arm)).collect(),
+            params: u.parameters.clone(),
             cov: u.matrix(),
             encoder_counts: u.encoder_counts.clone(),
             probing_mm: u.probing_mm,
@@ -161,13 +101,17 @@ impl Budget {
         }
     }
 
-    /// The file's section; `Err` names an unknown the file cannot list.
+    /// The file's section for `arm`; `Err` names an unknown the file cannot list (the
+    /// instrument frame's, a periodic term the arm has no entry for).
     pub fn to_file(&self, arm: &Arm) -> Result<Uncertainty, BudgetError> {
-        let parameters = self
+        if let Some(p) = self
             .params
             .iter()
-            .map(|p| key_of(*p, arm).ok_or(BudgetError::NotListable(*p)))
-            .collect::<Result<_, _>>()?;
+            .find(|p| uncertainty::name(**p, arm).is_none())
+        {
+            return Err(BudgetError::NotListable(*p));
+        }
+        let parameters = self.params.clone();
         let n = self.params.len();
         Ok(Uncertainty {
             parameters,
@@ -195,7 +139,7 @@ impl Budget {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::params::{Effect, Terms};
+    use crate::params::{Effect, Link, Terms};
 
     #[test]
     fn names_map_both_ways_and_the_file_round_trips() {
@@ -226,14 +170,23 @@ mod tests {
             model_mm: 0.0,
         };
         for p in &params {
-            let k = key_of(*p, &arm).unwrap();
-            assert_eq!(param_of(k, &arm), *p);
-            assert_eq!(ParamKey::parse(&k.name(&arm), &arm), Ok(k));
+            let name = uncertainty::name(*p, &arm).unwrap();
+            assert_eq!(uncertainty::parse_name(&name, &arm), Ok(*p));
         }
         let file = b.to_file(&arm).unwrap();
         let text = quatarm_ref::calfile::write_with(&arm, Some(&file), &[]);
         let back = quatarm_ref::calfile::parse(&text).unwrap();
-        assert_eq!(Budget::from_file(&back.uncertainty.unwrap(), &back.arm), b);
-        assert!(key_of(Param::FrameRotation(0), &arm).is_none());
+        assert_eq!(Budget::from_file(&back.uncertainty.unwrap()), b);
+        assert!(uncertainty::name(Param::FrameRotation(0), &arm).is_none());
+        let mut bad = b.clone();
+        bad.params[0] = Param::Harmonic {
+            joint: 0,
+            order: 2,
+            cos: false,
+        };
+        assert!(matches!(
+            bad.to_file(&arm),
+            Err(BudgetError::NotListable(Param::Harmonic { joint: 0, .. }))
+        ));
     }
 }

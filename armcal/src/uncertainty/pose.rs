@@ -34,7 +34,7 @@ use super::misfit::RowCov;
 use super::{u95, Budget};
 use crate::data::Dataset;
 use crate::fit::holdout::{FoldFit, Holdout};
-use crate::params::Param;
+use crate::params::{Param, ParamExt};
 use nalgebra::{DMatrix, DVector, Matrix3};
 use std::collections::BTreeSet;
 
