@@ -14,9 +14,9 @@
 //! has the block) where the hub computes one. Results go to the defmt log (`cargo xtask
 //! bench-target` decodes it).
 
+use quatarm::matrix::Frames;
 use quatarm::signature::{self, KEY_LEN, SIGNATURE_LEN};
 use quatarm::stream::{Event, Replay};
-use quatarm::matrix::Frames;
 use quatarm::uncertainty::OwnTerms;
 use quatarm::{Chain, MatrixChain, Table};
 
