@@ -133,10 +133,21 @@ fn an_effect_of_one_unit_is_named_for_that_unit_only() {
     let files = write(&dir, "fleet-six-", &units);
     let mut args = vec!["diagnose", "--fleet"];
     args.extend(files.iter().map(String::as_str));
-    args.extend(["--json", "--max-order", "2"]);
+    args.extend(["--json", "--max-order", "2", "--progress"]);
     let out = common::armcal_ok(&args, &dir);
     let j: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(j["design"]["causes"], Value::Array(Vec::new()), "{j:#}");
+    // Piped with --progress: every stage counted, the time left once a step is done.
+    let err = String::from_utf8_lossy(&out.stderr);
+    for stage in [
+        "same-arm test: fit of recording 5 of 5",
+        "geometric fit of recording 5 of 5",
+        "design step 1: tests of recording 5 of 5",
+        "own diagnosis of recording 1 of 4",
+        "left",
+    ] {
+        assert!(err.contains(stage), "no `{stage}` in:\n{err}");
+    }
     let units = j["units"].as_array().unwrap();
     let names: Vec<&str> = units.iter().map(|u| u["unit"].as_str().unwrap()).collect();
     assert_eq!(

@@ -58,6 +58,10 @@ pub struct Args {
     /// Print the report as JSON instead of text.
     #[arg(long)]
     json: bool,
+    /// Show progress on stderr even when it is not a terminal (`--fleet`: each recording's
+    /// fits and tests counted, with the time left).
+    #[arg(long)]
+    progress: bool,
     /// Write the figures (PNG) into this folder: residuals against each joint's reading,
     /// each joint's gravity lever, and temperature.
     #[arg(long, value_name = "DIR")]
@@ -262,18 +266,13 @@ fn run_fleet(a: &Args) -> anyhow::Result<()> {
             alpha: a.same_arm_alpha,
         }
     };
-    let spinner = (!a.json).then(|| {
-        let pb = indicatif::ProgressBar::new_spinner();
-        pb.set_message(format!(
-            "diagnosing a fleet of {} recordings: which are one arm, then every candidate on \
-             every arm, sessions held out…",
-            files.len()
-        ));
-        pb.enable_steady_tick(std::time::Duration::from_millis(200));
-        pb
-    });
-    let run = || -> anyhow::Result<_> {
-        let arms = same_arm::group(&start, &files, &opts, &grouping)?;
+    // A count with the time left for each stage: on a terminal, or piped with --progress.
+    let mut obs = armcal::progress::for_command(
+        a.progress,
+        &format!("diagnosing a fleet of {} recordings", files.len()),
+    );
+    let mut run = || -> anyhow::Result<_> {
+        let arms = same_arm::group_observed(&start, &files, &opts, &grouping, obs.as_mut())?;
         if arms.groups.len() < 2 {
             return Err(anyhow::anyhow!(
                 "the {} recordings are all one arm ({}): a fleet needs two arms or more to tell a \
@@ -292,14 +291,18 @@ fn run_fleet(a: &Args) -> anyhow::Result<()> {
             ));
         }
 
-        let f = diagnose::fleet::diagnose_arms(&start, &files, &arms.list(), &opts)
-            .context("cannot diagnose the fleet")?;
+        let f = diagnose::fleet::diagnose_arms_observed(
+            &start,
+            &files,
+            &arms.list(),
+            &opts,
+            obs.as_mut(),
+        )
+        .context("cannot diagnose the fleet")?;
         Ok((arms, f))
     };
     let done = run();
-    if let Some(pb) = &spinner {
-        pb.finish_and_clear();
-    }
+    drop(obs);
     let (arms, f) = done?;
     let names: Vec<String> = files.iter().map(|u| u.name.clone()).collect();
     let rep = diagnose::fleet_report::build(

@@ -64,6 +64,7 @@ use crate::data::Dataset;
 use crate::fit::calib::{self, CalibError, Fit};
 use crate::fit::holdout::{self, Folds, Holdout};
 use crate::params::{Effect, Terms};
+use crate::progress::{Observer, Silent};
 use crate::stats::{normal_tail, t_tail, MIN_UNITS};
 use quatarm_ref::arm::Arm;
 use std::collections::{BTreeMap, BTreeSet};
@@ -546,6 +547,19 @@ pub fn diagnose_arms(
     arms: &[(String, Vec<usize>)],
     opts: &Options,
 ) -> Result<Fleet, CalibError> {
+    diagnose_arms_observed(start, units, arms, opts, &mut Silent)
+}
+
+/// [`diagnose_arms`], telling `obs` each counted step (the recordings' geometric fits, the
+/// design-level steps and each recording's tests within them, the units' own diagnoses), so
+/// that a command can show the count and the time left.
+pub fn diagnose_arms_observed(
+    start: &Arm,
+    units: &[UnitData],
+    arms: &[(String, Vec<usize>)],
+    opts: &Options,
+    obs: &mut dyn Observer,
+) -> Result<Fleet, CalibError> {
     let mut arm_of = vec![usize::MAX; units.len()];
     for (a, (_, recs)) in arms.iter().enumerate() {
         for &r in recs {
@@ -561,7 +575,8 @@ pub fn diagnose_arms(
     let inner = geometric_options(opts);
     let mut work: Vec<Work> = Vec::new();
     let mut geometric_fits = Vec::new();
-    for u in units {
+    for (k, u) in units.iter().enumerate() {
+        obs.step("geometric fit of recording", k, units.len());
         let cands = candidates::candidates_up_to(start, &u.data, opts.diagnose.max_order);
         let Geometric {
             folds,
@@ -604,7 +619,7 @@ pub fn diagnose_arms(
     let mut steps = Vec::new();
     // The last step's per-unit tests, reused as the first unit-level step.
     let mut last: Vec<Vec<UnitTest>> = Vec::new();
-    for _ in 0..opts.diagnose.select.max_steps {
+    for step in 0..opts.diagnose.select.max_steps {
         let vocabulary: Vec<Effect> = work
             .iter()
             .filter(|w| in_test(w))
@@ -613,9 +628,12 @@ pub fn diagnose_arms(
             .collect::<BTreeSet<_>>()
             .into_iter()
             .collect();
+        let what = format!("design step {}: tests of recording", step + 1);
         last = work
             .iter()
-            .map(|w| {
+            .enumerate()
+            .map(|(k, w)| {
+                obs.step(&what, k, work.len());
                 if !in_test(w) {
                     return Vec::new();
                 }
@@ -726,7 +744,9 @@ pub fn diagnose_arms(
         folds: super::FoldChoice::ByGroup,
         ..opts.diagnose.clone()
     };
-    for w in work.iter_mut().filter(|w| w.testable) {
+    let testable = work.iter().filter(|w| w.testable).count();
+    for (k, w) in work.iter_mut().filter(|w| w.testable).enumerate() {
+        obs.step("own diagnosis of recording", k, testable);
         let own = super::diagnose(start, &w.unit.data, &single)
             .map_err(|e| CalibError::Mismatch(format!("unit {}: {e}", w.unit.name)))?;
         for c in &own.causes {

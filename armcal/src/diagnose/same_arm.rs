@@ -59,6 +59,7 @@ use crate::data::Dataset;
 use crate::fit::calib::Fit;
 use crate::fit::holdout::Holdout;
 use crate::params::Param;
+use crate::progress::{Observer, Silent};
 use crate::stats::{chi2_tail, f_tail};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use quatarm_ref::arm::Arm;
@@ -301,6 +302,18 @@ pub fn group(
     opts: &fleet::Options,
     grouping: &Grouping,
 ) -> Result<Arms, FleetError> {
+    group_observed(start, files, opts, grouping, &mut Silent)
+}
+
+/// [`group`], telling `obs` each recording's fits (its two halves, then the whole) as a
+/// counted step, so that a command can show the count and the time left.
+pub fn group_observed(
+    start: &Arm,
+    files: &[UnitData],
+    opts: &fleet::Options,
+    grouping: &Grouping,
+    obs: &mut dyn Observer,
+) -> Result<Arms, FleetError> {
     let n = files.len();
     // A hand grouping is checked before any fit.
     let hand = match grouping {
@@ -325,6 +338,7 @@ pub fn group(
         };
         let (mut q_split, mut k_split) = (0.0, 0usize);
         for (i, u) in files.iter().enumerate() {
+            obs.step("same-arm test: halves of recording", i, n);
             let Some((x, y)) = halves(&u.data) else {
                 continue;
             };
@@ -348,6 +362,7 @@ pub fn group(
             .iter()
             .enumerate()
             .map(|(i, u)| {
+                obs.step("same-arm test: fit of recording", i, n);
                 let geo = geo_of(&u.data);
                 if geo.is_none() {
                     uncompared.push((
