@@ -69,7 +69,7 @@ impl Accept {
 
     /// The key a table must be signed under on a hub at key generation `gen` (`None`: no
     /// key of this image, so no signed table is accepted; also `None` on a hub without keys).
-    fn key_of(&self, gen: u8) -> Option<&[u8; KEY_LEN]> {
+    fn key_at(&self, gen: u8) -> Option<&[u8; KEY_LEN]> {
         self.keys.as_ref().and_then(|k| k.of(gen))
     }
 }
@@ -246,7 +246,7 @@ pub(crate) fn verify_slot<'b, F: NorFlash>(
         }
         // No key of this generation in the image: nothing verifies.
         let key = accept
-            .key_of(gen)
+            .key_at(gen)
             .ok_or(SlotError::Signature(SignatureError::Invalid))?;
         signature::verify(key, table.bytes(), &sig).map_err(SlotError::Signature)?;
     }
