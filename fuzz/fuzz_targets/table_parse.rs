@@ -1,6 +1,7 @@
 //! The binary table parser (`quatarm::table`): any bytes in flash are refused with an error or
-//! accepted as a table whose every value is inside the table's limits and from which both
-//! chains build or refuse cleanly. Never a panic.
+//! accepted as a table whose every value is inside the table's limits, which re-encodes to the
+//! same values (to the same bytes in the current format), and from which both chains build or
+//! refuse cleanly. Never a panic.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -33,11 +34,16 @@ fuzz_target!(|bytes: &[u8]| {
     let n = data
         .encode_full(budget.as_ref(), parameters.as_ref(), &mut out)
         .expect("an accepted table re-encodes");
-    assert_eq!(
-        &out[..n],
-        &bytes[..n],
-        "re-encoding an accepted table changed it"
-    );
+    // A table of the current format re-encodes to its own bytes; an older one (format 3,
+    // read as calibration number 0 with no date) re-encodes in the current format, whose
+    // values are the same.
+    if table.version() == quatarm::table::VERSION {
+        assert_eq!(
+            &out[..n],
+            &bytes[..n],
+            "re-encoding an accepted table changed it"
+        );
+    }
     assert_eq!(Table::parse(&out[..n]).map(|t| t.data()), Ok(data));
     if let Ok(mut chain) = Chain::<F32>::new(&table) {
         mounts_each(&table, "an f32", |k| chain.mount(&table, k));
