@@ -22,29 +22,11 @@ pub fn file_with_hash(path: &Path) -> String {
     }
 }
 
-/// The civil date (year, month, day) of a day count since 1970-01-01 (Howard Hinnant's
-/// algorithm, proleptic Gregorian).
-fn civil(days: i64) -> (i64, u32, u32) {
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z.rem_euclid(146_097);
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = (doy - (153 * mp + 2) / 5 + 1) as u32;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
-    (yoe + era * 400 + i64::from(m <= 2), m, d)
-}
-
 /// Seconds since 1970 as `YYYY-MM-DD HH:MM UTC`.
 pub fn utc(seconds: i64) -> String {
-    let (y, m, d) = civil(seconds.div_euclid(86_400));
+    let date = quatarm_ref::release::Date::from_days_since_epoch(seconds.div_euclid(86_400));
     let s = seconds.rem_euclid(86_400);
-    format!(
-        "{y:04}-{m:02}-{d:02} {:02}:{:02} UTC",
-        s / 3600,
-        s % 3600 / 60
-    )
+    format!("{date} {:02}:{:02} UTC", s / 3600, s % 3600 / 60)
 }
 
 /// Now, or `SOURCE_DATE_EPOCH` where set (a reproducible report, the convention of
