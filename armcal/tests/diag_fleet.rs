@@ -25,16 +25,7 @@ fn unit(seed: u64, g: f64, rows: usize, sessions: usize) -> Dataset {
     let d = sim::simulate(&truth, &sim::Options::new(Kind::Point, rows), &mut rng)
         .unwrap()
         .data;
-    let rows = d
-        .rows
-        .into_iter()
-        .enumerate()
-        .map(|(i, mut r)| {
-            r.group = 1 + (i % sessions) as i64;
-            r
-        })
-        .collect();
-    Dataset::from_rows(rows, 6, false, "(simulated unit)").unwrap()
+    common::in_sessions(d, sessions, "(simulated unit)")
 }
 
 fn options() -> fleet::Options {

@@ -19,16 +19,7 @@ fn arm_data(seed: u64, g: f64, rows: usize, sessions: usize) -> Dataset {
     let d = sim::simulate(&truth, &sim::Options::new(Kind::Point, rows), &mut rng)
         .unwrap()
         .data;
-    let rows = d
-        .rows
-        .into_iter()
-        .enumerate()
-        .map(|(i, mut r)| {
-            r.group = 1 + (i % sessions) as i64;
-            r
-        })
-        .collect();
-    Dataset::from_rows(rows, 6, false, "(simulated arm)").unwrap()
+    common::in_sessions(d, sessions, "(simulated arm)")
 }
 
 fn options() -> Options {

@@ -23,16 +23,7 @@ fn record(truth: &Arm, seed: u64, rows: usize, sessions: usize) -> Dataset {
     let d = sim::simulate(truth, &sim::Options::new(Kind::Point, rows), &mut rng)
         .unwrap()
         .data;
-    let rows = d
-        .rows
-        .into_iter()
-        .enumerate()
-        .map(|(i, mut r)| {
-            r.group = 1 + (i % sessions) as i64;
-            r
-        })
-        .collect();
-    Dataset::from_rows(rows, 6, false, "(simulated recording)").unwrap()
+    common::in_sessions(d, sessions, "(simulated recording)")
 }
 
 /// Five recordings: `a` and `c` of one arm (the second with its tool remounted: another probe

@@ -150,3 +150,23 @@ pub fn with_copies(set: &str, name: &str, files: &[&str]) -> PathBuf {
     .unwrap();
     d
 }
+
+/// Simulated `data` cut into `sessions` sessions (row i in group 1 + i mod `sessions`), as a
+/// dataset named `name`: the shape the diagnosis and fleet tests hold sessions out of.
+#[allow(dead_code)]
+pub fn in_sessions(
+    data: armcal::data::Dataset,
+    sessions: usize,
+    name: &str,
+) -> armcal::data::Dataset {
+    let rows = data
+        .rows
+        .into_iter()
+        .enumerate()
+        .map(|(i, mut r)| {
+            r.group = 1 + (i % sessions) as i64;
+            r
+        })
+        .collect();
+    armcal::data::Dataset::from_rows(rows, 6, false, name).unwrap()
+}
