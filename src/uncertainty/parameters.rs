@@ -245,6 +245,20 @@ mod tests {
     use crate::table::probes::tests::several;
     use crate::table::MAX_TABLE_LEN;
 
+    /// The three-probe test table with a budget and the parameter block `columns`, `factor`,
+    /// encoded into `buf` and parsed back.
+    fn with_block<'a>(
+        columns: &[Column],
+        factor: &[f32],
+        buf: &'a mut [u8; MAX_TABLE_LEN],
+    ) -> Table<'a> {
+        let block = ParameterData { columns, factor };
+        let n = several()
+            .encode_full(Some(&BudgetData::default()), Some(&block), buf)
+            .unwrap();
+        Table::parse(&buf[..n]).unwrap()
+    }
+
     /// A probe's shift moves the tip only while its probe is mounted: with the first probe
     /// (id 4) the part is the plain shift's alone, with the extension (id 9) mounted both
     /// shifts', with the probe of id 0 the plain one's again.
@@ -260,15 +274,8 @@ mod tests {
         let columns = [shift(Kind::Shift, 0), shift(Kind::ProbeShift, 9)];
         // Two independent parameters of 1 µm and 2 µm.
         let factor = [1e-3, 0.0, 2e-3];
-        let block = ParameterData {
-            columns: &columns,
-            factor: &factor,
-        };
         let mut buf = [0u8; MAX_TABLE_LEN];
-        let n = several()
-            .encode_full(Some(&BudgetData::default()), Some(&block), &mut buf)
-            .unwrap();
-        let table = Table::parse(&buf[..n]).unwrap();
+        let table = with_block(&columns, &factor, &mut buf);
         let mut part = ParameterPart::new(&table).unwrap().unwrap();
         let chain = MatrixChain::<F32>::new(&table).unwrap();
         let mut frames = Frames::default();
@@ -311,15 +318,8 @@ mod tests {
             let factor: std::vec::Vec<f32> = (0..factor_len(p))
                 .map(|k| 1e-3 * ((k as f32 * 1.37).sin() + 0.1))
                 .collect();
-            let block = ParameterData {
-                columns: &columns,
-                factor: &factor,
-            };
             let mut buf = [0u8; MAX_TABLE_LEN];
-            let n = several()
-                .encode_full(Some(&BudgetData::default()), Some(&block), &mut buf)
-                .unwrap();
-            let table = Table::parse(&buf[..n]).unwrap();
+            let table = with_block(&columns, &factor, &mut buf);
             let part = ParameterPart::new(&table).unwrap().unwrap();
             let chain = MatrixChain::<F32>::new(&table).unwrap();
             let mut frames = Frames::default();
