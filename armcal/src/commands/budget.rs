@@ -32,6 +32,11 @@ pub struct BudgetArgs {
     /// Standard uncertainty of the temperature reading (°C).
     #[arg(long, default_value_t = 0.0, value_parser = super::args::budget_temperature_c)]
     temperature_c: f64,
+    /// Scale κ of the pose-dependent model term when the data are held out by group and have
+    /// only two groups, so the data cannot set it: default measured with two training
+    /// sessions on the MUKCa fleet (docs/spec-reading.md); give your own fleet's.
+    #[arg(long, default_value_t = armcal::uncertainty::pose::TWO_GROUP_SCALE, value_parser = super::args::positive)]
+    fleet_kappa: f64,
 }
 
 impl BudgetArgs {
@@ -42,6 +47,7 @@ impl BudgetArgs {
             model_mm: self.model_mm,
             instrument_mm: self.instrument_mm,
             temperature_c: self.temperature_c,
+            two_group_scale: self.fleet_kappa,
         }
     }
 

@@ -205,6 +205,7 @@ pub fn calibrated(setup: &Setup, k: usize) -> Result<Calibrated, super::BudgetEr
             0.0
         },
         model_mm: (setup.folds == 0).then_some(0.0),
+        ..Settings::default()
     };
     let held = (setup.folds > 0).then(|| {
         let folds = crate::fit::holdout::kfold(&data, setup.folds, 0x0f01d);

@@ -38,6 +38,10 @@ pub struct Settings {
     pub instrument_mm: f64,
     /// Temperature reading (°C).
     pub temperature_c: f64,
+    /// κ of the pose-dependent term when only two groups were held out and the data cannot
+    /// validate it ([`super::pose::TWO_GROUP_SCALE`] unless the caller has a fleet of its
+    /// own).
+    pub two_group_scale: f64,
 }
 
 impl Default for Settings {
@@ -48,6 +52,7 @@ impl Default for Settings {
             model_mm: None,
             instrument_mm: 0.0,
             temperature_c: 0.0,
+            two_group_scale: super::pose::TWO_GROUP_SCALE,
         }
     }
 }
@@ -243,7 +248,7 @@ pub fn from_fit(
                 m * 1e3
             ));
         }
-        (None, Some(h)) => match model_term(fit, data, h, &budget, s.instrument_mm) {
+        (None, Some(h)) => match model_term(fit, data, h, &budget, s) {
             Some((tau, src, pose)) => {
                 if let Some(p) = pose {
                     budget.cov += &p.cov;
@@ -290,7 +295,7 @@ fn model_term(
     data: &Dataset,
     h: &Holdout,
     budget: &Budget,
-    instrument_mm: f64,
+    s: &Settings,
 ) -> Option<(f64, ModelSource, Option<super::pose::PoseTerm>)> {
     // A held-out row's residual comes from a fit on the other folds: its parameter part is
     // that of F − 1 folds' rows, F/(F − 1) times the whole fit's C (equal folds), which the
@@ -300,15 +305,25 @@ fn model_term(
     if f > 1.0 {
         b.cov *= f / (f - 1.0);
     }
-    let rows = misfit::row_covariances(&fit.arm, &b, data, &h.judged, instrument_mm);
-    let pose = super::pose::estimate(&fit.arm, &budget.params, &budget.cov, data, h, &rows);
+    let rows = misfit::row_covariances(&fit.arm, &b, data, &h.judged, s.instrument_mm);
+    let res = misfit::without_frame(data, h);
+    let pose = super::pose::estimate(
+        &fit.arm,
+        &budget.params,
+        &budget.cov,
+        data,
+        h,
+        &rows,
+        &res,
+        s.two_group_scale,
+    );
     let zero = nalgebra::Matrix3::zeros();
     let sc: Vec<misfit::Score> = rows
         .iter()
         .enumerate()
         .map(|(k, r)| {
             let extra = pose.as_ref().map_or(&zero, |p| &p.extra[k]);
-            r.score(&h.residuals.rows, extra)
+            r.score(&res, extra)
         })
         .collect();
     let (tau, rank, exact) = misfit::conformal(&sc, super::u95::LEVEL)?;
@@ -340,7 +355,9 @@ fn pose_note(p: &super::pose::PoseSource) -> String {
             "its scale set by split-conformal prediction on rows scored without their own \
              group's spread"
         } else {
-            "not validated: two groups, no row can be scored without its own group (scale 1)"
+            "not validated on this arm: two groups, no row can be scored without its own \
+             group; the scale is a fleet's, measured with two training groups on other arms \
+             (--fleet-kappa)"
         }
     )
 }
@@ -351,7 +368,7 @@ fn model_note(tau: f64, src: &ModelSource, h: &Holdout, instrument_mm: f64) -> S
         "model: {:.2} µm per axis, estimated from the held-out residuals of {} rows in {} \
          folds ({} degrees of freedom between folds): the least isotropic term that puts {} of \
          them ({:.1} %) inside their predicted 95 % region beyond the rest of the budget \
-         (split-conformal{}); without it {:.1} % were inside{}{}",
+         (split-conformal{}); without it {:.1} % were inside{}{}{}",
         tau * 1e3,
         src.rows,
         src.folds,
@@ -373,6 +390,12 @@ fn model_note(tau: f64, src: &ModelSource, h: &Holdout, instrument_mm: f64) -> S
             "; the reference instrument's noise counted in it (set --instrument-mm)".to_string()
         } else {
             String::new()
+        },
+        if data_has_points(h) {
+            "; each fold's own instrument frame (the rigid part of its held-out point \
+             residuals) taken out first"
+        } else {
+            ""
         },
         if h.failed.is_empty() {
             String::new()

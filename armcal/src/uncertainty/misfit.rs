@@ -99,6 +99,53 @@ pub fn scores(
         .collect()
 }
 
+/// The held-out residuals of `h` with each fold's rigid part taken out of its `point` rows
+/// (the best rigid motion of the fold's predicted points onto the reference's, over its held-out
+/// `point` rows; folds with fewer than [`FRAME_ROWS`] of them unchanged). A fold's fit places
+/// the reference instrument's frame from the other folds, and that placement's error is in
+/// every held-out `point` residual of the fold, while the rest of the budget (C marginal over
+/// the frame) does not predict it: the model term would take it for misfit. A fresh reading
+/// of the arm carries no instrument frame (its coordinates are the arm's), so the frame's
+/// error is not the model's. Taking out a rigid motion fitted to n rows removes 6 of their
+/// 3n degrees of freedom, and with them the rigid-looking part of the parameters' error in
+/// those rows, which S_i still counts: the term errs small by at most that share.
+pub fn without_frame(data: &Dataset, h: &crate::fit::holdout::Holdout) -> Vec<Vector3<f64>> {
+    let mut out = h.residuals.rows.clone();
+    for fit in &h.fits {
+        let rows: Vec<usize> = fit
+            .rows
+            .iter()
+            .copied()
+            .filter(|&i| h.judged[i] && data.rows[i].kind == crate::data::Kind::Point)
+            .filter(|&i| data.rows[i].xyz.is_some())
+            .collect();
+        if rows.len() < FRAME_ROWS {
+            continue;
+        }
+        let x: Vec<Vector3<f64>> = rows
+            .iter()
+            .map(|&i| Vector3::from(data.rows[i].xyz.unwrap_or([0.0; 3])))
+            .collect();
+        let r: Vec<Vector3<f64>> = rows.iter().map(|&i| out[i]).collect();
+        for (&i, v) in rows.iter().zip(rigid_part_removed(&x, &r)) {
+            out[i] = v;
+        }
+    }
+    out
+}
+
+/// Residuals r_i = q_i − x_i of predicted points q_i against reference points x_i, less
+/// their best rigid part: g(q_i) − x_i with g the rigid motion that best maps the q onto the x.
+fn rigid_part_removed(x: &[Vector3<f64>], r: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+    let q: Vec<Vector3<f64>> = x.iter().zip(r).map(|(x, r)| x + r).collect();
+    let g = crate::fit::residuals::best_rigid(&q, x);
+    q.iter().zip(x).map(|(q, x)| g.apply(q) - x).collect()
+}
+
+/// Fewest held-out `point` rows of a fold whose rigid part [`without_frame`] takes out: a
+/// rigid motion has 6 degrees of freedom, and fewer rows would lose most of theirs to it.
+pub const FRAME_ROWS: usize = 12;
+
 /// One held-out row's predicted covariance.
 #[derive(Clone, Copy, Debug)]
 pub struct RowCov {
@@ -247,5 +294,37 @@ mod tests {
         };
         let t = far.threshold();
         assert!(far.covered(t) && !far.covered(0.99 * t), "{t}");
+    }
+
+    /// A fold's frame error (a rigid motion of its predictions) is taken out of its held-out
+    /// residuals and a misfit that is not rigid (a scale error of 1e-4 about the centroid)
+    /// is kept.
+    #[test]
+    fn the_rigid_part_of_a_folds_residuals_is_taken_out_and_no_more() {
+        let mut rng = crate::rng::rng(5);
+        let x: Vec<Vector3<f64>> = (0..120)
+            .map(|_| Vector3::from_fn(|_, _| 800.0 * crate::rng::normal(&mut rng)))
+            .collect();
+        let rot = nalgebra::Rotation3::from_scaled_axis(Vector3::new(2e-5, -1e-5, 3e-5));
+        let t = Vector3::new(0.004, -0.002, 0.003);
+        let frame: Vec<Vector3<f64>> = x.iter().map(|p| rot * p + t - p).collect();
+        let rms = |v: &[Vector3<f64>]| {
+            (v.iter().map(|r| r.norm_squared()).sum::<f64>() / v.len() as f64).sqrt()
+        };
+        let left = rigid_part_removed(&x, &frame);
+        assert!(rms(&frame) > 0.02 && rms(&left) < 1e-9, "{}", rms(&left));
+        // A scale error about the points' centroid has no rigid part (one about another
+        // centre has a translation, which goes with the frame).
+        let c = x.iter().sum::<Vector3<f64>>() / x.len() as f64;
+        let scale: Vec<Vector3<f64>> = x.iter().map(|p| (p - c) * 1e-4).collect();
+        let both: Vec<Vector3<f64>> = frame.iter().zip(&scale).map(|(a, b)| a + b).collect();
+        let left = rigid_part_removed(&x, &both);
+        let d: Vec<Vector3<f64>> = left.iter().zip(&scale).map(|(a, b)| a - b).collect();
+        assert!(
+            rms(&d) < 1e-3 * rms(&scale),
+            "{} of {}",
+            rms(&d),
+            rms(&scale)
+        );
     }
 }

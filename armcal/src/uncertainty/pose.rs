@@ -23,7 +23,9 @@
 //!   smallest of the rows' least covering scales. The held-out spread has one degree of
 //!   freedom fewer than the one written, so κ carries the few-groups correction a Student-t
 //!   factor would (measured, not assumed). With G = 2 no row can be scored without its own
-//!   group, κ = 1 and the report says the term was not validated.
+//!   group: κ is then borrowed from other arms ([`TWO_GROUP_SCALE`], `--fleet-kappa`), the
+//!   κ that covers a third session when S_b comes from two, measured in that regime, and the
+//!   report says the term was not validated on this arm.
 //! - **Shrunk.** With few groups S_b has rank G − 1: no spread in the directions the groups
 //!   did not happen to differ in. It is shrunk towards the fit's own covariance C, scaled to
 //!   the same size in C's metric, with the weight of one group ([`shrink`]).
@@ -41,6 +43,18 @@ use std::collections::BTreeSet;
 /// Largest scale κ tried: a row the term cannot cover within it is left to the isotropic
 /// term.
 pub const SCALE_MAX: f64 = 30.0;
+
+/// κ for two groups, where the data cannot set it: borrowed from a fleet of other arms,
+/// measured in the same regime. On each MUKCa unit with ≥ 3 sessions, each pair of
+/// consecutive sessions (cyclic) is calibrated, S_b taken from its two leave-one-session-out
+/// fits, and every other session's probings scored ([`least_scales`]); the unit's κ is the
+/// conformal quantile of its scores ([`conformal_scale`]) and this is the median over the 9
+/// units (`cargo test --profile test -p armcal --bench coverage -- mukca`, the line
+/// `two-session κ`; `docs/results/uncertainty.md`). A median over units, not a quantile over
+/// their pooled rows: the target is each unit's coverage, and one unit whose bad session no
+/// scale covers (panda_2 `high`) must not set every other unit's width. `--fleet-kappa`
+/// replaces it with the caller's fleet.
+pub const TWO_GROUP_SCALE: f64 = 1.104;
 
 /// Where the term came from (the report's provenance).
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -197,10 +211,41 @@ fn least_scale(s: &Matrix3<f64>, p: &Matrix3<f64>, deviation: f64) -> f64 {
     hi
 }
 
+/// Each row's least covering κ ([`SCALE_MAX`] at most, infinite beyond): `rows` the rest of
+/// the budget's prediction, `extra` the pose term's part at κ = 1, `deviation` |r| per row.
+pub fn least_scales(rows: &[RowCov], extra: &[Matrix3<f64>], deviation: &[f64]) -> Vec<f64> {
+    rows.iter()
+        .zip(extra)
+        .zip(deviation)
+        .map(|((r, p), d)| least_scale(&r.s, p, *d))
+        .collect()
+}
+
+/// The split-conformal κ of rows' least covering scales: the ⌈0.95 (n + 1)⌉-th smallest,
+/// but no more than the largest finite one (rows the term cannot cover at all are left to
+/// the isotropic term). 0 without scores.
+pub fn conformal_scale(mut t: Vec<f64>) -> f64 {
+    if t.is_empty() {
+        return 0.0;
+    }
+    t.sort_by(f64::total_cmp);
+    let n = t.len();
+    let k = ((u95::LEVEL * (n + 1) as f64).ceil() as usize).clamp(1, n);
+    let finite = t
+        .iter()
+        .copied()
+        .filter(|x| x.is_finite())
+        .fold(0.0, f64::max);
+    t[k - 1].min(finite)
+}
+
 /// The pose term of a held-out validation by group `h` of `data`, for the budget's `params`
 /// on the calibrated `arm`; `rows` what the rest of the budget predicts for the held-out rows
-/// ([`super::misfit::row_covariances`]). `None` unless the folds were whole groups, at least
-/// two of them fitted and the term is not zero.
+/// ([`super::misfit::row_covariances`]) and `res` their residuals
+/// ([`super::misfit::without_frame`]); `two_group_scale` κ when only two groups fitted
+/// (see [`TWO_GROUP_SCALE`]). `None` unless the folds were whole groups, at least two of
+/// them fitted and the term is not zero.
+#[allow(clippy::too_many_arguments)]
 pub fn estimate(
     arm: &quatarm_ref::arm::Arm,
     params: &[Param],
@@ -208,6 +253,8 @@ pub fn estimate(
     data: &Dataset,
     h: &Holdout,
     rows: &[RowCov],
+    res: &[nalgebra::Vector3<f64>],
+    two_group_scale: f64,
 ) -> Option<PoseTerm> {
     let groups = fold_groups(data, &h.fits)?;
     let g_all = groups.len();
@@ -237,25 +284,12 @@ pub fn estimate(
             }
         }
     }
-    let deviation = |r: &RowCov| h.residuals.rows[r.row].norm();
+    let deviation = |r: &RowCov| res[r.row].norm();
     let scale = if validated {
-        let mut t: Vec<f64> = rows
-            .iter()
-            .zip(&extra)
-            .map(|(r, p)| least_scale(&r.s, p, deviation(r)))
-            .collect();
-        t.sort_by(f64::total_cmp);
-        let n = t.len();
-        let k = ((u95::LEVEL * (n + 1) as f64).ceil() as usize).clamp(1, n);
-        // Rows the term cannot cover at all are left to the isotropic term.
-        let finite = t
-            .iter()
-            .copied()
-            .filter(|x| x.is_finite())
-            .fold(0.0, f64::max);
-        t[k - 1].min(finite)
+        let d: Vec<f64> = rows.iter().map(deviation).collect();
+        conformal_scale(least_scales(rows, &extra, &d))
     } else {
-        1.0
+        two_group_scale
     };
     let covered = |k: f64| {
         rows.iter()
@@ -347,5 +381,18 @@ mod tests {
         assert!(covered(k) && !covered(0.99 * k));
         // No direction to grow in: never covered.
         assert!(least_scale(&s, &Matrix3::zeros(), 0.3).is_infinite());
+    }
+
+    /// κ is the ⌈0.95 (n + 1)⌉-th smallest score, capped at the largest finite one.
+    #[test]
+    fn the_conformal_scale_is_the_finite_sample_rank() {
+        let t: Vec<f64> = (1..=39).map(f64::from).collect();
+        // n = 39: rank ⌈0.95 × 40⌉ = 38.
+        assert_eq!(conformal_scale(t.clone()), 38.0);
+        let mut inf = t;
+        inf[37] = f64::INFINITY;
+        inf[38] = f64::INFINITY;
+        assert_eq!(conformal_scale(inf), 37.0);
+        assert_eq!(conformal_scale(vec![]), 0.0);
     }
 }
