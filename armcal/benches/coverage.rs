@@ -17,7 +17,7 @@
 //! does (the instrument's noise declared); `held-out-undeclared` without declaring it.
 
 use armcal::uncertainty::coverage::{self, Setup};
-use armcal::uncertainty::{montecarlo, propagate, u95};
+use armcal::uncertainty::{montecarlo, propagate, realdata, u95};
 use std::time::Instant;
 
 fn main() {
@@ -158,15 +158,50 @@ fn mukca() {
     );
     let (mut pooled, mut judged, mut per_session) = (0.0, 0usize, Vec::new());
     let mut sweep = [0.0; 6];
+    let mut loaded = Vec::new();
     for (name, _) in units {
-        let unit = match armcal::mukca::load(&dir, &name) {
-            Ok(u) => u,
-            Err(e) => {
-                println!("  {name:<20} {e}");
-                continue;
-            }
-        };
-        let Some(c) = armcal::uncertainty::realdata::unit_coverage(&unit) else {
+        match armcal::mukca::load(&dir, &name) {
+            Ok(u) => loaded.push(u),
+            Err(e) => println!("  {name:<20} {e}"),
+        }
+    }
+    // The pose term's κ for two training sessions, per unit (conformal over its own
+    // pair-trained scores); a unit is judged with the median of the *other* units' values.
+    let kappa2: Vec<Option<f64>> = loaded
+        .iter()
+        .map(|u| {
+            let t = realdata::two_group_scores(u);
+            (!t.is_empty()).then(|| {
+                let covered = |k: f64| t.iter().filter(|x| **x <= k).count() as f64 / t.len() as f64;
+                let k = armcal::uncertainty::pose::conformal_scale(t.clone());
+                println!(
+                    "  two-session κ {:<20} {k:.3} from {} probings (covered at κ = 1: {:.3}, at κ = {k:.3}: {:.3}, never: {:.3})",
+                    u.name,
+                    t.len(),
+                    covered(1.0),
+                    covered(k),
+                    t.iter().filter(|x| x.is_infinite()).count() as f64 / t.len() as f64
+                );
+                k
+            })
+        })
+        .collect();
+    let all: Vec<f64> = kappa2.iter().flatten().copied().collect();
+    println!(
+        "  two-session κ of the fleet (median over {} units, the product's default): {:.3}",
+        all.len(),
+        realdata::fleet_scale(&all)
+    );
+    for (k, unit) in loaded.iter().enumerate() {
+        let others: Vec<f64> = kappa2
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| *j != k)
+            .filter_map(|(_, v)| *v)
+            .collect();
+        let fleet = realdata::fleet_scale(&others);
+        let name = &unit.name;
+        let Some(c) = realdata::unit_coverage(unit, fleet) else {
             println!("  {name:<20} one session: nothing to hold out");
             continue;
         };
@@ -187,7 +222,8 @@ fn mukca() {
             c.nested_model_mm
         );
         println!(
-            "    pose term: scale per held-out session {}; nested coverage with m × its σ: {}",
+            "    pose term: two-session κ from the other units {fleet:.3}; scale per held-out \
+             session {}; nested coverage with m × its σ: {}",
             c.pose_scale
                 .iter()
                 .map(|(k, v)| format!("{k:.2}{}", if *v { "" } else { "*" }))

@@ -83,8 +83,14 @@ struct Held {
     probings: Vec<(usize, f64, f64, f64)>,
 }
 
-/// Calibrates on every session but `g` and judges `g` with the budget as written.
-fn hold_out(unit: &Unit, groups: &[i64], g: i64) -> Result<Held, super::BudgetError> {
+/// Calibrates on every session but `g` and judges `g` with the budget as written;
+/// `two_group_scale` is the pose term's κ when two training sessions cannot set it.
+fn hold_out(
+    unit: &Unit,
+    groups: &[i64],
+    g: i64,
+    two_group_scale: f64,
+) -> Result<Held, super::BudgetError> {
     let train: Vec<i64> = groups.iter().copied().filter(|x| *x != g).collect();
     let train_data = unit.sessions_data(&train);
     let opts = mukca::options(None);
@@ -103,7 +109,11 @@ fn hold_out(unit: &Unit, groups: &[i64], g: i64) -> Result<Held, super::BudgetEr
         &crate::fit::holdout::by_group(&train_data),
     );
     let (nested, pose, pose_scale) = if inner.folds > 1 {
-        let e = estimate::from_fit(&fit, &train_data, Some(&inner), 0.0, &Settings::default())?;
+        let with = Settings {
+            two_group_scale,
+            ..Settings::default()
+        };
+        let e = estimate::from_fit(&fit, &train_data, Some(&inner), 0.0, &with)?;
         let without = estimate::from_fit(&fit, &train_data, Some(&inner), 0.0, &no_model)?;
         let scale = e
             .model
@@ -155,15 +165,17 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// Leave-one-session-out coverage of a unit (`None` with fewer than two sessions). The
 /// model term of session g is the mean per-axis variance the budget missed on the other
-/// sessions' held-out probings (g's own probings never set it).
-pub fn unit_coverage(unit: &Unit) -> Option<UnitCoverage> {
+/// sessions' held-out probings (g's own probings never set it). `two_group_scale`: the pose
+/// term's κ where only two training sessions are left (from other units: see
+/// [`two_group_scores`]).
+pub fn unit_coverage(unit: &Unit, two_group_scale: f64) -> Option<UnitCoverage> {
     let groups = unit.groups();
     if groups.len() < 2 {
         return None;
     }
     let (mut held, mut failed) = (Vec::new(), Vec::new());
     for &g in &groups {
-        match hold_out(unit, &groups, g) {
+        match hold_out(unit, &groups, g, two_group_scale) {
             Ok(h) => held.push(h),
             Err(e) => failed.push(format!(
                 "{}: {e}",
@@ -260,4 +272,84 @@ fn socket_u95(arm: &Arm, b: &Budget, data: &Dataset, rows: &[usize]) -> Vec<(usi
         .into_iter()
         .map(|(i, s)| (i, u95::u95(&s), s.trace()))
         .collect()
+}
+
+/// The pose term's least covering κ for held-out probings when S_b comes from two sessions
+/// (the regime where the data cannot set κ, [`super::pose::TWO_GROUP_SCALE`]): for each pair
+/// of consecutive sessions (cyclic) of a unit with ≥ 3 sessions, the unit is calibrated on
+/// the pair, S_b (1 + 1/2) taken from the pair's two leave-one-session-out fits, and every
+/// other session's probings scored against it beyond the rest of the budget
+/// ([`super::pose::least_scales`]). Empty with fewer than 3 sessions. A fleet's κ for a unit
+/// is taken from the *other* units' scores, so a unit never sets its own.
+pub fn two_group_scores(unit: &Unit) -> Vec<f64> {
+    let groups = unit.groups();
+    let mut out = Vec::new();
+    if groups.len() < 3 {
+        return out;
+    }
+    let opts = mukca::options(None);
+    let no_model = Settings {
+        model_mm: Some(0.0),
+        ..Settings::default()
+    };
+    for k in 0..groups.len() {
+        let pair = [groups[k], groups[(k + 1) % groups.len()]];
+        let data = unit.sessions_data(&pair);
+        let Ok(fit) = crate::fit::calib::calibrate(&unit.arm, &data, &opts) else {
+            continue;
+        };
+        let inner = crate::fit::holdout::validate(
+            &unit.arm,
+            &data,
+            &opts,
+            &crate::fit::holdout::by_group(&data),
+        );
+        if inner.fits.len() < 2 {
+            continue;
+        }
+        let Ok(e) = estimate::from_fit(&fit, &data, Some(&inner), 0.0, &no_model) else {
+            continue;
+        };
+        let rest = e.budget;
+        let fits: Vec<&crate::fit::holdout::FoldFit> = inner.fits.iter().collect();
+        let sb = super::pose::between(&rest.params, &fits, 2, &rest.cov);
+        let pose = Budget {
+            params: rest.params.clone(),
+            cov: sb * 1.5,
+            encoder_counts: vec![0.0; data.dof],
+            probing_mm: 0.0,
+            temperature_c: 0.0,
+            model_mm: 0.0,
+        };
+        for &s in groups.iter().filter(|s| !pair.contains(s)) {
+            let test = unit.sessions_data(&[s]);
+            let res = residuals(&fit.arm, &test, None);
+            for end in test.layout().length.iter().flat_map(|l| [&l.a, &l.b]) {
+                let m = 1.0 - 1.0 / end.len() as f64;
+                let (rows, d): (Vec<_>, Vec<_>) =
+                    propagate::group_deviations(&fit.arm, &rest, &test, end)
+                        .into_iter()
+                        .map(|(i, s)| (super::misfit::RowCov { row: i, s, m }, res.rows[i].norm()))
+                        .unzip();
+                let extra: Vec<_> = propagate::group_deviations(&fit.arm, &pose, &test, end)
+                    .into_iter()
+                    .map(|(_, p)| p)
+                    .collect();
+                out.extend(super::pose::least_scales(&rows, &extra, &d));
+            }
+        }
+    }
+    out
+}
+
+/// The fleet's two-session κ: the median over units of each unit's conformal κ
+/// ([`super::pose::conformal_scale`] of its [`two_group_scores`]). 0 without units.
+pub fn fleet_scale(per_unit: &[f64]) -> f64 {
+    let mut v = per_unit.to_vec();
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => 0.0,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
 }
