@@ -233,3 +233,73 @@ fn the_pose_term_is_estimated_from_sessions_and_covers_a_new_one() {
         t_without.sphere()
     );
 }
+
+/// Two sessions: no row can be scored without its own group's spread, so the pose term's κ
+/// is the caller's fleet value (`--fleet-kappa`, default `pose::TWO_GROUP_SCALE`), stated as
+/// not validated, and what it adds to C grows as κ².
+#[test]
+fn with_two_sessions_the_pose_terms_scale_is_the_fleets() {
+    use armcal::data::{Dataset, Kind};
+    use armcal::sim::{self, FrameChoice};
+    use armcal::uncertainty::estimate::{self, Settings};
+    let nominal = quatarm_ref::arm::Arm::default6();
+    let mut rng = armcal::rng::rng(12);
+    let centre = sim::perturb(&nominal, 3e-4, 0.3, &mut rng);
+    let mut data: Option<Dataset> = None;
+    for g in 0..2 {
+        let session = sim::perturb(&centre, 1e-4, 0.05, &mut rng);
+        let mut o = sim::Options::new(Kind::Point, 80);
+        o.frame = FrameChoice::Identity;
+        let mut d = sim::simulate(&session, &o, &mut rng).unwrap().data;
+        d.rows.iter_mut().for_each(|r| r.group = g);
+        match &mut data {
+            Some(all) => all.rows.extend(d.rows),
+            None => data = Some(d),
+        }
+    }
+    let data = data.unwrap();
+    let opts = armcal::fit::calib::Options::default();
+    let fit = armcal::fit::calib::calibrate(&nominal, &data, &opts).unwrap();
+    let h = armcal::fit::holdout::validate(
+        &nominal,
+        &data,
+        &opts,
+        &armcal::fit::holdout::by_group(&data),
+    );
+    let at = |k: f64| {
+        let s = Settings {
+            instrument_mm: 0.005,
+            two_group_scale: k,
+            ..Settings::default()
+        };
+        estimate::from_fit(&fit, &data, Some(&h), 0.0, &s).unwrap()
+    };
+    let none = estimate::from_fit(
+        &fit,
+        &data,
+        Some(&h),
+        0.0,
+        &Settings {
+            model_mm: Some(0.0),
+            ..Settings::default()
+        },
+    )
+    .unwrap();
+    let (one, two) = (at(1.0), at(2.0));
+    let pose = two.model.as_ref().unwrap().pose.clone().unwrap();
+    assert_eq!(pose.groups, 2);
+    assert!(!pose.validated && pose.scale == 2.0, "{pose:?}");
+    assert!(two.notes.iter().any(|n| n.contains("--fleet-kappa")));
+    let added = |e: &estimate::Estimated| (&e.budget.cov - &none.budget.cov).norm();
+    let ratio = added(&two) / added(&one);
+    assert!((ratio - 4.0).abs() < 1e-9 * 4.0, "{ratio}");
+    assert_eq!(
+        at(armcal::uncertainty::pose::TWO_GROUP_SCALE)
+            .model
+            .unwrap()
+            .pose
+            .unwrap()
+            .scale,
+        armcal::uncertainty::pose::TWO_GROUP_SCALE
+    );
+}
