@@ -157,6 +157,7 @@ fn mukca() {
          (+model) [nested]  RMS dev mm  probing mm  model mm  nested model mm"
     );
     let (mut pooled, mut judged, mut per_session) = (0.0, 0usize, Vec::new());
+    let mut pooled_alt = 0.0;
     let mut sweep = [0.0; 6];
     let mut loaded = Vec::new();
     for (name, _) in units {
@@ -167,10 +168,12 @@ fn mukca() {
     }
     // The pose term's κ for two training sessions, per unit (conformal over its own
     // pair-trained scores); a unit is judged with the median of the *other* units' values.
+    let scores: Vec<Vec<f64>> = loaded.iter().map(realdata::two_group_scores).collect();
     let kappa2: Vec<Option<f64>> = loaded
         .iter()
-        .map(|u| {
-            let t = realdata::two_group_scores(u);
+        .zip(&scores)
+        .map(|(u, t)| {
+            let t = t.clone();
             (!t.is_empty()).then(|| {
                 let covered = |k: f64| t.iter().filter(|x| **x <= k).count() as f64 / t.len() as f64;
                 let k = armcal::uncertainty::pose::conformal_scale(t.clone());
@@ -200,6 +203,14 @@ fn mukca() {
             .filter_map(|(_, v)| *v)
             .collect();
         let fleet = realdata::fleet_scale(&others);
+        // Sensitivity (not the rule): the κ at which the other units cover 95 % on average.
+        let other_scores: Vec<Vec<f64>> = scores
+            .iter()
+            .enumerate()
+            .filter(|(j, t)| *j != k && !t.is_empty())
+            .map(|(_, t)| t.clone())
+            .collect();
+        let mean_fleet = realdata::fleet_scale_mean_coverage(&other_scores);
         let name = &unit.name;
         let Some(c) = realdata::unit_coverage(unit, fleet) else {
             println!("  {name:<20} one session: nothing to hold out");
@@ -235,6 +246,18 @@ fn mukca() {
                 .collect::<Vec<_>>()
                 .join(", ")
         );
+        if c.sessions == 3 {
+            if let Some(a) = realdata::unit_coverage(unit, mean_fleet) {
+                println!(
+                    "    sensitivity: κ at the other units' mean coverage 95 % {mean_fleet:.3}: \
+                     nested {:.3}, median U95 {:.4} mm",
+                    a.covered_nested, a.nested_u95_mm
+                );
+                pooled_alt += a.covered_nested * a.probings as f64;
+            }
+        } else if c.sessions > 3 {
+            pooled_alt += c.covered_nested * c.probings as f64;
+        }
         if c.sessions >= 3 {
             for (k, (_, f)) in c.pose_sweep.iter().enumerate() {
                 sweep[k] += f * c.probings as f64;
@@ -242,10 +265,14 @@ fn mukca() {
             pooled += c.covered_nested * c.probings as f64;
             judged += c.probings;
         }
-        per_session.extend(c.per_session.iter().map(|(s, n, f, x, j)| {
+        per_session.extend(c.per_session.iter().map(|(s, n, f, x, j, r)| {
             format!(
-                "{}/{s}: {f:.3} of {n}, extrapolated {x:.2} (tip) {j:.2} (joints)",
-                c.unit
+                "{}/{s}: {f:.3} of {n}, extrapolated {x:.2} (tip) {j:.2} (joints) {:.2} \
+                 (a joint outside its range) {:.2} (by > {} rad)",
+                c.unit,
+                r[0],
+                r[1],
+                realdata::RANGE_MARGIN
             )
         }));
         for f in &c.failed {
@@ -255,6 +282,10 @@ fn mukca() {
     println!(
         "  pooled over units with ≥ 3 sessions, nested model term: {:.3} of {judged} probings",
         pooled / judged.max(1) as f64
+    );
+    println!(
+        "  pooled, sensitivity (3-session units at the other units' mean-coverage κ): {:.3}",
+        pooled_alt / judged.max(1) as f64
     );
     println!(
         "  pooled, m × the pose term's σ (m = 0, 0.5, 1, 1.5, 2, 3): {}  (* in the scales: \

@@ -132,6 +132,41 @@ impl Support {
     }
 }
 
+/// The cheapest extrapolation check a hub could run: each joint's [min, max] over the
+/// calibration's rows. Measured (not used) as the candidate for the hub's flag, which would
+/// need the ranges in the table (issue 27; the table's format has no room for them today).
+#[derive(Clone, Debug)]
+pub struct JointRange {
+    /// Per joint: (least, greatest) angle of the calibration (rad).
+    pub range: Vec<(f64, f64)>,
+}
+
+impl JointRange {
+    /// The ranges of `data`'s joint angles; `None` without rows.
+    pub fn of(data: &Dataset) -> Option<JointRange> {
+        (!data.rows.is_empty()).then(|| JointRange {
+            range: (0..data.dof)
+                .map(|j| {
+                    data.rows
+                        .iter()
+                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| {
+                            (a.min(r.theta[j]), b.max(r.theta[j]))
+                        })
+                })
+                .collect(),
+        })
+    }
+
+    /// How far (rad) the farthest joint of `theta` lies outside its range (0 inside).
+    pub fn excess(&self, theta: &[f64]) -> f64 {
+        self.range
+            .iter()
+            .zip(theta)
+            .map(|(&(lo, hi), &t)| (lo - t).max(t - hi).max(0.0))
+            .fold(0.0, f64::max)
+    }
+}
+
 /// The calibration's poses in joint space: a reading is outside when its Mahalanobis
 /// distance from their mean, in their own covariance, exceeds every calibration row's.
 ///
@@ -208,5 +243,40 @@ impl JointSupport {
     /// Is `theta` outside every calibration row's distance?
     pub fn far(&self, theta: &[f64]) -> bool {
         self.distance(theta) > self.threshold
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::{Kind, Row};
+
+    /// A joint inside its calibration range has no excess; outside, its distance to the
+    /// nearer end, the largest over the joints.
+    #[test]
+    fn the_range_excess_is_the_farthest_joints_distance_outside() {
+        let row = |theta: Vec<f64>| Row {
+            kind: Kind::Point,
+            group: 0,
+            theta,
+            xyz: Some([0.0; 3]),
+            end: None,
+            length_mm: None,
+            sphere: None,
+            temp_c: 20.0,
+            probe: None,
+            line: 0,
+        };
+        let data = Dataset {
+            rows: vec![row(vec![0.0, -1.0]), row(vec![0.5, 1.0])],
+            dof: 2,
+            has_temperature: false,
+            warnings: Vec::new(),
+            source: "test".into(),
+        };
+        let r = JointRange::of(&data).unwrap();
+        assert_eq!(r.excess(&[0.25, 0.0]), 0.0);
+        assert!((r.excess(&[0.7, -1.1]) - 0.2).abs() < 1e-12);
+        assert!((r.excess(&[-0.3, 1.05]) - 0.3).abs() < 1e-12);
     }
 }

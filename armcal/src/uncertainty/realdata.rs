@@ -53,7 +53,7 @@ pub struct UnitCoverage {
     /// Per held-out session: (name, probings, fraction covered by the nested budget,
     /// fraction flagged as extrapolated from the training sessions in tip space, and in
     /// joint space).
-    pub per_session: Vec<(String, usize, f64, f64, f64)>,
+    pub per_session: Vec<(String, usize, f64, f64, f64, [f64; 2])>,
     /// Median U95 of the probings (mm), without and with the model term.
     pub median_u95_mm: [f64; 2],
     /// RMS distance of the probings from their socket's centre (mm).
@@ -63,6 +63,9 @@ pub struct UnitCoverage {
     /// Mean model term the other sessions gave (mm per axis).
     pub model_mm: f64,
 }
+
+/// The margin (rad, about 5.7°) of the per-joint range check measured beside the others.
+pub const RANGE_MARGIN: f64 = 0.1;
 
 /// A held-out session: its calibration, budget, data and what its probings showed.
 struct Held {
@@ -78,6 +81,9 @@ struct Held {
     far: f64,
     /// Fraction outside the training sessions' joint-space spread.
     joint_far: f64,
+    /// Fraction with a joint outside the training sessions' range, by more than 0 and by
+    /// more than [`RANGE_MARGIN`] rad.
+    range_far: [f64; 2],
     test: Dataset,
     /// Per probing: (row, |deviation|, predicted U95, per-axis variance the budget missed).
     probings: Vec<(usize, f64, f64, f64)>,
@@ -141,12 +147,18 @@ fn hold_out(
         let n = test.rows.iter().filter(|r| sup.far(&m.tip(r))).count();
         n as f64 / test.rows.len().max(1) as f64
     });
+    let range_far = super::extrapolation::JointRange::of(&train_data).map_or([0.0; 2], |r| {
+        let n = test.rows.len().max(1) as f64;
+        let share = |m: f64| test.rows.iter().filter(|t| r.excess(&t.theta) > m).count() as f64 / n;
+        [share(0.0), share(RANGE_MARGIN)]
+    });
     let joint_far = super::extrapolation::JointSupport::of(&train_data).map_or(0.0, |sup| {
         let n = test.rows.iter().filter(|r| sup.far(&r.theta)).count();
         n as f64 / test.rows.len().max(1) as f64
     });
     Ok(Held {
         joint_far,
+        range_far,
         pose,
         pose_scale,
         far,
@@ -225,6 +237,7 @@ pub fn unit_coverage(unit: &Unit, two_group_scale: f64) -> Option<UnitCoverage> 
             k as f64 / n.max(1) as f64,
             h.far,
             h.joint_far,
+            h.range_far,
         ));
     }
     let pose_sweep = [0.0, 0.5, 1.0, 1.5, 2.0, 3.0]
@@ -352,4 +365,31 @@ pub fn fleet_scale(per_unit: &[f64]) -> f64 {
         n if n % 2 == 1 => v[n / 2],
         n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
     }
+}
+
+/// A sensitivity beside [`fleet_scale`]: the least κ at which the units' mean coverage of
+/// their [`two_group_scores`] reaches 95 % (each unit weighted alike, whatever its rows).
+/// [`SCALE_MAX`](super::pose::SCALE_MAX) when none does; 0 without units.
+pub fn fleet_scale_mean_coverage(per_unit: &[Vec<f64>]) -> f64 {
+    let units: Vec<&Vec<f64>> = per_unit.iter().filter(|t| !t.is_empty()).collect();
+    if units.is_empty() {
+        return 0.0;
+    }
+    let mean = |k: f64| {
+        units
+            .iter()
+            .map(|t| t.iter().filter(|x| **x <= k).count() as f64 / t.len() as f64)
+            .sum::<f64>()
+            / units.len() as f64
+    };
+    let mut candidates: Vec<f64> = units
+        .iter()
+        .flat_map(|t| t.iter().copied())
+        .filter(|x| x.is_finite())
+        .collect();
+    candidates.sort_by(f64::total_cmp);
+    candidates
+        .into_iter()
+        .find(|&k| mean(k) >= super::u95::LEVEL)
+        .unwrap_or(super::pose::SCALE_MAX)
 }
