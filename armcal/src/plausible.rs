@@ -109,21 +109,6 @@ pub fn data(arm: &Arm, data: &Dataset, accept: Accept) -> Result<(), Implausible
                 ));
             }
         }
-        if let Some((ratio, g, line, diameter)) = sphere_ratio(arm, data) {
-            if !(1.0 / SIZE_RATIO..=SIZE_RATIO).contains(&ratio) {
-                return Err(refuse(
-                    format!(
-                        "sphere group {g} (line {line}): diameter_mm = {diameter} while the arm's \
-                         nominal model puts its ball centres {:.1} mm apart (a test sphere of \
-                         about {:.1} mm, a factor {ratio:.3})",
-                        diameter * ratio,
-                        diameter * ratio,
-                    ),
-                    unit_hint(ratio),
-                    "units",
-                ));
-            }
-        }
         if let Some((ratio, g, length)) = length_ratio(arm, data) {
             if !(1.0 / SIZE_RATIO..=SIZE_RATIO).contains(&ratio) {
                 return Err(refuse(
@@ -131,6 +116,20 @@ pub fn data(arm: &Arm, data: &Dataset, accept: Accept) -> Result<(), Implausible
                         "length group {g}: length_mm = {length} while the arm's nominal model puts \
                          the bar's ends {:.1} mm apart (a factor {ratio:.3})",
                         length * ratio
+                    ),
+                    unit_hint(ratio),
+                    "units",
+                ));
+            }
+        }
+        if let Some((ratio, g, line, diameter)) = sphere_ratio(arm, data) {
+            if !(1.0 / SIZE_RATIO..=SIZE_RATIO).contains(&ratio) {
+                return Err(refuse(
+                    format!(
+                        "sphere group {g} (line {line}): diameter_mm = {diameter} while the arm's \
+                         nominal model puts the ball centres on a test sphere of about {:.1} mm \
+                         (a factor {ratio:.3})",
+                        diameter * ratio,
                     ),
                     unit_hint(ratio),
                     "units",
@@ -298,7 +297,7 @@ pub fn order(arm: &Arm, data: &Dataset) -> Result<(), Implausible> {
         Some((m, name, mend)) if m <= ORDER_MM && m * ORDER_GAIN <= as_given => Err(Implausible {
             file: data.source.clone(),
             what: format!(
-                "the joint columns look out of order: the arm's nominal model misfits the data \
+                "the joint columns look out of order: the arm's model misfits the data \
                  by {as_given:.1} mm RMS as the columns are, by {m:.2} mm with {name} (a \
                  calibration corrects a few mm, never {ORDER_MM} mm)"
             ),
@@ -541,9 +540,11 @@ pub fn calibration_text(text: &str, file: &str, accept: Accept) -> Result<(), Im
                     format!("joint[{k}].{key}"),
                     line_key,
                     format!(
-                        "= {t} rad, {off:.3} rad ({:.1}°) from the nearest quarter turn, where \
-                         it holds 0, ±π/2 or ±π and an error of a few mrad",
-                        off.to_degrees()
+                        "= {t} rad ({:.1}°), {off:.3} rad off the nearest quarter turn, where it \
+                         holds 0, ±π/2 or ±π and an error of a few mrad (read as degrees: \
+                         {:.5} rad)",
+                        t.to_degrees(),
+                        t.to_radians()
                     ),
                     degrees,
                 ));
@@ -576,8 +577,9 @@ pub fn calibration_text(text: &str, file: &str, accept: Accept) -> Result<(), Im
                     &line_key,
                     format!(
                         "= {v} rad ({:.2}°), where an encoder's or a bearing's periodic error \
-                         is below {PERIODIC_RAD} rad",
-                        v.to_degrees()
+                         is below {PERIODIC_RAD} rad (read as degrees: {:.2e} rad)",
+                        v.to_degrees(),
+                        v.to_radians()
                     ),
                     degrees,
                 ));
@@ -698,4 +700,70 @@ pub fn hub(
         )));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    fn data_dir() -> std::path::PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../data")
+    }
+
+    /// Every calibration file the project ships (nominal models of real arms, calibrated
+    /// ones, default-6 with every term) reads as radians and mm.
+    #[test]
+    fn the_shipped_calibration_files_pass() {
+        let mut n = 0;
+        for dir in [data_dir(), data_dir().join("mukca")] {
+            for e in std::fs::read_dir(dir).unwrap() {
+                let p = e.unwrap().path();
+                if p.extension().is_some_and(|x| x == "toml") && !p.ends_with("mpe-example.toml") {
+                    calibration(&p, Accept::default())
+                        .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+                    n += 1;
+                }
+            }
+        }
+        assert!(n >= 20, "{n} files");
+    }
+
+    /// The line of a key in the k-th `[[joint]]`, not in another table or joint.
+    #[test]
+    fn key_lines_are_those_of_the_joint() {
+        let text = "name = \"a\"\n[[joint]]\naxis = \"z\"\ntilt = [0, 0]\n[[joint]]\n\
+                    axis = \"x\"\ntilt = [1, 0]\n[probe]\nball_diameter = 6\n";
+        assert_eq!(key_line(text, Some(1), "tilt"), Some(4));
+        assert_eq!(key_line(text, Some(2), "tilt"), Some(7));
+        assert_eq!(key_line(text, Some(3), "tilt"), None);
+        assert_eq!(key_line(text, None, "ball_diameter"), Some(9));
+        assert_eq!(key_line(text, Some(2), "ball_diameter"), None);
+    }
+
+    /// MUKCa's real recordings with their nominal models misfit by far less than
+    /// [`ORDER_MM`]; the same rows with two joint columns swapped are refused, the swap named.
+    #[test]
+    fn real_recordings_pass_the_order_check_and_a_swap_is_named() {
+        let dir = data_dir().join("mukca");
+        for name in [
+            "mukca-panda-panda_2",
+            "mukca-gen3lite-dinova_1",
+            "mukca-iiwa14-kuka_14",
+        ] {
+            let arm = crate::load::arm(&dir.join(format!("{name}.toml"))).unwrap();
+            let data = crate::data::read(&dir.join(format!("{name}.csv")), arm.dof()).unwrap();
+            let n = arm.dof();
+            let m = nominal_misfit(&arm, &data, &(0..n).collect::<Vec<_>>());
+            eprintln!("{name}: the nominal model misfits by {m:.2} mm RMS");
+            assert!(m < ORDER_MM / 2.0, "{name}: {m} mm");
+            order(&arm, &data).unwrap();
+            let mut swapped = data.clone();
+            for r in &mut swapped.rows {
+                r.theta.swap(1, 2);
+            }
+            let e = order(&arm, &swapped).unwrap_err().to_string();
+            assert!(e.contains("with j2 and j3 swapped"), "{name}: {e}");
+        }
+    }
 }

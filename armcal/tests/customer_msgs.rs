@@ -319,7 +319,7 @@ fn decode_refuses_a_hub_running_another_arms_table() {
     };
     let o = decode("good.bin", stream(6, crc), &[]);
     assert!(o.status.success(), "{}", stderr(&o));
-    refused(
+    let seven = refused(
         &decode("seven.bin", stream(7, crc), &[]),
         &[
             "seven.bin",
@@ -329,7 +329,7 @@ fn decode_refuses_a_hub_running_another_arms_table() {
             "--accept-misfit",
         ],
     );
-    refused(
+    let other = refused(
         &decode("other.bin", stream(6, crc ^ 1), &[]),
         &[
             "other.bin",
@@ -338,6 +338,7 @@ fn decode_refuses_a_hub_running_another_arms_table() {
             "another calibration",
         ],
     );
+    eprintln!("{seven}{other}");
     let o = decode("other2.bin", stream(6, crc ^ 1), &["--accept-misfit"]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
