@@ -67,6 +67,10 @@ pub struct Row {
     pub probe: Option<u8>,
     /// 1-based line of the row in its file (0 for rows made in memory).
     pub line: usize,
+    /// The file the row was read from, where a dataset merges several files ([`read_all`]),
+    /// so that a message raised after the merge names the row's own file with its line
+    /// ([`Dataset::file_of`]); `None`: the dataset's [`Dataset::source`].
+    pub file: Option<std::sync::Arc<str>>,
 }
 
 /// What a `sphere` row touches.
@@ -281,6 +285,12 @@ pub fn read_all(paths: &[std::path::PathBuf], arm: &quatarm_ref::Arm) -> Result<
             seen.push((real, file.clone()));
         }
         let mut part = parse_with(&read_text(path)?, &file, Joints::RadiansOrCounts(arm))?;
+        if paths.len() > 1 {
+            let name: std::sync::Arc<str> = file.as_str().into();
+            for r in &mut part.rows {
+                r.file = Some(name.clone());
+            }
+        }
         parts.push(part.clone());
         if let Some(first) = part.rows.iter().find(|r| r.kind == Kind::Point) {
             match &point_file {
@@ -449,6 +459,16 @@ fn parse_with(text: &str, file: &str, joints_as: Joints) -> Result<Dataset, Data
         ));
     }
     let header_err = |h: HeaderProblem| err(hline, &h.column, h.message);
+    // Another joint count than the arm's: whose arm it is, so that another arm's calibration
+    // given with the data is named as such.
+    let joints_err = |h: HeaderProblem| match joints_as {
+        Joints::RadiansOrCounts(arm) if h.message.contains(" joints") => err(
+            hline,
+            &h.column,
+            format!("{}; {}", h.message, whose_arm(arm)),
+        ),
+        _ => header_err(h),
+    };
     let seen = unique_columns(&names).map_err(header_err)?;
     let mut warnings = Vec::new();
     for n in &names {
@@ -481,11 +501,11 @@ fn parse_with(text: &str, file: &str, joints_as: Joints) -> Result<Dataset, Data
             .ok_or_else(|| err(hline, name, "missing column".into()))
     };
     let counts = match joints_as {
-        Joints::RadiansOrCounts(_) => joint_columns(&names, "c", dof).map_err(header_err)?,
+        Joints::RadiansOrCounts(_) => joint_columns(&names, "c", dof).map_err(joints_err)?,
         Joints::Radians(_) => None,
     };
     let (joints, counts_of) = match (
-        joint_columns(&names, "j", dof).map_err(header_err)?,
+        joint_columns(&names, "j", dof).map_err(joints_err)?,
         counts,
         joints_as,
     ) {
@@ -500,7 +520,12 @@ fn parse_with(text: &str, file: &str, joints_as: Joints) -> Result<Dataset, Data
                 ),
             ))
         }
-        _ => return Err(err(hline, "j1", missing_joint(1, 0, dof))),
+        _ => {
+            return Err(joints_err(HeaderProblem {
+                column: "j1".into(),
+                message: missing_joint(1, 0, dof),
+            }))
+        }
     };
     let columns = Columns {
         kind: need("kind")?,
@@ -693,7 +718,7 @@ impl Bound {
     pub fn joint() -> Bound {
         Bound::Abs(
             crate::limits::JOINT_RAD,
-            "rad (a joint reading: a thousand turns)",
+            "rad (a joint reading: a thousand turns; encoder counts? name the columns c1..cN)",
         )
     }
 
@@ -816,6 +841,21 @@ fn missing_joint(k: usize, file_dof: usize, dof: usize) -> String {
     }
 }
 
+/// The arm the data are read for, as a message names it: its name, serial and joint count,
+/// and the question a joint count other than the data's raises.
+pub fn whose_arm(arm: &quatarm_ref::Arm) -> String {
+    format!(
+        "the calibration's arm is {} ({}{} joints): is it the arm these data were measured with?",
+        arm.name
+            .as_deref()
+            .map_or_else(|| "unnamed".to_string(), |n| format!("`{}`", shown(n))),
+        arm.serial
+            .as_deref()
+            .map_or_else(String::new, |s| format!("serial {}, ", shown(s))),
+        arm.dof()
+    )
+}
+
 /// The line of the first non-comment, non-blank line (the header).
 fn first_content_line(text: &str) -> Option<usize> {
     text.lines()
@@ -866,6 +906,9 @@ impl Cells<'_> {
 
     fn integer(&self, i: usize, column: &str) -> Result<i64, DataError> {
         let s = self.text(i);
+        if s.is_empty() {
+            return Err(self.fail(column, "empty: every row needs a whole number here".into()));
+        }
         match s.parse::<i64>() {
             Ok(g) => Ok(g),
             Err(_) => match s.parse::<f64>() {
@@ -962,6 +1005,7 @@ fn parse_row(
         temp_c,
         probe,
         line,
+        file: None,
     })
 }
 
@@ -1020,7 +1064,7 @@ fn sphere_cells(cells: &Cells, c: &Columns) -> Result<Touch, DataError> {
 /// ends and one length, no group number shared by spat and length rows.
 fn check_groups(data: &Dataset) -> Result<(), DataError> {
     let err = |row: &Row, column: &str, message: String| DataError {
-        file: data.source.clone(),
+        file: data.file_of(row).to_string(),
         line: row.line,
         column: column.to_string(),
         message,
@@ -1172,6 +1216,22 @@ impl Dataset {
         }
         check_groups(&data)?;
         Ok(data)
+    }
+
+    /// The file `row` was read from: its own where the dataset merges several files, else
+    /// the dataset's source.
+    pub fn file_of<'a>(&'a self, row: &'a Row) -> &'a str {
+        row.file.as_deref().unwrap_or(&self.source)
+    }
+
+    /// Where the first row of group `group` is, as messages name it: `b.csv, line 7`
+    /// (`None` where no row has that group number).
+    pub fn group_place(&self, group: i64) -> Option<String> {
+        let r = self
+            .rows
+            .iter()
+            .find(|r| r.kind != Kind::Point && r.group == group)?;
+        Some(format!("{}, line {}", self.file_of(r), r.line))
     }
 
     /// Sorts the rows by what ties them together; groups come in group-number order.

@@ -434,6 +434,7 @@ pub fn simulate(truth: &Arm, opts: &Options, rng: &mut SimRng) -> Result<Simulat
                     temp_c: tc,
                     probe,
                     line: 0,
+                    file: None,
                 });
             }
         }
@@ -592,6 +593,7 @@ pub(crate) fn row(kind: Kind, group: i64, th: &[f64], end: Option<End>, tc: f64)
         temp_c: tc,
         probe: None,
         line: 0,
+        file: None,
     }
 }
 
@@ -626,6 +628,7 @@ pub fn design_like(arm: &Arm, like: &Dataset, seed: u64) -> Dataset {
                 temp_c: tc,
                 probe,
                 line: 0,
+                file: None,
             });
         }
     }

@@ -55,6 +55,7 @@ fn joint3_still(n: usize) -> Dataset {
                 temp_c: 20.0,
                 probe: None,
                 line: 0,
+                file: None,
             }
         })
         .collect();

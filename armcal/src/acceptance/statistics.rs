@@ -101,6 +101,17 @@ pub enum StatError {
     },
 }
 
+impl StatError {
+    /// The group the test could not be computed from.
+    pub fn group(&self) -> i64 {
+        match self {
+            StatError::SphereTooFew { group, .. }
+            | StatError::Articulations { group, .. }
+            | StatError::Fit { group, .. } => *group,
+        }
+    }
+}
+
 /// Every test value the data supports, group by group; `ball_diameter` gives the stylus ball
 /// (mm) a row was taken with (a sphere group is touched with one probe: the data reader's rule).
 pub fn values(
@@ -271,6 +282,7 @@ mod tests {
             temp_c: 20.0,
             probe: None,
             line: 0,
+            file: None,
         }
     }
 

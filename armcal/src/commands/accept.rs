@@ -15,6 +15,10 @@ pub struct AcceptArgs {
     /// pasted twice).
     #[arg(long)]
     accept_duplicates: bool,
+    /// Accept joint columns that a swap (or reversal) of two columns fits far better than
+    /// their order as given (refused as columns out of order).
+    #[arg(long)]
+    accept_order: bool,
 }
 
 impl AcceptArgs {
@@ -24,6 +28,7 @@ impl AcceptArgs {
             units: self.accept_units,
             temperature: self.accept_temperature,
             duplicates: self.accept_duplicates,
+            order: self.accept_order,
             ..Default::default()
         }
     }

@@ -77,11 +77,14 @@ pub struct Args {
     accept: super::accept::AcceptArgs,
 }
 
-/// Reads the start arm: a file, or `default-6`.
-pub fn start_arm(path: Option<&Path>) -> anyhow::Result<Arm> {
+/// Reads the start arm: a file (its angles in radians unless `accept.units`), or `default-6`.
+pub fn start_arm(path: Option<&Path>, accept: armcal::plausible::Accept) -> anyhow::Result<Arm> {
     match path {
         None => Ok(Arm::default6()),
-        Some(p) => Ok(armcal::load::arm(p)?),
+        Some(p) => {
+            armcal::plausible::calibration(p, accept)?;
+            Ok(armcal::load::arm(p)?)
+        }
     }
 }
 
@@ -89,7 +92,7 @@ pub fn start_arm(path: Option<&Path>) -> anyhow::Result<Arm> {
 /// terms, the output's name, the data) is checked before the fit; the files are written
 /// together at the end, or none of them.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    let start = start_arm(a.arm.as_deref())?;
+    let start = start_arm(a.arm.as_deref(), a.accept.accept())?;
     let terms = Terms::parse(&a.terms, start.dof())?;
     let table = a.output.with_extension("bin");
     let mut inputs = super::data_in::inputs(&a.data);

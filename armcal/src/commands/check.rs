@@ -75,6 +75,7 @@ pub fn run(a: Args) -> anyhow::Result<i32> {
     if let Some(r) = &a.report {
         armcal::output::check(&[(r.as_path(), "report")], &inputs)?;
     }
+    armcal::plausible::calibration(&a.calib, a.accept.accept())?;
     // The budget, where the file has one, gives U where the MPE file has none.
     let (arm, budget) = armcal::uncertainty::load::calibration_with_budget(
         &a.calib,
@@ -93,7 +94,11 @@ pub fn run(a: Args) -> anyhow::Result<i32> {
     let names = super::data_in::names(&a.data);
     // The values once: another arm's calibration is refused on them before any prediction or
     // decision, and the decision below reuses them.
-    let values = acceptance::measure(&arm, &data).with_context(|| names.clone())?;
+    // Named by the group's own file and line, not by all the files given.
+    let values = acceptance::measure(&arm, &data).map_err(|e| {
+        let at = data.group_place(e.group()).unwrap_or_else(|| names.clone());
+        anyhow::anyhow!("{at}: {e}")
+    })?;
     armcal::plausible::misfit(
         acceptance::statistics::Test::ALL.iter().filter_map(|&t| {
             acceptance::statistics::result(&values, t).map(|v| (t.key(), v.value_mm * 1e3))

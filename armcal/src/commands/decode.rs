@@ -35,6 +35,12 @@ pub struct Args {
     /// past the due date its `[calibration]` gives.
     #[arg(long)]
     calib: Option<PathBuf>,
+    #[command(flatten)]
+    accept: super::accept::AcceptArgs,
+    /// Go on when the hub announces a table other than the one `--calib` builds (refused as
+    /// another arm's or another calibration's table).
+    #[arg(long)]
+    accept_misfit: bool,
 }
 
 /// Runs the subcommand.
@@ -42,9 +48,18 @@ pub struct Args {
 /// Nothing goes to stdout until the first report: a run that fails (an unreadable input, a
 /// capture in which no frame passed its checks) leaves no partial CSV behind.
 pub fn run(args: Args) -> Result<()> {
-    if let Some(calib) = &args.calib {
-        armcal::load::warn_if_due(calib)?;
-    }
+    let accept = armcal::plausible::Accept {
+        misfit: args.accept_misfit,
+        ..args.accept.accept()
+    };
+    let expected = match &args.calib {
+        Some(calib) => {
+            armcal::plausible::calibration(calib, accept)?;
+            armcal::load::warn_if_due(calib)?;
+            Some(hub_table(calib)?)
+        }
+        None => None,
+    };
     let (mut source, joining, name) = open(&args)?;
     let mut decoder = if joining {
         Decoder::joining()
@@ -76,6 +91,11 @@ pub fn run(args: Args) -> Result<()> {
                 continue;
             };
             note(&item);
+            if let (Item::Hello(h), Some(expected)) = (&item, &expected) {
+                // Before any report of that table is written.
+                out.flush()?;
+                armcal::plausible::hub(expected, &name, h.joints, h.live.map(|l| l.crc), accept)?;
+            }
             if let Some(r) = item.report() {
                 if !header_written {
                     out.write_all(CSV_HEADER.as_bytes())?;
@@ -101,6 +121,29 @@ pub fn run(args: Args) -> Result<()> {
     }
     out.flush()?;
     Ok(())
+}
+
+/// What a hub running `calib`'s table announces: its joint count and the CRCs of the tables
+/// `armcal table build` makes from it, with and without the covariance.
+fn hub_table(calib: &std::path::Path) -> Result<armcal::plausible::HubTable> {
+    let (arm, budget, release) = armcal::load::calibration_release(calib)?;
+    let built = |b: Option<&quatarm_ref::calfile::Uncertainty>| -> Result<u32> {
+        let bytes = armcal::tablebuild::build_release(&arm, b, &release)
+            .with_context(|| calib.display().to_string())?;
+        Ok(quatarm::table::Table::parse(&bytes)
+            .map_err(|e| anyhow::anyhow!("{}: {e:?}", calib.display()))?
+            .crc())
+    };
+    let mut crcs = vec![built(budget.as_ref())?];
+    if let Some(b) = &budget {
+        crcs.push(built(Some(&b.without_covariance()))?);
+    }
+    crcs.dedup();
+    Ok(armcal::plausible::HubTable {
+        file: calib.display().to_string(),
+        joints: arm.dof(),
+        crcs,
+    })
 }
 
 /// The stream to read, whether the decoder joins it mid-stream (a live port, unless

@@ -126,7 +126,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if a.folds < 2 && !a.by_group {
         bail!("--folds must be 2 or more: a diagnosis needs held-out data");
     }
-    let start = super::calibrate::start_arm(a.arm.as_deref())?;
+    let start = super::calibrate::start_arm(a.arm.as_deref(), a.accept.accept())?;
     let mut inputs = super::data_in::inputs(&a.data);
     if let Some(arm) = &a.arm {
         inputs.push((arm.as_path(), "start arm"));
@@ -240,7 +240,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 
 /// `armcal diagnose --fleet`: every file is a unit of the arm `--arm` (default `default-6`).
 fn run_fleet(a: &Args) -> anyhow::Result<()> {
-    let start = super::calibrate::start_arm(a.arm.as_deref())?;
+    let start = super::calibrate::start_arm(a.arm.as_deref(), a.accept.accept())?;
     let paths: Vec<&Path> = a.fleet.iter().map(PathBuf::as_path).collect();
     let files = diagnose::fleet::read_units(&paths, start.dof())?;
     for u in &files {

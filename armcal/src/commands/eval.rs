@@ -48,6 +48,7 @@ pub struct Args {
 
 /// Runs the subcommand.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    armcal::plausible::calibration(&args.calib, args.accept.accept())?;
     armcal::load::warn_if_due(&args.calib)?;
     let (arm, budget) = armcal::uncertainty::load::calibration_and_budget(
         &args.calib,
@@ -63,7 +64,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "stdin".to_string(),
         ),
     };
-    let rows = rows.with_context(|| name.clone())?;
+    let rows = rows.map_err(|e| {
+        // Another joint count than the calibration's: say whose arm the calibration is.
+        let e = format!("{name}: {e:#}");
+        if e.contains(" joints") {
+            anyhow::anyhow!(
+                "{e}; {} ({})",
+                armcal::data::whose_arm(&arm),
+                args.calib.display()
+            )
+        } else {
+            anyhow::anyhow!(e)
+        }
+    })?;
     let radians: Vec<Vec<f64>> = rows.iter().map(|r| r.reading.radians(&arm)).collect();
     let placed: Vec<armcal::plausible::Reading> = rows
         .iter()

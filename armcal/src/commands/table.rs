@@ -21,6 +21,8 @@ pub enum Command {
         /// stream no U95.
         #[arg(long)]
         without_covariance: bool,
+        #[command(flatten)]
+        accept: super::accept::AcceptArgs,
     },
     /// Validate a binary table as the firmware does and print what it holds.
     Show {
@@ -80,8 +82,10 @@ pub fn run(command: Command) -> anyhow::Result<()> {
             calib,
             output,
             without_covariance,
+            accept,
         } => {
             armcal::output::check(&[(&output, "table")], &[(&calib, "calibration file")])?;
+            armcal::plausible::calibration(&calib, accept.accept())?;
             let (arm, mut budget, release) = armcal::load::calibration_release(&calib)?;
             if without_covariance {
                 budget = budget.map(|u| u.without_covariance());

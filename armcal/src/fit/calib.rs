@@ -1086,10 +1086,12 @@ fn check_sphere_groups(start: &Arm, data: &Dataset, layout: &Layout) -> Result<(
         let qs: Vec<Vector3<f64>> = g.rows.iter().map(|&i| mounted.tip(&data.rows[i])).collect();
         let radius = crate::fit::probes::sphere_radius(start, data, g);
         if let Err(e) = crate::geometry::sphere::centre_of(&qs, radius) {
-            let line = g.rows.first().map_or(0, |&i| data.rows[i].line);
+            let first = g.rows.first().map(|&i| &data.rows[i]);
+            let line = first.map_or(0, |r| r.line);
+            let file = first.map_or(data.source.as_str(), |r| data.file_of(r));
             return Err(CalibError::Mismatch(format!(
-                "{}: sphere group {} (line {line}): {e}",
-                data.source, g.group
+                "{file}: sphere group {} (line {line}): {e}",
+                g.group
             )));
         }
     }

@@ -28,7 +28,7 @@ pub fn check(arm: &Arm, data: &Dataset) -> Result<(), DataError> {
             if arm.probe_index(id).is_none() {
                 let ids: Vec<String> = arm.probes().map(|p| p.id.to_string()).collect();
                 return Err(DataError {
-                    file: data.source.clone(),
+                    file: data.file_of(r).to_string(),
                     line: r.line,
                     column: "probe".into(),
                     message: format!(
