@@ -210,10 +210,22 @@ pub fn release_line(t: &Table<'_>) -> String {
     }
 }
 
-/// A person-readable listing of a validated table.
+/// A person-readable listing of a validated table: its header, each joint, each probe, its
+/// uncertainty budget.
 pub fn show(t: &Table<'_>) -> String {
-    use std::fmt::Write as _;
     let mut s = String::new();
+    show_header(&mut s, t);
+    for i in 0..t.joint_count() {
+        show_joint(&mut s, t, i);
+    }
+    show_probes(&mut s, t);
+    show_budget(&mut s, t);
+    s
+}
+
+/// Version, size, CRC, release, serial, joints and the terms the table carries.
+fn show_header(s: &mut String, t: &Table<'_>) {
+    use std::fmt::Write as _;
     let flags = t.flags();
     let names: Vec<&str> = [
         (FLAG_GEOMETRIC, "geometric"),
@@ -245,55 +257,63 @@ pub fn show(t: &Table<'_>) -> String {
             names.join(", ")
         }
     );
-    for i in 0..t.joint_count() {
-        let Some(j) = t.joint(i) else { continue };
+}
+
+/// Joint `i` (0-based): its axis, rotation, link, thermal and gravity terms, harmonics and
+/// axis wobble.
+fn show_joint(s: &mut String, t: &Table<'_>, i: usize) {
+    use std::fmt::Write as _;
+    let Some(j) = t.joint(i) else { return };
+    let _ = writeln!(
+        s,
+        "joint {}: axis {}, {} counts/rev",
+        i + 1,
+        ["x", "y", "z"][usize::from(j.axis).min(2)],
+        j.counts
+    );
+    let q = j.rotation;
+    let _ = writeln!(
+        s,
+        "  M' (w,x,y,z) = [{:.12}, {:.12}, {:.12}, {:.12}]",
+        q[0], q[1], q[2], q[3]
+    );
+    let _ = writeln!(
+        s,
+        "  link (mm) = [{:.6}, {:.6}, {:.6}]",
+        j.link[0], j.link[1], j.link[2]
+    );
+    let _ = writeln!(
+        s,
+        "  thermal = {:e} /degC, gravity = {:e} rad/mm",
+        j.thermal, j.gravity
+    );
+    for h in &j.harmonics[..usize::from(j.harmonic_count)] {
         let _ = writeln!(
             s,
-            "joint {}: axis {}, {} counts/rev",
-            i + 1,
-            ["x", "y", "z"][usize::from(j.axis).min(2)],
-            j.counts
+            "  harmonic order {}: sin {:e}, cos {:e} rad",
+            h.order, h.sin, h.cos
         );
-        let q = j.rotation;
-        let _ = writeln!(
-            s,
-            "  M' (w,x,y,z) = [{:.12}, {:.12}, {:.12}, {:.12}]",
-            q[0], q[1], q[2], q[3]
-        );
-        let _ = writeln!(
-            s,
-            "  link (mm) = [{:.6}, {:.6}, {:.6}]",
-            j.link[0], j.link[1], j.link[2]
-        );
-        let _ = writeln!(
-            s,
-            "  thermal = {:e} /degC, gravity = {:e} rad/mm",
-            j.thermal, j.gravity
-        );
-        for h in &j.harmonics[..usize::from(j.harmonic_count)] {
-            let _ = writeln!(
-                s,
-                "  harmonic order {}: sin {:e}, cos {:e} rad",
-                h.order, h.sin, h.cos
-            );
-        }
-        let w = t.joint_wobble(i);
-        for term in &w.terms[..usize::from(w.count).min(w.terms.len())] {
-            let _ = writeln!(
-                s,
-                "  axis wobble order {}: alpha sin {:e}, cos {:e}; beta sin {:e}, cos {:e} rad",
-                term.order, term.alpha[0], term.alpha[1], term.beta[0], term.beta[1]
-            );
-        }
-        if w.count > 0 {
-            let _ = writeln!(
-                s,
-                "    about f1 = [{:.12}, {:.12}, {:.12}], f2 = [{:.12}, {:.12}, {:.12}]",
-                w.f1[0], w.f1[1], w.f1[2], w.f2[0], w.f2[1], w.f2[2]
-            );
-        }
     }
-    // Every probe, the first (mounted at boot) first.
+    let w = t.joint_wobble(i);
+    for term in &w.terms[..usize::from(w.count).min(w.terms.len())] {
+        let _ = writeln!(
+            s,
+            "  axis wobble order {}: alpha sin {:e}, cos {:e}; beta sin {:e}, cos {:e} rad",
+            term.order, term.alpha[0], term.alpha[1], term.beta[0], term.beta[1]
+        );
+    }
+    if w.count > 0 {
+        let _ = writeln!(
+            s,
+            "    about f1 = [{:.12}, {:.12}, {:.12}], f2 = [{:.12}, {:.12}, {:.12}]",
+            w.f1[0], w.f1[1], w.f1[2], w.f2[0], w.f2[1], w.f2[2]
+        );
+    }
+}
+
+/// Every probe, the first (mounted at boot) first.
+fn show_probes(s: &mut String, t: &Table<'_>) {
+    use std::fmt::Write as _;
     for k in 0..t.probe_count() {
         let Some(p) = t.probe_at(k) else { continue };
         let _ = writeln!(
@@ -311,31 +331,32 @@ pub fn show(t: &Table<'_>) -> String {
             p.ball_diameter
         );
     }
-    match t.budget() {
-        None => {
-            let _ = writeln!(s, "uncertainty: none (the hub streams no U95)");
-        }
-        Some(b) => {
-            let counts: Vec<String> = (0..t.joint_count())
-                .map(|i| format!("{}", b.encoder_counts(i)))
-                .collect();
-            let _ = writeln!(
-                s,
-                "uncertainty: encoder [{}] counts, probing {} mm, model {} mm, temperature {} degC",
-                counts.join(", "),
-                b.probing_mm(),
-                b.model_mm(),
-                b.temperature_c()
-            );
-            let _ = match t.parameters() {
-                Some(p) => writeln!(
-                    s,
-                    "  parameter covariance: {} parameters (f32 hubs only)",
-                    p.count()
-                ),
-                None => writeln!(s, "  parameter covariance: none"),
-            };
-        }
-    }
-    s
+}
+
+/// The uncertainty budget and the parameter covariance, or that there is none.
+fn show_budget(s: &mut String, t: &Table<'_>) {
+    use std::fmt::Write as _;
+    let Some(b) = t.budget() else {
+        let _ = writeln!(s, "uncertainty: none (the hub streams no U95)");
+        return;
+    };
+    let counts: Vec<String> = (0..t.joint_count())
+        .map(|i| format!("{}", b.encoder_counts(i)))
+        .collect();
+    let _ = writeln!(
+        s,
+        "uncertainty: encoder [{}] counts, probing {} mm, model {} mm, temperature {} degC",
+        counts.join(", "),
+        b.probing_mm(),
+        b.model_mm(),
+        b.temperature_c()
+    );
+    let _ = match t.parameters() {
+        Some(p) => writeln!(
+            s,
+            "  parameter covariance: {} parameters (f32 hubs only)",
+            p.count()
+        ),
+        None => writeln!(s, "  parameter covariance: none"),
+    };
 }
