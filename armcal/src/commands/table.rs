@@ -80,119 +80,136 @@ pub fn run(command: Command) -> anyhow::Result<()> {
             calib,
             output,
             without_covariance,
-        } => {
-            armcal::output::check(&[(&output, "table")], &[(&calib, "calibration file")])?;
-            let (arm, mut budget, release) = armcal::load::calibration_release(&calib)?;
-            if without_covariance {
-                budget = budget.map(|u| u.without_covariance());
-            }
-            let bytes = armcal::tablebuild::build_release(&arm, budget.as_ref(), &release)
-                .with_context(|| calib.display().to_string())?;
-            let t = Table::parse(&bytes)?;
-            let mut files = armcal::output::Staged::guarding(&[(&calib, "calibration file")]);
-            files.write(&output, &bytes)?;
-            files.commit()?;
-            println!(
-                "{}: {} bytes, {} joints, CRC {:08x}, {}{}",
-                output.display(),
-                bytes.len(),
-                t.joint_count(),
-                t.crc(),
-                release_line(&t),
-                if t.wobble().is_some() {
-                    " (with an axis wobble: the f32 hubs apply it; the Cortex-M0 hubs refuse the table)"
-                } else {
-                    ""
-                }
-            );
-            Ok(())
-        }
+        } => build(calib, output, without_covariance),
         Command::Send {
             table,
             port,
             baud,
             timeout,
-        } => {
-            let bytes = std::fs::read(&table).with_context(|| table.display().to_string())?;
-            if !(timeout > 0.0 && timeout.is_finite()) {
-                anyhow::bail!("--timeout {timeout}: a positive number of seconds");
-            }
-            let timeout = std::time::Duration::from_secs_f64(timeout);
-            let mut p = serialport::new(&port, baud)
-                .timeout(timeout)
-                .open()
-                .with_context(|| format!("opening serial port {port}"))?;
-            let sent = armcal::table_send::send(&mut p, &bytes, timeout)
-                .with_context(|| format!("sending {} to {port}", table.display()))?;
-            println!(
-                "{}: live on the hub in slot {}, record {}, CRC {:08x} ({} steps, {} reports while it ran)",
-                table.display(),
-                sent.live.slot,
-                sent.live.seq,
-                sent.live.crc,
-                sent.steps,
-                sent.reports_between
-            );
-            Ok(())
-        }
-        Command::Keygen { out } => {
-            let (pem, public) = tablesign::keygen()?;
-            let (private_path, public_path) =
-                (out.with_extension("pem"), out.with_extension("pub"));
-            armcal::output::check(
-                &[(&private_path, "private key"), (&public_path, "public key")],
-                &[],
-            )?;
-            // Both new, the private one readable by its owner alone; both or neither.
-            let mut files = armcal::output::Staged::new();
-            files.write_private(&private_path, pem.as_bytes(), "private key")?;
-            files.write_new(&public_path, &public, "public key", 0o644)?;
-            files.commit()?;
-            println!(
-                "{}: private key (keep it secret); {}: public key {}",
-                private_path.display(),
-                public_path.display(),
-                public
-                    .iter()
-                    .map(|b| format!("{b:02x}"))
-                    .collect::<String>()
-            );
-            Ok(())
-        }
-        Command::Sign { table, key, output } => {
-            let inputs = [(table.as_path(), "table"), (key.as_path(), "private key")];
-            armcal::output::check(&[(&output, "signed table")], &inputs)?;
-            let k = tablesign::read_private(&key)?;
-            let bytes = std::fs::read(&table).with_context(|| table.display().to_string())?;
-            let image = tablesign::sign(&k, &bytes).with_context(|| table.display().to_string())?;
-            let mut files = armcal::output::Staged::guarding(&inputs);
-            files.write(&output, &image)?;
-            files.commit()?;
-            println!(
-                "{}: {} bytes, table and signature",
-                output.display(),
-                image.len()
-            );
-            Ok(())
-        }
-        Command::Verify { table, key } => {
-            let k = tablesign::read_public(&key)?;
-            let bytes = std::fs::read(&table).with_context(|| table.display().to_string())?;
-            let n = tablesign::verify(&k, &bytes).with_context(|| table.display().to_string())?;
-            println!(
-                "{}: a {n}-byte table, signature valid under {}",
-                table.display(),
-                key.display()
-            );
-            Ok(())
-        }
-        Command::Show { table } => {
-            let bytes = std::fs::read(&table).with_context(|| table.display().to_string())?;
-            let t = Table::parse(&bytes).with_context(|| table.display().to_string())?;
-            print!("{}", show(&t));
-            Ok(())
-        }
+        } => send(table, port, baud, timeout),
+        Command::Keygen { out } => keygen(out),
+        Command::Sign { table, key, output } => sign(table, key, output),
+        Command::Verify { table, key } => verify(table, key),
+        Command::Show { table } => show_file(table),
     }
+}
+
+/// `table build`: the calibration file's table, written all or nothing.
+fn build(calib: PathBuf, output: PathBuf, without_covariance: bool) -> anyhow::Result<()> {
+    armcal::output::check(&[(&output, "table")], &[(&calib, "calibration file")])?;
+    let (arm, mut budget, release) = armcal::load::calibration_release(&calib)?;
+    if without_covariance {
+        budget = budget.map(|u| u.without_covariance());
+    }
+    let bytes = armcal::tablebuild::build_release(&arm, budget.as_ref(), &release)
+        .with_context(|| calib.display().to_string())?;
+    let t = Table::parse(&bytes)?;
+    let mut files = armcal::output::Staged::guarding(&[(&calib, "calibration file")]);
+    files.write(&output, &bytes)?;
+    files.commit()?;
+    println!(
+        "{}: {} bytes, {} joints, CRC {:08x}, {}{}",
+        output.display(),
+        bytes.len(),
+        t.joint_count(),
+        t.crc(),
+        release_line(&t),
+        if t.wobble().is_some() {
+            " (with an axis wobble: the f32 hubs apply it; the Cortex-M0 hubs refuse the table)"
+        } else {
+            ""
+        }
+    );
+    Ok(())
+}
+
+/// `table send`: a table to a hub over its serial port, step by step.
+fn send(table: PathBuf, port: String, baud: u32, timeout: f64) -> anyhow::Result<()> {
+    let bytes = std::fs::read(&table).with_context(|| table.display().to_string())?;
+    if !(timeout > 0.0 && timeout.is_finite()) {
+        anyhow::bail!("--timeout {timeout}: a positive number of seconds");
+    }
+    let timeout = std::time::Duration::from_secs_f64(timeout);
+    let mut p = serialport::new(&port, baud)
+        .timeout(timeout)
+        .open()
+        .with_context(|| format!("opening serial port {port}"))?;
+    let sent = armcal::table_send::send(&mut p, &bytes, timeout)
+        .with_context(|| format!("sending {} to {port}", table.display()))?;
+    println!(
+        "{}: live on the hub in slot {}, record {}, CRC {:08x} ({} steps, {} reports while it ran)",
+        table.display(),
+        sent.live.slot,
+        sent.live.seq,
+        sent.live.crc,
+        sent.steps,
+        sent.reports_between
+    );
+    Ok(())
+}
+
+/// `table keygen`: a new signing key pair, both files or neither.
+fn keygen(out: PathBuf) -> anyhow::Result<()> {
+    let (pem, public) = tablesign::keygen()?;
+    let (private_path, public_path) = (out.with_extension("pem"), out.with_extension("pub"));
+    armcal::output::check(
+        &[(&private_path, "private key"), (&public_path, "public key")],
+        &[],
+    )?;
+    // Both new, the private one readable by its owner alone; both or neither.
+    let mut files = armcal::output::Staged::new();
+    files.write_private(&private_path, pem.as_bytes(), "private key")?;
+    files.write_new(&public_path, &public, "public key", 0o644)?;
+    files.commit()?;
+    println!(
+        "{}: private key (keep it secret); {}: public key {}",
+        private_path.display(),
+        public_path.display(),
+        public
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect::<String>()
+    );
+    Ok(())
+}
+
+/// `table sign`: the table followed by its signature.
+fn sign(table: PathBuf, key: PathBuf, output: PathBuf) -> anyhow::Result<()> {
+    let inputs = [(table.as_path(), "table"), (key.as_path(), "private key")];
+    armcal::output::check(&[(&output, "signed table")], &inputs)?;
+    let k = tablesign::read_private(&key)?;
+    let bytes = std::fs::read(&table).with_context(|| table.display().to_string())?;
+    let image = tablesign::sign(&k, &bytes).with_context(|| table.display().to_string())?;
+    let mut files = armcal::output::Staged::guarding(&inputs);
+    files.write(&output, &image)?;
+    files.commit()?;
+    println!(
+        "{}: {} bytes, table and signature",
+        output.display(),
+        image.len()
+    );
+    Ok(())
+}
+
+/// `table verify`: whether the signed table's signature verifies under the public key.
+fn verify(table: PathBuf, key: PathBuf) -> anyhow::Result<()> {
+    let k = tablesign::read_public(&key)?;
+    let bytes = std::fs::read(&table).with_context(|| table.display().to_string())?;
+    let n = tablesign::verify(&k, &bytes).with_context(|| table.display().to_string())?;
+    println!(
+        "{}: a {n}-byte table, signature valid under {}",
+        table.display(),
+        key.display()
+    );
+    Ok(())
+}
+
+/// `table show`: the table, listed.
+fn show_file(table: PathBuf) -> anyhow::Result<()> {
+    let bytes = std::fs::read(&table).with_context(|| table.display().to_string())?;
+    let t = Table::parse(&bytes).with_context(|| table.display().to_string())?;
+    print!("{}", show(&t));
+    Ok(())
 }
 
 /// The table's calibration number and date, as `table build` and `table show` print them.
