@@ -167,7 +167,7 @@ pub struct JointModel<P: Physics> {
     /// Whether `link_rate` is non-zero.
     pub has_thermal: bool,
     /// Gravity compliance.
-    pub gravity: P::G,
+    pub gravity: P::Gravity,
     /// Whether `gravity` is non-zero.
     pub has_gravity: bool,
     /// Harmonic terms, ascending order.
@@ -434,7 +434,7 @@ impl<P: Physics> Model<P> {
                 link: vec3::<P>(unpermute(link, j.axis), no)?,
                 link_rate: rates::<P>(unpermute(rate, j.axis), no)?,
                 has_thermal: rate != [0.0; 3],
-                gravity: conv(P::g_from_f64(j.gravity), no)?,
+                gravity: conv(P::gravity_from_f64(j.gravity), no)?,
                 has_gravity: j.gravity != 0.0,
                 harmonics,
                 harmonic_count: count as u8,
@@ -596,7 +596,7 @@ pub struct GravityCount(usize);
 
 #[derive(Clone, Copy)]
 struct GravityTerm<P: Physics> {
-    g: P::G,
+    g: P::Gravity,
     axis: Vec3<P::U>,
     origin: Vec3<P::L>,
 }
@@ -613,7 +613,13 @@ impl<P: Physics> Default for Gravity<P> {
 impl<P: Physics> Gravity<P> {
     /// Records a compliant joint: its coefficient, its axis and its origin in the base frame.
     #[inline(always)]
-    pub fn push(&mut self, n: &mut GravityCount, g: P::G, axis: Vec3<P::U>, origin: Vec3<P::L>) {
+    pub fn push(
+        &mut self,
+        n: &mut GravityCount,
+        g: P::Gravity,
+        axis: Vec3<P::U>,
+        origin: Vec3<P::L>,
+    ) {
         if let Some(slot) = self.terms.get_mut(n.0) {
             slot.write(GravityTerm { g, axis, origin });
             n.0 += 1;

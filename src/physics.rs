@@ -13,28 +13,28 @@ use crate::scalar::{finite_below, fixed_bits, mul_shift, Arithmetic, Fixed, Len,
 
 /// The terms of the physical effects in one evaluator's numbers.
 pub trait Physics: Arithmetic {
-    /// Gravity compliance coefficient (rad/mm).
-    type G: Copy + Default + Debug;
+    /// The gravity compliance coefficient, the parameter `gravity` (rad/mm).
+    type Gravity: Copy + Default + Debug;
     /// A length's thermal expansion rate: mm per milli-degree Celsius.
     type R: Copy + Default + Debug;
     /// A temperature offset from 20 °C, converted once per reading.
     type T: Copy + Default + Debug;
 
     /// Gravity deflection angle `g · x` for a lever term x (mm).
-    fn gravity(g: Self::G, x: Self::L) -> Self::U;
+    fn gravity(g: Self::Gravity, x: Self::L) -> Self::U;
     /// A temperature offset ΔT (milli-degrees Celsius, |ΔT| ≤ 10^5) in evaluator form.
     fn temperature(dt_mc: i32) -> Self::T;
     /// The thermal expansion `rate · ΔT` of a length (mm).
     fn expansion(rate: Self::R, dt: Self::T) -> Self::L;
 
     /// Conversion of a gravity coefficient (rad/mm); `None` where it does not fit.
-    fn g_from_f64(g: f64) -> Option<Self::G>;
+    fn gravity_from_f64(g: f64) -> Option<Self::Gravity>;
     /// Conversion of an expansion rate (mm/°C); `None` where it does not fit.
     fn r_from_f64(mm_per_degc: f64) -> Option<Self::R>;
 }
 
 impl Physics for F32 {
-    type G = f32;
+    type Gravity = f32;
     type R = f32;
     type T = f32;
 
@@ -51,7 +51,7 @@ impl Physics for F32 {
     fn expansion(rate: f32, dt: f32) -> f32 {
         rate * dt
     }
-    fn g_from_f64(g: f64) -> Option<f32> {
+    fn gravity_from_f64(g: f64) -> Option<f32> {
         finite_below(g, 1.0).map(|x| x as f32)
     }
     fn r_from_f64(mm_per_degc: f64) -> Option<f32> {
@@ -67,7 +67,7 @@ const G_FRAC: u32 = 48;
 const R_FRAC: u32 = 40;
 
 impl Physics for Fixed {
-    type G = i32;
+    type Gravity = i32;
     type R = i32;
     type T = i32;
 
@@ -84,7 +84,7 @@ impl Physics for Fixed {
     fn expansion(rate: i32, dt_mc: i32) -> Len {
         Len::from_bits(mul_shift(rate, dt_mc, R_FRAC - 20))
     }
-    fn g_from_f64(g: f64) -> Option<i32> {
+    fn gravity_from_f64(g: f64) -> Option<i32> {
         fixed_bits(g, G_FRAC)
     }
     fn r_from_f64(mm_per_degc: f64) -> Option<i32> {
@@ -98,13 +98,13 @@ mod tests {
 
     #[test]
     fn fixed_gravity_and_expansion() {
-        let g = Fixed::g_from_f64(5e-8).unwrap();
+        let g = Fixed::gravity_from_f64(5e-8).unwrap();
         let e = Fixed::gravity(g, Fixed::l_from_f64(1000.0).unwrap());
         assert!((Fixed::u_to_f64(e) - 5e-5).abs() < 2e-9);
         let r = Fixed::r_from_f64(300.0 * 2.3e-5).unwrap();
         let x = Fixed::expansion(r, 15_000);
         assert!((Fixed::l_to_f64(x) - 300.0 * 2.3e-5 * 15.0).abs() < 1e-6);
         assert!(Fixed::r_from_f64(2.0).is_none());
-        assert!(Fixed::g_from_f64(1e-3).is_none());
+        assert!(Fixed::gravity_from_f64(1e-3).is_none());
     }
 }

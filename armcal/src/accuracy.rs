@@ -165,7 +165,11 @@ fn errors<P: Arithmetic>(pt: &Point<P>, p: &Vector3<f64>, n: &Vector3<f64>) -> (
 
 /// The reference with the spec's first-order gravity correction instead of the exact second
 /// pass: what the matrix chain computes, in f64.
-pub fn first_order_gravity(arm: &Arm, theta: &[f64], temp_c: f64) -> (Vector3<f64>, Vector3<f64>) {
+pub(crate) fn first_order_gravity(
+    arm: &Arm,
+    theta: &[f64],
+    temp_c: f64,
+) -> (Vector3<f64>, Vector3<f64>) {
     let c = quatarm_ref::forward::pass(arm, theta, temp_c, &vec![0.0; arm.dof()]);
     let (mut p, mut n) = (c.p, c.n);
     for (k, j) in arm.joints.iter().enumerate() {

@@ -33,30 +33,9 @@ pub struct Refusal {
     pub why: String,
 }
 
-/// The change of each unknown that scales the whole arm by 1 + ε, per unit ε: ε times the
-/// actual link for a link error, the actual probe vector for the probe error, 0 for the rest.
-pub fn scale_direction(arm: &Arm, params: &[Param]) -> Vec<f64> {
-    params
-        .iter()
-        .map(|p| match *p {
-            Param::LinkError(j, c) => arm.joints[j].actual_link()[c],
-            Param::ProbeError(k, c) => arm.probe_at(k).map_or(0.0, |p| p.actual()[c]),
-            // Angles, the effects' coefficients and the frame do not scale with the arm.
-            Param::ZeroOffset(_)
-            | Param::Tilt(..)
-            | Param::Harmonic { .. }
-            | Param::Wobble { .. }
-            | Param::Gravity(_)
-            | Param::Thermal(_)
-            | Param::FrameRotation(_)
-            | Param::FrameTranslation(_) => 0.0,
-        })
-        .collect()
-}
-
 /// Whether the unknowns `fitted` (indices into `params`) can express a scaling of the arm:
 /// every link and probe component that is not zero has its error among them.
-pub fn can_scale(arm: &Arm, params: &[Param], fitted: &[usize]) -> bool {
+pub(crate) fn can_scale(arm: &Arm, params: &[Param], fitted: &[usize]) -> bool {
     let mut need: Vec<Param> = Vec::new();
     for (j, joint) in arm.joints.iter().enumerate() {
         for (c, v) in joint.actual_link().iter().enumerate() {
@@ -204,22 +183,5 @@ mod tests {
         assert!(notes
             .iter()
             .any(|n| n.contains("test spheres' diameters alone")));
-    }
-
-    #[test]
-    fn the_scale_direction_scales_every_length() {
-        let arm = Arm::default6();
-        let params = Terms::geometric().params(6);
-        let d = scale_direction(&arm, &params);
-        let scaled = crate::params::apply(
-            &arm,
-            &params,
-            &d.iter().map(|x| 0.5 * x).collect::<Vec<_>>(),
-        );
-        for (a, b) in arm.joints.iter().zip(&scaled.joints) {
-            for c in 0..3 {
-                assert!((1.5 * a.actual_link()[c] - b.actual_link()[c]).abs() < 1e-12);
-            }
-        }
     }
 }

@@ -20,7 +20,7 @@ pub const COORDINATE_MM: f64 = 1.0e5;
 /// |joint reading| (rad): a thousand turns. Beyond it a reading is no encoder's, and the
 /// firmware's count conversion (and f64's resolution of the angle, 1e-12 rad here) would not
 /// hold.
-pub const JOINT_RAD: f64 = 1000.0 * TAU;
+pub(crate) const JOINT_RAD: f64 = 1000.0 * TAU;
 
 /// Temperatures (°C) the firmware's chain accepts (20 °C ± 100 °C): every command takes the
 /// same range, so a reading the host evaluates is one a board could too.

@@ -206,7 +206,7 @@ impl Staged {
 
     /// The temporary path for `dest` (same folder, same extension, hidden name), registered
     /// to be renamed onto `dest` at commit.
-    pub fn path_for(&mut self, dest: &Path) -> PathBuf {
+    pub(crate) fn path_for(&mut self, dest: &Path) -> PathBuf {
         let name = dest
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
@@ -232,7 +232,7 @@ impl Staged {
 
     /// Creates `dir` (and its parents) if needed; a folder created here is removed again if
     /// the files are never committed.
-    pub fn create_dir(&mut self, dir: &Path) -> Result<(), OutputError> {
+    pub(crate) fn create_dir(&mut self, dir: &Path) -> Result<(), OutputError> {
         let mut missing = Vec::new();
         let mut d = Some(dir);
         while let Some(p) = d.filter(|p| !p.as_os_str().is_empty() && !p.exists()) {

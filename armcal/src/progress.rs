@@ -35,12 +35,12 @@ fn counted(since: &mut Option<(String, Instant)>, what: &str, done: usize, total
 }
 
 /// Sees nothing.
-pub struct Silent;
+pub(crate) struct Silent;
 
 impl Observer for Silent {}
 
 /// A spinner on stderr with the stage and the solver's latest iteration.
-pub struct Spinner {
+pub(crate) struct Spinner {
     bar: indicatif::ProgressBar,
     stage: String,
     steps: Option<(String, Instant)>,
@@ -92,7 +92,7 @@ impl Drop for Spinner {
 }
 
 /// Plain lines on stderr, for a log: each stage, and the solver at most once a second.
-pub struct Log {
+pub(crate) struct Log {
     prefix: String,
     stage: String,
     last: Option<Instant>,

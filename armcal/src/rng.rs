@@ -9,7 +9,7 @@ use rand_chacha::ChaCha8Rng;
 use std::f64::consts::PI;
 
 /// The generator every random draw of the tool uses.
-pub type SimRng = ChaCha8Rng;
+pub(crate) type SimRng = ChaCha8Rng;
 
 /// A seeded generator.
 pub fn rng(seed: u64) -> SimRng {

@@ -4,7 +4,7 @@
 //! p a number of sessions allows.
 
 /// ln Γ(x) for x > 0 (Lanczos, g = 7, nine terms; relative error below 1e-14).
-pub fn ln_gamma(x: f64) -> f64 {
+pub(crate) fn ln_gamma(x: f64) -> f64 {
     const G: f64 = 7.0;
     const C: [f64; 9] = [
         0.999_999_999_999_809_9,
@@ -32,7 +32,7 @@ pub fn ln_gamma(x: f64) -> f64 {
 }
 
 /// The regularised incomplete beta function I_x(a, b) (continued fraction, Lentz).
-pub fn inc_beta(a: f64, b: f64, x: f64) -> f64 {
+pub(crate) fn inc_beta(a: f64, b: f64, x: f64) -> f64 {
     if x <= 0.0 {
         return 0.0;
     }
@@ -84,7 +84,7 @@ fn beta_fraction(a: f64, b: f64, x: f64) -> f64 {
 }
 
 /// P(F > f) for an F distribution with (d1, d2) degrees of freedom.
-pub fn f_tail(f: f64, d1: f64, d2: f64) -> f64 {
+pub(crate) fn f_tail(f: f64, d1: f64, d2: f64) -> f64 {
     if f.is_nan() || f <= 0.0 || d1 <= 0.0 || d2 <= 0.0 {
         return 1.0;
     }
@@ -108,19 +108,19 @@ pub fn t_tail(t: f64, df: f64) -> f64 {
 }
 
 /// P(Z > z) for a standard normal Z (the t tail with unbounded degrees of freedom).
-pub fn normal_tail(z: f64) -> f64 {
+pub(crate) fn normal_tail(z: f64) -> f64 {
     t_tail(z, 1e12)
 }
 
 /// P(|Z| > t) for a standard normal Z, through [`erfc`]. The calibration's significance test
 /// uses it; kept beside [`normal_tail`] (which is exact to rounding) because the calibration's
 /// figures were measured with it.
-pub fn normal_tail_two_sided(t: f64) -> f64 {
+pub(crate) fn normal_tail_two_sided(t: f64) -> f64 {
     erfc(t / std::f64::consts::SQRT_2)
 }
 
 /// P(χ²_k > w) for k = 1 or 2 (and a Wilson–Hilferty approximation beyond).
-pub fn chi2_tail(w: f64, k: usize) -> f64 {
+pub(crate) fn chi2_tail(w: f64, k: usize) -> f64 {
     match k {
         1 => erfc((w / 2.0).sqrt()),
         2 => (-w / 2.0).exp(),
@@ -133,7 +133,7 @@ pub fn chi2_tail(w: f64, k: usize) -> f64 {
 }
 
 /// The complementary error function (Numerical Recipes' erfcc, relative error below 1.2e-7).
-pub fn erfc(x: f64) -> f64 {
+pub(crate) fn erfc(x: f64) -> f64 {
     let z = x.abs();
     let t = 1.0 / (1.0 + 0.5 * z);
     let r = t

@@ -89,8 +89,9 @@ pub enum Kind {
     TurnSin,
     /// An angle cos(hθ_k) added to joint k: a harmonic's cos coefficient.
     TurnCos,
-    /// The gravity deflection of joint k per unit compliance.
-    TurnGravity,
+    /// The gravity deflection of joint k per unit compliance: the parameter `gravity`
+    /// (`quatarm_params::Param::Gravity`), a turn weighed by its lever.
+    Gravity,
     /// A turn about the fixed axis u of the frame before joint k, through its origin.
     Tilt,
     /// A shift by (w0 + w1 ΔT) u in the frame after joint k.
@@ -111,7 +112,7 @@ impl Kind {
             0 => Kind::Turn,
             1 => Kind::TurnSin,
             2 => Kind::TurnCos,
-            3 => Kind::TurnGravity,
+            3 => Kind::Gravity,
             4 => Kind::Tilt,
             5 => Kind::Shift,
             6 => Kind::TiltSin,
@@ -329,6 +330,29 @@ mod tests {
     use crate::table::budget::BudgetData;
     use crate::table::tests::{recrc, sample};
     use crate::table::{Table, FLAG_PARAMETERS, MAX_TABLE_LEN};
+
+    /// The kind bytes are the contract with the tables already written: a rename of a kind
+    /// (gravity's, once spelt as a turn, is `Gravity`) keeps its byte, and no byte moves.
+    #[test]
+    fn kind_bytes_are_fixed() {
+        let kinds = [
+            (Kind::Turn, 0),
+            (Kind::TurnSin, 1),
+            (Kind::TurnCos, 2),
+            (Kind::Gravity, 3),
+            (Kind::Tilt, 4),
+            (Kind::Shift, 5),
+            (Kind::TiltSin, 6),
+            (Kind::TiltCos, 7),
+            (Kind::ProbeShift, 8),
+        ];
+        for (kind, byte) in kinds {
+            assert_eq!(kind.byte(), byte, "{kind:?}");
+            assert_eq!(Kind::from_byte(byte), Some(kind));
+        }
+        assert_eq!(Kind::from_byte(9), None);
+        assert_eq!(Kind::from_byte(0xff), None);
+    }
 
     fn columns() -> [Column; 3] {
         [

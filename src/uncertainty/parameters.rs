@@ -226,7 +226,7 @@ impl<'a> ParameterPart<'a> {
             Kind::TurnSin => scaled(turn(), weight()[1]),
             Kind::TurnCos => scaled(turn(), weight()[0]),
             // The first-order lever of the spec: a_k · ((p − o_k) × ẑ).
-            Kind::TurnGravity => scaled(turn(), axis[0] * lever[1] - axis[1] * lever[0]),
+            Kind::Gravity => scaled(turn(), axis[0] * lever[1] - axis[1] * lever[0]),
             Kind::Tilt => tilt(),
             Kind::TiltSin => scaled(tilt(), weight()[1]),
             Kind::TiltCos => scaled(tilt(), weight()[0]),

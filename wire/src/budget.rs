@@ -118,7 +118,7 @@ fn column(p: Param, arm: &Arm) -> Result<Column, String> {
             order: order as u16,
             ..Column::new(if cos { Kind::TurnCos } else { Kind::TurnSin }, joint as u8)
         },
-        Param::Gravity(j) => Column::new(Kind::TurnGravity, j as u8),
+        Param::Gravity(j) => Column::new(Kind::Gravity, j as u8),
         Param::Thermal(Link::Joint(j)) => shift(j, arm.joints[j].actual_link(), 0.0, 1.0),
         Param::Thermal(Link::Probe) => probe_shift(0, arm.probe.actual(), 0.0, 1.0),
         Param::Wobble { joint, order, coef } => {

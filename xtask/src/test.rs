@@ -81,6 +81,20 @@ pub fn run() -> Result<()> {
         "cargo test --workspace",
     )?;
 
+    step("board-common unit tests (host)");
+    // The boards' shared crate is in no workspace (it builds for the targets); its pure parts
+    // (the boot check, the flash map and window, the update port) are tested on the host,
+    // with the u95 feature and without (the M0 hubs').
+    for features in [&[][..], &["--features", "u95"][..]] {
+        check(
+            cargo()
+                .args(["test", "--lib", "--manifest-path"])
+                .arg(root().join("boards/common/Cargo.toml"))
+                .args(features),
+            "cargo test --manifest-path boards/common/Cargo.toml",
+        )?;
+    }
+
     step("rustdoc");
     // Broken intra-doc links, private items linked from public docs, bad code-block syntax:
     // rustdoc only warns, so a warning fails here. (The doctests ran with the tests above.)

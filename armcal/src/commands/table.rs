@@ -83,120 +83,142 @@ pub fn run(command: Command) -> anyhow::Result<()> {
             output,
             without_covariance,
             accept,
-        } => {
-            armcal::output::check(&[(&output, "table")], &[(&calib, "calibration file")])?;
-            armcal::plausible::calibration(&calib, accept.accept())?;
-            let (arm, mut budget, release) = armcal::load::calibration_release(&calib)?;
-            if without_covariance {
-                budget = budget.map(|u| u.without_covariance());
-            }
-            let bytes = armcal::tablebuild::build_release(&arm, budget.as_ref(), &release)
-                .with_context(|| calib.display().to_string())?;
-            let t = Table::parse(&bytes)?;
-            let mut files = armcal::output::Staged::guarding(&[(&calib, "calibration file")]);
-            files.write(&output, &bytes)?;
-            files.commit()?;
-            println!(
-                "{}: {} bytes, {} joints, CRC {:08x}, {}{}",
-                output.display(),
-                bytes.len(),
-                t.joint_count(),
-                t.crc(),
-                release_line(&t),
-                if t.wobble().is_some() {
-                    " (with an axis wobble: the f32 hubs apply it; the Cortex-M0 hubs refuse the table)"
-                } else {
-                    ""
-                }
-            );
-            Ok(())
-        }
+        } => build(calib, output, without_covariance, accept.accept()),
         Command::Send {
             table,
             port,
             baud,
             timeout,
-        } => {
-            let bytes = std::fs::read(&table).with_context(|| table.display().to_string())?;
-            if !(timeout > 0.0 && timeout.is_finite()) {
-                anyhow::bail!("--timeout {timeout}: a positive number of seconds");
-            }
-            let timeout = std::time::Duration::from_secs_f64(timeout);
-            let mut p = serialport::new(&port, baud)
-                .timeout(timeout)
-                .open()
-                .with_context(|| format!("opening serial port {port}"))?;
-            let sent = armcal::table_send::send(&mut p, &bytes, timeout)
-                .with_context(|| format!("sending {} to {port}", table.display()))?;
-            println!(
-                "{}: live on the hub in slot {}, record {}, CRC {:08x} ({} steps, {} reports while it ran)",
-                table.display(),
-                sent.live.slot,
-                sent.live.seq,
-                sent.live.crc,
-                sent.steps,
-                sent.reports_between
-            );
-            Ok(())
-        }
-        Command::Keygen { out } => {
-            let (pem, public) = tablesign::keygen()?;
-            let (private_path, public_path) =
-                (out.with_extension("pem"), out.with_extension("pub"));
-            armcal::output::check(
-                &[(&private_path, "private key"), (&public_path, "public key")],
-                &[],
-            )?;
-            // Both new, the private one readable by its owner alone; both or neither.
-            let mut files = armcal::output::Staged::new();
-            files.write_private(&private_path, pem.as_bytes(), "private key")?;
-            files.write_new(&public_path, &public, "public key", 0o644)?;
-            files.commit()?;
-            println!(
-                "{}: private key (keep it secret); {}: public key {}",
-                private_path.display(),
-                public_path.display(),
-                public
-                    .iter()
-                    .map(|b| format!("{b:02x}"))
-                    .collect::<String>()
-            );
-            Ok(())
-        }
-        Command::Sign { table, key, output } => {
-            let inputs = [(table.as_path(), "table"), (key.as_path(), "private key")];
-            armcal::output::check(&[(&output, "signed table")], &inputs)?;
-            let k = tablesign::read_private(&key)?;
-            let bytes = std::fs::read(&table).with_context(|| table.display().to_string())?;
-            let image = tablesign::sign(&k, &bytes).with_context(|| table.display().to_string())?;
-            let mut files = armcal::output::Staged::guarding(&inputs);
-            files.write(&output, &image)?;
-            files.commit()?;
-            println!(
-                "{}: {} bytes, table and signature",
-                output.display(),
-                image.len()
-            );
-            Ok(())
-        }
-        Command::Verify { table, key } => {
-            let k = tablesign::read_public(&key)?;
-            let bytes = std::fs::read(&table).with_context(|| table.display().to_string())?;
-            let n = tablesign::verify(&k, &bytes).with_context(|| table.display().to_string())?;
-            println!(
-                "{}: a {n}-byte table, signature valid under {}",
-                table.display(),
-                key.display()
-            );
-            Ok(())
-        }
-        Command::Show { table } => {
-            let bytes = std::fs::read(&table).with_context(|| table.display().to_string())?;
-            let t = Table::parse(&bytes).with_context(|| table.display().to_string())?;
-            print!("{}", show(&t));
-            Ok(())
-        }
+        } => send(table, port, baud, timeout),
+        Command::Keygen { out } => keygen(out),
+        Command::Sign { table, key, output } => sign(table, key, output),
+        Command::Verify { table, key } => verify(table, key),
+        Command::Show { table } => show_file(table),
     }
+}
+
+/// `table build`: the calibration file's table, written all or nothing.
+fn build(
+    calib: PathBuf,
+    output: PathBuf,
+    without_covariance: bool,
+    accept: armcal::plausible::Accept,
+) -> anyhow::Result<()> {
+    armcal::output::check(&[(&output, "table")], &[(&calib, "calibration file")])?;
+    armcal::plausible::calibration(&calib, accept)?;
+    let (arm, mut budget, release) = armcal::load::calibration_release(&calib)?;
+    if without_covariance {
+        budget = budget.map(|u| u.without_covariance());
+    }
+    let bytes = armcal::tablebuild::build_release(&arm, budget.as_ref(), &release)
+        .with_context(|| calib.display().to_string())?;
+    let t = Table::parse(&bytes)?;
+    let mut files = armcal::output::Staged::guarding(&[(&calib, "calibration file")]);
+    files.write(&output, &bytes)?;
+    files.commit()?;
+    println!(
+        "{}: {} bytes, {} joints, CRC {:08x}, {}{}",
+        output.display(),
+        bytes.len(),
+        t.joint_count(),
+        t.crc(),
+        release_line(&t),
+        if t.wobble().is_some() {
+            " (with an axis wobble: the f32 hubs apply it; the Cortex-M0 hubs refuse the table)"
+        } else {
+            ""
+        }
+    );
+    Ok(())
+}
+
+/// `table send`: a table to a hub over its serial port, step by step.
+fn send(table: PathBuf, port: String, baud: u32, timeout: f64) -> anyhow::Result<()> {
+    let bytes = std::fs::read(&table).with_context(|| table.display().to_string())?;
+    if !(timeout > 0.0 && timeout.is_finite()) {
+        anyhow::bail!("--timeout {timeout}: a positive number of seconds");
+    }
+    let timeout = std::time::Duration::from_secs_f64(timeout);
+    let mut p = serialport::new(&port, baud)
+        .timeout(timeout)
+        .open()
+        .with_context(|| format!("opening serial port {port}"))?;
+    let sent = armcal::table_send::send(&mut p, &bytes, timeout)
+        .with_context(|| format!("sending {} to {port}", table.display()))?;
+    println!(
+        "{}: live on the hub in slot {}, record {}, CRC {:08x} ({} steps, {} reports while it ran)",
+        table.display(),
+        sent.live.slot,
+        sent.live.seq,
+        sent.live.crc,
+        sent.steps,
+        sent.reports_between
+    );
+    Ok(())
+}
+
+/// `table keygen`: a new signing key pair, both files or neither.
+fn keygen(out: PathBuf) -> anyhow::Result<()> {
+    let (pem, public) = tablesign::keygen()?;
+    let (private_path, public_path) = (out.with_extension("pem"), out.with_extension("pub"));
+    armcal::output::check(
+        &[(&private_path, "private key"), (&public_path, "public key")],
+        &[],
+    )?;
+    // Both new, the private one readable by its owner alone; both or neither.
+    let mut files = armcal::output::Staged::new();
+    files.write_private(&private_path, pem.as_bytes(), "private key")?;
+    files.write_new(&public_path, &public, "public key", 0o644)?;
+    files.commit()?;
+    println!(
+        "{}: private key (keep it secret); {}: public key {}",
+        private_path.display(),
+        public_path.display(),
+        public
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect::<String>()
+    );
+    Ok(())
+}
+
+/// `table sign`: the table followed by its signature.
+fn sign(table: PathBuf, key: PathBuf, output: PathBuf) -> anyhow::Result<()> {
+    let inputs = [(table.as_path(), "table"), (key.as_path(), "private key")];
+    armcal::output::check(&[(&output, "signed table")], &inputs)?;
+    let k = tablesign::read_private(&key)?;
+    let bytes = std::fs::read(&table).with_context(|| table.display().to_string())?;
+    let image = tablesign::sign(&k, &bytes).with_context(|| table.display().to_string())?;
+    let mut files = armcal::output::Staged::guarding(&inputs);
+    files.write(&output, &image)?;
+    files.commit()?;
+    println!(
+        "{}: {} bytes, table and signature",
+        output.display(),
+        image.len()
+    );
+    Ok(())
+}
+
+/// `table verify`: whether the signed table's signature verifies under the public key.
+fn verify(table: PathBuf, key: PathBuf) -> anyhow::Result<()> {
+    let k = tablesign::read_public(&key)?;
+    let bytes = std::fs::read(&table).with_context(|| table.display().to_string())?;
+    let n = tablesign::verify(&k, &bytes).with_context(|| table.display().to_string())?;
+    println!(
+        "{}: a {n}-byte table, signature valid under {}",
+        table.display(),
+        key.display()
+    );
+    Ok(())
+}
+
+/// `table show`: the table, listed.
+fn show_file(table: PathBuf) -> anyhow::Result<()> {
+    let bytes = std::fs::read(&table).with_context(|| table.display().to_string())?;
+    let t = Table::parse(&bytes).with_context(|| table.display().to_string())?;
+    print!("{}", show(&t));
+    Ok(())
 }
 
 /// The table's calibration number and date, as `table build` and `table show` print them.
@@ -214,10 +236,22 @@ pub fn release_line(t: &Table<'_>) -> String {
     }
 }
 
-/// A person-readable listing of a validated table.
+/// A person-readable listing of a validated table: its header, each joint, each probe, its
+/// uncertainty budget.
 pub fn show(t: &Table<'_>) -> String {
-    use std::fmt::Write as _;
     let mut s = String::new();
+    show_header(&mut s, t);
+    for i in 0..t.joint_count() {
+        show_joint(&mut s, t, i);
+    }
+    show_probes(&mut s, t);
+    show_budget(&mut s, t);
+    s
+}
+
+/// Version, size, CRC, release, serial, joints and the terms the table carries.
+fn show_header(s: &mut String, t: &Table<'_>) {
+    use std::fmt::Write as _;
     let flags = t.flags();
     let names: Vec<&str> = [
         (FLAG_GEOMETRIC, "geometric"),
@@ -249,55 +283,63 @@ pub fn show(t: &Table<'_>) -> String {
             names.join(", ")
         }
     );
-    for i in 0..t.joint_count() {
-        let Some(j) = t.joint(i) else { continue };
+}
+
+/// Joint `i` (0-based): its axis, rotation, link, thermal and gravity terms, harmonics and
+/// axis wobble.
+fn show_joint(s: &mut String, t: &Table<'_>, i: usize) {
+    use std::fmt::Write as _;
+    let Some(j) = t.joint(i) else { return };
+    let _ = writeln!(
+        s,
+        "joint {}: axis {}, {} counts/rev",
+        i + 1,
+        ["x", "y", "z"][usize::from(j.axis).min(2)],
+        j.counts
+    );
+    let q = j.rotation;
+    let _ = writeln!(
+        s,
+        "  M' (w,x,y,z) = [{:.12}, {:.12}, {:.12}, {:.12}]",
+        q[0], q[1], q[2], q[3]
+    );
+    let _ = writeln!(
+        s,
+        "  link (mm) = [{:.6}, {:.6}, {:.6}]",
+        j.link[0], j.link[1], j.link[2]
+    );
+    let _ = writeln!(
+        s,
+        "  thermal = {:e} /degC, gravity = {:e} rad/mm",
+        j.thermal, j.gravity
+    );
+    for h in &j.harmonics[..usize::from(j.harmonic_count)] {
         let _ = writeln!(
             s,
-            "joint {}: axis {}, {} counts/rev",
-            i + 1,
-            ["x", "y", "z"][usize::from(j.axis).min(2)],
-            j.counts
+            "  harmonic order {}: sin {:e}, cos {:e} rad",
+            h.order, h.sin, h.cos
         );
-        let q = j.rotation;
-        let _ = writeln!(
-            s,
-            "  M' (w,x,y,z) = [{:.12}, {:.12}, {:.12}, {:.12}]",
-            q[0], q[1], q[2], q[3]
-        );
-        let _ = writeln!(
-            s,
-            "  link (mm) = [{:.6}, {:.6}, {:.6}]",
-            j.link[0], j.link[1], j.link[2]
-        );
-        let _ = writeln!(
-            s,
-            "  thermal = {:e} /degC, gravity = {:e} rad/mm",
-            j.thermal, j.gravity
-        );
-        for h in &j.harmonics[..usize::from(j.harmonic_count)] {
-            let _ = writeln!(
-                s,
-                "  harmonic order {}: sin {:e}, cos {:e} rad",
-                h.order, h.sin, h.cos
-            );
-        }
-        let w = t.joint_wobble(i);
-        for term in &w.terms[..usize::from(w.count).min(w.terms.len())] {
-            let _ = writeln!(
-                s,
-                "  axis wobble order {}: alpha sin {:e}, cos {:e}; beta sin {:e}, cos {:e} rad",
-                term.order, term.alpha[0], term.alpha[1], term.beta[0], term.beta[1]
-            );
-        }
-        if w.count > 0 {
-            let _ = writeln!(
-                s,
-                "    about f1 = [{:.12}, {:.12}, {:.12}], f2 = [{:.12}, {:.12}, {:.12}]",
-                w.f1[0], w.f1[1], w.f1[2], w.f2[0], w.f2[1], w.f2[2]
-            );
-        }
     }
-    // Every probe, the first (mounted at boot) first.
+    let w = t.joint_wobble(i);
+    for term in &w.terms[..usize::from(w.count).min(w.terms.len())] {
+        let _ = writeln!(
+            s,
+            "  axis wobble order {}: alpha sin {:e}, cos {:e}; beta sin {:e}, cos {:e} rad",
+            term.order, term.alpha[0], term.alpha[1], term.beta[0], term.beta[1]
+        );
+    }
+    if w.count > 0 {
+        let _ = writeln!(
+            s,
+            "    about f1 = [{:.12}, {:.12}, {:.12}], f2 = [{:.12}, {:.12}, {:.12}]",
+            w.f1[0], w.f1[1], w.f1[2], w.f2[0], w.f2[1], w.f2[2]
+        );
+    }
+}
+
+/// Every probe, the first (mounted at boot) first.
+fn show_probes(s: &mut String, t: &Table<'_>) {
+    use std::fmt::Write as _;
     for k in 0..t.probe_count() {
         let Some(p) = t.probe_at(k) else { continue };
         let _ = writeln!(
@@ -315,31 +357,32 @@ pub fn show(t: &Table<'_>) -> String {
             p.ball_diameter
         );
     }
-    match t.budget() {
-        None => {
-            let _ = writeln!(s, "uncertainty: none (the hub streams no U95)");
-        }
-        Some(b) => {
-            let counts: Vec<String> = (0..t.joint_count())
-                .map(|i| format!("{}", b.encoder_counts(i)))
-                .collect();
-            let _ = writeln!(
-                s,
-                "uncertainty: encoder [{}] counts, probing {} mm, model {} mm, temperature {} degC",
-                counts.join(", "),
-                b.probing_mm(),
-                b.model_mm(),
-                b.temperature_c()
-            );
-            let _ = match t.parameters() {
-                Some(p) => writeln!(
-                    s,
-                    "  parameter covariance: {} parameters (f32 hubs only)",
-                    p.count()
-                ),
-                None => writeln!(s, "  parameter covariance: none"),
-            };
-        }
-    }
-    s
+}
+
+/// The uncertainty budget and the parameter covariance, or that there is none.
+fn show_budget(s: &mut String, t: &Table<'_>) {
+    use std::fmt::Write as _;
+    let Some(b) = t.budget() else {
+        let _ = writeln!(s, "uncertainty: none (the hub streams no U95)");
+        return;
+    };
+    let counts: Vec<String> = (0..t.joint_count())
+        .map(|i| format!("{}", b.encoder_counts(i)))
+        .collect();
+    let _ = writeln!(
+        s,
+        "uncertainty: encoder [{}] counts, probing {} mm, model {} mm, temperature {} degC",
+        counts.join(", "),
+        b.probing_mm(),
+        b.model_mm(),
+        b.temperature_c()
+    );
+    let _ = match t.parameters() {
+        Some(p) => writeln!(
+            s,
+            "  parameter covariance: {} parameters (f32 hubs only)",
+            p.count()
+        ),
+        None => writeln!(s, "  parameter covariance: none"),
+    };
 }

@@ -336,28 +336,7 @@ pub fn group_observed(
                 .as_ref()
                 .and_then(|f| geometry(f, d, g.baseline.as_ref()))
         };
-        let (mut q_split, mut k_split) = (0.0, 0usize);
-        for (i, u) in files.iter().enumerate() {
-            obs.step("same-arm test: halves of recording", i, n);
-            let Some((x, y)) = halves(&u.data) else {
-                continue;
-            };
-            if let (Some(gx), Some(gy)) = (geo_of(&x), geo_of(&y)) {
-                if let Some((q, k)) = chi2(&gx, &gy) {
-                    splits.push(Split {
-                        recording: i,
-                        chi2: q,
-                        dof: k,
-                    });
-                    q_split += q;
-                    k_split += k;
-                }
-            }
-        }
-        if k_split > 0 {
-            overdispersion = Some((q_split / k_split as f64, k_split));
-        }
-        let (phi, d2) = overdispersion.map_or((1.0, f64::INFINITY), |(p, k)| (p, k as f64));
+        (splits, overdispersion) = split_each(files, &geo_of, obs);
         let geos: Vec<Option<Geometry>> = files
             .iter()
             .enumerate()
@@ -373,52 +352,112 @@ pub fn group_observed(
                 geo
             })
             .collect();
-        for a in 0..n {
-            for b in a + 1..n {
-                let (Some(ga), Some(gb)) = (&geos[a], &geos[b]) else {
-                    continue;
-                };
-                if let Some((q, dof)) = chi2(ga, gb) {
-                    let f = q / dof as f64 / phi;
-                    let p = if d2.is_finite() {
-                        f_tail(f, dof as f64, d2)
-                    } else {
-                        chi2_tail(q, dof)
-                    };
-                    pairs.push(Pair {
-                        a,
-                        b,
-                        chi2: q,
-                        dof,
-                        f,
-                        p_value: p,
-                        same: p >= alpha,
-                    });
-                }
-            }
-        }
+        pairs = compare_pairs(&geos, overdispersion, alpha);
     }
     let of: Vec<usize> = match grouping {
-        Grouping::Detect { .. } => {
-            // Union–find over the "same" pairs; the root is the lowest index.
-            let mut root: Vec<usize> = (0..n).collect();
-            fn find(r: &mut [usize], i: usize) -> usize {
-                let mut i = i;
-                while r[i] != i {
-                    r[i] = r[r[i]];
-                    i = r[i];
-                }
-                i
-            }
-            for p in pairs.iter().filter(|p| p.same) {
-                let (x, y) = (find(&mut root, p.a), find(&mut root, p.b));
-                root[x.max(y)] = x.min(y);
-            }
-            (0..n).map(|i| find(&mut root, i)).collect()
-        }
+        Grouping::Detect { .. } => joined_by_same(n, &pairs),
         Grouping::EachFile => (0..n).collect(),
         Grouping::ByHand(_) => hand.expect("checked above"),
     };
+    Ok(Arms {
+        groups: arm_groups(files, &of, grouping),
+        pairs,
+        splits,
+        overdispersion,
+        rule: grouping.rule(),
+        uncompared,
+    })
+}
+
+/// Each recording's halves compared ([`halves`], [`chi2`]), and the overdispersion φ̂ they
+/// estimate together (`None` without a split).
+fn split_each(
+    files: &[UnitData],
+    geo_of: &dyn Fn(&Dataset) -> Option<Geometry>,
+    obs: &mut dyn Observer,
+) -> (Vec<Split>, Option<(f64, usize)>) {
+    let mut splits = Vec::new();
+    let (mut q_split, mut k_split) = (0.0, 0usize);
+    for (i, u) in files.iter().enumerate() {
+        obs.step("same-arm test: halves of recording", i, files.len());
+        let Some((x, y)) = halves(&u.data) else {
+            continue;
+        };
+        if let (Some(gx), Some(gy)) = (geo_of(&x), geo_of(&y)) {
+            if let Some((q, k)) = chi2(&gx, &gy) {
+                splits.push(Split {
+                    recording: i,
+                    chi2: q,
+                    dof: k,
+                });
+                q_split += q;
+                k_split += k;
+            }
+        }
+    }
+    let overdispersion = (k_split > 0).then(|| (q_split / k_split as f64, k_split));
+    (splits, overdispersion)
+}
+
+/// Every pair of recordings with a geometry compared: χ² scaled by the overdispersion, its
+/// p-value (F with the splits' degrees of freedom, else χ²), and whether the pair is the same
+/// arm at level `alpha`.
+fn compare_pairs(
+    geos: &[Option<Geometry>],
+    overdispersion: Option<(f64, usize)>,
+    alpha: f64,
+) -> Vec<Pair> {
+    let (phi, d2) = overdispersion.map_or((1.0, f64::INFINITY), |(p, k)| (p, k as f64));
+    let mut pairs = Vec::new();
+    for a in 0..geos.len() {
+        for b in a + 1..geos.len() {
+            let (Some(ga), Some(gb)) = (&geos[a], &geos[b]) else {
+                continue;
+            };
+            if let Some((q, dof)) = chi2(ga, gb) {
+                let f = q / dof as f64 / phi;
+                let p = if d2.is_finite() {
+                    f_tail(f, dof as f64, d2)
+                } else {
+                    chi2_tail(q, dof)
+                };
+                pairs.push(Pair {
+                    a,
+                    b,
+                    chi2: q,
+                    dof,
+                    f,
+                    p_value: p,
+                    same: p >= alpha,
+                });
+            }
+        }
+    }
+    pairs
+}
+
+/// Each of `n` recordings' representative when the "same" pairs join them: union–find, the
+/// root the lowest index.
+fn joined_by_same(n: usize, pairs: &[Pair]) -> Vec<usize> {
+    let mut root: Vec<usize> = (0..n).collect();
+    fn find(r: &mut [usize], i: usize) -> usize {
+        let mut i = i;
+        while r[i] != i {
+            r[i] = r[r[i]];
+            i = r[i];
+        }
+        i
+    }
+    for p in pairs.iter().filter(|p| p.same) {
+        let (x, y) = (find(&mut root, p.a), find(&mut root, p.b));
+        root[x.max(y)] = x.min(y);
+    }
+    (0..n).map(|i| find(&mut root, i)).collect()
+}
+
+/// The arms from each recording's representative `of`, in the order of their first
+/// recording, named by hand where `grouping` gives names, else by their first recording.
+fn arm_groups(files: &[UnitData], of: &[usize], grouping: &Grouping) -> Vec<ArmGroup> {
     let mut groups: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
     for (i, r) in of.iter().enumerate() {
         groups.entry(*r).or_default().push(i);
@@ -444,14 +483,7 @@ pub fn group_observed(
         })
         .collect();
     groups.sort_by_key(|g| g.recordings[0]);
-    Ok(Arms {
-        groups,
-        pairs,
-        splits,
-        overdispersion,
-        rule: grouping.rule(),
-        uncompared,
-    })
+    groups
 }
 
 /// Each recording's representative (the first of its hand-given arm, or itself).

@@ -15,7 +15,7 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
 }
 
 /// A file named with its SHA-256 (`path (SHA-256 …)`), or with why it could not be read.
-pub fn file_with_hash(path: &Path) -> String {
+pub(crate) fn file_with_hash(path: &Path) -> String {
     match std::fs::read(path) {
         Ok(b) => format!("{} (SHA-256 {})", path.display(), sha256_hex(&b)),
         Err(e) => format!("{} (not readable for its hash: {e})", path.display()),
@@ -23,7 +23,7 @@ pub fn file_with_hash(path: &Path) -> String {
 }
 
 /// Seconds since 1970 as `YYYY-MM-DD HH:MM UTC`.
-pub fn utc(seconds: i64) -> String {
+pub(crate) fn utc(seconds: i64) -> String {
     let date = quatarm_ref::release::Date::from_days_since_epoch(seconds.div_euclid(86_400));
     let s = seconds.rem_euclid(86_400);
     format!("{date} {:02}:{:02} UTC", s / 3600, s % 3600 / 60)

@@ -3,7 +3,7 @@
 //! a browser shows and prints to PDF as the test report or calibration certificate a customer
 //! or an auditor receives.
 //!
-//! - [`Document`]: the page (title, header, sections, tables, figures, preformatted text),
+//! - `Document`: the page (title, header, sections, tables, figures, preformatted text),
 //!   every text escaped here, so that a file name or a serial cannot inject markup.
 //! - [`header`]: the provenance every report opens with (serial, date, data and SHA-256,
 //!   software version, temperatures, ball, MPE file, decision rule).
@@ -20,7 +20,7 @@ pub mod svg;
 use std::fmt::Write as _;
 
 /// `s` with HTML's special characters escaped (text and attribute values alike).
-pub fn escape(s: &str) -> String {
+pub(crate) fn escape(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     for c in s.chars() {
         match c {
@@ -37,7 +37,7 @@ pub fn escape(s: &str) -> String {
 
 /// How a verdict or a decision is shown.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Tone {
+pub(crate) enum Tone {
     /// Proven within (green).
     Good,
     /// Proven beyond (red).
@@ -60,7 +60,7 @@ impl Tone {
 }
 
 /// A table cell: text and its tone.
-pub struct Cell(pub String, pub Tone);
+pub(crate) struct Cell(pub String, pub Tone);
 
 impl From<String> for Cell {
     fn from(s: String) -> Cell {
@@ -75,7 +75,7 @@ impl From<&str> for Cell {
 }
 
 /// An HTML page being written.
-pub struct Document {
+pub(crate) struct Document {
     title: String,
     body: String,
 }
@@ -126,12 +126,12 @@ impl Document {
     }
 
     /// A section heading.
-    pub fn heading(&mut self, text: &str) {
+    pub(crate) fn heading(&mut self, text: &str) {
         let _ = writeln!(self.body, "<h2>{}</h2>", escape(text));
     }
 
     /// A paragraph of text.
-    pub fn paragraph(&mut self, text: &str) {
+    pub(crate) fn paragraph(&mut self, text: &str) {
         let _ = writeln!(self.body, "<p>{}</p>", escape(text));
     }
 
@@ -203,7 +203,7 @@ impl Document {
     }
 
     /// Preformatted text (a command's text report, whole).
-    pub fn preformatted(&mut self, text: &str) {
+    pub(crate) fn preformatted(&mut self, text: &str) {
         let _ = writeln!(self.body, "<pre>{}</pre>", escape(text));
     }
 

@@ -66,7 +66,7 @@ pub fn vectors(
 
 /// Residual sizes (µm) against the ball's reach from the base axis (mm): `before` in grey,
 /// `after` in blue, rows where `keep` is true.
-pub fn before_after(
+pub(crate) fn before_after(
     title: &str,
     names: (&str, &str),
     at: &[Vector3<f64>],

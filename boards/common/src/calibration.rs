@@ -217,3 +217,134 @@ impl<P: HubEvaluator> Measure for Calibration<'_, P> {
         Calibration::mount(self, k)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use quatarm::update::fixtures;
+    use quatarm::{Fixed, F32};
+
+    /// The fixture arm: six joints turning about z, each link 200 mm along x, the probe
+    /// 50 mm along z. At zero counts its tip is at (1200, 0, 50) mm. (Links of 300 mm reach
+    /// too far for the i32 nanometres of the stream: the chain refuses them.)
+    const LINK_MM: f64 = 200.0;
+    const TIP_NM: [i32; 3] = [1_200_000_000, 0, 50_000_000];
+
+    /// The table in a region of erased flash after it, as the boot reads it.
+    fn region(table: &[u8]) -> [u8; 4096] {
+        let mut r = [0xff; 4096];
+        r[..table.len()].copy_from_slice(table);
+        r
+    }
+
+    fn assert_near(got: [i32; 3], want: [i32; 3], tol_nm: i32) {
+        for c in 0..3 {
+            assert!(
+                (got[c] - want[c]).abs() <= tol_nm,
+                "component {c}: {got:?} against {want:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_valid_table_gives_the_arms_coordinates_in_both_formats() {
+        let r = region(&fixtures::table(LINK_MM));
+        let f32_cal = load::<F32>(&r);
+        let fixed_cal = load::<Fixed>(&r);
+        for (state, joints) in [
+            (f32_cal.state(), f32_cal.joints()),
+            (fixed_cal.state(), fixed_cal.joints()),
+        ] {
+            assert_eq!(state, TableState::Valid);
+            assert_eq!(joints, JOINTS as u8);
+        }
+        let a = f32_cal.eval(&[0; JOINTS], 0).unwrap();
+        let b = fixed_cal.eval(&[0; JOINTS], 0).unwrap();
+        // f32 resolves ~1e-7 of 1.2 m; the fixed-point chain to a few nm.
+        assert_near(a.xyz_nm, TIP_NM, 1_000);
+        assert_near(b.xyz_nm, TIP_NM, 100);
+        // A quarter turn of joint 1 (2^14 counts per turn) swings the whole arm about z:
+        // the tip stays 1200 mm from the axis and 50 mm up, and leaves the x axis.
+        let q = f32_cal.eval(&[1 << 12, 0, 0, 0, 0, 0], 0).unwrap().xyz_nm;
+        assert!(q[0].abs() < 1_000, "{q:?}");
+        assert!((q[1].abs() - TIP_NM[0]).abs() < 1_000, "{q:?}");
+        assert!((q[2] - TIP_NM[2]).abs() < 1_000, "{q:?}");
+        // No budget in the table: no U95, whatever the hub computes.
+        assert_eq!(a.u95_nm, None);
+    }
+
+    #[test]
+    fn erased_flash_is_missing_and_gives_no_coordinates() {
+        let cal = load::<F32>(&[0xff; 4096]);
+        assert_eq!(cal.state(), TableState::Missing);
+        assert_eq!(cal.joints(), 0);
+        assert!(cal.eval(&[0; JOINTS], 0).is_err());
+        let mut cal = cal;
+        assert!(!cal.mount(0));
+    }
+
+    #[test]
+    fn a_table_out_of_the_streams_reach_gives_no_chain() {
+        // Six links of 300 mm and the probe: the chain's reach check refuses it.
+        let r = region(&fixtures::table(300.0));
+        let cal = load::<F32>(&r);
+        assert_eq!(cal.state(), TableState::Malformed);
+        assert_eq!(cal.joints(), 0);
+    }
+
+    #[test]
+    fn a_damaged_table_is_corrupt() {
+        let mut t = fixtures::table(LINK_MM);
+        let mid = t.len() / 2;
+        t[mid] ^= 0x01;
+        let r = region(&t);
+        let cal = load::<Fixed>(&r);
+        assert_eq!(cal.state(), TableState::Corrupt);
+        assert!(cal.eval(&[0; JOINTS], 0).is_err());
+    }
+
+    #[test]
+    fn a_refused_calibration_reports_its_reason() {
+        let cal = Calibration::<F32>::refused(TableState::BadSignature);
+        assert_eq!(cal.state(), TableState::BadSignature);
+        assert_eq!(cal.joints(), 0);
+        assert!(cal.eval(&[0; JOINTS], 0).is_err());
+    }
+
+    #[test]
+    fn a_probe_the_table_lacks_is_not_mounted_and_the_chain_stays() {
+        let r = region(&fixtures::table(LINK_MM));
+        let mut cal = load::<F32>(&r);
+        let before = cal.eval(&[0; JOINTS], 0).unwrap();
+        // The fixture has one probe: index 0 mounts (again), index 1 does not exist.
+        assert!(cal.mount(0));
+        assert!(!cal.mount(1));
+        assert_eq!(cal.eval(&[0; JOINTS], 0).unwrap(), before);
+    }
+
+    #[test]
+    fn the_stream_format_is_the_evaluators() {
+        assert_eq!(F32::STREAM, stream::NumberFormat::F32);
+        assert_eq!(Fixed::STREAM, stream::NumberFormat::Fixed);
+    }
+
+    /// With a budget in the table, an f32 hub built with `u95` gives every point a U95;
+    /// without the feature (the M0 hubs) it gives none.
+    #[test]
+    fn a_budget_gives_u95_only_where_the_hub_computes_it() {
+        let r = region(&fixtures::table_with_budget(LINK_MM));
+        let cal = load::<F32>(&r);
+        let p = cal.eval(&[100, 200, 300, 400, 500, 600], 0).unwrap();
+        if cfg!(feature = "u95") {
+            let u = p.u95_nm.expect("a U95 with the budget");
+            // More than the probing (2 µm) and model (1 µm) terms at k = 2; of the order of a
+            // millimetre in all, from the budget's one count on each joint (3.8e-4 rad at up to
+            // 1.2 m from the tip).
+            assert!((4_000..5_000_000).contains(&u), "{u} nm");
+        } else {
+            assert_eq!(p.u95_nm, None);
+        }
+        let fixed = load::<Fixed>(&r);
+        assert_eq!(fixed.eval(&[0; JOINTS], 0).unwrap().u95_nm, None);
+    }
+}

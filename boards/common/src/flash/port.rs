@@ -65,3 +65,67 @@ impl<'s, F: NorFlash> Port<'s, F> {
         self.updater.step(&mut self.flash, self.scratch, step)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use quatarm::stream::TableState;
+    use quatarm::update::fixtures;
+    use quatarm::F32;
+
+    /// The port's whole cycle: boot on the factory table, take an update step by step (the
+    /// old chain answering meanwhile), boot on the new one.
+    #[test]
+    fn boot_update_and_boot_again() {
+        let old = fixtures::table(200.0);
+        let new = fixtures::numbered(220.0, 5);
+        let mut scratch = [0u8; MAX_TABLE_LEN];
+        let mut port = Port::new(
+            fixtures::factory(&old),
+            fixtures::layout(),
+            Accept::joints(6),
+            &mut scratch,
+        );
+        {
+            let mut live = [0u8; MAX_TABLE_LEN];
+            let first = port.boot::<F32>(&mut live);
+            assert_eq!(first.calibration.state(), TableState::Valid);
+            assert_eq!(first.live.map(|l| l.slot), Some(0));
+        }
+        let steps = fixtures::steps(&new);
+        assert!(steps.len() > 2);
+        for s in &steps {
+            port.step(s).unwrap();
+        }
+        let mut live = [0u8; MAX_TABLE_LEN];
+        let second = port.boot::<F32>(&mut live);
+        let id = second.live.expect("the new table");
+        assert_eq!((id.slot, id.crc), (1, fixtures::crc_of(&new)));
+        let x = second.calibration.eval(&[0; 6], 0).unwrap().xyz_nm[0];
+        assert!((x - 1_320_000_000).abs() < 1_000, "{x} nm");
+    }
+
+    /// A table the hub does not accept is refused at its commit, and the old one stays.
+    #[test]
+    fn a_refused_update_leaves_the_old_table() {
+        let old = fixtures::table(200.0);
+        let mut scratch = [0u8; MAX_TABLE_LEN];
+        let mut port = Port::new(
+            fixtures::factory(&old),
+            fixtures::layout(),
+            Accept::joints(6).for_encoders(&[1 << 14; 6]),
+            &mut scratch,
+        );
+        // Encoders of another resolution: a valid table, not this hub's.
+        let other = fixtures::table_for_encoders(220.0, 1 << 16);
+        let refused = fixtures::steps(&other)
+            .iter()
+            .map(|s| port.step(s))
+            .any(|a| a.is_err());
+        assert!(refused);
+        let mut live = [0u8; MAX_TABLE_LEN];
+        let b = port.boot::<F32>(&mut live);
+        let id = b.live.expect("the old table");
+        assert_eq!((id.slot, id.crc), (0, fixtures::crc_of(&old)));
+    }
+}

@@ -172,3 +172,117 @@ pub fn boot<'a, P: HubEvaluator, F: NorFlash>(
         },
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use quatarm::stream::TableState;
+    use quatarm::update::fixtures;
+    use quatarm::update::mock::MockFlash;
+    use quatarm::F32;
+
+    const LINK_MM: f64 = 200.0;
+
+    #[test]
+    fn the_map_counts_offsets_from_the_lowest_region() {
+        // The state copies below the slots, as on the Pico (any order works).
+        let slots = [(0x1010_4000, 0x1010_8000), (0x1010_8000, 0x1010_c000)];
+        let state = [(0x1010_0000, 0x1010_1000), (0x1010_1000, 0x1010_2000)];
+        let m = map_of(slots, Some(state));
+        assert_eq!(m.base, 0x1010_0000);
+        assert_eq!(m.span, 0xc000);
+        assert_eq!(
+            m.layout,
+            Layout::Regions {
+                slots: [0x4000..0x8000, 0x8000..0xc000],
+                state: [0..0x1000, 0x1000..0x2000],
+            }
+        );
+    }
+
+    #[test]
+    fn without_state_regions_the_record_is_in_the_slots_trailers() {
+        // Slot 1 below slot 0: the base is the lower, offsets follow the addresses.
+        let slots = [(0x0806_0000, 0x0808_0000), (0x0804_0000, 0x0806_0000)];
+        let m = map_of(slots, None);
+        assert_eq!(m.base, 0x0804_0000);
+        assert_eq!(m.span, 0x4_0000);
+        assert_eq!(
+            m.layout,
+            Layout::Trailers {
+                slots: [0x2_0000..0x4_0000, 0..0x2_0000],
+            }
+        );
+    }
+
+    fn boot_of(
+        flash: &mut MockFlash,
+        layout: &Layout,
+        accept: &Accept,
+    ) -> (TableState, Option<LiveTable>) {
+        let mut live = [0u8; MAX_TABLE_LEN];
+        let b = boot::<F32, _>(flash, layout, accept, &mut live);
+        (b.calibration.state(), b.live)
+    }
+
+    #[test]
+    fn a_factory_table_in_slot_0_boots() {
+        let t = fixtures::table(LINK_MM);
+        for layout in fixtures::layouts() {
+            let mut flash = fixtures::factory(&t);
+            let (state, live) = boot_of(&mut flash, &layout, &Accept::joints(calibration::JOINTS));
+            assert_eq!(state, TableState::Valid);
+            let crc = fixtures::crc_of(&t);
+            assert_eq!(
+                live,
+                Some(LiveTable {
+                    slot: 0,
+                    seq: 0,
+                    crc
+                }),
+                "{layout:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn after_an_update_the_new_table_boots_with_its_chain() {
+        let mut flash = fixtures::factory(&fixtures::table(LINK_MM));
+        let new = fixtures::numbered(210.0, 2);
+        fixtures::update(&mut flash, &new).unwrap();
+        let mut live = [0u8; MAX_TABLE_LEN];
+        let accept = Accept::joints(calibration::JOINTS);
+        let b = boot::<F32, _>(&mut flash, &fixtures::layout(), &accept, &mut live);
+        let id = b.live.expect("a live table");
+        assert_eq!((id.slot, id.crc), (1, fixtures::crc_of(&new)));
+        assert!(id.seq >= 1, "{id:?}");
+        // The chain is the new table's: six links of 210 mm.
+        let x = b.calibration.eval(&[0; 6], 0).unwrap().xyz_nm[0];
+        assert!((x - 1_260_000_000).abs() < 1_000, "{x} nm");
+    }
+
+    #[test]
+    fn blank_flash_reports_slot_0s_reason() {
+        let mut flash = MockFlash::new(fixtures::FLASH_LEN);
+        let (state, live) = boot_of(&mut flash, &fixtures::layout(), &Accept::joints(6));
+        assert_eq!((state, live), (TableState::Missing, None));
+    }
+
+    #[test]
+    fn an_unsigned_table_on_a_hub_with_a_key_is_refused() {
+        let mut flash = fixtures::factory(&fixtures::table(LINK_MM));
+        let accept = Accept::joints(6).signed_by(fixtures::public_key(7));
+        let (state, live) = boot_of(&mut flash, &fixtures::layout(), &accept);
+        assert_eq!((state, live), (TableState::Unsigned, None));
+    }
+
+    #[test]
+    fn a_layout_beyond_the_flash_is_malformed() {
+        let mut flash = fixtures::factory(&fixtures::table(LINK_MM));
+        let too_far = Layout::Trailers {
+            slots: [0..3072, 3072..(fixtures::FLASH_LEN as u32 + 1024)],
+        };
+        let (state, live) = boot_of(&mut flash, &too_far, &Accept::joints(6));
+        assert_eq!((state, live), (TableState::Malformed, None));
+    }
+}

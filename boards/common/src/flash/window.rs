@@ -82,3 +82,75 @@ impl<R: Raw> NorFlash for Window<R> {
         self.raw.program(self.base + offset as usize, bytes)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::flash::ram_nor::Ram;
+
+    const UNIT: usize = 256;
+    const GUARD: u8 = 0x5a;
+
+    /// Runs `f` on a window of four erase units in the middle of a buffer whose first and
+    /// last unit lie outside it; returns the whole buffer.
+    fn with_window(f: impl FnOnce(&mut Window<Ram<UNIT>>)) -> [u8; 6 * UNIT] {
+        let mut mem = [GUARD; 6 * UNIT];
+        let base = mem.as_mut_ptr() as usize + UNIT;
+        // SAFETY: the window lies inside `mem`, which nothing else touches while it lives.
+        let mut w = unsafe { Window::new(Ram::<UNIT>, base, 4 * UNIT) };
+        f(&mut w);
+        mem
+    }
+
+    fn outside_untouched(mem: &[u8; 6 * UNIT]) -> bool {
+        mem[..UNIT]
+            .iter()
+            .chain(&mem[5 * UNIT..])
+            .all(|&b| b == GUARD)
+    }
+
+    #[test]
+    fn erase_write_and_read_count_from_the_windows_start() {
+        let mem = with_window(|w| {
+            assert_eq!(w.capacity(), 4 * UNIT);
+            w.erase(UNIT as u32, 2 * UNIT as u32).unwrap();
+            w.write(UNIT as u32 + 8, &[0x0f, 0xf0, 0x12, 0x34]).unwrap();
+            let mut got = [0u8; 6];
+            w.read(UNIT as u32 + 6, &mut got).unwrap();
+            assert_eq!(got, [0xff, 0xff, 0x0f, 0xf0, 0x12, 0x34]);
+            // NOR: a write only clears bits.
+            w.write(UNIT as u32 + 8, &[0xf0, 0xff, 0xff, 0x00]).unwrap();
+            w.read(UNIT as u32 + 8, &mut got[..4]).unwrap();
+            assert_eq!(got[..4], [0x00, 0xf0, 0x12, 0x00]);
+        });
+        // Offset UNIT of the window is unit 2 of the buffer: only it was erased.
+        assert!(mem[2 * UNIT..3 * UNIT]
+            .iter()
+            .enumerate()
+            .all(|(i, &b)| (8..12).contains(&i) || b == 0xff));
+        assert!(mem[UNIT..2 * UNIT].iter().all(|&b| b == GUARD));
+        assert!(mem[3 * UNIT..5 * UNIT].iter().all(|&b| b == GUARD));
+        assert!(outside_untouched(&mem));
+    }
+
+    #[test]
+    fn misaligned_or_outside_operations_are_refused_before_the_chip() {
+        use NorFlashErrorKind::{NotAligned, OutOfBounds};
+        let mem = with_window(|w| {
+            let top = 4 * UNIT as u32;
+            assert_eq!(w.erase(1, UNIT as u32), Err(NotAligned));
+            assert_eq!(w.erase(0, UNIT as u32 + 4), Err(NotAligned));
+            assert_eq!(
+                w.erase(top - UNIT as u32, top + UNIT as u32),
+                Err(OutOfBounds)
+            );
+            assert_eq!(w.write(2, &[0; 4]), Err(NotAligned));
+            assert_eq!(w.write(0, &[0; 3]), Err(NotAligned));
+            assert_eq!(w.write(top, &[0; 4]), Err(OutOfBounds));
+            assert_eq!(w.write(top - 4, &[0; 8]), Err(OutOfBounds));
+            assert_eq!(w.read(top - 1, &mut [0; 2]), Err(OutOfBounds));
+        });
+        // Nothing was written, inside the window or out.
+        assert!(mem.iter().all(|&b| b == GUARD));
+    }
+}
