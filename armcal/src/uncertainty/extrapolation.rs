@@ -266,6 +266,7 @@ mod tests {
             temp_c: 20.0,
             probe: None,
             line: 0,
+            file: None,
         };
         let data = Dataset {
             rows: vec![row(vec![0.0, -1.0]), row(vec![0.5, 1.0])],
