@@ -244,7 +244,10 @@ fn the_hello_s_calibration_number_and_date_are_shown() {
         hubs[0].ends_with(", calibration number 12, dated 2026-12-04"),
         "{err}"
     );
-    assert!(hubs[1].ends_with(", calibration number 0, no date"), "{err}");
+    assert!(
+        hubs[1].ends_with(", calibration number 0, no date"),
+        "{err}"
+    );
     // A protocol-4 Hello: the same fields without the number and date (a tuple: `Hello`
     // serialises protocol 5's layout).
     let v4 = frame_of_tuple(&(

@@ -470,7 +470,10 @@ mod tests {
     fn hello_decodes_from_every_protocol() {
         let v1: Hello = postcard::from_bytes(&[1, 0, 6, 1]).unwrap();
         assert_eq!((v1.protocol, v1.joints, v1.live), (1, 6, None));
-        assert_eq!((v1.probe, v1.probes.len(), v1.number, v1.date), (0, 0, 0, 0));
+        assert_eq!(
+            (v1.probe, v1.probes.len(), v1.number, v1.date),
+            (0, 0, 0, 0)
+        );
         let live = Some(LiveTable {
             slot: 1,
             seq: 7,

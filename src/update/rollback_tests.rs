@@ -213,11 +213,7 @@ fn lost_live_sweep(layout: &Layout, start: &MockFlash, offered: &[u8]) -> (usize
 
 #[test]
 fn a_lower_table_left_by_a_cut_update_never_boots() {
-    let (old, live, offered) = (
-        numbered(100.0, 2),
-        numbered(110.0, 3),
-        numbered(120.0, 2),
-    );
+    let (old, live, offered) = (numbered(100.0, 2), numbered(110.0, 3), numbered(120.0, 2));
     for layout in layouts() {
         let start = with_live(&layout, &plain(), &old, &live);
         let (tried, whole) = lost_live_sweep(&layout, &start, &offered);

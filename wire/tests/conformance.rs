@@ -113,9 +113,7 @@ fn report(r: &Report) -> String {
 /// One item in the file's notation.
 fn render(item: &Item) -> String {
     match item {
-        Item::Hello(h) if (1..=quatarm::stream::PROTOCOL_VERSION).contains(&h.protocol) => {
-            hello(h)
-        }
+        Item::Hello(h) if (1..=quatarm::stream::PROTOCOL_VERSION).contains(&h.protocol) => hello(h),
         Item::Hello(h) => format!("foreign-hello protocol={}", h.protocol),
         Item::Report(r) => report(r),
         Item::Backward {

@@ -1093,7 +1093,11 @@ pub fn key_rotation(name: &str) {
     assert_eq!(point_now(&mut s, &reading), host6);
     let refused = Some(Item::Update(Err(Refusal::RetiredKey)));
     assert_eq!(send_table(&mut s, &retired), refused);
-    assert_eq!(point_now(&mut s, &reading), host6, "a refusal changes nothing");
+    assert_eq!(
+        point_now(&mut s, &reading),
+        host6,
+        "a refusal changes nothing"
+    );
     s.reset().unwrap();
     assert_eq!(announced_calibration(&mut s, "reset").0, 6);
     assert_eq!(point_now(&mut s, &reading), host6, "after a reset");
