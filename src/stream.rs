@@ -58,5 +58,7 @@ pub use status::{Status, TableState};
 /// Protocol version carried in [`Hello`]; bumped on any incompatible change of a message.
 /// Version 2 added the live table to `Hello`; version 3 the point's U95 to its coordinates;
 /// version 4 the probes: the mounted probe's id in every report, the mounted probe and the
-/// table's in `Hello`, `ToDevice::SelectProbe` answered by `ToHost::Probe`.
-pub const PROTOCOL_VERSION: u16 = 4;
+/// table's in `Hello`, `ToDevice::SelectProbe` answered by `ToHost::Probe`; version 5 the
+/// live table's calibration number and date at the end of `Hello` (the other messages are
+/// protocol 4's).
+pub const PROTOCOL_VERSION: u16 = 5;

@@ -36,7 +36,7 @@ pub mod session;
 #[cfg(test)]
 mod session_tests;
 
-pub use boot::{key_generation, live_slot, live_table, Accept, BootError, Keys, Live};
+pub use boot::{floor, key_generation, live_slot, live_table, Accept, BootError, Keys, Live};
 pub use layout::{Layout, LayoutError};
 pub use record::StateRecord;
 pub use session::{Accepted, Refusal, Updater};

@@ -206,3 +206,74 @@ fn decodes_a_capture_counting_gaps_and_damage() {
         "{err}"
     );
 }
+
+/// A protocol-5 `Hello` names the live calibration's number and date: `decode` says them on
+/// stderr; a protocol-4 one (which has none) and a hub without a valid table say nothing of
+/// a calibration.
+#[test]
+fn the_hello_s_calibration_number_and_date_are_shown() {
+    use quatarm::stream::{Hello, LiveTable, NumberFormat, PROTOCOL_VERSION};
+    let hello = |status: u16, number, date| {
+        frame(&ToHost::Hello(Hello {
+            protocol: PROTOCOL_VERSION,
+            precision: NumberFormat::F32,
+            joints: 6,
+            status: Status(status),
+            live: (status == 1).then_some(LiveTable {
+                slot: 1,
+                seq: 2,
+                crc: 0x1234,
+            }),
+            probe: 3,
+            probes: [3u8].into_iter().collect(),
+            number,
+            date,
+        }))
+    };
+    let mut bytes = vec![0u8];
+    bytes.extend(hello(1, 12, 20261204));
+    bytes.extend(frame(&report(0, true)));
+    bytes.extend(hello(1, 0, 0));
+    bytes.extend(frame(&report(0, true)));
+    let out = decode(&[], &bytes);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let err = text(&out.stderr);
+    let hubs: Vec<&str> = err.lines().filter(|l| l.starts_with("# hub:")).collect();
+    assert_eq!(hubs.len(), 2, "{err}");
+    assert!(
+        hubs[0].ends_with(", calibration number 12, dated 2026-12-04"),
+        "{err}"
+    );
+    assert!(
+        hubs[1].ends_with(", calibration number 0, no date"),
+        "{err}"
+    );
+    // A protocol-4 Hello: the same fields without the number and date (a tuple: `Hello`
+    // serialises protocol 5's layout).
+    let v4 = frame_of_tuple(&(
+        0u8,
+        4u16,
+        NumberFormat::F32,
+        6u8,
+        Status(1),
+        None::<u8>,
+        3u8,
+        &[3u8][..],
+    ));
+    let mut bytes = vec![0u8];
+    bytes.extend(v4);
+    bytes.extend(frame(&report(0, true)));
+    let out = decode(&[], &bytes);
+    let err = text(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("# hub: protocol 4") && !err.contains("calibration number"),
+        "{err}"
+    );
+}
+
+fn frame_of_tuple(msg: &impl serde::Serialize) -> Vec<u8> {
+    let mut out = [0u8; MAX_FRAME];
+    let n = encode(msg, &mut out).unwrap();
+    out[..n].to_vec()
+}

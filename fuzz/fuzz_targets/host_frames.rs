@@ -4,7 +4,7 @@
 //! counts, probe answers (protocol 4) and reports of every protocol included. The document's
 //! rules on what a report may carry (`docs/protocol.md`, "What a decoder refuses"): every
 //! point handed out has a coherent status with no fault, a unit direction, and a probe the
-//! last `Hello` of protocol 4 lists; nothing handed out breaks them.
+//! last `Hello` of protocol 4 or 5 lists; nothing handed out breaks them.
 #![no_main]
 
 use armcal::stream_decode::{is_unit_direction, Decoder, Item};
@@ -16,14 +16,14 @@ fuzz_target!(|bytes: &[u8]| {
         let s = decoder.finish();
         let (mut reports, mut points, mut damaged, mut hellos) = (0u64, 0u64, 0u64, 0u64);
         let mut probe_answers = 0u64;
-        // The probes the last protocol-4 `Hello` listed ([0] for none), as the document says.
+        // The probes the last `Hello` of protocol 4 or 5 listed ([0] for none), as the document says.
         let mut listed: Option<Vec<u8>> = None;
         for item in &items {
             match item {
                 Item::Damaged(_) => damaged += 1,
                 Item::Hello(h) => {
                     hellos += 1;
-                    listed = (h.protocol == 4).then(|| {
+                    listed = (4..=5).contains(&h.protocol).then(|| {
                         if h.probes.is_empty() {
                             vec![0]
                         } else {

@@ -137,8 +137,18 @@ pub struct Outcome {
 /// `table` signed with the repository's test key (`keys/test-maker.pem`, `keys/README.md`),
 /// whose public half the qemu-m4f image embeds as its maker's key: the image a maker flashes.
 pub fn signed(table: &[u8]) -> Result<Vec<u8>> {
-    let key =
-        quatarm_wire::tablesign::read_private(&crate::boards::root().join("keys/test-maker.pem"))?;
+    signed_with(table, "keys/test-maker.pem")
+}
+
+/// `table` signed with the test key's successor (`keys/test-maker-next.pem`), the qemu-m4f
+/// image's next maker key: the image that rotates a hub to it.
+pub fn signed_next(table: &[u8]) -> Result<Vec<u8>> {
+    signed_with(table, "keys/test-maker-next.pem")
+}
+
+/// `table` signed with the private key at `key` (a path from the repository's root).
+fn signed_with(table: &[u8], key: &str) -> Result<Vec<u8>> {
+    let key = quatarm_wire::tablesign::read_private(&crate::boards::root().join(key))?;
     Ok(quatarm_wire::tablesign::sign(&key, table)?)
 }
 

@@ -25,3 +25,12 @@ common::board_tests! {
 fn an_older_calibration_number_is_refused() {
     common::rollback_refused("qemu-m4f");
 }
+
+/// Key rotation end to end: a table signed by the image's next key committed, then a table
+/// signed by the retired key refused `RetiredKey`, before and after a reset
+/// (`common::key_rotation`).
+#[test]
+#[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
+fn a_table_signed_by_a_retired_key_is_refused_after_a_rotation() {
+    common::key_rotation("qemu-m4f");
+}

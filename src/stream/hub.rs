@@ -16,6 +16,7 @@ use super::{
     MAX_CSV_LINE, MAX_FRAME, PROTOCOL_VERSION,
 };
 use crate::table::probes::MAX_PROBES;
+use crate::table::Release;
 
 /// The rated temperature range of the thermal model, milli-degrees Celsius. Outside it the
 /// hub reports `OVER_TEMPERATURE` and no coordinates: the expansion model is only
@@ -44,6 +45,8 @@ pub struct Hub {
     /// table (`Table::probe_at`). Ids only, 8 bytes and a length: the board converts a probe
     /// from the table when it is selected, rather than holding eight converted.
     probes: heapless::Vec<u8, MAX_PROBES>,
+    /// The live table's calibration number and date, for the `Hello` (zeros without one).
+    release: Release,
 }
 
 impl Hub {
@@ -63,6 +66,7 @@ impl Hub {
             live: None,
             probe: 0,
             probes: heapless::Vec::new(),
+            release: Release { number: 0, date: 0 },
         }
     }
 
@@ -77,6 +81,15 @@ impl Hub {
                 }
             }
             self.probe = self.probes.first().copied().unwrap_or(0);
+        }
+        self
+    }
+
+    /// The same hub, announcing the live table's calibration number and date (only with a
+    /// valid table: a hub without one announces zeros).
+    pub fn with_release(mut self, release: Release) -> Hub {
+        if self.base.table_valid() {
+            self.release = release;
         }
         self
     }
@@ -130,6 +143,8 @@ impl Hub {
             live: self.live,
             probe: self.probe,
             probes: self.probes.clone(),
+            number: self.release.number,
+            date: self.release.date,
         })
     }
 
@@ -306,7 +321,11 @@ mod tests {
             TableState::WrongJointCount,
             TableState::Malformed,
         ] {
-            let mut hub = Hub::new(state, 6, NumberFormat::Fixed);
+            let release = Release {
+                number: 4,
+                date: 20261204,
+            };
+            let mut hub = Hub::new(state, 6, NumberFormat::Fixed).with_release(release);
             let r = hub.report(0, Ok(&reading(0, 20_000)), must_not_run);
             assert_eq!(r.point, None);
             assert_eq!(r.status.table(), state);
@@ -315,9 +334,28 @@ mod tests {
                 ToHost::Hello(h) => {
                     assert_eq!(h.joints, 0);
                     assert_eq!(h.status.table(), state);
+                    assert_eq!((h.number, h.date), (0, 0), "no table, no calibration");
                 }
                 other => panic!("{other:?}"),
             }
+        }
+    }
+
+    /// Protocol 5: the `Hello` of a hub with a valid table names its calibration's number
+    /// and date.
+    #[test]
+    fn hello_names_the_live_calibration() {
+        let release = Release {
+            number: 12,
+            date: 20261204,
+        };
+        let hub = Hub::new(TableState::Valid, 6, NumberFormat::F32).with_release(release);
+        match hub.hello() {
+            ToHost::Hello(h) => assert_eq!(
+                (h.protocol, h.number, h.date),
+                (PROTOCOL_VERSION, 12, 20261204)
+            ),
+            other => panic!("{other:?}"),
         }
     }
 

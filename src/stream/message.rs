@@ -46,9 +46,12 @@ pub enum ProbeRefusal {
 
 /// What a hub announces at boot.
 ///
-/// It decodes from protocols 1 to 3 too (without `live` before protocol 2, read as `None`;
-/// without the probes before protocol 4, read as probe 0 of none announced): the version is
-/// its first field, so a host tells the layouts apart before it reads the rest.
+/// It decodes from protocols 1 to 4 too (without `live` before protocol 2, read as `None`;
+/// without the probes before protocol 4, read as probe 0 of none announced; without the
+/// calibration's number and date before protocol 5, read as 0, unknown): the version is its
+/// first field, so a host tells the layouts apart before it reads the rest. It serialises
+/// in the layout of [`super::PROTOCOL_VERSION`] whatever `protocol` says: a hub sends only
+/// its own version.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 pub struct Hello {
     /// [`super::PROTOCOL_VERSION`] of the firmware.
@@ -67,6 +70,13 @@ pub struct Hello {
     /// The ids of every probe the table holds, the first first (protocol 4; empty without a
     /// valid table).
     pub probes: heapless::Vec<u8, MAX_PROBES>,
+    /// The live table's calibration number (protocol 5; [`crate::table::Release`]): what the
+    /// hub's anti-rollback compares, so a host sees which calibration it measures with. 0
+    /// without a valid table and for a table of format 3, which has none.
+    pub number: u32,
+    /// The live table's calibration date as the decimal number YYYYMMDD (protocol 5); 0
+    /// unknown (no valid table, a format-3 table, or none given).
+    pub date: u32,
 }
 
 // By hand: heapless's `defmt` support is for defmt 0.3, the firmware's is 1.
@@ -75,14 +85,16 @@ impl defmt::Format for Hello {
     fn format(&self, f: defmt::Formatter) {
         defmt::write!(
             f,
-            "Hello protocol {=u16}, precision {}, joints {=u8}, status {}, live {}, probe {=u8}, probes {=[u8]}",
+            "Hello protocol {=u16}, precision {}, joints {=u8}, status {}, live {}, probe {=u8}, probes {=[u8]}, number {=u32}, date {=u32}",
             self.protocol,
             self.precision,
             self.joints,
             self.status,
             self.live,
             self.probe,
-            self.probes.as_slice()
+            self.probes.as_slice(),
+            self.number,
+            self.date
         )
     }
 }
@@ -93,7 +105,7 @@ impl<'de> Deserialize<'de> for Hello {
         impl<'de> Visitor<'de> for HelloVisitor {
             type Value = Hello;
             fn expecting(&self, f: &mut core::fmt::Formatter) -> core::fmt::Result {
-                f.write_str("a Hello of protocol 1 to 4")
+                f.write_str("a Hello of protocol 1 to 5")
             }
             fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Hello, A::Error> {
                 let missing = |i| A::Error::invalid_length(i, &self);
@@ -101,18 +113,24 @@ impl<'de> Deserialize<'de> for Hello {
                 let precision = seq.next_element()?.ok_or_else(|| missing(1))?;
                 let joints = seq.next_element()?.ok_or_else(|| missing(2))?;
                 let status = seq.next_element()?.ok_or_else(|| missing(3))?;
-                // Every version starts with these four; protocols 2 to 4 have `live` after
-                // them, protocol 4 the probes after it (a Hello of another version decodes as
-                // far as they go, for a host to say which version it met).
-                let live = if (2..=4).contains(&protocol) {
+                // Every version starts with these four; protocols 2 to 5 have `live` after
+                // them, protocols 4 and 5 the probes after it, protocol 5 the calibration's
+                // number and date last (a Hello of another version decodes as far as these
+                // four go, for a host to say which version it met).
+                let live = if (2..=5).contains(&protocol) {
                     seq.next_element()?.ok_or_else(|| missing(4))?
                 } else {
                     None
                 };
                 let (mut probe, mut probes) = (0, heapless::Vec::new());
-                if protocol == 4 {
+                if (4..=5).contains(&protocol) {
                     probe = seq.next_element()?.ok_or_else(|| missing(5))?;
                     probes = seq.next_element()?.ok_or_else(|| missing(6))?;
+                }
+                let (mut number, mut date) = (0, 0);
+                if protocol == 5 {
+                    number = seq.next_element()?.ok_or_else(|| missing(7))?;
+                    date = seq.next_element()?.ok_or_else(|| missing(8))?;
                 }
                 Ok(Hello {
                     protocol,
@@ -122,6 +140,8 @@ impl<'de> Deserialize<'de> for Hello {
                     live,
                     probe,
                     probes,
+                    number,
+                    date,
                 })
             }
         }
@@ -133,6 +153,8 @@ impl<'de> Deserialize<'de> for Hello {
             "live",
             "probe",
             "probes",
+            "number",
+            "date",
         ];
         deserializer.deserialize_struct("Hello", FIELDS, HelloVisitor)
     }
@@ -406,33 +428,39 @@ mod tests {
 
     /// `docs/protocol.md`'s `Hello`: the number format is one byte after the protocol varint,
     /// 0 for f32 and 1 for fixed point. The enum's name is not on the wire; its order is.
-    /// Protocol 4's probes follow `live`: the mounted id, then the ids as a sequence.
+    /// Protocol 4's probes follow `live`: the mounted id, then the ids as a sequence;
+    /// protocol 5's calibration number and date follow them, two `u32` varints.
     #[test]
     fn hello_carries_the_number_format_and_the_probes_as_documented() {
         let hello = |precision| Hello {
-            protocol: 4,
+            protocol: 5,
             precision,
             joints: 6,
             status: Status::default(),
             live: None,
             probe: 9,
             probes: heapless::Vec::from_slice(&[4, 9, 0]).unwrap(),
+            number: 300,
+            date: 20261204,
         };
-        let mut buf = [0u8; 16];
+        // 300 = 0xac 0x02; 20261204 = 0x0135_2954 = 0xd4 0xd2 0xd4 0x09.
+        let tail = [0xac, 0x02, 0xd4, 0xd2, 0xd4, 0x09];
+        let mut buf = [0u8; 24];
         let f32 = postcard::to_slice(&hello(NumberFormat::F32), &mut buf)
             .unwrap()
             .to_vec();
         let fixed = postcard::to_slice(&hello(NumberFormat::Fixed), &mut buf)
             .unwrap()
             .to_vec();
-        assert_eq!(f32, [4, 0, 6, 0, 0, 9, 3, 4, 9, 0]);
-        assert_eq!(fixed, [4, 1, 6, 0, 0, 9, 3, 4, 9, 0]);
+        assert_eq!(f32[..10], [5, 0, 6, 0, 0, 9, 3, 4, 9, 0]);
+        assert_eq!(fixed[..10], [5, 1, 6, 0, 0, 9, 3, 4, 9, 0]);
+        assert_eq!((&f32[10..], &fixed[10..]), (&tail[..], &tail[..]));
         assert_eq!(
             postcard::from_bytes::<Hello>(&f32).unwrap(),
             hello(NumberFormat::F32)
         );
         // More than eight ids: refused.
-        let nine = [4, 0, 6, 0, 0, 9, 9, 1, 2, 3, 4, 5, 6, 7, 8, 9];
+        let nine = [5, 0, 6, 0, 0, 9, 9, 1, 2, 3, 4, 5, 6, 7, 8, 9, 0, 0];
         assert!(postcard::from_bytes::<Hello>(&nine).is_err());
     }
 
@@ -442,27 +470,39 @@ mod tests {
     fn hello_decodes_from_every_protocol() {
         let v1: Hello = postcard::from_bytes(&[1, 0, 6, 1]).unwrap();
         assert_eq!((v1.protocol, v1.joints, v1.live), (1, 6, None));
-        assert_eq!((v1.probe, v1.probes.len()), (0, 0));
+        assert_eq!(
+            (v1.probe, v1.probes.len(), v1.number, v1.date),
+            (0, 0, 0, 0)
+        );
         let live = Some(LiveTable {
             slot: 1,
             seq: 7,
             crc: 0xdead_beef,
         });
-        let v4 = Hello {
-            protocol: 4,
+        let v5 = Hello {
+            protocol: 5,
             precision: NumberFormat::Fixed,
             joints: 6,
             status: Status(Status::TABLE_VALID),
             live,
             probe: 3,
             probes: heapless::Vec::from_slice(&[3]).unwrap(),
+            number: 7,
+            date: 20261204,
         };
-        let mut buf = [0u8; 32];
-        let bytes = postcard::to_slice(&v4, &mut buf).unwrap().to_vec();
-        assert_eq!(postcard::from_bytes::<Hello>(&bytes).unwrap(), v4);
-        // Protocols 2 and 3: the same bytes without the probes (the last 3).
+        let mut buf = [0u8; 40];
+        let bytes = postcard::to_slice(&v5, &mut buf).unwrap().to_vec();
+        assert_eq!(postcard::from_bytes::<Hello>(&bytes).unwrap(), v5);
+        // The number (1 byte) and the date (4) are the last 5 bytes.
+        let v4_len = bytes.len() - 5;
+        let mut v4 = bytes[..v4_len].to_vec();
+        v4[0] = 4;
+        let h = postcard::from_bytes::<Hello>(&v4).unwrap();
+        assert_eq!((h.protocol, h.live, h.probe), (4, live, 3));
+        assert_eq!((h.number, h.date), (0, 0));
+        // Protocols 2 and 3: the same bytes without the probes (3 more).
         for v in [2, 3] {
-            let mut old = bytes[..bytes.len() - 3].to_vec();
+            let mut old = bytes[..v4_len - 3].to_vec();
             old[0] = v;
             let h = postcard::from_bytes::<Hello>(&old).unwrap();
             assert_eq!(
@@ -470,17 +510,27 @@ mod tests {
                 (u16::from(v), live, 0, 0)
             );
             // With them, a byte is left over: not a Hello of that protocol.
-            let mut more = bytes.clone();
+            let mut more = v4.clone();
             more[0] = v;
             assert!(!matches!(
                 postcard::take_from_bytes::<Hello>(&more),
                 Ok((_, []))
             ));
         }
+        // Protocol 5's bytes under protocol 4: five left over, no Hello of 4.
+        let mut more = bytes.clone();
+        more[0] = 4;
+        assert!(!matches!(
+            postcard::take_from_bytes::<Hello>(&more),
+            Ok((_, []))
+        ));
         // A protocol-2 Hello cut before `live` is refused, not read as protocol 1; so is a
-        // protocol-4 one cut before its probes.
+        // protocol-4 one cut before its probes and a protocol-5 one cut before its date or
+        // its number.
         assert!(postcard::from_bytes::<Hello>(&[2, 0, 6, 1]).is_err());
-        assert!(postcard::from_bytes::<Hello>(&bytes[..bytes.len() - 3]).is_err());
+        assert!(postcard::from_bytes::<Hello>(&v4[..v4.len() - 3]).is_err());
+        assert!(postcard::from_bytes::<Hello>(&bytes[..bytes.len() - 4]).is_err());
+        assert!(postcard::from_bytes::<Hello>(&bytes[..v4_len]).is_err());
     }
 
     /// A probe answer as `docs/protocol.md` spells it: `ToHost::Probe` 3, `Ok` 0 and the id,

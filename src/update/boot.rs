@@ -116,6 +116,13 @@ pub fn key_generation(accept: &Accept, copies: &[Option<StateRecord>; 2]) -> u8 
         .fold(image, u8::max)
 }
 
+/// The hub's anti-rollback floor: the highest calibration number the valid records say was
+/// made live (0 without a record). Like the key generation it only grows, and the highest of
+/// both copies counts, so a torn newest record cannot lower it below the previous one's.
+pub fn floor(copies: &[Option<StateRecord>; 2]) -> u32 {
+    copies.iter().flatten().map(|r| r.floor).fold(0, u32::max)
+}
+
 /// A flash operation failed; what the driver said, in a form a stream message can carry.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -163,13 +170,25 @@ pub enum SlotError {
     Signature(SignatureError),
     /// A valid table for encoders of another resolution than the hub's.
     Resolution,
+    /// A valid table whose calibration number is below the hub's anti-rollback floor
+    /// ([`floor`]): never made live at boot (an older record's slot after the newest one's
+    /// was lost, an offered table left complete in a slot by a refused or cut update).
+    BelowFloor {
+        /// The table's calibration number.
+        number: u32,
+        /// The floor it is below.
+        floor: u32,
+    },
 }
 
 impl SlotError {
     /// How the stream reports the slot: the status word's table state.
     pub fn state(&self) -> TableState {
         match self {
-            SlotError::Flash(_) | SlotError::NotRecorded => TableState::Corrupt,
+            // A table the state record does not allow is reported like one it does not name.
+            SlotError::Flash(_) | SlotError::NotRecorded | SlotError::BelowFloor { .. } => {
+                TableState::Corrupt
+            }
             SlotError::Table(t) => TableState::from(t),
             SlotError::Resolution => TableState::WrongResolution,
             SlotError::Signature(SignatureError::Missing) => TableState::Unsigned,
@@ -266,17 +285,30 @@ pub fn live_slot<F: NorFlash>(
     let copies = record::read_copies(flash, layout);
     // One key for both slots and every rule: a table signed by a retired key never boots.
     let gen = key_generation(accept, &copies);
+    // One floor for both slots: a table below it never boots, whichever record names it or
+    // none (the older record's slot when the newest one's fails; a lower table an update
+    // left whole in the other slot before its commit was refused or cut).
+    let floor = floor(&copies);
+    let mut verify = |slot: u8, rec: Option<&StateRecord>| {
+        let number = verify_slot(flash, layout, slot, accept, gen, rec, buf)?
+            .release()
+            .number;
+        if number < floor {
+            return Err(SlotError::BelowFloor { number, floor });
+        }
+        Ok(())
+    };
     if let Some((first, _)) = record::newest(&copies) {
         for rec in [copies[first], copies[1 - first]].into_iter().flatten() {
-            if verify_slot(flash, layout, rec.slot, accept, gen, Some(&rec), buf).is_ok() {
+            if verify(rec.slot, Some(&rec)).is_ok() {
                 return Ok((rec.slot, Some(rec)));
             }
         }
     }
     let mut why = [SlotError::Table(TableError::Blank); 2];
     for slot in 0..2u8 {
-        match verify_slot(flash, layout, slot, accept, gen, None, buf) {
-            Ok(_) => return Ok((slot, None)),
+        match verify(slot, None) {
+            Ok(()) => return Ok((slot, None)),
             Err(e) => why[usize::from(slot)] = e,
         }
     }

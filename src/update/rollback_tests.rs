@@ -124,26 +124,105 @@ fn a_lower_number_is_refused_an_equal_or_higher_one_committed() {
 }
 
 /// The floor lives in the state record, not only in the live table: a hub whose newest slot
-/// was lost (it falls back to the older table) still refuses a number below the highest it
-/// made live.
+/// was lost boots no table below the highest number it made live (the older record's slot
+/// holds one), and still refuses a number below it; an older slot of the same number boots.
 #[test]
-fn the_floor_outlives_a_fallback_to_the_older_table() {
-    let layout = super::fixtures::layout();
-    let mut f = with_live(&layout, &plain(), &numbered(100.0, 1), &numbered(110.0, 8));
-    // Slot 1 (number 8) corrupted: the boot falls back to slot 0 (number 1).
-    f.mem[3072 + 100] ^= 0xff;
-    let mut f = MockFlash::from_image(f.mem);
-    assert_eq!(
-        boot_with(&layout, &plain(), &mut f),
-        Some(numbered(100.0, 1))
-    );
-    assert_eq!(
-        update_with(&layout, &plain(), &mut f, &numbered(120.0, 7)),
-        Err(Refusal::Rollback {
-            live: 8,
-            offered: 7
-        })
-    );
+fn a_slot_below_the_floor_is_not_made_live_at_boot() {
+    for layout in layouts() {
+        let mut f = with_live(&layout, &plain(), &numbered(100.0, 1), &numbered(110.0, 8));
+        // Slot 1 (number 8) corrupted: slot 0 (number 1) is below the floor, so nothing boots.
+        f.mem[3072 + 100] ^= 0xff;
+        let mut f = MockFlash::from_image(f.mem);
+        assert_eq!(boot_with(&layout, &plain(), &mut f), None, "{layout:?}");
+        let mut buf = [0u8; crate::table::MAX_TABLE_LEN];
+        match super::boot::live_slot(&mut f, &layout, &plain(), &mut buf) {
+            Err(super::BootError::NoTable([why, _])) => {
+                assert_eq!(
+                    why,
+                    super::boot::SlotError::BelowFloor {
+                        number: 1,
+                        floor: 8
+                    }
+                );
+                assert_eq!(why.state(), TableState::Corrupt);
+            }
+            other => panic!("{layout:?}: {other:?}"),
+        }
+        assert_eq!(
+            update_with(&layout, &plain(), &mut f, &numbered(120.0, 7)),
+            Err(Refusal::Rollback {
+                live: 8,
+                offered: 7
+            })
+        );
+        assert!(committed(update_with(
+            &layout,
+            &plain(),
+            &mut f,
+            &numbered(120.0, 8)
+        )));
+        assert_eq!(
+            boot_with(&layout, &plain(), &mut f),
+            Some(numbered(120.0, 8))
+        );
+        // The same number in the older slot is no rollback: it boots when the newest is lost.
+        let mut g = with_live(&layout, &plain(), &numbered(100.0, 8), &numbered(110.0, 8));
+        g.mem[3072 + 100] ^= 0xff;
+        let mut g = MockFlash::from_image(g.mem);
+        assert_eq!(
+            boot_with(&layout, &plain(), &mut g),
+            Some(numbered(100.0, 8)),
+            "{layout:?}"
+        );
+    }
+}
+
+/// A refused rollback cut at every operation, then the live slot lost (corrupted) before the
+/// reboot: the offered lower table, which from some cut on lies whole and valid in the other
+/// slot, is never made live; the hub boots no table. Returns (cut points, of them those that
+/// left the offered table whole in its slot).
+fn lost_live_sweep(layout: &Layout, start: &MockFlash, offered: &[u8]) -> (usize, usize) {
+    let mut clean = start.clone();
+    assert!(update_with(layout, &plain(), &mut clean, offered).is_err());
+    let total = clean.ops;
+    // Uncut, the refused update leaves the offered table whole in the other slot.
+    assert_eq!(clean.mem[..offered.len()], *offered);
+    clean.mem[3072 + 100] ^= 0xff;
+    let mut lost = MockFlash::from_image(clean.mem);
+    assert_eq!(boot_with(layout, &plain(), &mut lost), None, "{layout:?}");
+    let (mut tried, mut whole) = (0, 0);
+    for cut in CUTS {
+        for at in 0..total {
+            let mut f = start.clone();
+            f.cut = Some((at, cut));
+            assert!(update_with(layout, &plain(), &mut f, offered).is_err());
+            let mut mem = f.mem;
+            whole += usize::from(mem[..offered.len()] == *offered);
+            mem[3072 + 100] ^= 0xff;
+            let mut rebooted = MockFlash::from_image(mem);
+            tried += 1;
+            assert_eq!(
+                boot_with(layout, &plain(), &mut rebooted),
+                None,
+                "{layout:?}: cut at {at} of {total} ({cut:?}), live slot lost"
+            );
+        }
+    }
+    (tried, whole)
+}
+
+#[test]
+fn a_lower_table_left_by_a_cut_update_never_boots() {
+    let (old, live, offered) = (numbered(100.0, 2), numbered(110.0, 3), numbered(120.0, 2));
+    for layout in layouts() {
+        let start = with_live(&layout, &plain(), &old, &live);
+        let (tried, whole) = lost_live_sweep(&layout, &start, &offered);
+        std::println!(
+            "boot floor, {}: {tried} cut points of a refused update with the live slot then lost, {whole} of them with the offered table whole in its slot, 0 boots on it",
+            layout_name(&layout)
+        );
+        assert!(tried > 400 && whole > 0, "{tried} {whole}");
+    }
 }
 
 /// Cuts the power at every operation of sending `offered` (a number below the live one's) to

@@ -283,9 +283,7 @@ impl Updater {
             Some(r) => r.seq.checked_add(1).ok_or(Refusal::SequenceExhausted)?,
             None => 1,
         };
-        let floor = newest
-            .map_or(0, |r| r.floor)
-            .max(live.map_or(0, |(_, n)| n));
+        let floor = boot::floor(&copies).max(live.map_or(0, |(_, n)| n));
         // A slot holds every table without a parameter block (the layout's check); one with
         // many parameters may not fit a small board's slot. A table never reaches into its
         // slot's trailer: the state record goes there.
@@ -421,6 +419,12 @@ impl Updater {
         let refusal = |e: SlotError| match e {
             SlotError::Flash(f) => Refusal::Flash(f),
             SlotError::NotRecorded => Refusal::NotAnnounced,
+            // `verify_slot` checks no floor (the commit compares the number itself); named
+            // for completeness in the refusal it would be.
+            SlotError::BelowFloor { number, floor } => Refusal::Rollback {
+                live: floor,
+                offered: number,
+            },
             e @ (SlotError::Table(_) | SlotError::Signature(_) | SlotError::Resolution) => {
                 Refusal::Table(e.state())
             }

@@ -7,8 +7,9 @@
 //! for. A report whose status carries a fault but which holds coordinates anyway (a hub never
 //! sends one; a broken or foreign hub might) is handed out without them.
 //!
-//! Reports are read by the protocol the last `Hello` announced: protocol 4 ends each with the
-//! mounted probe's id, protocols 1 to 3 have none (their hubs had one probe, id 0, which the
+//! Reports are read by the protocol the last `Hello` announced: protocols 4 and 5 (whose
+//! reports are the same; 5 added the calibration's number and date to `Hello`) end each with
+//! the mounted probe's id, protocols 1 to 3 have none (their hubs had one probe, id 0, which the
 //! decoder gives them). After a `Hello` of a protocol it does not know, it reads this
 //! protocol's; before any `Hello` (a stream joined mid-way, a capture cut after the hub's
 //! boot), this protocol's or, failing that, an older one's: a report of either is a byte
@@ -83,7 +84,8 @@ pub enum Inconsistency {
     Forbidden,
     /// No coordinates although the status has no fault.
     Missing,
-    /// A report of a probe the last `Hello` (protocol 4) does not list (0 where it lists none).
+    /// A report of a probe the last `Hello` (protocol 4 or 5) does not list (0 where it lists
+    /// none).
     UnknownProbe,
     /// A probe direction that is no unit vector (its length off 1 by more than
     /// [`DIRECTION_TOLERANCE_E9`] units of 1e-9; a zero direction among them).
@@ -138,8 +140,9 @@ pub struct Stats {
     /// reported apart because they mean "wrong or broken sender", not "bad line".
     pub undecodable: u64,
     /// `Hello`s announcing a `protocol` this decoder does not read (it reads 1 to
-    /// [`PROTOCOL_VERSION`], 4: the same messages, protocol 2 adding `Hello::live` and the
-    /// update messages, protocol 3 the coordinates' U95, protocol 4 the probes).
+    /// [`PROTOCOL_VERSION`], 5: the same messages, protocol 2 adding `Hello::live` and the
+    /// update messages, protocol 3 the coordinates' U95, protocol 4 the probes, protocol 5
+    /// the calibration's number and date in `Hello`).
     pub foreign_protocol: u64,
     /// Bytes skipped before the first delimiter (joining a running stream).
     pub skipped_bytes: u64,
@@ -171,7 +174,7 @@ pub struct Decoder {
     /// The protocol the last `Hello` announced, by which reports are read (`None` before the
     /// first).
     protocol: Option<u16>,
-    /// The probe ids a report may name: those the last `Hello` of protocol 4 listed (`[0]`
+    /// The probe ids a report may name: those the last `Hello` of protocol 4 or 5 listed (`[0]`
     /// where it listed none: a hub without a valid table); `None` before one (a stream
     /// joined mid-way, an older protocol), when any id passes.
     probes: Option<heapless::Vec<u8, MAX_PROBES>>,
@@ -280,8 +283,8 @@ impl Decoder {
                 self.stats.foreign_protocol += u64::from(!known);
                 self.protocol = Some(if known { h.protocol } else { PROTOCOL_VERSION });
                 self.probes = match h.protocol {
-                    4 if h.probes.is_empty() => heapless::Vec::from_slice(&[0]).ok(),
-                    4 => Some(h.probes.clone()),
+                    4 | 5 if h.probes.is_empty() => heapless::Vec::from_slice(&[0]).ok(),
+                    4 | 5 => Some(h.probes.clone()),
                     _ => None,
                 };
                 Item::Hello(h)
@@ -409,16 +412,18 @@ mod tests {
     #[test]
     fn reports_are_read_by_the_protocol_of_the_last_hello() {
         let hello = |protocol: u16| raw_frame(&(0u8, protocol, 0u8, 6u8, 1u16, None::<u8>));
-        // Protocol 4's Hello: the mounted probe and the ids after `live`.
-        let v4_hello = raw_frame(&ToHost::Hello(Hello {
-            protocol: 4,
-            precision: quatarm::stream::NumberFormat::F32,
-            joints: 6,
-            status: Status(Status::TABLE_VALID),
-            live: None,
-            probe: 7,
-            probes: heapless::Vec::from_slice(&[7, 2]).unwrap(),
-        }));
+        // Protocol 4's Hello: the mounted probe and the ids after `live` (a tuple: `Hello`
+        // itself serialises protocol 5's layout, the number and date after them).
+        let v4_hello = raw_frame(&(
+            0u8,
+            4u16,
+            quatarm::stream::NumberFormat::F32,
+            6u8,
+            Status(Status::TABLE_VALID),
+            None::<u8>,
+            7u8,
+            &[7u8, 2][..],
+        ));
         let no_u95 = Coordinates {
             u95_nm: None,
             ..POINT

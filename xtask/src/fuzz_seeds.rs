@@ -131,6 +131,8 @@ pub fn run() -> Result<()> {
         }),
         probe: 1,
         probes: [1u8, 2, 5].into_iter().collect(),
+        number: 7,
+        date: 20261204,
     })));
     for seq in 0..4u32 {
         let fault = seq == 2;

@@ -11,7 +11,7 @@ use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
 use armcal::stream_decode::{Decoder, Inconsistency, Item, Stats};
-use quatarm::stream::{write_csv_line, CSV_HEADER, MAX_CSV_LINE, PROTOCOL_VERSION};
+use quatarm::stream::{write_csv_line, Hello, CSV_HEADER, MAX_CSV_LINE, PROTOCOL_VERSION};
 
 /// Arguments of `armcal decode`.
 #[derive(clap::Args)]
@@ -170,11 +170,22 @@ fn open(args: &Args) -> Result<(Box<dyn Read>, bool, String)> {
     })
 }
 
+/// The live table's calibration number and date as a `Hello` of protocol 5 names them (an
+/// older hub's says nothing of them; a hub without a valid table has none).
+fn calibration(h: &Hello) -> String {
+    if h.protocol < 5 || !h.status.table_valid() {
+        return String::new();
+    }
+    let date = quatarm_ref::release::Date::from_yyyymmdd(h.date)
+        .map_or_else(|| "no date".to_string(), |d| format!("dated {d}"));
+    format!(", calibration number {}, {date}", h.number)
+}
+
 /// Says on stderr what a decoded item other than a plain report means.
 fn note(item: &Item) {
     match item {
         Item::Hello(h) => eprintln!(
-            "# hub: protocol {}, {:?}, {} joints, table {}{}{}",
+            "# hub: protocol {}, {:?}, {} joints, table {}{}{}{}",
             h.protocol,
             h.precision,
             h.joints,
@@ -190,7 +201,8 @@ fn note(item: &Item) {
                 String::new()
             } else {
                 format!(", probe {} of {:?}", h.probe, h.probes.as_slice())
-            }
+            },
+            calibration(h)
         ),
         Item::Update(a) => eprintln!("# update: {a:?}"),
         Item::Probe(Ok(id)) => eprintln!("# probe {id} mounted"),

@@ -156,13 +156,15 @@ fn build<P: Evaluator>(table: Table<'_>) -> Result<Chain<P>, TableState> {
 }
 
 impl<P: HubEvaluator> Calibration<'_, P> {
-    /// A hub that reports this calibration's state, joints and precision, and the table's
-    /// probes, the first mounted.
+    /// A hub that reports this calibration's state, joints and precision, the table's
+    /// probes, the first mounted, and its calibration number and date (protocol 5).
     #[inline(always)] // called once per image: out of line it only adds a call (24 B on the M0)
     pub fn hub(&self) -> Hub {
         let hub = Hub::new(self.state(), self.joints(), P::STREAM);
         match &self.table {
-            Some(t) => hub.with_probes((0..t.probe_count()).filter_map(|k| t.probe_id(k))),
+            Some(t) => hub
+                .with_probes((0..t.probe_count()).filter_map(|k| t.probe_id(k)))
+                .with_release(t.release()),
             None => hub,
         }
     }

@@ -1,7 +1,8 @@
 //! The arm maker's public key an image checks tables against ([`quatarm::update::Accept`]).
 //!
-//! The QEMU images trust the repository's test key ([`TEST_MAKER_KEY`], `keys/README.md`), so
-//! that the end-to-end tests can sign tables. A real board's image embeds the key its build
+//! The QEMU images trust the repository's test key ([`TEST_MAKER_KEY`], `keys/README.md`), and
+//! qemu-m4f its successor as the next key ([`TEST_KEYS`]), so that the end-to-end tests can
+//! sign tables and rotate a hub. A real board's image embeds the key its build
 //! was given: `QUATARM_MAKER_KEY=/path/to/maker.pub cargo xtask build --board NAME` (the
 //! 32-byte file `armcal table keygen` writes; the private key stays offline). The board's
 //! build script (`maker_key` in `boards/common/build_link.rs`) copies it beside its output,
@@ -12,6 +13,20 @@
 /// The test key's 32 bytes (`keys/test-maker.pub`).
 pub const TEST_MAKER_KEY: [u8; quatarm::signature::KEY_LEN] =
     *include_bytes!("../../../keys/test-maker.pub");
+
+/// The test key's successor (`keys/test-maker-next.pub`): the next maker key of the QEMU
+/// images, which a table signed with `keys/test-maker-next.pem` rotates a hub to
+/// (`docs/update.md`, "Key rotation and revocation").
+pub const TEST_NEXT_MAKER_KEY: [u8; quatarm::signature::KEY_LEN] =
+    *include_bytes!("../../../keys/test-maker-next.pub");
+
+/// The keys of a QEMU image that updates: the test key (generation 0) and its successor, so
+/// that the end-to-end tests can rotate a hub and see the retired key refused.
+pub const TEST_KEYS: quatarm::update::Keys = quatarm::update::Keys {
+    generation: 0,
+    current: TEST_MAKER_KEY,
+    next: Some(TEST_NEXT_MAKER_KEY),
+};
 
 /// The key the board's build script chose (`QUATARM_MAKER_KEY`, else the test key), as a
 /// `[u8; 32]`: expands in the board's crate, whose build script wrote the file.

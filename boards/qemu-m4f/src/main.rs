@@ -11,7 +11,7 @@ mod uart;
 use board_common::calibration::JOINTS;
 use board_common::flash::ram_nor::Ram;
 use board_common::flash::slots;
-use board_common::maker_key::TEST_MAKER_KEY;
+use board_common::maker_key::TEST_KEYS;
 use board_common::qemu;
 use cortex_m_rt::entry;
 use quatarm::update::Accept;
@@ -28,8 +28,9 @@ const RAM_START: usize = 0x2000_0000;
 fn main() -> ! {
     qemu::hub_main::<quatarm::F32, CORE_HZ, _, _>(
         RAM_START,
-        // A table must be signed under the (test) maker key to boot or to be committed.
-        Accept::joints(JOINTS).signed_by(TEST_MAKER_KEY),
+        // A table must be signed under the (test) maker key of the hub's generation to boot
+        // or to be committed; one signed by the next test key rotates the hub to it.
+        Accept::joints(JOINTS).signed_by_keys(TEST_KEYS),
         || {
             // SAFETY: UART0 is used by nothing else.
             unsafe { uart::Uart::new(uart::Uart::UART0, BAUDDIV) }

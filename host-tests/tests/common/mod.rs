@@ -977,62 +977,138 @@ pub fn update_not_supported(name: &str) {
     assert!(status.success(), "{status}");
 }
 
+/// The default calibration's arm with its probe `dz` mm longer, as a table of calibration
+/// `number` dated 2026-12-04 (unsigned).
+#[allow(dead_code)] // qemu-m4f only (qemu-m0 has no update port)
+fn numbered_table(dz: f64, number: u32) -> Vec<u8> {
+    use quatarm_ref::release::{Date, Release};
+    let mut arm = calibration(&default_calibration_path()).unwrap().0;
+    arm.probe.error[2] += dz;
+    let release = Release {
+        number,
+        date: Date::new(2026, 12, 4),
+        due: None,
+    };
+    quatarm_wire::tablebuild::build_release(&arm, None, &release).unwrap()
+}
+
+/// Sends a signed table image step by step; the answer to the last step.
+#[allow(dead_code)] // qemu-m4f only
+fn send_table(s: &mut Session, image: &[u8]) -> Option<Item> {
+    let mut last = None;
+    for step in &update_steps(image) {
+        last = Some(s.ask(&ToDevice::Update(step.clone())).unwrap());
+    }
+    last
+}
+
+/// The next item, a `Hello` of this protocol: the calibration number and date it announces.
+#[allow(dead_code)] // qemu-m4f only
+fn announced_calibration(s: &mut Session, when: &str) -> (u32, u32) {
+    match s.next_item().unwrap() {
+        Item::Hello(h) => {
+            assert_eq!(h.protocol, quatarm::stream::PROTOCOL_VERSION, "{when}");
+            (h.number, h.date)
+        }
+        other => panic!("{when}: expected a Hello, got {other:?}"),
+    }
+}
+
 /// Anti-rollback on a hub under QEMU (`docs/update.md`): on a factory table of calibration
 /// number 5, a table of number 6 is committed and its points follow; the number-5 table sent
 /// back (validly signed) is refused at commit as `Rollback { live: 6, offered: 5 }`, the points
 /// stay the new table's, and after a reset the hub still boots on number 6 and refuses the
-/// number-5 table again. Key rotation is not run here: the QEMU image holds one key.
+/// number-5 table again. Every `Hello` names the live number and date (protocol 5).
 #[allow(dead_code)] // qemu-m4f only (qemu-m0 has no update port)
 pub fn rollback_refused(name: &str) {
-    use quatarm_ref::release::{Date, Release};
     let b = the_board(name);
-    let arm = calibration(&default_calibration_path()).unwrap().0;
-    let numbered = |arm: &quatarm_ref::Arm, number| {
-        let release = Release {
-            number,
-            date: Date::new(2026, 12, 4),
-            due: None,
-        };
-        signed(&quatarm_wire::tablebuild::build_release(arm, None, &release).unwrap()).unwrap()
-    };
-    let mut newer_arm = arm.clone();
-    newer_arm.probe.error[2] += 0.05;
-    let (five, six) = (numbered(&arm, 5), numbered(&newer_arm, 6));
+    let (five, six) = (
+        signed(&numbered_table(0.0, 5)).unwrap(),
+        signed(&numbered_table(0.05, 6)).unwrap(),
+    );
     let reading = some_readings(1)[0];
     let host_five = host_points(b.precision, &five, &[reading]).unwrap()[0].unwrap();
     let host_six = host_points(b.precision, &six, &[reading]).unwrap()[0].unwrap();
     assert_ne!(host_five, host_six);
-    let send = |s: &mut Session, image: &[u8]| {
-        let mut last = None;
-        for step in &update_steps(image) {
-            last = Some(s.ask(&ToDevice::Update(step.clone())).unwrap());
-        }
-        last
-    };
 
     let mut s = Session::start(&b, &b.elf(b.name), Some(&five)).unwrap();
-    let _hello = s.next_item().unwrap();
+    assert_eq!(announced_calibration(&mut s, "boot"), (5, 20261204));
     assert_eq!(point_now(&mut s, &reading), host_five);
     assert_eq!(
-        send(&mut s, &six),
+        send_table(&mut s, &six),
         Some(Item::Update(Ok(Accepted::Committed { slot: 1, seq: 1 })))
     );
-    let _hello = s.next_item().unwrap();
+    assert_eq!(announced_calibration(&mut s, "commit"), (6, 20261204));
     assert_eq!(point_now(&mut s, &reading), host_six);
     let refused = Some(Item::Update(Err(Refusal::Rollback {
         live: 6,
         offered: 5,
     })));
-    assert_eq!(send(&mut s, &five), refused);
+    assert_eq!(send_table(&mut s, &five), refused);
     assert_eq!(
         point_now(&mut s, &reading),
         host_six,
         "a refused rollback changes nothing"
     );
     s.reset().unwrap();
-    let _hello = s.next_item().unwrap();
+    assert_eq!(announced_calibration(&mut s, "reset"), (6, 20261204));
     assert_eq!(point_now(&mut s, &reading), host_six, "after a reset");
-    assert_eq!(send(&mut s, &five), refused, "after a reset");
+    assert_eq!(send_table(&mut s, &five), refused, "after a reset");
+    let (status, _) = s.finish().unwrap();
+    assert!(status.success(), "{status}");
+}
+
+/// Key rotation on a hub under QEMU (`docs/update.md`, "Key rotation and revocation"): the
+/// image holds the test key and its successor. On a factory table of number 5 signed by the
+/// test key, a table of number 6 signed by the successor is committed (the rotation) and its
+/// points follow; a table of number 7 signed by the now retired test key is refused
+/// `RetiredKey` and changes nothing, before and after a reset; the same table signed by the
+/// successor is committed.
+#[allow(dead_code)] // qemu-m4f only (the one image with a next key)
+pub fn key_rotation(name: &str) {
+    use host_tests::e2e::signed_next;
+    let b = the_board(name);
+    let (t5, t6, t7) = (
+        numbered_table(0.0, 5),
+        numbered_table(0.05, 6),
+        numbered_table(-0.05, 7),
+    );
+    let factory = signed(&t5).unwrap();
+    let rotation = signed_next(&t6).unwrap();
+    let (retired, renewed) = (signed(&t7).unwrap(), signed_next(&t7).unwrap());
+    let reading = some_readings(1)[0];
+    let host = |t: &[u8]| host_points(b.precision, t, &[reading]).unwrap()[0].unwrap();
+    let (host5, host6, host7) = (host(&t5), host(&t6), host(&t7));
+    assert!(host5 != host6 && host6 != host7);
+
+    let mut s = Session::start(&b, &b.elf(b.name), Some(&factory)).unwrap();
+    assert_eq!(announced_calibration(&mut s, "boot").0, 5);
+    assert_eq!(point_now(&mut s, &reading), host5);
+    assert_eq!(
+        send_table(&mut s, &rotation),
+        Some(Item::Update(Ok(Accepted::Committed { slot: 1, seq: 1 }))),
+        "a table signed by the next key rotates the hub"
+    );
+    assert_eq!(announced_calibration(&mut s, "rotation").0, 6);
+    assert_eq!(point_now(&mut s, &reading), host6);
+    let refused = Some(Item::Update(Err(Refusal::RetiredKey)));
+    assert_eq!(send_table(&mut s, &retired), refused);
+    assert_eq!(
+        point_now(&mut s, &reading),
+        host6,
+        "a refusal changes nothing"
+    );
+    s.reset().unwrap();
+    assert_eq!(announced_calibration(&mut s, "reset").0, 6);
+    assert_eq!(point_now(&mut s, &reading), host6, "after a reset");
+    assert_eq!(send_table(&mut s, &retired), refused, "after a reset");
+    assert_eq!(
+        send_table(&mut s, &renewed),
+        Some(Item::Update(Ok(Accepted::Committed { slot: 0, seq: 2 }))),
+        "the new key signs the next update"
+    );
+    assert_eq!(announced_calibration(&mut s, "renewed").0, 7);
+    assert_eq!(point_now(&mut s, &reading), host7);
     let (status, _) = s.finish().unwrap();
     assert!(status.success(), "{status}");
 }
