@@ -290,7 +290,7 @@ fn decode_refuses_a_hub_running_another_arms_table() {
     };
     let stream = |joints: u8, crc: u32| {
         let mut s = frame(&ToHost::Hello(Hello {
-            protocol: 4,
+            protocol: quatarm::stream::PROTOCOL_VERSION,
             precision: NumberFormat::F32,
             joints,
             status: Status::default(),
@@ -301,6 +301,8 @@ fn decode_refuses_a_hub_running_another_arms_table() {
             }),
             probe: 0,
             probes: Default::default(),
+            number: 0,
+            date: 0,
         }));
         s.extend(frame(&ToHost::Report(quatarm::stream::Report {
             seq: 0,
