@@ -138,6 +138,20 @@ pub struct Pair {
     pub p_value: f64,
     /// Whether the test calls them one arm (p ≥ alpha).
     pub same: bool,
+    /// How far their predicted balls are apart over both recordings' poses, probe and frame
+    /// out (RMS, µm; [`super::gauge_free::tip_difference`]): the difference in what the two
+    /// calibrations predict, which does not depend on their gauge.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tip_rms_um: Option<f64>,
+}
+
+/// The two recordings' calibrations compared by their predicted balls over both recordings'
+/// poses, probe and frame out ([`super::gauge_free`]).
+fn tip_rms_um(a: &Option<Fit>, b: &Option<Fit>, da: &Dataset, db: &Dataset) -> Option<f64> {
+    let (a, b) = (a.as_ref()?, b.as_ref()?);
+    let mut poses = super::gauge_free::poses(da);
+    poses.extend(super::gauge_free::poses(db));
+    Some(super::gauge_free::tip_difference(&a.arm, &b.arm, &poses).rms_um)
 }
 
 /// χ² of the difference of two recordings' geometries on what both identify alike (module
@@ -330,12 +344,15 @@ pub fn group_observed(
             _ => ALPHA,
         };
         let inner = fleet::geometric_options(opts);
-        let geo_of = |d: &Dataset| {
+        let fit_of = |d: &Dataset| {
             let g = fleet::geometric(start, d, &inner);
-            g.fit
+            let geo = g
+                .fit
                 .as_ref()
-                .and_then(|f| geometry(f, d, g.baseline.as_ref()))
+                .and_then(|f| geometry(f, d, g.baseline.as_ref()));
+            (g.fit, geo)
         };
+        let geo_of = |d: &Dataset| fit_of(d).1;
         let (mut q_split, mut k_split) = (0.0, 0usize);
         for (i, u) in files.iter().enumerate() {
             obs.step("same-arm test: halves of recording", i, n);
@@ -358,21 +375,21 @@ pub fn group_observed(
             overdispersion = Some((q_split / k_split as f64, k_split));
         }
         let (phi, d2) = overdispersion.map_or((1.0, f64::INFINITY), |(p, k)| (p, k as f64));
-        let geos: Vec<Option<Geometry>> = files
+        let (fits, geos): (Vec<Option<Fit>>, Vec<Option<Geometry>>) = files
             .iter()
             .enumerate()
             .map(|(i, u)| {
                 obs.step("same-arm test: fit of recording", i, n);
-                let geo = geo_of(&u.data);
+                let (fit, geo) = fit_of(&u.data);
                 if geo.is_none() {
                     uncompared.push((
                         i,
                         "its geometric model has no covariance (fit failed or singular)".into(),
                     ));
                 }
-                geo
+                (fit, geo)
             })
-            .collect();
+            .unzip();
         for a in 0..n {
             for b in a + 1..n {
                 let (Some(ga), Some(gb)) = (&geos[a], &geos[b]) else {
@@ -393,6 +410,7 @@ pub fn group_observed(
                         f,
                         p_value: p,
                         same: p >= alpha,
+                        tip_rms_um: tip_rms_um(&fits[a], &fits[b], &files[a].data, &files[b].data),
                     });
                 }
             }
