@@ -38,10 +38,10 @@ fn a_tilted_base_is_found_and_level_rejected() {
     let d = arm_data(71, tilt);
     let l = test_level(&Arm::default6(), &d, &opts(), &[Effect::Gravity(1)]).unwrap();
     assert_eq!(l.sessions, 4);
-    for c in 0..2 {
+    for (c, &truth) in tilt.iter().enumerate() {
         let [lo, hi] = l.interval[c];
-        assert!(lo < tilt[c] && tilt[c] < hi, "angle {c}: {l:#?}");
-        assert!((l.tilt[c] - tilt[c]).abs() < 0.02, "angle {c}: {l:#?}");
+        assert!(lo < truth && truth < hi, "angle {c}: {l:#?}");
+        assert!((l.tilt[c] - truth).abs() < 0.02, "angle {c}: {l:#?}");
     }
     assert!(l.rejects_level && l.p_value < 0.01, "{l:#?}");
     assert!(l.rms_um[1] < l.rms_um[0], "{l:#?}");

@@ -96,12 +96,15 @@ pub struct PooledFleet {
     pub left_out: Vec<(String, String)>,
 }
 
-/// Each arm's recording with the most sessions, when it has [`MIN_UNITS`] or more: (arm
-/// name, recording index, sessions), and the arms left out with why.
-fn recordings(
-    units: &[UnitData],
-    arms: &[(String, Vec<usize>)],
-) -> (Vec<(String, usize, usize)>, Vec<(String, String)>) {
+/// An arm's recording pooled: (arm name, recording index, sessions).
+type Used = (String, usize, usize);
+
+/// An arm left out: (arm name, why).
+type LeftOut = (String, String);
+
+/// Each arm's recording with the most sessions, when it has [`MIN_UNITS`] or more, and the
+/// arms left out with why.
+fn recordings(units: &[UnitData], arms: &[(String, Vec<usize>)]) -> (Vec<Used>, Vec<LeftOut>) {
     let mut used = Vec::new();
     let mut left_out = Vec::new();
     for (name, recs) in arms {
