@@ -107,6 +107,22 @@ pub fn t_tail(t: f64, df: f64) -> f64 {
     }
 }
 
+/// The two-sided critical value of Student's t with `df` degrees of freedom at `alpha`
+/// (bisection on [`t_tail`]).
+pub fn t_critical(alpha: f64, df: f64) -> f64 {
+    let target = alpha / 2.0;
+    let (mut lo, mut hi) = (0.0f64, 1e3f64);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if t_tail(mid, df) > target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
 /// P(Z > z) for a standard normal Z (the t tail with unbounded degrees of freedom).
 pub(crate) fn normal_tail(z: f64) -> f64 {
     t_tail(z, 1e12)

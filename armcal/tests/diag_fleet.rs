@@ -128,6 +128,20 @@ fn an_effect_of_one_unit_is_named_for_that_unit_only() {
     let out = common::armcal_ok(&args, &dir);
     let j: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(j["design"]["causes"], Value::Array(Vec::new()), "{j:#}");
+    // The pooled stage: one arm's compliance is not made the design's by pooling either (the
+    // arms disagree, τ is large, the design's mean does not pass); the arm of two sessions
+    // has no jackknife error and is left out, said.
+    let pooled = &j["pooled"];
+    let g = pooled["effects"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["term"] == "+gravity_compliance:2")
+        .unwrap_or_else(|| panic!("{pooled:#}"));
+    assert_eq!(g["design"]["arms"], 4, "{g:#}");
+    assert_eq!(g["named"], false, "{g:#}");
+    assert!(g["design"]["spread"].as_f64().unwrap() > 1e-8, "{g:#}");
+    assert_eq!(pooled["left_out"][0][0], "e", "{pooled:#}");
     // Piped with --progress: every stage counted, the time left once a step is done.
     let err = String::from_utf8_lossy(&out.stderr);
     for stage in [

@@ -98,8 +98,43 @@ fn diagnose_by_group_reports_the_nested_test() {
         .as_str()
         .unwrap()
         .contains("4 sessions: no sign test can reach p < 0.062"));
-    // Without --by-group there are no sessions to rerun the selection without.
+    assert!(
+        j["sessions_from"]
+            .as_str()
+            .unwrap()
+            .contains("the `group` column of arm.csv: 4 groups"),
+        "{j:#}"
+    );
+    // The named compliance rests on a level base: said beside it, and tested or why not.
+    let causes = j["causes"].as_array().unwrap();
+    assert!(causes
+        .iter()
+        .all(|c| c["effect"] != "gravity_compliance" || c["assumption"].is_string()));
+    if causes.iter().any(|c| c["effect"] == "gravity_compliance") {
+        assert!(
+            j.get("level").is_some() || j["level_not_tested"].is_string(),
+            "{j:#}"
+        );
+    }
+    // Without --by-group (k folds of rows) the sessions are still there: the nested test runs
+    // on them.
     let out = common::armcal_ok(&["diagnose", "arm.csv", "--json", "--max-order", "1"], &dir);
     let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["nested"]["sessions"], 4, "{j:#}");
+    assert!(j.get("nested_not_run").is_none());
+    // One session: no nested test, and the report says why.
+    let one = arm_data(304, 0.0, 40, 1);
+    std::fs::write(dir.join("one.csv"), one.to_csv(&["one session"])).unwrap();
+    let out = common::armcal_ok(&["diagnose", "one.csv", "--json", "--max-order", "1"], &dir);
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!(j.get("nested").is_none());
+    let why = j["nested_not_run"].as_str().unwrap();
+    assert!(why.contains("1 group"), "{why}");
+    let text = common::armcal_ok(&["diagnose", "one.csv", "--max-order", "1"], &dir);
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(
+        text.contains("sessions: the `group` column of one.csv: 1 group")
+            && text.contains("nested held-out test): not run"),
+        "{text}"
+    );
 }

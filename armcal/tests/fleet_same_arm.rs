@@ -72,6 +72,21 @@ fn detection_groups_exactly_the_two_recordings_of_one_arm() {
     assert_eq!(arms.splits.len(), 5);
     assert!((0.5..2.0).contains(&phi), "φ̂ = {phi} on {d}");
     assert_eq!(arms.pairs.len(), 10);
+    // What the calibrations predict, probe and frame out, tells the same way: the two
+    // recordings of one arm are closer than any two arms.
+    let tip = |p: &same_arm::Pair| p.tip_rms_um.expect("both fitted");
+    let same = arms.pairs.iter().find(|p| (p.a, p.b) == (0, 2)).unwrap();
+    let closest_apart = arms
+        .pairs
+        .iter()
+        .filter(|p| (p.a, p.b) != (0, 2))
+        .map(tip)
+        .fold(f64::INFINITY, f64::min);
+    assert!(
+        3.0 * tip(same) < closest_apart,
+        "same arm {} µm, closest different arms {closest_apart} µm",
+        tip(same)
+    );
     for p in &arms.pairs {
         if (p.a, p.b) == (0, 2) {
             assert!(p.f < 3.0 && p.same, "{p:?}");

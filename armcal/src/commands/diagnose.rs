@@ -181,8 +181,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut figures = patterns::figures(&d, &data);
     figures.extend(diagnose::unexplained::figure(&d.unexplained));
     let mut rep = report::build(&d, &data, &figures);
-    if a.by_group {
-        // The headline test with sessions: the whole selection rerun without each one.
+    // The headline test with sessions: the whole selection rerun without each one, whenever
+    // the data have groups to hold out (`sessions::nested_plan` says when not, and why).
+    let plan = diagnose::sessions::nested_plan(&data, opts.folds);
+    if let Err(why) = &plan {
+        rep.nested_not_run = Some(why.clone());
+    }
+    if plan.is_ok() {
         let pb = (!a.json).then(|| {
             let pb = indicatif::ProgressBar::new_spinner();
             pb.set_message("rerunning the diagnosis without each session…");
@@ -203,6 +208,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             .report(),
         );
     }
+    test_level(&start, &data, &opts, &d, &mut rep);
 
     let mut files = armcal::output::Staged::guarding(&inputs);
     if let Some(dir) = &a.plots {
@@ -299,17 +305,21 @@ fn run_fleet(a: &Args) -> anyhow::Result<()> {
             obs.as_mut(),
         )
         .context("cannot diagnose the fleet")?;
-        Ok((arms, f))
+        // Partial pooling of every one-unknown candidate over the arms.
+        let pooled = diagnose::fleet_pooled::pool_fleet(&start, &files, &f, &opts)
+            .context("cannot pool the fleet's arms")?;
+        Ok((arms, f, pooled))
     };
     let done = run();
     drop(obs);
-    let (arms, f) = done?;
+    let (arms, f, pooled) = done?;
     let names: Vec<String> = files.iter().map(|u| u.name.clone()).collect();
     let rep = diagnose::fleet_report::build(
         &f,
         "file stem less the prefix every stem shares up to its last `-`",
         &arms,
         &names,
+        &pooled,
     );
     if a.json {
         println!("{}", rep.json());
@@ -317,6 +327,41 @@ fn run_fleet(a: &Args) -> anyhow::Result<()> {
         print!("{}", rep.text());
     }
     Ok(())
+}
+
+/// Tests the assumption of the named gravity terms, a level base ([`diagnose::level`]),
+/// where the data have the sessions for it; the report says the outcome or why not.
+fn test_level(
+    start: &quatarm_ref::arm::Arm,
+    data: &Dataset,
+    opts: &diagnose::Options,
+    d: &Diagnosis,
+    rep: &mut Report,
+) {
+    let gravity: Vec<_> = d
+        .extended
+        .effects
+        .iter()
+        .copied()
+        .filter(|e| matches!(e, armcal::params::Effect::Gravity(_)))
+        .collect();
+    if gravity.is_empty() {
+        return;
+    }
+    let calib = armcal::fit::calib::Options {
+        design_check: false,
+        allow_degenerate: true,
+        ..opts.calib.clone()
+    };
+    let pb = indicatif::ProgressBar::new_spinner();
+    pb.set_message("fitting the base's tilt through the gravity terms…");
+    pb.enable_steady_tick(std::time::Duration::from_millis(200));
+    let level = diagnose::level::test_level(start, data, &calib, &gravity);
+    pb.finish_and_clear();
+    match level {
+        Ok(l) => rep.level = Some(l),
+        Err(e) => rep.level_not_tested = Some(e.to_string()),
+    }
 }
 
 /// Stages the extended calibration file `out` and its binary table beside it (or says in the

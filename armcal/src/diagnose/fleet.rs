@@ -560,6 +560,72 @@ pub fn diagnose_arms_observed(
     opts: &Options,
     obs: &mut dyn Observer,
 ) -> Result<Fleet, CalibError> {
+    let arm_of = arm_of(units, arms)?;
+    let inner = geometric_options(opts);
+    let (mut work, geometric_fits) = start_work(start, units, &arm_of, opts, &inner, obs);
+    // An arm is tested when its contributing recordings give MIN_UNITS sessions together;
+    // its recordings are then tested whenever they contribute.
+    let arm_tested: Vec<bool> = (0..arms.len())
+        .map(|a| {
+            work.iter()
+                .filter(|w| w.arm == a && w.contributes)
+                .map(|w| w.folds.len())
+                .sum::<usize>()
+                >= MIN_UNITS
+        })
+        .collect();
+    let tested_units = arm_tested.iter().filter(|t| **t).count();
+    let ctx = Context {
+        start,
+        inner: &inner,
+        arm_tested: &arm_tested,
+        arms: arms.len(),
+    };
+    let (design, steps, mut last) = design_level(&ctx, &mut work, opts, obs);
+    design_to_untested(&ctx, &mut work, &design);
+    // The last design step's per-unit tests are the first unit-level step's.
+    let first_tests: Vec<Vec<UnitTest>> = (0..work.len())
+        .map(|k| {
+            let mut t = last.get_mut(k).map(std::mem::take).unwrap_or_default();
+            t.sort_by(|a, b| a.p.total_cmp(&b.p));
+            t
+        })
+        .collect();
+    unit_level(&ctx, &mut work, opts, obs)?;
+    let mut out = Vec::new();
+    for ((w, geo), tests) in work.into_iter().zip(geometric_fits).zip(first_tests) {
+        out.push(unit_result(&ctx, w, geo, tests, arms)?);
+    }
+    Ok(Fleet {
+        design,
+        steps,
+        units: out,
+        tested_units,
+        arms: arms.to_vec(),
+        alpha: opts.alpha,
+    })
+}
+
+/// What every stage of a fleet diagnosis shares.
+struct Context<'a> {
+    start: &'a Arm,
+    /// The geometric model's settings ([`geometric_options`]).
+    inner: &'a calib::Options,
+    /// Whether each arm's sessions allow the pooled test.
+    arm_tested: &'a [bool],
+    /// Arms.
+    arms: usize,
+}
+
+impl Context<'_> {
+    /// Whether a recording's evidence enters the pooled test.
+    fn in_test(&self, w: &Work) -> bool {
+        w.contributes && self.arm_tested[w.arm]
+    }
+}
+
+/// Each recording's arm (index into `arms`); an error names a recording in no arm.
+fn arm_of(units: &[UnitData], arms: &[(String, Vec<usize>)]) -> Result<Vec<usize>, CalibError> {
     let mut arm_of = vec![usize::MAX; units.len()];
     for (a, (_, recs)) in arms.iter().enumerate() {
         for &r in recs {
@@ -572,7 +638,19 @@ pub fn diagnose_arms_observed(
             units[r].name
         )));
     }
-    let inner = geometric_options(opts);
+    Ok(arm_of)
+}
+
+/// Every recording's geometric model, folds and candidates: the work list, and the fits on
+/// all data (`None` where one failed).
+fn start_work<'a>(
+    start: &Arm,
+    units: &'a [UnitData],
+    arm_of: &[usize],
+    opts: &Options,
+    inner: &calib::Options,
+    obs: &mut dyn Observer,
+) -> (Vec<Work<'a>>, Vec<Option<Fit>>) {
     let mut work: Vec<Work> = Vec::new();
     let mut geometric_fits = Vec::new();
     for (k, u) in units.iter().enumerate() {
@@ -582,7 +660,7 @@ pub fn diagnose_arms_observed(
             folds,
             baseline,
             fit,
-        } = geometric(start, &u.data, &inner);
+        } = geometric(start, &u.data, inner);
         let chain: Vec<Holdout> = baseline.into_iter().collect();
         geometric_fits.push(fit);
         let valid = chain.iter().all(|h| h.failed.is_empty());
@@ -597,32 +675,28 @@ pub fn diagnose_arms_observed(
             chain,
             testable,
             contributes,
-            arm: arm_of[work.len()],
+            arm: arm_of[k],
         });
     }
-    // An arm is tested when its contributing recordings give MIN_UNITS sessions together;
-    // its recordings are then tested whenever they contribute.
-    let arm_sessions = |a: usize| -> usize {
-        work.iter()
-            .filter(|w| w.arm == a && w.contributes)
-            .map(|w| w.folds.len())
-            .sum()
-    };
-    let arm_tested: Vec<bool> = (0..arms.len())
-        .map(|a| arm_sessions(a) >= MIN_UNITS)
-        .collect();
-    let in_test = |w: &Work| w.contributes && arm_tested[w.arm];
-    let tested_units = arm_tested.iter().filter(|t| **t).count();
+    (work, geometric_fits)
+}
 
-    // Design level: pool every candidate over the tested units, Holm, add the strongest.
+/// The design level: pool every candidate over the tested arms, Holm, add the strongest;
+/// until none passes or the steps run out. Returns the causes, the steps and the last step's
+/// per-recording tests (emptied when that step named a cause: they went into the models).
+fn design_level(
+    ctx: &Context,
+    work: &mut [Work],
+    opts: &Options,
+    obs: &mut dyn Observer,
+) -> (Vec<Effect>, Vec<DesignStep>, Vec<Vec<UnitTest>>) {
     let mut design: Vec<Effect> = Vec::new();
     let mut steps = Vec::new();
-    // The last step's per-unit tests, reused as the first unit-level step.
     let mut last: Vec<Vec<UnitTest>> = Vec::new();
     for step in 0..opts.diagnose.select.max_steps {
         let vocabulary: Vec<Effect> = work
             .iter()
-            .filter(|w| in_test(w))
+            .filter(|w| ctx.in_test(w))
             .flat_map(|w| w.cands.testable.iter().map(|c| c.effect))
             .filter(|e| !design.contains(e))
             .collect::<BTreeSet<_>>()
@@ -634,57 +708,19 @@ pub fn diagnose_arms_observed(
             .enumerate()
             .map(|(k, w)| {
                 obs.step(&what, k, work.len());
-                if !in_test(w) {
+                if !ctx.in_test(w) {
                     return Vec::new();
                 }
                 vocabulary
                     .iter()
                     .filter(|e| w.can_test(**e))
-                    .map(|e| w.test(start, &inner, *e))
+                    .map(|e| w.test(ctx.start, ctx.inner, *e))
                     .collect()
             })
             .collect();
         let pooled: Vec<Pooled> = vocabulary
             .iter()
-            .map(|&e| {
-                // Each arm: the sessions of every recording of it that tested `e`.
-                let ts: Vec<(usize, f64, f64)> = (0..arms.len())
-                    .filter_map(|a| {
-                        let ys: Vec<f64> = last
-                            .iter()
-                            .zip(&work)
-                            .filter(|(_, w)| w.arm == a)
-                            .filter_map(|(ts, _)| ts.iter().find(|t| t.effect == e))
-                            .flat_map(|t| t.per_session.iter().copied())
-                            .collect();
-                        let (mean, se, _) = session_summary(&ys, true);
-                        (ys.len() >= 2).then_some((a, mean, se))
-                    })
-                    .collect();
-                let y: Vec<f64> = ts.iter().map(|t| t.1).collect();
-                let v: Vec<f64> = ts.iter().map(|t| t.2 * t.2).collect();
-                let (mu, se, tau2, q) = dersimonian_laird(&y, &v);
-                let t = if se > 0.0 { mu / se } else { 0.0 };
-                let k = ts.len();
-                Pooled {
-                    effect: e,
-                    pooling: Pooling {
-                        units: k,
-                        units_gaining: y.iter().filter(|y| **y > 0.0).count(),
-                        mean_log_ratio: mu,
-                        se,
-                        tau2,
-                        q,
-                        t,
-                        p: if k >= MIN_FLEET_UNITS {
-                            t_tail(t, (k - 1) as f64)
-                        } else {
-                            1.0
-                        },
-                    },
-                    per_unit: ts,
-                }
-            })
+            .map(|&e| pool_candidate(e, &last, work, ctx.arms))
             .collect();
         let ps: Vec<f64> = pooled.iter().map(|p| p.pooling.p).collect();
         let rejected = holm(&ps, opts.alpha);
@@ -716,30 +752,75 @@ pub fn diagnose_arms_observed(
             }
         }
     }
+    (design, steps, last)
+}
 
-    // Units that cannot be tested still get the design's causes when they can be validated.
+/// The random-effects pooling of candidate `e` over the arms: each arm's entry is the
+/// sessions of every recording of it that tested `e` (`tests`, one list per recording).
+fn pool_candidate(e: Effect, tests: &[Vec<UnitTest>], work: &[Work], arms: usize) -> Pooled {
+    let ts: Vec<(usize, f64, f64)> = (0..arms)
+        .filter_map(|a| {
+            let ys: Vec<f64> = tests
+                .iter()
+                .zip(work)
+                .filter(|(_, w)| w.arm == a)
+                .filter_map(|(ts, _)| ts.iter().find(|t| t.effect == e))
+                .flat_map(|t| t.per_session.iter().copied())
+                .collect();
+            let (mean, se, _) = session_summary(&ys, true);
+            (ys.len() >= 2).then_some((a, mean, se))
+        })
+        .collect();
+    let y: Vec<f64> = ts.iter().map(|t| t.1).collect();
+    let v: Vec<f64> = ts.iter().map(|t| t.2 * t.2).collect();
+    let (mu, se, tau2, q) = dersimonian_laird(&y, &v);
+    let t = if se > 0.0 { mu / se } else { 0.0 };
+    let k = ts.len();
+    Pooled {
+        effect: e,
+        pooling: Pooling {
+            units: k,
+            units_gaining: y.iter().filter(|y| **y > 0.0).count(),
+            mean_log_ratio: mu,
+            se,
+            tau2,
+            q,
+            t,
+            p: if k >= MIN_FLEET_UNITS {
+                t_tail(t, (k - 1) as f64)
+            } else {
+                1.0
+            },
+        },
+        per_unit: ts,
+    }
+}
+
+/// Recordings outside the pooled test still get the design's causes when they can be
+/// validated.
+fn design_to_untested(ctx: &Context, work: &mut [Work], design: &[Effect]) {
     for w in work
         .iter_mut()
-        .filter(|w| !in_test(w) && w.folds.len() >= 2)
+        .filter(|w| !ctx.in_test(w) && w.folds.len() >= 2)
     {
-        for &e in &design {
+        for &e in design {
             if w.can_test(e) {
-                let t = w.test(start, &inner, e);
+                let t = w.test(ctx.start, ctx.inner, e);
                 w.add(Level::Design, t);
             }
         }
     }
+}
 
-    // Unit level: each tested unit alone, by its own test (the single-arm diagnosis, sessions
-    // held out whole); a cause it names beyond the design's is kept when its real held-out
-    // gain still passes the single-arm rule given the design's causes.
-    let first_tests: Vec<Vec<UnitTest>> = (0..work.len())
-        .map(|k| {
-            let mut t = last.get_mut(k).map(std::mem::take).unwrap_or_default();
-            t.sort_by(|a, b| a.p.total_cmp(&b.p));
-            t
-        })
-        .collect();
+/// Unit level: each testable recording alone, by its own test (the single-arm diagnosis,
+/// sessions held out whole); a cause it names beyond the design's is kept when its real
+/// held-out gain still passes the single-arm rule given the design's causes.
+fn unit_level(
+    ctx: &Context,
+    work: &mut [Work],
+    opts: &Options,
+    obs: &mut dyn Observer,
+) -> Result<(), CalibError> {
     let single = DiagOptions {
         folds: super::FoldChoice::ByGroup,
         ..opts.diagnose.clone()
@@ -747,13 +828,13 @@ pub fn diagnose_arms_observed(
     let testable = work.iter().filter(|w| w.testable).count();
     for (k, w) in work.iter_mut().filter(|w| w.testable).enumerate() {
         obs.step("own diagnosis of recording", k, testable);
-        let own = super::diagnose(start, &w.unit.data, &single)
+        let own = super::diagnose(ctx.start, &w.unit.data, &single)
             .map_err(|e| CalibError::Mismatch(format!("unit {}: {e}", w.unit.name)))?;
         for c in &own.causes {
             if w.effects.contains(&c.effect) {
                 continue;
             }
-            let t = w.test(start, &inner, c.effect);
+            let t = w.test(ctx.start, ctx.inner, c.effect);
             let paired = compare(&w.unit.data, w.current(), &t.holdout);
             if paired.p_value() < normal_tail(opts.diagnose.select.z)
                 && t.holdout.failed.len() <= w.current().failed.len()
@@ -762,73 +843,73 @@ pub fn diagnose_arms_observed(
             }
         }
     }
+    Ok(())
+}
 
-    let mut out = Vec::new();
-    for ((w, geo), tests) in work.into_iter().zip(geometric_fits).zip(first_tests) {
-        let sessions = w.folds.len();
-        let counted = if in_test(&w) && arms[w.arm].1.len() > 1 {
-            format!("; its sessions count in arm {}'s evidence", arms[w.arm].0)
+/// One recording's outcome: why it could not be tested, and its causes with their values in
+/// a fit of all its data.
+fn unit_result(
+    ctx: &Context,
+    w: Work,
+    geo: Option<Fit>,
+    tests: Vec<UnitTest>,
+    arms: &[(String, Vec<usize>)],
+) -> Result<UnitResult, CalibError> {
+    let sessions = w.folds.len();
+    let counted = if ctx.in_test(&w) && arms[w.arm].1.len() > 1 {
+        format!("; its sessions count in arm {}'s evidence", arms[w.arm].0)
+    } else {
+        String::new()
+    };
+    let cannot_test = (!w.testable).then(|| {
+        if sessions < MIN_UNITS {
+            format!(
+                "cannot test: {sessions} session{}{counted}",
+                plural(sessions)
+            )
         } else {
-            String::new()
-        };
-        let cannot_test = (!w.testable).then(|| {
-            if sessions < MIN_UNITS {
-                format!(
-                    "cannot test: {sessions} session{}{counted}",
-                    plural(sessions)
+            "cannot test: its geometric model could not be refitted on every fold".into()
+        }
+    });
+    let causes = if w.effects.is_empty() {
+        Vec::new()
+    } else {
+        let fit = super::select::fit_with(ctx.start, &w.unit.data, ctx.inner, &w.effects)?;
+        w.effects
+            .iter()
+            .enumerate()
+            .map(|(i, &e)| {
+                let c = Confirmation {
+                    effect: e,
+                    named: true,
+                    paired: compare(&w.unit.data, &w.chain[i], &w.chain[i + 1]),
+                    holdout: w.chain[i + 1].clone(),
+                };
+                let indistinguishable = w
+                    .cands
+                    .testable
+                    .iter()
+                    .find(|t| t.effect == e)
+                    .map(|t| t.indistinguishable.clone())
+                    .unwrap_or_default();
+                (
+                    w.levels[i],
+                    super::cause(&fit, &w.unit.data, &c, indistinguishable, None, None),
                 )
-            } else {
-                "cannot test: its geometric model could not be refitted on every fold".into()
-            }
-        });
-        let causes = if w.effects.is_empty() {
-            Vec::new()
-        } else {
-            let fit = super::select::fit_with(start, &w.unit.data, &inner, &w.effects)?;
-            w.effects
-                .iter()
-                .enumerate()
-                .map(|(i, &e)| {
-                    let c = Confirmation {
-                        effect: e,
-                        named: true,
-                        paired: compare(&w.unit.data, &w.chain[i], &w.chain[i + 1]),
-                        holdout: w.chain[i + 1].clone(),
-                    };
-                    let indistinguishable = w
-                        .cands
-                        .testable
-                        .iter()
-                        .find(|t| t.effect == e)
-                        .map(|t| t.indistinguishable.clone())
-                        .unwrap_or_default();
-                    (
-                        w.levels[i],
-                        super::cause(&fit, &w.unit.data, &c, indistinguishable, None, None),
-                    )
-                })
-                .collect()
-        };
-        out.push(UnitResult {
-            name: w.unit.name.clone(),
-            file: w.unit.file.clone(),
-            sessions,
-            cannot_test,
-            geometric: geo,
-            baseline: w.chain.first().cloned(),
-            extended: w.chain.last().cloned(),
-            causes,
-            candidates: w.cands,
-            tests,
-        });
-    }
-    Ok(Fleet {
-        design,
-        steps,
-        units: out,
-        tested_units,
-        arms: arms.to_vec(),
-        alpha: opts.alpha,
+            })
+            .collect()
+    };
+    Ok(UnitResult {
+        name: w.unit.name.clone(),
+        file: w.unit.file.clone(),
+        sessions,
+        cannot_test,
+        geometric: geo,
+        baseline: w.chain.first().cloned(),
+        extended: w.chain.last().cloned(),
+        causes,
+        candidates: w.cands,
+        tests,
     })
 }
 

@@ -208,6 +208,9 @@ pub struct FleetReport {
     /// φ̂, the halves' pooled χ²/k, and its degrees of freedom D.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub overdispersion: Option<Overdispersion>,
+    /// Every one-unknown candidate pooled over the arms ([`super::fleet_pooled`]): the
+    /// design's distribution, each arm's pooled value and, where named, its held-out gain.
+    pub pooled: super::fleet_pooled::PooledFleet,
 }
 
 /// One recording's halves ([`super::same_arm::halves`]).
@@ -338,7 +341,13 @@ fn pair_report(p: &Pair, names: &[String]) -> PairReport {
 
 /// Builds the report; `naming` says how unit names were made, `arms` how the recordings
 /// (named `recordings`, file order) were grouped into the fleet's units.
-pub fn build(f: &Fleet, naming: &str, arms: &Arms, recordings: &[String]) -> FleetReport {
+pub fn build(
+    f: &Fleet,
+    naming: &str,
+    arms: &Arms,
+    recordings: &[String],
+    pooled: &super::fleet_pooled::PooledFleet,
+) -> FleetReport {
     let arm_reports = arms
         .groups
         .iter()
@@ -404,6 +413,7 @@ pub fn build(f: &Fleet, naming: &str, arms: &Arms, recordings: &[String]) -> Fle
         overdispersion: arms
             .overdispersion
             .map(|(phi, dof)| Overdispersion { phi, dof }),
+        pooled: pooled.clone(),
     }
 }
 
@@ -413,8 +423,17 @@ fn um(x: Option<f64>) -> String {
 
 fn pair_text(p: &PairReport) -> String {
     format!(
-        "{} ~ {}: χ² = {:.1} on {}, F = {:.2}, p = {:.1e}",
-        p.a, p.b, p.pair.chi2, p.pair.dof, p.pair.f, p.pair.p_value
+        "{} ~ {}: χ² = {:.1} on {}, F = {:.2}, p = {:.1e}{}",
+        p.a,
+        p.b,
+        p.pair.chi2,
+        p.pair.dof,
+        p.pair.f,
+        p.pair.p_value,
+        p.pair.tip_rms_um.map_or(String::new(), |t| format!(
+            "; predicted balls {t:.1} µm apart (RMS over both recordings' poses, probe and \
+             frame out)"
+        ))
     )
 }
 
@@ -536,6 +555,7 @@ impl FleetReport {
                 );
             }
         }
+        self.pooled.write_text(&mut s);
         let _ = writeln!(
             s,
             "\nunits (held-out RMS, sessions held out one at a time, µm)"

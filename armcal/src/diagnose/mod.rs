@@ -21,7 +21,10 @@
 
 pub mod candidates;
 pub mod fleet;
+pub mod fleet_pooled;
 pub mod fleet_report;
+pub mod gauge_free;
+pub mod level;
 pub mod linear;
 pub mod nested;
 pub mod patterns;
@@ -31,6 +34,7 @@ pub mod report;
 pub mod same_arm;
 pub mod scenario;
 pub mod select;
+pub mod sessions;
 pub mod unexplained;
 pub use crate::stats;
 

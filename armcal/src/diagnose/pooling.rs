@@ -75,20 +75,7 @@ pub struct Design {
     pub named: bool,
 }
 
-/// The two-sided critical value of Student's t with `df` degrees of freedom at `alpha`.
-pub fn t_critical(alpha: f64, df: f64) -> f64 {
-    let target = alpha / 2.0;
-    let (mut lo, mut hi) = (0.0f64, 1e3f64);
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if t_tail(mid, df) > target {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    0.5 * (lo + hi)
-}
+pub use crate::stats::t_critical;
 
 /// The generalised Q at `tau2`: Σ w (y − μ̂(τ²))², w = 1 / (v + τ²).
 fn q_at(y: &[f64], v: &[f64], tau2: f64) -> f64 {

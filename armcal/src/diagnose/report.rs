@@ -103,6 +103,10 @@ pub struct CauseReport {
     pub phase_rad: Option<f64>,
     /// RMS distance the term moves the ball over the data's poses (µm).
     pub rms_effect_um: f64,
+    /// What the term is identified under, when it rests on an assumption (a gravity
+    /// compliance: a level base, [`super::level`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub assumption: Option<String>,
     /// Why it is named.
     pub evidence: Evidence,
 }
@@ -253,6 +257,19 @@ pub struct Report {
     /// ([`super::nested`]); absent when the folds are not whole groups.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub nested: Option<super::nested::NestedReport>,
+    /// Why the nested test did not run (one group, or many without `--by-group`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub nested_not_run: Option<String>,
+    /// The base's tilt against level, measured through the named gravity terms
+    /// ([`super::level`]), when tested.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub level: Option<super::level::Level>,
+    /// Why the base's tilt was not tested though a gravity term is named.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub level_not_tested: Option<String>,
+    /// Where the sessions (groups) come from: the column and the file(s)
+    /// ([`super::sessions::source`]).
+    pub sessions_from: String,
     /// Degrees of freedom of the held-out paired t-tests: the held-out units less one.
     pub holdout_t_df: usize,
     /// The arm's name.
@@ -357,6 +374,10 @@ pub fn build(d: &Diagnosis, data: &Dataset, figures: &[Figure]) -> Report {
         gain_percent: d.gain_percent(),
         verdict,
         nested: None,
+        nested_not_run: None,
+        level: None,
+        level_not_tested: None,
+        sessions_from: super::sessions::source(data),
         holdout_t_df: d.held_out_units.saturating_sub(1),
         arm: arm.name.clone().unwrap_or_else(|| "(unnamed)".into()),
         data: DataReport {
@@ -428,6 +449,8 @@ pub fn cause_report(c: &super::Cause) -> CauseReport {
         cos: co,
         phase_rad: s.zip(co).map(|(s, c)| c.atan2(s)),
         rms_effect_um: c.rms_effect_um,
+        assumption: matches!(c.effect, Effect::Gravity(_))
+            .then(|| super::level::ASSUMPTION.to_string()),
         evidence: Evidence {
             f_statistic: c.score.as_ref().map_or(f64::NAN, |s| s.f),
             p_value: c.score.as_ref().map_or(f64::NAN, |s| s.p),
@@ -626,6 +649,7 @@ impl Report {
             "  held out: {} ({} folds)",
             self.holdout.method, self.holdout.folds
         );
+        let _ = writeln!(s, "  sessions: {}", self.sessions_from);
     }
 
     /// The models' residuals and the residual patterns.
@@ -696,6 +720,9 @@ impl Report {
                 c.rms_effect_um,
                 c.holdout_rms_um_after
             );
+            if let Some(a) = &c.assumption {
+                let _ = writeln!(s, "    assumes: {a}");
+            }
             if let Some(w) = c.holdout_rms_um_without {
                 let _ = writeln!(
                     s,
@@ -725,6 +752,25 @@ impl Report {
         );
         if let Some(n) = &self.nested {
             n.write_text(s);
+        }
+        if let Some(l) = &self.level {
+            let _ = writeln!(
+                s,
+                "  assumption of the gravity terms tested: {}",
+                l.summary()
+            );
+        }
+        if let Some(why) = &self.level_not_tested {
+            let _ = writeln!(
+                s,
+                "  assumption of the gravity terms (a level base) not tested: {why}"
+            );
+        }
+        if let Some(why) = &self.nested_not_run {
+            let _ = writeln!(
+                s,
+                "  the whole selection rerun without each session (nested held-out test): {why}"
+            );
         }
     }
 

@@ -138,6 +138,20 @@ pub struct Pair {
     pub p_value: f64,
     /// Whether the test calls them one arm (p ≥ alpha).
     pub same: bool,
+    /// How far their predicted balls are apart over both recordings' poses, probe and frame
+    /// out (RMS, µm; [`super::gauge_free::tip_difference`]): the difference in what the two
+    /// calibrations predict, which does not depend on their gauge.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tip_rms_um: Option<f64>,
+}
+
+/// The two recordings' calibrations compared by their predicted balls over both recordings'
+/// poses, probe and frame out ([`super::gauge_free`]).
+fn tip_rms_um(a: &Option<Fit>, b: &Option<Fit>, da: &Dataset, db: &Dataset) -> Option<f64> {
+    let (a, b) = (a.as_ref()?, b.as_ref()?);
+    let mut poses = super::gauge_free::poses(da);
+    poses.extend(super::gauge_free::poses(db));
+    Some(super::gauge_free::tip_difference(&a.arm, &b.arm, &poses).rms_um)
 }
 
 /// χ² of the difference of two recordings' geometries on what both identify alike (module
@@ -330,29 +344,34 @@ pub fn group_observed(
             _ => ALPHA,
         };
         let inner = fleet::geometric_options(opts);
-        let geo_of = |d: &Dataset| {
+        let fit_of = |d: &Dataset| {
             let g = fleet::geometric(start, d, &inner);
-            g.fit
+            let geo = g
+                .fit
                 .as_ref()
-                .and_then(|f| geometry(f, d, g.baseline.as_ref()))
+                .and_then(|f| geometry(f, d, g.baseline.as_ref()));
+            (g.fit, geo)
         };
+        let geo_of = |d: &Dataset| fit_of(d).1;
         (splits, overdispersion) = split_each(files, &geo_of, obs);
-        let geos: Vec<Option<Geometry>> = files
+        let (fits, geos): (Vec<Option<Fit>>, Vec<Option<Geometry>>) = files
             .iter()
             .enumerate()
             .map(|(i, u)| {
                 obs.step("same-arm test: fit of recording", i, n);
-                let geo = geo_of(&u.data);
+                let (fit, geo) = fit_of(&u.data);
                 if geo.is_none() {
                     uncompared.push((
                         i,
                         "its geometric model has no covariance (fit failed or singular)".into(),
                     ));
                 }
-                geo
+                (fit, geo)
             })
-            .collect();
-        pairs = compare_pairs(&geos, overdispersion, alpha);
+            .unzip();
+        pairs = compare_pairs(&geos, overdispersion, alpha, &|a, b| {
+            tip_rms_um(&fits[a], &fits[b], &files[a].data, &files[b].data)
+        });
     }
     let of: Vec<usize> = match grouping {
         Grouping::Detect { .. } => joined_by_same(n, &pairs),
@@ -406,6 +425,7 @@ fn compare_pairs(
     geos: &[Option<Geometry>],
     overdispersion: Option<(f64, usize)>,
     alpha: f64,
+    tip_rms_um: &dyn Fn(usize, usize) -> Option<f64>,
 ) -> Vec<Pair> {
     let (phi, d2) = overdispersion.map_or((1.0, f64::INFINITY), |(p, k)| (p, k as f64));
     let mut pairs = Vec::new();
@@ -429,6 +449,7 @@ fn compare_pairs(
                     f,
                     p_value: p,
                     same: p >= alpha,
+                    tip_rms_um: tip_rms_um(a, b),
                 });
             }
         }

@@ -26,6 +26,16 @@ pub fn page(rep: &Report, d: &Diagnosis, data: &Dataset, prov: &Provenance) -> S
         (&headline, &rep.verdict, tone),
         &rep.warnings,
     );
+    doc.heading("Sessions and the nested held-out test");
+    doc.paragraph(&format!("Sessions: {}.", rep.sessions_from));
+    doc.paragraph(&match (&rep.nested, &rep.nested_not_run) {
+        (Some(n), _) => format!(
+            "The whole selection rerun without each session: {}.",
+            n.summary
+        ),
+        (None, Some(why)) => format!("Nested held-out test {why}."),
+        (None, None) => "Nested held-out test not run.".into(),
+    });
     doc.heading("Plots");
     let arm = &d.extended.fit.arm;
     let at = crate::acceptance::centres(arm, data);

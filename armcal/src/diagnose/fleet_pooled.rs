@@ -1,0 +1,353 @@
+//! Partial pooling as a candidate of the fleet diagnosis (`armcal diagnose --fleet`).
+//!
+//! The fleet's design-level test ([`super::fleet`]) asks whether a cause's held-out gain is
+//! shared by the design's arms; an effect whose size differs from arm to arm, and which each
+//! arm measures poorly, passes neither that test nor any arm's own. This stage gives every
+//! one-unknown candidate of the vocabulary (a joint's gravity compliance, a thermal
+//! coefficient) its hierarchical model ([`super::pooling`]): each arm's value, with its
+//! jackknife error over its sessions, drawn from the design's distribution (mean μ, spread τ).
+//!
+//! **What is named.** The design's mean of each candidate is tested two-sided (Hartung–Knapp,
+//! arms − 1 degrees of freedom) and the p-values corrected by Holm over the candidates at the
+//! fleet's `alpha`; for a candidate that passes, the effect is named for every arm whose pooled
+//! interval (at 1 − `alpha`) excludes zero, and each such arm's **held-out gain** is measured
+//! nested ([`super::pooling::pooled_holdout`]: each session scored with the value pooled from
+//! the arm's other sessions and the other arms).
+//!
+//! **Which recording of an arm.** The pooled model needs one estimate per physical arm; an arm
+//! of several recordings (each with its own tool and frame) gives the estimate of its
+//! recording with the most sessions. Arms with no recording of [`crate::stats::MIN_UNITS`]
+//! sessions have no jackknife error and are left out, with the reason.
+//!
+//! This module sits above both [`super::fleet`] (whose arms and candidates it reads) and
+//! [`super::pooling`] (which it calls): neither of them knows it.
+
+use super::fleet::{geometric_options, holm, Fleet, Options, UnitData};
+use super::pooling::{self, Arm as PooledValue, Design};
+use crate::data::Dataset;
+use crate::fit::calib::CalibError;
+use crate::fit::holdout::by_group;
+use crate::params::Effect;
+use crate::stats::{min_sign_p, sign_test_p, Paired, MIN_UNITS};
+use quatarm_ref::arm::Arm;
+use std::collections::BTreeSet;
+
+/// One arm in a pooled candidate.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PooledArm {
+    /// The arm's name.
+    pub arm: String,
+    /// The recording whose sessions gave its estimate.
+    pub recording: String,
+    /// Its sessions.
+    pub sessions: usize,
+    /// Alone and pooled.
+    #[serde(flatten)]
+    pub value: PooledValue,
+    /// The nested held-out gain of its pooled value (only where the effect is named for it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub holdout: Option<PooledGain>,
+}
+
+/// The nested held-out gain of an arm's pooled value.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PooledGain {
+    /// Sessions scored.
+    pub sessions: usize,
+    /// Held-out RMS (µm) of the geometric model and of the model with the pooled value fixed,
+    /// every session weighing the same.
+    pub rms_um: [f64; 2],
+    /// Sessions on which the pooled value predicts strictly better.
+    pub sessions_better: usize,
+    /// Paired t of the per-session mean squared errors and its one-sided p.
+    pub t: f64,
+    /// Its one-sided p.
+    pub t_p_value: f64,
+    /// Exact one-sided sign-test p.
+    pub sign_test_p_value: f64,
+    /// The smallest p a sign test on these sessions can give.
+    pub smallest_possible_p: f64,
+}
+
+/// One candidate pooled over the arms.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PooledEffect {
+    /// The candidate (`+gravity_compliance:2`).
+    pub term: String,
+    /// The effect.
+    #[serde(skip)]
+    pub effect: Effect,
+    /// The design's distribution of its value.
+    pub design: Design,
+    /// Whether the design's mean passes Holm over the pooled candidates at `alpha`.
+    pub named: bool,
+    /// Every pooled arm.
+    pub arms: Vec<PooledArm>,
+}
+
+/// The pooled stage of a fleet diagnosis.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct PooledFleet {
+    /// The family-wise level (Holm over the candidates) and 1 − the intervals' level.
+    pub alpha: f64,
+    /// Every one-unknown candidate pooled, the most significant design mean first.
+    pub effects: Vec<PooledEffect>,
+    /// Arms left out, with why.
+    pub left_out: Vec<(String, String)>,
+}
+
+/// An arm's recording pooled: (arm name, recording index, sessions).
+type Used = (String, usize, usize);
+
+/// An arm left out: (arm name, why).
+type LeftOut = (String, String);
+
+/// Each arm's recording with the most sessions, when it has [`MIN_UNITS`] or more, and the
+/// arms left out with why.
+fn recordings(units: &[UnitData], arms: &[(String, Vec<usize>)]) -> (Vec<Used>, Vec<LeftOut>) {
+    let mut used = Vec::new();
+    let mut left_out = Vec::new();
+    for (name, recs) in arms {
+        let best = recs
+            .iter()
+            .filter(|&&r| r < units.len())
+            .map(|&r| (r, by_group(&units[r].data).len()))
+            .max_by_key(|(_, n)| *n);
+        match best {
+            Some((r, n)) if n >= MIN_UNITS => used.push((name.clone(), r, n)),
+            _ => left_out.push((
+                name.clone(),
+                format!(
+                    "no recording of {MIN_UNITS} sessions or more: no jackknife error to weigh \
+                     its estimate by"
+                ),
+            )),
+        }
+    }
+    (used, left_out)
+}
+
+/// The pooled stage of the fleet diagnosis `f` of `units` (see the module's text): its arms,
+/// and the candidates each recording could test.
+pub fn pool_fleet(
+    start: &Arm,
+    units: &[UnitData],
+    f: &Fleet,
+    opts: &Options,
+) -> Result<PooledFleet, CalibError> {
+    let testable: Vec<Vec<Effect>> = f
+        .units
+        .iter()
+        .map(|u| u.candidates.testable.iter().map(|c| c.effect).collect())
+        .collect();
+    pool_arms(start, units, &f.arms, &testable, opts)
+}
+
+/// Pools every one-unknown candidate that every used arm's recording can test (`testable`,
+/// one list per recording) over the arms `arms` (name, recordings) of `units`.
+pub fn pool_arms(
+    start: &Arm,
+    units: &[UnitData],
+    arms: &[(String, Vec<usize>)],
+    testable: &[Vec<Effect>],
+    opts: &Options,
+) -> Result<PooledFleet, CalibError> {
+    let (used, left_out) = recordings(units, arms);
+    let mut out = PooledFleet {
+        alpha: opts.alpha,
+        effects: Vec::new(),
+        left_out,
+    };
+    if used.len() < super::fleet::MIN_FLEET_UNITS {
+        return Ok(out);
+    }
+    // Candidates every used recording can test: a value missing for one arm would leave the
+    // design's distribution estimated from the others only, unsaid.
+    let one_unknown = |r: usize| -> BTreeSet<Effect> {
+        testable
+            .get(r)
+            .map(|t| {
+                t.iter()
+                    .copied()
+                    .filter(|e| e.params().len() == 1)
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    let mut vocabulary = one_unknown(used[0].1);
+    for (_, r, _) in &used[1..] {
+        vocabulary = vocabulary.intersection(&one_unknown(*r)).copied().collect();
+    }
+    let calib = geometric_options(opts);
+    for e in vocabulary {
+        let mut est = Vec::new();
+        for (_, r, _) in &used {
+            let Some(v) = pooling::estimate(start, &units[*r].data, &calib, e)? else {
+                break;
+            };
+            est.push(v);
+        }
+        if est.len() != used.len() {
+            continue;
+        }
+        let (y, se): (Vec<f64>, Vec<f64>) = est.iter().copied().unzip();
+        let Some((design, values)) = pooling::pool(&y, &se, opts.alpha) else {
+            continue;
+        };
+        let arms = used
+            .iter()
+            .zip(values)
+            .map(|((name, r, n), value)| PooledArm {
+                arm: name.clone(),
+                recording: units[*r].name.clone(),
+                sessions: *n,
+                value,
+                holdout: None,
+            })
+            .collect();
+        out.effects.push(PooledEffect {
+            term: e.spec(),
+            effect: e,
+            design,
+            named: false,
+            arms,
+        });
+    }
+    let ps: Vec<f64> = out.effects.iter().map(|p| p.design.mean_p).collect();
+    for (p, named) in out.effects.iter_mut().zip(holm(&ps, opts.alpha)) {
+        p.named = named;
+        p.design.named = named;
+        for a in &mut p.arms {
+            a.value.named_pooled &= named;
+        }
+    }
+    out.effects
+        .sort_by(|a, b| a.design.mean_p.total_cmp(&b.design.mean_p));
+    let data: Vec<&Dataset> = used.iter().map(|(_, r, _)| &units[*r].data).collect();
+    for p in out.effects.iter_mut().filter(|p| p.named) {
+        held_out_gains(start, &data, &calib, opts.alpha, p)?;
+    }
+    Ok(out)
+}
+
+/// The nested held-out gain of every arm the pooled effect `p` is named for.
+fn held_out_gains(
+    start: &Arm,
+    data: &[&Dataset],
+    calib: &crate::fit::calib::Options,
+    alpha: f64,
+    p: &mut PooledEffect,
+) -> Result<(), CalibError> {
+    let all: Vec<(f64, f64)> = p
+        .arms
+        .iter()
+        .map(|a| (a.value.estimate, a.value.se))
+        .collect();
+    for (i, a) in p.arms.iter_mut().enumerate() {
+        if !a.value.named_pooled {
+            continue;
+        }
+        let others: Vec<(f64, f64)> = all
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| *k != i)
+            .map(|(_, v)| *v)
+            .collect();
+        let folds = pooling::pooled_holdout(start, data[i], calib, p.effect, &others, alpha)?;
+        a.holdout = Some(gain(&folds));
+    }
+    Ok(())
+}
+
+/// The evidence over an arm's scored sessions.
+fn gain(folds: &[pooling::PooledFold]) -> PooledGain {
+    let (b, a): (Vec<f64>, Vec<f64>) = folds.iter().map(|f| (f.before_ms, f.after_ms)).unzip();
+    let n = folds.len();
+    let better = b.iter().zip(&a).filter(|(x, y)| y < x).count();
+    let rms = |x: &[f64]| 1e3 * (x.iter().sum::<f64>() / n.max(1) as f64).sqrt();
+    let paired = Paired::of(&b, &a);
+    PooledGain {
+        sessions: n,
+        rms_um: [rms(&b), rms(&a)],
+        sessions_better: better,
+        t: paired.z(),
+        t_p_value: paired.p_value(),
+        sign_test_p_value: sign_test_p(better, n),
+        smallest_possible_p: min_sign_p(n),
+    }
+}
+
+impl PooledFleet {
+    /// The text section of the fleet report.
+    pub fn write_text(&self, s: &mut String) {
+        use std::fmt::Write;
+        let _ = writeln!(
+            s,
+            "\npooled effects (each arm's value drawn from the design's distribution, \
+             DerSimonian–Laird; the design's mean tested two-sided, Holm at α = {}; named for \
+             an arm whose pooled {:.0} % interval excludes 0)",
+            self.alpha,
+            100.0 * (1.0 - self.alpha)
+        );
+        if self.effects.is_empty() {
+            let _ = writeln!(s, "  none pooled (fewer than 3 arms with 3 sessions)");
+        }
+        for p in &self.effects {
+            let d = &p.design;
+            let _ = writeln!(
+                s,
+                "  {}: design mean {:+.3e} [{:+.3e}, {:+.3e}], p = {:.1e}; spread τ {:.2e} \
+                 [{:.2e}, {:.2e}]; {}",
+                p.term,
+                d.mean,
+                d.mean_interval[0],
+                d.mean_interval[1],
+                d.mean_p,
+                d.spread,
+                d.spread_interval[0],
+                d.spread_interval[1],
+                if p.named {
+                    "named for the design"
+                } else {
+                    "not named"
+                }
+            );
+            if !p.named {
+                continue;
+            }
+            for a in &p.arms {
+                let _ = write!(
+                    s,
+                    "    {} ({}): alone {:+.3e} ± {:.1e}, pooled {:+.3e} ± {:.1e} (B = {:.2}){}",
+                    a.arm,
+                    a.recording,
+                    a.value.estimate,
+                    a.value.se,
+                    a.value.pooled,
+                    a.value.pooled_se,
+                    a.value.shrinkage,
+                    if a.value.named_pooled { ", named" } else { "" }
+                );
+                if let Some(g) = &a.holdout {
+                    let _ = write!(
+                        s,
+                        "; held-out RMS {:.2} → {:.2} µm, better on {} of {}, t = {:.2} (p = \
+                         {:.2e}), sign test p = {:.3} (smallest possible {:.3})",
+                        g.rms_um[0],
+                        g.rms_um[1],
+                        g.sessions_better,
+                        g.sessions,
+                        g.t,
+                        g.t_p_value,
+                        g.sign_test_p_value,
+                        g.smallest_possible_p
+                    );
+                }
+                let _ = writeln!(s);
+            }
+        }
+        for (arm, why) in &self.left_out {
+            let _ = writeln!(s, "  {arm} not pooled: {why}");
+        }
+    }
+}
