@@ -140,15 +140,32 @@ trait Entries: Copy {
     /// Entry `at`; `None` past the end.
     fn one(self, at: usize) -> Option<f32>;
 
-    /// g_b += L_(i, k0 + b) d_i for the rows i = first, first + 1, … whose columns d are
-    /// given, each holding the block's BLOCK entries.
+    /// g_b += L_(i, k0 + b) d_i for a whole block (its BLOCK columns k0 … k0 + 5 all within
+    /// L): `d` holds the columns of the rows k0, k0 + 1, … to the last, the first five the
+    /// block's triangle (row k0 + r holds r + 1 of its entries), the rest whole rows.
     #[inline(always)]
-    fn full_rows(self, g: &mut [[f32; 3]; BLOCK], d: &[[f32; 3]], first: usize, k0: usize) {
-        rows_portable(self, g, d, first, k0);
+    fn whole_block(self, g: &mut [[f32; 3]; BLOCK], d: &[[f32; 3]], k0: usize) {
+        whole_block_portable(self, g, d, k0);
     }
 }
 
-/// [`Entries::full_rows`] in Rust, for every target.
+/// [`Entries::whole_block`] in Rust, for every target.
+#[inline(always)]
+fn whole_block_portable<E: Entries>(
+    factor: E,
+    g: &mut [[f32; 3]; BLOCK],
+    d: &[[f32; 3]],
+    k0: usize,
+) {
+    let mut acc = *g;
+    let (top, rest) = d.split_at(d.len().min(BLOCK - 1));
+    triangle_rows(&mut acc, top, factor, k0, BLOCK);
+    rows_portable(factor, &mut acc, rest, k0 + BLOCK - 1, k0);
+    *g = acc;
+}
+
+/// g_b += L_(i, k0 + b) d_i for the rows i = first, first + 1, … whose columns d are given,
+/// each holding the block's BLOCK entries.
 #[inline(always)]
 fn rows_portable<E: Entries>(
     factor: E,
@@ -180,34 +197,100 @@ impl Entries for &[f32] {
         self.get(at).copied()
     }
 
-    /// On a Cortex-M with single-precision floating point, a loop in assembly: a row's 6
-    /// entries and its column each one `vldm`, the 18 sums in s0–s17 throughout, 24
-    /// instructions a row and 6 a call (the compiler's loop took 35: a load an entry and a bounds check a
-    /// row; measured on qemu-m4f, `docs/results/speed.md`). The same multiply-adds in the
-    /// same order as [`Entries::full_rows`]' (`vmla` rounds the product and the sum, as
-    /// `g += d * l` does), so the sums are the portable loop's bit for bit.
+    /// On a Cortex-M with single-precision floating point, the block in assembly: the
+    /// triangle's rows written out, then a loop over the whole rows, a row's entries and its
+    /// column each one `vldm`, the 18 sums in s0–s17 throughout: 24 instructions a whole row
+    /// (the compiler's loop took 35: a load an entry and a bounds check a row; its triangle,
+    /// ~300 a block, this one 66; measured on qemu-m4f, `docs/results/speed.md`). The same
+    /// multiply-adds in the same order as the portable code (`vmla` rounds the product and
+    /// the sum, as `g += d * l` does), so the sums are its bit for bit.
     #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
     #[inline(always)]
-    fn full_rows(self, g: &mut [[f32; 3]; BLOCK], d: &[[f32; 3]], first: usize, k0: usize) {
+    fn whole_block(self, g: &mut [[f32; 3]; BLOCK], d: &[[f32; 3]], k0: usize) {
         let rows = d.len();
-        // Entry after the last row's block: every load below stays within the slice.
-        let end = factor_len(first + rows.max(1) - 1) + k0 + BLOCK;
-        if rows == 0 || end > self.len() {
-            // Nothing to add, or a factor shorter than its count (the table's check refuses
-            // it): the portable loop, which stops at the end.
-            return rows_portable(self, g, d, first, k0);
+        // The block is whole: rows k0 … k0 + 5 at least, and the last row's block ends
+        // within the slice.
+        if rows < BLOCK || factor_len(k0 + rows - 1) + k0 + BLOCK > self.len() {
+            return whole_block_portable(self, g, d, k0);
         }
-        let at = factor_len(first) + k0;
-        // SAFETY: `g` holds 18 f32 (read and written), `d` `rows` ≥ 1 triples (read), and the
-        // loop reads row r's 6 entries at entry at + Σ_(j<r) (first + 1 + j), whose last
-        // block ends at `end` ≤ the slice's length (checked above). The floating-point
-        // registers it uses are saved and restored on the stack inside (Rust's `sreg` operands
-        // need double-precision VFP2, which this FPU does not have); the core registers it
+        // SAFETY: `g` holds 18 f32 (read and written) and `d` `rows` ≥ 6 triples (read). Row
+        // k0 + r's entries start at entry factor_len(k0 + r) + k0 = that of row k0 plus
+        // Σ_(j<r) (k0 + 1 + j); the triangle's row r reads r + 1 of them, the whole rows 6,
+        // the last ending at the entry checked above. The floating-point registers it uses
+        // are saved and restored on the stack inside (Rust's `sreg` operands need
+        // double-precision VFP2, which this FPU does not have); the core registers it
         // writes are declared.
         unsafe {
             core::arch::asm!(
                 "vpush {{s0-s26}}",
                 "vldmia {g}, {{s0-s17}}",
+                // The triangle: rows k0 … k0 + 4, 1 to 5 entries.
+                "vldmia {d}!, {{s18-s20}}",
+                "vldr s21, [{l}]",
+                "add.w {l}, {l}, {step}, lsl #2",
+                "adds {step}, #1",
+                "vmla.f32 s0, s18, s21",
+                "vmla.f32 s1, s19, s21",
+                "vmla.f32 s2, s20, s21",
+                "vldmia {d}!, {{s18-s20}}",
+                "vldmia {l}, {{s21-s22}}",
+                "add.w {l}, {l}, {step}, lsl #2",
+                "adds {step}, #1",
+                "vmla.f32 s0, s18, s21",
+                "vmla.f32 s1, s19, s21",
+                "vmla.f32 s2, s20, s21",
+                "vmla.f32 s3, s18, s22",
+                "vmla.f32 s4, s19, s22",
+                "vmla.f32 s5, s20, s22",
+                "vldmia {d}!, {{s18-s20}}",
+                "vldmia {l}, {{s21-s23}}",
+                "add.w {l}, {l}, {step}, lsl #2",
+                "adds {step}, #1",
+                "vmla.f32 s0, s18, s21",
+                "vmla.f32 s1, s19, s21",
+                "vmla.f32 s2, s20, s21",
+                "vmla.f32 s3, s18, s22",
+                "vmla.f32 s4, s19, s22",
+                "vmla.f32 s5, s20, s22",
+                "vmla.f32 s6, s18, s23",
+                "vmla.f32 s7, s19, s23",
+                "vmla.f32 s8, s20, s23",
+                "vldmia {d}!, {{s18-s20}}",
+                "vldmia {l}, {{s21-s24}}",
+                "add.w {l}, {l}, {step}, lsl #2",
+                "adds {step}, #1",
+                "vmla.f32 s0, s18, s21",
+                "vmla.f32 s1, s19, s21",
+                "vmla.f32 s2, s20, s21",
+                "vmla.f32 s3, s18, s22",
+                "vmla.f32 s4, s19, s22",
+                "vmla.f32 s5, s20, s22",
+                "vmla.f32 s6, s18, s23",
+                "vmla.f32 s7, s19, s23",
+                "vmla.f32 s8, s20, s23",
+                "vmla.f32 s9, s18, s24",
+                "vmla.f32 s10, s19, s24",
+                "vmla.f32 s11, s20, s24",
+                "vldmia {d}!, {{s18-s20}}",
+                "vldmia {l}, {{s21-s25}}",
+                "add.w {l}, {l}, {step}, lsl #2",
+                "adds {step}, #1",
+                "vmla.f32 s0, s18, s21",
+                "vmla.f32 s1, s19, s21",
+                "vmla.f32 s2, s20, s21",
+                "vmla.f32 s3, s18, s22",
+                "vmla.f32 s4, s19, s22",
+                "vmla.f32 s5, s20, s22",
+                "vmla.f32 s6, s18, s23",
+                "vmla.f32 s7, s19, s23",
+                "vmla.f32 s8, s20, s23",
+                "vmla.f32 s9, s18, s24",
+                "vmla.f32 s10, s19, s24",
+                "vmla.f32 s11, s20, s24",
+                "vmla.f32 s12, s18, s25",
+                "vmla.f32 s13, s19, s25",
+                "vmla.f32 s14, s20, s25",
+                // The whole rows k0 + 5 … to the last.
                 "2:",
                 "vldmia {d}!, {{s18-s20}}",
                 "vldmia {l}, {{s21-s26}}",
@@ -237,9 +320,9 @@ impl Entries for &[f32] {
                 "vpop {{s0-s26}}",
                 g = in(reg) g.as_mut_ptr(),
                 d = inout(reg) d.as_ptr() => _,
-                l = inout(reg) self.as_ptr().add(at) => _,
-                step = inout(reg) first + 1 => _,
-                n = inout(reg) rows => _,
+                l = inout(reg) self.as_ptr().add(factor_len(k0) + k0) => _,
+                step = inout(reg) k0 + 1 => _,
+                n = inout(reg) rows - (BLOCK - 1) => _,
             );
         }
     }
@@ -270,27 +353,33 @@ fn as_f32(bytes: &[u8]) -> Option<&[f32]> {
     (head.is_empty() && tail.is_empty()).then_some(mid)
 }
 
-/// [`Entries::full_rows`] out of line and indexed by constants only, so that the 18 sums
-/// stay in registers (inlined into `add_to`, its sums went to the stack at every row:
-/// measured on qemu-m4f).
+/// One block of BLOCK columns of J_π L from k0 on (`width` of them within L): `d` holds the
+/// columns of the rows k0, k0 + 1, … to the last. Out of line and indexed by constants only,
+/// so that the 18 sums stay in registers (inlined into `add_to`, its sums went to the stack
+/// at every row: measured on qemu-m4f).
 #[inline(never)]
-fn full_rows<E: Entries>(
+fn block<E: Entries>(
     g: &mut [[f32; 3]; BLOCK],
     d: &[[f32; 3]],
     factor: E,
-    first: usize,
     k0: usize,
+    width: usize,
 ) {
-    let mut acc = *g;
-    factor.full_rows(&mut acc, d, first, k0);
-    *g = acc;
+    if width == BLOCK {
+        factor.whole_block(g, d, k0);
+    } else {
+        // The last, narrow block: all its rows are its triangle's.
+        let mut acc = *g;
+        triangle_rows(&mut acc, d, factor, k0, width);
+        *g = acc;
+    }
 }
 
 /// g_b += L_(k0 + r, k0 + b) d_(k0 + r) for the rows r = 0, 1, … of the block's triangle
-/// (row k0 + r holds the first r + 1 of the block's `width` entries), indexed by constants
-/// as [`full_rows`]: each row leaves its loop at its last entry (reading all six and
-/// selecting the row's took ~110 instructions a row, measured on qemu-m4f).
-#[inline(never)]
+/// (row k0 + r holds the first r + 1 of the block's `width` entries), indexed by constants:
+/// each row leaves its loop at its last entry (reading all six and selecting the row's took
+/// ~110 instructions a row, measured on qemu-m4f).
+#[inline(always)]
 fn triangle_rows<E: Entries>(
     g: &mut [[f32; 3]; BLOCK],
     d: &[[f32; 3]],
@@ -317,16 +406,14 @@ fn triangle_rows<E: Entries>(
 
 /// Σ += (J_π L)(J_π L)ᵀ for the columns `d` of J_π (nm): g_k = Σ_(i ≥ k) L_ik d_i, column k
 /// of J_π L, for BLOCK columns k at a time: first the rows of the block's triangle (row i
-/// holds L_ik for k ≤ i only), then the rows below it, whole, in `full_rows`.
+/// holds L_ik for k ≤ i only), then the rows below it, whole ([`block`]).
 fn product<E: Entries>(d: &[[f32; 3]], factor: E, sigma: &mut Covariance) {
     let n = d.len();
     let mut k0 = 0;
     while k0 < n {
         let mut g = [[0.0f32; 3]; BLOCK];
         let width = (n - k0).min(BLOCK);
-        let top = if width == BLOCK { k0 + BLOCK - 1 } else { n };
-        triangle_rows(&mut g, d.get(k0..top).unwrap_or(&[]), factor, k0, width);
-        full_rows(&mut g, d.get(top..n).unwrap_or(&[]), factor, top, k0);
+        block(&mut g, d.get(k0..).unwrap_or(&[]), factor, k0, width);
         for gb in &g[..width] {
             sigma.add_outer(*gb, 1.0);
         }
