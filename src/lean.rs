@@ -326,8 +326,37 @@ impl LeanForm<F32> for LeanF32 {
         counts: &[u32],
         temp_mc: i32,
     ) -> Result<Point<F32>, ChainError> {
+        // Six joints (the hubs' arms) with the joint count a constant, so that the compiler
+        // unrolls both passes; any other count with the same code, looped.
+        if counts.len() == 6 {
+            self.run::<6>(model, counts, temp_mc)
+        } else {
+            self.run::<0>(model, counts, temp_mc)
+        }
+    }
+
+    fn mount(&mut self, model: &Model<F32>) {
+        if !self.on {
+            return;
+        }
+        let last = self.n.clamp(1, MAX_JOINTS) - 1;
+        let (jm, j) = (&model.joints[last], &mut self.joints[last]);
+        (j.link, j.rate, j.has_thermal) = (jm.link, jm.link_rate, jm.has_thermal);
+        self.probe_dir = model.probe_dir;
+    }
+}
+
+impl LeanF32 {
+    /// [`LeanForm::eval`] for `JOINTS` joints (0: as many as `counts` has).
+    #[inline(always)]
+    fn run<const JOINTS: usize>(
+        &self,
+        model: &Model<F32>,
+        counts: &[u32],
+        temp_mc: i32,
+    ) -> Result<Point<F32>, ChainError> {
         let dt = model.check(counts, temp_mc)?;
-        let n = counts.len().min(MAX_JOINTS);
+        let n = if JOINTS > 0 { JOINTS } else { counts.len() }.min(MAX_JOINTS);
         let mut angles = [const { MaybeUninit::<Angle>::uninit() }; MAX_JOINTS];
         let mut verticals = [const { MaybeUninit::<[f32; 2]>::uninit() }; MAX_JOINTS];
         // Base to tip: the angles, and the vertical up to the last compliant joint.
@@ -417,16 +446,6 @@ impl LeanForm<F32> for LeanF32 {
         let (p, q) = quarter_turns(b.q, (d[0], d[1]));
         d = [p * b.cos - q * b.sin, p * b.sin + q * b.cos, d[2]];
         Ok(Point { xyz: w, dir: d })
-    }
-
-    fn mount(&mut self, model: &Model<F32>) {
-        if !self.on {
-            return;
-        }
-        let last = self.n.clamp(1, MAX_JOINTS) - 1;
-        let (jm, j) = (&model.joints[last], &mut self.joints[last]);
-        (j.link, j.rate, j.has_thermal) = (jm.link, jm.link_rate, jm.has_thermal);
-        self.probe_dir = model.probe_dir;
     }
 }
 

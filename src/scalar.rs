@@ -321,9 +321,15 @@ wrapping_ops!(Len, I12F20);
 /// Full 32×32→64-bit signed product. On ARMv6-M (no long multiply) this takes four 16×16
 /// products inline, much cheaper than the `__aeabi_lmul` call that `i64 * i64` becomes there;
 /// elsewhere the compiler's single instruction. Both give the same exact result.
+///
+/// ARMv6-M is told by its lack of 32-bit compare-and-swap (`target_has_atomic = "32"`, set
+/// on thumbv7em and every later Arm target, never on thumbv6m): the `thumb2` target feature
+/// this tested before is unstable, never set in `cfg` on a stable compiler, so the
+/// Cortex-M4F took the four-product path too (~20 instructions for one `umull`/`smull`, per
+/// joint and point in every chain; measured on qemu-m4f, `docs/results/speed.md`).
 #[inline(always)]
 pub fn mul_wide(a: i32, b: i32) -> i64 {
-    #[cfg(all(target_arch = "arm", not(target_feature = "thumb2")))]
+    #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
     {
         let (ah, al) = (a >> 16, a & 0xffff);
         let (bh, bl) = (b >> 16, b & 0xffff);
@@ -333,7 +339,7 @@ pub fn mul_wide(a: i32, b: i32) -> i64 {
         let ll = (al as u32) * (bl as u32);
         ((hh as i64) << 32) + (((hl as i64) + (lh as i64)) << 16) + ll as i64
     }
-    #[cfg(not(all(target_arch = "arm", not(target_feature = "thumb2"))))]
+    #[cfg(not(all(target_arch = "arm", not(target_has_atomic = "32"))))]
     {
         a as i64 * b as i64
     }
@@ -342,7 +348,7 @@ pub fn mul_wide(a: i32, b: i32) -> i64 {
 /// Full 32×32→64-bit unsigned product (see [`mul_wide`]).
 #[inline(always)]
 pub fn mul_wide_u(a: u32, b: u32) -> u64 {
-    #[cfg(all(target_arch = "arm", not(target_feature = "thumb2")))]
+    #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
     {
         let (ah, al) = (a >> 16, a & 0xffff);
         let (bh, bl) = (b >> 16, b & 0xffff);
@@ -350,7 +356,7 @@ pub fn mul_wide_u(a: u32, b: u32) -> u64 {
             + ((al * bl) as u64)
             + (((ah * bl) as u64 + (al * bh) as u64) << 16)
     }
-    #[cfg(not(all(target_arch = "arm", not(target_feature = "thumb2"))))]
+    #[cfg(not(all(target_arch = "arm", not(target_has_atomic = "32"))))]
     {
         a as u64 * b as u64
     }

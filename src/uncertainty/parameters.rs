@@ -19,7 +19,7 @@ use crate::matrix::Frames;
 use crate::model::{unpermute_inline, ChainError, BASE_AXIS, REFERENCE_TEMP_MC};
 use crate::rotate::{cross, Vec3};
 use crate::scalar::F32;
-use crate::table::parameters::{factor_len, Column, Kind, Parameters, MAX_PARAMETERS};
+use crate::table::parameters::{factor_len, Column, Kind, MAX_PARAMETERS};
 use crate::table::{Table, MAX_JOINTS};
 
 /// Columns of L whose sums J_π L's block accumulates at once: 6 × 3 accumulators, a column
@@ -29,16 +29,68 @@ use crate::table::{Table, MAX_JOINTS};
 pub const BLOCK: usize = 6;
 
 /// The parameter part of a table with a parameter block, built at boot. It borrows the
-/// block (the columns' records and the factor, read at every point) rather than copying it:
-/// a copy is 11 KB at 64 parameters, and the boot's moves of a struct that size overflowed
-/// the qemu-m4f hub's 64 KiB of RAM.
+/// factor (8.3 KB at 64 parameters: as a copy, the boot's moves of a struct that size
+/// overflowed the qemu-m4f hub's 64 KiB of RAM) and keeps the columns' records decoded
+/// (24 B a parameter): decoding each record from the table's bytes at every point, with its
+/// frame's relabelling, cost more than the column it gives (measured on qemu-m4f,
+/// `docs/results/speed.md`).
 #[derive(Clone, Debug)]
 pub struct ParameterPart<'a> {
-    block: Parameters<'a>,
-    /// Each joint's axis (0, 1, 2: x, y, z), for the records' relabelling.
-    axes: [u8; MAX_JOINTS],
+    /// L, row after row, as the table's little-endian bytes.
+    factor: &'a [u8],
+    /// The columns' records, decoded ([`Record`]); the first `count` hold the block's.
+    records: [Record; MAX_PARAMETERS],
+    /// Number of parameters.
+    count: usize,
+    /// Joints in the table: the frames whose levers a point's columns use.
+    joints: usize,
     /// The id of the probe mounted: a probe's shift ([`Kind::ProbeShift`]) of another is 0.
     probe: u8,
+}
+
+/// A parameter's record as every point reads it: the table's, with its vector relabelled
+/// into the frame the chain's matrices use (a tilt's: the frame before its joint, the
+/// previous joint's or the base's, labelled like a z joint; a shift's: its joint's) and in
+/// nm per the parameter's unit (the record's is in mm).
+#[derive(Clone, Copy, Debug)]
+struct Record {
+    kind: Kind,
+    /// Its joint, within [`MAX_JOINTS`].
+    joint: u8,
+    order: u16,
+    vector: Vec3<f32>,
+    w0: f32,
+    w1: f32,
+}
+
+const NO_RECORD: Record = Record {
+    kind: Kind::Turn,
+    joint: 0,
+    order: 0,
+    vector: [0.0; 3],
+    w0: 0.0,
+    w1: 0.0,
+};
+
+impl Record {
+    /// The table's column `col`, its joints' axes `axes` (0, 1, 2: x, y, z).
+    fn of(col: &Column, axes: &[u8; MAX_JOINTS]) -> Record {
+        let k = usize::from(col.joint).min(MAX_JOINTS - 1);
+        let tilt = matches!(col.kind, Kind::Tilt | Kind::TiltSin | Kind::TiltCos);
+        let frame_axis = match (tilt, k) {
+            (true, 0) => BASE_AXIS,
+            (true, _) => axes[k - 1],
+            _ => axes[k],
+        };
+        Record {
+            kind: col.kind,
+            joint: k as u8,
+            order: col.order,
+            vector: scaled(unpermute_inline(col.vector, frame_axis), NM_PER_MM),
+            w0: col.w0,
+            w1: col.w1,
+        }
+    }
 }
 
 fn sub(a: Vec3<f32>, b: Vec3<f32>) -> Vec3<f32> {
@@ -78,48 +130,295 @@ fn accumulate(g: &mut [f32; 3], d: &[f32; 3], l: f32) {
     g[2] += d[2] * l;
 }
 
-/// g_b += L_(i, k0 + b) d_i for the rows i = first, first + 1, … whose columns d are given,
-/// each holding the block's BLOCK entries. Out of line and indexed by constants only, so that
-/// the 24 sums stay in registers: one load, one move and three multiply-adds an entry of L
-/// (inlined into `add_to`, its sums went to the stack at every row: measured on qemu-m4f).
-#[inline(never)]
-fn full_rows(g: &mut [[f32; 3]; BLOCK], d: &[[f32; 3]], factor: &[u8], first: usize, k0: usize) {
-    let mut acc = *g;
-    let mut at = 4 * (factor_len(first) + k0);
-    for (i, di) in d.iter().enumerate() {
-        let Some(row) = factor.get(at..at + 4 * BLOCK) else {
-            break;
-        };
-        for (b, gb) in acc.iter_mut().enumerate() {
-            accumulate(gb, di, entry(row, b));
-        }
-        // Row first + i + 1 starts first + i + 1 entries after row first + i.
-        at += 4 * (first + i + 1);
+/// L's entries as the product reads them: an aligned run of f32 where the table's bytes
+/// allow it (the hub's flash: the block's factor starts at a multiple of 4 bytes in the
+/// format, and the table region is aligned), else the raw little-endian bytes (a host's
+/// buffer of any alignment).
+trait Entries: Copy {
+    /// The [`BLOCK`] entries from entry `at` on; `None` past the end.
+    fn block(self, at: usize) -> Option<[f32; BLOCK]>;
+    /// Entry `at`; `None` past the end.
+    fn one(self, at: usize) -> Option<f32>;
+
+    /// g_b += L_(i, k0 + b) d_i for a whole block (its BLOCK columns k0 … k0 + 5 all within
+    /// L): `d` holds the columns of the rows k0, k0 + 1, … to the last, the first five the
+    /// block's triangle (row k0 + r holds r + 1 of its entries), the rest whole rows.
+    #[inline(always)]
+    fn whole_block(self, g: &mut [[f32; 3]; BLOCK], d: &[[f32; 3]], k0: usize) {
+        whole_block_portable(self, g, d, k0);
     }
+}
+
+/// [`Entries::whole_block`] in Rust, for every target.
+#[inline(always)]
+fn whole_block_portable<E: Entries>(
+    factor: E,
+    g: &mut [[f32; 3]; BLOCK],
+    d: &[[f32; 3]],
+    k0: usize,
+) {
+    let mut acc = *g;
+    let (top, rest) = d.split_at(d.len().min(BLOCK - 1));
+    triangle_rows(&mut acc, top, factor, k0, BLOCK);
+    rows_portable(factor, &mut acc, rest, k0 + BLOCK - 1, k0);
     *g = acc;
 }
 
-/// g_b += L_(k0 + r, k0 + b) d_(k0 + r) for the rows r = 0, 1, … of the block's triangle
-/// (row k0 + r holds r + 1 of the block's `width` entries), indexed by constants as
-/// [`full_rows`].
-#[inline(never)]
-fn triangle_rows(
+/// g_b += L_(i, k0 + b) d_i for the rows i = first, first + 1, … whose columns d are given,
+/// each holding the block's BLOCK entries.
+#[inline(always)]
+fn rows_portable<E: Entries>(
+    factor: E,
     g: &mut [[f32; 3]; BLOCK],
     d: &[[f32; 3]],
-    factor: &[u8],
+    first: usize,
+    k0: usize,
+) {
+    let mut at = factor_len(first) + k0;
+    for (i, di) in d.iter().enumerate() {
+        let Some(row) = factor.block(at) else {
+            break;
+        };
+        for (b, gb) in g.iter_mut().enumerate() {
+            accumulate(gb, di, row[b]);
+        }
+        // Row first + i + 1 starts first + i + 1 entries after row first + i.
+        at += first + i + 1;
+    }
+}
+
+impl Entries for &[f32] {
+    #[inline(always)]
+    fn block(self, at: usize) -> Option<[f32; BLOCK]> {
+        self.get(at..at + BLOCK)?.try_into().ok()
+    }
+    #[inline(always)]
+    fn one(self, at: usize) -> Option<f32> {
+        self.get(at).copied()
+    }
+
+    /// On a Cortex-M with single-precision floating point, the block in assembly: the
+    /// triangle's rows written out, then a loop over the whole rows, a row's entries and its
+    /// column each one `vldm`, the 18 sums in s0–s17 throughout: 24 instructions a whole row
+    /// (the compiler's loop took 35: a load an entry and a bounds check a row; its triangle,
+    /// ~300 a block, this one 66; measured on qemu-m4f, `docs/results/speed.md`). The same
+    /// multiply-adds in the same order as the portable code (`vmla` rounds the product and
+    /// the sum, as `g += d * l` does), so the sums are its bit for bit.
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+    #[inline(always)]
+    fn whole_block(self, g: &mut [[f32; 3]; BLOCK], d: &[[f32; 3]], k0: usize) {
+        let rows = d.len();
+        // The block is whole: rows k0 … k0 + 5 at least, and the last row's block ends
+        // within the slice.
+        if rows < BLOCK || factor_len(k0 + rows - 1) + k0 + BLOCK > self.len() {
+            return whole_block_portable(self, g, d, k0);
+        }
+        // SAFETY: `g` holds 18 f32 (read and written) and `d` `rows` ≥ 6 triples (read). Row
+        // k0 + r's entries start at entry factor_len(k0 + r) + k0 = that of row k0 plus
+        // Σ_(j<r) (k0 + 1 + j); the triangle's row r reads r + 1 of them, the whole rows 6,
+        // the last ending at the entry checked above. The floating-point registers it uses
+        // are saved and restored on the stack inside (Rust's `sreg` operands need
+        // double-precision VFP2, which this FPU does not have); the core registers it
+        // writes are declared.
+        unsafe {
+            core::arch::asm!(
+                "vpush {{s0-s26}}",
+                "vldmia {g}, {{s0-s17}}",
+                // The triangle: rows k0 … k0 + 4, 1 to 5 entries.
+                "vldmia {d}!, {{s18-s20}}",
+                "vldr s21, [{l}]",
+                "add.w {l}, {l}, {step}, lsl #2",
+                "adds {step}, #1",
+                "vmla.f32 s0, s18, s21",
+                "vmla.f32 s1, s19, s21",
+                "vmla.f32 s2, s20, s21",
+                "vldmia {d}!, {{s18-s20}}",
+                "vldmia {l}, {{s21-s22}}",
+                "add.w {l}, {l}, {step}, lsl #2",
+                "adds {step}, #1",
+                "vmla.f32 s0, s18, s21",
+                "vmla.f32 s1, s19, s21",
+                "vmla.f32 s2, s20, s21",
+                "vmla.f32 s3, s18, s22",
+                "vmla.f32 s4, s19, s22",
+                "vmla.f32 s5, s20, s22",
+                "vldmia {d}!, {{s18-s20}}",
+                "vldmia {l}, {{s21-s23}}",
+                "add.w {l}, {l}, {step}, lsl #2",
+                "adds {step}, #1",
+                "vmla.f32 s0, s18, s21",
+                "vmla.f32 s1, s19, s21",
+                "vmla.f32 s2, s20, s21",
+                "vmla.f32 s3, s18, s22",
+                "vmla.f32 s4, s19, s22",
+                "vmla.f32 s5, s20, s22",
+                "vmla.f32 s6, s18, s23",
+                "vmla.f32 s7, s19, s23",
+                "vmla.f32 s8, s20, s23",
+                "vldmia {d}!, {{s18-s20}}",
+                "vldmia {l}, {{s21-s24}}",
+                "add.w {l}, {l}, {step}, lsl #2",
+                "adds {step}, #1",
+                "vmla.f32 s0, s18, s21",
+                "vmla.f32 s1, s19, s21",
+                "vmla.f32 s2, s20, s21",
+                "vmla.f32 s3, s18, s22",
+                "vmla.f32 s4, s19, s22",
+                "vmla.f32 s5, s20, s22",
+                "vmla.f32 s6, s18, s23",
+                "vmla.f32 s7, s19, s23",
+                "vmla.f32 s8, s20, s23",
+                "vmla.f32 s9, s18, s24",
+                "vmla.f32 s10, s19, s24",
+                "vmla.f32 s11, s20, s24",
+                "vldmia {d}!, {{s18-s20}}",
+                "vldmia {l}, {{s21-s25}}",
+                "add.w {l}, {l}, {step}, lsl #2",
+                "adds {step}, #1",
+                "vmla.f32 s0, s18, s21",
+                "vmla.f32 s1, s19, s21",
+                "vmla.f32 s2, s20, s21",
+                "vmla.f32 s3, s18, s22",
+                "vmla.f32 s4, s19, s22",
+                "vmla.f32 s5, s20, s22",
+                "vmla.f32 s6, s18, s23",
+                "vmla.f32 s7, s19, s23",
+                "vmla.f32 s8, s20, s23",
+                "vmla.f32 s9, s18, s24",
+                "vmla.f32 s10, s19, s24",
+                "vmla.f32 s11, s20, s24",
+                "vmla.f32 s12, s18, s25",
+                "vmla.f32 s13, s19, s25",
+                "vmla.f32 s14, s20, s25",
+                // The whole rows k0 + 5 … to the last.
+                "2:",
+                "vldmia {d}!, {{s18-s20}}",
+                "vldmia {l}, {{s21-s26}}",
+                "add.w {l}, {l}, {step}, lsl #2",
+                "adds {step}, #1",
+                "vmla.f32 s0, s18, s21",
+                "vmla.f32 s1, s19, s21",
+                "vmla.f32 s2, s20, s21",
+                "vmla.f32 s3, s18, s22",
+                "vmla.f32 s4, s19, s22",
+                "vmla.f32 s5, s20, s22",
+                "vmla.f32 s6, s18, s23",
+                "vmla.f32 s7, s19, s23",
+                "vmla.f32 s8, s20, s23",
+                "vmla.f32 s9, s18, s24",
+                "vmla.f32 s10, s19, s24",
+                "vmla.f32 s11, s20, s24",
+                "vmla.f32 s12, s18, s25",
+                "vmla.f32 s13, s19, s25",
+                "vmla.f32 s14, s20, s25",
+                "vmla.f32 s15, s18, s26",
+                "vmla.f32 s16, s19, s26",
+                "vmla.f32 s17, s20, s26",
+                "subs {n}, #1",
+                "bne 2b",
+                "vstmia {g}, {{s0-s17}}",
+                "vpop {{s0-s26}}",
+                g = in(reg) g.as_mut_ptr(),
+                d = inout(reg) d.as_ptr() => _,
+                l = inout(reg) self.as_ptr().add(factor_len(k0) + k0) => _,
+                step = inout(reg) k0 + 1 => _,
+                n = inout(reg) rows - (BLOCK - 1) => _,
+            );
+        }
+    }
+}
+
+impl Entries for &[u8] {
+    #[inline(always)]
+    fn block(self, at: usize) -> Option<[f32; BLOCK]> {
+        let row = self.get(4 * at..4 * (at + BLOCK))?;
+        Some(core::array::from_fn(|b| entry(row, b)))
+    }
+    #[inline(always)]
+    fn one(self, at: usize) -> Option<f32> {
+        self.get(4 * at..4 * at + 4).map(|b| entry(b, 0))
+    }
+}
+
+/// The factor's bytes as f32 where they are aligned for it (and the machine is little
+/// endian, the format's order); `None` otherwise.
+fn as_f32(bytes: &[u8]) -> Option<&[f32]> {
+    if cfg!(target_endian = "big") {
+        return None;
+    }
+    // SAFETY: every bit pattern is a valid f32, and `align_to` hands out only the aligned
+    // middle of the slice (whole f32s within it); the check below takes it only when it is
+    // the whole slice.
+    let (head, mid, tail) = unsafe { bytes.align_to::<f32>() };
+    (head.is_empty() && tail.is_empty()).then_some(mid)
+}
+
+/// One block of BLOCK columns of J_π L from k0 on (`width` of them within L): `d` holds the
+/// columns of the rows k0, k0 + 1, … to the last. Out of line and indexed by constants only,
+/// so that the 18 sums stay in registers (inlined into `add_to`, its sums went to the stack
+/// at every row: measured on qemu-m4f).
+#[inline(never)]
+fn block<E: Entries>(
+    g: &mut [[f32; 3]; BLOCK],
+    d: &[[f32; 3]],
+    factor: E,
+    k0: usize,
+    width: usize,
+) {
+    if width == BLOCK {
+        factor.whole_block(g, d, k0);
+    } else {
+        // The last, narrow block: all its rows are its triangle's.
+        let mut acc = *g;
+        triangle_rows(&mut acc, d, factor, k0, width);
+        *g = acc;
+    }
+}
+
+/// g_b += L_(k0 + r, k0 + b) d_(k0 + r) for the rows r = 0, 1, … of the block's triangle
+/// (row k0 + r holds the first r + 1 of the block's `width` entries), indexed by constants:
+/// each row leaves its loop at its last entry (reading all six and selecting the row's took
+/// ~110 instructions a row, measured on qemu-m4f).
+#[inline(always)]
+fn triangle_rows<E: Entries>(
+    g: &mut [[f32; 3]; BLOCK],
+    d: &[[f32; 3]],
+    factor: E,
     k0: usize,
     width: usize,
 ) {
     let mut acc = *g;
     for (r, di) in d.iter().enumerate() {
-        let at = 4 * (factor_len(k0 + r) + k0);
+        let at = factor_len(k0 + r) + k0;
         let m = (r + 1).min(width);
         for (b, gb) in acc.iter_mut().enumerate() {
-            let l = factor.get(at + 4 * b..at + 4 * b + 4).filter(|_| b < m);
-            accumulate(gb, di, l.map_or(0.0, |l| entry(l, 0)));
+            if b >= m {
+                break;
+            }
+            let Some(l) = factor.one(at + b) else {
+                break;
+            };
+            accumulate(gb, di, l);
         }
     }
     *g = acc;
+}
+
+/// Σ += (J_π L)(J_π L)ᵀ for the columns `d` of J_π (nm): g_k = Σ_(i ≥ k) L_ik d_i, column k
+/// of J_π L, for BLOCK columns k at a time: first the rows of the block's triangle (row i
+/// holds L_ik for k ≤ i only), then the rows below it, whole ([`block`]).
+fn product<E: Entries>(d: &[[f32; 3]], factor: E, sigma: &mut Covariance) {
+    let n = d.len();
+    let mut k0 = 0;
+    while k0 < n {
+        let mut g = [[0.0f32; 3]; BLOCK];
+        let width = (n - k0).min(BLOCK);
+        block(&mut g, d.get(k0..).unwrap_or(&[]), factor, k0, width);
+        for gb in &g[..width] {
+            sigma.add_outer(*gb, 1.0);
+        }
+        k0 += BLOCK;
+    }
 }
 
 /// An entry of L from its four little-endian bytes.
@@ -145,9 +444,20 @@ impl<'a> ParameterPart<'a> {
                 *a = j.axis;
             }
         }
+        let count = block.count().min(MAX_PARAMETERS);
+        let mut records = [NO_RECORD; MAX_PARAMETERS];
+        for (i, r) in records.iter_mut().enumerate().take(count) {
+            // The table's check read every record (kind, joint within the table).
+            *r = Record::of(
+                &block.column(i).ok_or(ChainError::Range { joint: 0 })?,
+                &axes,
+            );
+        }
         Ok(Some(ParameterPart {
-            block,
-            axes,
+            factor: block.factor(),
+            records,
+            count,
+            joints: table.joint_count().min(MAX_JOINTS),
             probe: table.probe().id,
         }))
     }
@@ -161,77 +471,80 @@ impl<'a> ParameterPart<'a> {
 
     /// Number of parameters.
     pub fn count(&self) -> usize {
-        self.block.count().min(MAX_PARAMETERS)
+        self.count
     }
 
     /// Σ += J_π C J_πᵀ (nm²) at a reading at `temp_mc` whose frames are `frames` and tip `p`
     /// (mm).
     pub fn add_to(&self, frames: &Frames, p: Vec3<f32>, temp_mc: i32, sigma: &mut Covariance) {
-        let dt = temp_mc.wrapping_sub(REFERENCE_TEMP_MC) as f32 * 1.0e-3;
-        let n = self.count();
-        // J_π's columns, in nm per the parameter's unit.
         let mut d = [[0.0f32; 3]; MAX_PARAMETERS];
-        for (i, di) in d.iter_mut().enumerate().take(n) {
-            // The table's check read every record (kind, joint within the table).
-            if let Some(col) = self.block.column(i) {
-                *di = scaled(self.column(&col, frames, p, dt), NM_PER_MM);
-            }
-        }
-        let factor = self.block.factor();
-        // g_k = Σ_(i ≥ k) L_ik d_i, column k of J_π L, for BLOCK columns k at a time: first
-        // the rows of the block's triangle (row i holds L_ik for k ≤ i only), then the rows
-        // below it, whole, in `full_rows`.
-        let mut k0 = 0;
-        while k0 < n {
-            let mut g = [[0.0f32; 3]; BLOCK];
-            let width = (n - k0).min(BLOCK);
-            let top = if width == BLOCK { k0 + BLOCK - 1 } else { n };
-            triangle_rows(&mut g, d.get(k0..top).unwrap_or(&[]), factor, k0, width);
-            full_rows(&mut g, d.get(top..n).unwrap_or(&[]), factor, top, k0);
-            for gb in &g[..width] {
-                sigma.add_outer(*gb, 1.0);
-            }
-            k0 += BLOCK;
+        let d = self.columns(frames, p, temp_mc, &mut d);
+        match as_f32(self.factor) {
+            Some(aligned) => product(d, aligned, sigma),
+            None => product(d, self.factor, sigma),
         }
     }
 
-    /// ∂p/∂π for one parameter (mm per the parameter's unit).
-    fn column(&self, col: &Column, frames: &Frames, p: Vec3<f32>, dt: f32) -> Vec3<f32> {
-        let k = usize::from(col.joint).min(MAX_JOINTS - 1);
-        // The record's vector is in the calibration file's frame: a tilt's in the frame
-        // before its joint (the previous joint's, or the base's, labelled like a z joint),
-        // a shift's in its joint's.
-        let tilt = matches!(col.kind, Kind::Tilt | Kind::TiltSin | Kind::TiltCos);
-        let frame_axis = match (tilt, k) {
-            (true, 0) => BASE_AXIS,
-            (true, _) => self.axes[k - 1],
-            _ => self.axes[k],
-        };
-        let vector = unpermute_inline(col.vector, frame_axis);
-        let r = &frames.rotation[k];
-        let lever = sub(p, frames.origin[k]);
-        let axis = [r[0][2], r[1][2], r[2][2]];
-        let turn = || cross::<F32>(&axis, &lever);
+    /// J_π's columns (nm per the parameter's unit) into `d`, the filled part returned: per
+    /// joint once the lever p − o_k and the turn about its axis, then each parameter's
+    /// column from its joint's.
+    fn columns<'d>(
+        &self,
+        frames: &Frames,
+        p: Vec3<f32>,
+        temp_mc: i32,
+        d: &'d mut [[f32; 3]; MAX_PARAMETERS],
+    ) -> &'d [[f32; 3]] {
+        let dt = temp_mc.wrapping_sub(REFERENCE_TEMP_MC) as f32 * 1.0e-3;
+        let mut levers = [[0.0f32; 3]; MAX_JOINTS];
+        let mut turns = [[0.0f32; 3]; MAX_JOINTS];
+        for k in 0..self.joints {
+            let r = &frames.rotation[k];
+            levers[k] = sub(p, frames.origin[k]);
+            turns[k] = scaled(
+                cross::<F32>(&[r[0][2], r[1][2], r[2][2]], &levers[k]),
+                NM_PER_MM,
+            );
+        }
+        let n = self.count;
+        for (di, rec) in d.iter_mut().zip(&self.records[..n]) {
+            *di = self.column(rec, frames, &levers, &turns, dt);
+        }
+        &d[..n]
+    }
+
+    /// ∂p/∂π for one parameter (nm per the parameter's unit), from its joint's lever and
+    /// turn.
+    fn column(
+        &self,
+        rec: &Record,
+        frames: &Frames,
+        levers: &[Vec3<f32>; MAX_JOINTS],
+        turns: &[Vec3<f32>; MAX_JOINTS],
+        dt: f32,
+    ) -> Vec3<f32> {
+        let k = usize::from(rec.joint).min(MAX_JOINTS - 1);
+        let (r, lever, turn) = (&frames.rotation[k], levers[k], turns[k]);
         let tilt = || {
             let before = if k == 0 {
                 &IDENTITY
             } else {
                 &frames.rotation[k - 1]
             };
-            cross::<F32>(&mat_vec(before, vector), &lever)
+            cross::<F32>(&mat_vec(before, rec.vector), &lever)
         };
-        let weight = || harmonic(frames.turn[k], col.order);
-        match col.kind {
-            Kind::Turn => turn(),
-            Kind::TurnSin => scaled(turn(), weight()[1]),
-            Kind::TurnCos => scaled(turn(), weight()[0]),
+        let weight = || harmonic(frames.turn[k], rec.order);
+        match rec.kind {
+            Kind::Turn => turn,
+            Kind::TurnSin => scaled(turn, weight()[1]),
+            Kind::TurnCos => scaled(turn, weight()[0]),
             // The first-order lever of the spec: a_k · ((p − o_k) × ẑ).
-            Kind::Gravity => scaled(turn(), axis[0] * lever[1] - axis[1] * lever[0]),
+            Kind::Gravity => scaled(turn, r[0][2] * lever[1] - r[1][2] * lever[0]),
             Kind::Tilt => tilt(),
             Kind::TiltSin => scaled(tilt(), weight()[1]),
             Kind::TiltCos => scaled(tilt(), weight()[0]),
-            Kind::ProbeShift if col.order != u16::from(self.probe) => [0.0; 3],
-            Kind::Shift | Kind::ProbeShift => scaled(mat_vec(r, vector), col.w0 + col.w1 * dt),
+            Kind::ProbeShift if rec.order != u16::from(self.probe) => [0.0; 3],
+            Kind::Shift | Kind::ProbeShift => scaled(mat_vec(r, rec.vector), rec.w0 + rec.w1 * dt),
         }
     }
 }
@@ -329,13 +642,13 @@ mod tests {
             let mut got = Covariance::default();
             part.add_to(&frames, tip.xyz, 23_000, &mut got);
             // Σ = J L Lᵀ Jᵀ in f64 from the same columns.
-            let d: std::vec::Vec<[f64; 3]> = (0..p)
-                .map(|i| {
-                    let col = part.block.column(i).unwrap();
-                    part.column(&col, &frames, tip.xyz, 3.0)
-                        .map(|x| f64::from(x) * 1e6)
-                })
+            let mut cols = [[0.0f32; 3]; MAX_PARAMETERS];
+            let d: std::vec::Vec<[f64; 3]> = part
+                .columns(&frames, tip.xyz, 23_000, &mut cols)
+                .iter()
+                .map(|c| c.map(f64::from))
                 .collect();
+            assert_eq!(d.len(), p);
             let mut want = [0.0f64; 6];
             for k in 0..p {
                 let mut g = [0.0f64; 3];
@@ -380,5 +693,71 @@ mod product_tests {
         }
         // The input's rounding (6e-8 of θ) grows h-fold; orders of a real calibration are ≤ 8.
         assert!(worst < 300.0 * 1.2e-7, "{worst}");
+    }
+}
+
+#[cfg(test)]
+mod factor_tests {
+    use super::*;
+
+    /// The product reads L the same whether as aligned f32 or as bytes at any alignment (the
+    /// hub takes the first, a host's unaligned buffer the second): equal sums, bit for bit,
+    /// and both within f32 rounding of the plain product in f64.
+    #[test]
+    fn aligned_and_byte_factors_give_the_same_product() {
+        for p in [1, 6, 7, 13, 52] {
+            let d: std::vec::Vec<[f32; 3]> = (0..p)
+                .map(|i| {
+                    let x = i as f32;
+                    [(0.3 * x).sin() * 1e3, (0.7 * x).cos() * 1e3, 500.0 - x]
+                })
+                .collect();
+            let factor: std::vec::Vec<f32> = (0..factor_len(p))
+                .map(|k| 1e-3 * ((k as f32 * 1.37).sin() + 0.1))
+                .collect();
+            let mut bytes = std::vec![0u8; 4 * factor.len() + 1];
+            for (k, l) in factor.iter().enumerate() {
+                bytes[1 + 4 * k..5 + 4 * k].copy_from_slice(&l.to_le_bytes());
+            }
+            let (mut a, mut b) = (Covariance::default(), Covariance::default());
+            product(&d, factor.as_slice(), &mut a);
+            product(&d, &bytes[1..], &mut b);
+            assert_eq!(a, b, "P = {p}");
+            let mut want = [0.0f64; 6];
+            for k in 0..p {
+                let mut g = [0.0f64; 3];
+                for (i, di) in d.iter().enumerate().skip(k) {
+                    let l = f64::from(factor[factor_len(i) + k]);
+                    for c in 0..3 {
+                        g[c] += f64::from(di[c]) * l;
+                    }
+                }
+                let pairs = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+                for (w, (x, y)) in want.iter_mut().zip(pairs) {
+                    *w += g[x] * g[y];
+                }
+            }
+            let scale = want[0] + want[1] + want[2];
+            for (g, w) in a.0.iter().zip(want) {
+                assert!(
+                    (f64::from(*g) - w).abs() < 1e-5 * scale,
+                    "P = {p}: {a:?} against {want:?}"
+                );
+            }
+        }
+    }
+
+    /// Bytes at an aligned address are read as f32, whole; at an odd one they are not.
+    #[test]
+    fn only_aligned_bytes_are_read_as_f32() {
+        let words = [1.5f32, -2.0, 3.25];
+        let mut bytes = [0u8; 20];
+        // A [u8; 20] has alignment 1: its first address that is a multiple of 4.
+        let at = bytes.as_ptr().align_offset(4);
+        for (k, w) in words.iter().enumerate() {
+            bytes[at + 4 * k..at + 4 * k + 4].copy_from_slice(&w.to_le_bytes());
+        }
+        assert_eq!(as_f32(&bytes[at..at + 12]), Some(&words[..]));
+        assert_eq!(as_f32(&bytes[at + 1..at + 5]), None);
     }
 }
