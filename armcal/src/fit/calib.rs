@@ -44,6 +44,7 @@ use crate::effects::FAMILIES;
 use crate::fit::ident::{self, Fixed, Identifiability, RFactor, Why};
 use crate::fit::jacobian::tip_jacobian;
 use crate::fit::lm::{self, Normal};
+pub use crate::fit::options::Options;
 use crate::fit::priors::{prior_conflicts, prior_terms};
 pub use crate::fit::priors::{Gaussian, Prior, PriorConflict, Ridge, PRIOR_CONFLICT_SIGMAS};
 use crate::fit::residuals::{best_rigid, Rigid};
@@ -56,59 +57,6 @@ use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, Vector3};
 use quatarm_ref::arm::{Arm, Frame};
 use std::f64::consts::FRAC_PI_2;
 use std::time::{Duration, Instant};
-
-/// Settings of a calibration.
-#[derive(Clone, Debug)]
-pub struct Options {
-    /// What to fit.
-    pub terms: Terms,
-    /// Solver settings.
-    pub lm: lm::Options,
-    /// Singular values below this fraction of the largest (unit-norm columns) are
-    /// dependencies.
-    pub structural_tol: f64,
-    /// Apply the statistical identifiability test after the fit.
-    pub weak_check: bool,
-    /// A direction is held when its standard uncertainty exceeds this fraction of the
-    /// plausible sizes of its unknowns ([`Param::plausible`]).
-    pub weak_threshold: f64,
-    /// Compare identifiability with a well-spread design (degenerate pose sets, equation
-    /// count). Off, the data's own rank is trusted.
-    pub design_check: bool,
-    /// Proceed on a degenerate pose set, holding what it cannot determine (instead of an
-    /// error).
-    pub allow_degenerate: bool,
-    /// A Gaussian prior on the geometric errors (`None`: plain least squares).
-    pub prior: Option<Prior>,
-    /// Unknowns to hold at their start values whatever the data say.
-    pub hold: Vec<Param>,
-    /// Backward elimination of extended effects: while some fitted effect is not significant
-    /// at this many standard uncertainties (a harmonic's sin and cos tested together, at the
-    /// same tail probability), hold the least significant one and refit. 0: keep every effect
-    /// requested. Geometric unknowns are never eliminated this way.
-    pub significance: f64,
-    /// A ridge penalty on the geometric errors (MUKCa's regulariser); with it, unknowns the
-    /// data cannot separate stay fitted and the penalty shares their effect out among them.
-    pub ridge: Option<Ridge>,
-}
-
-impl Default for Options {
-    fn default() -> Options {
-        Options {
-            terms: Terms::geometric(),
-            lm: lm::Options::default(),
-            structural_tol: 1e-8,
-            weak_check: true,
-            weak_threshold: 1.0,
-            design_check: true,
-            allow_degenerate: false,
-            prior: None,
-            hold: Vec::new(),
-            significance: 0.0,
-            ridge: None,
-        }
-    }
-}
 
 /// Why a calibration refused to give a result.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

@@ -15,6 +15,7 @@ pub mod holdout;
 pub mod ident;
 pub mod jacobian;
 pub mod lm;
+pub mod options;
 pub mod priors;
 pub mod probes;
 pub mod report;
