@@ -10,6 +10,7 @@
 //! diagnosis, the acceptance tests and the simulation stand on it.
 
 pub mod calib;
+pub mod error;
 pub mod fleet_prior;
 pub mod holdout;
 pub mod ident;
