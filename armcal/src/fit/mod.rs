@@ -18,6 +18,7 @@ pub mod jacobian;
 pub mod lm;
 pub mod options;
 pub mod priors;
+pub mod problem;
 pub mod probes;
 pub mod report;
 pub mod residuals;

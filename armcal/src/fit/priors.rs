@@ -2,7 +2,7 @@
 //! class, or each unknown's own [`Gaussian`], e.g. a fleet's), MUKCa's ridge penalty
 //! ([`Ridge`]), and the test that drops an unknown's own prior when the data contradict it
 //! ([`PriorConflict`]). Each becomes one residual per unknown (`prior_terms`, the weights
-//! [`crate::fit::calib::Problem::with_prior`] takes); the fit's loop decides when they apply.
+//! [`crate::fit::problem::Problem::with_prior`] takes); the fit's loop decides when they apply.
 
 use crate::data::Dataset;
 use crate::fit::ident::{self, Fixed};
