@@ -22,3 +22,4 @@ pub mod problem;
 pub mod probes;
 pub mod report;
 pub mod residuals;
+pub mod structure;
