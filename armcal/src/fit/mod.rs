@@ -20,6 +20,7 @@ pub mod options;
 pub mod priors;
 pub mod problem;
 pub mod probes;
+pub mod prune;
 pub mod report;
 pub mod residuals;
 pub mod structure;
