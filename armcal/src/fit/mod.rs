@@ -11,6 +11,7 @@
 
 pub mod calib;
 pub mod error;
+pub mod finish;
 pub mod fleet_prior;
 pub mod holdout;
 pub mod ident;
