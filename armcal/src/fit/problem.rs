@@ -24,12 +24,12 @@
 //!
 //! All residuals are millimetres of ball position, so one noise level weighs them all.
 
-use crate::data::{Dataset, Layout};
+use crate::data::{Dataset, Layout, LengthGroup};
 use crate::fit::ident::RFactor;
 use crate::fit::jacobian::tip_jacobian;
 use crate::fit::lm::{self, Normal};
 use crate::fit::residuals::{best_rigid, Rigid};
-use crate::params::{apply, Param, ParamExt};
+use crate::params::{apply, Param};
 use nalgebra::{DMatrix, DVector, Rotation3, Vector3};
 use quatarm_ref::arm::Arm;
 
@@ -124,6 +124,126 @@ fn radial_rows(us: &[Vector3<f64>], bj: &[f64], n: usize) -> DMatrix<f64> {
     radial
 }
 
+/// One state's ball centres through the instrument frame, q = R_T p + t_T, with (when `jac`)
+/// their Jacobian rows: what every residual block of [`Problem::visit`] is made of.
+struct Balls<'a> {
+    problem: &'a Problem<'a>,
+    mounted: crate::fit::probes::Mounted<'a>,
+    frame: &'a Rigid,
+    jac: bool,
+    /// The arm unknowns' derivatives of the tip (scratch, one per arm unknown).
+    cols: Vec<Vector3<f64>>,
+}
+
+impl Balls<'_> {
+    /// The ball centre of row `i` through the frame, and its 3 × n Jacobian rows into `j`
+    /// (row-major, one column per kept unknown; untouched without `jac`).
+    fn at(&mut self, i: usize, j: &mut [f64]) -> Vector3<f64> {
+        let p = self.problem;
+        let n = p.kept.len();
+        let rot = self.frame.rot;
+        let row = &p.data.rows[i];
+        if !self.jac {
+            return rot * self.mounted.tip(row) + self.frame.trans;
+        }
+        let (probe, with) = self.mounted.of(row);
+        let tip = tip_jacobian(
+            with,
+            probe,
+            &p.arm_params,
+            &row.theta,
+            row.temp_c,
+            &mut self.cols,
+        );
+        j.iter_mut().for_each(|v| *v = 0.0);
+        for (k, &col) in p.arm_cols.iter().enumerate() {
+            let v = rot * self.cols[k];
+            for c in 0..3 {
+                j[c * n + col] = v[c];
+            }
+        }
+        // Frame unknowns are small motions in the arm's base frame, before R_T: rotation
+        // ω gives R_T (ω × p), translation τ gives R_T τ.
+        for &(param, col) in &p.frame_cols {
+            let v = match param {
+                Param::FrameRotation(a) => rot * Vector3::ith(a, 1.0).cross(&tip),
+                Param::FrameTranslation(a) => rot.column(a).into_owned(),
+                _ => Vector3::zeros(),
+            };
+            for c in 0..3 {
+                j[c * n + col] = v[c];
+            }
+        }
+        rot * tip + self.frame.trans
+    }
+}
+
+/// A bar's rows: each end's rows centred on the end's mean ([`centred`]), then the bar's own
+/// residual √(n_a n_b / (n_a + n_b)) (|m_a − m_b| − L), appended to `br` (and, with `jac`, the
+/// Jacobian rows to `bj`); `mja` and `mj` are scratch for the ends' mean Jacobians.
+fn bar_rows(
+    eval: &mut dyn FnMut(usize, &mut [f64]) -> Vector3<f64>,
+    jac: bool,
+    n: usize,
+    g: &LengthGroup,
+    (br, bj): (&mut Vec<f64>, &mut Vec<f64>),
+    (mja, mj): (&mut [f64], &mut [f64]),
+) {
+    let ma = centred(eval, jac, n, &g.a, br, bj, mja);
+    let mb = centred(eval, jac, n, &g.b, br, bj, mj);
+    let w = ((g.a.len() * g.b.len()) as f64 / (g.a.len() + g.b.len()) as f64).sqrt();
+    let d = ma - mb;
+    let dist = d.norm();
+    br.push(w * (dist - g.length_mm));
+    if jac {
+        let u = if dist > 0.0 {
+            d / dist
+        } else {
+            Vector3::zeros()
+        };
+        for col in 0..n {
+            let v = (0..3)
+                .map(|c| u[c] * (mja[c * n + col] - mj[c * n + col]))
+                .sum::<f64>();
+            bj.push(w * v);
+        }
+    }
+}
+
+/// A sphere group's rows `idx`: each ball centre's distance from the group's best centre for
+/// this arm minus `radius`, appended to `br`, and (with `jac`) their radial Jacobian rows with
+/// the centre projected out ([`radial_rows`]) to `bj`.
+fn sphere_rows(
+    eval: &mut dyn FnMut(usize, &mut [f64]) -> Vector3<f64>,
+    jac: bool,
+    n: usize,
+    idx: &[usize],
+    radius: f64,
+    br: &mut Vec<f64>,
+    bj: &mut Vec<f64>,
+) {
+    let mut qs = Vec::with_capacity(idx.len());
+    for &i in idx {
+        bj.resize(bj.len() + if jac { 3 * n } else { 0 }, 0.0);
+        let len = bj.len();
+        qs.push(eval(i, if jac { &mut bj[len - 3 * n..] } else { &mut [] }));
+    }
+    // Validated before any fit (`check_sphere_groups`); a group whose centre is lost
+    // on the way keeps its mean, which the solver sees as a large residual.
+    let c = crate::geometry::sphere::centre_of(&qs, radius)
+        .unwrap_or_else(|_| qs.iter().sum::<Vector3<f64>>() / qs.len() as f64);
+    let us: Vec<Vector3<f64>> = qs
+        .iter()
+        .map(|q| (q - c).try_normalize(0.0).unwrap_or_else(Vector3::z))
+        .collect();
+    br.extend(qs.iter().map(|q| (q - c).norm() - radius));
+    if jac {
+        let radial = radial_rows(&us, bj, n);
+        bj.clear();
+        bj.extend(radial.transpose().iter());
+    }
+}
+
 impl<'a> Problem<'a> {
     /// A problem over the unknowns `kept` (positions in `all`).
     pub fn new(
@@ -197,47 +317,15 @@ impl<'a> Problem<'a> {
     /// a rotation of the whole arm about its base, the symmetry such data cannot see.
     pub fn visit(&self, s: &State, jac: bool, sink: &mut dyn FnMut(&[f64], &[f64])) {
         let arm = self.arm(s);
-        let mounted = crate::fit::probes::Mounted::new(&arm);
         let n = self.kept.len();
-        let na = self.arm_params.len();
-        let rot = s.frame.rot;
-        let mut cols = vec![Vector3::zeros(); na];
-        // Ball centre of row i through the frame, and its 3 × n Jacobian rows into `j`.
-        let mut eval = |i: usize, j: &mut [f64]| -> Vector3<f64> {
-            let row = &self.data.rows[i];
-            if !jac {
-                return rot * mounted.tip(row) + s.frame.trans;
-            }
-            let (probe, with) = mounted.of(row);
-            let p = tip_jacobian(
-                with,
-                probe,
-                &self.arm_params,
-                &row.theta,
-                row.temp_c,
-                &mut cols,
-            );
-            j.iter_mut().for_each(|v| *v = 0.0);
-            for (k, &col) in self.arm_cols.iter().enumerate() {
-                let v = rot * cols[k];
-                for c in 0..3 {
-                    j[c * n + col] = v[c];
-                }
-            }
-            // Frame unknowns are small motions in the arm's base frame, before R_T: rotation
-            // ω gives R_T (ω × p), translation τ gives R_T τ.
-            for &(param, col) in &self.frame_cols {
-                let v = match param {
-                    Param::FrameRotation(a) => rot * Vector3::ith(a, 1.0).cross(&p),
-                    Param::FrameTranslation(a) => rot.column(a).into_owned(),
-                    _ => Vector3::zeros(),
-                };
-                for c in 0..3 {
-                    j[c * n + col] = v[c];
-                }
-            }
-            rot * p + s.frame.trans
+        let mut balls = Balls {
+            problem: self,
+            mounted: crate::fit::probes::Mounted::new(&arm),
+            frame: &s.frame,
+            jac,
+            cols: vec![Vector3::zeros(); self.arm_params.len()],
         };
+        let mut eval = |i: usize, j: &mut [f64]| balls.at(i, j);
         let mut j = vec![0.0; 3 * n];
         for &i in &self.layout.points {
             let q = eval(i, &mut j);
@@ -259,52 +347,21 @@ impl<'a> Problem<'a> {
         for g in &self.layout.length {
             br.clear();
             bj.clear();
-            let ma = centred(&mut eval, jac, n, &g.a, &mut br, &mut bj, &mut mja);
-            let mb = centred(&mut eval, jac, n, &g.b, &mut br, &mut bj, &mut mj);
-            // The bar: √(n_a n_b / (n_a + n_b)) (|m_a − m_b| − L).
-            let w = ((g.a.len() * g.b.len()) as f64 / (g.a.len() + g.b.len()) as f64).sqrt();
-            let d = ma - mb;
-            let dist = d.norm();
-            br.push(w * (dist - g.length_mm));
-            if jac {
-                let u = if dist > 0.0 {
-                    d / dist
-                } else {
-                    Vector3::zeros()
-                };
-                for col in 0..n {
-                    let v = (0..3)
-                        .map(|c| u[c] * (mja[c * n + col] - mj[c * n + col]))
-                        .sum::<f64>();
-                    bj.push(w * v);
-                }
-            }
+            bar_rows(
+                &mut eval,
+                jac,
+                n,
+                g,
+                (&mut br, &mut bj),
+                (&mut mja, &mut mj),
+            );
             sink(&br, &bj);
         }
         for g in &self.layout.sphere {
-            let radius = crate::fit::probes::sphere_radius(&arm, self.data, g);
             br.clear();
             bj.clear();
-            let mut qs = Vec::with_capacity(g.rows.len());
-            for &i in &g.rows {
-                bj.resize(bj.len() + if jac { 3 * n } else { 0 }, 0.0);
-                let len = bj.len();
-                qs.push(eval(i, if jac { &mut bj[len - 3 * n..] } else { &mut [] }));
-            }
-            // Validated before any fit (`check_sphere_groups`); a group whose centre is lost
-            // on the way keeps its mean, which the solver sees as a large residual.
-            let c = crate::geometry::sphere::centre_of(&qs, radius)
-                .unwrap_or_else(|_| qs.iter().sum::<Vector3<f64>>() / qs.len() as f64);
-            let us: Vec<Vector3<f64>> = qs
-                .iter()
-                .map(|q| (q - c).try_normalize(0.0).unwrap_or_else(Vector3::z))
-                .collect();
-            br.extend(qs.iter().map(|q| (q - c).norm() - radius));
-            if jac {
-                let radial = radial_rows(&us, &bj, n);
-                bj.clear();
-                bj.extend(radial.transpose().iter());
-            }
+            let radius = crate::fit::probes::sphere_radius(&arm, self.data, g);
+            sphere_rows(&mut eval, jac, n, &g.rows, radius, &mut br, &mut bj);
             sink(&br, &bj);
         }
     }
