@@ -7,6 +7,7 @@
 
 use crate::data::{Dataset, Layout};
 use crate::effects::FAMILIES;
+use crate::fit::design::design_like;
 use crate::fit::error::CalibError;
 use crate::fit::ident::{self, Fixed, Identifiability, Why};
 use crate::fit::options::Options;
@@ -14,7 +15,6 @@ use crate::fit::problem::{start_frame, Problem, State};
 use crate::kinds;
 use crate::params::{frame_params, Param, ParamExt, Terms};
 use crate::progress::Observer;
-use crate::sim;
 use nalgebra::{DMatrix, Vector3};
 use quatarm_ref::arm::Arm;
 use std::f64::consts::FRAC_PI_2;
@@ -328,7 +328,7 @@ fn compare_design(
         return Ok(());
     }
     observer.stage("comparing with a well-spread design");
-    let design = sim::design_like(&skeleton(base), data, 0x5eed);
+    let design = design_like(&skeleton(base), data, 0x5eed);
     let (id_design, _) = structural(base, &design, all, opts.structural_tol);
     let need = id_design.kept.len();
     if eqs <= need {
