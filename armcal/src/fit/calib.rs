@@ -1,48 +1,44 @@
 //! Calibration: the arm's parameters from any mix of `point`, `spat`, `length` and `sphere`
-//! data.
+//! data. This file is the fit's loop; each step has a file of its own:
 //!
-//! ## The procedure
-//! 1. Identifiability, structural: the Jacobian of every requested unknown at the arm's
-//!    nominal skeleton (errors zeroed, tilts snapped to their nominal quarter turns) is
-//!    analysed (`ident`); unknowns the data cannot separate are held at their start values.
-//!    The same analysis on a small well-spread simulated design of the same kinds tells a
-//!    degenerate pose set (fewer identifiable unknowns than good poses give) from a limit of
-//!    the data's kinds, and gives the count of equations needed.
-//! 2. Levenberg–Marquardt from the start arm, with the instrument frame started by the best
-//!    rigid alignment of the start arm's ball centres onto the measured ones.
-//! 3. Identifiability, statistical: a direction determined only to more than plausible sizes
-//!    of its terms is also held, and the fit repeated.
-//! 4. Standard uncertainties from σ̂² (JᵀJ)⁻¹ with σ̂ from the residuals.
+//! 1. Identifiability, structural ([`crate::fit::structure`]): the Jacobian of every requested
+//!    unknown at the arm's nominal skeleton (errors zeroed, tilts snapped to their nominal
+//!    quarter turns) is analysed ([`crate::fit::ident`]); unknowns the data cannot separate
+//!    are held at their start values. The same analysis on a small well-spread design of the
+//!    same kinds tells a degenerate pose set (fewer identifiable unknowns than good poses
+//!    give) from a limit of the data's kinds, and gives the count of equations needed.
+//! 2. Levenberg–Marquardt ([`crate::fit::lm`]) on the least-squares problem
+//!    ([`crate::fit::problem`]) from the start arm, with the instrument frame started by the
+//!    best rigid alignment of the start arm's ball centres onto the measured ones.
+//! 3. Identifiability, statistical ([`crate::fit::prune`]): a direction determined only to
+//!    more than plausible sizes of its terms is also held, and the fit repeated.
+//! 4. Standard uncertainties from σ̂² (JᵀJ)⁻¹ with σ̂ from the residuals
+//!    ([`crate::fit::finish`]).
 //!
-//! A Gaussian prior ([`Prior`]) or MUKCa's ridge penalty ([`Ridge`]) can join the cost as one
+//! A Gaussian prior or MUKCa's ridge penalty ([`crate::fit::priors`]) can join the cost as one
 //! residual per unknown; under the ridge, step 1 holds nothing it penalises (the penalty
-//! shares out what the data cannot separate), and JᵀJ in step 4 includes the penalty.
+//! shares out what the data cannot separate), and JᵀJ in step 4 includes the penalty. The
+//! settings are [`Options`], the refusals [`CalibError`].
 
-use crate::data::{Dataset, Layout};
-use crate::effects::FAMILIES;
-use crate::fit::ident::{self, Fixed, Identifiability, RFactor, Why};
-use crate::fit::jacobian::tip_jacobian;
-pub use crate::fit::error::CalibError;
+use crate::data::Dataset;
 use crate::fit::finish::{finish, Fitted};
-pub use crate::fit::finish::Fit;
-use crate::fit::lm::{self, Normal};
-pub use crate::fit::options::Options;
-use crate::fit::priors::{prior_conflicts, prior_terms};
+use crate::fit::lm;
+use crate::fit::priors::{prior_conflicts, prior_terms, PriorConflict};
+use crate::fit::problem::start_frame;
 use crate::fit::prune::{prune, Next};
-pub use crate::fit::problem::{start_frame, Problem, State};
-pub use crate::fit::priors::{Gaussian, Prior, PriorConflict, Ridge, PRIOR_CONFLICT_SIGMAS};
-use crate::fit::residuals::{best_rigid, Rigid};
 use crate::fit::structure::{check_structure, Structure};
-pub use crate::fit::structure::{equations, skeleton, structural, unknowns};
-use crate::kinds;
-use crate::params::{apply, frame_params, Param, ParamExt, Terms};
 use crate::progress::{Observer, Silent};
-use crate::sim;
-use crate::stats::{chi2_tail, normal_tail_two_sided};
-use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, Vector3};
-use quatarm_ref::arm::{Arm, Frame};
-use std::f64::consts::FRAC_PI_2;
-use std::time::{Duration, Instant};
+use quatarm_ref::arm::Arm;
+use std::time::Instant;
+
+// The old paths of what moved out of this file, kept for `diagnose/` and `uncertainty/` only,
+// which other work changes at the same time: on merging, point their imports at the new
+// modules (`error`, `finish`, `options`, `problem`, `structure`) and delete these lines.
+pub use crate::fit::error::CalibError;
+pub use crate::fit::finish::Fit;
+pub use crate::fit::options::Options;
+pub use crate::fit::problem::{Problem, State};
+pub use crate::fit::structure::{structural, unknowns};
 
 /// Calibrates `start` on `data`.
 pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, CalibError> {
@@ -51,7 +47,7 @@ pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, Cal
 
 /// Calibrates `start` on `data`, telling `observer` what it is doing: the structural check
 /// (`check_structure`), then fits ([`lm::solve`]) until the pruning policy (`prune`, saying
-/// [`Next`]) accepts the model, then the uncertainties of what was kept (`finish`).
+/// `Next`) accepts the model, then the uncertainties of what was kept (`finish`).
 pub fn calibrate_observed(
     start: &Arm,
     data: &Dataset,
@@ -65,18 +61,7 @@ pub fn calibrate_observed(
         x: vec![0.0; all.len()],
         frame: start_frame(&s.base, data, layout),
     };
-    let rms_before = {
-        let p = Problem::new(data, layout, &s.base, all, &s.id.kept);
-        (2.0 * lm::Problem::cost(&p, &state) / eqs as f64).sqrt()
-    };
-    if !rms_before.is_finite() {
-        // The loaders bound every value, so this is an arm made in memory; a solver given NaN
-        // would only report "did not converge" after its whole budget.
-        return Err(CalibError::Mismatch(format!(
-            "the start arm puts the ball at a non-finite position (RMS residual {rms_before}): \
-             its values are beyond what can be evaluated"
-        )));
-    }
+    let rms_before = rms_before(data, &s, &state)?;
     let mut run = Run {
         iterations: 0,
         passes: 0,
@@ -86,26 +71,8 @@ pub fn calibrate_observed(
         conflicts: Vec::new(),
     };
     loop {
-        // A first pass without the prior estimates the noise it is weighed against and tests
-        // the per-unknown priors against what the data say alone; it leaves out what only the
-        // prior lets it fit (unknowns shared out by their own prior alone).
-        let noise_pass = opts.prior.as_ref().is_some_and(|p| {
-            !run.data_pass_done && (run.prior_noise.is_none() || !p.unknowns.is_empty())
-        });
-        let kept: Vec<usize> = if noise_pass {
-            let ridged = |i: usize| {
-                opts.ridge
-                    .is_some_and(|r| r.weight(all[i], data.rows.len()) > 0.0)
-            };
-            let shared = &s.shared;
-            s.id.kept
-                .iter()
-                .copied()
-                .filter(|&i| !shared.contains(&i) || ridged(i))
-                .collect()
-        } else {
-            s.id.kept.clone()
-        };
+        let noise_pass = run.noise_pass(opts);
+        let kept = pass_unknowns(opts, &s, data, noise_pass);
         let dropped: Vec<usize> = run.conflicts.iter().map(|c| c.index).collect();
         let problem = Problem::new(data, layout, &s.base, all, &kept).with_prior(prior_terms(
             opts.prior.as_ref(),
@@ -173,6 +140,39 @@ pub fn calibrate_observed(
     }
 }
 
+/// The RMS residual of the start arm over the data's equations; refused when it is not
+/// finite.
+fn rms_before(data: &Dataset, s: &Structure, state: &State) -> Result<f64, CalibError> {
+    let p = Problem::new(data, &s.layout, &s.base, &s.all, &s.id.kept);
+    let rms = (2.0 * lm::Problem::cost(&p, state) / s.eqs as f64).sqrt();
+    if !rms.is_finite() {
+        // The loaders bound every value, so this is an arm made in memory; a solver given NaN
+        // would only report "did not converge" after its whole budget.
+        return Err(CalibError::Mismatch(format!(
+            "the start arm puts the ball at a non-finite position (RMS residual {rms}): \
+             its values are beyond what can be evaluated"
+        )));
+    }
+    Ok(rms)
+}
+
+/// The unknowns of the next pass: those the structure check kept, less (on the data-only
+/// pass) those only their own prior lets the fit separate.
+fn pass_unknowns(opts: &Options, s: &Structure, data: &Dataset, noise_pass: bool) -> Vec<usize> {
+    if !noise_pass {
+        return s.id.kept.clone();
+    }
+    let ridged = |i: usize| {
+        opts.ridge
+            .is_some_and(|r| r.weight(s.all[i], data.rows.len()) > 0.0)
+    };
+    s.id.kept
+        .iter()
+        .copied()
+        .filter(|&i| !s.shared.contains(&i) || ridged(i))
+        .collect()
+}
+
 /// The fit's passes: iterations in all and per model, and the prior's noise once estimated.
 struct Run {
     iterations: usize,
@@ -187,6 +187,16 @@ struct Run {
 }
 
 impl Run {
+    /// Whether the next pass is the data-only one: a first pass without the prior estimates
+    /// the noise it is weighed against and tests the per-unknown priors against what the data
+    /// say alone; it leaves out what only the prior lets it fit (unknowns shared out by their
+    /// own prior alone).
+    fn noise_pass(&self, opts: &Options) -> bool {
+        opts.prior.as_ref().is_some_and(|p| {
+            !self.data_pass_done && (self.prior_noise.is_none() || !p.unknowns.is_empty())
+        })
+    }
+
     /// One pass of the solver, its iterations told to `observer`. Refused when it stopped
     /// without converging for another reason than its budget, or with the model's budget spent.
     fn pass(
@@ -231,19 +241,15 @@ impl Run {
     }
 }
 
-/// Rotation matrices are compared by their angle; a small helper for tests and reports.
-pub fn rotation_angle(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
-    let c = ((a.transpose() * b).trace() - 1.0) / 2.0;
-    c.clamp(-1.0, 1.0).acos()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::data::Kind;
+    use crate::fit::priors::Ridge;
     use crate::fit::residuals::compare_aligned;
+    use crate::params::Param;
     use crate::rng::rng;
-    use crate::sim::{perturb, random_pose, simulate};
+    use crate::sim::{self, perturb, random_pose, simulate};
 
     #[test]
     fn the_ridge_shares_out_what_the_data_cannot_separate() {

@@ -2,14 +2,13 @@
 //! (without what a ridge shares out), the standard uncertainties, correlations and covariance
 //! of what was kept, the calibrated arm and its instrument frame.
 
-use crate::data::Layout;
 use crate::fit::ident::{self, Identifiability};
 use crate::fit::lm;
 use crate::fit::priors::PriorConflict;
 use crate::fit::problem::State;
 use crate::fit::residuals::Rigid;
 use crate::fit::structure::Structure;
-use crate::params::{Param, ParamExt};
+use crate::params::Param;
 use nalgebra::DMatrix;
 use quatarm_ref::arm::{Arm, Frame};
 use std::time::{Duration, Instant};
@@ -91,7 +90,13 @@ pub(crate) struct Fitted {
 
 /// The fit of the accepted model: the data's own singular values, the uncertainties and
 /// correlations of what was kept, the calibrated arm and frame.
-pub(crate) fn finish(s: Structure, f: Fitted, iterations: usize, rms_before: f64, t0: Instant) -> Fit {
+pub(crate) fn finish(
+    s: Structure,
+    f: Fitted,
+    iterations: usize,
+    rms_before: f64,
+    t0: Instant,
+) -> Fit {
     let Structure {
         layout,
         all,
