@@ -531,38 +531,45 @@ fn spread_line(s: &mut String, label: &str, sum: &Summary) {
     }
 }
 
+impl DataInfo {
+    /// The rows of each kind in words (`400 point rows`, `30 spat rows in 3 groups`).
+    fn kinds(&self) -> Vec<String> {
+        let mut kinds = Vec::new();
+        if self.point_rows > 0 {
+            kinds.push(format!("{} point rows", self.point_rows));
+        }
+        if self.spat_rows > 0 {
+            kinds.push(format!(
+                "{} spat rows in {} groups",
+                self.spat_rows, self.spat_groups
+            ));
+        }
+        if self.length_rows > 0 {
+            kinds.push(format!(
+                "{} length rows at {} bar positions",
+                self.length_rows, self.length_groups
+            ));
+        }
+        if self.sphere_rows > 0 {
+            kinds.push(format!(
+                "{} sphere rows at {} sphere positions",
+                self.sphere_rows, self.sphere_groups
+            ));
+        }
+        kinds
+    }
+}
+
 impl<U: Section> Report<U> {
     /// The report as text.
     pub fn text(&self) -> String {
         let mut s = String::new();
         let d = &self.data;
-        let mut kinds = Vec::new();
-        if d.point_rows > 0 {
-            kinds.push(format!("{} point rows", d.point_rows));
-        }
-        if d.spat_rows > 0 {
-            kinds.push(format!(
-                "{} spat rows in {} groups",
-                d.spat_rows, d.spat_groups
-            ));
-        }
-        if d.length_rows > 0 {
-            kinds.push(format!(
-                "{} length rows at {} bar positions",
-                d.length_rows, d.length_groups
-            ));
-        }
-        if d.sphere_rows > 0 {
-            kinds.push(format!(
-                "{} sphere rows at {} sphere positions",
-                d.sphere_rows, d.sphere_groups
-            ));
-        }
         let _ = writeln!(s, "calibration of {} from {}", self.arm, d.file);
         let _ = writeln!(
             s,
             "  data: {} ({} equations)",
-            kinds.join(", "),
+            d.kinds().join(", "),
             d.equations
         );
         for note in &self.data_kinds {
