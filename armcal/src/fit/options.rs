@@ -19,7 +19,7 @@ pub struct Options {
     /// Apply the statistical identifiability test after the fit.
     pub weak_check: bool,
     /// A direction is held when its standard uncertainty exceeds this fraction of the
-    /// plausible sizes of its unknowns ([`Param::plausible`]).
+    /// plausible sizes of its unknowns ([`plausible`](crate::params::ParamExt::plausible)).
     pub weak_threshold: f64,
     /// Compare identifiability with a well-spread design (degenerate pose sets, equation
     /// count). Off, the data's own rank is trusted.

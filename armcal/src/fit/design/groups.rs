@@ -1,5 +1,5 @@
 //! Groups of rows around one fixed point, as an arm records them: a `spat` cone probed from
-//! several poses, a ball bar's two ends, each row taken with the probes in turn ([`Turns`]).
+//! several poses, a ball bar's two ends, each row taken with the probes in turn (`Turns`).
 //! With no noise they are the design's groups; with noise, the simulation's.
 
 use super::poses::{probe_point, random_pose, Limits};
