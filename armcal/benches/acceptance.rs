@@ -10,7 +10,8 @@
 
 use armcal::acceptance::{self, statistics::Test};
 use armcal::data::Kind;
-use armcal::fit::calib::{calibrate, Options};
+use armcal::fit::calib::calibrate;
+use armcal::fit::options::Options;
 use armcal::rng::rng;
 use armcal::sim::{self, perturb, protocol};
 use quatarm_ref::arm::{Arm, Harmonic};

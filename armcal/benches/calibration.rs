@@ -4,7 +4,9 @@
 //! Single-threaded throughout: the times are one core's.
 
 use armcal::data::{Dataset, Kind, Row};
-use armcal::fit::calib::{calibrate, Options, Ridge};
+use armcal::fit::calib::calibrate;
+use armcal::fit::options::Options;
+use armcal::fit::priors::Ridge;
 use armcal::fit::residuals::compare_aligned;
 use armcal::mukca;
 use armcal::rng::rng;

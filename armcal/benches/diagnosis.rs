@@ -167,9 +167,9 @@ fn mukca() {
             .map(|c| format!("{} rejected on refits", c.effect.spec()))
             .collect();
         let score = |effects: &[Effect]| {
-            let o = armcal::fit::calib::Options {
+            let o = armcal::fit::options::Options {
                 terms: armcal::params::Terms::with(effects),
-                ..armcal::fit::calib::Options::default()
+                ..armcal::fit::options::Options::default()
             };
             mukca::loso(&unit, &o)
         };

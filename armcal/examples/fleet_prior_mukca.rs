@@ -13,8 +13,9 @@
 //!
 //!     cargo run --release -p armcal --example fleet_prior_mukca
 
-use armcal::fit::calib::{Options, Prior, Ridge};
 use armcal::fit::fleet_prior::{self, FleetPrior};
+use armcal::fit::options::Options;
+use armcal::fit::priors::{Prior, Ridge};
 use armcal::mukca::{self, Unit};
 use quatarm_ref::arm::Arm;
 
@@ -39,7 +40,7 @@ fn without_conflict_test(mut o: Options) -> Options {
 }
 
 /// The protocol's fit itself (to say which priors it dropped).
-fn trial_fit(p2: &Unit, opts: &Options) -> (mukca::Trial, armcal::fit::calib::Fit) {
+fn trial_fit(p2: &Unit, opts: &Options) -> (mukca::Trial, armcal::fit::finish::Fit) {
     let train = p2.group("front_center").expect("front_center");
     let high = p2.group("high").expect("high");
     let test: Vec<i64> = p2

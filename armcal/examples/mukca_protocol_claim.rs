@@ -18,8 +18,9 @@
 //!
 //!     cargo run --release -p armcal --example mukca_protocol_claim
 
-use armcal::fit::calib::{Options, Prior, Ridge};
 use armcal::fit::fleet_prior;
+use armcal::fit::options::Options;
+use armcal::fit::priors::{Prior, Ridge};
 use armcal::mukca::{self, Unit};
 use armcal::stats::{bootstrap_mean_interval, min_sign_p, sign_test_p, t_tail, Paired};
 use quatarm_ref::arm::Arm;

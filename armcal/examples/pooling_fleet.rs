@@ -9,7 +9,7 @@
 use armcal::data::{Dataset, Kind};
 use armcal::diagnose::pooling::{self, Arm as Pooled, Design};
 use armcal::diagnose::{self, FoldChoice};
-use armcal::fit::calib::Options as CalibOptions;
+use armcal::fit::options::Options as CalibOptions;
 use armcal::mukca;
 use armcal::params::Effect;
 use armcal::sim;

@@ -10,7 +10,11 @@
 //! of a test session is fitted but what the metric itself defines: its two centres.
 
 use crate::data::{self, Dataset};
-use crate::fit::calib::{calibrate, CalibError, Fit, Options, Ridge};
+use crate::fit::calib::calibrate;
+use crate::fit::error::CalibError;
+use crate::fit::finish::Fit;
+use crate::fit::options::Options;
+use crate::fit::priors::Ridge;
 use crate::fit::residuals::residuals;
 use quatarm_ref::arm::Arm;
 use quatarm_ref::calfile;

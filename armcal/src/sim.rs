@@ -17,49 +17,24 @@
 //! Everything is drawn from one ChaCha generator seeded by the caller: the same seed gives the
 //! same file on every machine.
 
-use crate::data::{Dataset, End, Kind, Row};
+use crate::data::{Dataset, Kind, Row};
+use crate::fit::design::groups::{length_group, spat_group, Turns};
+use crate::fit::design::poses::count_angle;
+pub use crate::fit::design::poses::{inverse, limits, quantise, random_pose, Limits};
+use crate::fit::design::sphere;
 use crate::geometry::{frame_matrix, reach};
-use crate::rng::{normal, rng, SimRng};
-use nalgebra::{Matrix3, Vector3};
+use crate::rng::{normal, SimRng};
+use nalgebra::Vector3;
 use quatarm_ref::arm::{Arm, Frame};
 use quatarm_ref::forward;
 use rand::Rng;
 use std::f64::consts::PI;
 
 pub mod protocol;
-mod sphere;
 
 /// The touch directions of a `sphere` group of `n` points (upper hemisphere).
 pub fn sphere_directions(n: usize) -> Vec<Vector3<f64>> {
     sphere::directions(n, 0.0)
-}
-
-/// Joint travel: readings (rad) from `lo[k]` to `hi[k]`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Limits {
-    /// Lower bounds.
-    pub lo: Vec<f64>,
-    /// Upper bounds.
-    pub hi: Vec<f64>,
-}
-
-/// Hinges travel ±170° (the spec's `default-6`), swivels a full turn (±180°).
-pub fn limits(arm: &Arm) -> Limits {
-    let h = 170f64.to_radians();
-    let (lo, hi) = (0..arm.dof())
-        .map(|k| if arm.is_hinge(k) { (-h, h) } else { (-PI, PI) })
-        .unzip();
-    Limits { lo, hi }
-}
-
-/// A pose drawn uniformly inside the limits.
-pub fn random_pose(limits: &Limits, rng: &mut SimRng) -> Vec<f64> {
-    limits
-        .lo
-        .iter()
-        .zip(&limits.hi)
-        .map(|(lo, hi)| rng.gen_range(*lo..*hi))
-        .collect()
 }
 
 /// The arm with random geometric errors: zero offsets and tilts with standard deviation
@@ -100,16 +75,6 @@ pub fn random_frame(rng: &mut SimRng) -> Frame {
     }
 }
 
-/// Readings as the encoders give them: each angle rounded to a whole count, swivels wrapped
-/// into (−π, π].
-pub fn quantise(arm: &Arm, theta: &[f64]) -> Vec<f64> {
-    theta
-        .iter()
-        .zip(&arm.joints)
-        .map(|(t, j)| count_angle(*t, j.encoder_counts, 0.0))
-        .collect()
-}
-
 /// Readings of a noisy encoder: the continuous angle plus Gaussian noise of `noise_counts`
 /// counts (standard deviation), then rounded to a whole count. The reading's error is the
 /// noise plus the quantisation, standard deviation √(noise² + 1/12) counts. With no noise
@@ -127,63 +92,6 @@ pub fn read_encoders(arm: &Arm, theta: &[f64], noise_counts: f64, rng: &mut SimR
             count_angle(*t, j.encoder_counts, z)
         })
         .collect()
-}
-
-/// The angle of the count nearest to `t` plus `extra` counts, wrapped into (−π, π].
-fn count_angle(t: f64, counts: u32, extra: f64) -> f64 {
-    let mut t = t;
-    if t > PI {
-        t -= 2.0 * PI * ((t + PI) / (2.0 * PI)).floor();
-    } else if t <= -PI {
-        t += 2.0 * PI * ((PI - t) / (2.0 * PI)).floor();
-    }
-    let counts = f64::from(counts);
-    let c = (t * counts / (2.0 * PI) + extra).round();
-    2.0 * PI * c / counts
-}
-
-/// Joint angles that put the ball of `arm` on `target` at temperature `temp_c`, found by damped
-/// least squares from `start` within `limits`; `None` if it does not get within 1e-9 mm.
-pub fn inverse(
-    arm: &Arm,
-    target: &Vector3<f64>,
-    start: &[f64],
-    temp_c: f64,
-    limits: &Limits,
-) -> Option<Vec<f64>> {
-    let n = arm.dof();
-    let mut th = start.to_vec();
-    for _ in 0..200 {
-        let c = forward::evaluate(arm, &th, temp_c);
-        let e = target - c.p;
-        if e.norm() < 1e-9 {
-            return Some(th);
-        }
-        // J (3 × n) and the minimum-norm damped step Jᵀ (J Jᵀ + μ² I)⁻¹ e.
-        let cols: Vec<Vector3<f64>> = (0..n)
-            .map(|k| c.axes[k].cross(&(c.p - c.origins[k])))
-            .collect();
-        let mut jjt = Matrix3::zeros();
-        for col in &cols {
-            jjt += col * col.transpose();
-        }
-        let mu2 = 1e-6 * jjt.trace() + 1e-9;
-        jjt += Matrix3::identity() * mu2;
-        let w = jjt.try_inverse()? * e;
-        let mut step: Vec<f64> = cols.iter().map(|col| col.dot(&w)).collect();
-        let big = step.iter().fold(0.0f64, |m, s| m.max(s.abs()));
-        if big > 0.3 {
-            step.iter_mut().for_each(|s| *s *= 0.3 / big);
-        }
-        for k in 0..n {
-            th[k] = (th[k] + step[k]).clamp(limits.lo[k], limits.hi[k].max(limits.lo[k]));
-            if limits.hi[k] - limits.lo[k] >= 2.0 * PI - 1e-9 {
-                // A swivel: no end stop, only wrap.
-                th[k] = (th[k] + PI).rem_euclid(2.0 * PI) - PI;
-            }
-        }
-    }
-    None
 }
 
 /// Which instrument frame `point` data are recorded in.
@@ -228,57 +136,6 @@ pub struct Options {
     /// The ids of the probes rows are taken with, in turn (row by row; a `sphere` group
     /// whole): a `probe` column. Empty: the arm's first probe, and no column.
     pub probes: Vec<u8>,
-}
-
-/// The probes a simulation takes rows with, in turn, and the arm as each measures.
-struct Turns<'a> {
-    turns: Vec<(Option<u8>, std::borrow::Cow<'a, Arm>)>,
-}
-
-impl<'a> Turns<'a> {
-    /// The probes `ids` of `truth` (the first alone, with no id, for none).
-    fn new(truth: &'a Arm, ids: &[u8]) -> Result<Turns<'a>, SimError> {
-        if ids.is_empty() {
-            return Ok(Turns {
-                turns: vec![(None, std::borrow::Cow::Borrowed(truth))],
-            });
-        }
-        let turns = ids
-            .iter()
-            .map(|&id| {
-                truth
-                    .probe_index(id)
-                    .and_then(|k| truth.for_probe(k))
-                    .map(|a| (Some(id), a))
-                    .ok_or(SimError::NoProbe(id))
-            })
-            .collect::<Result<_, _>>()?;
-        Ok(Turns { turns })
-    }
-
-    /// The probes of the rows of `like` (the design of a calibration: identifiability must
-    /// see every probe the data has, the first too where rows leave the probe cell empty),
-    /// in ascending order of id; the first alone, with no id, where the data use no other.
-    fn like(arm: &'a Arm, like: &Dataset) -> Turns<'a> {
-        let used = crate::fit::probes::used(arm, like);
-        if used == [0] {
-            return Turns {
-                turns: vec![(None, std::borrow::Cow::Borrowed(arm))],
-            };
-        }
-        let mut turns: Vec<_> = used
-            .into_iter()
-            .filter_map(|k| Some((Some(arm.probe_at(k)?.id), arm.for_probe(k)?)))
-            .collect();
-        turns.sort_unstable_by_key(|t| t.0);
-        Turns { turns }
-    }
-
-    /// The `i`-th turn's id and arm.
-    fn at(&self, i: usize) -> (Option<u8>, &Arm) {
-        let (id, arm) = &self.turns[i % self.turns.len()];
-        (*id, arm)
-    }
 }
 
 /// A link that sags under its own weight, on the truth side only: the end of link `link`
@@ -392,7 +249,7 @@ pub fn simulate(truth: &Arm, opts: &Options, rng: &mut SimRng) -> Result<Simulat
         return Err(SimError::TooFewRows(opts.kind.name()));
     }
     let lim = limits(truth);
-    let turns = Turns::new(truth, &opts.probes)?;
+    let turns = Turns::new(truth, &opts.probes).map_err(SimError::NoProbe)?;
     let identity = Frame {
         rotation: [1.0, 0.0, 0.0, 0.0],
         translation: [0.0; 3],
@@ -495,209 +352,6 @@ fn group_sizes(count: usize, size: usize) -> Vec<usize> {
     (0..groups).map(|g| base + usize::from(g < extra)).collect()
 }
 
-/// Poses putting the ball on `target` (missed by the noise), from random starts.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn probe_point(
-    truth: &Arm,
-    lim: &Limits,
-    target: &Vector3<f64>,
-    noise_mm: f64,
-    tc: f64,
-    rng: &mut SimRng,
-) -> Option<Vec<f64>> {
-    let aim = target + Vector3::new(normal(rng), normal(rng), normal(rng)) * noise_mm;
-    for _ in 0..40 {
-        let start = random_pose(lim, rng);
-        if let Some(th) = inverse(truth, &aim, &start, tc, lim) {
-            return Some(th);
-        }
-    }
-    None
-}
-
-/// A cone probed `size` times, the rows taking the probes in turn (how the probes' vectors
-/// are told apart: each puts its ball in the same cone).
-fn spat_group(
-    turns: &Turns,
-    lim: &Limits,
-    size: usize,
-    noise_mm: f64,
-    group: i64,
-    temp: &mut dyn FnMut(&mut SimRng) -> f64,
-    rng: &mut SimRng,
-) -> Option<Vec<Row>> {
-    let truth = turns.at(0).1;
-    'placement: for _ in 0..20 {
-        let centre = forward::forward(truth, &random_pose(lim, rng), forward::REFERENCE_TEMP_C).p;
-        let mut rows = Vec::with_capacity(size);
-        for i in 0..size {
-            let (probe, mounted) = turns.at(i);
-            let tc = temp(rng);
-            let Some(th) = probe_point(mounted, lim, &centre, noise_mm, tc, rng) else {
-                continue 'placement;
-            };
-            let mut r = row(Kind::Spat, group, &th, None, tc);
-            r.probe = probe;
-            rows.push(r);
-        }
-        return Some(rows);
-    }
-    None
-}
-
-#[allow(clippy::too_many_arguments)]
-fn length_group(
-    turns: &Turns,
-    lim: &Limits,
-    size: usize,
-    bar: f64,
-    noise_mm: f64,
-    group: i64,
-    temp: &mut dyn FnMut(&mut SimRng) -> f64,
-    rng: &mut SimRng,
-) -> Option<Vec<Row>> {
-    let na = size.div_ceil(2);
-    let truth = turns.at(0).1;
-    'placement: for _ in 0..40 {
-        let a = forward::forward(truth, &random_pose(lim, rng), forward::REFERENCE_TEMP_C).p;
-        let dir = Vector3::new(normal(rng), normal(rng), normal(rng)).normalize();
-        let b = a + dir * bar;
-        let mut rows = Vec::with_capacity(size);
-        for i in 0..size {
-            let (end, centre) = if i < na { (End::A, &a) } else { (End::B, &b) };
-            let (probe, mounted) = turns.at(i);
-            let tc = temp(rng);
-            let Some(th) = probe_point(mounted, lim, centre, noise_mm, tc, rng) else {
-                continue 'placement;
-            };
-            let mut r = row(Kind::Length, group, &th, Some(end), tc);
-            r.length_mm = Some(bar);
-            r.probe = probe;
-            rows.push(r);
-        }
-        return Some(rows);
-    }
-    None
-}
-
-/// A row at the continuous true angles: the caller reads them through the encoders.
-pub(crate) fn row(kind: Kind, group: i64, th: &[f64], end: Option<End>, tc: f64) -> Row {
-    Row {
-        kind,
-        group,
-        theta: th.to_vec(),
-        xyz: None,
-        end,
-        length_mm: None,
-        sphere: None,
-        temp_c: tc,
-        probe: None,
-        line: 0,
-        file: None,
-    }
-}
-
-/// A small, well-spread, noise-free data set of the same kinds (and temperatures) as `like`,
-/// made with `arm`: what identifiability can reach with good poses, to tell a degenerate pose
-/// set from a structural limit of the data's kinds.
-pub fn design_like(arm: &Arm, like: &Dataset, seed: u64) -> Dataset {
-    let mut rng = rng(seed);
-    let temps: Vec<f64> = like.rows.iter().map(|r| r.temp_c).collect();
-    let lim = limits(arm);
-    let mut k = 0usize;
-    let mut next_temp = |_: &mut SimRng| {
-        k += 1;
-        temps[(k * 7919) % temps.len()]
-    };
-    let turns = Turns::like(arm, like);
-    let mut rows = Vec::new();
-    if like.rows.iter().any(|r| r.kind == Kind::Point) {
-        for i in 0..150 {
-            let (probe, mounted) = turns.at(i);
-            let th = random_pose(&lim, &mut rng);
-            let tc = next_temp(&mut rng);
-            let p = forward::forward(mounted, &th, tc).p;
-            rows.push(Row {
-                kind: Kind::Point,
-                group: 0,
-                theta: th,
-                xyz: Some([p.x, p.y, p.z]),
-                end: None,
-                length_mm: None,
-                sphere: None,
-                temp_c: tc,
-                probe,
-                line: 0,
-                file: None,
-            });
-        }
-    }
-    if like.rows.iter().any(|r| r.kind == Kind::Spat) {
-        for g in 0..6 {
-            if let Some(made) = spat_group(&turns, &lim, 6, 0.0, 1000 + g, &mut next_temp, &mut rng)
-            {
-                rows.extend(made);
-            }
-        }
-    }
-    let bars: Vec<f64> = like.layout().length.iter().map(|g| g.length_mm).collect();
-    for (g, bar) in bars
-        .iter()
-        .cycle()
-        .take(if bars.is_empty() { 0 } else { 6 })
-        .enumerate()
-    {
-        if let Some(made) = length_group(
-            &turns,
-            &lim,
-            6,
-            *bar,
-            0.0,
-            2000 + g as i64,
-            &mut next_temp,
-            &mut rng,
-        ) {
-            rows.extend(made);
-        }
-    }
-    let spheres: Vec<f64> = like.layout().sphere.iter().map(|g| g.diameter_mm).collect();
-    for (g, d) in spheres
-        .iter()
-        .cycle()
-        .take(if spheres.is_empty() { 0 } else { 6 })
-        .enumerate()
-    {
-        let test = sphere::Test {
-            points: 25,
-            diameter_mm: *d,
-            articulations: None,
-            noise_mm: 0.0,
-        };
-        if let Some(made) = sphere::group(
-            turns.at(g),
-            &lim,
-            &test,
-            3000 + g as i64,
-            &mut next_temp,
-            &mut rng,
-        ) {
-            rows.extend(made);
-        }
-    }
-    // Spat, length and sphere rows are read by the encoders, as `simulate` records them (point rows
-    // of the design keep their continuous angles).
-    for r in rows.iter_mut().filter(|r| r.kind != Kind::Point) {
-        r.theta = quantise(arm, &r.theta);
-    }
-    Dataset {
-        rows,
-        dof: arm.dof(),
-        has_temperature: like.has_temperature,
-        warnings: Vec::new(),
-        source: "(design)".into(),
-    }
-}
-
 #[cfg(test)]
 mod tests {
 
@@ -723,6 +377,7 @@ mod tests {
         assert!((sd - 1.0408).abs() < 0.02, "{sd}");
     }
     use super::*;
+    use crate::rng::rng;
 
     #[test]
     fn same_seed_same_data() {

@@ -1,7 +1,9 @@
 //! Bad data gets a plain error, never a silent wrong fit.
 
 use armcal::data::{Dataset, Kind, Row};
-use armcal::fit::calib::{calibrate, CalibError, Options};
+use armcal::fit::calib::calibrate;
+use armcal::fit::error::CalibError;
+use armcal::fit::options::Options;
 use armcal::rng::rng;
 use armcal::sim::{self, perturb, random_pose, simulate};
 use quatarm_ref::arm::Arm;

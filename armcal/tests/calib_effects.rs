@@ -2,8 +2,9 @@
 //! right terms, it is recovered within its uncertainty and the model predicts the truth.
 
 use armcal::data::Kind;
-use armcal::fit::calib::{calibrate, Options};
+use armcal::fit::calib::calibrate;
 use armcal::fit::ident::Why;
+use armcal::fit::options::Options;
 use armcal::params::{Link, Param, Terms};
 use armcal::rng::rng;
 use armcal::sim::{self, perturb, random_pose, simulate};

@@ -1,7 +1,7 @@
 //! MUKCa real data under the authors' protocol: the nominal figures the authors publish are
 //! reproduced exactly by the scoring, and the calibration stays near its measured result.
 
-use armcal::fit::calib::Options;
+use armcal::fit::options::Options;
 use armcal::mukca;
 
 #[test]

@@ -5,8 +5,11 @@
 mod common;
 
 use armcal::data::{Dataset, Kind};
-use armcal::fit::calib::{self, Options, Prior};
+use armcal::fit::calib;
 use armcal::fit::fleet_prior::{self, Fallback};
+use armcal::fit::options::Options;
+use armcal::fit::priors;
+use armcal::fit::priors::Prior;
 use armcal::fit::residuals::compare_aligned;
 use armcal::params::ParamExt as _;
 use armcal::rng::rng;
@@ -54,7 +57,7 @@ fn fresh_error(model: &Arm, truth: &Arm) -> f64 {
     compare_aligned(model, truth, &poses).rms_um
 }
 
-fn with_prior(unknowns: Vec<(armcal::params::Param, calib::Gaussian)>) -> Options {
+fn with_prior(unknowns: Vec<(armcal::params::Param, priors::Gaussian)>) -> Options {
     Options {
         prior: Some(Prior {
             unknowns,
@@ -94,7 +97,7 @@ fn the_fleet_prior_calibrates_a_unit_from_few_rows_better() {
     // The same spreads centred on the nominal arm: what the mean adds.
     let centred: Vec<_> = gaussians
         .iter()
-        .map(|(p, g)| (*p, calib::Gaussian { mean: 0.0, ..*g }))
+        .map(|(p, g)| (*p, priors::Gaussian { mean: 0.0, ..*g }))
         .collect();
     let at_nominal = calib::calibrate(&nominal, &data, &with_prior(centred)).unwrap();
     let (e_plain, e_fleet, e_nominal) = (
@@ -129,7 +132,7 @@ fn a_prior_the_data_contradict_is_dropped() {
     let truth = unit(&nominal, 6);
     let data = points(&truth, 200, 0.005, 307);
     // A prior 3 mm off on the probe's x, with a 0.01 mm spread: the data fix it to microns.
-    let wrong = calib::Gaussian {
+    let wrong = priors::Gaussian {
         mean: truth.probe.error[0] + 3.0,
         sd: 0.01,
     };

@@ -5,7 +5,8 @@
 mod common;
 
 use armcal::data::Kind;
-use armcal::fit::calib::{calibrate, Options};
+use armcal::fit::calib::calibrate;
+use armcal::fit::options::Options;
 use armcal::rng::rng;
 use armcal::sim::{self, perturb, simulate};
 use common::{armcal, armcal_ok, workdir, write_truth};

@@ -2,7 +2,9 @@
 //! from its data alone, and compare the calibrated model with the truth on fresh poses.
 
 use armcal::data::{Dataset, Kind};
-use armcal::fit::calib::{calibrate, Fit, Options};
+use armcal::fit::calib::calibrate;
+use armcal::fit::finish::Fit;
+use armcal::fit::options::Options;
 use armcal::fit::residuals::compare_aligned;
 use armcal::params::ParamExt as _;
 use armcal::rng::rng;

@@ -3,7 +3,7 @@
 //! and on separate recordings of the same arm — and where nothing holds it says none.
 
 use armcal::diagnose::{self, FoldChoice};
-use armcal::fit::calib::Options;
+use armcal::fit::options::Options;
 use armcal::mukca;
 use armcal::params::Terms;
 

@@ -172,7 +172,7 @@ fn the_pose_term_is_estimated_from_sessions_and_covers_a_new_one() {
         }
     }
     let data = data.unwrap();
-    let opts = armcal::fit::calib::Options::default();
+    let opts = armcal::fit::options::Options::default();
     let fit = armcal::fit::calib::calibrate(&nominal, &data, &opts).unwrap();
     let h = armcal::fit::holdout::validate(
         &nominal,

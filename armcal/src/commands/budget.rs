@@ -1,7 +1,7 @@
 //! The uncertainty budget options of `calibrate` and `diagnose -o`, and the budget they write.
 
 use armcal::data::Dataset;
-use armcal::fit::calib::Fit;
+use armcal::fit::finish::Fit;
 use armcal::fit::holdout::Holdout;
 use armcal::uncertainty::estimate::{self, Settings};
 use armcal::uncertainty::extrapolation::Support;

@@ -1,8 +1,11 @@
 //! `armcal calibrate`: identify an arm's parameters from measured data.
 
 use anyhow::Context;
-use armcal::fit::calib::{self, Prior};
+use armcal::fit::calib;
+use armcal::fit::finish::Fit;
 use armcal::fit::holdout;
+use armcal::fit::options::Options;
+use armcal::fit::priors::{Prior, Ridge};
 use armcal::fit::report;
 use armcal::fit::residuals::{residuals, summarise};
 use armcal::params::Terms;
@@ -215,12 +218,12 @@ fn options(
     a: &Args,
     terms: &Terms,
     fleet: Option<&armcal::fit::fleet_prior::FleetPrior>,
-) -> calib::Options {
-    let mut opts = calib::Options {
+) -> Options {
+    let mut opts = Options {
         terms: terms.clone(),
         allow_degenerate: a.allow_degenerate,
         significance: a.significance,
-        ..calib::Options::default()
+        ..Options::default()
     };
     opts.lm.max_iterations = a.max_iter as usize;
     if a.prior_angle.is_some() || fleet.is_some() {
@@ -232,7 +235,7 @@ fn options(
         });
     }
     if let Some(lambda) = a.ridge {
-        opts.ridge = Some(calib::Ridge { lambda });
+        opts.ridge = Some(Ridge { lambda });
     }
     opts
 }
@@ -242,7 +245,7 @@ fn options(
 fn prior_report(
     a: &Args,
     fleet: Option<armcal::fit::fleet_prior::FleetPrior>,
-    fit: &calib::Fit,
+    fit: &Fit,
 ) -> Option<report::PriorReport> {
     let mut rule = Vec::new();
     if let (Some(angle), Some(length)) = (a.prior_angle, a.prior_length) {

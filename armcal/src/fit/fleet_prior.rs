@@ -5,7 +5,7 @@
 //! assembly habit) and scatter about them. From N calibration files of that design, each
 //! geometric unknown's error relative to the nominal arm is averaged over the units, and its
 //! sample standard deviation is the spread: a Gaussian prior N(mean, sd²) per unknown for
-//! [`calib::Options::prior`](crate::fit::calib::Options). A calibration from few rows then pulls its
+//! [`Options::prior`](crate::fit::options::Options). A calibration from few rows then pulls its
 //! weakly determined directions towards the fleet's typical errors instead of towards the
 //! nominal arm.
 //!
@@ -18,7 +18,7 @@
 //! floating-point value never lands exactly on it. Counting such a zero as a measurement would
 //! pull the mean towards nominal and shrink the spread.
 
-use crate::fit::calib::Gaussian;
+use crate::fit::priors::Gaussian;
 use crate::params::{geometric_params, Param, ParamExt};
 use quatarm_ref::arm::Arm;
 use serde::Serialize;
@@ -243,7 +243,7 @@ fn shown(p: &Path) -> String {
 }
 
 impl FleetPrior {
-    /// The per-unknown Gaussians for [`calib::Prior::unknowns`](crate::fit::calib::Prior): every
+    /// The per-unknown Gaussians for [`Prior::unknowns`](crate::fit::priors::Prior): every
     /// entry without a fallback. They are increments from the nominal arm, so the calibration
     /// must start from it.
     pub fn gaussians(&self) -> Vec<(Param, Gaussian)> {

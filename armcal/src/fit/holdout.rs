@@ -8,7 +8,9 @@
 //! instrument frame fitted on the other folds. Sessions are held out whole by [`by_group`].
 
 use crate::data::{Dataset, Kind};
-use crate::fit::calib::{calibrate, CalibError, Options};
+use crate::fit::calib::calibrate;
+use crate::fit::error::CalibError;
+use crate::fit::options::Options;
 use crate::fit::residuals::{residuals, summarise, Residuals, Summary};
 use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;

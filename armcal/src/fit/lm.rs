@@ -200,15 +200,7 @@ pub fn solve<P: Problem>(
         }
         // Try damped steps until one lowers the cost.
         loop {
-            let mut m = a.clone();
-            for i in 0..n {
-                m[(i, i)] = if scale[i] > 0.0 {
-                    m[(i, i)] + lambda
-                } else {
-                    1.0
-                };
-            }
-            let Some(ch) = Cholesky::new(m) else {
+            let Some(ch) = Cholesky::new(damped(&a, &scale, lambda)) else {
                 lambda *= 10.0;
                 if lambda > 1e16 {
                     break 'solve Termination::Unfactorable;
@@ -229,14 +221,7 @@ pub fn solve<P: Problem>(
                 } else {
                     0.0
                 };
-                lambda *= if rho > 0.75 {
-                    0.2
-                } else if rho > 0.25 {
-                    1.0
-                } else {
-                    3.0
-                };
-                lambda = lambda.max(1e-12);
+                lambda = after_success(lambda, rho);
                 let cost_small = actual <= options.cost_tolerance * normal.cost;
                 state = trial;
                 normal = problem.normal(&state);
@@ -270,6 +255,29 @@ pub fn solve<P: Problem>(
         exhausted: reason == Termination::Budget,
         reason,
     }
+}
+
+/// The scaled normal matrix `a` damped by `lambda` on its diagonal; an unknown with no effect
+/// (scale 0) gets a 1 there, so that it stays put.
+fn damped(a: &DMatrix<f64>, scale: &[f64], lambda: f64) -> DMatrix<f64> {
+    let mut m = a.clone();
+    for (i, &sc) in scale.iter().enumerate() {
+        m[(i, i)] = if sc > 0.0 { m[(i, i)] + lambda } else { 1.0 };
+    }
+    m
+}
+
+/// The damping after a step that lowered the cost, from its gain ratio `rho` (actual against
+/// predicted reduction): less damping where the linear model predicted well, more where not.
+fn after_success(lambda: f64, rho: f64) -> f64 {
+    let factor = if rho > 0.75 {
+        0.2
+    } else if rho > 0.25 {
+        1.0
+    } else {
+        3.0
+    };
+    (lambda * factor).max(1e-12)
 }
 
 /// Marquardt's scaling of a symmetric positive semi-definite matrix `a`: the factors

@@ -2,7 +2,7 @@
 //! could not determine — as text a person reads, or JSON a program reads (`--json`).
 
 use crate::data::{Dataset, Kind};
-use crate::fit::calib::Fit;
+use crate::fit::finish::Fit;
 use crate::fit::holdout::Holdout;
 use crate::fit::ident::{Fixed, Why};
 use crate::fit::residuals::Summary;
@@ -127,9 +127,35 @@ pub struct OutputReport {
     pub table: Option<String>,
 }
 
-/// A whole calibration report.
+/// A section a higher layer adds to the calibration's report, written in the text after the
+/// prior's section and in the JSON under `uncertainty`: the uncertainty budget
+/// (`crate::uncertainty::report::BudgetReport`) is one. The fit names no such section, so
+/// that it stands below the uncertainty; the command that has both puts them together.
+pub trait Section: Serialize {
+    /// The section's text, appended to `s`.
+    fn text(&self, s: &mut String);
+}
+
+/// No section: the report of a fit alone.
+#[derive(Clone, Copy, Debug)]
+pub enum NoSection {}
+
+impl Serialize for NoSection {
+    fn serialize<S: serde::Serializer>(&self, _: S) -> Result<S::Ok, S::Error> {
+        match *self {}
+    }
+}
+
+impl Section for NoSection {
+    fn text(&self, _: &mut String) {
+        match *self {}
+    }
+}
+
+/// A whole calibration report, with the section `U` a higher layer may add
+/// (`uncertainty`).
 #[derive(Clone, Debug, Serialize)]
-pub struct Report {
+pub struct Report<U = NoSection> {
     /// The data.
     pub data: DataInfo,
     /// The arm's name.
@@ -170,9 +196,10 @@ pub struct Report {
     /// What the data determine poorly ([`weak_results`]): a reader must not take these
     /// estimates for measured errors of the arm.
     pub weak: Vec<String>,
-    /// The uncertainty budget written with the calibration (`[uncertainty]`).
+    /// The uncertainty budget written with the calibration (`[uncertainty]`), added by the
+    /// command that computes it.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub uncertainty: Option<crate::uncertainty::report::BudgetReport>,
+    pub uncertainty: Option<U>,
     /// The prior or penalty the fit used besides the data (none: plain least squares).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub prior: Option<PriorReport>,
@@ -191,7 +218,7 @@ pub struct PriorReport {
     pub dropped: Vec<DroppedPrior>,
 }
 
-/// A per-unknown prior the data contradicted ([`crate::fit::calib::PRIOR_CONFLICT_SIGMAS`]).
+/// A per-unknown prior the data contradicted ([`crate::fit::priors::PRIOR_CONFLICT_SIGMAS`]).
 #[derive(Clone, Debug, Serialize)]
 pub struct DroppedPrior {
     /// The calibration-file key.
@@ -308,14 +335,14 @@ fn held_report(f: &Fixed, fit: &Fit, has_points: bool) -> HeldReport {
     }
 }
 
-/// Builds the report of a fit.
-pub fn build(
+/// Builds the report of a fit, its section `U` left empty.
+pub fn build<U>(
     fit: &Fit,
     data: &Dataset,
     before: Summary,
     after: Summary,
     holdout: Option<(&str, &Holdout)>,
-) -> Report {
+) -> Report<U> {
     let layout = data.layout();
     let has_points = !layout.points.is_empty();
     let mut parameters = Vec::new();
@@ -504,38 +531,45 @@ fn spread_line(s: &mut String, label: &str, sum: &Summary) {
     }
 }
 
-impl Report {
+impl DataInfo {
+    /// The rows of each kind in words (`400 point rows`, `30 spat rows in 3 groups`).
+    fn kinds(&self) -> Vec<String> {
+        let mut kinds = Vec::new();
+        if self.point_rows > 0 {
+            kinds.push(format!("{} point rows", self.point_rows));
+        }
+        if self.spat_rows > 0 {
+            kinds.push(format!(
+                "{} spat rows in {} groups",
+                self.spat_rows, self.spat_groups
+            ));
+        }
+        if self.length_rows > 0 {
+            kinds.push(format!(
+                "{} length rows at {} bar positions",
+                self.length_rows, self.length_groups
+            ));
+        }
+        if self.sphere_rows > 0 {
+            kinds.push(format!(
+                "{} sphere rows at {} sphere positions",
+                self.sphere_rows, self.sphere_groups
+            ));
+        }
+        kinds
+    }
+}
+
+impl<U: Section> Report<U> {
     /// The report as text.
     pub fn text(&self) -> String {
         let mut s = String::new();
         let d = &self.data;
-        let mut kinds = Vec::new();
-        if d.point_rows > 0 {
-            kinds.push(format!("{} point rows", d.point_rows));
-        }
-        if d.spat_rows > 0 {
-            kinds.push(format!(
-                "{} spat rows in {} groups",
-                d.spat_rows, d.spat_groups
-            ));
-        }
-        if d.length_rows > 0 {
-            kinds.push(format!(
-                "{} length rows at {} bar positions",
-                d.length_rows, d.length_groups
-            ));
-        }
-        if d.sphere_rows > 0 {
-            kinds.push(format!(
-                "{} sphere rows at {} sphere positions",
-                d.sphere_rows, d.sphere_groups
-            ));
-        }
         let _ = writeln!(s, "calibration of {} from {}", self.arm, d.file);
         let _ = writeln!(
             s,
             "  data: {} ({} equations)",
-            kinds.join(", "),
+            d.kinds().join(", "),
             d.equations
         );
         for note in &self.data_kinds {

@@ -4,13 +4,13 @@
 
 use super::{header::Provenance, residuals, Document, Tone};
 use crate::data::Dataset;
-use crate::fit::calib::Fit;
+use crate::fit::finish::Fit;
 use crate::fit::holdout::Holdout;
-use crate::fit::report::Report;
+use crate::fit::report::{Report, Section};
 
 /// The page.
 pub fn page(
-    rep: &Report,
+    rep: &Report<impl Section>,
     fit: &Fit,
     data: &Dataset,
     validation: Option<&Holdout>,

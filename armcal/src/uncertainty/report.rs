@@ -178,3 +178,10 @@ impl BudgetReport {
         }
     }
 }
+
+/// The budget is the section of the calibration report that the fit leaves to a higher layer.
+impl crate::fit::report::Section for BudgetReport {
+    fn text(&self, s: &mut String) {
+        BudgetReport::text(self, s);
+    }
+}

@@ -8,8 +8,10 @@
 //! same random pose, so the elbow and wrist stay in one posture within a set and differ
 //! between sets, as the standard's "articulations" do.
 
-use super::{inverse, normal, random_pose, row, Limits, SimRng};
+use super::groups::row;
+use super::poses::{inverse, random_pose, Limits};
 use crate::data::{Kind, Row, Touch};
+use crate::rng::{normal, SimRng};
 use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;
 use quatarm_ref::forward;
