@@ -6,7 +6,7 @@ mod common;
 
 use armcal::data::{Dataset, Kind};
 use armcal::diagnose::level::test_level;
-use armcal::fit::calib::Options;
+use armcal::fit::options::Options;
 use armcal::params::Effect;
 use armcal::sim;
 use quatarm_ref::arm::Arm;

@@ -258,7 +258,7 @@ fn with_two_sessions_the_pose_terms_scale_is_the_fleets() {
         }
     }
     let data = data.unwrap();
-    let opts = armcal::fit::calib::Options::default();
+    let opts = armcal::fit::options::Options::default();
     let fit = armcal::fit::calib::calibrate(&nominal, &data, &opts).unwrap();
     let h = armcal::fit::holdout::validate(
         &nominal,

@@ -348,7 +348,7 @@ fn test_level(
     if gravity.is_empty() {
         return;
     }
-    let calib = armcal::fit::calib::Options {
+    let calib = armcal::fit::options::Options {
         design_check: false,
         allow_degenerate: true,
         ..opts.calib.clone()

@@ -21,8 +21,8 @@
 //!   next link's frame turned) is tested with that part held.
 
 use crate::data::Dataset;
-use crate::fit::calib::{structural, unknowns};
 use crate::fit::ident::{Fixed, Identifiability, Why};
+use crate::fit::structure::{structural, unknowns};
 use crate::params::{Effect, Param, ParamExt, Terms};
 use quatarm_ref::arm::Arm;
 

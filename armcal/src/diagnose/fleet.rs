@@ -61,7 +61,9 @@ use super::candidates::{self, Candidates};
 use super::select::{compare, Confirmation};
 use super::{Cause, Options as DiagOptions};
 use crate::data::Dataset;
-use crate::fit::calib::{self, CalibError, Fit};
+use crate::fit::calib::{self};
+use crate::fit::error::CalibError;
+use crate::fit::finish::Fit;
 use crate::fit::holdout::{self, Folds, Holdout};
 use crate::params::{Effect, Terms};
 use crate::progress::{Observer, Silent};
@@ -464,10 +466,10 @@ impl Work<'_> {
     }
 
     /// The unit's test of `e` added to its current model.
-    fn test(&self, start: &Arm, inner: &calib::Options, e: Effect) -> UnitTest {
+    fn test(&self, start: &Arm, inner: &crate::fit::options::Options, e: Effect) -> UnitTest {
         let mut trial = self.effects.clone();
         trial.push(e);
-        let o = calib::Options {
+        let o = crate::fit::options::Options {
             terms: Terms::with(&trial),
             ..inner.clone()
         };
@@ -485,8 +487,8 @@ impl Work<'_> {
 /// The calibration settings of every unit's geometric model (and of its refits with
 /// candidates): the data's own rank is trusted and what it cannot determine is held, since a
 /// unit's sessions are what they are.
-pub fn geometric_options(opts: &Options) -> calib::Options {
-    calib::Options {
+pub fn geometric_options(opts: &Options) -> crate::fit::options::Options {
+    crate::fit::options::Options {
         terms: Terms::geometric(),
         design_check: false,
         allow_degenerate: true,
@@ -508,7 +510,7 @@ pub struct Geometric {
 
 /// The geometric model of `data` with `inner` ([`geometric_options`]); the fleet diagnosis
 /// and the same-arm test ([`super::same_arm`]) both start from it.
-pub fn geometric(start: &Arm, data: &Dataset, inner: &calib::Options) -> Geometric {
+pub fn geometric(start: &Arm, data: &Dataset, inner: &crate::fit::options::Options) -> Geometric {
     let folds = holdout::by_group(data);
     let baseline = (folds.len() >= 2).then(|| holdout::validate(start, data, inner, &folds));
     Geometric {
@@ -610,7 +612,7 @@ pub fn diagnose_arms_observed(
 struct Context<'a> {
     start: &'a Arm,
     /// The geometric model's settings ([`geometric_options`]).
-    inner: &'a calib::Options,
+    inner: &'a crate::fit::options::Options,
     /// Whether each arm's sessions allow the pooled test.
     arm_tested: &'a [bool],
     /// Arms.
@@ -648,7 +650,7 @@ fn start_work<'a>(
     units: &'a [UnitData],
     arm_of: &[usize],
     opts: &Options,
-    inner: &calib::Options,
+    inner: &crate::fit::options::Options,
     obs: &mut dyn Observer,
 ) -> (Vec<Work<'a>>, Vec<Option<Fit>>) {
     let mut work: Vec<Work> = Vec::new();

@@ -25,7 +25,7 @@
 use super::fleet::{geometric_options, holm, Fleet, Options, UnitData};
 use super::pooling::{self, Arm as PooledValue, Design};
 use crate::data::Dataset;
-use crate::fit::calib::CalibError;
+use crate::fit::error::CalibError;
 use crate::fit::holdout::by_group;
 use crate::params::Effect;
 use crate::stats::{min_sign_p, sign_test_p, Paired, MIN_UNITS};
@@ -234,7 +234,7 @@ pub fn pool_arms(
 fn held_out_gains(
     start: &Arm,
     data: &[&Dataset],
-    calib: &crate::fit::calib::Options,
+    calib: &crate::fit::options::Options,
     alpha: f64,
     p: &mut PooledEffect,
 ) -> Result<(), CalibError> {

@@ -16,7 +16,9 @@
 //! value), since a recording's tool is its own.
 
 use crate::data::Dataset;
-use crate::fit::calib::{self, CalibError, Fit};
+use crate::fit::calib::{self};
+use crate::fit::error::CalibError;
+use crate::fit::finish::Fit;
 use crate::fit::residuals::{compare_aligned, Spread};
 use crate::params::Param;
 use quatarm_ref::arm::Arm;
@@ -43,13 +45,17 @@ pub fn tip_difference(a: &Arm, b: &Arm, poses: &[(Vec<f64>, f64)]) -> Spread {
 /// offset and tilt: an offset across the last axis is indistinguishable from that joint's zero
 /// offset, which identifiability keeps in its place, so holding the joint would leave part of
 /// a new tool unfitted.
-pub fn refit_probe(arm: &Arm, data: &Dataset, opts: &calib::Options) -> Result<Fit, CalibError> {
-    let o = calib::Options {
+pub fn refit_probe(
+    arm: &Arm,
+    data: &Dataset,
+    opts: &crate::fit::options::Options,
+) -> Result<Fit, CalibError> {
+    let o = crate::fit::options::Options {
         terms: crate::params::Terms::geometric(),
         ..opts.clone()
     };
     let last = arm.dof().saturating_sub(1);
-    let mut hold: Vec<Param> = calib::unknowns(arm, &o.terms, data)
+    let mut hold: Vec<Param> = crate::fit::structure::unknowns(arm, &o.terms, data)
         .into_iter()
         .filter(|p| match p {
             Param::ProbeError(..) | Param::FrameRotation(_) | Param::FrameTranslation(_) => false,
@@ -58,7 +64,7 @@ pub fn refit_probe(arm: &Arm, data: &Dataset, opts: &calib::Options) -> Result<F
         })
         .collect();
     hold.extend(o.hold.iter().copied());
-    calib::calibrate(arm, data, &calib::Options { hold, ..o })
+    calib::calibrate(arm, data, &crate::fit::options::Options { hold, ..o })
 }
 
 #[cfg(test)]
@@ -104,10 +110,10 @@ mod tests {
         )
         .unwrap()
         .data;
-        let opts = calib::Options {
+        let opts = crate::fit::options::Options {
             design_check: false,
             allow_degenerate: true,
-            ..calib::Options::default()
+            ..crate::fit::options::Options::default()
         };
         let fit = refit_probe(&truth, &d, &opts).unwrap();
         // The arm before its last joint is kept; the new tool is taken whole (the part of it

@@ -27,7 +27,9 @@
 //! changes.
 
 use crate::data::Dataset;
-use crate::fit::calib::{self, CalibError, Fit};
+use crate::fit::calib::{self};
+use crate::fit::error::CalibError;
+use crate::fit::finish::Fit;
 use crate::fit::holdout::by_group;
 use crate::params::{Effect, Param, ParamExt, Terms};
 use crate::stats::MIN_UNITS;
@@ -95,7 +97,7 @@ fn at_tilt(start: &Arm, tilt: [f64; 2]) -> Arm {
 fn fit_at(
     start: &Arm,
     data: &Dataset,
-    opts: &calib::Options,
+    opts: &crate::fit::options::Options,
     tilt: [f64; 2],
 ) -> Result<(Fit, f64), CalibError> {
     let fit = calib::calibrate(&at_tilt(start, tilt), data, opts)?;
@@ -107,7 +109,7 @@ fn fit_at(
 fn profile(
     start: &Arm,
     data: &Dataset,
-    opts: &calib::Options,
+    opts: &crate::fit::options::Options,
     from: [f64; 2],
 ) -> Result<[f64; 2], CalibError> {
     let h = PROFILE_STEP;
@@ -155,7 +157,7 @@ fn profile(
 pub fn test_level(
     start: &Arm,
     data: &Dataset,
-    opts: &calib::Options,
+    opts: &crate::fit::options::Options,
     gravity: &[Effect],
 ) -> Result<Level, CalibError> {
     let folds = by_group(data);
@@ -174,7 +176,7 @@ pub fn test_level(
     }
     let mut hold = opts.hold.clone();
     hold.extend([Param::Tilt(0, 0), Param::Tilt(0, 1)]);
-    let o = calib::Options {
+    let o = crate::fit::options::Options {
         terms: Terms::with(gravity),
         hold,
         ..opts.clone()

@@ -17,9 +17,10 @@
 //! reported ([`super::select`]).
 
 use crate::data::Dataset;
-use crate::fit::calib::{Fit, Problem, State};
+use crate::fit::finish::Fit;
 use crate::fit::holdout::Folds;
 use crate::fit::lm::unit_diagonal;
+use crate::fit::problem::{Problem, State};
 use crate::fit::residuals::Rigid;
 use crate::params::Param;
 use nalgebra::{DMatrix, DVector, SymmetricEigen};

@@ -39,7 +39,9 @@ pub mod unexplained;
 pub use crate::stats;
 
 use crate::data::Dataset;
-use crate::fit::calib::{self, CalibError, Fit};
+use crate::fit::calib::{self};
+use crate::fit::error::CalibError;
+use crate::fit::finish::Fit;
 use crate::fit::holdout::{self, Folds, Holdout};
 use crate::fit::probes::Mounted;
 use crate::fit::residuals::{residuals, summarise, Summary};
@@ -67,7 +69,7 @@ pub enum FoldChoice {
 #[derive(Clone, Debug)]
 pub struct Options {
     /// The calibration settings of every fit (its `terms` are set by the diagnosis).
-    pub calib: calib::Options,
+    pub calib: crate::fit::options::Options,
     /// Held-out folds.
     pub folds: FoldChoice,
     /// Selection thresholds.
@@ -83,7 +85,7 @@ pub struct Options {
 impl Default for Options {
     fn default() -> Options {
         Options {
-            calib: calib::Options::default(),
+            calib: crate::fit::options::Options::default(),
             folds: FoldChoice::KFold {
                 k: 5,
                 seed: 0x0f01d,
@@ -209,13 +211,13 @@ pub fn diagnose(start: &Arm, data: &Dataset, opts: &Options) -> Result<Diagnosis
                 .into(),
         ));
     }
-    let geometric = calib::Options {
+    let geometric = crate::fit::options::Options {
         terms: crate::params::Terms::geometric(),
         ..opts.calib.clone()
     };
     let base_fit = calib::calibrate(start, data, &geometric)?;
     // The design has been checked once; the extended fits and the folds go on without.
-    let inner = calib::Options {
+    let inner = crate::fit::options::Options {
         design_check: false,
         allow_degenerate: true,
         ..geometric.clone()
@@ -275,7 +277,7 @@ pub fn diagnose(start: &Arm, data: &Dataset, opts: &Options) -> Result<Diagnosis
     let without = |e: Effect| -> Option<Holdout> {
         (named.len() > 1).then(|| {
             let others: Vec<Effect> = named.iter().copied().filter(|x| *x != e).collect();
-            let o = calib::Options {
+            let o = crate::fit::options::Options {
                 terms: crate::params::Terms::with(&others),
                 ..inner.clone()
             };

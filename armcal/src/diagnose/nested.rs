@@ -27,7 +27,8 @@
 
 use super::{diagnose, FoldChoice, Options};
 use crate::data::{Dataset, Kind};
-use crate::fit::calib::{CalibError, Fit};
+use crate::fit::error::CalibError;
+use crate::fit::finish::Fit;
 use crate::fit::residuals::residuals;
 use crate::params::Effect;
 use crate::stats::{min_sign_p, sign_test_p, Paired};

@@ -31,7 +31,8 @@
 
 use super::fleet::dersimonian_laird;
 use crate::data::Dataset;
-use crate::fit::calib::{self, CalibError};
+use crate::fit::calib::{self};
+use crate::fit::error::CalibError;
 use crate::params::{Effect, ParamExt, Terms};
 use crate::stats::{chi2_tail, t_tail};
 
@@ -187,7 +188,7 @@ pub fn pool(y: &[f64], se: &[f64], alpha: f64) -> Option<(Design, Vec<Arm>)> {
 pub fn estimate(
     start: &quatarm_ref::arm::Arm,
     data: &Dataset,
-    opts: &calib::Options,
+    opts: &crate::fit::options::Options,
     effect: Effect,
 ) -> Result<Option<(f64, f64)>, CalibError> {
     let params = effect.params();
@@ -195,7 +196,7 @@ pub fn estimate(
     if params.len() != 1 || folds.len() < crate::stats::MIN_UNITS {
         return Ok(None);
     }
-    let o = calib::Options {
+    let o = crate::fit::options::Options {
         terms: Terms::with(&[effect]),
         ..opts.clone()
     };
@@ -237,7 +238,7 @@ pub struct PooledFold {
 pub fn pooled_holdout(
     start: &quatarm_ref::arm::Arm,
     data: &Dataset,
-    opts: &calib::Options,
+    opts: &crate::fit::options::Options,
     effect: Effect,
     others: &[(f64, f64)],
     alpha: f64,
@@ -246,7 +247,7 @@ pub fn pooled_holdout(
     if params.len() != 1 {
         return Ok(Vec::new());
     }
-    let geometric = calib::Options {
+    let geometric = crate::fit::options::Options {
         terms: Terms::geometric(),
         ..opts.clone()
     };

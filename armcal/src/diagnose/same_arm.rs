@@ -43,7 +43,7 @@
 //! **Gauge.** Only what both recordings identify is compared. The unknowns the data cannot see
 //! (the base's place and turn for `length` and `spat` data, a rotation about the first axis)
 //! are held by the identifiability analysis ([`crate::fit::ident`]) at their start values, and a kept
-//! unknown then stands for itself plus the held ones it absorbs ([`crate::fit::calib::Fit::combination`]).
+//! unknown then stands for itself plus the held ones it absorbs ([`crate::fit::finish::Fit::combination`]).
 //! So a kept unknown is compared only when it is kept by both recordings and absorbs, in
 //! either, no unknown that the other one fits: otherwise the two numbers are estimates of
 //! different combinations. The frame is marginalised, never compared: each recording has its
@@ -56,7 +56,7 @@
 
 use super::fleet::{self, FleetError, UnitData};
 use crate::data::Dataset;
-use crate::fit::calib::Fit;
+use crate::fit::finish::Fit;
 use crate::fit::holdout::Holdout;
 use crate::params::Param;
 use crate::progress::{Observer, Silent};

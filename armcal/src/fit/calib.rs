@@ -31,14 +31,10 @@ use crate::progress::{Observer, Silent};
 use quatarm_ref::arm::Arm;
 use std::time::Instant;
 
-// The old paths of what moved out of this file, kept for `diagnose/` and `uncertainty/` only,
-// which other work changes at the same time: on merging, point their imports at the new
-// modules (`error`, `finish`, `options`, `problem`, `structure`) and delete these lines.
-pub use crate::fit::error::CalibError;
-pub use crate::fit::finish::Fit;
-pub use crate::fit::options::Options;
-pub use crate::fit::problem::{Problem, State};
-pub use crate::fit::structure::{structural, unknowns};
+use crate::fit::error::CalibError;
+use crate::fit::finish::Fit;
+use crate::fit::options::Options;
+use crate::fit::problem::{Problem, State};
 
 /// Calibrates `start` on `data`.
 pub fn calibrate(start: &Arm, data: &Dataset, opts: &Options) -> Result<Fit, CalibError> {

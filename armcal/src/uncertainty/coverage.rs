@@ -17,7 +17,8 @@
 use super::estimate::{self, Settings};
 use super::{propagate, u95};
 use crate::data::Kind;
-use crate::fit::calib::{self, Options};
+use crate::fit::calib::{self};
+use crate::fit::options::Options;
 use crate::fit::residuals::best_rigid;
 use crate::rng::SimRng;
 use crate::sim;

@@ -19,7 +19,7 @@
 
 use super::{misfit, propagate, Budget, QUANTISATION_COUNTS};
 use crate::data::{Dataset, Kind};
-use crate::fit::calib::Fit;
+use crate::fit::finish::Fit;
 use crate::fit::holdout::Holdout;
 use nalgebra::DMatrix;
 

@@ -44,7 +44,7 @@ pub enum BudgetError {
     NotListable(crate::params::Param),
     /// The calibration behind a budget failed.
     #[error(transparent)]
-    Fit(#[from] crate::fit::calib::CalibError),
+    Fit(#[from] crate::fit::error::CalibError),
     /// The simulated data of a coverage trial.
     #[error(transparent)]
     Sim(#[from] crate::sim::SimError),
