@@ -5,10 +5,10 @@ use super::figure::{Figure, Legend, Patterns};
 use super::{
     joint_args, joints_of, Describe, Draw, Effect, Family, Simulate, Term, TermsError, TipPoint,
 };
-use crate::params::{Link, Param};
 use crate::rng::SimRng;
 use nalgebra::Vector3;
 use quatarm::table::limits::GRAVITY;
+use quatarm_params::{Link, Param};
 use quatarm_ref::arm::Arm;
 use rand::Rng;
 use serde_json::Value;

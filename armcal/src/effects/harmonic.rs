@@ -8,10 +8,10 @@ use super::{
     Term, TermsError, TipPoint,
 };
 use crate::data::Dataset;
-use crate::params::{Link, Param};
 use crate::rng::SimRng;
 use nalgebra::Vector3;
 use quatarm::table::limits::HARMONIC_SUM;
+use quatarm_params::{Link, Param};
 use quatarm_ref::arm::{Arm, Harmonic as Entry};
 use rand::Rng;
 use serde_json::Value;

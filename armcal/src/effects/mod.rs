@@ -29,10 +29,10 @@ pub mod harmonic;
 pub mod thermal;
 pub mod wobble;
 
-use crate::params::{Link, Param};
 use crate::rng::SimRng;
 use figure::{Figure, Patterns};
 use nalgebra::{Matrix3, Vector3};
+use quatarm_params::{Link, Param};
 use quatarm_ref::arm::Arm;
 use quatarm_ref::forward::{tilt_axis, Chain};
 use serde_json::Value;
@@ -330,7 +330,7 @@ pub fn joint_args(
 
 /// The order H of a periodic term's `+KEY:J:H`: 1 to the highest a calibration file holds.
 pub fn order_arg(item: &str, key: &str, arg: Option<&&str>) -> Result<u32, TermsError> {
-    use crate::params::MAX_ORDER;
+    use quatarm_ref::calfile::MAX_HARMONIC_ORDER as MAX_ORDER;
     match arg.map(|s| s.parse::<u32>()) {
         Some(Ok(h)) if (1..=MAX_ORDER).contains(&h) => Ok(h),
         Some(Ok(h)) => Err(TermsError(format!(

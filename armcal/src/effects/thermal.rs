@@ -3,10 +3,10 @@
 
 use super::figure::{Figure, Legend, Patterns};
 use super::{joint_args, Describe, Draw, Effect, Family, Simulate, Term, TermsError, TipPoint};
-use crate::params::{Link, Param};
 use crate::rng::SimRng;
 use nalgebra::Vector3;
 use quatarm::table::limits::THERMAL;
+use quatarm_params::{Link, Param};
 use quatarm_ref::arm::Arm;
 use quatarm_ref::forward::REFERENCE_TEMP_C;
 use rand::Rng;

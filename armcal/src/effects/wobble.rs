@@ -9,9 +9,9 @@ use super::{
     parse_periodic, periodic_entry, periodic_vocabulary, Describe, Draw, Effect, Family, Simulate,
     Term, TermsError, TipPoint,
 };
-use crate::params::{Link, Param};
 use crate::rng::SimRng;
 use nalgebra::Vector3;
+use quatarm_params::{Link, Param};
 use quatarm_ref::arm::{Arm, Wobble as Entry};
 use rand::Rng;
 use serde_json::Value;
