@@ -47,4 +47,37 @@ fn maker_key() {
     );
     let out = std::path::PathBuf::from(std::env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
     std::fs::write(out.join("maker.pub"), key).expect("write maker.pub");
+    next_maker_key(&out, std::env::var_os(VAR).is_some());
+}
+
+/// Copies the maker's next public key into `$OUT_DIR/maker-next.pub`
+/// (`board_common::maker_keys!`): the 32-byte file `QUATARM_NEXT_MAKER_KEY` names; without
+/// it, the test key's successor (`keys/test-maker-next.pub`) when the image trusts the test
+/// key, else an empty file (no next key) and a warning that the image cannot rotate its key.
+#[allow(dead_code)]
+fn next_maker_key(out: &std::path::Path, maker_given: bool) {
+    const VAR: &str = "QUATARM_NEXT_MAKER_KEY";
+    println!("cargo:rerun-if-env-changed={VAR}");
+    let path = match std::env::var_os(VAR) {
+        Some(p) => std::path::PathBuf::from(p),
+        None if maker_given => {
+            println!(
+                "cargo:warning=no {VAR}: this image holds no next maker key and cannot be \
+                 rotated off a leaked key without a debug probe (docs/update.md)"
+            );
+            std::fs::write(out.join("maker-next.pub"), []).expect("write maker-next.pub");
+            return;
+        }
+        None => std::path::PathBuf::from("../../keys/test-maker-next.pub"),
+    };
+    println!("cargo:rerun-if-changed={}", path.display());
+    let key = std::fs::read(&path)
+        .unwrap_or_else(|e| panic!("{VAR}: reading {}: {e}", path.display()));
+    assert!(
+        key.len() == 32,
+        "{VAR}: {} is {} bytes, not a 32-byte Ed25519 public key (armcal table keygen)",
+        path.display(),
+        key.len()
+    );
+    std::fs::write(out.join("maker-next.pub"), key).expect("write maker-next.pub");
 }

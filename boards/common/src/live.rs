@@ -15,12 +15,11 @@
 
 use embedded_storage::nor_flash::NorFlash;
 use quatarm::encoder::AbsoluteEncoder;
-use quatarm::signature::KEY_LEN;
 use quatarm::stream::{Hub, HubLoop, Live, Replay, Then, UpdateAnswer};
 use quatarm::table::MAX_TABLE_LEN;
 use quatarm::temperature::TemperatureSensor;
 use quatarm::update::session::Step;
-use quatarm::update::{Accept, Layout};
+use quatarm::update::{Accept, Keys, Layout};
 
 use crate::calibration::{Calibration, HubEvaluator, JOINTS};
 use crate::clock;
@@ -39,7 +38,8 @@ pub trait PollLink {
 /// The whole run of a real hub once its board has set up the link, the encoders (joint 1
 /// first, one per joint of the table), the thermometer and its calibration flash (`flash`,
 /// laid out as `layout`: `slots::Map::window`): boot on the live table, one for this many
-/// joints and the encoders' resolution, signed under the arm maker's `key`; then
+/// joints and the encoders' resolution, signed under the arm maker's `keys` (its current key
+/// and, where the image holds one, the next: [`crate::maker_keys!`]); then
 /// [`serve_live`] in precision `P` with a report every `period_us`, timed by a core clock of
 /// `CORE_HZ` (a constant parameter so that the ticks-to-µs divisions, several per sample,
 /// compile to multiplications), until an update commits; then boot again on the new table,
@@ -50,11 +50,11 @@ pub fn run<P: HubEvaluator, const CORE_HZ: u32, F: NorFlash>(
     thermometer: &mut impl TemperatureSensor,
     period_us: u64,
     (flash, layout): (F, Layout),
-    key: [u8; KEY_LEN],
+    keys: Keys,
 ) -> ! {
     let resolution = encoders.each_ref().map(|e| e.counts_per_rev());
     let accept = Accept::joints(JOINTS)
-        .signed_by(key)
+        .signed_by_keys(keys)
         .for_encoders(&resolution);
     // The live table (which the calibration borrows) and the update's scratch, apart
     // (`flash::port`).

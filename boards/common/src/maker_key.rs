@@ -36,3 +36,53 @@ macro_rules! maker_key {
         *include_bytes!(concat!(env!("OUT_DIR"), "/maker.pub"))
     };
 }
+
+/// The keys of a real board's image, as its build script chose them: the current key
+/// ([`maker_key!`](crate::maker_key!), generation 0) and the next (`QUATARM_NEXT_MAKER_KEY`;
+/// with neither variable the test key's successor, so that a bench image can rotate; with a
+/// maker key but no next, none, and the build warns that the image cannot rotate). A next
+/// key in every field image is what lets a maker whose key leaks move the hubs to the next
+/// and retire the old for good (`docs/update.md`), without a debug probe.
+#[macro_export]
+macro_rules! maker_keys {
+    () => {
+        quatarm::update::Keys {
+            generation: 0,
+            current: $crate::maker_key!(),
+            next: $crate::maker_key::next_key(include_bytes!(concat!(
+                env!("OUT_DIR"),
+                "/maker-next.pub"
+            ))),
+        }
+    };
+}
+
+/// The next key from the bytes the build script wrote: 32 bytes, or none (an empty file).
+pub const fn next_key(bytes: &[u8]) -> Option<[u8; quatarm::signature::KEY_LEN]> {
+    if bytes.len() != quatarm::signature::KEY_LEN {
+        return None;
+    }
+    let mut key = [0u8; quatarm::signature::KEY_LEN];
+    let mut i = 0;
+    while i < key.len() {
+        key[i] = bytes[i];
+        i += 1;
+    }
+    Some(key)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The build script writes 32 bytes for a next key and an empty file for none: both read
+    /// back as written, and a file of another length is no key (the build refuses it first).
+    #[test]
+    fn the_next_key_is_its_32_bytes_or_none() {
+        let bytes = include_bytes!("../../../keys/test-maker-next.pub");
+        assert_eq!(next_key(bytes), Some(TEST_NEXT_MAKER_KEY));
+        assert_eq!(next_key(&[]), None);
+        assert_eq!(next_key(&bytes[..31]), None);
+        assert_ne!(next_key(bytes), Some(TEST_MAKER_KEY));
+    }
+}

@@ -15,9 +15,10 @@
 //!   the first second after boot) the reports carry `TEMP_SENSOR_FAULT` and no coordinates.
 //! - Calibration: the live one of the two table slots (the last four 4 KiB sectors: slots
 //!   and state record copies, `docs/update.md`), signed under the arm maker's key the build
-//!   was given (`QUATARM_MAKER_KEY`, `board_common::maker_key`); updates over the stream
-//!   (`armcal table send`), after which the hub boots again on the new table. No U95 and no
-//!   axis wobble (the fixed-point hub's table has neither block).
+//!   was given (`QUATARM_MAKER_KEY`; its successor `QUATARM_NEXT_MAKER_KEY`:
+//!   `board_common::maker_keys`); updates over the stream (`armcal table send`), after which
+//!   the hub boots again on the new table. No U95 and no axis wobble (the fixed-point hub's
+//!   table has neither block).
 #![no_std]
 #![no_main]
 
@@ -27,7 +28,7 @@ use core::cell::RefCell;
 
 use board_common::flash::slots;
 use board_common::live::{self, PollLink};
-use board_common::{clock, maker_key};
+use board_common::{clock, maker_keys};
 use cortex_m_rt::entry;
 use embedded_hal_bus::spi::RefCellDevice;
 use embedded_hal_nb::serial::{Read, Write};
@@ -155,6 +156,6 @@ fn main() -> ! {
         &mut thermometer,
         PERIOD_US,
         cal_flash,
-        maker_key!(),
+        maker_keys!(),
     )
 }
