@@ -19,7 +19,7 @@ use host_tests::boards::root;
 use crate::build::check;
 
 /// Every fuzz target, as `fuzz/Cargo.toml` declares them.
-pub const TARGETS: [&str; 8] = [
+pub const TARGETS: [&str; 9] = [
     "table_parse",
     "hub_frames",
     "host_frames",
@@ -28,6 +28,7 @@ pub const TARGETS: [&str; 8] = [
     "data_csv",
     "calfile_toml",
     "update_session",
+    "update_rollback",
 ];
 
 /// Seconds of each target's smoke run in `cargo xtask test`.
