@@ -36,17 +36,8 @@ fn maker_key() {
             std::path::PathBuf::from("../../keys/test-maker.pub")
         }
     };
-    println!("cargo:rerun-if-changed={}", path.display());
-    let key = std::fs::read(&path)
-        .unwrap_or_else(|e| panic!("{VAR}: reading {}: {e}", path.display()));
-    assert!(
-        key.len() == 32,
-        "{VAR}: {} is {} bytes, not a 32-byte Ed25519 public key (armcal table keygen)",
-        path.display(),
-        key.len()
-    );
     let out = std::path::PathBuf::from(std::env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
-    std::fs::write(out.join("maker.pub"), key).expect("write maker.pub");
+    copy_key(VAR, &path, &out.join("maker.pub"));
     next_maker_key(&out, std::env::var_os(VAR).is_some());
 }
 
@@ -70,14 +61,21 @@ fn next_maker_key(out: &std::path::Path, maker_given: bool) {
         }
         None => std::path::PathBuf::from("../../keys/test-maker-next.pub"),
     };
+    copy_key(VAR, &path, &out.join("maker-next.pub"));
+}
+
+/// Copies the public key at `path` (named by the variable `var`) to `to`, and has cargo
+/// rebuild when it changes: a 32-byte Ed25519 public key, else the build fails naming both.
+#[allow(dead_code)]
+fn copy_key(var: &str, path: &std::path::Path, to: &std::path::Path) {
     println!("cargo:rerun-if-changed={}", path.display());
-    let key = std::fs::read(&path)
-        .unwrap_or_else(|e| panic!("{VAR}: reading {}: {e}", path.display()));
+    let key =
+        std::fs::read(path).unwrap_or_else(|e| panic!("{var}: reading {}: {e}", path.display()));
     assert!(
         key.len() == 32,
-        "{VAR}: {} is {} bytes, not a 32-byte Ed25519 public key (armcal table keygen)",
+        "{var}: {} is {} bytes, not a 32-byte Ed25519 public key (armcal table keygen)",
         path.display(),
         key.len()
     );
-    std::fs::write(out.join("maker-next.pub"), key).expect("write maker-next.pub");
+    std::fs::write(to, key).unwrap_or_else(|e| panic!("writing {}: {e}", to.display()));
 }
