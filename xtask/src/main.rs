@@ -12,6 +12,7 @@
 
 mod bench;
 mod build;
+mod cbase;
 mod demo;
 mod fuzz;
 mod fuzz_seeds;
