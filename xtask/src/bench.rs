@@ -17,6 +17,7 @@ use host_tests::recording::{self, replay_bytes};
 use object::{Object, ObjectSegment};
 
 use crate::build::build_board_with;
+use crate::cbase;
 use crate::setup;
 use crate::toolchain::{self, Toolchain};
 
@@ -259,6 +260,8 @@ pub fn run(only: Option<&str>, calib: Option<&std::path::Path>) -> Result<()> {
         Err(_) => survey.available.iter().collect(),
     };
     let mut rows = Vec::new();
+    // The product's chains on the board the C baselines run on, for the side-by-side table.
+    let mut products = Vec::new();
     for tc in chains {
         // The QEMU runs below find each board's image by this variable.
         std::env::set_var(toolchain::TOOLCHAIN_ENV, tc.kind.name());
@@ -267,7 +270,13 @@ pub fn run(only: Option<&str>, calib: Option<&std::path::Path>) -> Result<()> {
             .filter(|b| only.is_none_or(|o| o == b.name))
         {
             build_board_with(b, tc)?;
-            rows.push(measure(b, tc, &table_for(b)?)?);
+            let row = measure(b, tc, &table_for(b)?)?;
+            if b.name == C_BOARD {
+                if let Some(chains) = row.instructions {
+                    products.push(product(b, &row, chains)?);
+                }
+            }
+            rows.push(row);
         }
     }
     println!("\n{}", table(&rows));
@@ -278,6 +287,86 @@ pub fn run(only: Option<&str>, calib: Option<&std::path::Path>) -> Result<()> {
     );
     for (k, why) in &survey.missing {
         println!("(not measured with {}: {why})", k.name());
+    }
+    if only.is_none_or(|o| o == C_BOARD) {
+        side_by_side(&parsed.arm, &path, products)?;
+    }
+    Ok(())
+}
+
+/// The board whose core the C baselines are measured on (QEMU mps2-an386, Cortex-M4F).
+const C_BOARD: &str = "qemu-m4f";
+
+/// The calibration with an axis wobble on every joint, for the product's wobble row.
+const WOBBLE_CALIBRATION: &str = "data/default-6-wobble.toml";
+
+/// The product's row of the side-by-side table from a measured qemu-m4f board, with the hub's
+/// chain timed again on the wobble calibration.
+fn product(b: &Board, row: &Row, chains: (f64, f64, f64)) -> Result<cbase::table::Product> {
+    let path = host_tests::boards::root().join(WOBBLE_CALIBRATION);
+    let w = quatarm_ref::calfile::read(&path)?;
+    let table = quatarm_wire::tablebuild::build_with(&w.arm, w.uncertainty.as_ref())
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let wobble = instructions(b, &table)?;
+    Ok(cbase::table::Product {
+        compiler: row.compiler.clone(),
+        flash: row.flash,
+        chains,
+        lean: row.lean,
+        wobble: Some((WOBBLE_CALIBRATION.into(), wobble.chains.0)),
+        u95: row.u95[1],
+    })
+}
+
+/// The product's chains, the C baselines (`bench/c/`, built with arm-none-eabi-gcc where the
+/// machine has it) and the counted floor in one table: instructions a point over the same
+/// recorded readings, flash, accuracy against the f64 reference on those readings.
+fn side_by_side(
+    arm: &quatarm_ref::arm::Arm,
+    path: &std::path::Path,
+    products: Vec<cbase::table::Product>,
+) -> Result<()> {
+    let readings = recording::read(&default_recording_path())?;
+    let readings = &readings[..POINTS.min(readings.len())];
+    let wobble_arm =
+        quatarm_ref::calfile::read(&host_tests::boards::root().join(WOBBLE_CALIBRATION))?.arm;
+    let mut measured = Vec::new();
+    for p in products {
+        let a = cbase::table::product_accuracy(arm, readings)?;
+        let wa = cbase::table::product_accuracy(&wobble_arm, readings)?[0];
+        measured.push((p, a, Some(wa)));
+    }
+    let stem = path
+        .file_stem()
+        .map_or("calibration".into(), |s| s.to_string_lossy().into_owned());
+    let gen = host_tests::boards::root().join("target/cbase").join(stem);
+    let c = cbase::measure(
+        arm,
+        &path.display().to_string(),
+        readings,
+        &cbase::CChain::ALL,
+        &gen,
+    )?;
+    let gcc = cbase::image::gcc_version().unwrap_or_else(|| "arm-none-eabi-gcc".into());
+    println!(
+        "\n{}",
+        cbase::table::render(
+            &measured,
+            &c,
+            &gcc,
+            cbase::floor::lean_floor(arm),
+            readings.len()
+        )
+    );
+    println!(
+        "(C: bench/c/, {} {}; flash of a C image is its whole image without the readings it carries, \
+         of a quatarm row the whole hub image; the floor is counted from the lean form's structure, \
+         xtask/src/cbase/floor.rs)",
+        gcc,
+        cbase::image::CFLAGS.join(" ")
+    );
+    if let cbase::Outcome::Skipped(why) = &c {
+        println!("({why})");
     }
     Ok(())
 }

@@ -241,6 +241,7 @@ pub fn run(every_compiler: bool) -> Result<()> {
     if !which("qemu-system-arm") {
         install_qemu(&mut apt)?;
     }
+    install_c_compiler(&mut apt)?;
     if !has_browser() {
         apt.install_or_fail(
             &["chromium-headless-shell"],
@@ -254,6 +255,34 @@ pub fn run(every_compiler: bool) -> Result<()> {
         "xtask setup: firmware tool chains:\n{}\nxtask setup: qemu-system-arm, chromium and cargo-fuzz present",
         survey.describe()
     );
+    Ok(())
+}
+
+/// The C baselines' compiler (`bench/c/`, measured by `bench-target`) where it is missing.
+/// Optional: without it (no root, or apt cannot) setup goes on and the C baselines are
+/// reported as skipped, never as measured.
+fn install_c_compiler(apt: &mut Apt) -> Result<()> {
+    if crate::cbase::image::gcc().is_some() {
+        return Ok(());
+    }
+    const PACKAGES: [&str; 2] = ["gcc-arm-none-eabi", "libnewlib-arm-none-eabi"];
+    let why = "the C baselines of `cargo xtask bench-target` (bench/c/), optional";
+    if !is_root() {
+        eprintln!(
+            "xtask setup: {} not installed ({why}; needs root: `sudo apt-get install {}`)",
+            crate::cbase::image::GCC,
+            PACKAGES.join(" ")
+        );
+        return Ok(());
+    }
+    match apt.install(&PACKAGES, &[], why) {
+        Ok(true) => {}
+        Ok(false) => eprintln!(
+            "xtask setup: apt-get install {} failed; the C baselines will be skipped",
+            PACKAGES.join(" ")
+        ),
+        Err(e) => eprintln!("xtask setup: {e:#}; the C baselines will be skipped"),
+    }
     Ok(())
 }
 

@@ -43,7 +43,11 @@ mod ops {
 /// The floor for `arm`: (floating-point operations, all instructions) a point.
 pub fn lean_floor(arm: &Arm) -> (u32, u32) {
     let n = arm.dof() as u32;
-    let harmonics = arm.joints.iter().filter(|j| !j.harmonics.is_empty()).count() as u32;
+    let harmonics = arm
+        .joints
+        .iter()
+        .filter(|j| !j.harmonics.is_empty())
+        .count() as u32;
     let compliant = arm.joints.iter().filter(|j| j.gravity != 0.0).count() as u32;
     // The vertical is carried up to the last compliant joint.
     let vertical = arm

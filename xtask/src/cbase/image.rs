@@ -67,6 +67,13 @@ pub fn gcc() -> Option<PathBuf> {
         .find(|p| p.is_file())
 }
 
+/// "arm-none-eabi-gcc 12.2.1", if it runs.
+pub fn gcc_version() -> Option<String> {
+    let out = Command::new(gcc()?).arg("-dumpversion").output().ok()?;
+    let v = String::from_utf8_lossy(&out.stdout).trim().to_string();
+    (out.status.success() && !v.is_empty()).then(|| format!("{GCC} {v}"))
+}
+
 /// The C sources' folder.
 pub fn sources() -> PathBuf {
     root().join("bench/c")
@@ -155,9 +162,7 @@ pub fn parse(log: &str) -> Result<Log> {
         }
         let mut v = [0f32; 6];
         for (x, h) in v.iter_mut().zip(&w[3..]) {
-            *x = f32::from_bits(
-                u32::from_str_radix(h, 16).with_context(|| format!("in `{l}`"))?,
-            );
+            *x = f32::from_bits(u32::from_str_radix(h, 16).with_context(|| format!("in `{l}`"))?);
         }
         points.push(Some(v));
     }

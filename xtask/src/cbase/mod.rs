@@ -7,6 +7,7 @@
 pub mod floor;
 pub mod header;
 pub mod image;
+pub mod table;
 
 use anyhow::{Context, Result};
 use nalgebra::Vector3;
@@ -121,7 +122,7 @@ pub fn measure(
 ) -> Result<Outcome> {
     let Some(gcc) = image::gcc() else {
         return Ok(Outcome::Skipped(format!(
-            "C baselines skipped: {} not found (`cargo xtask setup --c-baselines` installs it)",
+            "C baselines skipped: {} not found (`cargo xtask setup`, as root, installs gcc-arm-none-eabi and libnewlib-arm-none-eabi)",
             image::GCC
         )));
     };
@@ -141,10 +142,7 @@ pub fn measure(
                 readings.len()
             );
         }
-        let results = log
-            .points
-            .iter()
-            .map(|p| p.map(|v| v.map(f64::from)));
+        let results = log.points.iter().map(|p| p.map(|v| v.map(f64::from)));
         let (flash, code) = flash_and_code(&elf)?;
         rows.push(CRow {
             chain,
@@ -201,12 +199,20 @@ mod tests {
             panic!("the shipped calibration is one the C chains take");
         };
         for r in &rows {
-            eprintln!("{:?}: {:.0} instructions a point, {:?}", r.chain, r.instructions, r.accuracy);
+            eprintln!(
+                "{:?}: {:.0} instructions a point, {:?}",
+                r.chain, r.instructions, r.accuracy
+            );
             assert_eq!(r.accuracy.points, 20, "{:?} refused a reading", r.chain);
             // f32 over a 1.5 m arm: the C chains were within 0.4 µm; the sinf one
             // rounds its angles in float radians, up to ~1 µm.
             let bound = if r.chain == CChain::DhSinf { 3.0 } else { 1.0 };
-            assert!(r.accuracy.tip_max_um < bound, "{:?}: {:?}", r.chain, r.accuracy);
+            assert!(
+                r.accuracy.tip_max_um < bound,
+                "{:?}: {:?}",
+                r.chain,
+                r.accuracy
+            );
             assert!(r.accuracy.dir_max < 2e-6, "{:?}: {:?}", r.chain, r.accuracy);
             assert!(r.instructions > 100.0, "{:?}: {}", r.chain, r.instructions);
         }
