@@ -12,14 +12,15 @@ use std::time::Duration;
 /// The compiler the C baselines need.
 pub const GCC: &str = "arm-none-eabi-gcc";
 
-/// The flags of every C baseline (the issue's: gcc's `-O2` for the Cortex-M4F's FPU).
+/// The flags of every C baseline: the (gcc's `-O2` for the Cortex-M4F's FPU), in
+/// gcc's default GNU C mode, whose `-ffp-contract=fast` fuses a multiply and an add into one
+/// `vfma` (an ISO mode such as `-std=c11` turns that off: [`CChain::LeanUnfused`]).
 pub const CFLAGS: &[&str] = &[
     "-O2",
     "-mcpu=cortex-m4",
     "-mthumb",
     "-mfpu=fpv4-sp-d16",
     "-mfloat-abi=hard",
-    "-std=c11",
     "-Wall",
     "-Wextra",
     "-Werror",
@@ -34,18 +35,42 @@ pub enum CChain {
     Matrix,
     /// The lean forward chain.
     Lean,
+    /// The same, built with `-ffp-contract=off`: no fused multiply–add, as the Rust chains
+    /// (whose host build is bit for bit the hub's).
+    LeanUnfused,
 }
 
 impl CChain {
     /// Every C chain, in the table's order.
-    pub const ALL: [CChain; 3] = [CChain::DhSinf, CChain::Matrix, CChain::Lean];
+    pub const ALL: [CChain; 4] = [
+        CChain::DhSinf,
+        CChain::Matrix,
+        CChain::Lean,
+        CChain::LeanUnfused,
+    ];
 
     /// The file stem after `chain_`.
     pub fn file(self) -> &'static str {
         match self {
             CChain::DhSinf => "dh",
             CChain::Matrix => "matrix",
-            CChain::Lean => "lean",
+            CChain::Lean | CChain::LeanUnfused => "lean",
+        }
+    }
+
+    /// The image's name (its file's, with the variant's).
+    pub fn image(self) -> &'static str {
+        match self {
+            CChain::LeanUnfused => "lean-unfused",
+            c => c.file(),
+        }
+    }
+
+    /// Flags of this chain beyond [`CFLAGS`].
+    pub fn extra_flags(self) -> &'static [&'static str] {
+        match self {
+            CChain::LeanUnfused => &["-ffp-contract=off"],
+            _ => &[],
         }
     }
 
@@ -55,6 +80,9 @@ impl CChain {
             CChain::DhSinf => "C, D–H style 3×4 with newlib sinf/cosf (full model)",
             CChain::Matrix => "C, calibrated 3×4 matrix chain, inner products written out",
             CChain::Lean => "C, lean forward chain (Rz·Rx a joint, Euler split at boot)",
+            CChain::LeanUnfused => {
+                "C, the same lean chain with -ffp-contract=off (no fused multiply–add)"
+            }
         }
     }
 }
@@ -82,9 +110,10 @@ pub fn sources() -> PathBuf {
 /// Compiles `chain` with the headers in `gen` into `gen/<file>.elf`.
 pub fn build(gcc: &Path, chain: CChain, gen: &Path) -> Result<PathBuf> {
     let src = sources();
-    let elf = gen.join(format!("{}.elf", chain.file()));
+    let elf = gen.join(format!("{}.elf", chain.image()));
     let out = Command::new(gcc)
         .args(CFLAGS)
+        .args(chain.extra_flags())
         .arg("-I")
         .arg(gen)
         .arg("-I")
