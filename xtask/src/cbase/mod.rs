@@ -120,7 +120,19 @@ pub fn measure(
     chains: &[CChain],
     gen: &Path,
 ) -> Result<Outcome> {
-    let Some(gcc) = image::gcc() else {
+    measure_with(image::gcc(), arm, source, readings, chains, gen)
+}
+
+/// [`measure`] with the compiler given (`None`: not found).
+fn measure_with(
+    gcc: Option<std::path::PathBuf>,
+    arm: &Arm,
+    source: &str,
+    readings: &[Reading],
+    chains: &[CChain],
+    gen: &Path,
+) -> Result<Outcome> {
+    let Some(gcc) = gcc else {
         return Ok(Outcome::Skipped(format!(
             "C baselines skipped: {} not found (`cargo xtask setup`, as root, installs gcc-arm-none-eabi and libnewlib-arm-none-eabi)",
             image::GCC
@@ -220,6 +232,45 @@ mod tests {
 
     fn tempdir() -> tempfile::TempDir {
         tempfile::tempdir().unwrap()
+    }
+
+    /// Without the compiler nothing is built or run, and the table says the C rows were
+    /// skipped, with no number in their place.
+    #[test]
+    fn without_the_compiler_the_c_rows_are_skipped_not_passed() {
+        let gen = tempdir();
+        let arm = Arm::default6();
+        let out = measure_with(None, &arm, "default6", &[], &CChain::ALL, gen.path()).unwrap();
+        let Outcome::Skipped(why) = &out else {
+            panic!("measured without a compiler");
+        };
+        assert!(
+            why.starts_with("C baselines skipped: arm-none-eabi-gcc not found"),
+            "{why}"
+        );
+        assert!(
+            std::fs::read_dir(gen.path()).unwrap().next().is_none(),
+            "wrote headers"
+        );
+        let text = table::render(&[], &out, "gcc", (1, 2), 0);
+        assert!(
+            text.contains("| C baselines skipped: arm-none-eabi-gcc not found"),
+            "{text}"
+        );
+        assert!(!text.contains("| C, "), "{text}");
+    }
+
+    /// An arm the C chains do not model is refused with the file and the joint named.
+    #[test]
+    fn a_wobble_is_refused_by_name() {
+        let path = host_tests::boards::root().join("data/default-6-wobble.toml");
+        let arm = quatarm_ref::calfile::read(&path).unwrap().arm;
+        let e = header::calibration(&arm, "data/default-6-wobble.toml").unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("data/default-6-wobble.toml: joint 1 has an axis wobble"),
+            "{e}"
+        );
     }
 
     /// A refused reading is counted as refused, not compared.
