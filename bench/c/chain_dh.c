@@ -3,12 +3,18 @@
  * Hartenberg style: T = T_1 T_2 ... T_n). The whole model all the same: the angle
  * theta = 2 pi count / counts in float, the zero offset and the two harmonics (sinf and cosf
  * of theta, the second order by the double angle), each joint's fixed rotation, the links'
- * expansion and gravity to first order. */
+ * expansion and gravity to first order. Built with -DGEOMETRY_ONLY: the geometry alone (zero
+ * offsets, the fixed rotations, the links; one sinf and one cosf a joint), as a team's first
+ * version would be, and not the calibrated model: its accuracy shows what the rest is worth. */
 #include "bench.h"
 #include "cal.h"
 #include "turn.h"
 
+#ifdef GEOMETRY_ONLY
+const char chain_name[] = "dh-sinf-geometry";
+#else
 const char chain_name[] = "dh-sinf";
+#endif
 
 static struct {
     float f[3][3], link[3], rate[3];
@@ -56,9 +62,13 @@ int chain_eval(const uint32_t *counts, int32_t temp_mc, float out[6]) {
     for (int i = 0; i < CAL_JOINTS; i++) {
         if (counts[i] >= J[i].counts) return i + 1;
         float th = (float)counts[i] * J[i].k;
+#ifdef GEOMETRY_ONLY
+        float phi = th + J[i].zero;
+#else
         float st = sinf(th), ct = cosf(th);
         float phi = th + J[i].zero + J[i].s1 * st + J[i].c1 * ct + J[i].s2 * (2.0f * st * ct) +
                     J[i].c2 * (ct * ct - st * st);
+#endif
         float c = cosf(phi), s = sinf(phi);
         float a[3][4];
         for (int r = 0; r < 3; r++) {
@@ -67,14 +77,23 @@ int chain_eval(const uint32_t *counts, int32_t temp_mc, float out[6]) {
             a[r][2] = J[i].f[r][2];
         }
         float l[3];
+#ifdef GEOMETRY_ONLY
+        (void)dt;
+        for (int k = 0; k < 3; k++) l[k] = J[i].link[k];
+#else
         for (int k = 0; k < 3; k++) l[k] = J[i].link[k] + J[i].rate[k] * dt;
+#endif
         for (int r = 0; r < 3; r++) a[r][3] = a[r][0] * l[0] + a[r][1] * l[1] + a[r][2] * l[2];
         float o[3] = {t[0][3], t[1][3], t[2][3]};
         mul34(t, a);
+#ifndef GEOMETRY_ONLY
         if (J[i].g != 0.0f) {
             float ax[3] = {t[0][2], t[1][2], t[2][2]};
             gravity_push(&gv, J[i].g, ax, o);
         }
+#else
+        (void)o;
+#endif
     }
     float p[3], n[3];
     for (int r = 0; r < 3; r++) {

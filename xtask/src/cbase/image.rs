@@ -29,6 +29,9 @@ pub const CFLAGS: &[&str] = &[
 /// The C chains, by their file in `bench/c/` (`chain_<name>.c`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CChain {
+    /// Newlib's `sinf`/`cosf` per joint, full 3×4 products, the geometry only (not the
+    /// calibrated model: a team's first version).
+    DhGeometry,
     /// Newlib's `sinf`/`cosf` per joint, full 3×4 products.
     DhSinf,
     /// The calibrated 3×4 matrix chain, inner products written out.
@@ -42,7 +45,8 @@ pub enum CChain {
 
 impl CChain {
     /// Every C chain, in the table's order.
-    pub const ALL: [CChain; 4] = [
+    pub const ALL: [CChain; 5] = [
+        CChain::DhGeometry,
         CChain::DhSinf,
         CChain::Matrix,
         CChain::Lean,
@@ -52,7 +56,7 @@ impl CChain {
     /// The file stem after `chain_`.
     pub fn file(self) -> &'static str {
         match self {
-            CChain::DhSinf => "dh",
+            CChain::DhGeometry | CChain::DhSinf => "dh",
             CChain::Matrix => "matrix",
             CChain::Lean | CChain::LeanUnfused => "lean",
         }
@@ -62,6 +66,7 @@ impl CChain {
     pub fn image(self) -> &'static str {
         match self {
             CChain::LeanUnfused => "lean-unfused",
+            CChain::DhGeometry => "dh-geometry",
             c => c.file(),
         }
     }
@@ -70,6 +75,7 @@ impl CChain {
     pub fn extra_flags(self) -> &'static [&'static str] {
         match self {
             CChain::LeanUnfused => &["-ffp-contract=off"],
+            CChain::DhGeometry => &["-DGEOMETRY_ONLY"],
             _ => &[],
         }
     }
@@ -77,6 +83,9 @@ impl CChain {
     /// The row's label.
     pub fn label(self) -> &'static str {
         match self {
+            CChain::DhGeometry => {
+                "C, D–H style 3×4 with newlib sinf/cosf, geometry only (no harmonics, gravity, thermal: not the model)"
+            }
             CChain::DhSinf => "C, D–H style 3×4 with newlib sinf/cosf (full model)",
             CChain::Matrix => "C, calibrated 3×4 matrix chain, inner products written out",
             CChain::Lean => "C, lean forward chain (Rz·Rx a joint, Euler split at boot)",

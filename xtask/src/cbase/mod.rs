@@ -216,6 +216,16 @@ mod tests {
                 r.chain, r.instructions, r.accuracy
             );
             assert_eq!(r.accuracy.points, 20, "{:?} refused a reading", r.chain);
+            if r.chain == CChain::DhGeometry {
+                // Not the model: the harmonics, gravity and expansion it leaves out move the
+                // tip by tens of µm, but the geometry puts it within a millimetre.
+                assert!(
+                    (10.0..1000.0).contains(&r.accuracy.tip_max_um),
+                    "{:?}",
+                    r.accuracy
+                );
+                continue;
+            }
             // f32 over a 1.5 m arm: the C chains were within 0.4 µm; the sinf one
             // rounds its angles in float radians, up to ~1 µm.
             let bound = if r.chain == CChain::DhSinf { 3.0 } else { 1.0 };
