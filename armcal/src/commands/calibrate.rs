@@ -142,7 +142,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             "none: the data are a single unit (one group) that cannot be split into folds".into(),
         );
     }
-    let mut files = armcal::output::Staged::guarding(&inputs);
+    let mut files = Staged::guarding(&inputs);
     stage(
         &a,
         &terms,

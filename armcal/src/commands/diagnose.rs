@@ -137,7 +137,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut rep = report::build(&d, &data, &figures);
     nested(&a, &start, &data, &opts, &mut rep)?;
     test_level(&start, &data, &opts, &d, &mut rep);
-    let mut files = armcal::output::Staged::guarding(&inputs);
+    let mut files = Staged::guarding(&inputs);
     stage(&a, &d, &data, &figures, &mut rep, &mut files)?;
     files.commit()?;
     super::print_report(a.json, || rep.json(), || rep.text());
