@@ -80,7 +80,6 @@ pub type Rows = Vec<Input>;
 /// ([`crate::data::unique_columns`], [`crate::data::joint_columns`]): every name once, the
 /// joint columns exactly the arm's; numbers within the same bounds ([`Bound`]).
 pub fn read_rows(arm: &Arm, mut input: impl std::io::Read) -> Result<Rows, RowError> {
-    let n = arm.dof();
     let mut text = String::new();
     input.read_to_string(&mut text).map_err(|e| RowError {
         line: 0,
@@ -95,34 +94,7 @@ pub fn read_rows(arm: &Arm, mut input: impl std::io::Read) -> Result<Rows, RowEr
         .has_headers(true)
         .trim(csv::Trim::All)
         .from_reader(text.as_bytes());
-    let header_err = |column: String, message: String| RowError {
-        line: 1,
-        column,
-        message,
-    };
-    let headers: Vec<String> = rdr
-        .headers()
-        .map_err(|e| header_err("(header)".into(), format!("cannot read the header: {e}")))?
-        .iter()
-        .map(str::to_string)
-        .collect();
-    let problem = |p: HeaderProblem| header_err(p.column, p.message);
-    let seen = unique_columns(&headers).map_err(problem)?;
-    let j = joint_columns(&headers, "j", n).map_err(problem)?;
-    let c = joint_columns(&headers, "c", n).map_err(problem)?;
-    let temp = seen.get("temp_c").copied();
-    let probe_col = seen.get("probe").copied();
-    let (cols, radians) = match (j, c) {
-        (Some(j), None) => (j, true),
-        (None, Some(c)) => (c, false),
-        _ => {
-            return Err(header_err(
-                "(header)".into(),
-                format!("need columns j1..j{n} (radians) or c1..c{n} (counts), not both"),
-            ))
-        }
-    };
-    let name = |col: usize| shown(&headers[col]);
+    let header = Header::read(&mut rdr, arm.dof())?;
     let mut rows = Vec::new();
     for rec in rdr.records() {
         let rec = rec.map_err(|e| RowError {
@@ -131,69 +103,158 @@ pub fn read_rows(arm: &Arm, mut input: impl std::io::Read) -> Result<Rows, RowEr
             message: e.to_string(),
         })?;
         let line = lines.of_record(&rec) as u64;
-        let field = |col: usize| -> Result<&str, RowError> {
-            rec.get(col).ok_or_else(|| RowError {
-                line,
-                column: name(col),
-                message: "missing field".into(),
-            })
-        };
-        let bad = |col: usize, message: String| RowError {
-            line,
-            column: name(col),
-            message,
-        };
-        let reading = if radians {
-            let mut v = Vec::with_capacity(n);
-            for &col in &cols {
-                v.push(
-                    number_cell(field(col)?, &Bound::joint())
-                        .map_err(|m| bad(col, m.to_string()))?,
-                );
-            }
-            Reading::Radians(v)
-        } else {
-            let mut v = Vec::with_capacity(n);
-            for (k, &col) in cols.iter().enumerate() {
-                let per_rev = arm.joints[k].encoder_counts;
-                v.push(count_cell(field(col)?, per_rev).map_err(|m| bad(col, m.to_string()))?);
-            }
-            Reading::Counts(v)
-        };
-        let t = match temp {
-            Some(col) if !field(col)?.is_empty() => number_cell(field(col)?, &Bound::temperature())
-                .map_err(|m| bad(col, m.to_string()))?,
-            _ => quatarm_ref::forward::REFERENCE_TEMP_C,
-        };
-        let probe = match probe_col {
-            Some(col) if !field(col)?.is_empty() => {
-                let s = field(col)?;
-                s.parse::<u8>()
-                    .ok()
-                    .and_then(|id| arm.probe_index(id))
-                    .ok_or_else(|| {
-                        let ids: Vec<String> = arm.probes().map(|p| p.id.to_string()).collect();
-                        bad(
-                            col,
-                            format!(
-                                "`{}` is not a probe of the arm (its probes: {})",
-                                shown(s),
-                                ids.join(", ")
-                            ),
-                        )
-                    })?
-            }
-            _ => 0,
-        };
-        rows.push(Input {
-            reading,
-            temp_c: t,
-            probe,
-        });
+        rows.push(header.input(arm, &Record { rec: &rec, line })?);
     }
     Ok(rows)
 }
 
+/// The input's header: which columns hold the joints (radians or counts), the temperature
+/// and the probe.
+struct Header {
+    /// The column names, as written.
+    names: Vec<String>,
+    /// The joint columns, in joint order.
+    joints: Vec<usize>,
+    /// Whether the joints are in radians (`j1..jN`), else counts (`c1..cN`).
+    radians: bool,
+    /// The `temp_c` column, if any.
+    temp: Option<usize>,
+    /// The `probe` column, if any.
+    probe: Option<usize>,
+}
+
+impl Header {
+    /// Reads and checks the header of an input for an arm of `n` joints (every problem on
+    /// line 1, naming its column).
+    fn read<R: std::io::Read>(rdr: &mut csv::Reader<R>, n: usize) -> Result<Header, RowError> {
+        let header_err = |column: String, message: String| RowError {
+            line: 1,
+            column,
+            message,
+        };
+        let names: Vec<String> = rdr
+            .headers()
+            .map_err(|e| header_err("(header)".into(), format!("cannot read the header: {e}")))?
+            .iter()
+            .map(str::to_string)
+            .collect();
+        let problem = |p: HeaderProblem| header_err(p.column, p.message);
+        let seen = unique_columns(&names).map_err(problem)?;
+        let j = joint_columns(&names, "j", n).map_err(problem)?;
+        let c = joint_columns(&names, "c", n).map_err(problem)?;
+        let (joints, radians) = match (j, c) {
+            (Some(j), None) => (j, true),
+            (None, Some(c)) => (c, false),
+            _ => {
+                return Err(header_err(
+                    "(header)".into(),
+                    format!("need columns j1..j{n} (radians) or c1..c{n} (counts), not both"),
+                ))
+            }
+        };
+        Ok(Header {
+            temp: seen.get("temp_c").copied(),
+            probe: seen.get("probe").copied(),
+            names,
+            joints,
+            radians,
+        })
+    }
+
+    /// One data row as an input: its reading, its temperature and its probe, in that order
+    /// of checking.
+    fn input(&self, arm: &Arm, r: &Record) -> Result<Input, RowError> {
+        Ok(Input {
+            reading: self.reading(arm, r)?,
+            temp_c: self.temperature(r)?,
+            probe: self.probe(arm, r)?,
+        })
+    }
+
+    /// The cell of column `col` (a short row misses it).
+    fn field<'r>(&self, r: &Record<'r>, col: usize) -> Result<&'r str, RowError> {
+        r.rec
+            .get(col)
+            .ok_or_else(|| self.bad(r, col, "missing field".into()))
+    }
+
+    /// A refusal of the cell of column `col`, naming the line and the column.
+    fn bad(&self, r: &Record, col: usize, message: String) -> RowError {
+        RowError {
+            line: r.line,
+            column: shown(&self.names[col]),
+            message,
+        }
+    }
+
+    /// The joint cells, radians within [`Bound::joint`] or counts below each joint's counts
+    /// per revolution.
+    fn reading(&self, arm: &Arm, r: &Record) -> Result<Reading, RowError> {
+        let cell = |col: usize| self.field(r, col);
+        if self.radians {
+            let mut v = Vec::with_capacity(self.joints.len());
+            for &col in &self.joints {
+                v.push(
+                    number_cell(cell(col)?, &Bound::joint())
+                        .map_err(|m| self.bad(r, col, m.to_string()))?,
+                );
+            }
+            Ok(Reading::Radians(v))
+        } else {
+            let mut v = Vec::with_capacity(self.joints.len());
+            for (k, &col) in self.joints.iter().enumerate() {
+                let per_rev = arm.joints[k].encoder_counts;
+                v.push(
+                    count_cell(cell(col)?, per_rev).map_err(|m| self.bad(r, col, m.to_string()))?,
+                );
+            }
+            Ok(Reading::Counts(v))
+        }
+    }
+
+    /// The temperature (°C): the reference temperature where there is no column or the cell
+    /// is empty.
+    fn temperature(&self, r: &Record) -> Result<f64, RowError> {
+        Ok(match self.temp {
+            Some(col) if !self.field(r, col)?.is_empty() => {
+                number_cell(self.field(r, col)?, &Bound::temperature())
+                    .map_err(|m| self.bad(r, col, m.to_string()))?
+            }
+            _ => quatarm_ref::forward::REFERENCE_TEMP_C,
+        })
+    }
+
+    /// The index of the row's probe: the arm's first where there is no column or the cell is
+    /// empty; an id the arm does not have is refused, listing the ids it has.
+    fn probe(&self, arm: &Arm, r: &Record) -> Result<usize, RowError> {
+        let col = match self.probe {
+            Some(col) if !self.field(r, col)?.is_empty() => col,
+            _ => return Ok(0),
+        };
+        let s = self.field(r, col)?;
+        s.parse::<u8>()
+            .ok()
+            .and_then(|id| arm.probe_index(id))
+            .ok_or_else(|| {
+                let ids: Vec<String> = arm.probes().map(|p| p.id.to_string()).collect();
+                self.bad(
+                    r,
+                    col,
+                    format!(
+                        "`{}` is not a probe of the arm (its probes: {})",
+                        shown(s),
+                        ids.join(", ")
+                    ),
+                )
+            })
+    }
+}
+
+/// A data record and its line in the input, for messages that name the cell.
+struct Record<'a> {
+    rec: &'a csv::StringRecord,
+    line: u64,
+}
 /// The count nearest to an angle (rad), in 0..counts.
 pub fn nearest_count(theta: f64, counts: u32) -> u32 {
     let c = (theta / std::f64::consts::TAU * f64::from(counts)).round() as i64;

@@ -13,7 +13,7 @@ use crate::acceptance::mpe::{Limit, Mpe};
 use crate::acceptance::statistics::Test;
 use crate::data::Dataset;
 use crate::fit::probes::Mounted;
-use quatarm_ref::arm::Arm;
+use quatarm_ref::arm::{Arm, Joint};
 
 /// What the user accepts deliberately (`--accept-units`, `--accept-temperature`,
 /// `--accept-mpe`, `--accept-misfit`, `--accept-duplicates`, `--accept-order`).
@@ -510,86 +510,124 @@ pub fn calibration_text(text: &str, file: &str, accept: Accept) -> Result<(), Im
     let Ok(parsed) = quatarm_ref::calfile::parse_with(text, &wide) else {
         return Ok(());
     };
-    let refuse = |joint: Option<usize>, key: String, line_key: &str, what: String, hint: &str| {
-        let line = key_line(text, joint, line_key)
+    let place = CalPlace { text, file };
+    for (i, j) in parsed.arm.joints.iter().enumerate() {
+        angles_in_radians(&place, i + 1, j)?;
+        periodic_in_radians(&place, i + 1, j)?;
+    }
+    balls_in_mm(&place, &parsed.arm)
+}
+
+/// A calibration file's text and name, for a refusal that names the key's line.
+struct CalPlace<'a> {
+    text: &'a str,
+    file: &'a str,
+}
+
+/// The hint of an angle that looks like degrees.
+const DEGREES: &str = "angles are in radians: in degrees? multiply by π/180";
+
+impl CalPlace<'_> {
+    /// The refusal of `key` (found on its line by `line_key` in `joint`'s table, or in the
+    /// whole file), `what` said of its value, with the `--accept-units` flag.
+    fn refuse(
+        &self,
+        joint: Option<usize>,
+        key: String,
+        line_key: &str,
+        what: String,
+        hint: &str,
+    ) -> Implausible {
+        let line = key_line(self.text, joint, line_key)
             .map(|l| format!("line {l}, "))
             .unwrap_or_default();
         Implausible {
-            file: file.to_string(),
+            file: self.file.to_string(),
             what: format!("{line}{key} {what}"),
             hint: hint.to_string(),
             flag: "units",
         }
-    };
-    let degrees = "angles are in radians: in degrees? multiply by π/180";
+    }
+}
+
+/// Joint `k`'s (1-based) `zero_offset` and `tilt`: each within [`TWIST_OFF_RAD`] of a
+/// quarter turn and of magnitude at most π (plus that), as angles in radians are.
+fn angles_in_radians(place: &CalPlace, k: usize, j: &Joint) -> Result<(), Implausible> {
     let quarter = std::f64::consts::FRAC_PI_2;
-    for (i, j) in parsed.arm.joints.iter().enumerate() {
-        let k = i + 1;
-        let angles = std::iter::once(("zero_offset".to_string(), "zero_offset", j.zero_offset))
-            .chain(
-                j.tilt
-                    .iter()
-                    .enumerate()
-                    .map(|(c, &t)| (format!("tilt[{c}]"), "tilt", t)),
-            );
-        for (key, line_key, t) in angles {
-            let off = (t - (t / quarter).round() * quarter).abs();
-            if off > TWIST_OFF_RAD || t.abs() > std::f64::consts::PI + TWIST_OFF_RAD {
-                return Err(refuse(
-                    Some(k),
-                    format!("joint[{k}].{key}"),
-                    line_key,
-                    format!(
-                        "= {t} rad ({:.1}°), {off:.3} rad off the nearest quarter turn, where it \
-                         holds 0, ±π/2 or ±π and an error of a few mrad (read as degrees: \
-                         {:.5} rad)",
-                        t.to_degrees(),
-                        t.to_radians()
-                    ),
-                    degrees,
-                ));
-            }
-        }
-        let periodic = j
-            .harmonics
+    let angles = std::iter::once(("zero_offset".to_string(), "zero_offset", j.zero_offset)).chain(
+        j.tilt
             .iter()
             .enumerate()
-            .flat_map(|(h, t)| {
-                [
-                    (format!("harmonics[{}].sin", h + 1), t.sin),
-                    (format!("harmonics[{}].cos", h + 1), t.cos),
-                ]
-            })
-            .chain(j.wobble.iter().enumerate().flat_map(|(h, w)| {
-                (0..2).flat_map(move |c| {
-                    [
-                        (format!("wobble[{}].alpha[{c}]", h + 1), w.alpha[c]),
-                        (format!("wobble[{}].beta[{c}]", h + 1), w.beta[c]),
-                    ]
-                })
-            }));
-        for (key, v) in periodic {
-            if v.abs() >= PERIODIC_RAD {
-                let line_key = key.split('[').next().unwrap_or("").to_string();
-                return Err(refuse(
-                    Some(k),
-                    format!("joint[{k}].{key}"),
-                    &line_key,
-                    format!(
-                        "= {v} rad ({:.2}°), where an encoder's or a bearing's periodic error \
-                         is below {PERIODIC_RAD} rad (read as degrees: {:.2e} rad)",
-                        v.to_degrees(),
-                        v.to_radians()
-                    ),
-                    degrees,
-                ));
-            }
+            .map(|(c, &t)| (format!("tilt[{c}]"), "tilt", t)),
+    );
+    for (key, line_key, t) in angles {
+        let off = (t - (t / quarter).round() * quarter).abs();
+        if off > TWIST_OFF_RAD || t.abs() > std::f64::consts::PI + TWIST_OFF_RAD {
+            return Err(place.refuse(
+                Some(k),
+                format!("joint[{k}].{key}"),
+                line_key,
+                format!(
+                    "= {t} rad ({:.1}°), {off:.3} rad off the nearest quarter turn, where it \
+                     holds 0, ±π/2 or ±π and an error of a few mrad (read as degrees: \
+                     {:.5} rad)",
+                    t.to_degrees(),
+                    t.to_radians()
+                ),
+                DEGREES,
+            ));
         }
     }
-    for p in parsed.arm.probes() {
+    Ok(())
+}
+
+/// Joint `k`'s (1-based) harmonic and wobble coefficients: each below [`PERIODIC_RAD`].
+fn periodic_in_radians(place: &CalPlace, k: usize, j: &Joint) -> Result<(), Implausible> {
+    let periodic = j
+        .harmonics
+        .iter()
+        .enumerate()
+        .flat_map(|(h, t)| {
+            [
+                (format!("harmonics[{}].sin", h + 1), t.sin),
+                (format!("harmonics[{}].cos", h + 1), t.cos),
+            ]
+        })
+        .chain(j.wobble.iter().enumerate().flat_map(|(h, w)| {
+            (0..2).flat_map(move |c| {
+                [
+                    (format!("wobble[{}].alpha[{c}]", h + 1), w.alpha[c]),
+                    (format!("wobble[{}].beta[{c}]", h + 1), w.beta[c]),
+                ]
+            })
+        }));
+    for (key, v) in periodic {
+        if v.abs() >= PERIODIC_RAD {
+            let line_key = key.split('[').next().unwrap_or("").to_string();
+            return Err(place.refuse(
+                Some(k),
+                format!("joint[{k}].{key}"),
+                &line_key,
+                format!(
+                    "= {v} rad ({:.2}°), where an encoder's or a bearing's periodic error \
+                     is below {PERIODIC_RAD} rad (read as degrees: {:.2e} rad)",
+                    v.to_degrees(),
+                    v.to_radians()
+                ),
+                DEGREES,
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Every probe's stylus ball diameter (0: not given) within [`BALL_MM`], the hint saying
+/// which unit it looks like.
+fn balls_in_mm(place: &CalPlace, arm: &Arm) -> Result<(), Implausible> {
+    for p in arm.probes() {
         let d = p.ball_diameter;
         if d != 0.0 && !BALL_MM.contains(&d) {
-            return Err(refuse(
+            return Err(place.refuse(
                 None,
                 format!("probe (id {}) ball_diameter", p.id),
                 "ball_diameter",

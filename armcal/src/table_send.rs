@@ -93,85 +93,47 @@ pub fn send(port: &mut impl Link, table: &[u8], timeout: Duration) -> Result<Sen
         let len = encode(&ToDevice::Update(step.clone()), &mut out)?;
         stream.write(&out[..len])?;
         let what = format!("step {} of {n} ({})", i + 1, name(step));
-        let mut restarted = None;
-        let deadline = Instant::now() + timeout;
-        let mut reports = 0u64;
-        let answer: UpdateAnswer = loop {
-            let Some(item) = stream.next(deadline)? else {
-                bail!(
-                    "no answer from the hub to {what} within {timeout:?}{}{}; its old table stays live",
-                    match reports {
-                        0 => String::new(),
-                        r => format!(
-                            ", although it sent {r} reports meanwhile (it measures but does not take the update: another firmware?)"
-                        ),
-                    },
-                    match restarted {
-                        Some(h) => format!(", after it restarted ({})", announced(&h)),
-                        None => String::new(),
-                    }
-                );
-            };
-            match item {
-                Item::Update(a) => break a,
-                // The state record was written, the answer lost in the restart.
-                Item::Hello(Hello {
-                    live: Some(live), ..
-                }) if matches!(step, Step::Commit) && live.crc == crc => {
-                    return Ok(Sent {
-                        steps: n,
-                        reports_between: reports_between + reports,
-                        live,
-                    });
-                }
-                // A restart before `Begin` arrived loses nothing: the hub may still answer
-                // it (else the deadline says so, and that it restarted).
-                Item::Hello(h) if matches!(step, Step::Begin { .. }) => restarted = Some(h),
-                Item::Hello(h) => bail!(
-                    "the hub restarted while waiting for the answer to {what} ({}): an update does not survive a restart; its old table stays live, send the table again",
-                    announced(&h)
-                ),
-                Item::Report(_) | Item::Backward { .. } | Item::Inconsistent(..) => reports += 1,
-                // A probe answer is not this session's (another program selected a probe).
-                Item::Repeated(_) | Item::Damaged(_) | Item::Probe(_) => {}
-            }
-        };
+        let (waited, reports) = stream.answer(step, &what, crc)?;
         reports_between += reports;
-        match answer {
-            Ok(a) if answers(step, &a) => {}
-            Ok(a) => bail!(
-                "the hub answered {a:?} to {what}, which is not that step's answer (one left from an earlier session, or a hub out of step); the update is not done"
-            ),
-            Err(why) => bail!(
-                "the hub refused {what}: {why:?}{}; its old table stays live",
-                why_refused(&why)
-            ),
+        match waited {
+            Waited::Answer(answer) => check_answer(step, &what, answer)?,
+            Waited::Committed(live) => {
+                return Ok(Sent {
+                    steps: n,
+                    reports_between,
+                    live,
+                })
+            }
         }
     }
-    // The hub boots on the new table and announces it.
-    let deadline = Instant::now() + timeout;
-    loop {
-        let Some(item) = stream.next(deadline)? else {
-            bail!(
-                "the hub committed the table but did not announce it within {timeout:?}: it boots on it at its next start; its Hello (armcal decode) says which table is live"
-            );
-        };
-        match item {
-            Item::Hello(h) => match h.live {
-                Some(live) if live.crc == crc => {
-                    return Ok(Sent {
-                        steps: n,
-                        reports_between,
-                        live,
-                    })
-                }
-                _ => bail!(
-                    "after the commit the hub announced {}, not the table sent (CRC {crc:#010x})",
-                    announced(&h)
-                ),
-            },
-            _ => continue,
-        }
+    let live = stream.announcement(crc)?;
+    Ok(Sent {
+        steps: n,
+        reports_between,
+        live,
+    })
+}
+
+/// How the wait for a step's answer ended.
+enum Waited {
+    /// The hub answered the step.
+    Answer(UpdateAnswer),
+    /// The hub restarted on the table sent while the commit's answer was awaited: the
+    /// commit was written and only its answer lost.
+    Committed(LiveTable),
+}
+
+/// Ends the send unless `answer` accepts `step` as that step's own answer.
+fn check_answer(step: &Step, what: &str, answer: UpdateAnswer) -> Result<()> {
+    match answer {
+        Ok(a) if answers(step, &a) => Ok(()),
+        Ok(a) => bail!(
+            "the hub answered {a:?} to {what}, which is not that step's answer (one left from an earlier session, or a hub out of step); the update is not done"
+        ),
+        Err(why) => bail!(
+            "the hub refused {what}: {why:?}{}; its old table stays live",
+            why_refused(&why)
+        ),
     }
 }
 
@@ -218,6 +180,75 @@ struct Stream<'a, P> {
 }
 
 impl<P: Link> Stream<'_, P> {
+    /// Waits for the answer to `step` (`what` in messages), counting the reports that
+    /// arrive meanwhile; a restart of the hub ends the wait (see the module's notes), the
+    /// deadline too.
+    fn answer(&mut self, step: &Step, what: &str, crc: u32) -> Result<(Waited, u64)> {
+        let timeout = self.timeout;
+        let mut restarted = None;
+        let deadline = Instant::now() + timeout;
+        let mut reports = 0u64;
+        loop {
+            let Some(item) = self.next(deadline)? else {
+                bail!(
+                    "no answer from the hub to {what} within {timeout:?}{}{}; its old table stays live",
+                    match reports {
+                        0 => String::new(),
+                        r => format!(
+                            ", although it sent {r} reports meanwhile (it measures but does not take the update: another firmware?)"
+                        ),
+                    },
+                    match restarted {
+                        Some(h) => format!(", after it restarted ({})", announced(&h)),
+                        None => String::new(),
+                    }
+                );
+            };
+            match item {
+                Item::Update(a) => return Ok((Waited::Answer(a), reports)),
+                // The state record was written, the answer lost in the restart.
+                Item::Hello(Hello {
+                    live: Some(live), ..
+                }) if matches!(step, Step::Commit) && live.crc == crc => {
+                    return Ok((Waited::Committed(live), reports));
+                }
+                // A restart before `Begin` arrived loses nothing: the hub may still answer
+                // it (else the deadline says so, and that it restarted).
+                Item::Hello(h) if matches!(step, Step::Begin { .. }) => restarted = Some(h),
+                Item::Hello(h) => bail!(
+                    "the hub restarted while waiting for the answer to {what} ({}): an update does not survive a restart; its old table stays live, send the table again",
+                    announced(&h)
+                ),
+                Item::Report(_) | Item::Backward { .. } | Item::Inconsistent(..) => reports += 1,
+                // A probe answer is not this session's (another program selected a probe).
+                Item::Repeated(_) | Item::Damaged(_) | Item::Probe(_) => {}
+            }
+        }
+    }
+
+    /// After the commit: waits for the `Hello` the hub boots with, which must name the
+    /// table sent (CRC `crc`).
+    fn announcement(&mut self, crc: u32) -> Result<LiveTable> {
+        let timeout = self.timeout;
+        let deadline = Instant::now() + timeout;
+        loop {
+            let Some(item) = self.next(deadline)? else {
+                bail!(
+                    "the hub committed the table but did not announce it within {timeout:?}: it boots on it at its next start; its Hello (armcal decode) says which table is live"
+                );
+            };
+            if let Item::Hello(h) = item {
+                return match h.live {
+                    Some(live) if live.crc == crc => Ok(live),
+                    _ => bail!(
+                        "after the commit the hub announced {}, not the table sent (CRC {crc:#010x})",
+                        announced(&h)
+                    ),
+                };
+            }
+        }
+    }
+
     fn write(&mut self, bytes: &[u8]) -> Result<()> {
         self.port
             .set_timeout(self.timeout)

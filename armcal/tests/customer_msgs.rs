@@ -5,7 +5,7 @@
 #[allow(dead_code)]
 mod common;
 
-use common::{armcal, armcal_ok, refused, refused_with, stderr, workdir};
+use common::{armcal, armcal_ok, refused, refused_with, simulate, stderr, workdir};
 use std::path::Path;
 
 /// `data/NAME` of the project copied into `d` as `as_name`.
@@ -57,6 +57,49 @@ fn edit(src: &Path, dst: &Path, after: &str, nth: usize, from: &str, to: &str) {
     std::fs::write(dst, out).unwrap();
 }
 
+/// The ISO 10360-12 test set (sphere, length and spat groups) simulated in `d` from the
+/// calibration `cal` (seed 1) into `out`.
+fn iso_set(d: &Path, cal: &str, out: &str) {
+    armcal_ok(
+        &[
+            "simulate",
+            "--truth",
+            cal,
+            "--seed",
+            "1",
+            "--test",
+            "iso10360-12",
+            "-o",
+            out,
+        ],
+        d,
+    );
+}
+
+/// A fresh folder `name` holding the project's `default-6-full.toml` as `cal.toml` and its
+/// ISO 10360-12 test set as `t.csv`; returns the folder and the set's text.
+fn with_iso_set(name: &str) -> (std::path::PathBuf, String) {
+    let d = workdir(name);
+    copy_data(&d, "default-6-full.toml", "cal.toml");
+    iso_set(&d, "cal.toml", "t.csv");
+    let text = std::fs::read_to_string(d.join("t.csv")).unwrap();
+    (d, text)
+}
+
+/// `r.csv` in `d`: one joint reading of a 6-joint arm, the input of `armcal eval`.
+fn write_reading(d: &Path) {
+    std::fs::write(
+        d.join("r.csv"),
+        "j1,j2,j3,j4,j5,j6\n0.1,0.2,0.3,0.4,0.5,0.6\n",
+    )
+    .unwrap();
+}
+
+/// `armcal check FILE --calib cal.toml` in `d`.
+fn check(d: &Path, file: &str) -> std::process::Output {
+    armcal(&["check", file, "--calib", "cal.toml"], d)
+}
+
 /// Joint columns out of order (two swapped, or all reversed) in `point`, `spat` and
 /// `sphere`/`length` data: refused before any fit with the reordering named; the data as
 /// recorded pass, and `--accept-order` takes them as they are.
@@ -67,22 +110,7 @@ fn joint_columns_out_of_order_are_named_before_any_fit() {
     // the misfit a real first calibration starts from.
     copy_data(&d, "default-6-full.toml", "truth.toml");
     for (kind, count, out) in [("point", "60", "p.csv"), ("spat", "8", "s.csv")] {
-        armcal_ok(
-            &[
-                "simulate",
-                "--truth",
-                "truth.toml",
-                "--seed",
-                "4",
-                "--kind",
-                kind,
-                "--count",
-                count,
-                "-o",
-                out,
-            ],
-            &d,
-        );
+        simulate(&d, kind, count, "4", &[], out);
     }
     let cal = |data: &str, extra: &[&str]| {
         let mut args = vec!["calibrate", data, "--folds", "0", "-o", "out.toml"];
@@ -123,20 +151,7 @@ fn joint_columns_out_of_order_are_named_before_any_fit() {
     assert!(!stderr(&o).contains("out of order"), "{}", stderr(&o));
 
     // `check` on an ISO 10360-12 test set (sphere, length and spat groups).
-    armcal_ok(
-        &[
-            "simulate",
-            "--truth",
-            "truth.toml",
-            "--seed",
-            "1",
-            "--test",
-            "iso10360-12",
-            "-o",
-            "t.csv",
-        ],
-        &d,
-    );
+    iso_set(&d, "truth.toml", "t.csv");
     armcal_ok(&["check", "t.csv", "--calib", "truth.toml"], &d);
     reorder(&d.join("t.csv"), &d.join("t12.csv"), &[1, 0, 2, 3, 4, 5]);
     refused_with(
@@ -146,57 +161,44 @@ fn joint_columns_out_of_order_are_named_before_any_fit() {
     );
 }
 
-/// Degrees (and a ball in µm) inside a calibration file: refused where it is read, by every
-/// command that reads it, with the file, the line and the key; `--accept-units` takes an
-/// angle within the loader's limits as it is.
-#[test]
-fn degrees_in_a_calibration_file_are_refused_with_key_and_line() {
-    let d = workdir("caldeg");
+/// A fresh folder `name` holding the project's calibration as `full.toml`, `r.csv`, and four
+/// copies of the calibration with one angle in degrees (or beyond every turn): `tilt.toml`
+/// (the second joint's tilt of (2.2, 2.4) mrad written in degrees), `zero.toml`,
+/// `harm.toml` and `twist.toml` (a quarter turn of 90).
+fn with_degrees(name: &str) -> std::path::PathBuf {
+    let d = workdir(name);
     copy_data(&d, "default-6-full.toml", "full.toml");
     let full = d.join("full.toml");
-    // The second joint's tilt of (2.2, 2.4) mrad written in degrees.
-    edit(
-        &full,
-        &d.join("tilt.toml"),
-        "[[joint]]",
-        2,
-        "tilt = [0.0022196, 0.0023613]",
-        "tilt = [0.127, 0.135]",
-    );
-    edit(
-        &full,
-        &d.join("zero.toml"),
-        "[[joint]]",
-        3,
-        "zero_offset = -0.0020333",
-        "zero_offset = -0.1165",
-    );
-    edit(
-        &full,
-        &d.join("harm.toml"),
-        "[[joint]]",
-        1,
-        "sin = -8.8e-5",
-        "sin = -0.005",
-    );
-    edit(
-        &full,
-        &d.join("twist.toml"),
-        "[[joint]]",
-        2,
-        "tilt = [0.0022196, 0.0023613]",
-        "tilt = [90.0, 0.0]",
-    );
-    std::fs::write(
-        d.join("r.csv"),
-        "j1,j2,j3,j4,j5,j6\n0.1,0.2,0.3,0.4,0.5,0.6\n",
-    )
-    .unwrap();
-    let eval = |calib: &str, extra: &[&str]| {
-        let mut args = vec!["eval", "--calib", calib, "r.csv"];
-        args.extend_from_slice(extra);
-        armcal(&args, &d)
-    };
+    let tilt = "tilt = [0.0022196, 0.0023613]";
+    for (file, nth, from, to) in [
+        ("tilt.toml", 2, tilt, "tilt = [0.127, 0.135]"),
+        (
+            "zero.toml",
+            3,
+            "zero_offset = -0.0020333",
+            "zero_offset = -0.1165",
+        ),
+        ("harm.toml", 1, "sin = -8.8e-5", "sin = -0.005"),
+        ("twist.toml", 2, tilt, "tilt = [90.0, 0.0]"),
+    ] {
+        edit(&full, &d.join(file), "[[joint]]", nth, from, to);
+    }
+    write_reading(&d);
+    d
+}
+
+/// `armcal eval --calib CALIB r.csv EXTRA…` in `d`.
+fn eval(d: &Path, calib: &str, extra: &[&str]) -> std::process::Output {
+    let mut args = vec!["eval", "--calib", calib, "r.csv"];
+    args.extend_from_slice(extra);
+    armcal(&args, d)
+}
+
+/// Degrees inside a calibration file: refused where it is read, with the file, the line and
+/// the key; `--accept-units` takes an angle within the loader's limits as it is.
+#[test]
+fn degrees_in_a_calibration_file_are_refused_with_key_and_line() {
+    let d = with_degrees("caldeg");
     armcal_ok(&["eval", "--calib", "full.toml", "r.csv"], &d);
     for (file, line, key, value) in [
         ("tilt.toml", 28, "joint[2].tilt[0]", "0.127 rad"),
@@ -211,7 +213,7 @@ fn degrees_in_a_calibration_file_are_refused_with_key_and_line() {
             "{file}: line {line} is `{at}`"
         );
         refused(
-            &eval(file, &[]),
+            &eval(&d, file, &[]),
             &[
                 &format!("{file}: line {line}, {key} = {value}"),
                 "in degrees? multiply by π/180",
@@ -219,7 +221,23 @@ fn degrees_in_a_calibration_file_are_refused_with_key_and_line() {
             ],
         );
     }
-    // Every command that reads a calibration refuses it the same way.
+    // Deliberately: a tilt of 0.127 rad is within the loader's limits and is read.
+    armcal_ok(
+        &["eval", "--calib", "tilt.toml", "r.csv", "--accept-units"],
+        &d,
+    );
+    // 90 rad is beyond every turn: the loader's own limit still refuses it, with its key.
+    refused(
+        &eval(&d, "twist.toml", &["--accept-units"]),
+        &["joint[2].tilt[0]", "angle limit"],
+    );
+}
+
+/// Every command that reads a calibration refuses degrees in it the way `eval` does, and
+/// writes nothing.
+#[test]
+fn every_command_refuses_degrees_in_a_calibration_file() {
+    let d = with_degrees("caldeg-all");
     refused(
         &armcal(&["table", "build", "tilt.toml", "-o", "t.bin"], &d),
         &["tilt.toml: line 28, joint[2].tilt[0]"],
@@ -237,27 +255,24 @@ fn degrees_in_a_calibration_file_are_refused_with_key_and_line() {
         ),
         &["harm.toml: line 20"],
     );
-    // Deliberately: a tilt of 0.127 rad is within the loader's limits and is read.
-    armcal_ok(
-        &["eval", "--calib", "tilt.toml", "r.csv", "--accept-units"],
-        &d,
-    );
-    // 90 rad is beyond every turn: the loader's own limit still refuses it, with its key.
-    refused(
-        &eval("twist.toml", &["--accept-units"]),
-        &["joint[2].tilt[0]", "angle limit"],
-    );
+}
 
-    // The stylus ball's diameter in µm.
+/// The stylus ball's diameter in µm in a calibration file: refused with its line, the unit
+/// named rather than the loader's limit.
+#[test]
+fn a_ball_diameter_in_um_is_refused_with_its_line() {
+    let d = workdir("ballum");
+    copy_data(&d, "default-6-full.toml", "full.toml");
+    write_reading(&d);
     edit(
-        &full,
+        &d.join("full.toml"),
         &d.join("ball.toml"),
         "",
         0,
         "[probe]",
         "[probe]\nball_diameter = 6000.0",
     );
-    let o = eval("ball.toml", &[]);
+    let o = eval(&d, "ball.toml", &[]);
     let e = refused(
         &o,
         &[
@@ -349,23 +364,8 @@ fn decode_refuses_a_hub_running_another_arms_table() {
 /// message names the calibration's arm and asks whether it is the data's.
 #[test]
 fn another_arms_calibration_is_named_as_such() {
-    let d = workdir("otherarm");
-    copy_data(&d, "default-6-full.toml", "cal.toml");
+    let (d, _) = with_iso_set("otherarm");
     copy_data(&d, "mukca/mukca-panda-panda_2.toml", "panda.toml");
-    armcal_ok(
-        &[
-            "simulate",
-            "--truth",
-            "cal.toml",
-            "--seed",
-            "1",
-            "--test",
-            "iso10360-12",
-            "-o",
-            "t.csv",
-        ],
-        &d,
-    );
     let why = [
         "the arm has 7 joints, the data has 6 joint columns",
         "the calibration's arm is `franka-panda` (serial panda_2, 7 joints)",
@@ -378,11 +378,7 @@ fn another_arms_calibration_is_named_as_such() {
         3,
         &needles,
     );
-    std::fs::write(
-        d.join("r.csv"),
-        "j1,j2,j3,j4,j5,j6\n0.1,0.2,0.3,0.4,0.5,0.6\n",
-    )
-    .unwrap();
+    write_reading(&d);
     let mut needles = vec!["r.csv: line 1, column j7", "panda.toml"];
     needles.extend(why);
     refused(
@@ -397,20 +393,7 @@ fn another_arms_calibration_is_named_as_such() {
 fn merged_files_name_the_file_and_line_of_the_row_at_fault() {
     let d = workdir("merged");
     copy_data(&d, "default-6-full.toml", "cal.toml");
-    armcal_ok(
-        &[
-            "simulate",
-            "--truth",
-            "cal.toml",
-            "--seed",
-            "1",
-            "--test",
-            "iso10360-12",
-            "-o",
-            "a.csv",
-        ],
-        &d,
-    );
+    iso_set(&d, "cal.toml", "a.csv");
     // b.csv: a sphere group of ten points of a.csv's (hence `--accept-duplicates`), too few
     // for P_Size and P_Form, after a comment.
     let text = std::fs::read_to_string(d.join("a.csv")).unwrap();
@@ -443,43 +426,30 @@ fn merged_files_name_the_file_and_line_of_the_row_at_fault() {
     assert!(!e.contains("a.csv + b.csv"), "{e}");
 }
 
-/// More mistakes a new user makes, each refused with its place or read right.
-#[test]
-fn five_more_realistic_mistakes() {
-    let d = workdir("more");
-    copy_data(&d, "default-6-full.toml", "cal.toml");
-    armcal_ok(
-        &[
-            "simulate",
-            "--truth",
-            "cal.toml",
-            "--seed",
-            "1",
-            "--test",
-            "iso10360-12",
-            "-o",
-            "t.csv",
-        ],
-        &d,
-    );
-    let text = std::fs::read_to_string(d.join("t.csv")).unwrap();
-    let check = |file: &str| armcal(&["check", file, "--calib", "cal.toml"], &d);
+// More mistakes a new user makes, each refused with its place or read right.
 
-    // 1. An empty group cell.
+/// 1. An empty group cell.
+#[test]
+fn an_empty_group_cell_is_refused_with_its_line() {
+    let (d, text) = with_iso_set("more-group");
     let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
     let k = lines.iter().position(|l| l.starts_with("sphere,")).unwrap();
     lines[k] = lines[k].replacen("sphere,1,", "sphere,,", 1);
     std::fs::write(d.join("g.csv"), lines.join("\n") + "\n").unwrap();
     refused_with(
-        &check("g.csv"),
+        &check(&d, "g.csv"),
         3,
         &[
             &format!("g.csv: line {}, column group: empty", k + 1),
             "whole number",
         ],
     );
+}
 
-    // 2. A header and no rows (an export that kept only the header).
+/// 2. A header and no rows (an export that kept only the header).
+#[test]
+fn a_header_without_rows_is_refused() {
+    let (d, text) = with_iso_set("more-header");
     let head: String = text
         .lines()
         .filter(|l| l.starts_with('#') || l.starts_with("kind"))
@@ -487,12 +457,16 @@ fn five_more_realistic_mistakes() {
         .collect();
     std::fs::write(d.join("h.csv"), head).unwrap();
     refused_with(
-        &check("h.csv"),
+        &check(&d, "h.csv"),
         3,
         &["h.csv: line 3, column (file): no data rows"],
     );
+}
 
-    // 3. Tab-separated (a spreadsheet's "text" export): read the same as the commas.
+/// 3. Tab-separated (a spreadsheet's "text" export): read the same as the commas.
+#[test]
+fn tab_separated_data_read_as_the_commas() {
+    let (d, text) = with_iso_set("more-tab");
     std::fs::write(d.join("tab.csv"), text.replace(',', "\t")).unwrap();
     let a = armcal_ok(&["check", "t.csv", "--calib", "cal.toml", "--json"], &d);
     let b = armcal_ok(&["check", "tab.csv", "--calib", "cal.toml", "--json"], &d);
@@ -503,8 +477,12 @@ fn five_more_realistic_mistakes() {
         serde_json::from_str(&strip(&b)).unwrap(),
     );
     assert_eq!(ja["tests"], jb["tests"]);
+}
 
-    // 4. Encoder counts in the radian columns j1..jN.
+/// 4. Encoder counts in the radian columns j1..jN.
+#[test]
+fn counts_in_the_radian_columns_are_named() {
+    let (d, text) = with_iso_set("more-counts");
     let counts: String = text
         .lines()
         .map(|l| {
@@ -521,27 +499,28 @@ fn five_more_realistic_mistakes() {
         .collect();
     std::fs::write(d.join("c.csv"), counts).unwrap();
     refused_with(
-        &check("c.csv"),
+        &check(&d, "c.csv"),
         3,
         &[
             "c.csv: line 4, column j1",
             "encoder counts? name the columns c1..cN",
         ],
     );
+}
 
-    // 5. A calibration of a later software version (an unknown section and key): read, with
-    //    each unknown key named on stderr, and the same values.
+/// 5. A calibration of a later software version (an unknown section and key): read, with
+///    each unknown key named on stderr, and the same values.
+#[test]
+fn a_newer_calibration_is_read_with_its_unknown_keys_named() {
+    let d = workdir("more-newer");
+    copy_data(&d, "default-6-full.toml", "cal.toml");
     let cal = std::fs::read_to_string(d.join("cal.toml")).unwrap();
     std::fs::write(
         d.join("newer.toml"),
         format!("format_version = 9\n{cal}\n[compensation]\nmode = \"volumetric\"\n"),
     )
     .unwrap();
-    std::fs::write(
-        d.join("r.csv"),
-        "j1,j2,j3,j4,j5,j6\n0.1,0.2,0.3,0.4,0.5,0.6\n",
-    )
-    .unwrap();
+    write_reading(&d);
     let old = armcal_ok(&["eval", "--calib", "cal.toml", "r.csv"], &d);
     let new = armcal_ok(&["eval", "--calib", "newer.toml", "r.csv"], &d);
     assert_eq!(old.stdout, new.stdout);
@@ -551,8 +530,12 @@ fn five_more_realistic_mistakes() {
             && e.contains("unknown key compensation ignored"),
         "{e}"
     );
+}
 
-    // 6. The test sphere's diameter in metres in a sphere group.
+/// 6. The test sphere's diameter in metres in a sphere group.
+#[test]
+fn a_sphere_diameter_in_metres_is_refused() {
+    let (d, text) = with_iso_set("more-metres");
     let metres: String = text
         .lines()
         .map(|l| {
@@ -567,7 +550,7 @@ fn five_more_realistic_mistakes() {
         .collect();
     std::fs::write(d.join("m.csv"), metres).unwrap();
     refused_with(
-        &check("m.csv"),
+        &check(&d, "m.csv"),
         3,
         &[
             "m.csv",

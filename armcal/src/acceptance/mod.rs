@@ -22,6 +22,7 @@ use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;
 use statistics::{StatError, Test, Value};
 use std::collections::BTreeMap;
+use std::fmt::Write as _;
 use virtual_test::Interval;
 
 /// One group's test in the report (µm).
@@ -232,10 +233,34 @@ fn row(v: &Value, mpe: Option<&Mpe>, predicted: Option<&Interval>) -> Row {
 
 impl Check {
     /// The report a metrologist reads: the tests by their standard names, each group's value
-    /// with the MPE and the decision, then each test's result and its worst group.
+    /// with the MPE and the decision, then each test's result and its worst group, the notes
+    /// and the verdict.
     pub fn text(&self) -> String {
-        use std::fmt::Write as _;
         let mut s = String::new();
+        self.values_text(&mut s);
+        self.results_text(&mut s);
+        self.notes_text(&mut s);
+        let _ = writeln!(s, "{}", self.verdict.line());
+        s
+    }
+
+    /// The effective stylus ball diameters as the reports list them: `d mm (group g), …`
+    /// (`None` where no plain sphere group measures one).
+    pub(crate) fn effective_ball_list(&self) -> Option<String> {
+        if self.effective_ball_diameter.is_empty() {
+            return None;
+        }
+        let each: Vec<String> = self
+            .effective_ball_diameter
+            .iter()
+            .map(|e| format!("{:.4} mm (group {})", e.diameter_mm, e.group))
+            .collect();
+        Some(each.join(", "))
+    }
+
+    /// The heading and a line a group's value: bar length, value, MPE, U and its source, the
+    /// decision and the predicted interval.
+    fn values_text(&self, s: &mut String) {
         let _ = writeln!(
             s,
             "acceptance tests (spec/acceptance-tests.md), stylus ball {} mm",
@@ -270,6 +295,11 @@ impl Check {
                 r.u_source.words()
             );
         }
+    }
+
+    /// Each test's result, its worst group and its decision over the groups: any fail fails,
+    /// else any undecided is undecided.
+    fn results_text(&self, s: &mut String) {
         let _ = writeln!(s, "results:");
         for (k, v) in &self.results {
             let decisions: Vec<&str> = self
@@ -293,16 +323,15 @@ impl Check {
                 self.worst_group[k]
             );
         }
-        if !self.effective_ball_diameter.is_empty() {
-            let each: Vec<String> = self
-                .effective_ball_diameter
-                .iter()
-                .map(|e| format!("{:.4} mm (group {})", e.diameter_mm, e.group))
-                .collect();
+    }
+
+    /// What the reader must know beside the values: the effective ball, decisions taken
+    /// with U = 0, and values outside what the budget predicts.
+    fn notes_text(&self, s: &mut String) {
+        if let Some(each) = self.effective_ball_list() {
             let _ = writeln!(
                 s,
-                "effective stylus ball diameter (B89.4.22): {}; the calibration file says {} mm",
-                each.join(", "),
+                "effective stylus ball diameter (B89.4.22): {each}; the calibration file says {} mm",
                 self.ball_diameter_mm
             );
         }
@@ -344,7 +373,5 @@ impl Check {
                 outside.join("; ")
             );
         }
-        let _ = writeln!(s, "{}", self.verdict.line());
-        s
     }
 }

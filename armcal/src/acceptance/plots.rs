@@ -11,7 +11,7 @@
 //!
 //! A file is written only where the data has the groups it shows.
 
-use crate::data::Dataset;
+use crate::data::{Dataset, LengthGroup, SpatGroup, SphereGroup};
 use crate::effects::figure::{Figure, Legend, Panel};
 use nalgebra::Vector3;
 
@@ -46,22 +46,66 @@ struct Bar {
     error_um: f64,
 }
 
-/// The figures for `data`, its ball centres `centres` by the calibrated model.
+/// Each point of a cone about the cone's mean, seen from above: (x, y) in µm, the SPAT
+/// scatter this module's `spat_scatter.png` and the HTML report both draw.
+pub(crate) fn from_above_um(rows: &[usize], centres: &[Vector3<f64>]) -> Vec<(f64, f64)> {
+    let m = super::mean_of(rows, centres);
+    rows.iter()
+        .map(|&i| ((centres[i].x - m.x) * 1e3, (centres[i].y - m.y) * 1e3))
+        .collect()
+}
+
+/// A point's place on a least-squares sphere and its distance from it.
+pub(crate) struct Deviation {
+    /// Azimuth about the sphere's centre (°).
+    pub azimuth_deg: f64,
+    /// Elevation from the centre's horizontal plane (°).
+    pub elevation_deg: f64,
+    /// Distance from the centre less the radius (µm): P_Form is their range.
+    pub radial_um: f64,
+}
+
+/// Each point's [`Deviation`] from the free least-squares sphere through `points` (`None`
+/// where no sphere fits): what both the PNG and the HTML report of a sphere group show.
+pub(crate) fn sphere_deviations(points: &[Vector3<f64>]) -> Option<Vec<Deviation>> {
+    let s = crate::geometry::sphere::free(points).ok()?;
+    let each = points
+        .iter()
+        .map(|p| {
+            let v = p - s.centre;
+            Deviation {
+                azimuth_deg: v.y.atan2(v.x).to_degrees(),
+                elevation_deg: (v.z / v.norm()).clamp(-1.0, 1.0).asin().to_degrees(),
+                radial_um: (v.norm() - s.radius) * 1e3,
+            }
+        })
+        .collect();
+    Some(each)
+}
+
+/// The figures for `data`, its ball centres `centres` by the calibrated model: each only
+/// where the data has its groups.
 pub fn figures(data: &Dataset, centres: &[Vector3<f64>]) -> Vec<Figure> {
     let layout = data.layout();
-    let mut out = Vec::new();
-    let spheres: Vec<Panel> = layout
-        .sphere
+    [
+        sphere_figure(&layout.sphere, centres),
+        length_figure(&layout.length, centres),
+        spat_figure(&layout.spat, centres),
+    ]
+    .into_iter()
+    .flatten()
+    .collect()
+}
+
+/// `sphere_deviations.png`: a panel a sphere group that a sphere fits.
+fn sphere_figure(groups: &[SphereGroup], centres: &[Vector3<f64>]) -> Option<Figure> {
+    let spheres: Vec<Panel> = groups
         .iter()
         .filter_map(|g| {
             let pts: Vec<Vector3<f64>> = g.rows.iter().map(|&i| centres[i]).collect();
-            let s = crate::geometry::sphere::free(&pts).ok()?;
-            let points = pts
+            let points = sphere_deviations(&pts)?
                 .iter()
-                .map(|p| {
-                    let d = p - s.centre;
-                    (d.y.atan2(d.x).to_degrees(), (d.norm() - s.radius) * 1e3)
-                })
+                .map(|d| (d.azimuth_deg, d.radial_um))
                 .collect();
             Some(panel(
                 format!("sphere group {} (D = {} mm)", g.group, g.diameter_mm),
@@ -71,14 +115,17 @@ pub fn figures(data: &Dataset, centres: &[Vector3<f64>]) -> Vec<Figure> {
             ))
         })
         .collect();
-    out.extend(figure(
+    figure(
         "sphere_deviations.png",
         "Sphere tests: radial deviations from the least-squares sphere",
         "Each point's distance from its group's fitted centre less the fitted radius (P_Form is their range)".into(),
         spheres,
-    ));
-    let bars: Vec<Bar> = layout
-        .length
+    )
+}
+
+/// `length_errors.png`: every bar position's error against its length, height and reach.
+fn length_figure(groups: &[LengthGroup], centres: &[Vector3<f64>]) -> Option<Figure> {
+    let bars: Vec<Bar> = groups
         .iter()
         .map(|g| {
             let (a, b) = (super::mean_of(&g.a, centres), super::mean_of(&g.b, centres));
@@ -89,10 +136,11 @@ pub fn figures(data: &Dataset, centres: &[Vector3<f64>]) -> Vec<Figure> {
             }
         })
         .collect();
-    if !bars.is_empty() {
-        let by =
-            |f: &dyn Fn(&Bar) -> f64| bars.iter().map(|b| (f(b), b.error_um)).collect::<Vec<_>>();
-        let panels = vec![
+    let by = |f: &dyn Fn(&Bar) -> f64| bars.iter().map(|b| (f(b), b.error_um)).collect::<Vec<_>>();
+    let panels = if bars.is_empty() {
+        Vec::new()
+    } else {
+        vec![
             panel(
                 "against length".into(),
                 "bar length (mm)",
@@ -111,40 +159,36 @@ pub fn figures(data: &Dataset, centres: &[Vector3<f64>]) -> Vec<Figure> {
                 "length error (µm)",
                 by(&|b| b.middle.xy().norm()),
             ),
-        ];
-        out.extend(figure(
-            "length_errors.png",
-            "Length tests: each bar position's error",
-            format!(
-                "{} bar positions: measured distance of the ball centres less the bar's length",
-                bars.len()
-            ),
-            panels,
-        ));
-    }
-    let cones: Vec<Panel> = layout
-        .spat
+        ]
+    };
+    figure(
+        "length_errors.png",
+        "Length tests: each bar position's error",
+        format!(
+            "{} bar positions: measured distance of the ball centres less the bar's length",
+            bars.len()
+        ),
+        panels,
+    )
+}
+
+/// `spat_scatter.png`: a panel a SPAT cone.
+fn spat_figure(groups: &[SpatGroup], centres: &[Vector3<f64>]) -> Option<Figure> {
+    let cones: Vec<Panel> = groups
         .iter()
         .map(|g| {
-            let m = super::mean_of(&g.rows, centres);
-            let points = g
-                .rows
-                .iter()
-                .map(|&i| ((centres[i].x - m.x) * 1e3, (centres[i].y - m.y) * 1e3))
-                .collect();
             panel(
                 format!("SPAT cone {}", g.group),
                 "x from the mean (µm)",
                 "y from the mean (µm)",
-                points,
+                from_above_um(&g.rows, centres),
             )
         })
         .collect();
-    out.extend(figure(
+    figure(
         "spat_scatter.png",
         "Single-point articulation: ball centres about each cone's mean, from above",
         "Each articulation's ball centre less the cone's mean position (x, y)".into(),
         cones,
-    ));
-    out
+    )
 }

@@ -1,14 +1,18 @@
 //! `armcal calibrate`: identify an arm's parameters from measured data.
 
 use anyhow::Context;
+use armcal::data::Dataset;
 use armcal::fit::calib;
 use armcal::fit::finish::Fit;
-use armcal::fit::holdout;
+use armcal::fit::holdout::{self, Holdout};
 use armcal::fit::options::Options;
 use armcal::fit::priors::{Prior, Ridge};
 use armcal::fit::report;
 use armcal::fit::residuals::{residuals, summarise};
+use armcal::html::header::Provenance;
+use armcal::output::Staged;
 use armcal::params::Terms;
+use armcal::uncertainty::report::BudgetReport;
 use quatarm_ref::arm::Arm;
 use std::path::{Path, PathBuf};
 
@@ -98,13 +102,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let start = start_arm(a.arm.as_deref(), a.accept.accept())?;
     let terms = Terms::parse(&a.terms, start.dof())?;
     let table = a.output.with_extension("bin");
-    let mut inputs = super::data_in::inputs(&a.data);
-    if let Some(arm) = &a.arm {
-        inputs.push((arm.as_path(), "start arm"));
-    }
-    for f in &a.fleet_prior {
-        inputs.push((f.as_path(), "fleet prior's calibration"));
-    }
+    let inputs = inputs(&a);
     let mut outputs = vec![
         (a.output.as_path(), "calibration file"),
         (&table, "binary table"),
@@ -126,19 +124,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut observer = armcal::progress::for_command(a.progress, "calibrating");
     let fit = calib::calibrate_observed(&start, &data, &opts, observer.as_mut())
         .with_context(|| format!("cannot calibrate from {}", super::data_in::names(&a.data)))?;
-
+    let (method, validation) = validate(&a, &start, &data, &opts, observer.as_mut());
+    drop(observer);
     let before = summarise(&residuals(&fit.start, &data, None), &data);
     let after = summarise(&residuals(&fit.arm, &data, fit.frame), &data);
-    let k = a.folds as usize;
-    let (folds, method) = if a.by_group {
-        (holdout::by_group(&data), "one group at a time".to_string())
-    } else {
-        (holdout::kfold(&data, k, 0x0f01d), format!("{k}-fold"))
-    };
-    let held = (k > 0 || a.by_group) && folds.len() > 1;
-    let validation =
-        held.then(|| holdout::validate_observed(&start, &data, &opts, &folds, observer.as_mut()));
-    drop(observer);
     let mut rep = report::build(
         &fit,
         &data,
@@ -148,13 +137,72 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     );
     rep.terms = terms.spec();
     rep.prior = prior_report(&a, fleet, &fit);
-    if !held && (k > 0 || a.by_group) {
+    if validation.is_none() && (a.folds > 0 || a.by_group) {
         rep.residuals.holdout_note = Some(
             "none: the data are a single unit (one group) that cannot be split into folds".into(),
         );
     }
+    let mut files = Staged::guarding(&inputs);
+    stage(
+        &a,
+        &terms,
+        &fit,
+        &data,
+        validation.as_ref(),
+        &mut rep,
+        &mut files,
+    )?;
+    files.commit()?;
+    super::print_report(a.json, || rep.json(), || rep.text());
+    Ok(())
+}
 
-    // The calibration file, checked by reading it back and evaluating it.
+/// The files no output may overwrite: the data, the start arm, the fleet prior's
+/// calibrations.
+fn inputs(a: &Args) -> Vec<(&Path, &'static str)> {
+    let mut inputs = super::data_in::inputs(&a.data);
+    if let Some(arm) = &a.arm {
+        inputs.push((arm.as_path(), "start arm"));
+    }
+    for f in &a.fleet_prior {
+        inputs.push((f.as_path(), "fleet prior's calibration"));
+    }
+    inputs
+}
+
+/// The held-out validation the arguments ask for (`--folds`, `--by-group`): its method in
+/// words and its result, `None` where none is asked or the data are one unit that cannot be
+/// split.
+fn validate(
+    a: &Args,
+    start: &Arm,
+    data: &Dataset,
+    opts: &Options,
+    observer: &mut dyn armcal::progress::Observer,
+) -> (String, Option<Holdout>) {
+    let k = a.folds as usize;
+    let (folds, method) = if a.by_group {
+        (holdout::by_group(data), "one group at a time".to_string())
+    } else {
+        (holdout::kfold(data, k, 0x0f01d), format!("{k}-fold"))
+    };
+    let held = (k > 0 || a.by_group) && folds.len() > 1;
+    let validation = held.then(|| holdout::validate_observed(start, data, opts, &folds, observer));
+    (method, validation)
+}
+
+/// Stages the outputs: the calibration file (checked by reading it back and evaluating it),
+/// with its uncertainty budget, its binary table where the firmware can hold the model, and
+/// the HTML report if asked; the report says what was written.
+fn stage(
+    a: &Args,
+    terms: &Terms,
+    fit: &Fit,
+    data: &Dataset,
+    validation: Option<&Holdout>,
+    rep: &mut report::Report<BudgetReport>,
+    files: &mut Staged,
+) -> anyhow::Result<()> {
     let header = [
         format!(
             "calibrated by armcal calibrate from {}",
@@ -170,45 +218,22 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         ),
     ];
     let refs: Vec<&str> = header.iter().map(String::as_str).collect();
-    let made = a.budget.budget(
-        &fit,
-        &data,
-        validation.as_ref(),
-        rep.residuals.after.all.rms_um,
-    );
+    let made = a
+        .budget
+        .budget(fit, data, validation, rep.residuals.after.all.rms_um);
     let budget = super::budget::or_warning(made, &mut rep.uncertainty, &mut rep.warnings);
-    let text = super::written::checked_text(&fit.arm, budget.as_ref(), &refs, &data)?;
-    let mut files = armcal::output::Staged::guarding(&inputs);
-    files.write(&a.output, text.as_bytes())?;
+    let text = super::written::checked_text(&fit.arm, budget.as_ref(), &refs, data)?;
+    let table =
+        super::written::stage_with_table(files, &a.output, &text, &fit.arm, budget.as_ref())?;
     rep.output.calibration = Some(a.output.display().to_string());
-    match armcal::tablebuild::build_with(&fit.arm, budget.as_ref()) {
-        Ok(bytes) => {
-            files.write(&table, &bytes)?;
-            rep.output.table = Some(table.display().to_string());
-        }
-        Err(e) => {
-            // A stale table beside the file would describe another model.
-            files.remove_at_commit(&table);
-            rep.warnings.push(format!("binary table not written: {e}"));
-        }
+    match table {
+        Ok(table) => rep.output.table = Some(table.display().to_string()),
+        Err(e) => rep.warnings.push(format!("binary table not written: {e}")),
     }
     if let Some(r) = &a.report {
-        let prov = armcal::html::header::Provenance {
-            arm: &fit.arm,
-            arm_file: a.arm.as_deref().map(|p| ("start arm", p)),
-            data_files: a.data.iter().map(PathBuf::as_path).collect(),
-            data: &data,
-            mpe: None,
-            rule: None,
-        };
-        let page = armcal::html::calibration::page(&rep, &fit, &data, validation.as_ref(), &prov);
+        let prov = Provenance::of_fit(&fit.arm, a.arm.as_deref(), &a.data, data);
+        let page = armcal::html::calibration::page(rep, fit, data, validation, &prov);
         files.write(r, page.as_bytes())?;
-    }
-    files.commit()?;
-    if a.json {
-        println!("{}", rep.json());
-    } else {
-        print!("{}", rep.text());
     }
     Ok(())
 }

@@ -7,7 +7,10 @@ use armcal::diagnose::report::Report;
 use armcal::diagnose::same_arm::{self, Grouping};
 use armcal::diagnose::Diagnosis;
 use armcal::diagnose::{self, patterns, plots, report, FoldChoice};
+use armcal::effects::figure::Figure;
+use armcal::html::header::Provenance;
 use armcal::output::Staged;
+use quatarm_ref::arm::Arm;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `armcal diagnose`.
@@ -120,6 +123,31 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if !a.fleet.is_empty() {
         return run_fleet(&a);
     }
+    let (start, inputs) = check_before_fit(&a)?;
+    let data = super::data_in::read(&a.data, &start, a.accept.accept())?;
+    let opts = options(&a);
+    let d = spinning(
+        !a.json,
+        "diagnosing: fitting the geometric model, testing candidates…",
+        || diagnose::diagnose(&start, &data, &opts),
+    )
+    .with_context(|| format!("cannot diagnose {}", super::data_in::names(&a.data)))?;
+    let mut figures = patterns::figures(&d, &data);
+    figures.extend(diagnose::unexplained::figure(&d.unexplained));
+    let mut rep = report::build(&d, &data, &figures);
+    nested(&a, &start, &data, &opts, &mut rep)?;
+    test_level(&start, &data, &opts, &d, &mut rep);
+    let mut files = Staged::guarding(&inputs);
+    stage(&a, &d, &data, &figures, &mut rep, &mut files)?;
+    files.commit()?;
+    super::print_report(a.json, || rep.json(), || rep.text());
+    Ok(())
+}
+
+/// What can be refused before any fit: the arguments, the start arm, the outputs' names
+/// (none may overwrite an input) and a `--plots` folder that is a file. Returns the start arm
+/// and the inputs the outputs are guarded against.
+fn check_before_fit(a: &Args) -> anyhow::Result<(Arm, Vec<(&Path, &'static str)>)> {
     if a.data.is_empty() {
         bail!("no data file given");
     }
@@ -149,7 +177,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             );
         }
     }
-    let data = super::data_in::read(&a.data, &start, a.accept.accept())?;
+    Ok((start, inputs))
+}
+
+/// The diagnosis' options from the arguments.
+fn options(a: &Args) -> diagnose::Options {
     let mut opts = diagnose::Options {
         folds: if a.by_group {
             FoldChoice::ByGroup
@@ -166,80 +198,81 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     opts.select.z = a.z;
     opts.max_order = a.max_order;
     opts.unexplained_alpha = a.unexplained_alpha;
-    let spinner = (!a.json).then(|| {
+    opts
+}
+
+/// Runs `work` under a spinner on stderr saying `message` (`show` false: no spinner, the
+/// output is JSON for a program), cleared when it ends.
+fn spinning<T>(show: bool, message: &'static str, work: impl FnOnce() -> T) -> T {
+    let pb = show.then(|| {
         let pb = indicatif::ProgressBar::new_spinner();
-        pb.set_message("diagnosing: fitting the geometric model, testing candidates…");
+        pb.set_message(message);
         pb.enable_steady_tick(std::time::Duration::from_millis(200));
         pb
     });
-    let d = diagnose::diagnose(&start, &data, &opts)
-        .with_context(|| format!("cannot diagnose {}", super::data_in::names(&a.data)));
-    if let Some(pb) = &spinner {
+    let done = work();
+    if let Some(pb) = &pb {
         pb.finish_and_clear();
     }
-    let d = d?;
-    let mut figures = patterns::figures(&d, &data);
-    figures.extend(diagnose::unexplained::figure(&d.unexplained));
-    let mut rep = report::build(&d, &data, &figures);
-    // The headline test with sessions: the whole selection rerun without each one, whenever
-    // the data have groups to hold out (`sessions::nested_plan` says when not, and why).
-    let plan = diagnose::sessions::nested_plan(&data, opts.folds);
-    if let Err(why) = &plan {
-        rep.nested_not_run = Some(why.clone());
-    }
-    if plan.is_ok() {
-        let pb = (!a.json).then(|| {
-            let pb = indicatif::ProgressBar::new_spinner();
-            pb.set_message("rerunning the diagnosis without each session…");
-            pb.enable_steady_tick(std::time::Duration::from_millis(200));
-            pb
-        });
-        let n = diagnose::nested::nested(&start, &data, &opts);
-        if let Some(pb) = &pb {
-            pb.finish_and_clear();
-        }
-        rep.nested = Some(
-            n.with_context(|| {
-                format!(
-                    "cannot rerun the diagnosis of {}",
-                    super::data_in::names(&a.data)
-                )
-            })?
-            .report(),
-        );
-    }
-    test_level(&start, &data, &opts, &d, &mut rep);
+    done
+}
 
-    let mut files = armcal::output::Staged::guarding(&inputs);
+/// The headline test with sessions: the whole selection rerun without each one, whenever
+/// the data have groups to hold out (`sessions::nested_plan` says when not, and why, in the
+/// report).
+fn nested(
+    a: &Args,
+    start: &Arm,
+    data: &Dataset,
+    opts: &diagnose::Options,
+    rep: &mut Report,
+) -> anyhow::Result<()> {
+    if let Err(why) = diagnose::sessions::nested_plan(data, opts.folds) {
+        rep.nested_not_run = Some(why);
+        return Ok(());
+    }
+    let n = spinning(
+        !a.json,
+        "rerunning the diagnosis without each session…",
+        || diagnose::nested::nested(start, data, opts),
+    );
+    rep.nested = Some(
+        n.with_context(|| {
+            format!(
+                "cannot rerun the diagnosis of {}",
+                super::data_in::names(&a.data)
+            )
+        })?
+        .report(),
+    );
+    Ok(())
+}
+
+/// Stages the outputs asked for: the figures, the extended calibration file and its table,
+/// the HTML report; the report says what was written.
+fn stage(
+    a: &Args,
+    d: &Diagnosis,
+    data: &Dataset,
+    figures: &[Figure],
+    rep: &mut Report,
+    files: &mut Staged,
+) -> anyhow::Result<()> {
     if let Some(dir) = &a.plots {
-        let pictures = plots::write_all(&figures, dir, &mut files)?;
+        let pictures = plots::write_all(figures, dir, files)?;
         rep.output.plots = pictures.iter().map(|p| p.display().to_string()).collect();
         if !d.candidates.thermal {
             rep.warnings
                 .push("no figure against temperature: the data have no temperature spread".into());
         }
     }
-
     if let Some(out) = &a.output {
-        stage_extended(&a, out, &d, &data, &mut rep, &mut files)?;
+        stage_extended(a, out, d, data, rep, files)?;
     }
     if let Some(r) = &a.report {
-        let prov = armcal::html::header::Provenance {
-            arm: &d.extended.fit.arm,
-            arm_file: a.arm.as_deref().map(|p| ("start arm", p)),
-            data_files: a.data.iter().map(PathBuf::as_path).collect(),
-            data: &data,
-            mpe: None,
-            rule: None,
-        };
-        let page = armcal::html::diagnosis::page(&rep, &d, &data, &prov);
+        let prov = Provenance::of_fit(&d.extended.fit.arm, a.arm.as_deref(), &a.data, data);
+        let page = armcal::html::diagnosis::page(rep, d, data, &prov);
         files.write(r, page.as_bytes())?;
-    }
-    files.commit()?;
-    if a.json {
-        println!("{}", rep.json());
-    } else {
-        print!("{}", rep.text());
     }
     Ok(())
 }
@@ -321,18 +354,14 @@ fn run_fleet(a: &Args) -> anyhow::Result<()> {
         &names,
         &pooled,
     );
-    if a.json {
-        println!("{}", rep.json());
-    } else {
-        print!("{}", rep.text());
-    }
+    super::print_report(a.json, || rep.json(), || rep.text());
     Ok(())
 }
 
 /// Tests the assumption of the named gravity terms, a level base ([`diagnose::level`]),
 /// where the data have the sessions for it; the report says the outcome or why not.
 fn test_level(
-    start: &quatarm_ref::arm::Arm,
+    start: &Arm,
     data: &Dataset,
     opts: &diagnose::Options,
     d: &Diagnosis,
@@ -353,11 +382,11 @@ fn test_level(
         allow_degenerate: true,
         ..opts.calib.clone()
     };
-    let pb = indicatif::ProgressBar::new_spinner();
-    pb.set_message("fitting the base's tilt through the gravity terms…");
-    pb.enable_steady_tick(std::time::Duration::from_millis(200));
-    let level = diagnose::level::test_level(start, data, &calib, &gravity);
-    pb.finish_and_clear();
+    let level = spinning(
+        true,
+        "fitting the base's tilt through the gravity terms…",
+        || diagnose::level::test_level(start, data, &calib, &gravity),
+    );
     match level {
         Ok(l) => rep.level = Some(l),
         Err(e) => rep.level_not_tested = Some(e.to_string()),
@@ -390,17 +419,11 @@ fn stage_extended(
     let made = a.budget.budget(fit, data, Some(&d.extended.holdout), 0.0);
     let budget = super::budget::or_warning(made, &mut rep.uncertainty, &mut rep.warnings);
     let text = super::written::checked_text(arm, budget.as_ref(), &refs, data)?;
-    files.write(out, text.as_bytes())?;
+    let table = super::written::stage_with_table(files, out, &text, arm, budget.as_ref())?;
     rep.output.calibration = Some(out.display().to_string());
-    let table = out.with_extension("bin");
-    match armcal::tablebuild::build_with(arm, budget.as_ref()) {
-        Ok(bytes) => {
-            files.write(&table, &bytes)?;
-            rep.output.table = Some(table.display().to_string());
-        }
+    match table {
+        Ok(table) => rep.output.table = Some(table.display().to_string()),
         Err(e) => {
-            // A stale table beside the file would describe another model.
-            files.remove_at_commit(&table);
             let why = report::beyond_table(arm);
             rep.output.table_error = Some(format!(
                 "{e}{}: the firmware could not apply {}; the calibration file is \

@@ -4,7 +4,8 @@ use super::args::ArgError;
 use anyhow::bail;
 use armcal::data::Kind;
 use armcal::sim::{self, FrameChoice};
-use std::path::PathBuf;
+use quatarm_ref::arm::Arm;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `armcal simulate`.
 #[derive(clap::Args)]
@@ -163,7 +164,8 @@ fn noise_note(encoder: f64, temp: f64) -> String {
     s
 }
 
-/// Runs the subcommand.
+/// Runs the subcommand: the truth (and the nominal arm, if given) read and checked, the
+/// rows simulated, then the file written only if its text reads back.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let mut inputs = vec![(a.truth.as_path(), "truth")];
     if let Some(arm) = &a.arm {
@@ -172,31 +174,69 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     armcal::output::check(&[(&a.output, "simulated data")], &inputs)?;
     let truth = armcal::load::arm(&a.truth)?;
     if let Some(path) = &a.arm {
-        let nominal = armcal::load::arm(path)?;
-        if nominal.dof() != truth.dof() {
-            bail!(
-                "{}: {} joints, the truth {} has {}",
-                path.display(),
-                nominal.dof(),
-                a.truth.display(),
-                truth.dof()
-            );
-        }
-        for (k, (n, t)) in nominal.joints.iter().zip(&truth.joints).enumerate() {
-            if n.axis != t.axis || n.link != t.link {
-                bail!(
-                    "{}: joint {} has axis {} and link {:?}, the truth {} and {:?}: not the same arm",
-                    path.display(),
-                    k + 1,
-                    n.axis.name(),
-                    n.link,
-                    t.axis.name(),
-                    t.link
-                );
-            }
-        }
+        same_arm(path, &armcal::load::arm(path)?, &a.truth, &truth)?;
     }
     let kind = a.kind.unwrap_or(Kind::Point);
+    let opts = options(&a, kind, &truth)?;
+    let mut rng = armcal::rng::rng(a.seed);
+    let s = match a.test {
+        Some(_) => sim::protocol::iso_10360_12(&truth, &opts, &mut rng)?,
+        None => sim::simulate(&truth, &opts, &mut rng)?,
+    };
+    let what = match &a.test {
+        Some(t) => format!("test set {t}"),
+        None => format!("kind {}", kind.name()),
+    };
+    let comments = comments(&a, &s, &what);
+    let refs: Vec<&str> = comments.iter().map(String::as_str).collect();
+    let text = s.data.to_csv(&refs);
+    // What is written must read back: a truth or a bar whose rows the reader refuses is
+    // refused here, with the reader's reason, instead of writing a file nothing can use.
+    let name = a.output.display().to_string();
+    armcal::data::parse(&text, &name, truth.dof())
+        .map_err(|e| anyhow::anyhow!("the simulated rows would not read back: {e}"))?;
+    let mut files = armcal::output::Staged::guarding(&inputs);
+    files.write(&a.output, text.as_bytes())?;
+    files.commit()?;
+    eprintln!(
+        "armcal: wrote {} ({} rows, {what})",
+        a.output.display(),
+        s.data.rows.len(),
+    );
+    Ok(())
+}
+
+/// Refuses a nominal arm (`path`) that is not the truth's arm: another joint count, or a
+/// joint of another axis or link.
+fn same_arm(path: &Path, nominal: &Arm, truth_path: &Path, truth: &Arm) -> anyhow::Result<()> {
+    if nominal.dof() != truth.dof() {
+        bail!(
+            "{}: {} joints, the truth {} has {}",
+            path.display(),
+            nominal.dof(),
+            truth_path.display(),
+            truth.dof()
+        );
+    }
+    for (k, (n, t)) in nominal.joints.iter().zip(&truth.joints).enumerate() {
+        if n.axis != t.axis || n.link != t.link {
+            bail!(
+                "{}: joint {} has axis {} and link {:?}, the truth {} and {:?}: not the same arm",
+                path.display(),
+                k + 1,
+                n.axis.name(),
+                n.link,
+                t.axis.name(),
+                t.link
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The simulation's options from the arguments (`--group-size` and `--sag` checked against
+/// the truth here).
+fn options(a: &Args, kind: Kind, truth: &Arm) -> anyhow::Result<sim::Options> {
     let mut opts = sim::Options::new(kind, a.count.unwrap_or(1) as usize);
     opts.noise_mm = a.noise_um * 1e-3;
     opts.temp = a.temp;
@@ -214,32 +254,32 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     opts.temp_noise_c = a.temp_noise_c;
     opts.probes = a.probes.clone();
     for (link, um) in &a.sag {
-        let dof = truth.dof();
-        let k = match link.as_str() {
-            "probe" => dof,
-            j => match j.parse::<usize>() {
-                Ok(k) if (1..=dof).contains(&k) => k - 1,
-                _ => bail!(
-                    "--sag {link}:{um}: `{link}` is not a link of this arm (1..={dof} or probe)"
-                ),
-            },
-        };
         opts.sag.push(sim::Sag {
-            link: k,
+            link: sag_link(link, *um, truth.dof())?,
             mm: um * 1e-3,
         });
     }
-    let mut rng = armcal::rng::rng(a.seed);
-    let s = match a.test {
-        Some(_) => sim::protocol::iso_10360_12(&truth, &opts, &mut rng)?,
-        None => sim::simulate(&truth, &opts, &mut rng)?,
-    };
-    let what = match &a.test {
-        Some(t) => format!("test set {t}"),
-        None => format!("kind {}", kind.name()),
-    };
+    Ok(opts)
+}
+
+/// The 0-based link of `--sag LINK:UM` on an arm of `dof` joints (`probe`: the last).
+fn sag_link(link: &str, um: f64, dof: usize) -> anyhow::Result<usize> {
+    Ok(match link {
+        "probe" => dof,
+        j => match j.parse::<usize>() {
+            Ok(k) if (1..=dof).contains(&k) => k - 1,
+            _ => {
+                bail!("--sag {link}:{um}: `{link}` is not a link of this arm (1..={dof} or probe)")
+            }
+        },
+    })
+}
+
+/// The file's comment lines: how it was made (truth, `what`, rows, seed, noise) and the
+/// instrument frame drawn, so that a reader can check a calibration against it.
+fn comments(a: &Args, s: &sim::Simulated, what: &str) -> [String; 2] {
     let f = &s.frame;
-    let comments = [
+    [
         format!(
             "simulated by armcal simulate: truth {}, {what}, {} rows, seed {}, noise {} µm per axis{}",
             a.truth.display(),
@@ -253,21 +293,5 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             f.rotation[0], f.rotation[1], f.rotation[2], f.rotation[3],
             f.translation[0], f.translation[1], f.translation[2]
         ),
-    ];
-    let refs: Vec<&str> = comments.iter().map(String::as_str).collect();
-    let text = s.data.to_csv(&refs);
-    // What is written must read back: a truth or a bar whose rows the reader refuses is
-    // refused here, with the reader's reason, instead of writing a file nothing can use.
-    let name = a.output.display().to_string();
-    armcal::data::parse(&text, &name, truth.dof())
-        .map_err(|e| anyhow::anyhow!("the simulated rows would not read back: {e}"))?;
-    let mut files = armcal::output::Staged::guarding(&inputs);
-    files.write(&a.output, text.as_bytes())?;
-    files.commit()?;
-    eprintln!(
-        "armcal: wrote {} ({} rows, {what})",
-        a.output.display(),
-        s.data.rows.len(),
-    );
-    Ok(())
+    ]
 }

@@ -29,3 +29,28 @@ pub fn checked_text(
     }
     Ok(text)
 }
+
+/// Stages the calibration `text` at `out` and its binary table beside it (`.bin`), for
+/// `calibrate` and `diagnose -o` alike. Where the firmware cannot hold the model the table
+/// is not written, a stale one there is removed at commit (it would describe another
+/// model), and the build's error is returned for the command's report to word.
+pub fn stage_with_table(
+    files: &mut armcal::output::Staged,
+    out: &std::path::Path,
+    text: &str,
+    arm: &quatarm_ref::arm::Arm,
+    budget: Option<&quatarm_ref::calfile::Uncertainty>,
+) -> anyhow::Result<Result<std::path::PathBuf, armcal::tablebuild::BuildError>> {
+    files.write(out, text.as_bytes())?;
+    let table = out.with_extension("bin");
+    match armcal::tablebuild::build_with(arm, budget) {
+        Ok(bytes) => {
+            files.write(&table, &bytes)?;
+            Ok(Ok(table))
+        }
+        Err(e) => {
+            files.remove_at_commit(&table);
+            Ok(Err(e))
+        }
+    }
+}

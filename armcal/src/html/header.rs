@@ -77,6 +77,26 @@ pub struct Provenance<'a> {
     pub rule: Option<&'a str>,
 }
 
+impl<'a> Provenance<'a> {
+    /// The header of a fit's report (`calibrate`, `diagnose`): the fitted `arm`, the start
+    /// arm's file where one was read, the data; no MPE file and no decision rule.
+    pub fn of_fit(
+        arm: &'a Arm,
+        start_file: Option<&'a Path>,
+        data_files: &'a [std::path::PathBuf],
+        data: &'a Dataset,
+    ) -> Self {
+        Provenance {
+            arm,
+            arm_file: start_file.map(|p| ("start arm", p)),
+            data_files: data_files.iter().map(std::path::PathBuf::as_path).collect(),
+            data,
+            mpe: None,
+            rule: None,
+        }
+    }
+}
+
 impl Provenance<'_> {
     /// The header's rows.
     pub fn facts(&self) -> Vec<(String, String)> {
