@@ -21,6 +21,9 @@ use armcal::uncertainty::{montecarlo, propagate, realdata, u95};
 use std::time::Instant;
 
 fn main() {
+    if std::env::args().any(|a| a == "mukca-variants") {
+        return mukca_variants();
+    }
     if std::env::args().any(|a| a == "mukca") {
         return mukca();
     }
@@ -212,7 +215,7 @@ fn mukca() {
             .collect();
         let mean_fleet = realdata::fleet_scale_mean_coverage(&other_scores);
         let name = &unit.name;
-        let Some(c) = realdata::unit_coverage(unit, fleet) else {
+        let Some(c) = realdata::unit_coverage(unit, fleet, 0.0) else {
             println!("  {name:<20} one session: nothing to hold out");
             continue;
         };
@@ -247,7 +250,7 @@ fn mukca() {
                 .join(", ")
         );
         if c.sessions == 3 {
-            if let Some(a) = realdata::unit_coverage(unit, mean_fleet) {
+            if let Some(a) = realdata::unit_coverage(unit, mean_fleet, 0.0) {
                 println!(
                     "    sensitivity: κ at the other units' mean coverage 95 % {mean_fleet:.3}: \
                      nested {:.3}, median U95 {:.4} mm",
@@ -300,4 +303,196 @@ fn mukca() {
     for s in per_session {
         println!("    {s}");
     }
+}
+
+/// The shrinkage weights of S_b towards C measured by `mukca-variants` (0.5 is the budget's,
+/// one group's worth with two groups; 1 is C's shape at S_b's size).
+const FORMS: [f64; 5] = [0.0, 0.25, 0.5, 0.75, 1.0];
+
+/// The columns of [`realdata::two_group_scores_by_form`] measured: the [`FORMS`], then the
+/// two leverage forms.
+const COLUMNS: [&str; 7] = [
+    "λ = 0 (S_b raw)",
+    "λ = 0.25",
+    "λ = 0.5 (the budget's)",
+    "λ = 0.75",
+    "λ = 1 (C's shape)",
+    "C itself (∝ leverage)",
+    "λ = 0.5 × max(1, ℓ)",
+];
+
+/// Student's t at 97.5 % for one degree of freedom over the normal's: the few-groups
+/// factor on σ for two training sessions (12.706/1.960).
+const T_ONE_DOF: f64 = 6.483;
+
+/// The variants of issue 27's last step, measured in one run (`docs/results/uncertainty.md`,
+/// "Stop 35"). Per unit with ≥ 3 sessions, its two-session scores under each form of
+/// [`COLUMNS`] (also written to `mukca-forms.json` in the working directory); each
+/// 3-session unit's nested coverage under each form with the median of the *other* units'
+/// κ (its pairs are its outer folds, so its scores are its nested coverage); few-groups
+/// factors; the leverage ratio ℓ per session; and, for the units with ≥ 4 sessions, the
+/// nested coverage with the fleet's κ pooled into their own (worth one group,
+/// [`armcal::uncertainty::pose::pooled_scale`]).
+fn mukca_variants() {
+    use armcal::uncertainty::pose::conformal_scale;
+    let dir = armcal::mukca::default_dir();
+    let Ok(units) = armcal::mukca::unit_names(&dir) else {
+        return println!("MUKCa: no units");
+    };
+    let loaded: Vec<armcal::mukca::Unit> = units
+        .iter()
+        .filter_map(|(n, _)| armcal::mukca::load(&dir, n).ok())
+        .filter(|u| u.groups().len() >= 3)
+        .collect();
+    let t0 = Instant::now();
+    let scores: Vec<Vec<(i64, Vec<f64>)>> = loaded
+        .iter()
+        .map(|u| realdata::two_group_scores_by_form(u, &FORMS))
+        .collect();
+    let kappa: Vec<Vec<f64>> = scores
+        .iter()
+        .map(|sc| {
+            (0..COLUMNS.len())
+                .map(|f| conformal_scale(sc.iter().map(|r| r.1[f]).collect()))
+                .collect()
+        })
+        .collect();
+    println!(
+        "MUKCa variants ({:.0} s of scoring)",
+        t0.elapsed().as_secs_f64()
+    );
+    println!("  two-session κ per unit (conformal over its pair-trained scores), per form:");
+    for (f, name) in COLUMNS.iter().enumerate() {
+        println!(
+            "    {name:<24} {}",
+            loaded
+                .iter()
+                .zip(&kappa)
+                .map(|(u, k)| format!("{} {:.3}", u.name, k[f]))
+                .collect::<Vec<_>>()
+                .join("  ")
+        );
+    }
+    let dump: Vec<_> = loaded
+        .iter()
+        .zip(&scores)
+        .map(|(u, sc)| serde_json::json!({"unit": u.name, "sessions": u.sessions, "scores": sc}))
+        .collect();
+    let path = "mukca-forms.json";
+    match std::fs::write(
+        path,
+        serde_json::json!({"columns": COLUMNS, "units": dump}).to_string(),
+    ) {
+        Ok(()) => println!("  scores written to {path}"),
+        Err(e) => println!("  {path}: {e}"),
+    }
+    let others = |k: usize, f: usize| -> Vec<f64> {
+        kappa
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| *j != k)
+            .map(|(_, v)| v[f])
+            .collect()
+    };
+    let covered = |k: usize, f: usize, at: f64| {
+        let sc = &scores[k];
+        sc.iter().filter(|r| r.1[f] <= at).count() as f64 / sc.len().max(1) as f64
+    };
+    let three: Vec<usize> = (0..loaded.len())
+        .filter(|&k| loaded[k].groups().len() == 3)
+        .collect();
+    println!("  3-session units, nested coverage (κ = median of the other units' κ; in 88–99 %?):");
+    for (f, name) in COLUMNS.iter().enumerate() {
+        let cells: Vec<(f64, f64)> = three
+            .iter()
+            .map(|&k| {
+                let at = realdata::fleet_scale(&others(k, f));
+                (covered(k, f, at), at)
+            })
+            .collect();
+        println!(
+            "    {name:<24} {}  — {} of {} in the band",
+            three
+                .iter()
+                .zip(&cells)
+                .map(|(&k, (c, at))| format!("{} {c:.3} (κ {at:.2})", loaded[k].name))
+                .collect::<Vec<_>>()
+                .join("  "),
+            cells
+                .iter()
+                .filter(|(c, _)| (0.88..=0.99).contains(c))
+                .count(),
+            cells.len()
+        );
+    }
+    for f in [2, 6] {
+        println!("  few-groups factors, form {}:", COLUMNS[f]);
+        for &k in &three {
+            let mut o = others(k, f);
+            o.sort_by(f64::total_cmp);
+            let rank = ((0.95 * (o.len() + 1) as f64).ceil() as usize).clamp(1, o.len().max(1));
+            let by_rank = o.get(rank - 1).copied().unwrap_or(0.0);
+            let rows: Vec<f64> = scores
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != k)
+                .flat_map(|(_, sc)| sc.iter().map(|r| r.1[f]))
+                .collect();
+            let pooled = conformal_scale(rows);
+            let t = T_ONE_DOF * realdata::fleet_scale(&o);
+            println!(
+                "    {:<12} units' conformal rank {by_rank:.3} → {:.3}; other units' rows pooled \
+                 {pooled:.3} → {:.3}; Student t (1 dof) × median {t:.3} → {:.3}",
+                loaded[k].name,
+                covered(k, f, by_rank),
+                covered(k, f, pooled),
+                covered(k, f, t)
+            );
+        }
+    }
+    println!("  per scored session (pairs of the others trained): leverage ratio ℓ median, 90th percentile; κ95 at λ = 0.5");
+    for (u, sc) in loaded.iter().zip(&scores) {
+        for (g, name) in &u.sessions {
+            let mut l: Vec<f64> = sc.iter().filter(|r| r.0 == *g).map(|r| r.1[7]).collect();
+            if l.is_empty() {
+                continue;
+            }
+            l.sort_by(f64::total_cmp);
+            let k95 = conformal_scale(sc.iter().filter(|r| r.0 == *g).map(|r| r.1[2]).collect());
+            println!(
+                "    {}/{name}: ℓ {:.2}, {:.2}; κ95 {k95:.2}",
+                u.name,
+                l[l.len() / 2],
+                l[(9 * l.len()) / 10]
+            );
+        }
+    }
+    println!("  κ pooled with the fleet's (worth one group), units with ≥ 4 sessions:");
+    for (k, u) in loaded.iter().enumerate() {
+        if u.groups().len() < 4 {
+            continue;
+        }
+        let fleet = realdata::fleet_scale(&others(k, 2));
+        if let Some(c) = realdata::unit_coverage(u, fleet, 1.0) {
+            println!(
+                "    {:<12} fleet κ {fleet:.3}: nested {:.3} of {}, median U95 {:.4} mm, κ per \
+                 session {}; per session {}",
+                c.unit,
+                c.covered_nested,
+                c.probings,
+                c.nested_u95_mm,
+                c.pose_scale
+                    .iter()
+                    .map(|(k, _)| format!("{k:.2}"))
+                    .collect::<Vec<_>>()
+                    .join(" "),
+                c.per_session
+                    .iter()
+                    .map(|(s, _, f, ..)| format!("{s} {f:.3}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+    }
+    println!("  took {:.0} s", t0.elapsed().as_secs_f64());
 }

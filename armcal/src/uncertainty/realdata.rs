@@ -96,6 +96,7 @@ fn hold_out(
     groups: &[i64],
     g: i64,
     two_group_scale: f64,
+    prior_groups: f64,
 ) -> Result<Held, super::BudgetError> {
     let train: Vec<i64> = groups.iter().copied().filter(|x| *x != g).collect();
     let train_data = unit.sessions_data(&train);
@@ -117,6 +118,7 @@ fn hold_out(
     let (nested, pose, pose_scale) = if inner.folds > 1 {
         let with = Settings {
             two_group_scale,
+            fleet_prior_groups: prior_groups,
             ..Settings::default()
         };
         let e = estimate::from_fit(&fit, &train_data, Some(&inner), 0.0, &with)?;
@@ -180,14 +182,15 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// sessions' held-out probings (g's own probings never set it). `two_group_scale`: the pose
 /// term's κ where only two training sessions are left (from other units: see
 /// [`two_group_scores`]).
-pub fn unit_coverage(unit: &Unit, two_group_scale: f64) -> Option<UnitCoverage> {
+/// `prior_groups`: the fleet κ's weight in a validated κ ([`super::pose::pooled_scale`]).
+pub fn unit_coverage(unit: &Unit, two_group_scale: f64, prior_groups: f64) -> Option<UnitCoverage> {
     let groups = unit.groups();
     if groups.len() < 2 {
         return None;
     }
     let (mut held, mut failed) = (Vec::new(), Vec::new());
     for &g in &groups {
-        match hold_out(unit, &groups, g, two_group_scale) {
+        match hold_out(unit, &groups, g, two_group_scale, prior_groups) {
             Ok(h) => held.push(h),
             Err(e) => failed.push(format!(
                 "{}: {e}",
@@ -295,6 +298,24 @@ fn socket_u95(arm: &Arm, b: &Budget, data: &Dataset, rows: &[usize]) -> Vec<(usi
 /// ([`super::pose::least_scales`]). Empty with fewer than 3 sessions. A fleet's κ for a unit
 /// is taken from the *other* units' scores, so a unit never sets its own.
 pub fn two_group_scores(unit: &Unit) -> Vec<f64> {
+    let lambda = super::pose::prior_weight(1);
+    two_group_scores_by_form(unit, &[lambda])
+        .into_iter()
+        .map(|(_, t)| t[0])
+        .collect()
+}
+
+/// [`two_group_scores`] under several forms of the term at once, measured for issue 27
+/// (`coverage` bench, `mukca-variants`): per scored probing, (its session, its least
+/// covering κ under each shrinkage weight λ of `lambdas` ([`super::pose::between_with`]),
+/// then under C itself (a term ∝ J C Jᵀ = σ̂² times the probing's leverage), then under the
+/// budget's form times max(1, ℓ), then ℓ itself). ℓ is the probing's leverage ratio: tr(J C
+/// Jᵀ) of its deviation over the mean of the same over the training probings, large where
+/// the placement is one the training design did not see. The last two are not
+/// representable in the table's C (a factor per reading), so they are measured here, not in
+/// the budget. For a unit with three sessions the pairs are the outer folds of the nested
+/// run, so these scores are its nested coverage as a function of κ.
+pub fn two_group_scores_by_form(unit: &Unit, lambdas: &[f64]) -> Vec<(i64, Vec<f64>)> {
     let groups = unit.groups();
     let mut out = Vec::new();
     if groups.len() < 3 {
@@ -325,15 +346,34 @@ pub fn two_group_scores(unit: &Unit) -> Vec<f64> {
         };
         let rest = e.budget;
         let fits: Vec<&crate::fit::holdout::FoldFit> = inner.fits.iter().collect();
-        let sb = super::pose::between(&rest.params, &fits, 2, &rest.cov);
-        let pose = Budget {
+        // A budget of the parameters' covariance `cov` alone.
+        let only = |cov: nalgebra::DMatrix<f64>| Budget {
             params: rest.params.clone(),
-            cov: sb * 1.5,
+            cov,
             encoder_counts: vec![0.0; data.dof],
             probing_mm: 0.0,
             temperature_c: 0.0,
             model_mm: 0.0,
         };
+        let poses: Vec<Budget> = lambdas
+            .iter()
+            .map(|&l| only(super::pose::between_with(&rest.params, &fits, 2, &rest.cov, l) * 1.5))
+            .collect();
+        let budget_form = only(super::pose::between(&rest.params, &fits, 2, &rest.cov) * 1.5);
+        let c_only = only(rest.cov.clone());
+        // The leverage ratio's normaliser: the mean trace of J C Jᵀ over the training
+        // probings (their deviations from their socket's centre).
+        let lev = |d: &Dataset| -> Vec<f64> {
+            d.layout()
+                .length
+                .iter()
+                .flat_map(|l| [&l.a, &l.b])
+                .flat_map(|end| propagate::group_deviations(&fit.arm, &c_only, d, end))
+                .map(|(_, p)| p.trace())
+                .collect()
+        };
+        let train_lev = lev(&data);
+        let mean_lev = train_lev.iter().sum::<f64>() / train_lev.len().max(1) as f64;
         for &s in groups.iter().filter(|s| !pair.contains(s)) {
             let test = unit.sessions_data(&[s]);
             let res = residuals(&fit.arm, &test, None);
@@ -344,11 +384,30 @@ pub fn two_group_scores(unit: &Unit) -> Vec<f64> {
                         .into_iter()
                         .map(|(i, s)| (super::misfit::RowCov { row: i, s, m }, res.rows[i].norm()))
                         .unzip();
-                let extra: Vec<_> = propagate::group_deviations(&fit.arm, &pose, &test, end)
+                let mut per_form: Vec<Vec<f64>> = poses
+                    .iter()
+                    .map(|pose| {
+                        let extra: Vec<_> = propagate::group_deviations(&fit.arm, pose, &test, end)
+                            .into_iter()
+                            .map(|(_, p)| p)
+                            .collect();
+                        super::pose::least_scales(&rows, &extra, &d)
+                    })
+                    .collect();
+                let jc: Vec<_> = propagate::group_deviations(&fit.arm, &c_only, &test, end)
                     .into_iter()
                     .map(|(_, p)| p)
                     .collect();
-                out.extend(super::pose::least_scales(&rows, &extra, &d));
+                let l: Vec<f64> = jc.iter().map(|p| p.trace() / mean_lev).collect();
+                per_form.push(super::pose::least_scales(&rows, &jc, &d));
+                let ext: Vec<_> = propagate::group_deviations(&fit.arm, &budget_form, &test, end)
+                    .into_iter()
+                    .zip(&l)
+                    .map(|((_, p), l)| p * l.max(1.0))
+                    .collect();
+                per_form.push(super::pose::least_scales(&rows, &ext, &d));
+                per_form.push(l);
+                out.extend((0..rows.len()).map(|r| (s, per_form.iter().map(|f| f[r]).collect())));
             }
         }
     }
