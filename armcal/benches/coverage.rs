@@ -10,7 +10,9 @@
 //! (°C) for the thermal variant;
 //! or `mukca` for the real recordings, each unit's sessions held out one at a time (the nested
 //! budget with the pose-dependent term, its scale per session, the pooled coverage with the
-//! term's σ multiplied by m = 0…3 as a sensitivity, and both extrapolation flags per session).
+//! term's σ multiplied by m = 0…3 as a sensitivity, and both extrapolation flags per session);
+//! `mukca-variants` for the variants measured towards each unit in 88–99 % (forms of the pose
+//! term, a leverage-scaled one, κ pooled with the fleet's, few-groups factors).
 //! `new-user` runs the issue's new user instead (`Setup::NEW_USER`: `default-6-full` as the
 //! truth, calibrated with the geometric model, the model term as `calibrate` estimates it);
 //! `held-out` runs the benchmark with the model term estimated from 5 folds as `calibrate`
@@ -326,8 +328,8 @@ const COLUMNS: [&str; 7] = [
 const T_ONE_DOF: f64 = 6.483;
 
 /// The variants of issue 27's last step, measured in one run (`docs/results/uncertainty.md`,
-/// "Stop 35"). Per unit with ≥ 3 sessions, its two-session scores under each form of
-/// [`COLUMNS`] (also written to `mukca-forms.json` in the working directory); each
+/// "The variants for each unit in 88–99 %"). Per unit with ≥ 3 sessions, its two-session
+/// scores under each form of [`COLUMNS`] (also written to `mukca-forms.json` in the working directory); each
 /// 3-session unit's nested coverage under each form with the median of the *other* units'
 /// κ (its pairs are its outer folds, so its scores are its nested coverage); few-groups
 /// factors; the leverage ratio ℓ per session; and, for the units with ≥ 4 sessions, the
