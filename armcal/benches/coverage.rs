@@ -217,7 +217,7 @@ fn mukca() {
             .collect();
         let mean_fleet = realdata::fleet_scale_mean_coverage(&other_scores);
         let name = &unit.name;
-        let Some(c) = realdata::unit_coverage(unit, fleet, 0.0) else {
+        let Some(c) = realdata::unit_coverage(unit, realdata::Rule::product(fleet)) else {
             println!("  {name:<20} one session: nothing to hold out");
             continue;
         };
@@ -252,7 +252,7 @@ fn mukca() {
                 .join(", ")
         );
         if c.sessions == 3 {
-            if let Some(a) = realdata::unit_coverage(unit, mean_fleet, 0.0) {
+            if let Some(a) = realdata::unit_coverage(unit, realdata::Rule::product(mean_fleet)) {
                 println!(
                     "    sensitivity: κ at the other units' mean coverage 95 % {mean_fleet:.3}: \
                      nested {:.3}, median U95 {:.4} mm",
@@ -475,7 +475,11 @@ fn mukca_variants() {
             continue;
         }
         let fleet = realdata::fleet_scale(&others(k, 2));
-        if let Some(c) = realdata::unit_coverage(u, fleet, 1.0) {
+        let rule = realdata::Rule {
+            prior_groups: 1.0,
+            ..realdata::Rule::product(fleet)
+        };
+        if let Some(c) = realdata::unit_coverage(u, rule) {
             println!(
                 "    {:<12} fleet κ {fleet:.3}: nested {:.3} of {}, median U95 {:.4} mm, κ per \
                  session {}; per session {}",
@@ -496,5 +500,47 @@ fn mukca_variants() {
             );
         }
     }
+    println!(
+        "  the leverage-scaled term through the nested path (κ validated on ℓ-scaled scores \
+         where ≥ 3 training sessions, else the median of the other units' ℓ-form κ):"
+    );
+    let (mut inside, mut judged) = (0.0, 0usize);
+    for (k, u) in loaded.iter().enumerate() {
+        let rule = realdata::Rule {
+            leverage: true,
+            ..realdata::Rule::product(realdata::fleet_scale(&others(k, 6)))
+        };
+        if let Some(c) = realdata::unit_coverage(u, rule) {
+            println!(
+                "    {:<12} nested {:.3} of {} ({}), median U95 {:.4} mm, κ per session {}; \
+                 per session {}",
+                c.unit,
+                c.covered_nested,
+                c.probings,
+                if (0.88..=0.99).contains(&c.covered_nested) {
+                    "in the band"
+                } else {
+                    "outside"
+                },
+                c.nested_u95_mm,
+                c.pose_scale
+                    .iter()
+                    .map(|(k, _)| format!("{k:.2}"))
+                    .collect::<Vec<_>>()
+                    .join(" "),
+                c.per_session
+                    .iter()
+                    .map(|(s, _, f, ..)| format!("{s} {f:.3}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+            inside += c.covered_nested * c.probings as f64;
+            judged += c.probings;
+        }
+    }
+    println!(
+        "    pooled {:.3} of {judged}",
+        inside / judged.max(1) as f64
+    );
     println!("  took {:.0} s", t0.elapsed().as_secs_f64());
 }

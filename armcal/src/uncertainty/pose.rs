@@ -263,6 +263,18 @@ pub fn conformal_scale(mut t: Vec<f64>) -> f64 {
     t[k - 1].min(finite)
 }
 
+/// The factor of the leverage-scaled variant of the term at a reading of leverage ratio `l`
+/// (its tr J C Jᵀ over the mean on the calibration's rows): max(1, l). Measured on MUKCa
+/// (`coverage` bench, `mukca-variants`), not in the budget: a factor per reading that the
+/// table's C cannot hold.
+pub fn leverage_factor(l: f64) -> f64 {
+    if l.is_finite() {
+        l.max(1.0)
+    } else {
+        1.0
+    }
+}
+
 /// A unit's own κ from `groups` held-out groups pooled with the fleet's, the fleet's worth
 /// `prior_groups` groups: κ² = (G κ_own² + w κ_fleet²)/(G + w), a random effect's
 /// shrinkage (the own value's weight grows with its groups). `own` unchanged when w = 0.
@@ -291,6 +303,7 @@ pub fn estimate(
     res: &[nalgebra::Vector3<f64>],
     two_group_scale: f64,
     prior_groups: f64,
+    leverage: bool,
 ) -> Option<PoseTerm> {
     let groups = fold_groups(data, &h.fits)?;
     let g_all = groups.len();
@@ -318,6 +331,19 @@ pub fn estimate(
             if let Some(&k) = at.get(&r.row) {
                 extra[k] = r.s;
             }
+        }
+    }
+    if leverage {
+        let judged: Vec<bool> = h.judged.clone();
+        let lev: std::collections::HashMap<usize, f64> =
+            tip_part(arm, params, c.clone(), data, &judged)
+                .into_iter()
+                .map(|r| (r.row, r.s.trace()))
+                .collect();
+        let mean = lev.values().sum::<f64>() / lev.len().max(1) as f64;
+        for (k, r) in rows.iter().enumerate() {
+            let l = lev.get(&r.row).map_or(1.0, |x| x / mean);
+            extra[k] *= leverage_factor(l);
         }
     }
     let deviation = |r: &RowCov| res[r.row].norm();
