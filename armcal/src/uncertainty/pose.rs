@@ -444,6 +444,16 @@ mod tests {
         assert!(many > 1.0 && many < 1.01, "{many}");
     }
 
+    /// The leverage factor only widens (floored at 1) and ignores a ratio that is not a
+    /// number (a calibration with no spread in C).
+    #[test]
+    fn the_leverage_factor_only_widens() {
+        assert_eq!(leverage_factor(0.3), 1.0);
+        assert_eq!(leverage_factor(4.0), 4.0);
+        assert_eq!(leverage_factor(f64::NAN), 1.0);
+        assert_eq!(leverage_factor(f64::INFINITY), 1.0);
+    }
+
     /// λ = 0 leaves the spread, λ = 1 is C at the spread's size in C's metric.
     #[test]
     fn the_shrinkage_weight_runs_from_the_spread_to_c() {
