@@ -329,8 +329,8 @@ const T_ONE_DOF: f64 = 6.483;
 
 /// The variants of issue 27's last step, measured in one run (`docs/results/uncertainty.md`,
 /// "The variants for each unit in 88–99 %"). Per unit with ≥ 3 sessions, its two-session
-/// scores under each form of [`COLUMNS`] (also written to `mukca-forms.json` in the working directory); each
-/// 3-session unit's nested coverage under each form with the median of the *other* units'
+/// scores under each form of [`COLUMNS`] (also written to `mukca-forms.json` in Cargo's
+/// temporary folder for benchmarks, `target/tmp/`); each 3-session unit's nested coverage under each form with the median of the *other* units'
 /// κ (its pairs are its outer folds, so its scores are its nested coverage); few-groups
 /// factors; the leverage ratio ℓ per session; and, for the units with ≥ 4 sessions, the
 /// nested coverage with the fleet's κ pooled into their own (worth one group,
@@ -380,13 +380,13 @@ fn mukca_variants() {
         .zip(&scores)
         .map(|(u, sc)| serde_json::json!({"unit": u.name, "sessions": u.sessions, "scores": sc}))
         .collect();
-    let path = "mukca-forms.json";
+    let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("mukca-forms.json");
     match std::fs::write(
-        path,
+        &path,
         serde_json::json!({"columns": COLUMNS, "units": dump}).to_string(),
     ) {
-        Ok(()) => println!("  scores written to {path}"),
-        Err(e) => println!("  {path}: {e}"),
+        Ok(()) => println!("  scores written to {}", path.display()),
+        Err(e) => println!("  {}: {e}", path.display()),
     }
     let others = |k: usize, f: usize| -> Vec<f64> {
         kappa
