@@ -19,6 +19,7 @@
 //! does (the instrument's noise declared); `held-out-undeclared` without declaring it.
 
 use armcal::uncertainty::coverage::{self, Setup};
+use armcal::uncertainty::pose::conformal_scale;
 use armcal::uncertainty::{montecarlo, propagate, realdata, u95};
 use std::time::Instant;
 
@@ -336,181 +337,224 @@ const T_ONE_DOF: f64 = 6.483;
 /// nested coverage with the fleet's κ pooled into their own (worth one group,
 /// [`armcal::uncertainty::pose::pooled_scale`]).
 fn mukca_variants() {
-    use armcal::uncertainty::pose::conformal_scale;
     let dir = armcal::mukca::default_dir();
     let Ok(units) = armcal::mukca::unit_names(&dir) else {
         return println!("MUKCa: no units");
     };
-    let loaded: Vec<armcal::mukca::Unit> = units
-        .iter()
-        .filter_map(|(n, _)| armcal::mukca::load(&dir, n).ok())
-        .filter(|u| u.groups().len() >= 3)
-        .collect();
     let t0 = Instant::now();
-    let scores: Vec<Vec<(i64, Vec<f64>)>> = loaded
-        .iter()
-        .map(|u| realdata::two_group_scores_by_form(u, &FORMS))
-        .collect();
-    let kappa: Vec<Vec<f64>> = scores
-        .iter()
-        .map(|sc| {
-            (0..COLUMNS.len())
-                .map(|f| conformal_scale(sc.iter().map(|r| r.1[f]).collect()))
-                .collect()
-        })
-        .collect();
+    let v = Variants::score(
+        units
+            .iter()
+            .filter_map(|(n, _)| armcal::mukca::load(&dir, n).ok())
+            .filter(|u| u.groups().len() >= 3)
+            .collect(),
+    );
     println!(
         "MUKCa variants ({:.0} s of scoring)",
         t0.elapsed().as_secs_f64()
     );
-    println!("  two-session κ per unit (conformal over its pair-trained scores), per form:");
-    for (f, name) in COLUMNS.iter().enumerate() {
-        println!(
-            "    {name:<24} {}",
-            loaded
-                .iter()
-                .zip(&kappa)
-                .map(|(u, k)| format!("{} {:.3}", u.name, k[f]))
-                .collect::<Vec<_>>()
-                .join("  ")
-        );
+    v.print_kappa();
+    v.dump();
+    v.print_forms();
+    v.print_few_groups();
+    v.print_sessions();
+    v.print_nested("κ pooled with the fleet's (worth one group)", |k| {
+        realdata::Rule {
+            prior_groups: 1.0,
+            ..realdata::Rule::product(realdata::fleet_scale(&v.others(k, 2)))
+        }
+    });
+    v.print_nested(
+        "the leverage-scaled term through the nested path (κ validated on ℓ-scaled scores \
+         where ≥ 3 training sessions, else the median of the other units' ℓ-form κ)",
+        |k| realdata::Rule {
+            leverage: true,
+            ..realdata::Rule::product(realdata::fleet_scale(&v.others(k, 6)))
+        },
+    );
+    println!("  took {:.0} s", t0.elapsed().as_secs_f64());
+}
+
+/// The units with ≥ 3 sessions, their two-session scores under each of [`COLUMNS`] (plus ℓ
+/// last) and each unit's conformal κ per column.
+struct Variants {
+    loaded: Vec<armcal::mukca::Unit>,
+    scores: Vec<Vec<(i64, Vec<f64>)>>,
+    kappa: Vec<Vec<f64>>,
+}
+
+impl Variants {
+    fn score(loaded: Vec<armcal::mukca::Unit>) -> Variants {
+        let scores: Vec<Vec<(i64, Vec<f64>)>> = loaded
+            .iter()
+            .map(|u| realdata::two_group_scores_by_form(u, &FORMS))
+            .collect();
+        let kappa = scores
+            .iter()
+            .map(|sc| {
+                (0..COLUMNS.len())
+                    .map(|f| conformal_scale(sc.iter().map(|r| r.1[f]).collect()))
+                    .collect()
+            })
+            .collect();
+        Variants {
+            loaded,
+            scores,
+            kappa,
+        }
     }
-    let dump: Vec<_> = loaded
-        .iter()
-        .zip(&scores)
-        .map(|(u, sc)| serde_json::json!({"unit": u.name, "sessions": u.sessions, "scores": sc}))
-        .collect();
-    let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("mukca-forms.json");
-    match std::fs::write(
-        &path,
-        serde_json::json!({"columns": COLUMNS, "units": dump}).to_string(),
-    ) {
-        Ok(()) => println!("  scores written to {}", path.display()),
-        Err(e) => println!("  {}: {e}", path.display()),
-    }
-    let others = |k: usize, f: usize| -> Vec<f64> {
-        kappa
+
+    /// The other units' κ under column `f`.
+    fn others(&self, k: usize, f: usize) -> Vec<f64> {
+        self.kappa
             .iter()
             .enumerate()
             .filter(|(j, _)| *j != k)
             .map(|(_, v)| v[f])
             .collect()
-    };
-    let covered = |k: usize, f: usize, at: f64| {
-        let sc = &scores[k];
-        sc.iter().filter(|r| r.1[f] <= at).count() as f64 / sc.len().max(1) as f64
-    };
-    let three: Vec<usize> = (0..loaded.len())
-        .filter(|&k| loaded[k].groups().len() == 3)
-        .collect();
-    println!("  3-session units, nested coverage (κ = median of the other units' κ; in 88–99 %?):");
-    for (f, name) in COLUMNS.iter().enumerate() {
-        let cells: Vec<(f64, f64)> = three
-            .iter()
-            .map(|&k| {
-                let at = realdata::fleet_scale(&others(k, f));
-                (covered(k, f, at), at)
-            })
-            .collect();
-        println!(
-            "    {name:<24} {}  — {} of {} in the band",
-            three
-                .iter()
-                .zip(&cells)
-                .map(|(&k, (c, at))| format!("{} {c:.3} (κ {at:.2})", loaded[k].name))
-                .collect::<Vec<_>>()
-                .join("  "),
-            cells
-                .iter()
-                .filter(|(c, _)| (0.88..=0.99).contains(c))
-                .count(),
-            cells.len()
-        );
     }
-    for f in [2, 6] {
-        println!("  few-groups factors, form {}:", COLUMNS[f]);
-        for &k in &three {
-            let mut o = others(k, f);
-            o.sort_by(f64::total_cmp);
-            let rank = ((0.95 * (o.len() + 1) as f64).ceil() as usize).clamp(1, o.len().max(1));
-            let by_rank = o.get(rank - 1).copied().unwrap_or(0.0);
-            let rows: Vec<f64> = scores
-                .iter()
-                .enumerate()
-                .filter(|(j, _)| *j != k)
-                .flat_map(|(_, sc)| sc.iter().map(|r| r.1[f]))
-                .collect();
-            let pooled = conformal_scale(rows);
-            let t = T_ONE_DOF * realdata::fleet_scale(&o);
+
+    /// Unit `k`'s share of scores under column `f` covered at κ = `at`.
+    fn covered(&self, k: usize, f: usize, at: f64) -> f64 {
+        let sc = &self.scores[k];
+        sc.iter().filter(|r| r.1[f] <= at).count() as f64 / sc.len().max(1) as f64
+    }
+
+    fn three(&self) -> Vec<usize> {
+        (0..self.loaded.len())
+            .filter(|&k| self.loaded[k].groups().len() == 3)
+            .collect()
+    }
+
+    fn print_kappa(&self) {
+        println!("  two-session κ per unit (conformal over its pair-trained scores), per form:");
+        for (f, name) in COLUMNS.iter().enumerate() {
             println!(
-                "    {:<12} units' conformal rank {by_rank:.3} → {:.3}; other units' rows pooled \
-                 {pooled:.3} → {:.3}; Student t (1 dof) × median {t:.3} → {:.3}",
-                loaded[k].name,
-                covered(k, f, by_rank),
-                covered(k, f, pooled),
-                covered(k, f, t)
+                "    {name:<24} {}",
+                self.loaded
+                    .iter()
+                    .zip(&self.kappa)
+                    .map(|(u, k)| format!("{} {:.3}", u.name, k[f]))
+                    .collect::<Vec<_>>()
+                    .join("  ")
             );
         }
     }
-    println!("  per scored session (pairs of the others trained): leverage ratio ℓ median, 90th percentile; κ95 at λ = 0.5");
-    for (u, sc) in loaded.iter().zip(&scores) {
-        for (g, name) in &u.sessions {
-            let mut l: Vec<f64> = sc.iter().filter(|r| r.0 == *g).map(|r| r.1[7]).collect();
-            if l.is_empty() {
+
+    /// Every score to `target/tmp/mukca-forms.json`, for analyses beyond these tables.
+    fn dump(&self) {
+        let units: Vec<_> = self
+            .loaded
+            .iter()
+            .zip(&self.scores)
+            .map(
+                |(u, sc)| serde_json::json!({"unit": u.name, "sessions": u.sessions, "scores": sc}),
+            )
+            .collect();
+        let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("mukca-forms.json");
+        let json = serde_json::json!({"columns": COLUMNS, "units": units});
+        match std::fs::write(&path, json.to_string()) {
+            Ok(()) => println!("  scores written to {}", path.display()),
+            Err(e) => println!("  {}: {e}", path.display()),
+        }
+    }
+
+    fn print_forms(&self) {
+        let three = self.three();
+        println!(
+            "  3-session units, nested coverage (κ = median of the other units' κ; in 88–99 %?):"
+        );
+        for (f, name) in COLUMNS.iter().enumerate() {
+            let cells: Vec<(f64, f64)> = three
+                .iter()
+                .map(|&k| {
+                    let at = realdata::fleet_scale(&self.others(k, f));
+                    (self.covered(k, f, at), at)
+                })
+                .collect();
+            println!(
+                "    {name:<24} {}  — {} of {} in the band",
+                three
+                    .iter()
+                    .zip(&cells)
+                    .map(|(&k, (c, at))| format!("{} {c:.3} (κ {at:.2})", self.loaded[k].name))
+                    .collect::<Vec<_>>()
+                    .join("  "),
+                cells
+                    .iter()
+                    .filter(|(c, _)| (0.88..=0.99).contains(c))
+                    .count(),
+                cells.len()
+            );
+        }
+    }
+
+    fn print_few_groups(&self) {
+        for f in [2, 6] {
+            println!("  few-groups factors, form {}:", COLUMNS[f]);
+            for k in self.three() {
+                let mut o = self.others(k, f);
+                o.sort_by(f64::total_cmp);
+                let rank = ((0.95 * (o.len() + 1) as f64).ceil() as usize).clamp(1, o.len().max(1));
+                let by_rank = o.get(rank - 1).copied().unwrap_or(0.0);
+                let rows: Vec<f64> = self
+                    .scores
+                    .iter()
+                    .enumerate()
+                    .filter(|(j, _)| *j != k)
+                    .flat_map(|(_, sc)| sc.iter().map(|r| r.1[f]))
+                    .collect();
+                let pooled = conformal_scale(rows);
+                let t = T_ONE_DOF * realdata::fleet_scale(&o);
+                println!(
+                    "    {:<12} units' conformal rank {by_rank:.3} → {:.3}; other units' rows \
+                     pooled {pooled:.3} → {:.3}; Student t (1 dof) × median {t:.3} → {:.3}",
+                    self.loaded[k].name,
+                    self.covered(k, f, by_rank),
+                    self.covered(k, f, pooled),
+                    self.covered(k, f, t)
+                );
+            }
+        }
+    }
+
+    fn print_sessions(&self) {
+        println!(
+            "  per scored session (pairs of the others trained): leverage ratio ℓ median, 90th \
+             percentile; κ95 at λ = 0.5"
+        );
+        for (u, sc) in self.loaded.iter().zip(&self.scores) {
+            for (g, name) in &u.sessions {
+                let mut l: Vec<f64> = sc.iter().filter(|r| r.0 == *g).map(|r| r.1[7]).collect();
+                if l.is_empty() {
+                    continue;
+                }
+                l.sort_by(f64::total_cmp);
+                let k95 =
+                    conformal_scale(sc.iter().filter(|r| r.0 == *g).map(|r| r.1[2]).collect());
+                println!(
+                    "    {}/{name}: ℓ {:.2}, {:.2}; κ95 {k95:.2}",
+                    u.name,
+                    l[l.len() / 2],
+                    l[(9 * l.len()) / 10]
+                );
+            }
+        }
+    }
+
+    /// Each unit's nested coverage under the rule `rule(k)` for unit k (the pooled rule only
+    /// changes units with ≥ 4 sessions, so 3-session units are skipped for it).
+    fn print_nested(&self, title: &str, rule: impl Fn(usize) -> realdata::Rule) {
+        println!("  {title}:");
+        let (mut inside, mut judged) = (0.0, 0usize);
+        for (k, u) in self.loaded.iter().enumerate() {
+            let r = rule(k);
+            if r.prior_groups > 0.0 && u.groups().len() < 4 {
                 continue;
             }
-            l.sort_by(f64::total_cmp);
-            let k95 = conformal_scale(sc.iter().filter(|r| r.0 == *g).map(|r| r.1[2]).collect());
-            println!(
-                "    {}/{name}: ℓ {:.2}, {:.2}; κ95 {k95:.2}",
-                u.name,
-                l[l.len() / 2],
-                l[(9 * l.len()) / 10]
-            );
-        }
-    }
-    println!("  κ pooled with the fleet's (worth one group), units with ≥ 4 sessions:");
-    for (k, u) in loaded.iter().enumerate() {
-        if u.groups().len() < 4 {
-            continue;
-        }
-        let fleet = realdata::fleet_scale(&others(k, 2));
-        let rule = realdata::Rule {
-            prior_groups: 1.0,
-            ..realdata::Rule::product(fleet)
-        };
-        if let Some(c) = realdata::unit_coverage(u, rule) {
-            println!(
-                "    {:<12} fleet κ {fleet:.3}: nested {:.3} of {}, median U95 {:.4} mm, κ per \
-                 session {}; per session {}",
-                c.unit,
-                c.covered_nested,
-                c.probings,
-                c.nested_u95_mm,
-                c.pose_scale
-                    .iter()
-                    .map(|(k, _)| format!("{k:.2}"))
-                    .collect::<Vec<_>>()
-                    .join(" "),
-                c.per_session
-                    .iter()
-                    .map(|(s, _, f, ..)| format!("{s} {f:.3}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            );
-        }
-    }
-    println!(
-        "  the leverage-scaled term through the nested path (κ validated on ℓ-scaled scores \
-         where ≥ 3 training sessions, else the median of the other units' ℓ-form κ):"
-    );
-    let (mut inside, mut judged) = (0.0, 0usize);
-    for (k, u) in loaded.iter().enumerate() {
-        let rule = realdata::Rule {
-            leverage: true,
-            ..realdata::Rule::product(realdata::fleet_scale(&others(k, 6)))
-        };
-        if let Some(c) = realdata::unit_coverage(u, rule) {
+            let Some(c) = realdata::unit_coverage(u, r) else {
+                continue;
+            };
             println!(
                 "    {:<12} nested {:.3} of {} ({}), median U95 {:.4} mm, κ per session {}; \
                  per session {}",
@@ -537,10 +581,9 @@ fn mukca_variants() {
             inside += c.covered_nested * c.probings as f64;
             judged += c.probings;
         }
+        println!(
+            "    pooled {:.3} of {judged} (the units shown)",
+            inside / judged.max(1) as f64
+        );
     }
-    println!(
-        "    pooled {:.3} of {judged}",
-        inside / judged.max(1) as f64
-    );
-    println!("  took {:.0} s", t0.elapsed().as_secs_f64());
 }
