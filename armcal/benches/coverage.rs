@@ -10,17 +10,23 @@
 //! (°C) for the thermal variant;
 //! or `mukca` for the real recordings, each unit's sessions held out one at a time (the nested
 //! budget with the pose-dependent term, its scale per session, the pooled coverage with the
-//! term's σ multiplied by m = 0…3 as a sensitivity, and both extrapolation flags per session).
+//! term's σ multiplied by m = 0…3 as a sensitivity, and both extrapolation flags per session);
+//! `mukca-variants` for the variants measured towards each unit in 88–99 % (forms of the pose
+//! term, a leverage-scaled one, κ pooled with the fleet's, few-groups factors).
 //! `new-user` runs the issue's new user instead (`Setup::NEW_USER`: `default-6-full` as the
 //! truth, calibrated with the geometric model, the model term as `calibrate` estimates it);
 //! `held-out` runs the benchmark with the model term estimated from 5 folds as `calibrate`
 //! does (the instrument's noise declared); `held-out-undeclared` without declaring it.
 
 use armcal::uncertainty::coverage::{self, Setup};
+use armcal::uncertainty::pose::conformal_scale;
 use armcal::uncertainty::{montecarlo, propagate, realdata, u95};
 use std::time::Instant;
 
 fn main() {
+    if std::env::args().any(|a| a == "mukca-variants") {
+        return mukca_variants();
+    }
     if std::env::args().any(|a| a == "mukca") {
         return mukca();
     }
@@ -212,7 +218,7 @@ fn mukca() {
             .collect();
         let mean_fleet = realdata::fleet_scale_mean_coverage(&other_scores);
         let name = &unit.name;
-        let Some(c) = realdata::unit_coverage(unit, fleet) else {
+        let Some(c) = realdata::unit_coverage(unit, realdata::Rule::product(fleet)) else {
             println!("  {name:<20} one session: nothing to hold out");
             continue;
         };
@@ -247,7 +253,7 @@ fn mukca() {
                 .join(", ")
         );
         if c.sessions == 3 {
-            if let Some(a) = realdata::unit_coverage(unit, mean_fleet) {
+            if let Some(a) = realdata::unit_coverage(unit, realdata::Rule::product(mean_fleet)) {
                 println!(
                     "    sensitivity: κ at the other units' mean coverage 95 % {mean_fleet:.3}: \
                      nested {:.3}, median U95 {:.4} mm",
@@ -299,5 +305,285 @@ fn mukca() {
     println!("  per held-out session (nested budget):");
     for s in per_session {
         println!("    {s}");
+    }
+}
+
+/// The shrinkage weights of S_b towards C measured by `mukca-variants` (0.5 is the budget's,
+/// one group's worth with two groups; 1 is C's shape at S_b's size).
+const FORMS: [f64; 5] = [0.0, 0.25, 0.5, 0.75, 1.0];
+
+/// The columns of [`realdata::two_group_scores_by_form`] measured: the [`FORMS`], then the
+/// two leverage forms.
+const COLUMNS: [&str; 7] = [
+    "λ = 0 (S_b raw)",
+    "λ = 0.25",
+    "λ = 0.5 (the budget's)",
+    "λ = 0.75",
+    "λ = 1 (C's shape)",
+    "C itself (∝ leverage)",
+    "λ = 0.5 × max(1, ℓ)",
+];
+
+/// Student's t at 97.5 % for one degree of freedom over the normal's: the few-groups
+/// factor on σ for two training sessions (12.706/1.960).
+const T_ONE_DOF: f64 = 6.483;
+
+/// The variants of issue 27's last step, measured in one run (`docs/results/uncertainty.md`,
+/// "The variants for each unit in 88–99 %"). Per unit with ≥ 3 sessions, its two-session
+/// scores under each form of [`COLUMNS`] (also written to `mukca-forms.json` in Cargo's
+/// temporary folder for benchmarks, `target/tmp/`); each 3-session unit's nested coverage under each form with the median of the *other* units'
+/// κ (its pairs are its outer folds, so its scores are its nested coverage); few-groups
+/// factors; the leverage ratio ℓ per session; and, for the units with ≥ 4 sessions, the
+/// nested coverage with the fleet's κ pooled into their own (worth one group,
+/// [`armcal::uncertainty::pose::pooled_scale`]).
+fn mukca_variants() {
+    let dir = armcal::mukca::default_dir();
+    let Ok(units) = armcal::mukca::unit_names(&dir) else {
+        return println!("MUKCa: no units");
+    };
+    let t0 = Instant::now();
+    let v = Variants::score(
+        units
+            .iter()
+            .filter_map(|(n, _)| armcal::mukca::load(&dir, n).ok())
+            .filter(|u| u.groups().len() >= 3)
+            .collect(),
+    );
+    println!(
+        "MUKCa variants ({:.0} s of scoring)",
+        t0.elapsed().as_secs_f64()
+    );
+    v.print_kappa();
+    v.dump();
+    v.print_forms();
+    v.print_few_groups();
+    v.print_sessions();
+    v.print_nested("κ pooled with the fleet's (worth one group)", |k| {
+        realdata::Rule {
+            prior_groups: 1.0,
+            ..realdata::Rule::product(realdata::fleet_scale(&v.others(k, 2)))
+        }
+    });
+    v.print_nested(
+        "the leverage-scaled term through the nested path (κ validated on ℓ-scaled scores \
+         where ≥ 3 training sessions, else the median of the other units' ℓ-form κ)",
+        |k| realdata::Rule {
+            leverage: true,
+            ..realdata::Rule::product(realdata::fleet_scale(&v.others(k, 6)))
+        },
+    );
+    println!("  took {:.0} s", t0.elapsed().as_secs_f64());
+}
+
+/// The units with ≥ 3 sessions, their two-session scores under each of [`COLUMNS`] (plus ℓ
+/// last) and each unit's conformal κ per column.
+struct Variants {
+    loaded: Vec<armcal::mukca::Unit>,
+    scores: Vec<Vec<(i64, Vec<f64>)>>,
+    kappa: Vec<Vec<f64>>,
+}
+
+impl Variants {
+    fn score(loaded: Vec<armcal::mukca::Unit>) -> Variants {
+        let scores: Vec<Vec<(i64, Vec<f64>)>> = loaded
+            .iter()
+            .map(|u| realdata::two_group_scores_by_form(u, &FORMS))
+            .collect();
+        let kappa = scores
+            .iter()
+            .map(|sc| {
+                (0..COLUMNS.len())
+                    .map(|f| conformal_scale(sc.iter().map(|r| r.1[f]).collect()))
+                    .collect()
+            })
+            .collect();
+        Variants {
+            loaded,
+            scores,
+            kappa,
+        }
+    }
+
+    /// The other units' κ under column `f`.
+    fn others(&self, k: usize, f: usize) -> Vec<f64> {
+        self.kappa
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| *j != k)
+            .map(|(_, v)| v[f])
+            .collect()
+    }
+
+    /// Unit `k`'s share of scores under column `f` covered at κ = `at`.
+    fn covered(&self, k: usize, f: usize, at: f64) -> f64 {
+        let sc = &self.scores[k];
+        sc.iter().filter(|r| r.1[f] <= at).count() as f64 / sc.len().max(1) as f64
+    }
+
+    fn three(&self) -> Vec<usize> {
+        (0..self.loaded.len())
+            .filter(|&k| self.loaded[k].groups().len() == 3)
+            .collect()
+    }
+
+    fn print_kappa(&self) {
+        println!("  two-session κ per unit (conformal over its pair-trained scores), per form:");
+        for (f, name) in COLUMNS.iter().enumerate() {
+            println!(
+                "    {name:<24} {}",
+                self.loaded
+                    .iter()
+                    .zip(&self.kappa)
+                    .map(|(u, k)| format!("{} {:.3}", u.name, k[f]))
+                    .collect::<Vec<_>>()
+                    .join("  ")
+            );
+        }
+    }
+
+    /// Every score to `target/tmp/mukca-forms.json`, for analyses beyond these tables.
+    fn dump(&self) {
+        let units: Vec<_> = self
+            .loaded
+            .iter()
+            .zip(&self.scores)
+            .map(
+                |(u, sc)| serde_json::json!({"unit": u.name, "sessions": u.sessions, "scores": sc}),
+            )
+            .collect();
+        let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("mukca-forms.json");
+        let json = serde_json::json!({"columns": COLUMNS, "units": units});
+        match std::fs::write(&path, json.to_string()) {
+            Ok(()) => println!("  scores written to {}", path.display()),
+            Err(e) => println!("  {}: {e}", path.display()),
+        }
+    }
+
+    fn print_forms(&self) {
+        let three = self.three();
+        println!(
+            "  3-session units, nested coverage (κ = median of the other units' κ; in 88–99 %?):"
+        );
+        for (f, name) in COLUMNS.iter().enumerate() {
+            let cells: Vec<(f64, f64)> = three
+                .iter()
+                .map(|&k| {
+                    let at = realdata::fleet_scale(&self.others(k, f));
+                    (self.covered(k, f, at), at)
+                })
+                .collect();
+            println!(
+                "    {name:<24} {}  — {} of {} in the band",
+                three
+                    .iter()
+                    .zip(&cells)
+                    .map(|(&k, (c, at))| format!("{} {c:.3} (κ {at:.2})", self.loaded[k].name))
+                    .collect::<Vec<_>>()
+                    .join("  "),
+                cells
+                    .iter()
+                    .filter(|(c, _)| (0.88..=0.99).contains(c))
+                    .count(),
+                cells.len()
+            );
+        }
+    }
+
+    fn print_few_groups(&self) {
+        for f in [2, 6] {
+            println!("  few-groups factors, form {}:", COLUMNS[f]);
+            for k in self.three() {
+                let mut o = self.others(k, f);
+                o.sort_by(f64::total_cmp);
+                let rank = ((0.95 * (o.len() + 1) as f64).ceil() as usize).clamp(1, o.len().max(1));
+                let by_rank = o.get(rank - 1).copied().unwrap_or(0.0);
+                let rows: Vec<f64> = self
+                    .scores
+                    .iter()
+                    .enumerate()
+                    .filter(|(j, _)| *j != k)
+                    .flat_map(|(_, sc)| sc.iter().map(|r| r.1[f]))
+                    .collect();
+                let pooled = conformal_scale(rows);
+                let t = T_ONE_DOF * realdata::fleet_scale(&o);
+                println!(
+                    "    {:<12} units' conformal rank {by_rank:.3} → {:.3}; other units' rows \
+                     pooled {pooled:.3} → {:.3}; Student t (1 dof) × median {t:.3} → {:.3}",
+                    self.loaded[k].name,
+                    self.covered(k, f, by_rank),
+                    self.covered(k, f, pooled),
+                    self.covered(k, f, t)
+                );
+            }
+        }
+    }
+
+    fn print_sessions(&self) {
+        println!(
+            "  per scored session (pairs of the others trained): leverage ratio ℓ median, 90th \
+             percentile; κ95 at λ = 0.5"
+        );
+        for (u, sc) in self.loaded.iter().zip(&self.scores) {
+            for (g, name) in &u.sessions {
+                let mut l: Vec<f64> = sc.iter().filter(|r| r.0 == *g).map(|r| r.1[7]).collect();
+                if l.is_empty() {
+                    continue;
+                }
+                l.sort_by(f64::total_cmp);
+                let k95 =
+                    conformal_scale(sc.iter().filter(|r| r.0 == *g).map(|r| r.1[2]).collect());
+                println!(
+                    "    {}/{name}: ℓ {:.2}, {:.2}; κ95 {k95:.2}",
+                    u.name,
+                    l[l.len() / 2],
+                    l[(9 * l.len()) / 10]
+                );
+            }
+        }
+    }
+
+    /// Each unit's nested coverage under the rule `rule(k)` for unit k (the pooled rule only
+    /// changes units with ≥ 4 sessions, so 3-session units are skipped for it).
+    fn print_nested(&self, title: &str, rule: impl Fn(usize) -> realdata::Rule) {
+        println!("  {title}:");
+        let (mut inside, mut judged) = (0.0, 0usize);
+        for (k, u) in self.loaded.iter().enumerate() {
+            let r = rule(k);
+            if r.prior_groups > 0.0 && u.groups().len() < 4 {
+                continue;
+            }
+            let Some(c) = realdata::unit_coverage(u, r) else {
+                continue;
+            };
+            println!(
+                "    {:<12} nested {:.3} of {} ({}), median U95 {:.4} mm, κ per session {}; \
+                 per session {}",
+                c.unit,
+                c.covered_nested,
+                c.probings,
+                if (0.88..=0.99).contains(&c.covered_nested) {
+                    "in the band"
+                } else {
+                    "outside"
+                },
+                c.nested_u95_mm,
+                c.pose_scale
+                    .iter()
+                    .map(|(k, _)| format!("{k:.2}"))
+                    .collect::<Vec<_>>()
+                    .join(" "),
+                c.per_session
+                    .iter()
+                    .map(|(s, _, f, ..)| format!("{s} {f:.3}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+            inside += c.covered_nested * c.probings as f64;
+            judged += c.probings;
+        }
+        println!(
+            "    pooled {:.3} of {judged} (the units shown)",
+            inside / judged.max(1) as f64
+        );
     }
 }

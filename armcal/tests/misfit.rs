@@ -189,6 +189,31 @@ fn the_pose_term_is_estimated_from_sessions_and_covers_a_new_one() {
     assert_eq!(pose.groups, 5);
     assert!(pose.validated && pose.scale > 0.0, "{pose:?}");
     assert!(pose.covered[1] > pose.covered[0], "{pose:?}");
+    // The benchmark's variants go through the same estimate: scaled by the leverage ratio
+    // (a factor ≥ 1 per row), each row needs no more κ, so the conformal κ is no larger;
+    // pooled with the fleet's κ worth one group, κ² = (G κ² + κ_fleet²)/(G + 1).
+    let variant = |v: Settings| {
+        let e = estimate::from_fit(&fit, &data, Some(&h), 0.0, &v).unwrap();
+        e.model.unwrap().pose.unwrap()
+    };
+    let lev = variant(Settings {
+        leverage_scaled: true,
+        ..s
+    });
+    assert!(
+        lev.validated && lev.scale <= pose.scale * (1.0 + 1e-9),
+        "{lev:?}"
+    );
+    let pooled = variant(Settings {
+        fleet_prior_groups: 1.0,
+        two_group_scale: 2.0,
+        ..s
+    });
+    let expect = ((5.0 * pose.scale * pose.scale + 4.0) / 6.0).sqrt();
+    assert!(
+        (pooled.scale - expect).abs() < 1e-9 * expect,
+        "{pooled:?} vs {expect}"
+    );
     let without = estimate::from_fit(
         &fit,
         &data,

@@ -48,6 +48,7 @@ impl BudgetArgs {
             instrument_mm: self.instrument_mm,
             temperature_c: self.temperature_c,
             two_group_scale: self.fleet_kappa,
+            ..Settings::default()
         }
     }
 

@@ -133,6 +133,20 @@ pub fn between(
     groups: usize,
     c: &DMatrix<f64>,
 ) -> DMatrix<f64> {
+    let nu = fits.len().saturating_sub(1);
+    between_with(params, fits, groups, c, prior_weight(nu))
+}
+
+/// [`between`] with the shrinkage weight `lambda` given (0: the raw spread, 1: C alone, at
+/// the spread's size in C's metric). The benchmark measures the family; the budget uses
+/// [`prior_weight`].
+pub fn between_with(
+    params: &[Param],
+    fits: &[&FoldFit],
+    groups: usize,
+    c: &DMatrix<f64>,
+    lambda: f64,
+) -> DMatrix<f64> {
     let p = params.len();
     let mut s = DMatrix::zeros(p, p);
     if fits.len() < 2 {
@@ -142,7 +156,13 @@ pub fn between(
         s += &d * d.transpose();
     }
     let g = groups as f64 - 1.0;
-    shrink(s * (g * g / (fits.len() - 1) as f64), c, fits.len() - 1)
+    shrink_by(s * (g * g / (fits.len() - 1) as f64), c, lambda)
+}
+
+/// The weight of the prior (C's shape) in a spread of ν degrees of freedom: that of one
+/// group, 1/(ν + 1).
+pub fn prior_weight(nu: usize) -> f64 {
+    1.0 / (nu as f64 + 1.0)
 }
 
 /// A spread `s` of ν degrees of freedom shrunk towards the shape of `c`:
@@ -152,6 +172,11 @@ pub fn between(
 /// there too, and the fit's own covariance is the best shape known for them. `s` unchanged
 /// when `c` is not positive definite.
 pub fn shrink(s: DMatrix<f64>, c: &DMatrix<f64>, nu: usize) -> DMatrix<f64> {
+    shrink_by(s, c, prior_weight(nu))
+}
+
+/// [`shrink`] with the weight λ given.
+pub fn shrink_by(s: DMatrix<f64>, c: &DMatrix<f64>, lambda: f64) -> DMatrix<f64> {
     let p = s.nrows();
     let Some(ch) = c.clone().cholesky() else {
         return s;
@@ -160,7 +185,6 @@ pub fn shrink(s: DMatrix<f64>, c: &DMatrix<f64>, nu: usize) -> DMatrix<f64> {
     if !(t.is_finite() && t > 0.0) {
         return s;
     }
-    let lambda = 1.0 / (nu as f64 + 1.0);
     s * (1.0 - lambda) + c * (lambda * t)
 }
 
@@ -239,6 +263,29 @@ pub fn conformal_scale(mut t: Vec<f64>) -> f64 {
     t[k - 1].min(finite)
 }
 
+/// The factor of the leverage-scaled variant of the term at a reading of leverage ratio `l`
+/// (its tr J C Jᵀ over the mean on the calibration's rows): max(1, l). Measured on MUKCa
+/// (`coverage` bench, `mukca-variants`), not in the budget: a factor per reading that the
+/// table's C cannot hold.
+pub fn leverage_factor(l: f64) -> f64 {
+    if l.is_finite() {
+        l.max(1.0)
+    } else {
+        1.0
+    }
+}
+
+/// A unit's own κ from `groups` held-out groups pooled with the fleet's, the fleet's worth
+/// `prior_groups` groups: κ² = (G κ_own² + w κ_fleet²)/(G + w), a random effect's
+/// shrinkage (the own value's weight grows with its groups). `own` unchanged when w = 0.
+pub fn pooled_scale(own: f64, groups: usize, fleet: f64, prior_groups: f64) -> f64 {
+    if prior_groups <= 0.0 {
+        return own;
+    }
+    let g = groups as f64;
+    ((g * own * own + prior_groups * fleet * fleet) / (g + prior_groups)).sqrt()
+}
+
 /// The pose term of a held-out validation by group `h` of `data`, for the budget's `params`
 /// on the calibrated `arm`; `rows` what the rest of the budget predicts for the held-out rows
 /// ([`super::misfit::row_covariances`]) and `res` their residuals
@@ -255,6 +302,8 @@ pub fn estimate(
     rows: &[RowCov],
     res: &[nalgebra::Vector3<f64>],
     two_group_scale: f64,
+    prior_groups: f64,
+    leverage: bool,
 ) -> Option<PoseTerm> {
     let groups = fold_groups(data, &h.fits)?;
     let g_all = groups.len();
@@ -284,10 +333,28 @@ pub fn estimate(
             }
         }
     }
+    if leverage {
+        let judged: Vec<bool> = h.judged.clone();
+        let lev: std::collections::HashMap<usize, f64> =
+            tip_part(arm, params, c.clone(), data, &judged)
+                .into_iter()
+                .map(|r| (r.row, r.s.trace()))
+                .collect();
+        let mean = lev.values().sum::<f64>() / lev.len().max(1) as f64;
+        for (k, r) in rows.iter().enumerate() {
+            let l = lev.get(&r.row).map_or(1.0, |x| x / mean);
+            extra[k] *= leverage_factor(l);
+        }
+    }
     let deviation = |r: &RowCov| res[r.row].norm();
     let scale = if validated {
         let d: Vec<f64> = rows.iter().map(deviation).collect();
-        conformal_scale(least_scales(rows, &extra, &d))
+        pooled_scale(
+            conformal_scale(least_scales(rows, &extra, &d)),
+            g_all,
+            two_group_scale,
+            prior_groups,
+        )
     } else {
         two_group_scale
     };
@@ -364,6 +431,38 @@ mod tests {
         assert_eq!(d[1][1], 0.0);
         assert_eq!(d[0][1], 0.0);
         assert!((d[0][0] - 1e-4).abs() < 1e-15);
+    }
+
+    /// The fleet's κ pooled into a unit's own weighs as `prior_groups` groups against the
+    /// unit's G, in κ²; weight 0 leaves the own κ, many groups leave it nearly so.
+    #[test]
+    fn a_pooled_scale_weighs_the_fleet_as_prior_groups() {
+        assert_eq!(pooled_scale(0.3, 3, 1.2, 0.0), 0.3);
+        let k = pooled_scale(0.0, 3, 2.0, 1.0);
+        assert!((k - 1.0).abs() < 1e-12, "{k}");
+        let many = pooled_scale(1.0, 1000, 3.0, 1.0);
+        assert!(many > 1.0 && many < 1.01, "{many}");
+    }
+
+    /// The leverage factor only widens (floored at 1) and ignores a ratio that is not a
+    /// number (a calibration with no spread in C).
+    #[test]
+    fn the_leverage_factor_only_widens() {
+        assert_eq!(leverage_factor(0.3), 1.0);
+        assert_eq!(leverage_factor(4.0), 4.0);
+        assert_eq!(leverage_factor(f64::NAN), 1.0);
+        assert_eq!(leverage_factor(f64::INFINITY), 1.0);
+    }
+
+    /// λ = 0 leaves the spread, λ = 1 is C at the spread's size in C's metric.
+    #[test]
+    fn the_shrinkage_weight_runs_from_the_spread_to_c() {
+        let s = DMatrix::from_row_slice(2, 2, &[4.0, 0.0, 0.0, 0.0]);
+        let c = DMatrix::from_diagonal_element(2, 2, 2.0);
+        assert_eq!(shrink_by(s.clone(), &c, 0.0), s);
+        // tr(c⁻¹ s)/p = (4/2)/2 = 1: C itself.
+        assert!((shrink_by(s.clone(), &c, 1.0) - &c).norm() < 1e-12);
+        assert_eq!(shrink(s.clone(), &c, 1), shrink_by(s, &c, prior_weight(1)));
     }
 
     /// κ is the least scale that covers: more than 0 for a far row, and covering there.

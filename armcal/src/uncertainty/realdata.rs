@@ -64,6 +64,29 @@ pub struct UnitCoverage {
     pub model_mm: f64,
 }
 
+/// How the nested budget sets the pose term's scale (see [`super::estimate::Settings`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rule {
+    /// κ where two training sessions cannot set it (the fleet's).
+    pub two_group_scale: f64,
+    /// The fleet κ's weight in a validated κ ([`super::pose::pooled_scale`]; 0: none).
+    pub prior_groups: f64,
+    /// The leverage-scaled variant ([`super::pose::leverage_factor`]): the pose part of each
+    /// probing's covariance times its leverage ratio, in the validation and in the scoring.
+    pub leverage: bool,
+}
+
+impl Rule {
+    /// The product's rule with the fleet's κ `two_group_scale`.
+    pub fn product(two_group_scale: f64) -> Rule {
+        Rule {
+            two_group_scale,
+            prior_groups: 0.0,
+            leverage: false,
+        }
+    }
+}
+
 /// The margin (rad, about 5.7°) of the per-joint range check measured beside the others.
 pub const RANGE_MARGIN: f64 = 0.1;
 
@@ -85,18 +108,15 @@ struct Held {
     /// more than [`RANGE_MARGIN`] rad.
     range_far: [f64; 2],
     test: Dataset,
+    /// Per probing: (row, U95 of the nested budget under the rule).
+    nested_u95: Vec<(usize, f64)>,
     /// Per probing: (row, |deviation|, predicted U95, per-axis variance the budget missed).
     probings: Vec<(usize, f64, f64, f64)>,
 }
 
 /// Calibrates on every session but `g` and judges `g` with the budget as written;
 /// `two_group_scale` is the pose term's κ when two training sessions cannot set it.
-fn hold_out(
-    unit: &Unit,
-    groups: &[i64],
-    g: i64,
-    two_group_scale: f64,
-) -> Result<Held, super::BudgetError> {
+fn hold_out(unit: &Unit, groups: &[i64], g: i64, rule: Rule) -> Result<Held, super::BudgetError> {
     let train: Vec<i64> = groups.iter().copied().filter(|x| *x != g).collect();
     let train_data = unit.sessions_data(&train);
     let opts = mukca::options(None);
@@ -116,7 +136,9 @@ fn hold_out(
     );
     let (nested, pose, pose_scale) = if inner.folds > 1 {
         let with = Settings {
-            two_group_scale,
+            two_group_scale: rule.two_group_scale,
+            fleet_prior_groups: rule.prior_groups,
+            leverage_scaled: rule.leverage,
             ..Settings::default()
         };
         let e = estimate::from_fit(&fit, &train_data, Some(&inner), 0.0, &with)?;
@@ -142,6 +164,7 @@ fn hold_out(
             probings.push((i, d, u, (d * d - trace) / (3.0 * (1.0 - 1.0 / n))));
         }
     }
+    let nested_u95 = nested_u95(&fit.arm, &train_data, &budget, &nested, &pose, &test, rule);
     let far = super::extrapolation::Support::of(&fit.arm, &train_data).map_or(0.0, |sup| {
         let m = crate::fit::probes::Mounted::new(&fit.arm);
         let n = test.rows.iter().filter(|r| sup.far(&m.tip(r))).count();
@@ -157,6 +180,7 @@ fn hold_out(
         n as f64 / test.rows.len().max(1) as f64
     });
     Ok(Held {
+        nested_u95,
         joint_far,
         range_far,
         pose,
@@ -170,6 +194,65 @@ fn hold_out(
     })
 }
 
+/// Each held-out probing's U95 under the nested budget `nested` (whose C holds the pose part
+/// `pose`); with the leverage rule the pose part is scaled per probing by its leverage ratio
+/// against the training probings (`budget`'s C, the same normaliser as the validation's).
+fn nested_u95(
+    arm: &Arm,
+    train: &Dataset,
+    budget: &Budget,
+    nested: &Budget,
+    pose: &nalgebra::DMatrix<f64>,
+    test: &Dataset,
+    rule: Rule,
+) -> Vec<(usize, f64)> {
+    let ends = |d: &Dataset| -> Vec<Vec<usize>> {
+        d.layout()
+            .length
+            .iter()
+            .flat_map(|l| [l.a.clone(), l.b.clone()])
+            .collect()
+    };
+    if !rule.leverage {
+        return ends(test)
+            .iter()
+            .flat_map(|end| socket_u95(arm, nested, test, end))
+            .map(|(i, u, _)| (i, u))
+            .collect();
+    }
+    let only = |cov: nalgebra::DMatrix<f64>| Budget {
+        params: budget.params.clone(),
+        cov,
+        encoder_counts: vec![0.0; test.dof],
+        probing_mm: 0.0,
+        temperature_c: 0.0,
+        model_mm: 0.0,
+    };
+    let c_only = only(budget.cov.clone());
+    let pose_only = only(pose.clone());
+    let rest = Budget {
+        cov: &nested.cov - pose,
+        ..nested.clone()
+    };
+    let train_lev: Vec<f64> = ends(train)
+        .iter()
+        .flat_map(|end| propagate::group_deviations(arm, &c_only, train, end))
+        .map(|(_, p)| p.trace())
+        .collect();
+    let mean = train_lev.iter().sum::<f64>() / train_lev.len().max(1) as f64;
+    let mut out = Vec::new();
+    for end in ends(test) {
+        let r = propagate::group_deviations(arm, &rest, test, &end);
+        let p = propagate::group_deviations(arm, &pose_only, test, &end);
+        let l = propagate::group_deviations(arm, &c_only, test, &end);
+        for ((i, s), ((_, p), (_, l))) in r.into_iter().zip(p.into_iter().zip(l)) {
+            let f = super::pose::leverage_factor(l.trace() / mean);
+            out.push((i, u95::u95(&(s + p * f))));
+        }
+    }
+    out
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
@@ -180,14 +263,16 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// sessions' held-out probings (g's own probings never set it). `two_group_scale`: the pose
 /// term's κ where only two training sessions are left (from other units: see
 /// [`two_group_scores`]).
-pub fn unit_coverage(unit: &Unit, two_group_scale: f64) -> Option<UnitCoverage> {
+/// `rule`: how the nested budget sets the pose term's scale ([`Rule::product`] for the
+/// budget `calibrate --by-group` writes).
+pub fn unit_coverage(unit: &Unit, rule: Rule) -> Option<UnitCoverage> {
     let groups = unit.groups();
     if groups.len() < 2 {
         return None;
     }
     let (mut held, mut failed) = (Vec::new(), Vec::new());
     for &g in &groups {
-        match hold_out(unit, &groups, g, two_group_scale) {
+        match hold_out(unit, &groups, g, rule) {
             Ok(h) => held.push(h),
             Err(e) => failed.push(format!(
                 "{}: {e}",
@@ -221,13 +306,11 @@ pub fn unit_coverage(unit: &Unit, two_group_scale: f64) -> Option<UnitCoverage> 
     let (mut inside_nested, mut u_nested, mut per_session) = (0usize, Vec::new(), Vec::new());
     for h in &held {
         let (mut n, mut k) = (0usize, 0usize);
-        for end in h.test.layout().length.iter().flat_map(|l| [&l.a, &l.b]) {
-            for (i, u, _) in socket_u95(&h.arm, &h.nested, &h.test, end) {
-                let d = h.probings.iter().find(|p| p.0 == i).map_or(0.0, |p| p.1);
-                k += usize::from(d <= u);
-                n += 1;
-                u_nested.push(u);
-            }
+        for &(i, u) in &h.nested_u95 {
+            let d = h.probings.iter().find(|p| p.0 == i).map_or(0.0, |p| p.1);
+            k += usize::from(d <= u);
+            n += 1;
+            u_nested.push(u);
         }
         inside_nested += k;
         let g = h.test.rows.first().map_or(0, |r| r.group);
@@ -295,6 +378,24 @@ fn socket_u95(arm: &Arm, b: &Budget, data: &Dataset, rows: &[usize]) -> Vec<(usi
 /// ([`super::pose::least_scales`]). Empty with fewer than 3 sessions. A fleet's κ for a unit
 /// is taken from the *other* units' scores, so a unit never sets its own.
 pub fn two_group_scores(unit: &Unit) -> Vec<f64> {
+    let lambda = super::pose::prior_weight(1);
+    two_group_scores_by_form(unit, &[lambda])
+        .into_iter()
+        .map(|(_, t)| t[0])
+        .collect()
+}
+
+/// [`two_group_scores`] under several forms of the term at once, measured for issue 27
+/// (`coverage` bench, `mukca-variants`): per scored probing, (its session, its least
+/// covering κ under each shrinkage weight λ of `lambdas` ([`super::pose::between_with`]),
+/// then under C itself (a term ∝ J C Jᵀ = σ̂² times the probing's leverage), then under the
+/// budget's form times max(1, ℓ), then ℓ itself). ℓ is the probing's leverage ratio: tr(J C
+/// Jᵀ) of its deviation over the mean of the same over the training probings, large where
+/// the placement is one the training design did not see. The last two are not
+/// representable in the table's C (a factor per reading), so they are measured here, not in
+/// the budget. For a unit with three sessions the pairs are the outer folds of the nested
+/// run, so these scores are its nested coverage as a function of κ.
+pub fn two_group_scores_by_form(unit: &Unit, lambdas: &[f64]) -> Vec<(i64, Vec<f64>)> {
     let groups = unit.groups();
     let mut out = Vec::new();
     if groups.len() < 3 {
@@ -325,15 +426,34 @@ pub fn two_group_scores(unit: &Unit) -> Vec<f64> {
         };
         let rest = e.budget;
         let fits: Vec<&crate::fit::holdout::FoldFit> = inner.fits.iter().collect();
-        let sb = super::pose::between(&rest.params, &fits, 2, &rest.cov);
-        let pose = Budget {
+        // A budget of the parameters' covariance `cov` alone.
+        let only = |cov: nalgebra::DMatrix<f64>| Budget {
             params: rest.params.clone(),
-            cov: sb * 1.5,
+            cov,
             encoder_counts: vec![0.0; data.dof],
             probing_mm: 0.0,
             temperature_c: 0.0,
             model_mm: 0.0,
         };
+        let poses: Vec<Budget> = lambdas
+            .iter()
+            .map(|&l| only(super::pose::between_with(&rest.params, &fits, 2, &rest.cov, l) * 1.5))
+            .collect();
+        let budget_form = only(super::pose::between(&rest.params, &fits, 2, &rest.cov) * 1.5);
+        let c_only = only(rest.cov.clone());
+        // The leverage ratio's normaliser: the mean trace of J C Jᵀ over the training
+        // probings (their deviations from their socket's centre).
+        let lev = |d: &Dataset| -> Vec<f64> {
+            d.layout()
+                .length
+                .iter()
+                .flat_map(|l| [&l.a, &l.b])
+                .flat_map(|end| propagate::group_deviations(&fit.arm, &c_only, d, end))
+                .map(|(_, p)| p.trace())
+                .collect()
+        };
+        let train_lev = lev(&data);
+        let mean_lev = train_lev.iter().sum::<f64>() / train_lev.len().max(1) as f64;
         for &s in groups.iter().filter(|s| !pair.contains(s)) {
             let test = unit.sessions_data(&[s]);
             let res = residuals(&fit.arm, &test, None);
@@ -344,11 +464,30 @@ pub fn two_group_scores(unit: &Unit) -> Vec<f64> {
                         .into_iter()
                         .map(|(i, s)| (super::misfit::RowCov { row: i, s, m }, res.rows[i].norm()))
                         .unzip();
-                let extra: Vec<_> = propagate::group_deviations(&fit.arm, &pose, &test, end)
+                let mut per_form: Vec<Vec<f64>> = poses
+                    .iter()
+                    .map(|pose| {
+                        let extra: Vec<_> = propagate::group_deviations(&fit.arm, pose, &test, end)
+                            .into_iter()
+                            .map(|(_, p)| p)
+                            .collect();
+                        super::pose::least_scales(&rows, &extra, &d)
+                    })
+                    .collect();
+                let jc: Vec<_> = propagate::group_deviations(&fit.arm, &c_only, &test, end)
                     .into_iter()
                     .map(|(_, p)| p)
                     .collect();
-                out.extend(super::pose::least_scales(&rows, &extra, &d));
+                let l: Vec<f64> = jc.iter().map(|p| p.trace() / mean_lev).collect();
+                per_form.push(super::pose::least_scales(&rows, &jc, &d));
+                let ext: Vec<_> = propagate::group_deviations(&fit.arm, &budget_form, &test, end)
+                    .into_iter()
+                    .zip(&l)
+                    .map(|((_, p), l)| p * l.max(1.0))
+                    .collect();
+                per_form.push(super::pose::least_scales(&rows, &ext, &d));
+                per_form.push(l);
+                out.extend((0..rows.len()).map(|r| (s, per_form.iter().map(|f| f[r]).collect())));
             }
         }
     }
