@@ -84,8 +84,9 @@ pub fn run() -> Result<()> {
     step("board-common unit tests (host)");
     // The boards' shared crate is in no workspace (it builds for the targets); its pure parts
     // (the boot check, the flash map and window, the update port) are tested on the host,
-    // with the u95 feature and without (the M0 hubs').
-    for features in [&[][..], &["--features", "u95"][..]] {
+    // with the features of the full profile (qemu-m4f, nucleo-f446re, rp-pico: U95 with the
+    // parameter block, the wobble) and without (qemu-m0's minimal profile).
+    for features in [&[][..], &["--features", "u95 wobble"][..]] {
         check(
             cargo()
                 .args(["test", "--lib", "--manifest-path"])
