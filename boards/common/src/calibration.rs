@@ -36,8 +36,9 @@ impl HubEvaluator for quatarm::F32 {
 
 /// The fixed-point hubs stream U95 where the board has the flash for it (feature `u95`: the
 /// Raspberry Pi Pico's 2 MB). Their U95 is the f32 one in software floating point on a core
-/// without an FPU, the Jacobians from the fixed-point matrix chain's frames
-/// (`docs/results/boards.md`, "The Pico's U95": why f32 and not fixed point). qemu-m0, the
+/// without an FPU, the Jacobians from the fixed-point matrix chain's frames, and on the Pico
+/// the parameter part's product in integers (`quatarm/fixed-u95`; `docs/results/boards.md`,
+/// "The Pico's U95": both measured, and why). qemu-m0, the
 /// 32 KiB minimal profile, leaves it out: its image holds the chain, the stream and the
 /// table's checks, not the uncertainty as well.
 impl HubEvaluator for quatarm::Fixed {
