@@ -225,9 +225,10 @@ mod tests {
             let mut want = [0.0f64; 6];
             for j in 0..p {
                 let mut g = [0.0f64; 3];
-                for k in j..p {
-                    for c in 0..3 {
-                        g[c] += f64::from(d[k][c]) * f64::from(l[factor_len(k) + j]);
+                for (k, dk) in d.iter().enumerate().take(p).skip(j) {
+                    let lkj = f64::from(l[factor_len(k) + j]);
+                    for (gc, &x) in g.iter_mut().zip(dk) {
+                        *gc += f64::from(x) * lkj;
                     }
                 }
                 for (w, (a, b)) in
@@ -239,15 +240,10 @@ mod tests {
             }
             let big = want[..3].iter().copied().fold(0.0, f64::max);
             let mut worst: f64 = 0.0;
-            for c in 0..6 {
-                let e = (f64::from(got.0[c]) - want[c]).abs() / big;
+            for (c, (&g, &w)) in got.0.iter().zip(&want).enumerate() {
+                let e = (f64::from(g) - w).abs() / big;
                 worst = worst.max(e);
-                assert!(
-                    e < 1e-4,
-                    "P = {p}, entry {c}: {} against {}",
-                    got.0[c],
-                    want[c]
-                );
+                assert!(e < 1e-4, "P = {p}, entry {c}: {g} against {w}");
             }
             std::println!("P = {p}: worst {worst:.2e} of the largest variance");
         }
