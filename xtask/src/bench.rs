@@ -356,7 +356,9 @@ pub fn run(only: Option<&str>, calib: Option<&std::path::Path>) -> Result<()> {
     setup::ensure()?;
     let path = calib.map_or_else(default_calibration_path, std::path::Path::to_path_buf);
     // With the calibration's uncertainty budget where it has one: whole for the f32 boards,
-    // without the parameters' covariance for the fixed-point ones (which refuse the block).
+    // without the parameters' covariance for the fixed-point ones: qemu-m0 (the minimal
+    // profile) refuses the block, and rp-pico, which takes it, runs no QEMU (its profile's
+    // rows, `pico_profile`, take the table whole).
     let parsed = quatarm_ref::calfile::read(&path)?;
     let table_for = |b: &Board| -> Result<Vec<u8>> {
         let budget = match &parsed.uncertainty {
