@@ -159,6 +159,30 @@ fn hub_u95_agrees_with_the_host_on_the_shipped_budget() {
     assert!(worst < 1e-3, "{worst}");
 }
 
+/// The Raspberry Pi Pico's profile (issue 32): the fixed-point hub with the axis wobble and
+/// the parameter block, its U95 in f32 (software floating point on the M0+, the same code
+/// compiled here) from the fixed-point matrix chain's frames, against `armcal eval
+/// --uncertainty`'s first order, on the arm whose every joint wobbles
+/// (`data/default-6-wobble.toml`) with the shipped 52-parameter budget: within 0.1 %.
+#[test]
+fn pico_profile_u95_agrees_with_the_host_on_a_wobbling_arm() {
+    let wobbling =
+        quatarm_ref::calfile::parse(include_str!("../../data/default-6-wobble.toml")).unwrap();
+    let full = quatarm_ref::calfile::parse(include_str!("../../data/default-6-full.toml")).unwrap();
+    let budget = full.uncertainty.as_ref().unwrap();
+    let bytes = armcal::tablebuild::build_with(&wobbling.arm, Some(budget)).unwrap();
+    let table = quatarm::Table::parse(&bytes).unwrap();
+    assert!(table.wobble().is_some() && table.parameters().is_some());
+    let (worst, share) = hub_against_host(&wobbling.arm, budget, 17);
+    println!(
+        "Pico profile, default-6-wobble with the 52-parameter budget: worst hub U95 error \
+         {worst:.2e} (parameter part up to {:.1} % of the variance)",
+        100.0 * share
+    );
+    assert!(share > 0.1, "{share}");
+    assert!(worst < 1e-3, "{worst}");
+}
+
 /// Without its parameters the same budget still agrees: the reading's own terms alone.
 #[test]
 fn hub_own_terms_agree_with_the_host() {

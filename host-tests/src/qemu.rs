@@ -33,6 +33,9 @@ pub struct Options {
     pub icount: bool,
     /// Kill QEMU after this long.
     pub timeout: Duration,
+    /// More QEMU arguments, after the machine's (the Pico's profile on `microbit` gives the
+    /// nRF51 more RAM: `-global nrf51-soc.sram-size=N`).
+    pub extra_args: Vec<String>,
 }
 
 impl Default for Options {
@@ -41,6 +44,7 @@ impl Default for Options {
             table: None,
             icount: true,
             timeout: Duration::from_secs(300),
+            extra_args: Vec::new(),
         }
     }
 }
@@ -183,7 +187,7 @@ pub fn run(board: &Board, elf: &Path, input: &[u8], opts: &Options) -> Result<Ru
     let dir = tempfile::tempdir()?;
     let sock = dir.path().join("uart.sock");
     let mut cmd = command(board, &opts.table, opts.icount, Uart::Socket(&sock), None)?;
-    cmd.arg("-kernel").arg(elf);
+    cmd.args(&opts.extra_args).arg("-kernel").arg(elf);
     let start = Instant::now();
     let mut child = cmd.spawn().context("starting qemu-system-arm")?;
     let mut stdout = child.stdout.take().context("qemu stdout")?;

@@ -121,6 +121,43 @@ fn every_board_reserves_a_calibration_region() {
     }
 }
 
+/// A board whose profile takes the parameter block and the wobble (`board-common`'s features
+/// `u95` and `wobble` in its `Cargo.toml`) has both slots large enough for the largest table
+/// with both blocks: 7 joints, 8 probes, every joint's wobble and 64 parameters (13,824
+/// bytes). The Pico's 4 KiB slots held only tables without the block; a 52-parameter table
+/// would have been refused by its length.
+#[test]
+fn a_board_that_takes_the_parameter_block_has_slots_for_it() {
+    use quatarm::table::{parameters, wobble, MAX_PLAIN_TABLE_LEN};
+    let largest =
+        MAX_PLAIN_TABLE_LEN + parameters::len(parameters::MAX_PARAMETERS) + wobble::len(MAX_JOINTS);
+    let mut profiled = vec![];
+    for b in boards::boards().unwrap() {
+        let manifest = std::fs::read_to_string(b.dir().join("Cargo.toml")).expect("Cargo.toml");
+        let common = manifest
+            .lines()
+            .find(|l| l.starts_with("board-common = "))
+            .unwrap_or_else(|| panic!("{}: no board-common dependency", b.name));
+        let takes = |f: &str| common.contains(&format!("\"{f}\""));
+        if !(takes("u95") && takes("wobble")) {
+            continue;
+        }
+        profiled.push(b.name);
+        let script = std::fs::read_to_string(b.dir().join("memory.x")).expect("memory.x");
+        for name in ["CALTABLE", "CALTABLE_B"] {
+            let (_, len) = region(&script, name);
+            assert!(
+                len >= largest as u64,
+                "{}: {name} of {len} bytes cannot hold a table of {largest} bytes",
+                b.name
+            );
+        }
+    }
+    // The profiles as docs/results/boards.md gives them: all but qemu-m0.
+    profiled.sort_unstable();
+    assert_eq!(profiled, ["nucleo-f446re", "qemu-m4f", "rp-pico"]);
+}
+
 #[test]
 fn the_template_reserves_a_calibration_region() {
     check(&root().join("memory.x"), None);

@@ -12,6 +12,8 @@
 //! --nocapture`), and its cost on qemu-m4f (`cargo xtask bench-target`): the numbers are in
 //! `docs/results/speed.md`.
 
+#[cfg(feature = "fixed-u95")]
+pub mod fixed_product;
 pub mod own;
 pub mod parameters;
 pub mod radius;

@@ -42,13 +42,66 @@ pub fn table(link: f64) -> Vec<u8> {
 
 /// [`table`] with an uncertainty budget (80 bytes more), as `armcal calibrate` writes it.
 pub fn table_with_budget(link: f64) -> Vec<u8> {
-    let budget = BudgetData {
+    encoded(link, Some(&budget()))
+}
+
+/// The fixtures' budget: one count on each joint, 2 µm of probing, 1 µm of model, 0.2 °C.
+fn budget() -> BudgetData {
+    BudgetData {
         encoder_counts: [1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0],
         probing_mm: 0.002,
         model_mm: 0.001,
         temperature_c: 0.2,
+    }
+}
+
+/// [`table_with_budget`] with the blocks a board profile decides on (issue 32): an axis
+/// wobble on joint 2 (one first-order term of 20 µrad) and a parameter block of three
+/// parameters (joint 1's turn, joint 3's first cosine harmonic, a shift of joint 5). A hub
+/// whose `quatarm` has the features `wobble` and `parameters` (the Pico's profile) takes it;
+/// one without either (qemu-m0's minimal profile) refuses it by its flags.
+pub fn table_with_blocks(link: f64) -> Vec<u8> {
+    use crate::table::parameters::{Column, Kind, ParameterData};
+    use crate::table::wobble::{WobbleData, WobbleTerm};
+    let mut data = arm(link, 1 << 14, Release::default());
+    data.wobble[1] = WobbleData {
+        f1: [1.0, 0.0, 0.0],
+        f2: [0.0, 1.0, 0.0],
+        count: 1,
+        terms: [
+            WobbleTerm {
+                order: 1,
+                alpha: [2e-5, 0.0],
+                beta: [0.0, -1e-5],
+            },
+            WobbleTerm::default(),
+            WobbleTerm::default(),
+            WobbleTerm::default(),
+        ],
     };
-    encoded(link, Some(&budget))
+    let columns = [
+        Column::new(Kind::Turn, 0),
+        Column {
+            order: 1,
+            ..Column::new(Kind::TurnCos, 2)
+        },
+        Column {
+            vector: [0.0, 0.0, 1.0],
+            w0: 1.0,
+            ..Column::new(Kind::Shift, 4)
+        },
+    ];
+    // L: 10 µrad, 2 µrad and 1 µm standard deviations, the first two correlated.
+    let factor = [1e-5, 3e-6, 2e-6, 0.0, 0.0, 1e-3];
+    let block = ParameterData {
+        columns: &columns,
+        factor: &factor,
+    };
+    let mut bytes = [0u8; MAX_TABLE_LEN];
+    let len = data
+        .encode_full(Some(&budget()), Some(&block), &mut bytes)
+        .expect("fixture table encodes");
+    bytes[..len].to_vec()
 }
 
 /// [`table`] for encoders of `counts` per revolution (the others have 2^14).
@@ -83,6 +136,16 @@ fn encoded_release(
     counts: u32,
     release: Release,
 ) -> Vec<u8> {
+    let data = arm(link, counts, release);
+    let mut bytes = [0u8; MAX_TABLE_LEN];
+    let len = data
+        .encode_with(budget, &mut bytes)
+        .expect("fixture table encodes");
+    bytes[..len].to_vec()
+}
+
+/// The fixture arm: six joints about z, links of `link` mm along x, the probe 50 mm along z.
+fn arm(link: f64, counts: u32, release: Release) -> TableData {
     let mut data = TableData {
         joint_count: 6,
         release,
@@ -106,11 +169,7 @@ fn encoded_release(
         ..ProbeData::default()
     };
     data.flags = data.content_flags();
-    let mut bytes = [0u8; MAX_TABLE_LEN];
-    let len = data
-        .encode_with(budget, &mut bytes)
-        .expect("fixture table encodes");
-    bytes[..len].to_vec()
+    data
 }
 
 /// The CRC a table carries in its last four bytes.

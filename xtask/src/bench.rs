@@ -11,15 +11,29 @@
 use anyhow::{bail, Context, Result};
 use host_tests::boards::{boards, Board};
 use host_tests::defmt_log::{self, number_after};
-use host_tests::e2e::{default_calibration_path, default_recording_path, replay, table_file};
+use host_tests::e2e::{default_calibration_path, default_recording_path, table_file};
 use host_tests::qemu::{self, Options};
 use host_tests::recording::{self, replay_bytes};
 use object::{Object, ObjectSegment};
+use std::path::{Path, PathBuf};
 
 use crate::build::build_board_with;
 use crate::cbase;
 use crate::setup;
 use crate::toolchain::{self, Toolchain};
+
+/// The Raspberry Pi Pico's profile measured on qemu-m0's core (the RP2040 is a Cortex-M0+:
+/// the same Armv6-M instructions; QEMU models no RP2040): qemu-m0's crate built with its
+/// feature `pico-profile` (the wobble, the parameter block, U95 in software f32) into a folder
+/// of its own, timed on the full table with its parameter block, and on the wobble
+/// calibration.
+pub const PICO_PROFILE: &str = "pico-profile";
+
+/// RAM of the profile's benchmark runs: the stack top of `boards/qemu-m0/pico-profile.x`.
+const PICO_PROFILE_RAM: u32 = 64 * 1024;
+
+/// The calibration whose every joint wobbles (no budget), for the profile's wobble chain.
+const WOBBLE_CALIBRATION: &str = "data/default-6-wobble.toml";
 
 /// Readings timed per chain.
 const POINTS: usize = 2_000;
@@ -43,6 +57,9 @@ pub fn sizes(elf: &std::path::Path) -> Result<(u64, u64)> {
 pub struct Row {
     /// The board.
     pub board: Board,
+    /// What the row's first column says: the board's name, or the profile measured on its
+    /// core ([`PICO_PROFILE`]).
+    pub label: String,
     /// The compiler that built it (`rustc --version`'s number, and its kind).
     pub compiler: String,
     /// Flash bytes of the hub image.
@@ -78,25 +95,25 @@ struct Measured {
     u95: [Option<f64>; 2],
 }
 
-fn instructions(b: &Board, table: &[u8]) -> Result<Measured> {
+fn instructions(b: &Board, elf: &Path, table: &[u8], extra_args: &[String]) -> Result<Measured> {
     let readings = recording::read(&default_recording_path())?;
     let input = replay_bytes(&readings[..POINTS.min(readings.len())], None);
     let file = table_file(table)?;
-    let elf = b.elf("bench");
     let run = qemu::run(
         b,
-        &elf,
+        elf,
         &input,
         &Options {
             table: Some(file.path().to_path_buf()),
             icount: true,
+            extra_args: extra_args.to_vec(),
             ..Options::default()
         },
     )?;
     if !run.status.success() {
         bail!("{} bench image failed: {:?}", b.name, run.status);
     }
-    let lines = defmt_log::decode(&elf, &run.log)?;
+    let lines = defmt_log::decode(elf, &run.log)?;
     let get = |key: &str| {
         number_after(&lines, key).with_context(|| format!("`{key}` missing in {lines:?}"))
     };
@@ -163,19 +180,46 @@ fn instructions(b: &Board, table: &[u8]) -> Result<Measured> {
     })
 }
 
+/// The row of board `b`'s own images, built by `tc`.
 fn measure(b: &Board, tc: &Toolchain, table: &[u8]) -> Result<Row> {
-    let (flash, statics) = sizes(&b.elf(b.name))?;
+    let dir = tc.kind.target_dir(&b.dir()).join(b.target).join("release");
+    measure_images(b, b.name.to_owned(), tc, &dir, table, None)
+}
+
+/// The row of the hub and benchmark images in `dir` (release binaries of board `b`'s crate),
+/// labelled `label`; the hub's stack peak from a replay, unless the row is a profile's run
+/// with more QEMU arguments (`profile_args`: its benchmark image only).
+fn measure_images(
+    b: &Board,
+    label: String,
+    tc: &Toolchain,
+    dir: &Path,
+    table: &[u8],
+    profile_args: Option<&[String]>,
+) -> Result<Row> {
+    let hub = dir.join(b.name);
+    let (flash, statics) = sizes(&hub)?;
     let (mut stack, mut instr, mut signature, mut u95) = (None, None, None, [None; 2]);
     let mut lean = false;
-    if b.qemu.is_some() {
+    if b.qemu.is_some() && profile_args.is_none() {
         let readings: Vec<_> = recording::read(&default_recording_path())?
             .into_iter()
             .take(50)
             .collect();
-        let out = replay(b, Some(table), &replay_bytes(&readings, None))?;
-        let lines = defmt_log::decode(&b.elf(b.name), &out.run.log)?;
+        let file = table_file(table)?;
+        let opts = Options {
+            table: Some(file.path().to_path_buf()),
+            ..Options::default()
+        };
+        let run = qemu::run(b, &hub, &replay_bytes(&readings, None), &opts)?;
+        if !run.status.success() {
+            bail!("{label} hub image failed: {:?}", run.status);
+        }
+        let lines = defmt_log::decode(&hub, &run.log)?;
         stack = number_after(&lines, "stack peak");
-        let m = instructions(b, table)?;
+    }
+    if b.qemu.is_some() {
+        let m = instructions(b, &dir.join("bench"), table, profile_args.unwrap_or(&[]))?;
         instr = Some(m.chains);
         lean = m.lean;
         signature = Some(m.signature);
@@ -183,6 +227,7 @@ fn measure(b: &Board, tc: &Toolchain, table: &[u8]) -> Result<Row> {
     }
     Ok(Row {
         board: *b,
+        label,
         compiler: format!(
             "{} {}",
             tc.kind.name(),
@@ -232,10 +277,78 @@ pub fn table(rows: &[Row]) -> String {
         let streamed = cell(r.u95[1], "(not computed)");
         s.push_str(&format!(
             "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
-            r.board.name, r.compiler, r.board.precision, r.flash, ram, h, q, m, own, streamed, sig
+            r.label, r.compiler, r.board.precision, r.flash, ram, h, q, m, own, streamed, sig
         ));
     }
     s
+}
+
+/// The rows of the Pico's profile on qemu-m0's core ([`PICO_PROFILE`]): the calibration at
+/// `calib` whole (the parameter block's U95) with U95 in software f32 and with its parameter
+/// product in integers (feature `pico-profile-fixed-u95`), and [`WOBBLE_CALIBRATION`] (the
+/// wobble chain).
+fn pico_profile(tc: &Toolchain, calib: &Path) -> Result<Vec<Row>> {
+    let m0 = host_tests::boards::board("qemu-m0")?;
+    let whole = |file: &Path| -> Result<Vec<u8>> {
+        let parsed = quatarm_ref::calfile::read(file)?;
+        quatarm_wire::tablebuild::build_with(&parsed.arm, parsed.uncertainty.as_ref())
+            .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))
+    };
+    let wobble = host_tests::boards::root().join(WOBBLE_CALIBRATION);
+    // The benchmark image holds both chains, the U95 and the table's boot check at once: with
+    // the profile's wobble and parameter block 21 KB of stack in all, more than the nRF51's
+    // 16 KiB (instructions do not depend on it). QEMU's nRF51 takes a larger SRAM (its
+    // `sram-size`), which `pico-profile.x` puts the stack top in: the Pico has 264 KB.
+    let ram = vec![
+        "-global".to_owned(),
+        format!("nrf51-soc.sram-size={PICO_PROFILE_RAM}"),
+    ];
+    let mut rows = Vec::new();
+    for (feature, label, files) in [
+        (
+            PICO_PROFILE,
+            "rp-pico profile (U95 soft f32)",
+            vec![("", calib), (", wobble", wobble.as_path())],
+        ),
+        (
+            "pico-profile-fixed-u95",
+            "rp-pico profile (U95 product in integers)",
+            vec![("", calib)],
+        ),
+    ] {
+        let target_dir = PathBuf::from(format!(
+            "{}-{feature}",
+            tc.kind.target_dir(&m0.dir()).display()
+        ));
+        eprintln!(
+            "xtask: building qemu-m0 with the Pico's profile (feature {feature}) with {}",
+            tc.version
+        );
+        let mut cmd = tc.cargo(&m0.dir(), m0.target, "build");
+        cmd.env("CARGO_TARGET_DIR", &target_dir).args([
+            "--release",
+            "--locked",
+            "--bins",
+            "--features",
+            feature,
+        ]);
+        crate::build::check(&mut cmd, &format!("building qemu-m0 --features {feature}"))?;
+        let dir = target_dir.join(m0.target).join("release");
+        for (suffix, file) in files {
+            let label = format!("qemu-m0, {label}{suffix}");
+            // Its hub image is no hub (the Pico's is `boards/rp-pico`, with its update port, on
+            // 264 KB of RAM): not replayed, only its benchmark image is run.
+            rows.push(measure_images(
+                &m0,
+                label,
+                tc,
+                &dir,
+                &whole(file)?,
+                Some(&ram),
+            )?);
+        }
+    }
+    Ok(rows)
 }
 
 /// `cargo xtask bench-target`: every board with every firmware tool chain this machine has
@@ -244,7 +357,9 @@ pub fn run(only: Option<&str>, calib: Option<&std::path::Path>) -> Result<()> {
     setup::ensure()?;
     let path = calib.map_or_else(default_calibration_path, std::path::Path::to_path_buf);
     // With the calibration's uncertainty budget where it has one: whole for the f32 boards,
-    // without the parameters' covariance for the fixed-point ones (which refuse the block).
+    // without the parameters' covariance for the fixed-point ones: qemu-m0 (the minimal
+    // profile) refuses the block, and rp-pico, which takes it, runs no QEMU (its profile's
+    // rows, `pico_profile`, take the table whole).
     let parsed = quatarm_ref::calfile::read(&path)?;
     let table_for = |b: &Board| -> Result<Vec<u8>> {
         let budget = match &parsed.uncertainty {
@@ -277,6 +392,9 @@ pub fn run(only: Option<&str>, calib: Option<&std::path::Path>) -> Result<()> {
                 }
             }
             rows.push(row);
+        }
+        if only.is_none_or(|o| o == "rp-pico" || o == PICO_PROFILE) {
+            rows.extend(pico_profile(tc, &path)?);
         }
     }
     println!("\n{}", table(&rows));

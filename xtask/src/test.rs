@@ -81,11 +81,40 @@ pub fn run() -> Result<()> {
         "cargo test --workspace",
     )?;
 
+    step("the Pico's U95 (quatarm feature fixed-u95)");
+    // The workspace builds quatarm without `fixed-u95` (no member asks for it): the Pico's
+    // integer product is tested on its own, against f64 and against the host's U95.
+    check(
+        cargo().args([
+            "test",
+            "-p",
+            "quatarm",
+            "--features",
+            "fixed-u95",
+            "--lib",
+            "uncertainty",
+        ]),
+        "cargo test -p quatarm --features fixed-u95 --lib uncertainty",
+    )?;
+    check(
+        cargo().args([
+            "test",
+            "-p",
+            "armcal",
+            "--features",
+            "quatarm/fixed-u95",
+            "--test",
+            "hub_u95",
+        ]),
+        "cargo test -p armcal --features quatarm/fixed-u95 --test hub_u95",
+    )?;
+
     step("board-common unit tests (host)");
     // The boards' shared crate is in no workspace (it builds for the targets); its pure parts
     // (the boot check, the flash map and window, the update port) are tested on the host,
-    // with the u95 feature and without (the M0 hubs').
-    for features in [&[][..], &["--features", "u95"][..]] {
+    // with the features of the full profile (qemu-m4f, nucleo-f446re, rp-pico: U95 with the
+    // parameter block, the wobble) and without (qemu-m0's minimal profile).
+    for features in [&[][..], &["--features", "u95 wobble"][..]] {
         check(
             cargo()
                 .args(["test", "--lib", "--manifest-path"])

@@ -34,11 +34,18 @@ impl HubEvaluator for quatarm::F32 {
     type Uncertainty<'a> = NoUncertainty;
 }
 
-/// The fixed-point hubs stream no U95: the Cortex-M0's 32 KiB hold the chain, the stream and
-/// the table's checks, not the uncertainty as well (README, "On the targets": its flash and
-/// instructions measured on the M0's benchmark image).
+/// The fixed-point hubs stream U95 where the board has the flash for it (feature `u95`: the
+/// Raspberry Pi Pico's 2 MB). Their U95 is the f32 one in software floating point on a core
+/// without an FPU, the Jacobians from the fixed-point matrix chain's frames, and on the Pico
+/// the parameter part's product in integers (`quatarm/fixed-u95`; `docs/results/boards.md`,
+/// "The Pico's U95": both measured, and why). qemu-m0, the
+/// 32 KiB minimal profile, leaves it out: its image holds the chain, the stream and the
+/// table's checks, not the uncertainty as well.
 impl HubEvaluator for quatarm::Fixed {
     const STREAM: stream::NumberFormat = stream::NumberFormat::Fixed;
+    #[cfg(feature = "u95")]
+    type Uncertainty<'a> = Uncertainty<'a, quatarm::Fixed>;
+    #[cfg(not(feature = "u95"))]
     type Uncertainty<'a> = NoUncertainty;
 }
 
@@ -330,23 +337,75 @@ mod tests {
         assert_eq!(Fixed::STREAM, stream::NumberFormat::Fixed);
     }
 
-    /// With a budget in the table, an f32 hub built with `u95` gives every point a U95;
-    /// without the feature (the M0 hubs) it gives none.
+    /// A table with an axis wobble and a parameter block: the Pico's profile (features `u95`
+    /// and `wobble`, what `cargo xtask test` runs these tests with besides none) takes it in
+    /// either number format and streams every point's U95 from its parameter block; qemu-m0's
+    /// minimal profile (no feature) refuses it as it does today, `Malformed` (the parser's
+    /// `Invalid { Flags }`: a block this firmware does not read), and gives no coordinates.
+    #[test]
+    fn the_profile_decides_on_the_wobble_and_the_parameter_block() {
+        let t = fixtures::table_with_blocks(LINK_MM);
+        let r = region(&t);
+        let reading = [100, 200, 300, 400, 500, 600];
+        let fixed = load::<Fixed>(&r);
+        let f32_cal = load::<F32>(&r);
+        if cfg!(all(feature = "u95", feature = "wobble")) {
+            for cal in [fixed.state(), f32_cal.state()] {
+                assert_eq!(cal, TableState::Valid);
+            }
+            let (p, q) = (
+                f32_cal.eval(&reading, 0).unwrap(),
+                fixed.eval(&reading, 0).unwrap(),
+            );
+            // The wobble's 20 µrad at joint 2 moves the tip by up to ~20 µm (a metre away),
+            // the same in both formats; the two agree to the f32 chain's rounding.
+            assert_near(p.xyz_nm, q.xyz_nm, 1_000);
+            let (u, v) = (p.u95_nm.unwrap(), q.u95_nm.unwrap());
+            assert!(u.abs_diff(v) <= u / 10_000 + 1, "f32 {u} nm, fixed {v} nm");
+            // The parameter block adds to the reading's own terms: 10 µrad of joint 1 at up
+            // to 1.2 m is ~12 µm, far above the budget's own (one count, 380 µrad, is ~0.5 mm
+            // at 1.2 m: so compare with the same table's budget alone).
+            let own = load::<Fixed>(&region(&fixtures::table_with_budget(LINK_MM)))
+                .eval(&reading, 0)
+                .unwrap()
+                .u95_nm
+                .unwrap();
+            assert!(v > own, "with the block {v} nm, the budget alone {own} nm");
+        } else {
+            assert_eq!(
+                Table::parse_for(&r, JOINTS).unwrap_err(),
+                quatarm::table::TableError::Invalid {
+                    joint: 0,
+                    field: quatarm::table::Field::Flags
+                }
+            );
+            for cal in [fixed.state(), f32_cal.state()] {
+                assert_eq!(cal, TableState::Malformed);
+            }
+            assert!(fixed.eval(&reading, 0).is_err());
+        }
+    }
+
+    /// With a budget in the table, a hub built with `u95` (the f32 boards and the Pico) gives
+    /// every point a U95, the same in either number format to the rounding of the f32 sums;
+    /// without the feature (qemu-m0's minimal profile) it gives none.
     #[test]
     fn a_budget_gives_u95_only_where_the_hub_computes_it() {
         let r = region(&fixtures::table_with_budget(LINK_MM));
-        let cal = load::<F32>(&r);
-        let p = cal.eval(&[100, 200, 300, 400, 500, 600], 0).unwrap();
+        let reading = [100, 200, 300, 400, 500, 600];
+        let p = load::<F32>(&r).eval(&reading, 0).unwrap();
+        let q = load::<Fixed>(&r).eval(&reading, 0).unwrap();
         if cfg!(feature = "u95") {
             let u = p.u95_nm.expect("a U95 with the budget");
             // More than the probing (2 µm) and model (1 µm) terms at k = 2; of the order of a
             // millimetre in all, from the budget's one count on each joint (3.8e-4 rad at up to
             // 1.2 m from the tip).
             assert!((4_000..5_000_000).contains(&u), "{u} nm");
+            let v = q.u95_nm.expect("a U95 with the budget, fixed point");
+            assert!(u.abs_diff(v) <= u / 10_000 + 1, "f32 {u} nm, fixed {v} nm");
         } else {
             assert_eq!(p.u95_nm, None);
+            assert_eq!(q.u95_nm, None);
         }
-        let fixed = load::<Fixed>(&r);
-        assert_eq!(fixed.eval(&[0; JOINTS], 0).unwrap().u95_nm, None);
     }
 }

@@ -13,12 +13,16 @@
 //!   enabled but weak for 400 kHz: the sensor's breakout board provides proper ones.
 //!   Without a valid reading (sensor missing, wrong part, bus error, no conversion yet in
 //!   the first second after boot) the reports carry `TEMP_SENSOR_FAULT` and no coordinates.
-//! - Calibration: the live one of the two table slots (the last four 4 KiB sectors: slots
+//! - Calibration: the live one of the two 16 KiB table slots (the last 40 KiB of flash: slots
 //!   and state record copies, `docs/update.md`), signed under the arm maker's key the build
 //!   was given (`QUATARM_MAKER_KEY`; its successor `QUATARM_NEXT_MAKER_KEY`:
 //!   `board_common::maker_keys`); updates over the stream (`armcal table send`), after which
-//!   the hub boots again on the new table. No U95 and no axis wobble (the fixed-point hub's
-//!   table has neither block).
+//!   the hub boots again on the new table.
+//! - Profile (features `u95`, `wobble` of `board-common`): the table's axis wobble and
+//!   parameter block are taken, and every report carries its point's U95 — from the
+//!   fixed-point matrix chain's frames, its columns in software f32 (no FPU), the parameter
+//!   part's product in integers (`quatarm/fixed-u95`: 3.1× fewer instructions than in
+//!   software f32; `docs/results/boards.md`, "Board profiles").
 #![no_std]
 #![no_main]
 
