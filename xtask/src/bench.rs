@@ -32,7 +32,8 @@ pub const PICO_PROFILE: &str = "pico-profile";
 /// RAM of the profile's benchmark runs: the stack top of `boards/qemu-m0/pico-profile.x`.
 const PICO_PROFILE_RAM: u32 = 64 * 1024;
 
-/// The calibration whose every joint wobbles (no budget), for the profile's wobble chain.
+/// The calibration whose every joint wobbles (no budget): the Pico profile's wobble chain and
+/// the product's wobble row beside the C baselines.
 const WOBBLE_CALIBRATION: &str = "data/default-6-wobble.toml";
 
 /// Readings timed per chain.
@@ -182,8 +183,12 @@ fn instructions(b: &Board, elf: &Path, table: &[u8], extra_args: &[String]) -> R
 
 /// The row of board `b`'s own images, built by `tc`.
 fn measure(b: &Board, tc: &Toolchain, table: &[u8]) -> Result<Row> {
-    let dir = tc.kind.target_dir(&b.dir()).join(b.target).join("release");
-    measure_images(b, b.name.to_owned(), tc, &dir, table, None)
+    measure_images(b, b.name.to_owned(), tc, &release_dir(b, tc), table, None)
+}
+
+/// Where board `b`'s crate leaves its release images (hub and bench) when built by `tc`.
+fn release_dir(b: &Board, tc: &Toolchain) -> std::path::PathBuf {
+    tc.kind.target_dir(&b.dir()).join(b.target).join("release")
 }
 
 /// The row of the hub and benchmark images in `dir` (release binaries of board `b`'s crate),
@@ -388,7 +393,7 @@ pub fn run(only: Option<&str>, calib: Option<&std::path::Path>) -> Result<()> {
             let row = measure(b, tc, &table_for(b)?)?;
             if b.name == C_BOARD {
                 if let Some(chains) = row.instructions {
-                    products.push(product(b, &row, chains)?);
+                    products.push(product(b, tc, &row, chains)?);
                 }
             }
             rows.push(row);
@@ -415,17 +420,19 @@ pub fn run(only: Option<&str>, calib: Option<&std::path::Path>) -> Result<()> {
 /// The board whose core the C baselines are measured on (QEMU mps2-an386, Cortex-M4F).
 const C_BOARD: &str = "qemu-m4f";
 
-/// The calibration with an axis wobble on every joint, for the product's wobble row.
-const WOBBLE_CALIBRATION: &str = "data/default-6-wobble.toml";
-
 /// The product's row of the side-by-side table from a measured qemu-m4f board, with the hub's
 /// chain timed again on the wobble calibration.
-fn product(b: &Board, row: &Row, chains: (f64, f64, f64)) -> Result<cbase::table::Product> {
+fn product(
+    b: &Board,
+    tc: &Toolchain,
+    row: &Row,
+    chains: (f64, f64, f64),
+) -> Result<cbase::table::Product> {
     let path = host_tests::boards::root().join(WOBBLE_CALIBRATION);
     let w = quatarm_ref::calfile::read(&path)?;
     let table = quatarm_wire::tablebuild::build_with(&w.arm, w.uncertainty.as_ref())
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    let wobble = instructions(b, &table)?;
+    let wobble = instructions(b, &release_dir(b, tc).join("bench"), &table, &[])?;
     Ok(cbase::table::Product {
         compiler: row.compiler.clone(),
         flash: row.flash,
