@@ -79,23 +79,27 @@ struct Turn {
     cos: f32,
 }
 
-/// One joint's constants in the lean form.
+/// One joint's constants in the lean form. A term the joint does not have is stored as zeros
+/// (harmonics, thermal rate), which give the same numbers as leaving it out (a sum with ±0), so
+/// the per-point code tests no flag for it; gravity keeps its flag, since its term needs the
+/// vertical the first pass computes only up to the last compliant joint.
 #[derive(Clone, Copy, Debug, Default)]
 struct LeanJoint {
     scale: CountScale,
     /// b_i + a_(i+1) as a binary angle (one turn = 2^32), added to the reading's.
     offset: u32,
-    /// (s₁, c₁, 2s₂, c₂) rotated to the offset angle.
+    /// (s₁, c₁, 2s₂, c₂) rotated to the offset angle; zeros without harmonics.
     harmonics: [f32; 4],
-    has_harmonics: bool,
-    /// v'_i = Rz(−a_(i+1)) v_i and its thermal rate.
+    /// v'_i = Rz(−a_(i+1)) v_i and its thermal rate (zeros without thermal expansion).
     link: [f32; 3],
     rate: [f32; 3],
-    has_thermal: bool,
     gravity: f32,
     has_gravity: bool,
-    /// Rx(α_i).
+    /// Rx(α_i), as a quarter turn and a correction (the tip's turn).
     alpha: Turn,
+    /// cos α_i and sin α_i whole, the quarter turns applied at boot (exact): the plain turns
+    /// of the direction and the vertical, which need no quarter-turn selection per point.
+    alpha_whole: [f32; 2],
 }
 
 /// The lean f32 chain of an arm (or none, `on` false).
@@ -294,17 +298,18 @@ impl LeanForm<F32> for LeanF32 {
             } else {
                 (jm.link, jm.link_rate)
             };
+            let alpha = turn_of(euler[i][1])?;
+            let (ca, sa) = quarter_turns(alpha.q, (alpha.cos, alpha.sin));
             out.joints[i] = LeanJoint {
                 scale: jm.scale,
                 offset,
                 harmonics: units::<F32, 4>(rotated, no)?,
-                has_harmonics: jm.harmonic_count > 0,
                 link,
                 rate,
-                has_thermal: jm.has_thermal,
                 gravity: jm.gravity,
                 has_gravity: jm.has_gravity,
-                alpha: turn_of(euler[i][1])?,
+                alpha,
+                alpha_whole: [ca, sa],
             };
             if jm.has_gravity {
                 out.vertical_joints = i + 1;
@@ -341,9 +346,51 @@ impl LeanForm<F32> for LeanF32 {
         }
         let last = self.n.clamp(1, MAX_JOINTS) - 1;
         let (jm, j) = (&model.joints[last], &mut self.joints[last]);
-        (j.link, j.rate, j.has_thermal) = (jm.link, jm.link_rate, jm.has_thermal);
+        // Without thermal expansion the model's rate is zero, as the lean form wants it.
+        (j.link, j.rate) = (jm.link, jm.link_rate);
         self.probe_dir = model.probe_dir;
     }
+}
+
+/// Runs `$body` for every joint `$i`, base to tip (`$rev` false) or tip to base: written out
+/// joint by joint where the count is a constant 6 (`$joints`; the compiler did not unroll the
+/// loop by itself, nor inline a closure called six times, and each joint so reads its
+/// constants at fixed offsets with no loop counter), else looped over `$n`. A `return` in the
+/// body returns from the enclosing function.
+macro_rules! each_joint {
+    ($joints:expr, $n:expr, $rev:expr, |$i:ident| $body:block) => {
+        if $joints == 6 {
+            {
+                let $i = if $rev { 5 } else { 0 };
+                $body
+            }
+            {
+                let $i = if $rev { 4 } else { 1 };
+                $body
+            }
+            {
+                let $i = if $rev { 3 } else { 2 };
+                $body
+            }
+            {
+                let $i = if $rev { 2 } else { 3 };
+                $body
+            }
+            {
+                let $i = if $rev { 1 } else { 4 };
+                $body
+            }
+            {
+                let $i = if $rev { 0 } else { 5 };
+                $body
+            }
+        } else {
+            for k in 0..$n {
+                let $i = if $rev { $n - 1 - k } else { k };
+                $body
+            }
+        }
+    };
 }
 
 impl LeanF32 {
@@ -361,7 +408,7 @@ impl LeanF32 {
         let mut verticals = [const { MaybeUninit::<[f32; 2]>::uninit() }; MAX_JOINTS];
         // Base to tip: the angles, and the vertical up to the last compliant joint.
         let mut zb = [0.0f32, 0.0, 1.0];
-        for i in 0..n {
+        each_joint!(JOINTS, n, false, |i| {
             let (j, count) = (&self.joints[i], counts[i]);
             if count >= j.scale.counts() {
                 return Err(ChainError::CountOutOfRange { joint: i as u8 + 1 });
@@ -369,12 +416,10 @@ impl LeanF32 {
             let t = j.scale.binary(count).wrapping_add(j.offset);
             let a = Quarter::<F32>::from_binary(t);
             let (sin, omc) = a.double();
-            let mut e = 0.0;
             let (c, s) = quarter_turns(a.q, (1.0 - omc, sin));
-            if j.has_harmonics {
-                let [s1, c1, s2, c2] = j.harmonics;
-                e = s * (s1 + c * s2 - s * c2) + c * (c1 + c * c2);
-            }
+            // Zero coefficients (a joint without harmonics) give e = ±0.
+            let [s1, c1, s2, c2] = j.harmonics;
+            let e = s * (s1 + c * s2 - s * c2) + c * (c1 + c * c2);
             angles[i].write(Angle {
                 q: a.q,
                 sin,
@@ -383,33 +428,36 @@ impl LeanF32 {
             });
             if i < self.vertical_joints {
                 // Rx(−α), then Rz(−θ' − e) with e to first order.
-                let al = &j.alpha;
-                let (ca, sa) = quarter_turns(al.q, (al.cos, al.sin));
+                let [ca, sa] = j.alpha_whole;
                 let (y, z) = (ca * zb[1] + sa * zb[2], ca * zb[2] - sa * zb[1]);
                 let (x, y) = (c * zb[0] + s * y, c * y - s * zb[0]);
                 zb = [x + e * y, y - e * x, z];
-                if j.has_gravity {
-                    verticals[i].write([zb[0], zb[1]]);
-                }
+                // Written for every joint up to the last compliant one (read only where
+                // compliant): a store is cheaper than testing the flag.
+                verticals[i].write([zb[0], zb[1]]);
             }
-        }
+        });
 
         // Tip to base.
         let mut w = [0.0f32; 3];
         let mut d = self.probe_dir;
-        for i in (0..n).rev() {
+        each_joint!(JOINTS, n, true, |i| {
             let j = &self.joints[i];
             // SAFETY: the first pass wrote every angle below n (it returns early only with an
             // error, before this pass).
             let a = unsafe { angles[i].assume_init_read() };
-            let mut link = j.link;
-            if j.has_thermal {
-                link = [0, 1, 2].map(|k| link[k] + j.rate[k] * dt);
-            }
-            w = [w[0] + link[0], w[1] + link[1], w[2] + link[2]];
+            // The link at temperature (a zero rate without thermal expansion: the link itself).
+            // (Written out: `map` over the three became a call once the joints were unrolled.)
+            let (v, r) = (&j.link, &j.rate);
+            w = [
+                w[0] + (v[0] + r[0] * dt),
+                w[1] + (v[1] + r[1] * dt),
+                w[2] + (v[2] + r[2] * dt),
+            ];
             let mut e = a.e;
             if j.has_gravity {
-                // SAFETY: the first pass wrote the vertical of every compliant joint.
+                // SAFETY: the first pass wrote the vertical of every joint up to the last
+                // compliant one.
                 let v = unsafe { verticals[i].assume_init_read() };
                 e += j.gravity * (w[0] * v[1] - w[1] * v[0]);
             }
@@ -424,7 +472,7 @@ impl LeanF32 {
             w = [p - (q * sin + p * omc), q + (p * sin - q * omc), w[2]];
             let (p, q) = quarter_turns(a.q, (d[0], d[1]));
             d = [p * cos - q * sin, p * sin + q * cos, d[2]];
-            // Rx(α).
+            // Rx(α): the tip by a quarter turn and a correction, the direction plainly.
             let al = &j.alpha;
             let (p, q) = quarter_turns(al.q, (w[1], w[2]));
             w = [
@@ -432,9 +480,9 @@ impl LeanF32 {
                 p - (q * al.sin + p * al.omc),
                 q + (p * al.sin - q * al.omc),
             ];
-            let (p, q) = quarter_turns(al.q, (d[1], d[2]));
-            d = [d[0], p * al.cos - q * al.sin, p * al.sin + q * al.cos];
-        }
+            let [ca, sa] = j.alpha_whole;
+            d = [d[0], ca * d[1] - sa * d[2], sa * d[1] + ca * d[2]];
+        });
         // Rz(a_1).
         let b = &self.base;
         let (p, q) = quarter_turns(b.q, (w[0], w[1]));
