@@ -86,6 +86,9 @@ struct Turn {
 #[derive(Clone, Copy, Debug, Default)]
 struct LeanJoint {
     scale: CountScale,
+    /// The binary angle of one count where the counts per revolution are a power of two
+    /// ([`CountScale::unit`]), else 0.
+    unit: u32,
     /// b_i + a_(i+1) as a binary angle (one turn = 2^32), added to the reading's.
     offset: u32,
     /// (s₁, c₁, 2s₂, c₂) rotated to the offset angle; zeros without harmonics.
@@ -107,6 +110,9 @@ struct LeanJoint {
 pub struct LeanF32 {
     on: bool,
     n: usize,
+    /// Every joint's counts per revolution are a power of two: the count's binary angle is
+    /// one multiply ([`LeanJoint::unit`]).
+    pow2: bool,
     joints: [LeanJoint; MAX_JOINTS],
     /// Rz(a_1), applied last.
     base: Turn,
@@ -302,6 +308,7 @@ impl LeanForm<F32> for LeanF32 {
             let (ca, sa) = quarter_turns(alpha.q, (alpha.cos, alpha.sin));
             out.joints[i] = LeanJoint {
                 scale: jm.scale,
+                unit: jm.scale.unit().unwrap_or(0),
                 offset,
                 harmonics: units::<F32, 4>(rotated, no)?,
                 link,
@@ -316,6 +323,7 @@ impl LeanForm<F32> for LeanF32 {
             }
         }
         out.probe_dir = model.probe_dir;
+        out.pow2 = out.joints[..n].iter().all(|j| j.unit != 0);
         Ok(out)
     }
 
@@ -332,11 +340,12 @@ impl LeanForm<F32> for LeanF32 {
         temp_mc: i32,
     ) -> Result<Point<F32>, ChainError> {
         // Six joints (the hubs' arms) with the joint count a constant, so that the compiler
-        // unrolls both passes; any other count with the same code, looped.
-        if counts.len() == 6 {
-            self.run::<6>(model, counts, temp_mc)
-        } else {
-            self.run::<0>(model, counts, temp_mc)
+        // unrolls both passes, the power-of-two scales (the usual encoders) without a test
+        // per joint; any other count or scale with the same code, looped.
+        match (counts.len(), self.pow2) {
+            (6, true) => self.run::<6, true>(model, counts, temp_mc),
+            (6, false) => self.run::<6, false>(model, counts, temp_mc),
+            _ => self.run::<0, false>(model, counts, temp_mc),
         }
     }
 
@@ -394,9 +403,10 @@ macro_rules! each_joint {
 }
 
 impl LeanF32 {
-    /// [`LeanForm::eval`] for `JOINTS` joints (0: as many as `counts` has).
+    /// [`LeanForm::eval`] for `JOINTS` joints (0: as many as `counts` has); `POW2`: every
+    /// joint's scale is a power of two.
     #[inline(always)]
-    fn run<const JOINTS: usize>(
+    fn run<const JOINTS: usize, const POW2: bool>(
         &self,
         model: &Model<F32>,
         counts: &[u32],
@@ -413,7 +423,12 @@ impl LeanF32 {
             if count >= j.scale.counts() {
                 return Err(ChainError::CountOutOfRange { joint: i as u8 + 1 });
             }
-            let t = j.scale.binary(count).wrapping_add(j.offset);
+            let t = if POW2 {
+                count.wrapping_mul(j.unit)
+            } else {
+                j.scale.binary(count)
+            };
+            let t = t.wrapping_add(j.offset);
             let a = Quarter::<F32>::from_binary(t);
             let (sin, omc) = a.double();
             let (c, s) = quarter_turns(a.q, (1.0 - omc, sin));
