@@ -444,8 +444,14 @@ impl LeanF32 {
             if i < self.vertical_joints {
                 // Rx(−α), then Rz(−θ' − e) with e to first order.
                 let [ca, sa] = j.alpha_whole;
-                let (y, z) = (ca * zb[1] + sa * zb[2], ca * zb[2] - sa * zb[1]);
-                let (x, y) = (c * zb[0] + s * y, c * y - s * zb[0]);
+                let (x, y, z) = if i == 0 {
+                    // The base frame's vertical is (0, 0, 1) itself: the same numbers without
+                    // the products by 0 and 1 (the compiler may not drop those in floating point).
+                    (s * sa, c * sa, ca)
+                } else {
+                    let (y, z) = (ca * zb[1] + sa * zb[2], ca * zb[2] - sa * zb[1]);
+                    (c * zb[0] + s * y, c * y - s * zb[0], z)
+                };
                 zb = [x + e * y, y - e * x, z];
                 // Written for every joint up to the last compliant one (read only where
                 // compliant): a store is cheaper than testing the flag.
@@ -464,11 +470,13 @@ impl LeanF32 {
             // The link at temperature (a zero rate without thermal expansion: the link itself).
             // (Written out: `map` over the three became a call once the joints were unrolled.)
             let (v, r) = (&j.link, &j.rate);
-            w = [
-                w[0] + (v[0] + r[0] * dt),
-                w[1] + (v[1] + r[1] * dt),
-                w[2] + (v[2] + r[2] * dt),
-            ];
+            let link = [v[0] + r[0] * dt, v[1] + r[1] * dt, v[2] + r[2] * dt];
+            w = if i + 1 == n {
+                // The tip's link: 0 + link, without the additions.
+                link
+            } else {
+                [w[0] + link[0], w[1] + link[1], w[2] + link[2]]
+            };
             let mut e = a.e;
             if j.has_gravity {
                 // SAFETY: the first pass wrote the vertical of every joint up to the last
