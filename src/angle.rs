@@ -79,6 +79,13 @@ impl CountScale {
         self.counts
     }
 
+    /// For a power-of-two count per revolution, the binary angle of one count, 2^(32−k): the
+    /// binary angle of a count is then `count.wrapping_mul(unit)`, one multiply with no test of
+    /// the scale's kind (the lean chain, [`crate::lean`], takes it where every joint has one).
+    pub fn unit(&self) -> Option<u32> {
+        self.pow2.then(|| 1u32 << (self.pre & 31))
+    }
+
     /// The binary angle of a count (the caller has checked `count < counts()`).
     #[inline(always)]
     pub fn binary(&self, count: u32) -> u32 {
@@ -273,6 +280,7 @@ mod tests {
             let theta = 2.0 * core::f64::consts::PI * count as f64 / (1u64 << 20) as f64;
             let t = scale.binary(count);
             assert_eq!(t, count << 12);
+            assert_eq!(t, count.wrapping_mul(scale.unit().unwrap()));
             let a = Quarter::<P>::from_binary(t);
             let (fc, fs) = a.full();
             worst.0 = worst
@@ -341,6 +349,8 @@ mod tests {
                 );
             }
         }
+        assert_eq!(CountScale::new(360).unwrap().unit(), None);
+        assert_eq!(CountScale::new(2).unwrap().unit(), Some(1 << 31));
         assert!(CountScale::new(0).is_none());
         assert!(CountScale::new(1).is_none());
         assert!(CountScale::new(1 << 31).is_none());

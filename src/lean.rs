@@ -79,23 +79,30 @@ struct Turn {
     cos: f32,
 }
 
-/// One joint's constants in the lean form.
+/// One joint's constants in the lean form. A term the joint does not have is stored as zeros
+/// (harmonics, thermal rate), which give the same numbers as leaving it out (a sum with ±0), so
+/// the per-point code tests no flag for it; gravity keeps its flag, since its term needs the
+/// vertical the first pass computes only up to the last compliant joint.
 #[derive(Clone, Copy, Debug, Default)]
 struct LeanJoint {
     scale: CountScale,
+    /// The binary angle of one count where the counts per revolution are a power of two
+    /// ([`CountScale::unit`]), else 0.
+    unit: u32,
     /// b_i + a_(i+1) as a binary angle (one turn = 2^32), added to the reading's.
     offset: u32,
-    /// (s₁, c₁, 2s₂, c₂) rotated to the offset angle.
+    /// (s₁, c₁, 2s₂, c₂) rotated to the offset angle; zeros without harmonics.
     harmonics: [f32; 4],
-    has_harmonics: bool,
-    /// v'_i = Rz(−a_(i+1)) v_i and its thermal rate.
+    /// v'_i = Rz(−a_(i+1)) v_i and its thermal rate (zeros without thermal expansion).
     link: [f32; 3],
     rate: [f32; 3],
-    has_thermal: bool,
     gravity: f32,
     has_gravity: bool,
-    /// Rx(α_i).
+    /// Rx(α_i), as a quarter turn and a correction (the tip's turn).
     alpha: Turn,
+    /// cos α_i and sin α_i whole, the quarter turns applied at boot (exact): the plain turns
+    /// of the direction and the vertical, which need no quarter-turn selection per point.
+    alpha_whole: [f32; 2],
 }
 
 /// The lean f32 chain of an arm (or none, `on` false).
@@ -103,6 +110,9 @@ struct LeanJoint {
 pub struct LeanF32 {
     on: bool,
     n: usize,
+    /// Every joint's counts per revolution are a power of two: the count's binary angle is
+    /// one multiply ([`LeanJoint::unit`]).
+    pow2: bool,
     joints: [LeanJoint; MAX_JOINTS],
     /// Rz(a_1), applied last.
     base: Turn,
@@ -294,23 +304,26 @@ impl LeanForm<F32> for LeanF32 {
             } else {
                 (jm.link, jm.link_rate)
             };
+            let alpha = turn_of(euler[i][1])?;
+            let (ca, sa) = quarter_turns(alpha.q, (alpha.cos, alpha.sin));
             out.joints[i] = LeanJoint {
                 scale: jm.scale,
+                unit: jm.scale.unit().unwrap_or(0),
                 offset,
                 harmonics: units::<F32, 4>(rotated, no)?,
-                has_harmonics: jm.harmonic_count > 0,
                 link,
                 rate,
-                has_thermal: jm.has_thermal,
                 gravity: jm.gravity,
                 has_gravity: jm.has_gravity,
-                alpha: turn_of(euler[i][1])?,
+                alpha,
+                alpha_whole: [ca, sa],
             };
             if jm.has_gravity {
                 out.vertical_joints = i + 1;
             }
         }
         out.probe_dir = model.probe_dir;
+        out.pow2 = out.joints[..n].iter().all(|j| j.unit != 0);
         Ok(out)
     }
 
@@ -327,11 +340,12 @@ impl LeanForm<F32> for LeanF32 {
         temp_mc: i32,
     ) -> Result<Point<F32>, ChainError> {
         // Six joints (the hubs' arms) with the joint count a constant, so that the compiler
-        // unrolls both passes; any other count with the same code, looped.
-        if counts.len() == 6 {
-            self.run::<6>(model, counts, temp_mc)
-        } else {
-            self.run::<0>(model, counts, temp_mc)
+        // unrolls both passes, the power-of-two scales (the usual encoders) without a test
+        // per joint; any other count or scale with the same code, looped.
+        match (counts.len(), self.pow2) {
+            (6, true) => self.run::<6, true>(model, counts, temp_mc),
+            (6, false) => self.run::<6, false>(model, counts, temp_mc),
+            _ => self.run::<0, false>(model, counts, temp_mc),
         }
     }
 
@@ -341,15 +355,58 @@ impl LeanForm<F32> for LeanF32 {
         }
         let last = self.n.clamp(1, MAX_JOINTS) - 1;
         let (jm, j) = (&model.joints[last], &mut self.joints[last]);
-        (j.link, j.rate, j.has_thermal) = (jm.link, jm.link_rate, jm.has_thermal);
+        // Without thermal expansion the model's rate is zero, as the lean form wants it.
+        (j.link, j.rate) = (jm.link, jm.link_rate);
         self.probe_dir = model.probe_dir;
     }
 }
 
+/// Runs `$body` for every joint `$i`, base to tip (`$rev` false) or tip to base: written out
+/// joint by joint where the count is a constant 6 (`$joints`; the compiler did not unroll the
+/// loop by itself, nor inline a closure called six times, and each joint so reads its
+/// constants at fixed offsets with no loop counter), else looped over `$n`. A `return` in the
+/// body returns from the enclosing function.
+macro_rules! each_joint {
+    ($joints:expr, $n:expr, $rev:expr, |$i:ident| $body:block) => {
+        if $joints == 6 {
+            {
+                let $i = if $rev { 5 } else { 0 };
+                $body
+            }
+            {
+                let $i = if $rev { 4 } else { 1 };
+                $body
+            }
+            {
+                let $i = if $rev { 3 } else { 2 };
+                $body
+            }
+            {
+                let $i = if $rev { 2 } else { 3 };
+                $body
+            }
+            {
+                let $i = if $rev { 1 } else { 4 };
+                $body
+            }
+            {
+                let $i = if $rev { 0 } else { 5 };
+                $body
+            }
+        } else {
+            for k in 0..$n {
+                let $i = if $rev { $n - 1 - k } else { k };
+                $body
+            }
+        }
+    };
+}
+
 impl LeanF32 {
-    /// [`LeanForm::eval`] for `JOINTS` joints (0: as many as `counts` has).
+    /// [`LeanForm::eval`] for `JOINTS` joints (0: as many as `counts` has); `POW2`: every
+    /// joint's scale is a power of two.
     #[inline(always)]
-    fn run<const JOINTS: usize>(
+    fn run<const JOINTS: usize, const POW2: bool>(
         &self,
         model: &Model<F32>,
         counts: &[u32],
@@ -361,20 +418,23 @@ impl LeanF32 {
         let mut verticals = [const { MaybeUninit::<[f32; 2]>::uninit() }; MAX_JOINTS];
         // Base to tip: the angles, and the vertical up to the last compliant joint.
         let mut zb = [0.0f32, 0.0, 1.0];
-        for i in 0..n {
+        each_joint!(JOINTS, n, false, |i| {
             let (j, count) = (&self.joints[i], counts[i]);
             if count >= j.scale.counts() {
                 return Err(ChainError::CountOutOfRange { joint: i as u8 + 1 });
             }
-            let t = j.scale.binary(count).wrapping_add(j.offset);
+            let t = if POW2 {
+                count.wrapping_mul(j.unit)
+            } else {
+                j.scale.binary(count)
+            };
+            let t = t.wrapping_add(j.offset);
             let a = Quarter::<F32>::from_binary(t);
             let (sin, omc) = a.double();
-            let mut e = 0.0;
             let (c, s) = quarter_turns(a.q, (1.0 - omc, sin));
-            if j.has_harmonics {
-                let [s1, c1, s2, c2] = j.harmonics;
-                e = s * (s1 + c * s2 - s * c2) + c * (c1 + c * c2);
-            }
+            // Zero coefficients (a joint without harmonics) give e = ±0.
+            let [s1, c1, s2, c2] = j.harmonics;
+            let e = s * (s1 + c * s2 - s * c2) + c * (c1 + c * c2);
             angles[i].write(Angle {
                 q: a.q,
                 sin,
@@ -383,33 +443,44 @@ impl LeanF32 {
             });
             if i < self.vertical_joints {
                 // Rx(−α), then Rz(−θ' − e) with e to first order.
-                let al = &j.alpha;
-                let (ca, sa) = quarter_turns(al.q, (al.cos, al.sin));
-                let (y, z) = (ca * zb[1] + sa * zb[2], ca * zb[2] - sa * zb[1]);
-                let (x, y) = (c * zb[0] + s * y, c * y - s * zb[0]);
+                let [ca, sa] = j.alpha_whole;
+                let (x, y, z) = if i == 0 {
+                    // The base frame's vertical is (0, 0, 1) itself: the same numbers without
+                    // the products by 0 and 1 (the compiler may not drop those in floating point).
+                    (s * sa, c * sa, ca)
+                } else {
+                    let (y, z) = (ca * zb[1] + sa * zb[2], ca * zb[2] - sa * zb[1]);
+                    (c * zb[0] + s * y, c * y - s * zb[0], z)
+                };
                 zb = [x + e * y, y - e * x, z];
-                if j.has_gravity {
-                    verticals[i].write([zb[0], zb[1]]);
-                }
+                // Written for every joint up to the last compliant one (read only where
+                // compliant): a store is cheaper than testing the flag.
+                verticals[i].write([zb[0], zb[1]]);
             }
-        }
+        });
 
         // Tip to base.
         let mut w = [0.0f32; 3];
         let mut d = self.probe_dir;
-        for i in (0..n).rev() {
+        each_joint!(JOINTS, n, true, |i| {
             let j = &self.joints[i];
             // SAFETY: the first pass wrote every angle below n (it returns early only with an
             // error, before this pass).
             let a = unsafe { angles[i].assume_init_read() };
-            let mut link = j.link;
-            if j.has_thermal {
-                link = [0, 1, 2].map(|k| link[k] + j.rate[k] * dt);
-            }
-            w = [w[0] + link[0], w[1] + link[1], w[2] + link[2]];
+            // The link at temperature (a zero rate without thermal expansion: the link itself).
+            // (Written out: `map` over the three became a call once the joints were unrolled.)
+            let (v, r) = (&j.link, &j.rate);
+            let link = [v[0] + r[0] * dt, v[1] + r[1] * dt, v[2] + r[2] * dt];
+            w = if i + 1 == n {
+                // The tip's link: 0 + link, without the additions.
+                link
+            } else {
+                [w[0] + link[0], w[1] + link[1], w[2] + link[2]]
+            };
             let mut e = a.e;
             if j.has_gravity {
-                // SAFETY: the first pass wrote the vertical of every compliant joint.
+                // SAFETY: the first pass wrote the vertical of every joint up to the last
+                // compliant one.
                 let v = unsafe { verticals[i].assume_init_read() };
                 e += j.gravity * (w[0] * v[1] - w[1] * v[0]);
             }
@@ -424,7 +495,7 @@ impl LeanF32 {
             w = [p - (q * sin + p * omc), q + (p * sin - q * omc), w[2]];
             let (p, q) = quarter_turns(a.q, (d[0], d[1]));
             d = [p * cos - q * sin, p * sin + q * cos, d[2]];
-            // Rx(α).
+            // Rx(α): the tip by a quarter turn and a correction, the direction plainly.
             let al = &j.alpha;
             let (p, q) = quarter_turns(al.q, (w[1], w[2]));
             w = [
@@ -432,9 +503,9 @@ impl LeanF32 {
                 p - (q * al.sin + p * al.omc),
                 q + (p * al.sin - q * al.omc),
             ];
-            let (p, q) = quarter_turns(al.q, (d[1], d[2]));
-            d = [d[0], p * al.cos - q * al.sin, p * al.sin + q * al.cos];
-        }
+            let [ca, sa] = j.alpha_whole;
+            d = [d[0], ca * d[1] - sa * d[2], sa * d[1] + ca * d[2]];
+        });
         // Rz(a_1).
         let b = &self.base;
         let (p, q) = quarter_turns(b.q, (w[0], w[1]));
@@ -452,6 +523,66 @@ impl LeanF32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The three copies of the lean pass (six joints written out with power-of-two scales,
+    /// six written out with any scale, looped) give the same numbers bit for bit, and agree
+    /// with the quaternion chain to f32's rounding (under 1 µm, 2e-6 on the direction) — a
+    /// joint without harmonics or thermal expansion (zeros stored, no flag) included; a count
+    /// out of range is refused by each, naming its joint.
+    #[test]
+    fn the_three_copies_agree() {
+        use crate::chain::Chain;
+        use crate::table::{tests::sample, FLAG_GEOMETRIC, MAX_TABLE_LEN};
+        let mut data = sample();
+        data.joints[2].harmonic_count = 0;
+        data.joints[2].harmonics = Default::default();
+        data.joints[2].thermal = 0.0;
+        // First-order gravity (the sample's 3e-8 on three hinges reaches the second order).
+        for j in data.joints.iter_mut().filter(|j| j.gravity != 0.0) {
+            j.gravity = 1e-8;
+        }
+        data.flags = data.content_flags() | FLAG_GEOMETRIC;
+        let mut buf = [0u8; MAX_TABLE_LEN];
+        let len = data.encode(&mut buf).unwrap();
+        let table = Table::parse(&buf[..len]).unwrap();
+        let model = Model::<F32>::new(&table).unwrap();
+        let lean = LeanF32::build(&table, &model, true).unwrap();
+        assert!(lean.on && lean.pow2);
+        let quat = Chain::<F32>::new(&table).unwrap();
+        let bits = |p: &Point<F32>| (p.xyz.map(f32::to_bits), p.dir.map(f32::to_bits));
+        for k in 0..60u32 {
+            let counts: [u32; 6] =
+                core::array::from_fn(|j| (k * 77_773 + j as u32 * 191_111) % (1 << 20));
+            let temp = 10_000 + 400 * k as i32;
+            let a = lean.run::<6, true>(&model, &counts, temp).unwrap();
+            let b = lean.run::<6, false>(&model, &counts, temp).unwrap();
+            let c = lean.run::<0, false>(&model, &counts, temp).unwrap();
+            assert_eq!(bits(&a), bits(&b), "{counts:?}");
+            assert_eq!(bits(&a), bits(&c), "{counts:?}");
+            let q = quat.eval_quaternion(&counts, temp).unwrap();
+            let (pa, pq) = (a.xyz_nm(), q.xyz_nm());
+            let (da, dq) = (a.dir_e9(), q.dir_e9());
+            for m in 0..3 {
+                assert!((pa[m] - pq[m]).abs() < 1_000, "{counts:?}: {pa:?} {pq:?}");
+                assert!((da[m] - dq[m]).abs() < 2_000, "{counts:?}: {da:?} {dq:?}");
+            }
+        }
+        let mut counts = [5u32; 6];
+        counts[3] = 1 << 20;
+        let want = Err(ChainError::CountOutOfRange { joint: 4 });
+        assert_eq!(
+            lean.run::<6, true>(&model, &counts, 20_000).map(|_| ()),
+            want
+        );
+        assert_eq!(
+            lean.run::<6, false>(&model, &counts, 20_000).map(|_| ()),
+            want
+        );
+        assert_eq!(
+            lean.run::<0, false>(&model, &counts, 20_000).map(|_| ()),
+            want
+        );
+    }
 
     /// The boot's angles: a binary angle comes back from its own cosine and sine, and the
     /// z-x-z split reproduces the matrix it came from.
