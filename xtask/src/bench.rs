@@ -19,6 +19,7 @@ use std::path::{Path, PathBuf};
 
 use crate::build::build_board_with;
 use crate::cbase;
+use crate::floor;
 use crate::setup;
 use crate::toolchain::{self, Toolchain};
 
@@ -408,20 +409,12 @@ pub fn run(only: Option<&str>, calib: Option<&std::path::Path>) -> Result<()> {
          the real boards share the cores of qemu-m4f (Cortex-M4F) and qemu-m0 (Cortex-M0; the RP2040 is an M0+))",
         path.display()
     );
-    let joints = parsed.arm.joints.len() as u32;
-    let compliant = parsed
-        .arm
-        .joints
-        .iter()
-        .filter(|j| j.gravity != 0.0)
-        .count() as u32;
-    let f = lean_floor(joints, compliant);
+    let f = floor::product_lean(&parsed.arm);
     println!(
-        "(the lean form's counted floor for this arm ({joints} joints, {compliant} compliant), \
-         from src/lean.rs, one instruction an operation: {} floating-point (a multiply-add as \
-         one), {} loads and stores, {} integer: {} in all, before any quarter-turn selection \
-         (4 a joint), register move or flag test; the issue's C lean chain was measured at \
-         866, its own floor counted at about 380 floating-point, 500-600 in all)",
+        "(the product's lean form's counted floor for this arm, from src/lean.rs (xtask/src/floor.rs), \
+         one instruction an operation, no fused multiply-add: {} floating-point, {} loads and \
+         stores, {} integer: {} in all, before any quarter-turn selection (4 a joint), register \
+         move or flag test)",
         f.fp,
         f.memory,
         f.integer,
@@ -494,18 +487,12 @@ fn side_by_side(
     let gcc = cbase::image::gcc_version().unwrap_or_else(|| "arm-none-eabi-gcc".into());
     println!(
         "\n{}",
-        cbase::table::render(
-            &measured,
-            &c,
-            &gcc,
-            cbase::floor::lean_floor(arm),
-            readings.len()
-        )
+        cbase::table::render(&measured, &c, &gcc, floor::c_lean(arm), readings.len())
     );
     println!(
         "(C: bench/c/, {} {}; flash of a C image is its whole image without the readings it carries, \
-         of a quatarm row the whole hub image; the floor is counted from the lean form's structure, \
-         xtask/src/cbase/floor.rs)",
+         of a quatarm row the whole hub image; the floor is counted from the C lean form's structure, \
+         xtask/src/floor.rs)",
         gcc,
         cbase::image::CFLAGS.join(" ")
     );
@@ -513,56 +500,4 @@ fn side_by_side(
         println!("({why})");
     }
     Ok(())
-}
-
-/// The lean chain's operations a point, counted from its source (`src/lean.rs`): what the
-/// hub's chain would take with no register moves, selections or tests.
-#[derive(Debug, PartialEq, Eq)]
-pub struct Floor {
-    /// Floating-point instructions, a multiply-add (`vmla`) as one.
-    pub fp: u32,
-    /// Loads and stores: the joints' constants, the count, the first pass's records.
-    pub memory: u32,
-    /// Integer instructions: the count's range check, binary angle, quadrant and remainder.
-    pub integer: u32,
-}
-
-/// [`Floor`] for an arm of `joints` joints, `compliant` of them with gravity (the power-of-two
-/// scales of the hub's encoders). Per joint, first pass: the remainder to f32 and its sine
-/// and 1 − cos (2 + 1 + 4 + 3), doubled (4), cos r (1), the harmonic error (5), the vertical
-/// turned by Rx, Rz and e (4 + 4 + 4; 3 for the first joint, whose vertical is ẑ); second
-/// pass: the link at temperature added (6; 3 for the tip's), the turn by e (10), Rz on the
-/// tip and the direction (6 + 4), Rx on both (6 + 4), gravity's deflection (3 where
-/// compliant). Per point: the temperature (1), the base's Rz (6 + 4).
-pub fn lean_floor(joints: u32, compliant: u32) -> Floor {
-    let first = 2 + 1 + 4 + 3 + 4 + 1 + 5 + 12;
-    let second = 6 + 10 + 6 + 4 + 6 + 4;
-    let fp = joints * (first + second) + 3 * compliant + 1 + 10 - (12 - 3) - 3;
-    // Count, its limit, the unit, the offset, 4 harmonic coefficients and cos α, sin α (10);
-    // the record (4) and the vertical (2) stored and read back (12); the link and its rate
-    // (6), Rx's sin and 1 − cos (2), cos α and sin α again (2); gravity and the vertical (3
-    // where compliant). The base turn's 3 and the probe direction's 3, the point's 6 stores.
-    let memory = joints * (10 + 12 + 10) + 3 * compliant + 12;
-    // Range check (2), multiply, offset, quadrant (add, and, subtract, shift), to f32 (1).
-    let integer = joints * 9;
-    Floor {
-        fp,
-        memory,
-        integer,
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The hub's arm (6 joints, 3 compliant): the counts the docs quote.
-    #[test]
-    fn the_lean_floor_of_the_hub_arm() {
-        let f = lean_floor(6, 3);
-        assert_eq!((f.fp, f.memory, f.integer), (416, 213, 54));
-        // Each joint and each compliant joint adds its share.
-        assert_eq!(lean_floor(7, 3).fp - f.fp, 68);
-        assert_eq!(lean_floor(6, 4).fp - f.fp, 3);
-    }
 }

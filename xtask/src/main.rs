@@ -14,6 +14,7 @@ mod bench;
 mod build;
 mod cbase;
 mod demo;
+mod floor;
 mod fuzz;
 mod fuzz_seeds;
 mod make_recording;

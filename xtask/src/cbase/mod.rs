@@ -4,7 +4,6 @@
 //! flash, accuracy against the f64 reference). Where the compiler is missing they are not
 //! measured, and the output says so.
 
-pub mod floor;
 pub mod header;
 pub mod image;
 pub mod table;

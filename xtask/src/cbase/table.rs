@@ -113,7 +113,7 @@ pub fn render(
         Outcome::Skipped(why) => s.push_str(&format!("| {why} | | | | |\n")),
     }
     s.push_str(&format!(
-        "| counted floor of the lean form (its floating-point operations, a multiply–add as one; with the fewest loads and integer work) | – | {} FP, ~{} in all | – | – |\n",
+        "| counted floor of the C lean form (its floating-point operations, a multiply–add as one; with the fewest loads and integer work) | – | {} FP, ~{} in all | – | – |\n",
         floor.0, floor.1
     ));
     s
