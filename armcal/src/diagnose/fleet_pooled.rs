@@ -376,6 +376,21 @@ impl PooledFleet {
                     a.value.shrinkage,
                     if a.value.named_pooled { ", named" } else { "" }
                 );
+                if a.combined.recordings > 1 {
+                    let each: Vec<String> = a
+                        .recordings
+                        .iter()
+                        .zip(&a.per_recording)
+                        .map(|(r, (y, se))| format!("{r} {y:+.3e} ± {se:.1e}"))
+                        .collect();
+                    let _ = write!(
+                        s,
+                        " [{}: Q = {:.2}, p = {:.2e}]",
+                        each.join(", "),
+                        a.combined.q,
+                        a.combined.q_p
+                    );
+                }
                 if let Some(g) = &a.holdout {
                     let _ = write!(
                         s,
