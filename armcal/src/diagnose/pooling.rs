@@ -565,9 +565,9 @@ mod tests {
         for (tau, lo) in [(0.0, 0.93), (1.0, 0.89)] {
             let c = simulated_coverage(4, tau, 4, 300, 7, 0.05);
             assert_eq!(c.intervals, 1200);
-            assert!(c.with_tau >= c.plugin + 0.015, "τ = {tau}: {c:?}");
-            assert!(c.with_tau > lo && c.with_tau < 0.99, "τ = {tau}: {c:?}");
-            assert!(c.mean > 0.9 && c.width_ratio > 1.1, "τ = {tau}: {c:?}");
+            assert!(c.with_tau >= c.plugin + 0.015, "tau = {tau}: {c:?}");
+            assert!(c.with_tau > lo && c.with_tau < 0.99, "tau = {tau}: {c:?}");
+            assert!(c.mean > 0.9 && c.width_ratio > 1.1, "tau = {tau}: {c:?}");
         }
     }
 
