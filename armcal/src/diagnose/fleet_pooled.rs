@@ -100,7 +100,7 @@ pub struct PooledFleet {
     pub alpha: f64,
     /// Every one-unknown candidate pooled, the most significant design mean first.
     pub effects: Vec<PooledEffect>,
-    /// Arms left out, with why.
+    /// Arms, recordings of an arm, or candidates left out, with why.
     pub left_out: Vec<(String, String)>,
 }
 
@@ -207,10 +207,19 @@ pub fn pool_arms(
         for (_, recs) in &used {
             let mut est = Vec::new();
             for (r, _) in recs {
-                let Some(v) = pooling::estimate(start, &units[*r].data, &calib, e)? else {
-                    continue 'effects;
-                };
-                est.push(v);
+                // A fit that fails (one candidate on one recording) leaves that candidate
+                // unpooled, said, rather than the whole fleet report.
+                match pooling::estimate(start, &units[*r].data, &calib, e) {
+                    Ok(Some(v)) => est.push(v),
+                    Ok(None) => continue 'effects,
+                    Err(err) => {
+                        out.left_out.push((
+                            e.spec(),
+                            format!("the fit of recording {} failed: {err}", units[*r].name),
+                        ));
+                        continue 'effects;
+                    }
+                }
             }
             let Some(c) = pooling::combine_recordings(&est) else {
                 continue 'effects;

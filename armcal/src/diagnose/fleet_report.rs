@@ -11,7 +11,7 @@
 //!            "evidence": {"rule", "pairs": [{"a", "b", "chi2", "dof", "f", "p_value", "same"}]}}],
 //!  "pairs": [every pair of recordings, as in "evidence"], "uncompared": [[recording, why]],
 //!  "halves": [{"recording", "chi2", "dof"}], "overdispersion": {"phi", "dof"},
-//!  "pooled": {"alpha", "left_out": [[arm or "arm: recording R", why]],
+//!  "pooled": {"alpha", "left_out": [[arm, "arm: recording R" or candidate, why]],
 //!             "effects": [{"term", "named", "design": {"arms", "mean", "mean_se",
 //!                          "mean_interval", "mean_p", "spread", "spread_interval", "named"},
 //!                          "arms": [{"arm", "recordings", "sessions", "per_recording":
