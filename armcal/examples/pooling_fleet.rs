@@ -1,12 +1,16 @@
 //! Power from the fleet (issue 30): the shoulder's gravity compliance pooled over a design's
 //! arms ([`armcal::diagnose::pooling`]), on a simulated fleet of 8 arms whose compliances are
 //! spread ±50 % around a mean, on null fleets (nothing hidden, false names counted over
-//! seeds), and on MUKCa's Panda arms (one recording per physical arm with three sessions or
-//! more), with panda_4's pooled compliance and its nested held-out gain.
+//! seeds), and on MUKCa's Panda arms, with panda_4's pooled compliance and its nested held-out
+//! gain: one recording per physical arm (as before), then every recording of an arm of three
+//! sessions or more, each with its own probe and frame, combined by inverse variance, under
+//! the grouping MUKCa documents and under the one the data give.
 //!
 //!     cargo run --release -p armcal --example pooling_fleet [seeds [mean compliance]]
 
 use armcal::data::{Dataset, Kind};
+use armcal::diagnose::fleet::{self, UnitData};
+use armcal::diagnose::fleet_pooled::pool_arms;
 use armcal::diagnose::pooling::{self, Arm as Pooled, Design};
 use armcal::diagnose::{self, FoldChoice};
 use armcal::fit::options::Options as CalibOptions;
@@ -155,63 +159,103 @@ fn simulated(seeds: u64, mean: f64) {
     );
 }
 
-fn mukca_fleet() {
-    let dir = mukca::default_dir();
-    let names = ["panda_2", "panda_3", "panda_4", "panda_6"];
-    let units: Vec<mukca::Unit> = names
+/// MUKCa's Panda recordings pooled under one grouping into arms (name, recordings): every
+/// recording of 3 sessions or more gives its own estimate (its own probe and frame), an arm's
+/// recordings are combined by inverse variance, the arms pooled; then panda_4's nested
+/// held-out gain with its pooled compliance fixed.
+fn mukca_grouping(
+    title: &str,
+    grouping: &[(&str, &[&str])],
+    units: &[UnitData],
+    start: &Arm,
+    o: &fleet::Options,
+) {
+    println!("{title}");
+    let index = |n: &str| units.iter().position(|u| u.name == n).expect("loaded");
+    let arms: Vec<(String, Vec<usize>)> = grouping
         .iter()
-        .map(|n| mukca::load(&dir, n).expect("unit"))
+        .map(|(a, recs)| (a.to_string(), recs.iter().map(|r| index(r)).collect()))
         .collect();
-    let o = mukca::options(None);
-    let arms: Vec<(Arm, Dataset)> = units
+    let testable = vec![vec![Effect::Gravity(1)]; units.len()];
+    let pooled = pool_arms(start, units, &arms, &testable, o).expect("pooled");
+    let Some(p) = pooled.effects.first() else {
+        println!("  nothing pooled");
+        return;
+    };
+    let d = &p.design;
+    println!(
+        "  design: {} arms, mean {:+.3} µrad/mm (95 % [{:+.3}, {:+.3}], p = {:.3}), spread τ {:.3} (95 % [{:.3}, {:.3}])",
+        d.arms,
+        d.mean * 1e6,
+        d.mean_interval[0] * 1e6,
+        d.mean_interval[1] * 1e6,
+        d.mean_p,
+        d.spread * 1e6,
+        d.spread_interval[0] * 1e6,
+        d.spread_interval[1] * 1e6
+    );
+    for a in &p.arms {
+        let per: Vec<String> = a
+            .recordings
+            .iter()
+            .zip(&a.per_recording)
+            .map(|(r, (y, s))| format!("{r} {:+.3} ± {:.3}", y * 1e6, s * 1e6))
+            .collect();
+        println!(
+            "    {:<8} {} → alone {:+.3} ± {:.3}{}; pooled {:+.3} ± {:.3} (plug-in ± {:.3}, B = {:.2}, named {})",
+            a.arm,
+            per.join(", "),
+            a.value.estimate * 1e6,
+            a.value.se * 1e6,
+            if a.combined.recordings > 1 {
+                format!(" (Q = {:.2}, p = {:.2})", a.combined.q, a.combined.q_p)
+            } else {
+                String::new()
+            },
+            a.value.pooled * 1e6,
+            a.value.pooled_se * 1e6,
+            a.value.pooled_se_plugin * 1e6,
+            a.value.shrinkage,
+            a.value.named_pooled
+        );
+    }
+    for (who, why) in &pooled.left_out {
+        println!("    {who} left out: {why}");
+    }
+    // panda_4 (one recording): its pooled value from its other sessions and the other arms.
+    let i4 = p
+        .arms
         .iter()
-        .map(|u| (u.arm.clone(), u.data.clone()))
-        .collect();
-    let est = estimates(&arms, &o);
-    let (y, se): (Vec<f64>, Vec<f64>) = est.iter().copied().unzip();
-    println!("MUKCa Panda arms (one recording per physical arm, ≥ 3 sessions), joint-2 compliance (µrad/mm; session jackknife errors)");
-    let (d, pooled) = pooling::pool(&y, &se, ALPHA).expect("pool");
-    let labels: Vec<String> = names.iter().map(|s| s.to_string()).collect();
-    print_pooled(&labels, &d, &pooled, 1e-6, "µrad/mm");
-    // panda_4: the pooled value from its other sessions and the other arms, fixed; each session
-    // scored.
-    let i4 = 2;
-    let others: Vec<(f64, f64)> = est
+        .position(|a| a.arm == "panda_4")
+        .expect("panda_4");
+    let others: Vec<(f64, f64)> = p
+        .arms
         .iter()
         .enumerate()
         .filter(|(i, _)| *i != i4)
-        .map(|(_, e)| *e)
+        .map(|(_, a)| (a.value.estimate, a.value.se))
         .collect();
     let folds = pooling::pooled_holdout(
-        &units[i4].arm,
-        &units[i4].data,
-        &o,
+        start,
+        &units[index("panda_4")].data,
+        &fleet::geometric_options(o),
         Effect::Gravity(1),
+        &[],
         &others,
         ALPHA,
     )
     .expect("panda_4");
     let (b, a): (Vec<f64>, Vec<f64>) = folds.iter().map(|f| (f.before_ms, f.after_ms)).unzip();
-    for f in &folds {
-        println!(
-            "    panda_4 session {:<12} pooled g {:+.3} µrad/mm: RMS {:.1} → {:.1} µm",
-            units[i4]
-                .sessions
-                .get(&f.group)
-                .cloned()
-                .unwrap_or_default(),
-            f.value * 1e6,
-            1e3 * f.before_ms.sqrt(),
-            1e3 * f.after_ms.sqrt()
-        );
-    }
+    let values: Vec<f64> = folds.iter().map(|f| f.value * 1e6).collect();
     let p = Paired::of(&b, &a);
     let better = b.iter().zip(&a).filter(|(x, y)| y < x).count();
     let n = b.len();
     let rms = |x: &[f64]| 1e3 * (x.iter().sum::<f64>() / n.max(1) as f64).sqrt();
     println!(
-        "  panda_4 with its pooled compliance fixed (nested): RMS {:.1} → {:.1} µm, better on {better}/{n}, \
+        "  panda_4 with its pooled compliance fixed (nested; θ̃ {:.2}…{:.2} µrad/mm over the folds): RMS {:.1} → {:.1} µm, better on {better}/{n}, \
          paired t = {:.2} ({} df, one-sided p = {:.3}), sign test p = {:.4} (smallest possible {:.4})",
+        values.iter().copied().fold(f64::INFINITY, f64::min),
+        values.iter().copied().fold(f64::NEG_INFINITY, f64::max),
         rms(&b),
         rms(&a),
         p.z(),
@@ -219,6 +263,84 @@ fn mukca_fleet() {
         p.p_value(),
         sign_test_p(better, n),
         min_sign_p(n)
+    );
+}
+
+fn mukca_fleet() {
+    let dir = mukca::default_dir();
+    let names = [
+        "panda_1",
+        "panda_1_with_sensor",
+        "panda_2",
+        "panda_left",
+        "panda_3",
+        "panda_3_bis",
+        "panda_right",
+        "panda_4",
+        "panda_6",
+        "panda_7",
+    ];
+    let loaded: Vec<mukca::Unit> = names
+        .iter()
+        .map(|n| mukca::load(&dir, n).expect("unit"))
+        .collect();
+    let start = loaded[2].arm.clone();
+    let units: Vec<UnitData> = loaded
+        .into_iter()
+        .map(|u| UnitData {
+            name: u.name,
+            file: format!("{}.csv", u.stem),
+            data: u.data,
+        })
+        .collect();
+    let o = fleet::Options {
+        alpha: ALPHA,
+        ..fleet::Options::default()
+    };
+    println!("MUKCa Panda arms, joint-2 compliance (µrad/mm; session jackknife errors; each recording fitted with its own probe and frame)");
+    mukca_grouping(
+        "one recording per physical arm (the table before issue 30's refit: panda_3_bis and panda_1 left out)",
+        &[
+            ("panda_2", &["panda_2"]),
+            ("panda_3", &["panda_3"]),
+            ("panda_4", &["panda_4"]),
+            ("panda_6", &["panda_6"]),
+            ("panda_7", &["panda_7"]),
+        ],
+        &units,
+        &start,
+        &o,
+    );
+    mukca_grouping(
+        "every recording; arms as MUKCa documents or names them (panda_right with panda_3 and panda_left with panda_2: the \
+         bimanual command of its README; panda_3_bis with panda_3 and panda_1_with_sensor with panda_1: the recordings' names); panda_1 its own arm",
+        &[
+            ("panda_1", &["panda_1", "panda_1_with_sensor"]),
+            ("panda_2", &["panda_2", "panda_left"]),
+            ("panda_3", &["panda_3", "panda_3_bis", "panda_right"]),
+            ("panda_4", &["panda_4"]),
+            ("panda_6", &["panda_6"]),
+            ("panda_7", &["panda_7"]),
+        ],
+        &units,
+        &start,
+        &o,
+    );
+    mukca_grouping(
+        "every recording; arms as the data group them (armcal diagnose --fleet's detection: panda_1 with panda_2 too)",
+        &[
+            (
+                "panda_2",
+                &["panda_2", "panda_1", "panda_1_with_sensor", "panda_left"],
+            ),
+            ("panda_3", &["panda_3", "panda_3_bis", "panda_right"]),
+            ("panda_4", &["panda_4"]),
+            ("panda_6", &["panda_6"]),
+            ("panda_7", &["panda_7"]),
+        ],
+        &units,
+        &start,
+        &o,
     );
 }
 

@@ -73,20 +73,49 @@ fn a_spread_effect_too_small_for_each_arm_is_named_for_every_arm_pooled() {
         g.arms.iter().filter(|a| a.value.named_alone).count() < 8,
         "every arm alone already names it: the fleet is too easy to show pooling's power"
     );
-    // Every arm named, each with its nested held-out gain. At 1.25…3.75e-9 rad/mm the effect
-    // moves the ball by about a micrometre against 5 µm of noise: the pooled value helps the
-    // fleet's held-out sessions as a whole, not every arm's four.
-    let (mut before, mut after, mut better) = (0.0, 0.0, 0);
+    // Every arm named by the pooled model or, where τ̂²'s uncertainty widens its pooled
+    // interval (a precise arm far from the design's mean, whose own estimate is then the strong
+    // one), by its own estimate: 6 of 8 by the pooled model at the fleet's α = 0.01 (8 of 8
+    // with the plug-in error, which covers too seldom: docs/results/claims.md §7.4), 3 alone. Each named arm
+    // has its nested held-out gain. At 1.25…3.75e-9 rad/mm the effect moves the ball by about
+    // a micrometre against 5 µm of noise: the pooled value helps the fleet's held-out sessions
+    // as a whole, not every arm's four.
+    let pooled_names = g.arms.iter().filter(|a| a.value.named_pooled).count();
+    let alone_names = g.arms.iter().filter(|a| a.value.named_alone).count();
+    assert!(
+        pooled_names >= 6 && pooled_names > alone_names,
+        "pooled {pooled_names}, alone {alone_names}: {:#?}",
+        g.arms.iter().map(|a| a.value).collect::<Vec<_>>()
+    );
+    let (mut before, mut after, mut better, mut sessions) = (0.0, 0.0, 0, 0);
     for a in &g.arms {
-        assert!(a.value.named_pooled, "{}: {:?}", a.arm, a.value);
+        assert!(
+            a.value.named_pooled || a.value.named_alone,
+            "{}: {:?}",
+            a.arm,
+            a.value
+        );
+        if !a.value.named_pooled {
+            assert!(
+                a.value.pooled_se > 2.0 * a.value.pooled_se_plugin,
+                "{:?}",
+                a.value
+            );
+            continue;
+        }
         let h = a.holdout.as_ref().expect("held-out gain of a named arm");
         assert_eq!(h.sessions, 4);
         before += h.rms_um[0].powi(2);
         after += h.rms_um[1].powi(2);
         better += h.sessions_better;
+        sessions += h.sessions;
     }
+    println!("named pooled {pooled_names}/8; held-out: better on {better} of {sessions} sessions, summed MS {before:.2} → {after:.2}");
     assert!(after < before, "{before} → {after}");
-    assert!(better > 16, "better on {better} of 32 sessions");
+    assert!(
+        2 * better > sessions,
+        "better on {better} of {sessions} sessions"
+    );
     // Nothing else is named: the other joints' compliances are not in the data.
     for e in p.effects.iter().filter(|e| e.effect != Effect::Gravity(1)) {
         assert!(!e.named, "{} named: {:?}", e.term, e.design);
@@ -112,4 +141,96 @@ fn a_fleet_with_nothing_hidden_gets_nothing_named() {
                 .all(|a| !a.value.named_pooled && a.holdout.is_none()));
         }
     }
+}
+
+/// One recording of the arm drawn from `truth_seed` (its geometric errors) with shoulder
+/// compliance `g`, its tool `probe` mm off, measured with the noise of `noise_seed`: 30
+/// tracker points per session.
+fn recording(
+    truth_seed: u64,
+    g: f64,
+    probe: [f64; 3],
+    noise_seed: u64,
+    sessions: usize,
+) -> Dataset {
+    let mut rng = armcal::rng::rng(truth_seed);
+    let mut truth = sim::perturb(&Arm::default6(), 3e-4, 0.3, &mut rng);
+    truth.joints[1].gravity = g;
+    for (e, d) in truth.probe.error.iter_mut().zip(probe) {
+        *e += d;
+    }
+    let mut rng = armcal::rng::rng(noise_seed);
+    let d = sim::simulate(
+        &truth,
+        &sim::Options::new(Kind::Point, 30 * sessions),
+        &mut rng,
+    )
+    .unwrap()
+    .data;
+    common::in_sessions(d, sessions, "(simulated recording)")
+}
+
+#[test]
+fn an_arm_recorded_twice_pools_both_recordings_each_with_its_own_probe() {
+    // arm_0 measured three times with tools up to half a millimetre apart (the third
+    // recording has 2 sessions: no jackknife error, left out of its arm, said), beside two
+    // other arms.
+    let data = [
+        ("arm_0_a", recording(700, 3e-8, [0.0; 3], 1, 4)),
+        ("arm_0_b", recording(700, 3e-8, [0.4, -0.3, 0.2], 2, 4)),
+        ("arm_0_c", recording(700, 3e-8, [0.1, 0.1, -0.2], 3, 2)),
+        ("arm_1", recording(701, 3.5e-8, [0.0; 3], 4, 4)),
+        ("arm_2", recording(702, 4e-8, [0.0; 3], 5, 4)),
+    ];
+    let units: Vec<UnitData> = data
+        .into_iter()
+        .map(|(n, d)| UnitData {
+            name: n.to_string(),
+            file: format!("{n}.csv"),
+            data: d,
+        })
+        .collect();
+    let arms = vec![
+        ("arm_0".to_string(), vec![0, 1, 2]),
+        ("arm_1".to_string(), vec![3]),
+        ("arm_2".to_string(), vec![4]),
+    ];
+    let start = Arm::default6();
+    let testable = vec![vec![Effect::Gravity(1)]; units.len()];
+    let p = pool_arms(&start, &units, &arms, &testable, &fleet::Options::default()).unwrap();
+    let g = &p.effects[0];
+    assert!(g.named && g.design.arms == 3, "{:?}", g.design);
+    let a0 = &g.arms[0];
+    assert_eq!(a0.recordings, ["arm_0_a", "arm_0_b"]);
+    assert_eq!((a0.sessions, a0.per_recording.len()), (8, 2));
+    // Each recording's tool is its own (fitted with its geometry): both see the compliance,
+    // and their combination is the arm's estimate, between them.
+    for (y, _) in &a0.per_recording {
+        assert!((y / 3e-8 - 1.0).abs() < 0.2, "{:?}", a0.per_recording);
+    }
+    let (lo, hi) = (
+        a0.per_recording[0].0.min(a0.per_recording[1].0),
+        a0.per_recording[0].0.max(a0.per_recording[1].0),
+    );
+    assert!(lo <= a0.value.estimate && a0.value.estimate <= hi);
+    assert_eq!(a0.combined.recordings, 2);
+    // The held-out gain runs over the sessions of both recordings.
+    let h = a0.holdout.as_ref().expect("held-out gain");
+    assert_eq!(h.sessions, 8);
+    assert!(h.rms_um[1] < h.rms_um[0], "{h:?}");
+    assert!(
+        p.left_out
+            .iter()
+            .any(|(who, why)| who == "arm_0: recording arm_0_c" && why.contains("2 session")),
+        "{:?}",
+        p.left_out
+    );
+    let mut text = String::new();
+    p.write_text(&mut text);
+    assert!(
+        text.contains("arm_0 (arm_0_a + arm_0_b)")
+            && text.contains("Q = ")
+            && text.contains("arm_0: recording arm_0_c not pooled"),
+        "{text}"
+    );
 }

@@ -14,16 +14,20 @@
 //! nested ([`super::pooling::pooled_holdout`]: each session scored with the value pooled from
 //! the arm's other sessions and the other arms).
 //!
-//! **Which recording of an arm.** The pooled model needs one estimate per physical arm; an arm
-//! of several recordings (each with its own tool and frame) gives the estimate of its
-//! recording with the most sessions. Arms with no recording of [`crate::stats::MIN_UNITS`]
-//! sessions have no jackknife error and are left out, with the reason.
+//! **Every recording of an arm.** The pooled model needs one estimate per physical arm; an arm
+//! of several recordings (each with its own tool and frame, so each fitted with its own probe:
+//! the probe is one of the geometric unknowns every recording's fit refits) gives one estimate
+//! per recording of [`crate::stats::MIN_UNITS`] sessions or more, combined by inverse variance
+//! ([`super::pooling::combine_recordings`]). Recordings with fewer sessions have no jackknife
+//! error and are left out of their arm, and arms with no such recording out of the pool, each
+//! with the reason. Which recordings are one arm is the fleet's grouping (`arms`), whose source
+//! (detected from the data, given by hand, or each file an arm) the fleet report says.
 //!
 //! This module sits above both [`super::fleet`] (whose arms and candidates it reads) and
 //! [`super::pooling`] (which it calls): neither of them knows it.
 
 use super::fleet::{geometric_options, holm, Fleet, Options, UnitData};
-use super::pooling::{self, Arm as PooledValue, Design};
+use super::pooling::{self, Arm as PooledValue, Combined, Design};
 use crate::data::Dataset;
 use crate::fit::error::CalibError;
 use crate::fit::holdout::by_group;
@@ -37,10 +41,14 @@ use std::collections::BTreeSet;
 pub struct PooledArm {
     /// The arm's name.
     pub arm: String,
-    /// The recording whose sessions gave its estimate.
-    pub recording: String,
-    /// Its sessions.
+    /// The recordings whose sessions gave its estimate.
+    pub recordings: Vec<String>,
+    /// Their sessions, in all.
     pub sessions: usize,
+    /// Each recording's own estimate (value, jackknife standard error), in `recordings`' order.
+    pub per_recording: Vec<(f64, f64)>,
+    /// Their combination (the arm's "alone" estimate below).
+    pub combined: Combined,
     /// Alone and pooled.
     #[serde(flatten)]
     pub value: PooledValue,
@@ -92,36 +100,47 @@ pub struct PooledFleet {
     pub alpha: f64,
     /// Every one-unknown candidate pooled, the most significant design mean first.
     pub effects: Vec<PooledEffect>,
-    /// Arms left out, with why.
+    /// Arms, recordings of an arm, or candidates left out, with why.
     pub left_out: Vec<(String, String)>,
 }
 
-/// An arm's recording pooled: (arm name, recording index, sessions).
-type Used = (String, usize, usize);
+/// An arm pooled: its name and its recordings used (index, sessions).
+type Used = (String, Vec<(usize, usize)>);
 
-/// An arm left out: (arm name, why).
+/// An arm or a recording left out: (name, why).
 type LeftOut = (String, String);
 
-/// Each arm's recording with the most sessions, when it has [`MIN_UNITS`] or more, and the
-/// arms left out with why.
+/// Each arm's recordings of [`MIN_UNITS`] sessions or more, and the arms and recordings left
+/// out with why.
 fn recordings(units: &[UnitData], arms: &[(String, Vec<usize>)]) -> (Vec<Used>, Vec<LeftOut>) {
     let mut used = Vec::new();
     let mut left_out = Vec::new();
     for (name, recs) in arms {
-        let best = recs
-            .iter()
-            .filter(|&&r| r < units.len())
-            .map(|&r| (r, by_group(&units[r].data).len()))
-            .max_by_key(|(_, n)| *n);
-        match best {
-            Some((r, n)) if n >= MIN_UNITS => used.push((name.clone(), r, n)),
-            _ => left_out.push((
+        let mut mine = Vec::new();
+        for &r in recs.iter().filter(|&&r| r < units.len()) {
+            let n = by_group(&units[r].data).len();
+            if n >= MIN_UNITS {
+                mine.push((r, n));
+            } else if recs.len() > 1 {
+                left_out.push((
+                    format!("{name}: recording {}", units[r].name),
+                    format!(
+                        "{n} session(s), fewer than {MIN_UNITS}: no jackknife error to weigh \
+                         it by; the arm's other recordings are pooled"
+                    ),
+                ));
+            }
+        }
+        if mine.is_empty() {
+            left_out.push((
                 name.clone(),
                 format!(
                     "no recording of {MIN_UNITS} sessions or more: no jackknife error to weigh \
                      its estimate by"
                 ),
-            )),
+            ));
+        } else {
+            used.push((name.clone(), mine));
         }
     }
     (used, left_out)
@@ -174,33 +193,54 @@ pub fn pool_arms(
             })
             .unwrap_or_default()
     };
-    let mut vocabulary = one_unknown(used[0].1);
-    for (_, r, _) in &used[1..] {
-        vocabulary = vocabulary.intersection(&one_unknown(*r)).copied().collect();
+    let mut all_recordings = used
+        .iter()
+        .flat_map(|(_, recs)| recs.iter().map(|(r, _)| *r));
+    let mut vocabulary = all_recordings.next().map(one_unknown).unwrap_or_default();
+    for r in all_recordings {
+        vocabulary = vocabulary.intersection(&one_unknown(r)).copied().collect();
     }
     let calib = geometric_options(opts);
-    for e in vocabulary {
-        let mut est = Vec::new();
-        for (_, r, _) in &used {
-            let Some(v) = pooling::estimate(start, &units[*r].data, &calib, e)? else {
-                break;
+    'effects: for e in vocabulary {
+        // Each arm: every recording's estimate (its own probe and frame), then combined.
+        let mut per_arm: Vec<(Vec<(f64, f64)>, Combined)> = Vec::new();
+        for (_, recs) in &used {
+            let mut est = Vec::new();
+            for (r, _) in recs {
+                // A fit that fails (one candidate on one recording) leaves that candidate
+                // unpooled, said, rather than the whole fleet report.
+                match pooling::estimate(start, &units[*r].data, &calib, e) {
+                    Ok(Some(v)) => est.push(v),
+                    Ok(None) => continue 'effects,
+                    Err(err) => {
+                        out.left_out.push((
+                            e.spec(),
+                            format!("the fit of recording {} failed: {err}", units[*r].name),
+                        ));
+                        continue 'effects;
+                    }
+                }
+            }
+            let Some(c) = pooling::combine_recordings(&est) else {
+                continue 'effects;
             };
-            est.push(v);
+            per_arm.push((est, c));
         }
-        if est.len() != used.len() {
-            continue;
-        }
-        let (y, se): (Vec<f64>, Vec<f64>) = est.iter().copied().unzip();
+        let y: Vec<f64> = per_arm.iter().map(|(_, c)| c.estimate).collect();
+        let se: Vec<f64> = per_arm.iter().map(|(_, c)| c.se).collect();
         let Some((design, values)) = pooling::pool(&y, &se, opts.alpha) else {
             continue;
         };
         let arms = used
             .iter()
+            .zip(per_arm)
             .zip(values)
-            .map(|((name, r, n), value)| PooledArm {
+            .map(|(((name, recs), (est, combined)), value)| PooledArm {
                 arm: name.clone(),
-                recording: units[*r].name.clone(),
-                sessions: *n,
+                recordings: recs.iter().map(|(r, _)| units[*r].name.clone()).collect(),
+                sessions: recs.iter().map(|(_, n)| n).sum(),
+                per_recording: est,
+                combined,
                 value,
                 holdout: None,
             })
@@ -223,17 +263,22 @@ pub fn pool_arms(
     }
     out.effects
         .sort_by(|a, b| a.design.mean_p.total_cmp(&b.design.mean_p));
-    let data: Vec<&Dataset> = used.iter().map(|(_, r, _)| &units[*r].data).collect();
+    let data: Vec<Vec<&Dataset>> = used
+        .iter()
+        .map(|(_, recs)| recs.iter().map(|(r, _)| &units[*r].data).collect())
+        .collect();
     for p in out.effects.iter_mut().filter(|p| p.named) {
         held_out_gains(start, &data, &calib, opts.alpha, p)?;
     }
     Ok(out)
 }
 
-/// The nested held-out gain of every arm the pooled effect `p` is named for.
+/// The nested held-out gain of every arm the pooled effect `p` is named for, over the sessions
+/// of all its recordings (`data`, one list per arm): each recording's sessions scored in turn,
+/// its estimate from its other sessions combined with the arm's other recordings.
 fn held_out_gains(
     start: &Arm,
-    data: &[&Dataset],
+    data: &[Vec<&Dataset>],
     calib: &crate::fit::options::Options,
     alpha: f64,
     p: &mut PooledEffect,
@@ -253,7 +298,19 @@ fn held_out_gains(
             .filter(|(k, _)| *k != i)
             .map(|(_, v)| *v)
             .collect();
-        let folds = pooling::pooled_holdout(start, data[i], calib, p.effect, &others, alpha)?;
+        let mut folds = Vec::new();
+        for (k, d) in data[i].iter().enumerate() {
+            let siblings: Vec<(f64, f64)> = a
+                .per_recording
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != k)
+                .map(|(_, v)| *v)
+                .collect();
+            folds.extend(pooling::pooled_holdout(
+                start, d, calib, p.effect, &siblings, &others, alpha,
+            )?);
+        }
         a.holdout = Some(gain(&folds));
     }
     Ok(())
@@ -320,7 +377,7 @@ impl PooledFleet {
                     s,
                     "    {} ({}): alone {:+.3e} ± {:.1e}, pooled {:+.3e} ± {:.1e} (B = {:.2}){}",
                     a.arm,
-                    a.recording,
+                    a.recordings.join(" + "),
                     a.value.estimate,
                     a.value.se,
                     a.value.pooled,
@@ -328,6 +385,21 @@ impl PooledFleet {
                     a.value.shrinkage,
                     if a.value.named_pooled { ", named" } else { "" }
                 );
+                if a.combined.recordings > 1 {
+                    let each: Vec<String> = a
+                        .recordings
+                        .iter()
+                        .zip(&a.per_recording)
+                        .map(|(r, (y, se))| format!("{r} {y:+.3e} ± {se:.1e}"))
+                        .collect();
+                    let _ = write!(
+                        s,
+                        " [{}: Q = {:.2}, p = {:.2e}]",
+                        each.join(", "),
+                        a.combined.q,
+                        a.combined.q_p
+                    );
+                }
                 if let Some(g) = &a.holdout {
                     let _ = write!(
                         s,

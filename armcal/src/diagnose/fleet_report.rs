@@ -10,8 +10,20 @@
 //!  "arms": [{"arm": "panda_3", "recordings": ["panda_3", "panda_3_bis", "panda_right"],
 //!            "evidence": {"rule", "pairs": [{"a", "b", "chi2", "dof", "f", "p_value", "same"}]}}],
 //!  "pairs": [every pair of recordings, as in "evidence"], "uncompared": [[recording, why]],
-//!  "halves": [{"recording", "chi2", "dof"}], "overdispersion": {"phi", "dof"}}
+//!  "halves": [{"recording", "chi2", "dof"}], "overdispersion": {"phi", "dof"},
+//!  "pooled": {"alpha", "left_out": [[arm, "arm: recording R" or candidate, why]],
+//!             "effects": [{"term", "named", "design": {"arms", "mean", "mean_se",
+//!                          "mean_interval", "mean_p", "spread", "spread_interval", "named"},
+//!                          "arms": [{"arm", "recordings", "sessions", "per_recording":
+//!                                    [[value, se]], "combined": {"estimate", "se",
+//!                                    "recordings", "q", "q_p"}, "estimate", "se",
+//!                                    "named_alone", "shrinkage", "pooled", "pooled_se",
+//!                                    "pooled_se_plugin", "named_pooled", "holdout"}]}]}}
 //! ```
+//!
+//! `pooled` is [`super::fleet_pooled`]'s stage: an arm's `per_recording` estimates (each
+//! recording fitted with its own probe and frame) combined into its `estimate`, then pooled
+//! over the arms; `pooled_se` carries τ̂²'s uncertainty, `pooled_se_plugin` does not.
 //!
 //! A unit is an arm ([`super::same_arm`]): recordings of one physical arm are one unit.
 //!

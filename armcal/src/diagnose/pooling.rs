@@ -17,9 +17,23 @@
 //! θ̃_u = μ̂ + (1 − B_u)(y_u − μ̂),  B_u = s_u² / (s_u² + τ̂²)
 //!
 //! an arm measured precisely keeps its own value (B → 0), one measured poorly borrows from the
-//! design (B → 1), and with τ̂² = 0 every arm gets μ̂. Its standard error is Morris's
-//! (1 − B_u) s_u² + B_u² se(μ̂)² (the first-order term of the uncertainty of μ̂; the one of τ̂²
-//! is left out, so it is somewhat short with few arms).
+//! design (B → 1), and with τ̂² = 0 every arm gets μ̂. Its variance is Morris's (1983)
+//!
+//! (1 − B_u) s_u² + B_u² se(μ̂)² + V(B̂_u) (y_u − μ̂)²
+//!
+//! the uncertainty of μ̂ (its Hartung–Knapp error) and, in the last term, of τ̂²: B̂_u is itself
+//! an estimate, and an arm far from the mean is the one whose pooled value moves most with it.
+//! V(B̂_u) = 2 B_u² w_u² / ((k − 3)/k · Σ w_j²), w = 1/(s² + τ̂²): the delta method on τ̂²'s
+//! information (½ Σ w²) with Morris's small-sample divisor k − 3 in place of k, which for equal
+//! errors is his 2 B²/(k − 3). With 3 arms k − 3 is floored at 1. Without the last term (the
+//! plug-in error, kept as `pooled_se_plugin`) the interval of an arm far from the mean covers
+//! its true value too seldom when τ̂² is small: measured by [`simulated_coverage`] (see
+//! `docs/results/claims.md`).
+//!
+//! **An arm of several recordings** (the same arm measured again, each recording with its own
+//! tool and frame, so each fitted with its own probe) gives one estimate per recording with
+//! ≥ 3 sessions; [`combine_recordings`] weighs them by inverse variance into the arm's
+//! estimate, its error widened when the recordings disagree beyond their errors.
 //!
 //! **What is named.** The design's mean is tested first (t = μ̂ / se_HK, arms − 1 degrees of
 //! freedom, two-sided at `alpha`); only when it passes is the effect named for an arm, and then
@@ -49,8 +63,10 @@ pub struct Arm {
     pub shrinkage: f64,
     /// The pooled estimate θ̃.
     pub pooled: f64,
-    /// Its standard error.
+    /// Its standard error, with the uncertainty of μ̂ and of τ̂² (Morris's first-order terms).
     pub pooled_se: f64,
+    /// The plug-in standard error (τ̂² taken as known): shorter, kept for comparison.
+    pub pooled_se_plugin: f64,
     /// Whether the pooled model names the effect for this arm.
     pub named_pooled: bool,
 }
@@ -158,13 +174,23 @@ pub fn pool(y: &[f64], se: &[f64], alpha: f64) -> Option<(Design, Vec<Arm>)> {
         named,
     };
     let z = t_critical(alpha, 1e12);
+    // τ̂²'s information in units of the largest error (as `dersimonian_laird` ran).
+    let w: Vec<f64> = vs
+        .iter()
+        .map(|v| 1.0 / (v + tau2 / (unit * unit)))
+        .collect();
+    let sw2: f64 = w.iter().map(|w| w * w).sum();
+    let small = (k as f64 - 3.0).max(1.0) / k as f64;
     let arms = y
         .iter()
         .zip(&v)
-        .map(|(&y, &v)| {
+        .zip(&w)
+        .map(|((&y, &v), &w)| {
             let b = v / (v + tau2);
             let pooled = mu + (1.0 - b) * (y - mu);
-            let pooled_se = ((1.0 - b) * v + b * b * mu_se * mu_se).sqrt();
+            let plugin = (1.0 - b) * v + b * b * mu_se * mu_se;
+            let var_b = 2.0 * b * b * w * w / (small * sw2);
+            let pooled_se = (plugin + var_b * (y - mu).powi(2)).sqrt();
             Arm {
                 estimate: y,
                 se: v.sqrt(),
@@ -172,11 +198,136 @@ pub fn pool(y: &[f64], se: &[f64], alpha: f64) -> Option<(Design, Vec<Arm>)> {
                 shrinkage: b,
                 pooled,
                 pooled_se,
+                pooled_se_plugin: plugin.sqrt(),
                 named_pooled: named && (pooled / pooled_se).abs() > tc,
             }
         })
         .collect();
     Some((design, arms))
+}
+
+/// One arm's estimate from its recordings ([`combine_recordings`]).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Combined {
+    /// The inverse-variance mean of the recordings' estimates.
+    pub estimate: f64,
+    /// Its standard error (widened by √(Q/(r − 1)) when that exceeds 1).
+    pub se: f64,
+    /// Recordings combined.
+    pub recordings: usize,
+    /// Cochran's Q of the recordings about their mean (0 for one recording).
+    pub q: f64,
+    /// Its upper-tail p on r − 1 degrees of freedom (1 for one recording): a small p says the
+    /// recordings of "one arm" disagree beyond their errors (another arm, or a changed one).
+    pub q_p: f64,
+}
+
+/// One arm's estimate from its recordings' estimates `est` (value, standard error), each
+/// fitted on its own recording with its own probe and frame: the inverse-variance mean, its
+/// error 1/√Σw widened by the Birge ratio √(Q/(r − 1)) when the recordings scatter more than
+/// their errors say (a level of the hierarchy with r = 2 or 3 recordings would estimate its
+/// spread from one or two differences; the ratio uses the same evidence without pretending to
+/// a variance). `None` for no recording or an error that is not a positive finite number.
+pub fn combine_recordings(est: &[(f64, f64)]) -> Option<Combined> {
+    if est.is_empty()
+        || est
+            .iter()
+            .any(|(y, s)| !(y.is_finite() && s.is_finite() && *s > 0.0))
+    {
+        return None;
+    }
+    // In units of the largest error, so tiny values (rad/mm) keep their precision.
+    let unit = est.iter().map(|e| e.1).fold(0.0, f64::max);
+    let w: Vec<f64> = est.iter().map(|(_, s)| (unit / s).powi(2)).collect();
+    let sw: f64 = w.iter().sum();
+    let mean = w.iter().zip(est).map(|(w, (y, _))| w * y).sum::<f64>() / sw;
+    let q: f64 = w
+        .iter()
+        .zip(est)
+        .map(|(w, (y, _))| w * ((y - mean) / unit).powi(2))
+        .sum();
+    let r = est.len();
+    let (birge, q_p) = if r > 1 {
+        let df = (r - 1) as f64;
+        ((q / df).max(1.0), chi2_tail(q, r - 1))
+    } else {
+        (1.0, 1.0)
+    };
+    Some(Combined {
+        estimate: mean,
+        se: unit * (birge / sw).sqrt(),
+        recordings: r,
+        q,
+        q_p,
+    })
+}
+
+/// Coverage of the pooled intervals on simulated fleets ([`simulated_coverage`]).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Coverage {
+    /// Arm intervals drawn (fleets × arms).
+    pub intervals: usize,
+    /// Share of arms whose true value lies in θ̃ ± t·`pooled_se` (with τ̂²'s uncertainty).
+    pub with_tau: f64,
+    /// The same with the plug-in error (τ̂² taken as known).
+    pub plugin: f64,
+    /// Share of fleets whose design-mean interval holds μ.
+    pub mean: f64,
+    /// Mean half-width of the arm intervals with τ̂²'s uncertainty, over the plug-in's.
+    pub width_ratio: f64,
+}
+
+/// The coverage of [`pool`]'s intervals at 1 − `alpha` over `fleets` simulated fleets of
+/// `arms` arms (seeds from `seed`): each arm's true value θ_u ~ N(1, τ²), its error s_u
+/// spread 0.5…1.5 (mean 1), its estimate y_u ~ N(θ_u, s_u²), and the error the pooling sees
+/// estimated from `sessions` sessions (a jackknife: s_u² χ²/(sessions − 1)), as on real arms.
+/// `tau` is in units of the mean error. The coverage is the frequentist one of an empirical
+/// Bayes interval: over arms whose values are drawn from the design's distribution.
+pub fn simulated_coverage(
+    arms: usize,
+    tau: f64,
+    sessions: usize,
+    fleets: usize,
+    seed: u64,
+    alpha: f64,
+) -> Coverage {
+    let mut rng = crate::rng::rng(seed);
+    let df = sessions.saturating_sub(1).max(1);
+    let (mut n, mut with_tau, mut plugin, mut mean, mut pooled_fleets) = (0, 0, 0, 0, 0);
+    let (mut w_tau, mut w_plug) = (0.0, 0.0);
+    for _ in 0..fleets {
+        let mut theta = Vec::with_capacity(arms);
+        let mut y = Vec::with_capacity(arms);
+        let mut se = Vec::with_capacity(arms);
+        for u in 0..arms {
+            let s = 0.5 + u as f64 / (arms.max(2) - 1) as f64;
+            let t = 1.0 + tau * crate::rng::normal(&mut rng);
+            theta.push(t);
+            y.push(t + s * crate::rng::normal(&mut rng));
+            let chi2: f64 = (0..df).map(|_| crate::rng::normal(&mut rng).powi(2)).sum();
+            se.push(s * (chi2 / df as f64).sqrt());
+        }
+        let Some((d, a)) = pool(&y, &se, alpha) else {
+            continue;
+        };
+        pooled_fleets += 1;
+        let tc = t_critical(alpha, (arms - 1) as f64);
+        mean += (d.mean_interval[0] <= 1.0 && 1.0 <= d.mean_interval[1]) as usize;
+        for (a, t) in a.iter().zip(&theta) {
+            n += 1;
+            with_tau += ((a.pooled - t).abs() <= tc * a.pooled_se) as usize;
+            plugin += ((a.pooled - t).abs() <= tc * a.pooled_se_plugin) as usize;
+            w_tau += a.pooled_se;
+            w_plug += a.pooled_se_plugin;
+        }
+    }
+    Coverage {
+        intervals: n,
+        with_tau: with_tau as f64 / n.max(1) as f64,
+        plugin: plugin as f64 / n.max(1) as f64,
+        mean: mean as f64 / pooled_fleets.max(1) as f64,
+        width_ratio: w_tau / w_plug.max(f64::MIN_POSITIVE),
+    }
 }
 
 /// One arm's estimate of a one-unknown `effect` (a gravity compliance) from its sessions: the
@@ -229,8 +380,9 @@ pub struct PooledFold {
 }
 
 /// The held-out gain of the pooled estimate on one arm, nested: for each session, the arm's
-/// estimate from its other sessions ([`estimate`]) is pooled with the other arms' `others`
-/// (value, standard error), the pooled value θ̃ is fixed in the arm's model, the geometric
+/// estimate from its other sessions ([`estimate`]), combined with its other recordings'
+/// `siblings` (value, standard error; [`combine_recordings`]), is pooled with the other arms'
+/// `others`, the pooled value θ̃ is fixed in the arm's model, the geometric
 /// unknowns are fitted on the other sessions, and the session is scored against the
 /// geometric model fitted on the same sessions. The held-out session never informs θ̃.
 /// Sessions whose training part cannot be estimated (fewer than three sessions left) or pooled
@@ -240,6 +392,7 @@ pub fn pooled_holdout(
     data: &Dataset,
     opts: &crate::fit::options::Options,
     effect: Effect,
+    siblings: &[(f64, f64)],
     others: &[(f64, f64)],
     alpha: f64,
 ) -> Result<Vec<PooledFold>, CalibError> {
@@ -259,13 +412,18 @@ pub fn pooled_holdout(
         let Some(own) = estimate(start, &train, opts, effect)? else {
             continue;
         };
+        let mut recs = vec![own];
+        recs.extend_from_slice(siblings);
+        let Some(arm) = combine_recordings(&recs) else {
+            continue;
+        };
         let (mut y, mut se): (Vec<f64>, Vec<f64>) = others.iter().copied().unzip();
-        y.push(own.0);
-        se.push(own.1);
+        y.push(arm.estimate);
+        se.push(arm.se);
         let Some((_, arms)) = pool(&y, &se, alpha) else {
             continue;
         };
-        let value = arms.last().map_or(own.0, |a| a.pooled);
+        let value = arms.last().map_or(arm.estimate, |a| a.pooled);
         let mut fixed = start.clone();
         params[0].add_to(&mut fixed, value - params[0].value(start));
         let session = data.subset(&held);
@@ -349,6 +507,67 @@ mod tests {
             assert!((b.pooled / 1e-8 - a.pooled).abs() < 1e-9);
             assert!((b.pooled_se / 1e-8 - a.pooled_se).abs() < 1e-9);
             assert_eq!(a.named_pooled, b.named_pooled);
+        }
+    }
+
+    #[test]
+    fn recordings_of_one_arm_are_weighed_by_their_errors() {
+        // Two recordings that agree: the inverse-variance mean, the error of their sum of
+        // weights, no widening.
+        let c = combine_recordings(&[(1.0, 0.1), (1.1, 0.2)]).unwrap();
+        assert!((c.estimate - (1.0 / 0.01 + 1.1 / 0.04) / (1.0 / 0.01 + 1.0 / 0.04)).abs() < 1e-12);
+        assert!((c.se - (1.0f64 / (100.0 + 25.0)).sqrt()).abs() < 1e-12);
+        assert!(c.q < 1.0 && c.q_p > 0.3 && c.recordings == 2);
+        // Two that disagree by ten errors: widened by the Birge ratio, and the p says so.
+        let d = combine_recordings(&[(1.0, 0.1), (2.0, 0.1)]).unwrap();
+        assert!((d.estimate - 1.5).abs() < 1e-12);
+        assert!(
+            (d.se - (0.005f64 * d.q).sqrt()).abs() < 1e-12 && d.q_p < 1e-6,
+            "{d:?}"
+        );
+        // One recording is itself; the scale does not matter; a bad error is refused.
+        assert_eq!(combine_recordings(&[(3.0, 0.5)]).unwrap().se, 0.5);
+        let s = combine_recordings(&[(1e-8, 1e-9), (2e-8, 1e-9)]).unwrap();
+        assert!((s.se / 1e-8 - d.se).abs() < 1e-12);
+        assert!(combine_recordings(&[(1.0, 0.0)]).is_none());
+        assert!(combine_recordings(&[]).is_none());
+    }
+
+    #[test]
+    fn an_arm_far_from_the_mean_gets_the_uncertainty_of_tau() {
+        // Morris's term grows with the distance from the mean and vanishes at the mean; it
+        // never shortens the plug-in error.
+        let y = [0.0, 0.2, -0.1, 0.1, 3.0];
+        let se = [1.0; 5];
+        let (d, arms) = pool(&y, &se, 0.05).unwrap();
+        for a in &arms {
+            assert!(a.pooled_se >= a.pooled_se_plugin);
+        }
+        let far = arms.iter().max_by(|a, b| {
+            (a.estimate - d.mean)
+                .abs()
+                .total_cmp(&(b.estimate - d.mean).abs())
+        });
+        let near = arms.iter().min_by(|a, b| {
+            (a.estimate - d.mean)
+                .abs()
+                .total_cmp(&(b.estimate - d.mean).abs())
+        });
+        let gap = |a: &Arm| a.pooled_se / a.pooled_se_plugin;
+        assert!(gap(far.unwrap()) > gap(near.unwrap()) + 0.05, "{arms:?}");
+    }
+
+    #[test]
+    fn the_uncertainty_of_tau_brings_four_arms_nearer_their_nominal_coverage() {
+        // Fleets of 4 arms whose errors come from 4 sessions (as MUKCa's): the plug-in interval
+        // covers too seldom where the spread is about the arms' error; Morris's term gives part
+        // of it back (the long run: `examples/pooling_coverage.rs`, docs/results/claims.md).
+        for (tau, lo) in [(0.0, 0.93), (1.0, 0.89)] {
+            let c = simulated_coverage(4, tau, 4, 300, 7, 0.05);
+            assert_eq!(c.intervals, 1200);
+            assert!(c.with_tau >= c.plugin + 0.015, "tau = {tau}: {c:?}");
+            assert!(c.with_tau > lo && c.with_tau < 0.99, "tau = {tau}: {c:?}");
+            assert!(c.mean > 0.9 && c.width_ratio > 1.1, "tau = {tau}: {c:?}");
         }
     }
 
