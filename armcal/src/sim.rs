@@ -19,8 +19,7 @@
 
 use crate::data::{Dataset, Kind, Row};
 use crate::fit::design::groups::{length_group, spat_group, Turns};
-use crate::fit::design::poses::count_angle;
-pub use crate::fit::design::poses::{inverse, limits, quantise, random_pose, Limits};
+use crate::fit::design::poses::{count_angle, limits, random_pose};
 use crate::fit::design::sphere;
 use crate::geometry::{frame_matrix, reach};
 use crate::rng::{normal, SimRng};
@@ -354,6 +353,7 @@ fn group_sizes(count: usize, size: usize) -> Vec<usize> {
 
 #[cfg(test)]
 mod tests {
+    use crate::fit::design::poses::quantise;
 
     #[test]
     fn encoder_noise_is_noise_plus_quantisation() {
