@@ -234,8 +234,8 @@ pub enum SimError {
 }
 
 /// Records `opts.count` rows of the truth arm: the rows at the continuous true angles and
-/// temperatures first ([`point_rows`], [`group_rows`]), then what the instruments read of
-/// them ([`read_instruments`]).
+/// temperatures first (`point_rows`, `group_rows`), then what the instruments read of
+/// them (`read_instruments`).
 pub fn simulate(truth: &Arm, opts: &Options, rng: &mut SimRng) -> Result<Simulated, SimError> {
     check_options(truth, opts)?;
     let lim = limits(truth);

@@ -159,10 +159,10 @@ pub struct Counts {
 /// Runs the soak on `board` with `frames` readings (the shipped recording, cycled), about one
 /// frame in `one_in` damaged in each direction; `seed` makes it reproducible.
 ///
-/// The steps: the input damaged ([`damaged_input`]), the hub run on it under QEMU, its
+/// The steps: the input damaged (`damaged_input`), the hub run on it under QEMU, its
 /// reports checked frame by frame against what its receiver must make of the bytes
-/// ([`check_reports`]) and against its log ([`check_log`]), then its stream damaged on the
-/// way back and decoded by the host ([`check_way_back`]).
+/// (`check_reports`) and against its log (`check_log`), then its stream damaged on the
+/// way back and decoded by the host (`check_way_back`).
 pub fn run(board: &Board, frames: usize, one_in: usize, seed: u64) -> Result<Counts> {
     let (_, table) = calibration(&default_calibration_path())?;
     let recorded = recording::read(&default_recording_path())?;

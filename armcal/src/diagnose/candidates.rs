@@ -97,8 +97,8 @@ pub fn candidates(start: &Arm, data: &Dataset) -> Candidates {
 /// what each joint's readings resolve, whichever is lower.
 ///
 /// Each effect is judged with every candidate at once first; one held there is judged again
-/// alone with the geometric model ([`alone_with_geometry`]) unless another candidate alone
-/// explains it ([`twin_of`]), so that an effect is refused only for what it cannot be told
+/// alone with the geometric model (`alone_with_geometry`) unless another candidate alone
+/// explains it (`twin_of`), so that an effect is refused only for what it cannot be told
 /// from.
 pub fn candidates_up_to(start: &Arm, data: &Dataset, max_order: u32) -> Candidates {
     let temp_range = temperature_range(data);
