@@ -23,7 +23,7 @@ use crate::angle::{CountScale, Multiples, Quarter};
 use crate::physics::Physics;
 use crate::rotate::Vec3;
 use crate::scalar::{Arithmetic, Scale};
-use crate::table::{ProbeData, Table, MAX_HARMONICS, MAX_JOINTS};
+use crate::table::{JointData, ProbeData, Table, MAX_HARMONICS, MAX_JOINTS};
 use core::fmt;
 use core::mem::MaybeUninit;
 
@@ -376,6 +376,83 @@ fn put_probe<P: Physics>(
     Ok(())
 }
 
+impl<P: Physics> JointModel<P> {
+    /// Sets joint `no`'s (1-based, for errors) model from its table record: its link without
+    /// the probe (the last joint's takes the probe's vector when one is mounted, in
+    /// [`put_probe`]), its harmonics sorted by order, and the combined first- and
+    /// second-order harmonic where the joint has no other. Written in place, as
+    /// [`put_probe`] is: returned by value, it raised the Cortex-M0 hub's stack peak by
+    /// 40 bytes.
+    fn set(&mut self, j: &JointData, no: usize) -> Result<(), ChainError> {
+        let mut harmonics = [HarmonicTerm::<P>::default(); MAX_HARMONICS];
+        let count = usize::from(j.harmonic_count).min(MAX_HARMONICS);
+        for (h, src) in harmonics.iter_mut().zip(&j.harmonics[..count]) {
+            *h = HarmonicTerm {
+                order: u32::from(src.order),
+                sin: conv(P::u_from_f64(src.sin), no)?,
+                cos: conv(P::u_from_f64(src.cos), no)?,
+            };
+        }
+        sort_by_order(&mut harmonics[..count], |h| h.order);
+        let mut h12 = [0.0f64; 4]; // s1, c1, s2, c2
+        let mut low = count > 0;
+        for src in &j.harmonics[..count] {
+            match src.order {
+                1 => (h12[0], h12[1]) = (h12[0] + src.sin, h12[1] + src.cos),
+                2 => (h12[2], h12[3]) = (h12[2] + src.sin, h12[3] + src.cos),
+                _ => low = false,
+            }
+        }
+        let harmonic_12 = if low {
+            let [s1, c1, s2, c2] = h12;
+            Some(units::<P, 4>([s1, c1, 2.0 * s2, c2], no)?)
+        } else {
+            None
+        };
+        let (link, rate) = (j.link, j.link.map(|x| x * j.thermal));
+        *self = JointModel {
+            axis: j.axis,
+            scale: conv(CountScale::new(j.counts), no)?,
+            link: vec3::<P>(unpermute(link, j.axis), no)?,
+            link_rate: rates::<P>(unpermute(rate, j.axis), no)?,
+            has_thermal: rate != [0.0; 3],
+            gravity: conv(P::gravity_from_f64(j.gravity), no)?,
+            has_gravity: j.gravity != 0.0,
+            harmonics,
+            harmonic_count: count as u8,
+            harmonic_12,
+        };
+        Ok(())
+    }
+}
+
+/// The arm's reach and sum of levers (mm, the longest probe included) with the thermal
+/// margin, refused when either is beyond what evaluator `P` holds; the reach with its margin
+/// when both fit.
+fn within_limits<P: Physics>(reach: f64, levers: f64) -> Result<f64, ChainError> {
+    // Finite by the table's checks; written so that NaN would be refused too.
+    let reach = reach * THERMAL_MARGIN;
+    let fits = reach < P::MAX_REACH_MM;
+    if !fits {
+        // Saturating conversions: the table's limits keep both far inside u32.
+        return Err(ChainError::Reach {
+            reach_mm: reach as u32 + 1,
+            limit_mm: P::MAX_REACH_MM as u32,
+        });
+    }
+    if let Some(limit) = P::MAX_LEVERS_MM {
+        let levers = levers * THERMAL_MARGIN;
+        let fits = levers < limit;
+        if !fits {
+            return Err(ChainError::Levers {
+                levers_mm: levers as u32 + 1,
+                limit_mm: limit as u32,
+            });
+        }
+    }
+    Ok(reach)
+}
+
 /// The axis the base frame stands for before joint 1: z (no permutation).
 pub(crate) const BASE_AXIS: u8 = 2;
 
@@ -396,50 +473,11 @@ impl<P: Physics> Model<P> {
             let j = table
                 .joint(i)
                 .ok_or(ChainError::Range { joint: i as u8 + 1 })?;
-            let no = i + 1;
-            let mut harmonics = [HarmonicTerm::<P>::default(); MAX_HARMONICS];
-            let count = usize::from(j.harmonic_count).min(MAX_HARMONICS);
-            for (h, src) in harmonics.iter_mut().zip(&j.harmonics[..count]) {
-                *h = HarmonicTerm {
-                    order: u32::from(src.order),
-                    sin: conv(P::u_from_f64(src.sin), no)?,
-                    cos: conv(P::u_from_f64(src.cos), no)?,
-                };
-            }
-            sort_by_order(&mut harmonics[..count], |h| h.order);
-            let mut h12 = [0.0f64; 4]; // s1, c1, s2, c2
-            let mut low = count > 0;
-            for src in &j.harmonics[..count] {
-                match src.order {
-                    1 => (h12[0], h12[1]) = (h12[0] + src.sin, h12[1] + src.cos),
-                    2 => (h12[2], h12[3]) = (h12[2] + src.sin, h12[3] + src.cos),
-                    _ => low = false,
-                }
-            }
-            let harmonic_12 = if low {
-                let [s1, c1, s2, c2] = h12;
-                Some(units::<P, 4>([s1, c1, 2.0 * s2, c2], no)?)
-            } else {
-                None
-            };
+            jm.set(&j, i + 1)?;
             reach += l1(j.link);
             // Link i lies beyond joints 1..=i + 1: it is in i + 1 levers.
             levers += l1(j.link) * (i + 1) as f64;
             gravity += abs(j.gravity);
-            // The last joint's link takes the probe's vector when the probe is mounted, below.
-            let (link, rate) = (j.link, j.link.map(|x| x * j.thermal));
-            *jm = JointModel {
-                axis: j.axis,
-                scale: conv(CountScale::new(j.counts), no)?,
-                link: vec3::<P>(unpermute(link, j.axis), no)?,
-                link_rate: rates::<P>(unpermute(rate, j.axis), no)?,
-                has_thermal: rate != [0.0; 3],
-                gravity: conv(P::gravity_from_f64(j.gravity), no)?,
-                has_gravity: j.gravity != 0.0,
-                harmonics,
-                harmonic_count: count as u8,
-                harmonic_12,
-            };
         }
         // The longest probe: the one that reaches farthest, beyond all n joints.
         let mut longest = 0.0;
@@ -451,26 +489,7 @@ impl<P: Physics> Model<P> {
         }
         reach += longest;
         levers += longest * n as f64;
-        // Finite by the table's checks; written so that NaN would be refused too.
-        let reach = reach * THERMAL_MARGIN;
-        let fits = reach < P::MAX_REACH_MM;
-        if !fits {
-            // Saturating conversions: the table's limits keep both far inside u32.
-            return Err(ChainError::Reach {
-                reach_mm: reach as u32 + 1,
-                limit_mm: P::MAX_REACH_MM as u32,
-            });
-        }
-        if let Some(limit) = P::MAX_LEVERS_MM {
-            let levers = levers * THERMAL_MARGIN;
-            let fits = levers < limit;
-            if !fits {
-                return Err(ChainError::Levers {
-                    levers_mm: levers as u32 + 1,
-                    limit_mm: limit as u32,
-                });
-            }
-        }
+        let reach = within_limits::<P>(reach, levers)?;
         // The first probe on the last joint, converted into the joints' own array rather
         // than into a whole model mounted afterwards: a second model on the Cortex-M0's boot
         // stack was 840 bytes its 8 KiB do not have.

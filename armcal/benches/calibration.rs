@@ -5,17 +5,18 @@
 
 use armcal::data::{Dataset, Kind, Row};
 use armcal::fit::calib::calibrate;
+use armcal::fit::design::poses::{limits, random_pose};
 use armcal::fit::options::Options;
 use armcal::fit::priors::Ridge;
 use armcal::fit::residuals::compare_aligned;
 use armcal::mukca;
 use armcal::rng::rng;
-use armcal::sim::{self, perturb, random_pose, simulate};
+use armcal::sim::{self, perturb, simulate};
 use quatarm_ref::arm::Arm;
 use std::time::{Duration, Instant};
 
 fn fresh_poses(arm: &Arm, n: usize, seed: u64) -> Vec<(Vec<f64>, f64)> {
-    let lim = sim::limits(arm);
+    let lim = limits(arm);
     let mut r = rng(seed);
     (0..n).map(|_| (random_pose(&lim, &mut r), 20.0)).collect()
 }

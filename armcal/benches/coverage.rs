@@ -18,6 +18,7 @@
 //! `held-out` runs the benchmark with the model term estimated from 5 folds as `calibrate`
 //! does (the instrument's noise declared); `held-out-undeclared` without declaring it.
 
+use armcal::fit::design::poses::{limits, random_pose};
 use armcal::uncertainty::coverage::{self, Setup};
 use armcal::uncertainty::pose::conformal_scale;
 use armcal::uncertainty::{montecarlo, propagate, realdata, u95};
@@ -129,12 +130,12 @@ fn first_order_against_monte_carlo(setup: &Setup) {
         return;
     };
     let root = montecarlo::sqrt_cov(&c.budget.cov);
-    let lim = armcal::sim::limits(&c.arm);
+    let lim = limits(&c.arm);
     let mut worst: f64 = 0.0;
     let mut sum = 0.0;
     let n = 100;
     for _ in 0..n {
-        let th = armcal::sim::random_pose(&lim, &mut c.rng);
+        let th = random_pose(&lim, &mut c.rng);
         let (_, s) = propagate::point(&c.arm, 0, &c.budget, &th, 20.0);
         let fo = u95::u95(&s);
         let mc = montecarlo::point(&c.arm, 0, &c.budget, &root, &th, 20.0, 40_000, &mut c.rng).u95;

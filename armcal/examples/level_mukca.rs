@@ -11,16 +11,7 @@ use armcal::params::Effect;
 
 fn main() {
     let dir = mukca::default_dir();
-    let asked: Vec<String> = std::env::args().skip(1).collect();
-    let units: Vec<String> = if asked.is_empty() {
-        mukca::unit_names(&dir)
-            .expect("data/mukca")
-            .into_iter()
-            .map(|(u, _)| u)
-            .collect()
-    } else {
-        asked
-    };
+    let units = mukca::units_or_all(&dir, std::env::args().skip(1)).expect("data/mukca");
     let deg = 180.0 / std::f64::consts::PI;
     let opts = mukca::options(None);
     println!("| unit | sessions | δα (°) [95 %] | δβ (°) [95 %] | T², p (level) | g level → tilted (µrad/mm) | RMS level → tilted (µm) |");

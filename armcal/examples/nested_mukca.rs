@@ -11,16 +11,7 @@ use armcal::stats::{sign_test_p, Paired};
 
 fn main() {
     let dir = mukca::default_dir();
-    let asked: Vec<String> = std::env::args().skip(1).collect();
-    let units: Vec<String> = if asked.is_empty() {
-        mukca::unit_names(&dir)
-            .expect("data/mukca")
-            .into_iter()
-            .map(|(u, _)| u)
-            .collect()
-    } else {
-        asked
-    };
+    let units = mukca::units_or_all(&dir, std::env::args().skip(1)).expect("data/mukca");
     for name in units {
         let unit = mukca::load(&dir, &name).expect("unit");
         if unit.groups().len() < 3 {

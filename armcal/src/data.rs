@@ -272,18 +272,7 @@ pub fn read_all(paths: &[std::path::PathBuf], arm: &quatarm_ref::Arm) -> Result<
     let mut seen: Vec<(std::path::PathBuf, String)> = Vec::new();
     for path in paths {
         let file = path.display().to_string();
-        // The same recording twice would count every row twice and look twice as certain.
-        if let Ok(real) = std::fs::canonicalize(path) {
-            if let Some((_, earlier)) = seen.iter().find(|(p, _)| *p == real) {
-                return Err(DataError {
-                    file,
-                    line: 0,
-                    column: "(file)".into(),
-                    message: format!("given twice (also as {earlier}): each file is read once"),
-                });
-            }
-            seen.push((real, file.clone()));
-        }
+        refuse_twice(&mut seen, path, &file)?;
         let mut part = parse_with(&read_text(path)?, &file, Joints::RadiansOrCounts(arm))?;
         if paths.len() > 1 {
             let name: std::sync::Arc<str> = file.as_str().into();
@@ -292,76 +281,11 @@ pub fn read_all(paths: &[std::path::PathBuf], arm: &quatarm_ref::Arm) -> Result<
             }
         }
         parts.push(part.clone());
-        if let Some(first) = part.rows.iter().find(|r| r.kind == Kind::Point) {
-            match &point_file {
-                Some(earlier) => {
-                    return Err(DataError {
-                        file: file.clone(),
-                        line: first.line,
-                        column: "kind".into(),
-                        message: format!(
-                            "`point` rows here and in {earlier}: point rows share one \
-                             instrument frame; put them in one file"
-                        ),
-                    })
-                }
-                None => point_file = Some(file.clone()),
-            }
+        one_point_file(&mut point_file, &part, &file)?;
+        match merged.as_mut() {
+            None => merged = Some(part),
+            Some(all) => merge_file(all, part, &file, &mut notes),
         }
-        let Some(all) = merged.as_mut() else {
-            merged = Some(part);
-            continue;
-        };
-        let taken = groups(all);
-        let mine = groups(&part);
-        let clash: Vec<String> = mine.intersection(&taken).map(i64::to_string).collect();
-        if !clash.is_empty() {
-            let (lo, hi) = (mine.first().copied(), taken.last().copied());
-            let shift = match (lo, hi) {
-                (Some(lo), Some(hi)) => ((hi - lo) / 1000 + 1) * 1000,
-                _ => 1000,
-            };
-            for r in &mut part.rows {
-                if r.kind != Kind::Point {
-                    r.group += shift;
-                }
-            }
-            notes.push(format!(
-                "{file}: group{} {} also in an earlier file: every group of this file is \
-                 renumbered + {shift} (group g is read as g + {shift}), so that no two files' \
-                 groups merge",
-                if clash.len() == 1 { "" } else { "s" },
-                if clash.len() > 6 {
-                    format!("{}, … ({} in all) are", clash[..6].join(", "), clash.len())
-                } else {
-                    format!(
-                        "{} {}",
-                        clash.join(", "),
-                        if clash.len() == 1 { "is" } else { "are" }
-                    )
-                }
-            ));
-        }
-        if all.has_temperature != part.has_temperature {
-            notes.push(format!(
-                "{file}: {} a temp_c column, an earlier file {}: rows without one are taken \
-                 at 20 °C",
-                if part.has_temperature {
-                    "has"
-                } else {
-                    "has no"
-                },
-                if part.has_temperature {
-                    "has none"
-                } else {
-                    "has one"
-                },
-            ));
-        }
-        all.rows.append(&mut part.rows);
-        all.warnings.append(&mut part.warnings);
-        all.has_temperature |= part.has_temperature;
-        all.source = format!("{} + {file}", all.source);
     }
     let data = merged.ok_or_else(|| DataError {
         file: "(no file)".into(),
@@ -371,6 +295,117 @@ pub fn read_all(paths: &[std::path::PathBuf], arm: &quatarm_ref::Arm) -> Result<
     })?;
     check_groups(&data)?;
     Ok(Files { data, notes, parts })
+}
+
+/// Refuses a file given twice (by any path to it): the same recording twice would count every
+/// row twice and look twice as certain. `seen` holds the files read so far.
+fn refuse_twice(
+    seen: &mut Vec<(std::path::PathBuf, String)>,
+    path: &std::path::Path,
+    file: &str,
+) -> Result<(), DataError> {
+    let Ok(real) = std::fs::canonicalize(path) else {
+        return Ok(());
+    };
+    if let Some((_, earlier)) = seen.iter().find(|(p, _)| *p == real) {
+        return Err(DataError {
+            file: file.to_string(),
+            line: 0,
+            column: "(file)".into(),
+            message: format!("given twice (also as {earlier}): each file is read once"),
+        });
+    }
+    seen.push((real, file.to_string()));
+    Ok(())
+}
+
+/// Refuses `point` rows in a second file: point rows share one instrument frame, which two
+/// recordings need not. `point_file` is the file that brought the first ones.
+fn one_point_file(
+    point_file: &mut Option<String>,
+    part: &Dataset,
+    file: &str,
+) -> Result<(), DataError> {
+    let Some(first) = part.rows.iter().find(|r| r.kind == Kind::Point) else {
+        return Ok(());
+    };
+    match point_file {
+        Some(earlier) => Err(DataError {
+            file: file.to_string(),
+            line: first.line,
+            column: "kind".into(),
+            message: format!(
+                "`point` rows here and in {earlier}: point rows share one \
+                 instrument frame; put them in one file"
+            ),
+        }),
+        None => {
+            *point_file = Some(file.to_string());
+            Ok(())
+        }
+    }
+}
+
+/// Appends a later file's rows to the files read so far, its groups renumbered where they
+/// clash and a note where the files disagree on temperature.
+fn merge_file(all: &mut Dataset, mut part: Dataset, file: &str, notes: &mut Vec<String>) {
+    notes.extend(renumber_clashing_groups(all, &mut part, file));
+    if all.has_temperature != part.has_temperature {
+        notes.push(format!(
+            "{file}: {} a temp_c column, an earlier file {}: rows without one are taken \
+             at 20 °C",
+            if part.has_temperature {
+                "has"
+            } else {
+                "has no"
+            },
+            if part.has_temperature {
+                "has none"
+            } else {
+                "has one"
+            },
+        ));
+    }
+    all.rows.append(&mut part.rows);
+    all.warnings.append(&mut part.warnings);
+    all.has_temperature |= part.has_temperature;
+    all.source = format!("{} + {file}", all.source);
+}
+
+/// Moves every group of `part` by the same multiple of 1000 past the groups of `all` when
+/// any of its numbers is taken, so that two files' groups never merge; the note says so.
+fn renumber_clashing_groups(all: &Dataset, part: &mut Dataset, file: &str) -> Option<String> {
+    let taken = groups(all);
+    let mine = groups(part);
+    let clash: Vec<String> = mine.intersection(&taken).map(i64::to_string).collect();
+    if clash.is_empty() {
+        return None;
+    }
+    let (lo, hi) = (mine.first().copied(), taken.last().copied());
+    let shift = match (lo, hi) {
+        (Some(lo), Some(hi)) => ((hi - lo) / 1000 + 1) * 1000,
+        _ => 1000,
+    };
+    for r in &mut part.rows {
+        if r.kind != Kind::Point {
+            r.group += shift;
+        }
+    }
+    Some(format!(
+        "{file}: group{} {} also in an earlier file: every group of this file is \
+         renumbered + {shift} (group g is read as g + {shift}), so that no two files' \
+         groups merge",
+        if clash.len() == 1 { "" } else { "s" },
+        if clash.len() > 6 {
+            format!("{}, … ({} in all) are", clash[..6].join(", "), clash.len())
+        } else {
+            format!(
+                "{} {}",
+                clash.join(", "),
+                if clash.len() == 1 { "is" } else { "are" }
+            )
+        }
+    ))
 }
 
 /// Several files read as one ([`read_all`]).
@@ -414,6 +449,8 @@ pub fn parse(text: &str, file: &str, dof: usize) -> Result<Dataset, DataError> {
     parse_with(text, file, Joints::Radians(dof))
 }
 
+/// Reads one file's text, its joint readings as `joints_as` allows: the header, the columns
+/// it names, the rows, and the groups' rules, each a step below; the first error stops it.
 fn parse_with(text: &str, file: &str, joints_as: Joints) -> Result<Dataset, DataError> {
     let dof = joints_as.dof();
     // A spreadsheet's UTF-8 byte order mark would glue itself to the first column's name.
@@ -431,6 +468,33 @@ fn parse_with(text: &str, file: &str, joints_as: Joints) -> Result<Dataset, Data
         .trim(csv::Trim::All)
         .flexible(true)
         .from_reader(cleaned.as_bytes());
+    let hline = first_content_line(text).unwrap_or(1);
+    let names = header_names(&mut reader, &cleaned, &lines, hline, &err)?;
+    let seen = unique_columns(&names).map_err(|h| err(hline, &h.column, h.message))?;
+    let warnings = unknown_columns(&names, joints_as, file, hline);
+    let columns = columns_of(&names, &seen, joints_as, hline, &err)?;
+    let rows = read_rows(&mut reader, &lines, &names, &columns, hline, &err)?;
+    let data = Dataset {
+        rows,
+        dof,
+        has_temperature: columns.temp.is_some(),
+        warnings,
+        source: file.to_string(),
+    };
+    check_groups(&data)?;
+    Ok(data)
+}
+
+/// The header's column names, refused when the file is empty, has no header, or its header
+/// is one column (the wrong separator: the message names the one it read with). `hline` is
+/// the header's line, for the messages.
+fn header_names(
+    reader: &mut csv::Reader<&[u8]>,
+    cleaned: &str,
+    lines: &Lines,
+    hline: usize,
+    err: &dyn Fn(usize, &str, String) -> DataError,
+) -> Result<Vec<String>, DataError> {
     let header_line = reader
         .headers()
         .map_err(|e| err(lines.of_error(&e), "(header)", format!("not CSV: {e}")))?
@@ -445,7 +509,6 @@ fn parse_with(text: &str, file: &str, joints_as: Joints) -> Result<Dataset, Data
     if header_line.is_empty() || header_line.iter().all(str::is_empty) {
         return Err(err(1, "(header)", "no header row".into()));
     }
-    let hline = first_content_line(text).unwrap_or(1);
     let names: Vec<String> = header_line.iter().map(|s| s.to_string()).collect();
     if let [one] = names.as_slice() {
         return Err(err(
@@ -454,11 +517,57 @@ fn parse_with(text: &str, file: &str, joints_as: Joints) -> Result<Dataset, Data
             format!(
                 "the header is one column, `{one}`: columns are separated by `,`, `;` or tab \
                  (read with {})",
-                separator_name(separator(&cleaned))
+                separator_name(separator(cleaned))
             ),
         ));
     }
-    let header_err = |h: HeaderProblem| err(hline, &h.column, h.message);
+    Ok(names)
+}
+
+/// A warning for each column the reader does not know (read on, ignored): a typo in an
+/// optional column's name would otherwise drop it silently.
+fn unknown_columns(names: &[String], joints_as: Joints, file: &str, hline: usize) -> Vec<String> {
+    let counts = matches!(joints_as, Joints::RadiansOrCounts(_));
+    names
+        .iter()
+        .filter(|n| {
+            let known = matches!(
+                n.as_str(),
+                "kind"
+                    | "group"
+                    | "x"
+                    | "y"
+                    | "z"
+                    | "end"
+                    | "length_mm"
+                    | "diameter_mm"
+                    | "articulation"
+                    | "session"
+                    | "temp_c"
+                    | "probe"
+            );
+            !known && joint_index(n, "j").is_none() && !(counts && joint_index(n, "c").is_some())
+        })
+        .map(|n| {
+            format!(
+                "{file}: line {hline}: unknown column `{}` ignored",
+                shown(n)
+            )
+        })
+        .collect()
+}
+
+/// The positions of the columns a row is read from: the joints (radians or, where
+/// `joints_as` allows, counts; one of the two), `kind` and `group` required, the rest where
+/// present.
+fn columns_of(
+    names: &[String],
+    seen: &BTreeMap<&str, usize>,
+    joints_as: Joints,
+    hline: usize,
+    err: &dyn Fn(usize, &str, String) -> DataError,
+) -> Result<Columns, DataError> {
+    let dof = joints_as.dof();
     // Another joint count than the arm's: whose arm it is, so that another arm's calibration
     // given with the data is named as such.
     let joints_err = |h: HeaderProblem| match joints_as {
@@ -467,45 +576,19 @@ fn parse_with(text: &str, file: &str, joints_as: Joints) -> Result<Dataset, Data
             &h.column,
             format!("{}; {}", h.message, whose_arm(arm)),
         ),
-        _ => header_err(h),
+        _ => err(hline, &h.column, h.message),
     };
-    let seen = unique_columns(&names).map_err(header_err)?;
-    let mut warnings = Vec::new();
-    for n in &names {
-        let known = matches!(
-            n.as_str(),
-            "kind"
-                | "group"
-                | "x"
-                | "y"
-                | "z"
-                | "end"
-                | "length_mm"
-                | "diameter_mm"
-                | "articulation"
-                | "session"
-                | "temp_c"
-                | "probe"
-        );
-        let counts = matches!(joints_as, Joints::RadiansOrCounts(_));
-        if !known && joint_index(n, "j").is_none() && !(counts && joint_index(n, "c").is_some()) {
-            warnings.push(format!(
-                "{file}: line {hline}: unknown column `{}` ignored",
-                shown(n)
-            ));
-        }
-    }
     let need = |name: &str| -> Result<usize, DataError> {
         seen.get(name)
             .copied()
             .ok_or_else(|| err(hline, name, "missing column".into()))
     };
     let counts = match joints_as {
-        Joints::RadiansOrCounts(_) => joint_columns(&names, "c", dof).map_err(joints_err)?,
+        Joints::RadiansOrCounts(_) => joint_columns(names, "c", dof).map_err(joints_err)?,
         Joints::Radians(_) => None,
     };
     let (joints, counts_of) = match (
-        joint_columns(&names, "j", dof).map_err(joints_err)?,
+        joint_columns(names, "j", dof).map_err(joints_err)?,
         counts,
         joints_as,
     ) {
@@ -527,7 +610,7 @@ fn parse_with(text: &str, file: &str, joints_as: Joints) -> Result<Dataset, Data
             }))
         }
     };
-    let columns = Columns {
+    Ok(Columns {
         kind: need("kind")?,
         group: need("group")?,
         joints,
@@ -542,8 +625,19 @@ fn parse_with(text: &str, file: &str, joints_as: Joints) -> Result<Dataset, Data
         articulation: seen.get("articulation").copied(),
         temp: seen.get("temp_c").copied(),
         probe: seen.get("probe").copied(),
-    };
+    })
+}
 
+/// Every data row, blank rows skipped; a row with another field count than the header, or
+/// none at all, is refused.
+fn read_rows(
+    reader: &mut csv::Reader<&[u8]>,
+    lines: &Lines,
+    names: &[String],
+    columns: &Columns,
+    hline: usize,
+    err: &dyn Fn(usize, &str, String) -> DataError,
+) -> Result<Vec<Row>, DataError> {
     let mut rows = Vec::new();
     for record in reader.records() {
         let record =
@@ -559,20 +653,12 @@ fn parse_with(text: &str, file: &str, joints_as: Joints) -> Result<Dataset, Data
                 format!("{} fields, the header has {}", record.len(), names.len()),
             ));
         }
-        rows.push(parse_row(&record, line, &names, &columns, &err)?);
+        rows.push(parse_row(&record, line, names, columns, err)?);
     }
     if rows.is_empty() {
         return Err(err(hline, "(file)", "no data rows".into()));
     }
-    let data = Dataset {
-        rows,
-        dof,
-        has_temperature: columns.temp.is_some(),
-        warnings,
-        source: file.to_string(),
-    };
-    check_groups(&data)?;
-    Ok(data)
+    Ok(rows)
 }
 
 /// A header that breaks the column rules, with the column at fault.
@@ -1061,14 +1147,36 @@ fn sphere_cells(cells: &Cells, c: &Columns) -> Result<Touch, DataError> {
 }
 
 /// Checks what ties rows together: spat groups of two rows or more, length groups with both
-/// ends and one length, no group number shared by spat and length rows.
+/// ends and one length, sphere groups of one diameter, probe and articulation, no group
+/// number shared by rows of two kinds. The first broken rule is the error, on its row.
 fn check_groups(data: &Dataset) -> Result<(), DataError> {
-    let err = |row: &Row, column: &str, message: String| DataError {
+    one_kind_per_group(data)?;
+    let layout = data.layout();
+    for g in &layout.spat {
+        spat_group(data, g)?;
+    }
+    for g in &layout.sphere {
+        sphere_group(data, g)?;
+    }
+    for g in &layout.length {
+        length_group(data, g)?;
+    }
+    Ok(())
+}
+
+/// The error of a group rule on `row`, named by its file and line.
+fn group_error(data: &Dataset, row: &Row, column: &str, message: String) -> DataError {
+    DataError {
         file: data.file_of(row).to_string(),
         line: row.line,
         column: column.to_string(),
         message,
-    };
+    }
+}
+
+/// A group number is one kind of rows (`point` rows have no group): a `spat` and a `length`
+/// group of the same number would be read as one.
+fn one_kind_per_group(data: &Dataset) -> Result<(), DataError> {
     let mut kinds: BTreeMap<i64, (Kind, usize)> = BTreeMap::new();
     for (i, r) in data.rows.iter().enumerate() {
         if r.kind == Kind::Point {
@@ -1076,7 +1184,8 @@ fn check_groups(data: &Dataset) -> Result<(), DataError> {
         }
         match kinds.get(&r.group) {
             Some(&(k, first)) if k != r.kind => {
-                return Err(err(
+                return Err(group_error(
+                    data,
                     r,
                     "group",
                     format!(
@@ -1094,91 +1203,106 @@ fn check_groups(data: &Dataset) -> Result<(), DataError> {
             }
         }
     }
-    let layout = data.layout();
-    for g in &layout.spat {
-        if g.rows.len() < 2 {
-            let r = &data.rows[g.rows[0]];
-            return Err(err(
+    Ok(())
+}
+
+/// A fixed point needs two poses or more: one row says nothing about the arm.
+fn spat_group(data: &Dataset, g: &SpatGroup) -> Result<(), DataError> {
+    if g.rows.len() < 2 {
+        let r = &data.rows[g.rows[0]];
+        return Err(group_error(
+            data,
+            r,
+            "group",
+            format!(
+                "spat group {} has one row: a fixed point needs two poses or more",
+                g.group
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// A sphere group is one test: one diameter, one stylus ball, articulated throughout or not
+/// at all; each row is compared with the group's first.
+fn sphere_group(data: &Dataset, g: &SphereGroup) -> Result<(), DataError> {
+    let first = &data.rows[g.rows[0]];
+    let articulated = first.sphere.and_then(|t| t.articulation).is_some();
+    for &i in &g.rows {
+        let r = &data.rows[i];
+        let t = r.sphere.unwrap_or(Touch {
+            diameter_mm: f64::NAN,
+            articulation: None,
+        });
+        if t.diameter_mm != g.diameter_mm {
+            return Err(group_error(
+                data,
                 r,
-                "group",
+                "diameter_mm",
                 format!(
-                    "spat group {} has one row: a fixed point needs two poses or more",
-                    g.group
+                    "sphere group {} has two diameters: {} (line {}) and {}",
+                    g.group, g.diameter_mm, first.line, t.diameter_mm
+                ),
+            ));
+        }
+        if r.probe != first.probe {
+            return Err(group_error(
+                data,
+                r,
+                "probe",
+                format!(
+                    "sphere group {} is touched with two probes ({} on line {}, {} here): \
+                     a sphere's radius takes one stylus ball",
+                    g.group,
+                    probe_name(first.probe),
+                    first.line,
+                    probe_name(r.probe)
+                ),
+            ));
+        }
+        if t.articulation.is_some() != articulated {
+            return Err(group_error(
+                data,
+                r,
+                "articulation",
+                format!(
+                    "sphere group {} has rows with and without an articulation (line {} and this one): a group is one test",
+                    g.group, first.line
                 ),
             ));
         }
     }
-    for g in &layout.sphere {
-        let first = &data.rows[g.rows[0]];
-        let articulated = first.sphere.and_then(|t| t.articulation).is_some();
-        for &i in &g.rows {
-            let r = &data.rows[i];
-            let t = r.sphere.unwrap_or(Touch {
-                diameter_mm: f64::NAN,
-                articulation: None,
-            });
-            if t.diameter_mm != g.diameter_mm {
-                return Err(err(
-                    r,
-                    "diameter_mm",
-                    format!(
-                        "sphere group {} has two diameters: {} (line {}) and {}",
-                        g.group, g.diameter_mm, first.line, t.diameter_mm
-                    ),
-                ));
-            }
-            if r.probe != first.probe {
-                return Err(err(
-                    r,
-                    "probe",
-                    format!(
-                        "sphere group {} is touched with two probes ({} on line {}, {} here): \
-                         a sphere's radius takes one stylus ball",
-                        g.group,
-                        probe_name(first.probe),
-                        first.line,
-                        probe_name(r.probe)
-                    ),
-                ));
-            }
-            if t.articulation.is_some() != articulated {
-                return Err(err(
-                    r,
-                    "articulation",
-                    format!(
-                        "sphere group {} has rows with and without an articulation (line {} and this one): a group is one test",
-                        g.group, first.line
-                    ),
-                ));
-            }
-        }
+    Ok(())
+}
+
+/// A length group has rows at both ends of the bar and one length on every row.
+fn length_group(data: &Dataset, g: &LengthGroup) -> Result<(), DataError> {
+    let all: Vec<usize> = g.a.iter().chain(&g.b).copied().collect();
+    let first = &data.rows[all[0]];
+    if g.a.is_empty() || g.b.is_empty() {
+        let missing = if g.a.is_empty() { "a" } else { "b" };
+        return Err(group_error(
+            data,
+            first,
+            "end",
+            format!("length group {} has no rows for end {missing}", g.group),
+        ));
     }
-    for g in &layout.length {
-        let all: Vec<usize> = g.a.iter().chain(&g.b).copied().collect();
-        let first = &data.rows[all[0]];
-        if g.a.is_empty() || g.b.is_empty() {
-            let missing = if g.a.is_empty() { "a" } else { "b" };
-            return Err(err(
-                first,
-                "end",
-                format!("length group {} has no rows for end {missing}", g.group),
+    for &i in &all {
+        let r = &data.rows[i];
+        if r.length_mm != Some(g.length_mm) {
+            return Err(group_error(
+                data,
+                r,
+                "length_mm",
+                format!(
+                    "length group {} has two lengths: {} (line {}) and {}",
+                    g.group,
+                    g.length_mm,
+                    first.line,
+                    r.length_mm.unwrap_or(f64::NAN)
+                ),
             ));
-        }
-        for &i in &all {
-            let r = &data.rows[i];
-            if r.length_mm != Some(g.length_mm) {
-                return Err(err(
-                    r,
-                    "length_mm",
-                    format!(
-                        "length group {} has two lengths: {} (line {}) and {}",
-                        g.group,
-                        g.length_mm,
-                        first.line,
-                        r.length_mm.unwrap_or(f64::NAN)
-                    ),
-                ));
-            }
         }
     }
     Ok(())

@@ -103,6 +103,20 @@ pub fn unit_names(dir: &Path) -> Result<Vec<(String, String)>, MukcaError> {
     Ok(out)
 }
 
+/// The units an example was asked for (`asked`, usually its command-line arguments), or every
+/// unit of `mukca-groups.csv` when none was named: the one rule of the MUKCa examples, so that
+/// `cargo run --example NAME` runs the whole fleet and `... NAME panda_2` one unit.
+pub fn units_or_all(
+    dir: &Path,
+    asked: impl IntoIterator<Item = String>,
+) -> Result<Vec<String>, MukcaError> {
+    let asked: Vec<String> = asked.into_iter().collect();
+    if !asked.is_empty() {
+        return Ok(asked);
+    }
+    Ok(unit_names(dir)?.into_iter().map(|(u, _)| u).collect())
+}
+
 /// Loads a unit by name (`panda_2`).
 pub fn load(dir: &Path, name: &str) -> Result<Unit, MukcaError> {
     let stem = unit_names(dir)?
@@ -336,6 +350,28 @@ pub fn loso(unit: &Unit, opts: &Options) -> Loso {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn named_units_are_kept_and_none_named_means_every_unit() {
+        let dir = default_dir();
+        let one = units_or_all(&dir, ["panda_2".to_string()]).unwrap();
+        assert_eq!(one, ["panda_2"]);
+        let all = units_or_all(&dir, Vec::new()).unwrap();
+        let listed: Vec<String> = unit_names(&dir)
+            .unwrap()
+            .into_iter()
+            .map(|(u, _)| u)
+            .collect();
+        assert_eq!(all, listed);
+        assert!(
+            all.len() > 1 && all.contains(&"panda_2".to_string()),
+            "{all:?}"
+        );
+        assert!(matches!(
+            units_or_all(Path::new("/nonexistent"), Vec::new()),
+            Err(MukcaError::Groups { .. })
+        ));
+    }
 
     /// MUKCa's regulariser at the authors' default λ reproduces their published figures for
     /// panda_2 (train 0.168, test 0.347 mm): measured 0.1679 and 0.3460.

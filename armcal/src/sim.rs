@@ -19,8 +19,7 @@
 
 use crate::data::{Dataset, Kind, Row};
 use crate::fit::design::groups::{length_group, spat_group, Turns};
-use crate::fit::design::poses::count_angle;
-pub use crate::fit::design::poses::{inverse, limits, quantise, random_pose, Limits};
+use crate::fit::design::poses::{count_angle, limits, random_pose, Limits};
 use crate::fit::design::sphere;
 use crate::geometry::{frame_matrix, reach};
 use crate::rng::{normal, SimRng};
@@ -234,20 +233,11 @@ pub enum SimError {
     Data(#[from] crate::data::DataError),
 }
 
-/// Records `opts.count` rows of the truth arm.
+/// Records `opts.count` rows of the truth arm: the rows at the continuous true angles and
+/// temperatures first (`point_rows`, `group_rows`), then what the instruments read of
+/// them (`read_instruments`).
 pub fn simulate(truth: &Arm, opts: &Options, rng: &mut SimRng) -> Result<Simulated, SimError> {
-    if opts.count == 0 {
-        return Err(SimError::NoRows);
-    }
-    if let Some(s) = opts.sag.iter().find(|s| s.link > truth.dof()) {
-        return Err(SimError::SagLink(s.link + 1, truth.dof()));
-    }
-    if opts.kind != Kind::Point && !opts.sag.is_empty() {
-        return Err(SimError::SagNeedsPoints(opts.kind.name()));
-    }
-    if opts.kind != Kind::Point && opts.count < 2 {
-        return Err(SimError::TooFewRows(opts.kind.name()));
-    }
+    check_options(truth, opts)?;
     let lim = limits(truth);
     let turns = Turns::new(truth, &opts.probes).map_err(SimError::NoProbe)?;
     let identity = Frame {
@@ -263,84 +253,123 @@ pub fn simulate(truth: &Arm, opts: &Options, rng: &mut SimRng) -> Result<Simulat
         Some((lo, _)) => lo,
         None => forward::REFERENCE_TEMP_C,
     };
-    let mut rows = Vec::with_capacity(opts.count);
-    match opts.kind {
-        Kind::Point => {
-            let r = frame_matrix(&frame);
-            let t = Vector3::from(frame.translation);
-            for i in 0..opts.count {
-                let (probe, mounted) = turns.at(i);
-                let th = random_pose(&lim, rng);
-                let tc = temp(rng);
-                let p = forward::forward(mounted, &th, tc).p
-                    + opts
-                        .sag
-                        .iter()
-                        .map(|s| s.displacement(mounted, &th, tc))
-                        .sum::<Vector3<f64>>();
-                let noise = Vector3::new(normal(rng), normal(rng), normal(rng)) * opts.noise_mm;
-                let x = r * p + t + noise;
-                rows.push(Row {
-                    kind: Kind::Point,
-                    group: 1,
-                    theta: th,
-                    xyz: Some([x.x, x.y, x.z]),
-                    end: None,
-                    length_mm: None,
-                    sphere: None,
-                    temp_c: tc,
-                    probe,
-                    line: 0,
-                    file: None,
-                });
-            }
-        }
+    let mut rows = match opts.kind {
+        Kind::Point => point_rows(&turns, &lim, &frame, opts, &mut temp, rng),
         Kind::Spat | Kind::Length | Kind::Sphere => {
-            let sizes = group_sizes(opts.count, opts.group_size.max(2));
-            let bar = opts.bar_mm.unwrap_or(0.4 * reach(truth));
-            for (g, size) in sizes.into_iter().enumerate() {
-                let group = g as i64 + 1;
-                let made = match opts.kind {
-                    Kind::Spat => {
-                        spat_group(&turns, &lim, size, opts.noise_mm, group, &mut temp, rng)
-                    }
-                    Kind::Sphere => sphere::group(
-                        turns.at(g),
-                        &lim,
-                        &sphere::Test {
-                            points: size,
-                            diameter_mm: opts.sphere_mm,
-                            articulations: opts.articulations,
-                            noise_mm: opts.noise_mm,
-                        },
-                        group,
-                        &mut temp,
-                        rng,
-                    ),
-                    _ => length_group(
-                        &turns,
-                        &lim,
-                        size,
-                        bar,
-                        opts.noise_mm,
-                        group,
-                        &mut temp,
-                        rng,
-                    ),
-                };
-                rows.extend(made.ok_or(SimError::Unreachable(group))?);
-            }
+            group_rows(truth, &turns, &lim, opts, &mut temp, rng)?
         }
+    };
+    read_instruments(truth, &mut rows, opts, rng);
+    let data = Dataset::from_rows(rows, truth.dof(), opts.temp.is_some(), "(simulated)")?;
+    Ok(Simulated { data, frame })
+}
+
+/// Refuses options that cannot make a file: no rows, a sagging link the arm lacks or on
+/// other than `point` data, a group kind with fewer than two rows.
+fn check_options(truth: &Arm, opts: &Options) -> Result<(), SimError> {
+    if opts.count == 0 {
+        return Err(SimError::NoRows);
     }
-    // The rows hold the continuous true angles and temperatures so far: now the readings.
-    for r in &mut rows {
+    if let Some(s) = opts.sag.iter().find(|s| s.link > truth.dof()) {
+        return Err(SimError::SagLink(s.link + 1, truth.dof()));
+    }
+    if opts.kind != Kind::Point && !opts.sag.is_empty() {
+        return Err(SimError::SagNeedsPoints(opts.kind.name()));
+    }
+    if opts.kind != Kind::Point && opts.count < 2 {
+        return Err(SimError::TooFewRows(opts.kind.name()));
+    }
+    Ok(())
+}
+
+/// `point` rows: the ball at random poses (sag added), seen through the instrument `frame`
+/// with Gaussian noise on each axis.
+fn point_rows(
+    turns: &Turns,
+    lim: &Limits,
+    frame: &Frame,
+    opts: &Options,
+    temp: &mut dyn FnMut(&mut SimRng) -> f64,
+    rng: &mut SimRng,
+) -> Vec<Row> {
+    let r = frame_matrix(frame);
+    let t = Vector3::from(frame.translation);
+    let mut rows = Vec::with_capacity(opts.count);
+    for i in 0..opts.count {
+        let (probe, mounted) = turns.at(i);
+        let th = random_pose(lim, rng);
+        let tc = temp(rng);
+        let p = forward::forward(mounted, &th, tc).p
+            + opts
+                .sag
+                .iter()
+                .map(|s| s.displacement(mounted, &th, tc))
+                .sum::<Vector3<f64>>();
+        let noise = Vector3::new(normal(rng), normal(rng), normal(rng)) * opts.noise_mm;
+        let x = r * p + t + noise;
+        rows.push(Row {
+            kind: Kind::Point,
+            group: 1,
+            theta: th,
+            xyz: Some([x.x, x.y, x.z]),
+            end: None,
+            length_mm: None,
+            sphere: None,
+            temp_c: tc,
+            probe,
+            line: 0,
+            file: None,
+        });
+    }
+    rows
+}
+
+/// `spat`, `length` or `sphere` rows in groups of about `opts.group_size`, each group made by
+/// the design's generator of its kind; a group no pose reaches is an error naming it.
+fn group_rows(
+    truth: &Arm,
+    turns: &Turns,
+    lim: &Limits,
+    opts: &Options,
+    temp: &mut dyn FnMut(&mut SimRng) -> f64,
+    rng: &mut SimRng,
+) -> Result<Vec<Row>, SimError> {
+    let sizes = group_sizes(opts.count, opts.group_size.max(2));
+    let bar = opts.bar_mm.unwrap_or(0.4 * reach(truth));
+    let mut rows = Vec::with_capacity(opts.count);
+    for (g, size) in sizes.into_iter().enumerate() {
+        let group = g as i64 + 1;
+        let made = match opts.kind {
+            Kind::Spat => spat_group(turns, lim, size, opts.noise_mm, group, temp, rng),
+            Kind::Sphere => sphere::group(
+                turns.at(g),
+                lim,
+                &sphere::Test {
+                    points: size,
+                    diameter_mm: opts.sphere_mm,
+                    articulations: opts.articulations,
+                    noise_mm: opts.noise_mm,
+                },
+                group,
+                temp,
+                rng,
+            ),
+            _ => length_group(turns, lim, size, bar, opts.noise_mm, group, temp, rng),
+        };
+        rows.extend(made.ok_or(SimError::Unreachable(group))?);
+    }
+    Ok(rows)
+}
+
+/// What the instruments read of rows made at the continuous true angles and temperatures:
+/// the angles through the encoders (quantised, with their noise), the thermometer with its.
+fn read_instruments(truth: &Arm, rows: &mut [Row], opts: &Options, rng: &mut SimRng) {
+    for r in rows {
         r.theta = read_encoders(truth, &r.theta, opts.encoder_noise_counts, rng);
         if opts.temp_noise_c > 0.0 {
             r.temp_c += opts.temp_noise_c * normal(rng);
         }
     }
-    let data = Dataset::from_rows(rows, truth.dof(), opts.temp.is_some(), "(simulated)")?;
-    Ok(Simulated { data, frame })
 }
 
 /// Splits `count` rows into groups of about `size`, none smaller than two.
@@ -354,6 +383,7 @@ fn group_sizes(count: usize, size: usize) -> Vec<usize> {
 
 #[cfg(test)]
 mod tests {
+    use crate::fit::design::poses::quantise;
 
     #[test]
     fn encoder_noise_is_noise_plus_quantisation() {

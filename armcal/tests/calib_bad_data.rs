@@ -2,10 +2,11 @@
 
 use armcal::data::{Dataset, Kind, Row};
 use armcal::fit::calib::calibrate;
+use armcal::fit::design::poses::{limits, random_pose};
 use armcal::fit::error::CalibError;
 use armcal::fit::options::Options;
 use armcal::rng::rng;
-use armcal::sim::{self, perturb, random_pose, simulate};
+use armcal::sim::{self, perturb, simulate};
 use quatarm_ref::arm::Arm;
 use quatarm_ref::forward;
 
@@ -39,7 +40,7 @@ fn too_few_rows_for_the_parameters() {
 /// Point rows from poses where joint 3 never turns.
 fn joint3_still(n: usize) -> Dataset {
     let t = truth();
-    let lim = sim::limits(&t);
+    let lim = limits(&t);
     let mut r = rng(7);
     let rows = (0..n)
         .map(|_| {

@@ -2,6 +2,7 @@
 
 mod common;
 
+use armcal::fit::design::poses::{limits, random_pose};
 use common::{armcal, armcal_ok, simulate, workdir, write_truth};
 
 /// The virtual arm the simulations measure.
@@ -225,10 +226,10 @@ fn sphere_rows_calibrate_with_spat_rows() {
     // workspace (71 µm from 1,085: a 25 mm sphere fixes the scale only through its radius, so
     // the scale is the weakest part of such a calibration; a bar fixes it far better).
     let cal = quatarm_ref::calfile::read(&d.join("cal.toml")).unwrap().arm;
-    let lim = armcal::sim::limits(&cal);
+    let lim = limits(&cal);
     let mut r = armcal::rng::rng(8);
     let poses: Vec<(Vec<f64>, f64)> = (0..2000)
-        .map(|_| (armcal::sim::random_pose(&lim, &mut r), 20.0))
+        .map(|_| (random_pose(&lim, &mut r), 20.0))
         .collect();
     let nominal =
         armcal::fit::residuals::compare_aligned(&quatarm_ref::Arm::default6(), &truth(), &poses);

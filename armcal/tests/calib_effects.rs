@@ -3,11 +3,12 @@
 
 use armcal::data::Kind;
 use armcal::fit::calib::calibrate;
+use armcal::fit::design::poses::{limits, random_pose};
 use armcal::fit::ident::Why;
 use armcal::fit::options::Options;
 use armcal::params::{Link, Param, Terms};
 use armcal::rng::rng;
-use armcal::sim::{self, perturb, random_pose, simulate};
+use armcal::sim::{self, perturb, simulate};
 use quatarm_ref::arm::{Arm, Harmonic, Wobble};
 use quatarm_ref::forward;
 
@@ -100,7 +101,7 @@ fn hidden_effects_are_recovered() {
     check(Param::Thermal(Link::Joint(2)), 2e-5);
     check(Param::Thermal(Link::Probe), 1.5e-5);
     // The calibrated model predicts fresh poses at any temperature.
-    let lim = sim::limits(&t);
+    let lim = limits(&t);
     let mut r = rng(33);
     let poses: Vec<(Vec<f64>, f64)> = (0..3000)
         .map(|k| (random_pose(&lim, &mut r), 16.0 + 12.0 * (k as f64 / 3000.0)))
@@ -169,7 +170,7 @@ fn an_axis_wobble_is_recovered() {
     let q = (order1[1].0 - order1[2].0) / 2.0;
     println!("joint 2 order 1 coning: p {p:.4e}, q {q:.4e} (truth 4e-5, 2e-5) ± {u:.1e}");
     assert!((p - 4e-5).abs() < 4.0 * u && (q - 2e-5).abs() < 4.0 * u);
-    let lim = sim::limits(&t);
+    let lim = limits(&t);
     let mut r = rng(43);
     let poses: Vec<(Vec<f64>, f64)> = (0..2000)
         .map(|_| (random_pose(&lim, &mut r), 20.0))

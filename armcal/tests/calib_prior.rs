@@ -6,6 +6,7 @@ mod common;
 
 use armcal::data::{Dataset, Kind};
 use armcal::fit::calib;
+use armcal::fit::design::poses::{limits, random_pose};
 use armcal::fit::fleet_prior::{self, Fallback};
 use armcal::fit::options::Options;
 use armcal::fit::priors;
@@ -13,7 +14,7 @@ use armcal::fit::priors::Prior;
 use armcal::fit::residuals::compare_aligned;
 use armcal::params::ParamExt as _;
 use armcal::rng::rng;
-use armcal::sim::{self, perturb, random_pose, simulate};
+use armcal::sim::{self, perturb, simulate};
 use quatarm_ref::arm::{Arm, Axis};
 use quatarm_ref::calfile;
 use std::path::{Path, PathBuf};
@@ -49,7 +50,7 @@ fn fleet_files(nominal: &Arm, dir: &Path) -> Vec<PathBuf> {
 
 /// RMS distance (µm) of a model's ball from the truth's on fresh poses, after alignment.
 fn fresh_error(model: &Arm, truth: &Arm) -> f64 {
-    let lim = sim::limits(truth);
+    let lim = limits(truth);
     let mut r = rng(999);
     let poses: Vec<(Vec<f64>, f64)> = (0..2000)
         .map(|_| (random_pose(&lim, &mut r), 20.0))

@@ -6,6 +6,7 @@ mod common;
 
 use armcal::data::Kind;
 use armcal::fit::calib::calibrate;
+use armcal::fit::design::poses::{limits, random_pose};
 use armcal::fit::options::Options;
 use armcal::rng::rng;
 use armcal::sim::{self, perturb, simulate};
@@ -46,9 +47,9 @@ fn truth(seed: u64) -> Arm {
 /// Each probe's ball centre, fitted against true, over fresh poses: RMS (µm) per probe, after
 /// the best rigid alignment of the first probe's (the data's frame is the fit's own).
 fn fresh_rms_um(fit: &Arm, truth: &Arm) -> Vec<f64> {
-    let lim = sim::limits(truth);
+    let lim = limits(truth);
     let mut r = rng(99);
-    let poses: Vec<Vec<f64>> = (0..2000).map(|_| sim::random_pose(&lim, &mut r)).collect();
+    let poses: Vec<Vec<f64>> = (0..2000).map(|_| random_pose(&lim, &mut r)).collect();
     let tips = |a: &Arm, k: usize| -> Vec<Vector3<f64>> {
         let m = a.for_probe(k).unwrap();
         poses

@@ -9,6 +9,7 @@
 use armcal::data::Dataset;
 use armcal::diagnose::scenario::{self, Family, Scenario};
 use armcal::diagnose::{self, Diagnosis};
+use armcal::fit::design::poses::{limits, random_pose};
 use armcal::fit::residuals::{compare_aligned, residuals, summarise};
 use armcal::params::{Effect, Link};
 use nalgebra::Vector3;
@@ -397,12 +398,12 @@ fn a_seven_axis_arm_is_diagnosed_too() {
     let zero: Vec<Effect> = d.candidates.untestable.iter().map(|u| u.effect).collect();
     assert!(zero.contains(&Effect::Thermal(Link::Joint(1))), "{zero:?}");
     assert!(zero.contains(&Effect::Thermal(Link::Joint(6))), "{zero:?}");
-    let lim = armcal::sim::limits(&nominal);
+    let lim = limits(&nominal);
     let mut rng = armcal::rng::rng(7);
     let poses: Vec<(Vec<f64>, f64)> = (0..2000)
         .map(|k| {
             (
-                armcal::sim::random_pose(&lim, &mut rng),
+                random_pose(&lim, &mut rng),
                 16.0 + 12.0 * (k as f64 / 2000.0),
             )
         })

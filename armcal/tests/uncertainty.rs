@@ -3,6 +3,7 @@
 
 mod common;
 
+use armcal::fit::design::poses::{limits, random_pose};
 use armcal::uncertainty::coverage::{self, Setup};
 use armcal::uncertainty::{montecarlo, propagate, u95};
 use common::{armcal, armcal_ok, workdir, write_truth};
@@ -44,9 +45,9 @@ fn first_order_and_monte_carlo_agree_on_u95() {
     let setup = Setup::BENCHMARK;
     let mut c = coverage::calibrated(&setup, 3).unwrap();
     let root = montecarlo::sqrt_cov(&c.budget.cov);
-    let lim = armcal::sim::limits(&c.arm);
+    let lim = limits(&c.arm);
     for _ in 0..6 {
-        let th = armcal::sim::random_pose(&lim, &mut c.rng);
+        let th = random_pose(&lim, &mut c.rng);
         let (p, s) = propagate::point(&c.arm, 0, &c.budget, &th, 20.0);
         let fo = u95::u95(&s);
         let mc = montecarlo::point(&c.arm, 0, &c.budget, &root, &th, 20.0, 40_000, &mut c.rng);

@@ -158,6 +158,11 @@ pub struct Counts {
 
 /// Runs the soak on `board` with `frames` readings (the shipped recording, cycled), about one
 /// frame in `one_in` damaged in each direction; `seed` makes it reproducible.
+///
+/// The steps: the input damaged (`damaged_input`), the hub run on it under QEMU, its
+/// reports checked frame by frame against what its receiver must make of the bytes
+/// (`check_reports`) and against its log (`check_log`), then its stream damaged on the
+/// way back and decoded by the host (`check_way_back`).
 pub fn run(board: &Board, frames: usize, one_in: usize, seed: u64) -> Result<Counts> {
     let (_, table) = calibration(&default_calibration_path())?;
     let recorded = recording::read(&default_recording_path())?;
@@ -180,16 +185,7 @@ pub fn run(board: &Board, frames: usize, one_in: usize, seed: u64) -> Result<Cou
         frames_in: frames as u64,
         ..Counts::default()
     };
-    let sent: Vec<Vec<u8>> = readings
-        .iter()
-        .map(|r| frame(&ToDevice::Reading(*r)))
-        .collect();
-    let (mut input, intact) = corrupt(&sent, one_in, &mut rng, &mut counts.damage_in);
-    counts.intact_in = intact.iter().filter(|&&x| x).count() as u64;
-    // A delimiter before `End`, so that garbage or a lost delimiter cannot swallow it.
-    input.push(0);
-    input.extend(frame(&ToDevice::End));
-
+    let (input, intact) = damaged_input(&readings, one_in, &mut rng, &mut counts);
     // What the hub's receiver must make of these bytes: its own code, run on the host.
     let mut model = Replay::new();
     let events: Vec<Event> = input.iter().filter_map(|&b| model.push(b)).collect();
@@ -216,10 +212,45 @@ pub fn run(board: &Board, frames: usize, one_in: usize, seed: u64) -> Result<Cou
         board.name,
         run.status
     );
+    let reports = check_reports(&run.stream, &events, &intact, &expected, &mut counts)?;
+    check_log(board, &run.log, &counts)?;
+    check_way_back(&run.stream, &reports, one_in, &mut rng, &mut counts)?;
+    Ok(counts)
+}
 
-    // The clean hub→host stream: every report in order, checked against the model.
+/// The readings' frames, about one in `one_in` damaged (counted in `counts`), then a
+/// delimiter and `End` (so that garbage or a lost delimiter cannot swallow it); with, per
+/// reading, whether its frame arrives intact.
+fn damaged_input(
+    readings: &[Reading],
+    one_in: usize,
+    rng: &mut Rng,
+    counts: &mut Counts,
+) -> (Vec<u8>, Vec<bool>) {
+    let sent: Vec<Vec<u8>> = readings
+        .iter()
+        .map(|r| frame(&ToDevice::Reading(*r)))
+        .collect();
+    let (mut input, intact) = corrupt(&sent, one_in, rng, &mut counts.damage_in);
+    counts.intact_in = intact.iter().filter(|&&x| x).count() as u64;
+    input.push(0);
+    input.extend(frame(&ToDevice::End));
+    (input, intact)
+}
+
+/// The hub's own (clean) stream: one report per frame the receiver made an event of, in
+/// order; a damaged frame's report flags `INPUT_ERROR` and carries no point; an intact
+/// reading's carries exactly what `expected` (the host build of the chain) gives, in the
+/// intact frames' order. Counts the hub's reports, points and refusals; returns the reports.
+fn check_reports(
+    stream: &[u8],
+    events: &[Event],
+    intact: &[bool],
+    expected: &dyn Fn(&Reading) -> Option<Coordinates>,
+    counts: &mut Counts,
+) -> Result<Vec<Report>> {
     let mut clean = Decoder::from_start();
-    let items = clean.push_all(&run.stream);
+    let items = clean.push_all(stream);
     let s = clean.finish();
     ensure!(
         s.damaged() == 0 && s.lost == 0 && s.hellos == 1,
@@ -272,7 +303,13 @@ pub fn run(board: &Board, frames: usize, one_in: usize, seed: u64) -> Result<Cou
     );
     counts.hub_reports = reports.len() as u64;
     ensure!(counts.hub_points == counts.intact_in);
-    let log = crate::defmt_log::decode(&board.elf(board.name), &run.log)?;
+    Ok(reports)
+}
+
+/// The hub's defmt log (`log`, raw) says it replayed as many reports and refused as many
+/// damaged frames as its stream shows.
+fn check_log(board: &Board, log: &[u8], counts: &Counts) -> Result<()> {
+    let log = crate::defmt_log::decode(&board.elf(board.name), log)?;
     let done = format!(
         "replay done: {} reports, {} damaged input frames",
         counts.hub_reports, counts.hub_rejected
@@ -284,22 +321,33 @@ pub fn run(board: &Board, frames: usize, one_in: usize, seed: u64) -> Result<Cou
             .filter(|l| l.starts_with("replay"))
             .collect::<Vec<_>>()
     );
+    Ok(())
+}
 
-    // The way back: the hub's report frames damaged the same ways, the Hello and the last
-    // report kept (a decoder cannot see a loss after the last frame it gets).
+/// The way back: the hub's report frames (`stream`) damaged the same ways, the Hello and the
+/// last report kept (a decoder cannot see a loss after the last frame it gets), decoded by
+/// the host. Every report it hands out is one the hub sent (`reports`), and its lost and
+/// damaged counts account for the damage.
+fn check_way_back(
+    stream: &[u8],
+    reports: &[Report],
+    one_in: usize,
+    rng: &mut Rng,
+    counts: &mut Counts,
+) -> Result<()> {
     let mut frames_out: Vec<Vec<u8>> = Vec::new();
     let mut start = 0;
-    for (i, &b) in run.stream.iter().enumerate() {
+    for (i, &b) in stream.iter().enumerate() {
         if b == 0 {
             if i > start {
-                frames_out.push(run.stream[start..=i].to_vec());
+                frames_out.push(stream[start..=i].to_vec());
             }
             start = i + 1;
         }
     }
     let hello = frames_out.remove(0);
     let last = frames_out.pop().context("no reports")?;
-    let (damaged_out, _) = corrupt(&frames_out, one_in, &mut rng, &mut counts.damage_out);
+    let (damaged_out, _) = corrupt(&frames_out, one_in, rng, &mut counts.damage_out);
     let back = [&hello[..], &damaged_out, &[0], &last].concat();
     let mut host = Decoder::from_start();
     let got = host.push_all(&back);
@@ -329,5 +377,5 @@ pub fn run(board: &Board, frames: usize, one_in: usize, seed: u64) -> Result<Cou
     counts.host_reports = hs.reports;
     counts.host_lost = hs.lost;
     counts.host_damaged = hs.damaged();
-    Ok(counts)
+    Ok(())
 }

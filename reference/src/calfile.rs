@@ -273,6 +273,8 @@ fn bounded_all(xs: &[f64], limit: f64, path: &str, what: &str) -> Result<(), Cal
     Ok(())
 }
 
+/// Reads joint table `t` (key path `path`, for messages), its keys noted where unknown,
+/// then checks every value against `limits` ([`joint_in_limits`]).
 fn joint(
     t: &Table,
     path: &str,
@@ -292,21 +294,7 @@ fn joint(
         "thermal",
     ];
     note_unknown(t, KEYS, path, unknown);
-    let axis = match t.get("axis") {
-        None => return Err(err(format!("{path}.axis"), "missing")),
-        Some(Value::String(s)) => match s.as_str() {
-            "x" => Axis::X,
-            "y" => Axis::Y,
-            "z" => Axis::Z,
-            other => {
-                return Err(err(
-                    format!("{path}.axis"),
-                    format!("\"{other}\" is not an axis: x, y or z"),
-                ))
-            }
-        },
-        Some(_) => return Err(err(format!("{path}.axis"), "must be a string: x, y or z")),
-    };
+    let axis = axis(t, path)?;
     let link = match t.get("link") {
         None => return Err(err(format!("{path}.link"), "missing")),
         Some(v) => array::<3>(v, &format!("{path}.link"))?,
@@ -332,6 +320,31 @@ fn joint(
         thermal: opt_number(t, "thermal", path)?,
         encoder_counts: counts,
     };
+    joint_in_limits(&j, path, limits)?;
+    Ok(j)
+}
+
+/// A joint's required `axis`: `"x"`, `"y"` or `"z"`.
+fn axis(t: &Table, path: &str) -> Result<Axis, CalFileError> {
+    match t.get("axis") {
+        None => Err(err(format!("{path}.axis"), "missing")),
+        Some(Value::String(s)) => match s.as_str() {
+            "x" => Ok(Axis::X),
+            "y" => Ok(Axis::Y),
+            "z" => Ok(Axis::Z),
+            other => Err(err(
+                format!("{path}.axis"),
+                format!("\"{other}\" is not an axis: x, y or z"),
+            )),
+        },
+        Some(_) => Err(err(format!("{path}.axis"), "must be a string: x, y or z")),
+    }
+}
+
+/// Every value of joint `j` within `limits` (the link with its error too), the first one
+/// outside named by its key path: a typo in units (metres, degrees) is refused here, not
+/// fitted from.
+fn joint_in_limits(j: &Joint, path: &str, limits: &Limits) -> Result<(), CalFileError> {
     let length = "link length";
     bounded_all(&j.link, limits.length_mm, &format!("{path}.link"), length)?;
     bounded_all(
@@ -380,7 +393,7 @@ fn joint(
         &format!("{path}.thermal"),
         "thermal expansion",
     )?;
-    Ok(j)
+    Ok(())
 }
 
 /// A joint's list of periodic terms under `key` (absent: none), each read by `read` with its

@@ -58,7 +58,9 @@ fn axis_code(a: Axis) -> u8 {
     a.index() as u8
 }
 
-/// The table contents for an arm.
+/// The table contents for an arm: its serial, each joint's record and wobble block, its
+/// probes, and the flags saying what the table holds. The first value the table cannot
+/// carry is the error, named by its key path.
 pub fn table_data(arm: &Arm) -> Result<TableData, BuildError> {
     let n = arm.dof();
     if !(6..=7).contains(&n) {
@@ -69,78 +71,111 @@ pub fn table_data(arm: &Arm) -> Result<TableData, BuildError> {
         ..TableData::default()
     };
     if let Some(s) = &arm.serial {
-        if let Some(at) = s.bytes().position(|b| b == 0) {
-            // The table pads the serial with NULs: one inside it would cut it short.
-            return Err(err(
-                "serial",
-                format!(
-                    "has a NUL character (byte {}), which the table uses as padding",
-                    at + 1
-                ),
-            ));
-        }
-        if s.len() > SERIAL_LEN {
-            return Err(err(
-                "serial",
-                format!("{} bytes; the table holds at most {SERIAL_LEN}", s.len()),
-            ));
-        }
-        d.serial[..s.len()].copy_from_slice(s.as_bytes());
+        d.serial = serial_data(s)?;
     }
     let mut geometric = false;
     for (i, j) in arm.joints.iter().enumerate() {
         let path = format!("joint[{}]", i + 1);
-        let (e1, e2) = j.axis.perpendicular();
-        let q = qmul(
-            qmul(axis_quat(e1, j.tilt[0]), axis_quat(e2, j.tilt[1])),
-            axis_quat(j.axis, j.zero_offset),
-        );
-        let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let q = q.map(|x| x / norm);
         d.wobble[i] = wobble_data(j, &path)?;
-        if j.harmonics.len() > MAX_HARMONICS {
+        d.joints[i] = joint_data(j, &path)?;
+        geometric |= has_geometric_error(j);
+    }
+    geometric |= probes_into(arm, &mut d)?;
+    d.flags = d.content_flags() | if geometric { FLAG_GEOMETRIC } else { 0 };
+    Ok(d)
+}
+
+/// The serial padded with NULs to the table's field; refused when longer, or holding a NUL
+/// itself (which would cut it short).
+fn serial_data(s: &str) -> Result<[u8; SERIAL_LEN], BuildError> {
+    if let Some(at) = s.bytes().position(|b| b == 0) {
+        return Err(err(
+            "serial",
+            format!(
+                "has a NUL character (byte {}), which the table uses as padding",
+                at + 1
+            ),
+        ));
+    }
+    if s.len() > SERIAL_LEN {
+        return Err(err(
+            "serial",
+            format!("{} bytes; the table holds at most {SERIAL_LEN}", s.len()),
+        ));
+    }
+    let mut serial = [0u8; SERIAL_LEN];
+    serial[..s.len()].copy_from_slice(s.as_bytes());
+    Ok(serial)
+}
+
+/// A joint's record: its rotation (tilts, then the zero offset about the axis) as a unit
+/// quaternion and a matrix, the link with its error, the thermal and gravity terms and the
+/// harmonics. `path` (`joint[K]`) names it in errors.
+fn joint_data(j: &Joint, path: &str) -> Result<JointData, BuildError> {
+    let (e1, e2) = j.axis.perpendicular();
+    let q = qmul(
+        qmul(axis_quat(e1, j.tilt[0]), axis_quat(e2, j.tilt[1])),
+        axis_quat(j.axis, j.zero_offset),
+    );
+    let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let q = q.map(|x| x / norm);
+    Ok(JointData {
+        axis: axis_code(j.axis),
+        counts: j.encoder_counts,
+        rotation: q,
+        matrix: quat_to_matrix(&q),
+        link: j.actual_link(),
+        thermal: j.thermal,
+        gravity: j.gravity,
+        harmonic_count: j.harmonics.len() as u8,
+        harmonics: harmonics_data(j, path)?,
+    })
+}
+
+/// A joint's harmonics in the table's fixed array: at most [`MAX_HARMONICS`], each order in
+/// 1..=[`MAX_HARMONIC_ORDER`].
+fn harmonics_data(j: &Joint, path: &str) -> Result<[Harmonic; MAX_HARMONICS], BuildError> {
+    if j.harmonics.len() > MAX_HARMONICS {
+        return Err(err(
+            format!("{path}.harmonics"),
+            format!(
+                "{} terms; the table holds {MAX_HARMONICS} per joint",
+                j.harmonics.len()
+            ),
+        ));
+    }
+    let mut harmonics = [Harmonic::default(); MAX_HARMONICS];
+    for (k, h) in j.harmonics.iter().enumerate() {
+        if h.order == 0 || h.order > u32::from(MAX_HARMONIC_ORDER) {
             return Err(err(
-                format!("{path}.harmonics"),
-                format!(
-                    "{} terms; the table holds {MAX_HARMONICS} per joint",
-                    j.harmonics.len()
-                ),
+                format!("{path}.harmonics[{}].order", k + 1),
+                format!("{}; the table takes 1..={MAX_HARMONIC_ORDER}", h.order),
             ));
         }
-        let mut harmonics = [Harmonic::default(); MAX_HARMONICS];
-        for (k, h) in j.harmonics.iter().enumerate() {
-            if h.order == 0 || h.order > u32::from(MAX_HARMONIC_ORDER) {
-                return Err(err(
-                    format!("{path}.harmonics[{}].order", k + 1),
-                    format!("{}; the table takes 1..={MAX_HARMONIC_ORDER}", h.order),
-                ));
-            }
-            harmonics[k] = Harmonic {
-                order: h.order as u16,
-                sin: h.sin,
-                cos: h.cos,
-            };
-        }
-        geometric |= j.zero_offset != 0.0 || j.link_error != [0.0; 3];
-        // A tilt is an error unless it is a designed twist of a D–H arm (a multiple of π/2).
-        geometric |= j.tilt.iter().any(|t| {
-            let k = (t / std::f64::consts::FRAC_PI_2).round();
-            (t - k * std::f64::consts::FRAC_PI_2).abs() > 1e-12
-        });
-        d.joints[i] = JointData {
-            axis: axis_code(j.axis),
-            counts: j.encoder_counts,
-            rotation: q,
-            matrix: quat_to_matrix(&q),
-            link: j.actual_link(),
-            thermal: j.thermal,
-            gravity: j.gravity,
-            harmonic_count: j.harmonics.len() as u8,
-            harmonics,
+        harmonics[k] = Harmonic {
+            order: h.order as u16,
+            sin: h.sin,
+            cos: h.cos,
         };
     }
-    // The first probe in its record, the others in the block (the reference keeps at most
-    // seven others, ids distinct; the table's parser checks both again).
+    Ok(harmonics)
+}
+
+/// Whether a joint carries a geometric error (the table's `FLAG_GEOMETRIC`): a zero offset, a
+/// link error, or a tilt that is not a designed twist of a D–H arm (a multiple of π/2).
+fn has_geometric_error(j: &Joint) -> bool {
+    j.zero_offset != 0.0
+        || j.link_error != [0.0; 3]
+        || j.tilt.iter().any(|t| {
+            let k = (t / std::f64::consts::FRAC_PI_2).round();
+            (t - k * std::f64::consts::FRAC_PI_2).abs() > 1e-12
+        })
+}
+
+/// The probes into `d`: the first in its record, the others in the block (the reference
+/// keeps at most seven others, ids distinct; the table's parser checks both again). Whether
+/// any probe carries an error (a geometric one).
+fn probes_into(arm: &Arm, d: &mut TableData) -> Result<bool, BuildError> {
     let several = arm.probe_count() > 1;
     if arm.more_probes.len() > d.more_probes.len() {
         return Err(err(
@@ -152,6 +187,7 @@ pub fn table_data(arm: &Arm) -> Result<TableData, BuildError> {
             ),
         ));
     }
+    let mut geometric = false;
     for (k, p) in arm.probes().enumerate() {
         let path = if several {
             format!("probe[{}]", k + 1)
@@ -166,8 +202,7 @@ pub fn table_data(arm: &Arm) -> Result<TableData, BuildError> {
         geometric |= p.error != [0.0; 3];
     }
     d.more_probe_count = arm.more_probes.len() as u8;
-    d.flags = d.content_flags() | if geometric { FLAG_GEOMETRIC } else { 0 };
-    Ok(d)
+    Ok(geometric)
 }
 
 /// A probe's record: its vector with its error, the unit direction, thermal expansion, ball

@@ -44,9 +44,18 @@ length,3,0.5,-0.2,0.9,0.0,0.2,0.35,,,,a,300,22
 length,3,0.6,-0.1,0.8,-0.1,0.3,0.45,,,,b,300,22
 ";
 
-/// `cargo xtask fuzz-seeds`.
+/// `cargo xtask fuzz-seeds`: the seeds of each target in turn.
 pub fn run() -> Result<()> {
     let data = root().join("data");
+    table_and_calfile_seeds(&data)?;
+    hub_frames_seeds(&data)?;
+    host_frames_seeds()?;
+    data_csv_seeds(&data)
+}
+
+/// `table_parse` and `calfile_toml`: the shipped calibrations as tables and as text, and the
+/// shipped budget's table (the reading's own terms and the 52 parameters' block).
+fn table_and_calfile_seeds(data: &std::path::Path) -> Result<()> {
     let panda = data.join("mukca/mukca-panda-panda_3-repo-calibrated.toml");
     for (name, path) in [
         ("default-6-full", data.join("default-6-full.toml")),
@@ -59,12 +68,15 @@ pub fn run() -> Result<()> {
         let text = std::fs::read(&path)?;
         write("calfile_toml", &format!("{name}.toml"), &text)?;
     }
-    // The shipped budget's table: the reading's own terms and the 52 parameters' block.
     let full = quatarm_ref::calfile::read(&data.join("default-6-full.toml"))?;
     let with_budget = quatarm_wire::tablebuild::build_with(&full.arm, full.uncertainty.as_ref())
         .map_err(|e| anyhow::anyhow!("{e}"))?;
-    write("table_parse", "default-6-full-budget.bin", &with_budget)?;
+    write("table_parse", "default-6-full-budget.bin", &with_budget)
+}
 
+/// `hub_frames`: recorded readings replayed in binary and text mode, a damaged frame, a whole
+/// calibration update with a reading and a mode switch in its middle, probe selections.
+fn hub_frames_seeds(data: &std::path::Path) -> Result<()> {
     let readings: Vec<_> = recording::read(&default_recording_path())?
         .into_iter()
         .step_by(1999)
@@ -112,8 +124,12 @@ pub fn run() -> Result<()> {
         }
     }
     // Pick 0x10: the hub on the three-probe table (`fuzz/fuzz_targets/hub_frames.rs`).
-    write("hub_frames", "probes.bin", &picked(0x10, &probes))?;
+    write("hub_frames", "probes.bin", &picked(0x10, &probes))
+}
 
+/// `host_frames`: the tests' streams, and a session (a hello, reports with a fault and
+/// without a U95, probe answers) written frame by frame.
+fn host_frames_seeds() -> Result<()> {
     let streams = root().join("armcal/tests/streams");
     for name in ["s-dup.bin", "s-fault-with-point.bin"] {
         write("host_frames", name, &std::fs::read(streams.join(name))?)?;
@@ -152,8 +168,12 @@ pub fn run() -> Result<()> {
             session.extend(host_frame(&ToHost::Probe(Err(ProbeRefusal::Unknown))));
         }
     }
-    write("host_frames", "session.bin", &session)?;
+    write("host_frames", "session.bin", &session)
+}
 
+/// `data_csv`: a short file of every row kind, and the head of a MUKCa file (7 joints,
+/// `length` rows).
+fn data_csv_seeds(data: &std::path::Path) -> Result<()> {
     write(
         "data_csv",
         "point-spat-length-6.csv",

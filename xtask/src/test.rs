@@ -31,7 +31,8 @@ fn free_disk() -> String {
         .unwrap_or_default()
 }
 
-/// Runs every check in order, stopping at the first failure.
+/// Runs every check in order, stopping at the first failure: each stage below is one step
+/// of the log, timed from the start with the disk's free space.
 pub fn run() -> Result<()> {
     let start = Instant::now();
     let step = |name: &str| {
@@ -42,8 +43,51 @@ pub fn run() -> Result<()> {
         )
     };
     setup::ensure()?;
-
     step("rustfmt");
+    formatting()?;
+    step("clippy");
+    check(
+        cargo().args([
+            "clippy",
+            "--workspace",
+            "--all-targets",
+            "--",
+            "-D",
+            "warnings",
+        ]),
+        "cargo clippy",
+    )?;
+    host_tests(&step)?;
+    step("fuzz smoke run");
+    // Each target for a few seconds from the committed corpus: a target that no longer builds
+    // or an input of the corpus that now crashes fails the run. Long runs: `cargo xtask fuzz`.
+    check(
+        cargo()
+            .args(["fmt", "--manifest-path"])
+            .arg(root().join("fuzz/Cargo.toml"))
+            .args(["--", "--check"]),
+        "cargo fmt --check in fuzz",
+    )?;
+    fuzz::smoke()?;
+    // Every firmware tool chain this machine has: the images differ (rustup links a prebuilt
+    // compiler_builtins, Debian's builds it from source), so each must meet the budgets.
+    let survey = toolchain::survey();
+    survey.primary()?;
+    eprintln!("\nxtask test: firmware tool chains\n{}", survey.describe());
+    boards_built_and_linted(&survey, &step)?;
+    qemu_end_to_end(&survey, &step)?;
+    eprintln!(
+        "\nxtask test: all passed in {:.0?}{}; firmware tool chains:\n{}",
+        start.elapsed(),
+        free_disk(),
+        survey.describe()
+    );
+    Ok(())
+}
+
+/// `cargo fmt --check` in the workspace, in each board's crate and in the boards' shared
+/// crate (neither is in the workspace: they build for the targets).
+fn formatting() -> Result<()> {
     check(
         cargo().args(["fmt", "--all", "--", "--check"]),
         "cargo fmt --check",
@@ -61,20 +105,12 @@ pub fn run() -> Result<()> {
             &format!("cargo fmt --check in {}", b.display()),
         )?;
     }
+    Ok(())
+}
 
-    step("clippy");
-    check(
-        cargo().args([
-            "clippy",
-            "--workspace",
-            "--all-targets",
-            "--",
-            "-D",
-            "warnings",
-        ]),
-        "cargo clippy",
-    )?;
-
+/// The tests that run on the host: the workspace's, the boards' shared crate's, and the
+/// docs (rustdoc's warnings denied).
+fn host_tests(step: &dyn Fn(&str)) -> Result<()> {
     step("workspace tests");
     check(
         cargo().args(["test", "--workspace"]),
@@ -132,32 +168,18 @@ pub fn run() -> Result<()> {
             .env("RUSTDOCFLAGS", "-D warnings")
             .args(["doc", "--workspace", "--no-deps"]),
         "RUSTDOCFLAGS=\"-D warnings\" cargo doc --workspace --no-deps",
-    )?;
+    )
+}
 
-    step("fuzz smoke run");
-    // Each target for a few seconds from the committed corpus: a target that no longer builds
-    // or an input of the corpus that now crashes fails the run. Long runs: `cargo xtask fuzz`.
-    check(
-        cargo()
-            .args(["fmt", "--manifest-path"])
-            .arg(root().join("fuzz/Cargo.toml"))
-            .args(["--", "--check"]),
-        "cargo fmt --check in fuzz",
-    )?;
-    fuzz::smoke()?;
-
-    // Every firmware tool chain this machine has: the images differ (rustup links a prebuilt
-    // compiler_builtins, Debian's builds it from source), so each must meet the budgets.
-    let survey = toolchain::survey();
-    survey.primary()?;
-    eprintln!("\nxtask test: firmware tool chains\n{}", survey.describe());
+/// Every board built with every tool chain of `survey` (each must meet the budgets), then
+/// clippy on the boards with rustup's, where there is one.
+fn boards_built_and_linted(survey: &toolchain::Survey, step: &dyn Fn(&str)) -> Result<()> {
     for tc in &survey.available {
         step(&format!("board builds ({})", tc.version));
         for b in boards()? {
             build_board_with(b, tc)?;
         }
     }
-
     // Clippy needs rustup's: Debian's Rust ships none. The boards are clippy-clean with it.
     match survey
         .available
@@ -177,10 +199,14 @@ pub fn run() -> Result<()> {
              (Debian's Rust ships no clippy)"
         ),
     }
+    Ok(())
+}
 
+/// The QEMU hubs driven end to end with each tool chain's images: the tests compare the
+/// stream with what the `armcal` binary prints, and drive the hubs with it through a
+/// pseudo-terminal (`armcal table send`, `armcal decode --port`).
+fn qemu_end_to_end(survey: &toolchain::Survey, step: &dyn Fn(&str)) -> Result<()> {
     step("QEMU end-to-end");
-    // The tests compare the stream with what the `armcal` binary prints, and drive the hubs
-    // with it through a pseudo-terminal (`armcal table send`, `armcal decode --port`).
     check(
         cargo().args(["build", "-p", "armcal"]),
         "cargo build -p armcal",
@@ -202,12 +228,5 @@ pub fn run() -> Result<()> {
             &format!("QEMU end-to-end tests ({})", tc.kind.name()),
         )?;
     }
-
-    eprintln!(
-        "\nxtask test: all passed in {:.0?}{}; firmware tool chains:\n{}",
-        start.elapsed(),
-        free_disk(),
-        survey.describe()
-    );
     Ok(())
 }

@@ -95,37 +95,20 @@ pub fn candidates(start: &Arm, data: &Dataset) -> Candidates {
 
 /// Sorts the vocabulary into what these data can test, harmonics up to order `max_order` or
 /// what each joint's readings resolve, whichever is lower.
+///
+/// Each effect is judged with every candidate at once first; one held there is judged again
+/// alone with the geometric model (`alone_with_geometry`) unless another candidate alone
+/// explains it (`twin_of`), so that an effect is refused only for what it cannot be told
+/// from.
 pub fn candidates_up_to(start: &Arm, data: &Dataset, max_order: u32) -> Candidates {
     let temp_range = temperature_range(data);
     let thermal = temp_range.is_some_and(|(lo, hi)| hi - lo >= MIN_TEMP_SPREAD_C);
-    let resolvable: Vec<u32> = (0..data.dof)
-        .map(|k| crate::effects::harmonic::resolvable_order(data, k))
-        .collect();
     let mut out = Candidates {
         thermal,
         temp_range,
         ..Candidates::default()
     };
-    let mut vocab = Vec::new();
-    for e in vocabulary(data.dof, thermal) {
-        match e {
-            Effect::Harmonic { order, .. } | Effect::Wobble { order, .. } if order > max_order => {}
-            Effect::Harmonic { joint, order } | Effect::Wobble { joint, order }
-                if order > resolvable[joint] =>
-            {
-                out.untestable.push(Untestable {
-                    effect: e,
-                    reason: format!(
-                        "joint {}'s readings resolve waves up to order {} (their widest gap \
-                         and count)",
-                        joint + 1,
-                        resolvable[joint]
-                    ),
-                })
-            }
-            _ => vocab.push(e),
-        }
-    }
+    let vocab = resolvable_vocabulary(data, thermal, max_order, &mut out.untestable);
     let terms = Terms::with(&vocab);
     let all = unknowns(start, &terms, data);
     let (id, _) = structural(start, data, &all, 1e-8);
@@ -147,15 +130,7 @@ pub fn candidates_up_to(start: &Arm, data: &Dataset, max_order: u32) -> Candidat
             });
             continue;
         }
-        // Held as inseparable: by one other candidate alone (a twin), or by the geometry?
-        let twin = held.iter().find_map(|f| {
-            let by = &f.absorbed_by;
-            (by.len() == 1 && f.unexplained < 1e-6)
-                .then(|| effect_of(all[by[0].0]))
-                .flatten()
-                .filter(|t| t != e)
-        });
-        if let Some(t) = twin {
+        if let Some(t) = twin_of(&held, &all, *e) {
             out.untestable.push(Untestable {
                 effect: *e,
                 reason: format!(
@@ -168,50 +143,102 @@ pub fn candidates_up_to(start: &Arm, data: &Dataset, max_order: u32) -> Candidat
             }
             continue;
         }
-        // Perhaps it is inseparable only together with other candidates: alone with the
-        // geometric model it may still be testable.
-        let alone = unknowns(start, &Terms::with(&[*e]), data);
-        let (id1, _) = structural(start, data, &alone, 1e-8);
-        let blocked = held_of(&id1, &alone, *e);
-        // Part of it may be geometry (the co-rotating half of an order-1 axis wobble is the
-        // next link's frame turned): with unknowns left that only it has, it is still a
-        // candidate, fitted with the geometry's share held as the calibration holds it.
-        let partly_geometric = blocked.len() < e.params().len()
-            && blocked.iter().all(|f| {
-                f.why == Why::Inseparable
-                    && f.absorbed_by
-                        .iter()
-                        .all(|&(k, _)| effect_of(alone[k]).is_none_or(|o| o == *e))
-            });
-        if blocked.is_empty() || partly_geometric {
-            let held: Vec<Param> = blocked.iter().map(|f| alone[f.index]).collect();
-            out.testable.push(Candidate {
-                effect: *e,
-                indistinguishable: Vec::new(),
-                fitted: e
-                    .params()
-                    .into_iter()
-                    .filter(|p| !held.contains(p))
-                    .collect(),
-            });
-        } else {
-            let by: Vec<String> = blocked
-                .iter()
-                .flat_map(|f| f.absorbed_by.iter().take(3))
-                .map(|&(k, _)| alone[k].describe(start))
-                .collect();
-            out.untestable.push(Untestable {
-                effect: *e,
-                reason: if by.is_empty() {
-                    "its effect on these data equals that of the geometric model's parameters"
-                        .into()
-                } else {
-                    format!("its effect on these data equals that of {}", by.join(", "))
-                },
-            });
+        match alone_with_geometry(start, data, *e) {
+            Ok(c) => out.testable.push(c),
+            Err(u) => out.untestable.push(u),
         }
     }
     out
+}
+
+/// The vocabulary of `dof` joints (thermal terms where the temperatures spread), harmonics and
+/// wobbles above `max_order` left out, and those above what a joint's readings resolve
+/// added to `untestable` with the reason.
+fn resolvable_vocabulary(
+    data: &Dataset,
+    thermal: bool,
+    max_order: u32,
+    untestable: &mut Vec<Untestable>,
+) -> Vec<Effect> {
+    let resolvable: Vec<u32> = (0..data.dof)
+        .map(|k| crate::effects::harmonic::resolvable_order(data, k))
+        .collect();
+    let mut vocab = Vec::new();
+    for e in vocabulary(data.dof, thermal) {
+        match e {
+            Effect::Harmonic { order, .. } | Effect::Wobble { order, .. } if order > max_order => {}
+            Effect::Harmonic { joint, order } | Effect::Wobble { joint, order }
+                if order > resolvable[joint] =>
+            {
+                untestable.push(Untestable {
+                    effect: e,
+                    reason: format!(
+                        "joint {}'s readings resolve waves up to order {} (their widest gap \
+                         and count)",
+                        joint + 1,
+                        resolvable[joint]
+                    ),
+                })
+            }
+            _ => vocab.push(e),
+        }
+    }
+    vocab
+}
+
+/// The one other candidate that alone absorbs a held unknown of `e` exactly (its twin: the
+/// two are named together), if there is one; `all` are the unknowns `held` indexes.
+fn twin_of(held: &[&Fixed], all: &[Param], e: Effect) -> Option<Effect> {
+    held.iter().find_map(|f| {
+        let by = &f.absorbed_by;
+        (by.len() == 1 && f.unexplained < 1e-6)
+            .then(|| effect_of(all[by[0].0]))
+            .flatten()
+            .filter(|t| *t != e)
+    })
+}
+
+/// Effect `e` judged alone with the geometric model: held among all candidates, it may be
+/// inseparable only together with others. A candidate when nothing of it is held, or when
+/// what is held is geometry (the co-rotating half of an order-1 axis wobble is the next
+/// link's frame turned): then it is fitted with the geometry's share held as the calibration
+/// holds it. Otherwise untestable, with the parameters it cannot be told from.
+fn alone_with_geometry(start: &Arm, data: &Dataset, e: Effect) -> Result<Candidate, Untestable> {
+    let alone = unknowns(start, &Terms::with(&[e]), data);
+    let (id1, _) = structural(start, data, &alone, 1e-8);
+    let blocked = held_of(&id1, &alone, e);
+    let partly_geometric = blocked.len() < e.params().len()
+        && blocked.iter().all(|f| {
+            f.why == Why::Inseparable
+                && f.absorbed_by
+                    .iter()
+                    .all(|&(k, _)| effect_of(alone[k]).is_none_or(|o| o == e))
+        });
+    if blocked.is_empty() || partly_geometric {
+        let held: Vec<Param> = blocked.iter().map(|f| alone[f.index]).collect();
+        return Ok(Candidate {
+            effect: e,
+            indistinguishable: Vec::new(),
+            fitted: e
+                .params()
+                .into_iter()
+                .filter(|p| !held.contains(p))
+                .collect(),
+        });
+    }
+    let by: Vec<String> = blocked
+        .iter()
+        .flat_map(|f| f.absorbed_by.iter().take(3))
+        .map(|&(k, _)| alone[k].describe(start))
+        .collect();
+    Err(Untestable {
+        effect: e,
+        reason: if by.is_empty() {
+            "its effect on these data equals that of the geometric model's parameters".into()
+        } else {
+            format!("its effect on these data equals that of {}", by.join(", "))
+        },
+    })
 }
 
 /// The unknowns of effect `e` that the identifiability analysis `id` of `unknowns` held.

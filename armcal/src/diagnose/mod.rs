@@ -201,7 +201,9 @@ pub fn make_folds(data: &Dataset, choice: FoldChoice) -> (Folds, String) {
     }
 }
 
-/// Diagnoses `data` measured with an arm whose model starts at `start`.
+/// Diagnoses `data` measured with an arm whose model starts at `start`: the geometric
+/// baseline, the candidates, the selection and its confirmation by real refits, the model
+/// extended with the named causes, each cause's figures, and what the extended model leaves.
 pub fn diagnose(start: &Arm, data: &Dataset, opts: &Options) -> Result<Diagnosis, CalibError> {
     let (folds, folds_method) = make_folds(data, opts.folds);
     if folds.len() < 2 {
@@ -248,32 +250,95 @@ pub fn diagnose(start: &Arm, data: &Dataset, opts: &Options) -> Result<Diagnosis
         &selection.chosen,
         opts.select.z,
     );
-    let named: Vec<Effect> = confirmations
+    let extended = extended_model(start, data, &inner, &baseline, &selection, &confirmations)?;
+    let causes = named_causes(
+        start,
+        data,
+        &inner,
+        &folds,
+        &cands,
+        &selection,
+        &confirmations,
+        &extended,
+    );
+    let unexplained = unexplained::search(&extended, data, opts.unexplained_alpha);
+    let held_out_units = select::unit_errors(data, &baseline.holdout)
+        .iter()
+        .filter(|u| u.is_some())
+        .count();
+    Ok(Diagnosis {
+        held_out_units,
+        candidates: cands,
+        folds_method,
+        folds,
+        baseline,
+        selection,
+        confirmations,
+        causes,
+        extended,
+        settings: opts.select,
+        unexplained,
+    })
+}
+
+/// The effects the confirmation named, in the order they were chosen.
+fn named_effects(confirmations: &[Confirmation]) -> Vec<Effect> {
+    confirmations
         .iter()
         .filter(|c| c.named)
         .map(|c| c.effect)
-        .collect();
-    let extended = if named.is_empty() {
-        baseline.clone()
+        .collect()
+}
+
+/// The geometric model extended with the named effects, fitted on all data (the selection's
+/// fit reused when it chose exactly those), with the held-out figures of the last named
+/// effect's confirmation; the baseline itself when none was named.
+fn extended_model(
+    start: &Arm,
+    data: &Dataset,
+    inner: &crate::fit::options::Options,
+    baseline: &Model,
+    selection: &Selection,
+    confirmations: &[Confirmation],
+) -> Result<Model, CalibError> {
+    let named = named_effects(confirmations);
+    if named.is_empty() {
+        return Ok(baseline.clone());
+    }
+    let fit = if named == selection.chosen {
+        selection.fit.clone()
     } else {
-        let fit = if named == selection.chosen {
-            selection.fit.clone()
-        } else {
-            select::fit_with(start, data, &inner, &named)?
-        };
-        let holdout = confirmations
-            .iter()
-            .rev()
-            .find(|c| c.named)
-            .map(|c| c.holdout.clone())
-            .unwrap_or_else(|| baseline.holdout.clone());
-        Model {
-            effects: named.clone(),
-            in_sample: summarise(&residuals(&fit.arm, data, fit.frame), data),
-            fit,
-            holdout,
-        }
+        select::fit_with(start, data, inner, &named)?
     };
+    let holdout = confirmations
+        .iter()
+        .rev()
+        .find(|c| c.named)
+        .map(|c| c.holdout.clone())
+        .unwrap_or_else(|| baseline.holdout.clone());
+    Ok(Model {
+        effects: named,
+        in_sample: summarise(&residuals(&fit.arm, data, fit.frame), data),
+        fit,
+        holdout,
+    })
+}
+
+/// Each named effect as a cause: its size in the extended fit, the candidates it cannot be
+/// told from, its selection score, and (with two causes or more) the held-out figures of the
+/// model without it, so that each cause's own share shows.
+#[allow(clippy::too_many_arguments)]
+fn named_causes(
+    start: &Arm,
+    data: &Dataset,
+    inner: &crate::fit::options::Options,
+    folds: &Folds,
+    cands: &Candidates,
+    selection: &Selection,
+    confirmations: &[Confirmation],
+    extended: &Model,
+) -> Vec<Cause> {
+    let named = named_effects(confirmations);
     let without = |e: Effect| -> Option<Holdout> {
         (named.len() > 1).then(|| {
             let others: Vec<Effect> = named.iter().copied().filter(|x| *x != e).collect();
@@ -281,10 +346,10 @@ pub fn diagnose(start: &Arm, data: &Dataset, opts: &Options) -> Result<Diagnosis
                 terms: crate::params::Terms::with(&others),
                 ..inner.clone()
             };
-            holdout::validate(start, data, &o, &folds)
+            holdout::validate(start, data, &o, folds)
         })
     };
-    let causes = confirmations
+    confirmations
         .iter()
         .filter(|c| c.named)
         .map(|c| {
@@ -309,25 +374,7 @@ pub fn diagnose(start: &Arm, data: &Dataset, opts: &Options) -> Result<Diagnosis
                 without(c.effect),
             )
         })
-        .collect();
-    let unexplained = unexplained::search(&extended, data, opts.unexplained_alpha);
-    let held_out_units = select::unit_errors(data, &baseline.holdout)
-        .iter()
-        .filter(|u| u.is_some())
-        .count();
-    Ok(Diagnosis {
-        held_out_units,
-        candidates: cands,
-        folds_method,
-        folds,
-        baseline,
-        selection,
-        confirmations,
-        causes,
-        extended,
-        settings: opts.select,
-        unexplained,
-    })
+        .collect()
 }
 
 pub(crate) fn cause(

@@ -19,6 +19,7 @@
 //! cause).
 
 use crate::data::Kind;
+use crate::fit::design::poses::{limits, random_pose};
 use crate::params::{Effect, Link};
 use crate::rng::SimRng;
 use crate::sim;
@@ -175,11 +176,11 @@ pub fn spat_length(s: &Scenario, spat: usize, length: usize) -> crate::data::Dat
 /// Fresh poses (and temperatures, 16–28 °C) to compare a model with the truth.
 pub fn fresh_poses(seed: u64, count: usize) -> Vec<(Vec<f64>, f64)> {
     let arm = Arm::default6();
-    let lim = sim::limits(&arm);
+    let lim = limits(&arm);
     let mut rng = crate::rng::rng(seed.wrapping_add(3));
     (0..count)
         .map(|_| {
-            let th = sim::random_pose(&lim, &mut rng);
+            let th = random_pose(&lim, &mut rng);
             let t = rng.gen_range(16.0..28.0);
             (th, t)
         })

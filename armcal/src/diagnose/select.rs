@@ -146,6 +146,26 @@ impl Scoring<'_> {
         1e3 * (ss / self.lin.equations.max(1) as f64).sqrt()
     }
 
+    /// The removal step: the chosen effect with the least support, if it no longer passes
+    /// (the highest p among those that fail), scored against the model of `model_len`
+    /// parameters.
+    fn worst_removal(
+        &self,
+        back: &[Back],
+        model_len: usize,
+        p_cut: f64,
+        p_level: f64,
+    ) -> Option<Score> {
+        let mut worst: Option<Score> = None;
+        for &(e, q, k) in back {
+            let score = self.removal(e, q, k, model_len);
+            if !score.passes(p_cut, p_level) && worst.as_ref().is_none_or(|w| score.p > w.p) {
+                worst = Some(score);
+            }
+        }
+        worst
+    }
+
     /// The support of chosen effect `e` (`q` unknowns), set `k` being the model without it.
     fn removal(&self, e: Effect, q: usize, k: usize, model_len: usize) -> Score {
         let rss_s = self.lin.rss(&self.sets[k]);
@@ -267,15 +287,7 @@ pub fn select(
             n_eq,
         };
 
-        // Removal: the chosen effect with the least support, if it no longer passes.
-        let mut worst: Option<Score> = None;
-        for &(e, q, k) in &back {
-            let score = scoring.removal(e, q, k, model.len());
-            if !score.passes(p_cut, p_level) && worst.as_ref().is_none_or(|w| score.p > w.p) {
-                worst = Some(score);
-            }
-        }
-        if let Some(w) = worst {
+        if let Some(w) = scoring.worst_removal(&back, model.len(), p_cut, p_level) {
             chosen.retain(|e| *e != w.effect);
             *removals.entry(w.effect).or_default() += 1;
             steps.push(Step {
@@ -298,18 +310,8 @@ pub fn select(
         };
         let mut trial = chosen.clone();
         trial.push(best.effect);
-        // The exact fit may not determine it after all (it holds it as weak or inseparable,
-        // or does not converge with it): then it cannot be named; try the others.
-        let fitted = remaining
-            .iter()
-            .find(|c| c.effect == best.effect)
-            .map_or_else(|| best.effect.params(), |c| c.fitted.clone());
-        let next = fit_with(start, data, opts, &trial).ok().filter(|next| {
-            fitted
-                .iter()
-                .all(|p| next.ident.kept.iter().any(|&k| next.params[k] == *p))
-        });
-        let Some(next) = next else {
+        let Some(next) = exact_fit_determines(start, data, opts, &trial, &remaining, best.effect)
+        else {
             removals.insert(best.effect, usize::MAX);
             continue;
         };
@@ -326,6 +328,29 @@ pub fn select(
         left_out,
         fit,
         p_cut,
+    })
+}
+
+/// The exact fit with `trial` (the chosen effects and `added`), if it determines every
+/// parameter of `added` the candidate fits: the linearised score may have passed an effect
+/// the exact fit holds as weak or inseparable, or does not converge with; such an effect
+/// cannot be named, and the selection tries the others.
+fn exact_fit_determines(
+    start: &Arm,
+    data: &Dataset,
+    opts: &Options,
+    trial: &[Effect],
+    remaining: &[&Candidate],
+    added: Effect,
+) -> Option<Fit> {
+    let fitted = remaining
+        .iter()
+        .find(|c| c.effect == added)
+        .map_or_else(|| added.params(), |c| c.fitted.clone());
+    fit_with(start, data, opts, trial).ok().filter(|next| {
+        fitted
+            .iter()
+            .all(|p| next.ident.kept.iter().any(|&k| next.params[k] == *p))
     })
 }
 

@@ -241,11 +241,12 @@ impl Run {
 mod tests {
     use super::*;
     use crate::data::Kind;
+    use crate::fit::design::poses::{limits, random_pose};
     use crate::fit::priors::Ridge;
     use crate::fit::residuals::compare_aligned;
     use crate::params::Param;
     use crate::rng::rng;
-    use crate::sim::{self, perturb, random_pose, simulate};
+    use crate::sim::{self, perturb, simulate};
 
     #[test]
     fn the_ridge_shares_out_what_the_data_cannot_separate() {
@@ -280,7 +281,7 @@ mod tests {
         assert!(fit.ident.condition_number.is_finite());
         // On data this precise the penalty hardly moves the fit: fresh poses still within the
         // round-trip target (measured 0.79 µm RMS, least squares 0.86).
-        let lim = sim::limits(&nominal);
+        let lim = limits(&nominal);
         let mut r = rng(13);
         let poses: Vec<(Vec<f64>, f64)> = (0..2000)
             .map(|_| (random_pose(&lim, &mut r), 20.0))

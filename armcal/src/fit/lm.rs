@@ -180,70 +180,34 @@ pub fn solve<P: Problem>(
     observer.iteration(iterations, normal.cost);
     // Every way out of the iteration says whether it converged and why; the outcome is the
     // state and normal equations it leaves.
-    let reason = 'solve: loop {
+    let reason = loop {
         if normal.cost == 0.0 {
             break Termination::ExactFit;
         }
         if !normal.cost.is_finite() {
             break Termination::NotFinite;
         }
-        // Scale to a unit diagonal; an unknown with no effect (zero column) stays put.
-        let (a, scale) = unit_diagonal(&normal.jtj);
-        let g: DVector<f64> = DVector::from_fn(n, |i, _| -normal.jtr[i] * scale[i]);
-        let rnorm = (2.0 * normal.cost).sqrt();
+        let scaled = Scaled::of(&normal);
         // First-order optimality: the residual is orthogonal to every column.
-        if g.amax() <= 1e-13 * rnorm {
+        if scaled.g.amax() <= 1e-13 * scaled.rnorm {
             break Termination::GradientVanished;
         }
         if iterations >= options.max_iterations {
             break Termination::Budget;
         }
-        // Try damped steps until one lowers the cost.
-        loop {
-            let Some(ch) = Cholesky::new(damped(&a, &scale, lambda)) else {
-                lambda *= 10.0;
-                if lambda > 1e16 {
-                    break 'solve Termination::Unfactorable;
-                }
-                continue;
-            };
-            let y = ch.solve(&g);
-            let dx: Vec<f64> = (0..n).map(|i| y[i] * scale[i]).collect();
-            let trial = problem.step(&state, &dx);
-            let trial_cost = problem.cost(&trial);
-            let actual = normal.cost - trial_cost;
-            let step_small = y.norm() <= options.step_tolerance * rnorm;
-            if trial_cost.is_finite() && actual > 0.0 {
-                // Gain ratio: actual against predicted reduction of the linear model.
-                let predicted = y.dot(&g) - 0.5 * y.dot(&(&a * &y));
-                let rho = if predicted > 0.0 {
-                    actual / predicted
-                } else {
-                    0.0
-                };
-                lambda = after_success(lambda, rho);
-                let cost_small = actual <= options.cost_tolerance * normal.cost;
-                state = trial;
-                normal = problem.normal(&state);
-                iterations += 1;
-                observer.iteration(iterations, normal.cost);
-                if step_small {
-                    break 'solve Termination::StepTolerance;
-                }
-                if cost_small {
-                    break 'solve Termination::CostStalled;
-                }
-                break;
-            }
-            // The step does not lower the cost. If it is already negligible we are at the
-            // minimum to rounding; otherwise damp harder.
-            if step_small {
-                break 'solve Termination::RoundingFloor;
-            }
-            lambda *= 8.0;
-            if lambda > 1e16 {
-                break 'solve Termination::NoDescent;
-            }
+        let step = match descend(problem, &state, &normal, &scaled, &mut lambda, options) {
+            Ok(step) => step,
+            Err(reason) => break reason,
+        };
+        state = step.state;
+        normal = problem.normal(&state);
+        iterations += 1;
+        observer.iteration(iterations, normal.cost);
+        if step.step_small {
+            break Termination::StepTolerance;
+        }
+        if step.cost_small {
+            break Termination::CostStalled;
         }
     };
     Outcome {
@@ -254,6 +218,90 @@ pub fn solve<P: Problem>(
         converged: reason.converged(),
         exhausted: reason == Termination::Budget,
         reason,
+    }
+}
+
+/// The normal equations scaled to a unit diagonal (an unknown with no effect, a zero column,
+/// stays put), so that one damping suits every unknown whatever its units.
+struct Scaled {
+    /// JᵀJ scaled.
+    a: DMatrix<f64>,
+    /// The scale of each unknown (0 for one with no effect).
+    scale: Vec<f64>,
+    /// The scaled gradient, −Jᵀr.
+    g: DVector<f64>,
+    /// ‖r‖.
+    rnorm: f64,
+}
+
+impl Scaled {
+    fn of(normal: &Normal) -> Scaled {
+        let (a, scale) = unit_diagonal(&normal.jtj);
+        let g = DVector::from_fn(scale.len(), |i, _| -normal.jtr[i] * scale[i]);
+        let rnorm = (2.0 * normal.cost).sqrt();
+        Scaled { a, scale, g, rnorm }
+    }
+}
+
+/// A step that lowered the cost: where it leads, and whether the step or the cost's fall was
+/// below its tolerance (converged once the step is taken).
+struct Accepted<S> {
+    state: S,
+    step_small: bool,
+    cost_small: bool,
+}
+
+/// Tries damped steps from `state` until one lowers the cost, adapting `lambda` (eased after
+/// a success by the gain ratio, raised after a failure). Stops without a step when the
+/// damped matrix cannot be factored, when a negligible step no longer lowers the cost (the
+/// minimum to rounding), or when no damping gives descent.
+fn descend<P: Problem>(
+    problem: &P,
+    state: &P::State,
+    normal: &Normal,
+    scaled: &Scaled,
+    lambda: &mut f64,
+    options: &Options,
+) -> Result<Accepted<P::State>, Termination> {
+    let Scaled { a, scale, g, rnorm } = scaled;
+    loop {
+        let Some(ch) = Cholesky::new(damped(a, scale, *lambda)) else {
+            *lambda *= 10.0;
+            if *lambda > 1e16 {
+                return Err(Termination::Unfactorable);
+            }
+            continue;
+        };
+        let y = ch.solve(g);
+        let dx: Vec<f64> = (0..scale.len()).map(|i| y[i] * scale[i]).collect();
+        let trial = problem.step(state, &dx);
+        let trial_cost = problem.cost(&trial);
+        let actual = normal.cost - trial_cost;
+        let step_small = y.norm() <= options.step_tolerance * rnorm;
+        if trial_cost.is_finite() && actual > 0.0 {
+            // Gain ratio: actual against predicted reduction of the linear model.
+            let predicted = y.dot(g) - 0.5 * y.dot(&(a * &y));
+            let rho = if predicted > 0.0 {
+                actual / predicted
+            } else {
+                0.0
+            };
+            *lambda = after_success(*lambda, rho);
+            return Ok(Accepted {
+                state: trial,
+                step_small,
+                cost_small: actual <= options.cost_tolerance * normal.cost,
+            });
+        }
+        // The step does not lower the cost. If it is already negligible we are at the
+        // minimum to rounding; otherwise damp harder.
+        if step_small {
+            return Err(Termination::RoundingFloor);
+        }
+        *lambda *= 8.0;
+        if *lambda > 1e16 {
+            return Err(Termination::NoDescent);
+        }
     }
 }
 

@@ -18,6 +18,7 @@ use super::estimate::{self, Settings};
 use super::{propagate, u95};
 use crate::data::Kind;
 use crate::fit::calib::{self};
+use crate::fit::design::poses::{limits, random_pose};
 use crate::fit::options::Options;
 use crate::fit::residuals::best_rigid;
 use crate::rng::SimRng;
@@ -241,10 +242,10 @@ pub fn fresh(
     setup: &Setup,
     rng: &mut SimRng,
 ) -> Tally {
-    let lim = sim::limits(truth);
+    let lim = limits(truth);
     let mut reads = Vec::with_capacity(setup.readings);
     for _ in 0..setup.readings {
-        let th = sim::random_pose(&lim, rng);
+        let th = random_pose(&lim, rng);
         let (t_true, t_read) = if setup.thermal {
             let t = rng.gen_range(TEMPS.0..TEMPS.1);
             (t, t + setup.temp_noise_c * crate::rng::normal(rng))

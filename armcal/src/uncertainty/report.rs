@@ -3,7 +3,7 @@
 
 use super::estimate::Estimated;
 use super::{propagate, u95, Budget};
-use crate::sim;
+use crate::fit::design::poses::{limits, random_pose};
 use quatarm_ref::arm::Arm;
 use quatarm_ref::forward::REFERENCE_TEMP_C;
 use serde::Serialize;
@@ -75,11 +75,11 @@ impl BudgetReport {
     /// The report of an estimated budget for the calibrated `arm`.
     pub fn build(est: &Estimated, arm: &Arm) -> BudgetReport {
         let b: &Budget = &est.budget;
-        let lim = sim::limits(arm);
+        let lim = limits(arm);
         let mut rng = crate::rng::rng(0x0095);
         let pts: Vec<(f64, f64, f64)> = (0..POSES)
             .map(|_| {
-                let th = sim::random_pose(&lim, &mut rng);
+                let th = random_pose(&lim, &mut rng);
                 let (p, s) = propagate::point(arm, 0, b, &th, REFERENCE_TEMP_C);
                 (p.x.hypot(p.y), p.z, u95::u95(&s) * 1e3)
             })

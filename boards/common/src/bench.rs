@@ -52,6 +52,88 @@ struct Sum {
     failures: u32,
 }
 
+impl Sum {
+    /// One timed evaluation: `ticks` between the clock's two readings, `failed` if it gave
+    /// no result. Called after the second reading, so the sum is outside what it times.
+    fn add(&mut self, ticks: u64, failed: bool) {
+        self.points += 1;
+        self.ticks += ticks;
+        self.failures += u32::from(failed);
+    }
+}
+
+/// The sums of one run, one per thing timed.
+#[derive(Default)]
+struct Sums {
+    /// Reading the clock twice: the overhead subtracted from the others.
+    empty: Sum,
+    /// The quaternion chain in full.
+    quaternion: Sum,
+    /// What the hub runs (the lean form where the arm fits it).
+    hub: Sum,
+    /// The 3×4 matrix chain.
+    matrix: Sum,
+    /// The reading's own U95 terms.
+    own: Sum,
+    /// The U95 as the hub streams it.
+    u95: Sum,
+}
+
+impl Sums {
+    /// The sums to the defmt log, one line each (`cargo xtask bench-target` reads them);
+    /// `lean` says whether the hub's chain was the lean form.
+    fn log(&self, lean: bool) {
+        defmt::info!(
+            "bench clock overhead {=u32} points {=u64} ticks",
+            self.empty.points,
+            self.empty.ticks
+        );
+        defmt::info!(
+            "bench quaternion {=u32} points {=u64} ticks {=u32} failures",
+            self.quaternion.points,
+            self.quaternion.ticks,
+            self.quaternion.failures
+        );
+        defmt::info!(
+            "bench hub chain (lean {=bool}) {=u32} points {=u64} ticks {=u32} failures",
+            lean,
+            self.hub.points,
+            self.hub.ticks,
+            self.hub.failures
+        );
+        defmt::info!(
+            "bench matrix {=u32} points {=u64} ticks {=u32} failures",
+            self.matrix.points,
+            self.matrix.ticks,
+            self.matrix.failures
+        );
+        defmt::info!(
+            "bench u95 own terms {=u32} points {=u64} ticks {=u32} failures",
+            self.own.points,
+            self.own.ticks,
+            self.own.failures
+        );
+        defmt::info!(
+            "bench u95 streamed {=u32} points {=u64} ticks {=u32} failures",
+            self.u95.points,
+            self.u95.ticks,
+            self.u95.failures
+        );
+    }
+}
+
+/// Times the loop of known length and logs it: its ticks give the instructions per tick.
+fn time_calibration_loop() {
+    let t0 = clock::ticks();
+    counted_loop(LOOP_ITERATIONS);
+    let t1 = clock::ticks();
+    defmt::info!(
+        "bench calibration loop {=u32} instructions {=u64} ticks",
+        2 * LOOP_ITERATIONS,
+        t1 - t0
+    );
+}
+
 /// Times the Ed25519 check of the table's signature (the bytes after it in the region) under
 /// `key`, once: it is deterministic, and runs once per boot or update.
 fn time_signature(key: &[u8; KEY_LEN], table: &Table<'_>, region: &[u8]) {
@@ -81,14 +163,7 @@ pub fn run<L: Link, P: HubEvaluator>(link: &mut L, region: &[u8], key: &[u8; KEY
         return;
     };
 
-    let t0 = clock::ticks();
-    counted_loop(LOOP_ITERATIONS);
-    let t1 = clock::ticks();
-    defmt::info!(
-        "bench calibration loop {=u32} instructions {=u64} ticks",
-        2 * LOOP_ITERATIONS,
-        t1 - t0
-    );
+    time_calibration_loop();
     time_signature(key, &table, region);
     let own = OwnTerms::new(&table);
     let uncertainty = <P::Uncertainty<'_> as PointUncertainty<'_, P>>::of(&table);
@@ -99,9 +174,7 @@ pub fn run<L: Link, P: HubEvaluator>(link: &mut L, region: &[u8], key: &[u8; KEY
         table.parameters().is_some()
     );
 
-    let (mut q, mut m, mut empty) = (Sum::default(), Sum::default(), Sum::default());
-    let mut hub = Sum::default();
-    let (mut own_sum, mut u95) = (Sum::default(), Sum::default());
+    let mut sums = Sums::default();
     let mut replay = Replay::new();
     loop {
         let Some(event) = replay.push(link.read()) else {
@@ -117,23 +190,18 @@ pub fn run<L: Link, P: HubEvaluator>(link: &mut L, region: &[u8], key: &[u8; KEY
 
         let a = clock::ticks();
         let b = clock::ticks();
-        empty.points += 1;
-        empty.ticks += b - a;
+        sums.empty.add(b - a, false);
 
         let a = clock::ticks();
         let res = core::hint::black_box(quat.eval_quaternion(counts, temp));
         let b = clock::ticks();
-        q.points += 1;
-        q.ticks += b - a;
-        q.failures += u32::from(res.is_err());
+        sums.quaternion.add(b - a, res.is_err());
 
         // What the hub runs: the lean form where the arm fits it ([`quatarm::lean`]).
         let a = clock::ticks();
         let res = core::hint::black_box(quat.eval(counts, temp));
         let b = clock::ticks();
-        hub.points += 1;
-        hub.ticks += b - a;
-        hub.failures += u32::from(res.is_err());
+        sums.hub.add(b - a, res.is_err());
 
         if let (Some(u), Ok(_)) = (&own, &res) {
             let a = clock::ticks();
@@ -144,61 +212,20 @@ pub fn run<L: Link, P: HubEvaluator>(link: &mut L, region: &[u8], key: &[u8; KEY
                     .map(|t| u.covariance(&frames, t.xyz.map(P::l_to_f32)).u95_nm()),
             );
             let b = clock::ticks();
-            own_sum.points += 1;
-            own_sum.ticks += b - a;
-            own_sum.failures += u32::from(got.is_err());
+            sums.own.add(b - a, got.is_err());
         }
         if let (Some(u), Ok(p)) = (&uncertainty, &res) {
             let a = clock::ticks();
             let got = core::hint::black_box(u.u95_nm(&quat, counts, temp, p));
             let b = clock::ticks();
-            u95.points += 1;
-            u95.ticks += b - a;
-            u95.failures += u32::from(got.is_none());
+            sums.u95.add(b - a, got.is_none());
         }
 
         let a = clock::ticks();
         let res = core::hint::black_box(matrix.eval(counts, temp));
         let b = clock::ticks();
-        m.points += 1;
-        m.ticks += b - a;
-        m.failures += u32::from(res.is_err());
+        sums.matrix.add(b - a, res.is_err());
         link.write(&[0]);
     }
-    defmt::info!(
-        "bench clock overhead {=u32} points {=u64} ticks",
-        empty.points,
-        empty.ticks
-    );
-    defmt::info!(
-        "bench quaternion {=u32} points {=u64} ticks {=u32} failures",
-        q.points,
-        q.ticks,
-        q.failures
-    );
-    defmt::info!(
-        "bench hub chain (lean {=bool}) {=u32} points {=u64} ticks {=u32} failures",
-        quat.is_lean(),
-        hub.points,
-        hub.ticks,
-        hub.failures
-    );
-    defmt::info!(
-        "bench matrix {=u32} points {=u64} ticks {=u32} failures",
-        m.points,
-        m.ticks,
-        m.failures
-    );
-    defmt::info!(
-        "bench u95 own terms {=u32} points {=u64} ticks {=u32} failures",
-        own_sum.points,
-        own_sum.ticks,
-        own_sum.failures
-    );
-    defmt::info!(
-        "bench u95 streamed {=u32} points {=u64} ticks {=u32} failures",
-        u95.points,
-        u95.ticks,
-        u95.failures
-    );
+    sums.log(quat.is_lean());
 }
