@@ -110,6 +110,10 @@ type Used = (String, Vec<(usize, usize)>);
 /// An arm or a recording left out: (name, why).
 type LeftOut = (String, String);
 
+/// An arm's estimate of a candidate: each recording's (value, jackknife standard error), and
+/// their combination.
+type ArmEstimate = (Vec<(f64, f64)>, Combined);
+
 /// Each arm's recordings of [`MIN_UNITS`] sessions or more, and the arms and recordings left
 /// out with why.
 fn recordings(units: &[UnitData], arms: &[(String, Vec<usize>)]) -> (Vec<Used>, Vec<LeftOut>) {
@@ -243,7 +247,7 @@ fn arm_estimates(
     calib: &crate::fit::options::Options,
     e: Effect,
     left_out: &mut Vec<LeftOut>,
-) -> Option<Vec<(Vec<(f64, f64)>, Combined)>> {
+) -> Option<Vec<ArmEstimate>> {
     let mut per_arm = Vec::new();
     for (_, recs) in used {
         let mut est = Vec::new();
