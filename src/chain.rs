@@ -286,8 +286,9 @@ impl<P: Evaluator> Chain<P> {
 
     /// [`Chain::eval`], with the second-order gravity terms or without, with the wobble or
     /// without. Its steps are separate functions marked `#[inline(always)]`, so that the
-    /// code generated is that of one function (sizes and instructions per point measured
-    /// the same: `docs/results/architecture.md`, stop 36).
+    /// code generated is still one function; the M0's register allocation over it is not
+    /// quite the same (+0.9 % instructions a point on qemu-m0, +0.5 % on qemu-m4f:
+    /// `docs/results/architecture.md`, "Long functions, stop 36 (last)").
     #[inline(always)]
     fn eval_with(
         &self,
