@@ -607,6 +607,55 @@ impl TableData {
         parameters: Option<&parameters::ParameterData<'_>>,
         out: &mut [u8],
     ) -> Result<usize, TableError> {
+        let at = self.layout(budget.is_some(), parameters)?;
+        let (n, len) = (at.joints, at.len);
+        if out.len() < len {
+            return Err(TableError::Truncated {
+                needed: len as u32,
+                available: out.len() as u32,
+            });
+        }
+        let out = &mut out[..len];
+        out.fill(0);
+        self.encode_header(&at, out);
+        for (i, j) in self.joints[..n].iter().enumerate() {
+            encode_joint(
+                j,
+                &mut out[HEADER_LEN + i * JOINT_LEN..HEADER_LEN + (i + 1) * JOINT_LEN],
+            );
+        }
+        put_probe(
+            &mut out[HEADER_LEN + n * JOINT_LEN..core_len(n)],
+            &self.probe,
+        );
+        if let Some(b) = budget {
+            b.encode(&mut out[core_len(n)..core_len(n) + budget::LEN]);
+        }
+        let probes_at = len - TAIL_LEN - at.probes;
+        let end = probes_at - at.wobble;
+        if let Some(p) = parameters {
+            p.encode(&mut out[core_len(n) + budget::LEN..end]);
+        }
+        if at.wobble > 0 {
+            wobble::encode(&self.wobble[..n], &mut out[end..probes_at]);
+        }
+        if at.probes > 0 {
+            probes::encode(self.other_probes(), &mut out[probes_at..len - TAIL_LEN]);
+        }
+        out[len - TAIL_LEN..len - CRC_LEN - 4].copy_from_slice(&self.release.number.to_le_bytes());
+        out[len - CRC_LEN - 4..len - CRC_LEN].copy_from_slice(&self.release.date.to_le_bytes());
+        let crc = CRC.checksum(&out[..len - CRC_LEN]);
+        out[len - CRC_LEN..].copy_from_slice(&crc.to_le_bytes());
+        Ok(len)
+    }
+
+    /// The lengths of the table's blocks and of the whole, with a budget (`budget`) and
+    /// `parameters`; fails as [`TableData::encode_full`] does, but for `out`'s length.
+    fn layout(
+        &self,
+        budget: bool,
+        parameters: Option<&parameters::ParameterData<'_>>,
+    ) -> Result<Layout, TableError> {
         let n = usize::from(self.joint_count);
         if !(MIN_JOINTS..=MAX_JOINTS).contains(&n) {
             return Err(TableError::BadJointCount(self.joint_count));
@@ -617,10 +666,10 @@ impl TableData {
         };
         let block = match parameters {
             None => 0,
-            Some(_) if budget.is_none() => return Err(invalid),
+            Some(_) if !budget => return Err(invalid),
             Some(p) => p.block_len().ok_or(invalid)?,
         };
-        let extra = if budget.is_some() { budget::LEN } else { 0 };
+        let extra = if budget { budget::LEN } else { 0 };
         let wobbling = self.wobble[..n].iter().filter(|w| w.count > 0).count();
         let wobble_len = if wobbling > 0 {
             wobble::len(wobbling)
@@ -639,69 +688,68 @@ impl TableData {
         } else {
             probes::len(others.len())
         };
-        let len = table_len(n) + extra + block + wobble_len + probes_len;
-        if out.len() < len {
-            return Err(TableError::Truncated {
-                needed: len as u32,
-                available: out.len() as u32,
-            });
-        }
-        let out = &mut out[..len];
-        out.fill(0);
+        Ok(Layout {
+            joints: n,
+            budget: extra,
+            parameters: block,
+            wobble: wobble_len,
+            probes: probes_len,
+            len: table_len(n) + extra + block + wobble_len + probes_len,
+        })
+    }
+
+    /// Writes the header of a table laid out as `at` into `out` (zeroed): the flags of its
+    /// blocks set from what it holds, whatever `self.flags` says of them.
+    fn encode_header(&self, at: &Layout, out: &mut [u8]) {
+        let flag = |len: usize, f: u8| if len > 0 { f } else { 0 };
         out[off::MAGIC..off::MAGIC + 4].copy_from_slice(&MAGIC);
         out[off::VERSION..off::VERSION + 2].copy_from_slice(&VERSION.to_le_bytes());
         out[off::JOINTS] = self.joint_count;
         out[off::FLAGS] = (self.flags
             & !(FLAG_BUDGET | FLAG_PARAMETERS | FLAG_WOBBLE | FLAG_PROBES))
-            | if extra > 0 { FLAG_BUDGET } else { 0 }
-            | if block > 0 { FLAG_PARAMETERS } else { 0 }
-            | if wobble_len > 0 { FLAG_WOBBLE } else { 0 }
-            | if probes_len > 0 { FLAG_PROBES } else { 0 };
+            | flag(at.budget, FLAG_BUDGET)
+            | flag(at.parameters, FLAG_PARAMETERS)
+            | flag(at.wobble, FLAG_WOBBLE)
+            | flag(at.probes, FLAG_PROBES);
         out[off::SERIAL..off::SERIAL + SERIAL_LEN].copy_from_slice(&self.serial);
-        out[off::LENGTH..off::LENGTH + 4].copy_from_slice(&(len as u32).to_le_bytes());
+        out[off::LENGTH..off::LENGTH + 4].copy_from_slice(&(at.len as u32).to_le_bytes());
         out[off::PROBE_ID] = self.probe.id;
-        for (i, j) in self.joints[..n].iter().enumerate() {
-            let r = &mut out[HEADER_LEN + i * JOINT_LEN..HEADER_LEN + (i + 1) * JOINT_LEN];
-            r[off::AXIS] = j.axis;
-            r[off::HARMONICS] = j.harmonic_count;
-            r[off::COUNTS..off::COUNTS + 4].copy_from_slice(&j.counts.to_le_bytes());
-            put_f64s(&mut r[off::QUAT..], &j.rotation);
-            for (row, m) in j.matrix.iter().enumerate() {
-                put_f64s(&mut r[off::MATRIX + 24 * row..], m);
-            }
-            put_f64s(&mut r[off::LINK..], &j.link);
-            put_f64s(&mut r[off::THERMAL..], &[j.thermal]);
-            put_f64s(&mut r[off::GRAVITY..], &[j.gravity]);
-            for (k, h) in j.harmonics.iter().enumerate() {
-                let s = &mut r[off::SLOTS + k * HARMONIC_LEN..off::SLOTS + (k + 1) * HARMONIC_LEN];
-                s[off::H_ORDER..off::H_ORDER + 2].copy_from_slice(&h.order.to_le_bytes());
-                put_f64s(&mut s[off::H_SIN..], &[h.sin]);
-                put_f64s(&mut s[off::H_COS..], &[h.cos]);
-            }
-        }
-        put_probe(
-            &mut out[HEADER_LEN + n * JOINT_LEN..core_len(n)],
-            &self.probe,
-        );
-        if let Some(b) = budget {
-            b.encode(&mut out[core_len(n)..core_len(n) + budget::LEN]);
-        }
-        let probes_at = len - TAIL_LEN - probes_len;
-        let end = probes_at - wobble_len;
-        if let Some(p) = parameters {
-            p.encode(&mut out[core_len(n) + budget::LEN..end]);
-        }
-        if wobble_len > 0 {
-            wobble::encode(&self.wobble[..n], &mut out[end..probes_at]);
-        }
-        if probes_len > 0 {
-            probes::encode(others, &mut out[probes_at..len - TAIL_LEN]);
-        }
-        out[len - TAIL_LEN..len - CRC_LEN - 4].copy_from_slice(&self.release.number.to_le_bytes());
-        out[len - CRC_LEN - 4..len - CRC_LEN].copy_from_slice(&self.release.date.to_le_bytes());
-        let crc = CRC.checksum(&out[..len - CRC_LEN]);
-        out[len - CRC_LEN..].copy_from_slice(&crc.to_le_bytes());
-        Ok(len)
+    }
+}
+
+/// The lengths of an encoded table's blocks (0 where it has none) and of the whole.
+struct Layout {
+    /// The joint count.
+    joints: usize,
+    /// The budget block.
+    budget: usize,
+    /// The parameters block.
+    parameters: usize,
+    /// The wobble block.
+    wobble: usize,
+    /// The other probes' block.
+    probes: usize,
+    /// The whole table.
+    len: usize,
+}
+
+/// Writes joint `j`'s record into `r` (its [`JOINT_LEN`] bytes, zeroed).
+fn encode_joint(j: &JointData, r: &mut [u8]) {
+    r[off::AXIS] = j.axis;
+    r[off::HARMONICS] = j.harmonic_count;
+    r[off::COUNTS..off::COUNTS + 4].copy_from_slice(&j.counts.to_le_bytes());
+    put_f64s(&mut r[off::QUAT..], &j.rotation);
+    for (row, m) in j.matrix.iter().enumerate() {
+        put_f64s(&mut r[off::MATRIX + 24 * row..], m);
+    }
+    put_f64s(&mut r[off::LINK..], &j.link);
+    put_f64s(&mut r[off::THERMAL..], &[j.thermal]);
+    put_f64s(&mut r[off::GRAVITY..], &[j.gravity]);
+    for (k, h) in j.harmonics.iter().enumerate() {
+        let s = &mut r[off::SLOTS + k * HARMONIC_LEN..off::SLOTS + (k + 1) * HARMONIC_LEN];
+        s[off::H_ORDER..off::H_ORDER + 2].copy_from_slice(&h.order.to_le_bytes());
+        put_f64s(&mut s[off::H_SIN..], &[h.sin]);
+        put_f64s(&mut s[off::H_COS..], &[h.cos]);
     }
 }
 
@@ -728,6 +776,45 @@ fn read_probe(id: u8, r: &[u8]) -> ProbeData {
         thermal: rd_f64(r, off::P_THERMAL),
         ball_diameter: rd_f64(r, off::P_BALL),
     }
+}
+
+/// The error for a bad value of joint `joint` (1-based; 0 for the table's own fields).
+fn invalid(joint: usize, field: Field) -> TableError {
+    TableError::Invalid {
+        joint: joint as u8,
+        field,
+    }
+}
+
+/// Checks joint `no`'s harmonic slots (its record `r`): reserved bytes zero, the unused
+/// slots empty, the used ones of an order in range with finite terms whose sum of
+/// magnitudes is within [`limits::HARMONIC_SUM`].
+fn check_harmonics(no: usize, r: &[u8], j: &JointData) -> Result<(), TableError> {
+    let mut sum = 0.0;
+    for (k, h) in j.harmonics.iter().enumerate() {
+        let s = &r[off::SLOTS + k * HARMONIC_LEN..off::SLOTS + (k + 1) * HARMONIC_LEN];
+        if s[off::H_RESERVED..off::H_SIN].iter().any(|&x| x != 0) {
+            return Err(invalid(no, Field::Reserved));
+        }
+        if k >= usize::from(j.harmonic_count) {
+            if h.order != 0 || h.sin.to_bits() != 0 || h.cos.to_bits() != 0 {
+                return Err(invalid(no, Field::Reserved));
+            }
+            continue;
+        }
+        if h.order == 0 || h.order > MAX_HARMONIC_ORDER {
+            return Err(invalid(no, Field::HarmonicOrder));
+        }
+        if !(h.sin.is_finite() && h.cos.is_finite()) {
+            return Err(invalid(no, Field::Harmonic));
+        }
+        sum += abs(h.sin) + abs(h.cos);
+    }
+    // NaN cannot reach here (checked above); `>` is the whole test.
+    if sum > limits::HARMONIC_SUM {
+        return Err(invalid(no, Field::Harmonic));
+    }
+    Ok(())
 }
 
 /// Checks a probe's values: vector and thermal coefficient in range, a unit direction along
@@ -921,14 +1008,9 @@ impl<'a> Table<'a> {
         Ok(table)
     }
 
-    // With every feature every flag is known (`!FLAGS_KNOWN` is 0, the test always passes);
-    // without one, its block's flag is refused by it.
-    #[allow(clippy::bad_bit_mask)]
+    /// Checks every value of a table whose length and CRC are right: the header, each joint
+    /// ([`Table::check_joint`]), each probe, the flags against the contents, and the blocks.
     fn check_values(&self) -> Result<(), TableError> {
-        let invalid = |joint: usize, field| TableError::Invalid {
-            joint: joint as u8,
-            field,
-        };
         let b = self.bytes;
         if b[off::RESERVED..off::RESERVED + 3].iter().any(|&x| x != 0) {
             return Err(invalid(0, Field::Reserved));
@@ -936,85 +1018,12 @@ impl<'a> Table<'a> {
         if core::str::from_utf8(self.serial()).is_err() {
             return Err(invalid(0, Field::Serial));
         }
-        // One joint at a time, not `self.data()`: on a target without an FPU every f64 here
-        // is soft-float, and a whole TableData on the boot stack would cost kilobytes.
         let mut content = 0;
         for i in 0..self.joint_count() {
-            let no = i + 1;
-            let (Some(r), Some(j)) = (
-                b.get(HEADER_LEN + i * JOINT_LEN..HEADER_LEN + (i + 1) * JOINT_LEN),
-                self.joint(i),
-            ) else {
-                return Err(invalid(no, Field::Reserved));
-            };
-            content |= j.content_flags();
-            if rd_u16(r, off::J_RESERVED) != 0 {
-                return Err(invalid(no, Field::Reserved));
-            }
-            if j.axis > 2 {
-                return Err(invalid(no, Field::Axis));
-            }
-            if !(2..=i32::MAX as u32).contains(&j.counts) {
-                return Err(invalid(no, Field::Counts));
-            }
-            if usize::from(j.harmonic_count) > MAX_HARMONICS {
-                return Err(invalid(no, Field::HarmonicCount));
-            }
-            check_rotation(&j.rotation, &j.matrix).map_err(|_| invalid(no, Field::Rotation))?;
-            if !j.link.iter().all(|&x| within(x, limits::LENGTH_MM)) {
-                return Err(invalid(no, Field::Link));
-            }
-            if !within(j.thermal, limits::THERMAL) {
-                return Err(invalid(no, Field::Thermal));
-            }
-            if !within(j.gravity, limits::GRAVITY) {
-                return Err(invalid(no, Field::Gravity));
-            }
-            let mut sum = 0.0;
-            for (k, h) in j.harmonics.iter().enumerate() {
-                let s = &r[off::SLOTS + k * HARMONIC_LEN..off::SLOTS + (k + 1) * HARMONIC_LEN];
-                if s[off::H_RESERVED..off::H_SIN].iter().any(|&x| x != 0) {
-                    return Err(invalid(no, Field::Reserved));
-                }
-                if k >= usize::from(j.harmonic_count) {
-                    if h.order != 0 || h.sin.to_bits() != 0 || h.cos.to_bits() != 0 {
-                        return Err(invalid(no, Field::Reserved));
-                    }
-                    continue;
-                }
-                if h.order == 0 || h.order > MAX_HARMONIC_ORDER {
-                    return Err(invalid(no, Field::HarmonicOrder));
-                }
-                if !(h.sin.is_finite() && h.cos.is_finite()) {
-                    return Err(invalid(no, Field::Harmonic));
-                }
-                sum += abs(h.sin) + abs(h.cos);
-            }
-            // NaN cannot reach here (checked above); `>` is the whole test.
-            if sum > limits::HARMONIC_SUM {
-                return Err(invalid(no, Field::Harmonic));
-            }
+            content |= self.check_joint(i)?;
         }
-        // Every probe's values, the first's and the others', and their ids all distinct.
-        if let Some(others) = self.other_probes() {
-            others.check()?;
-        }
-        for k in 0..self.probe_count() {
-            let p = self.probe_at(k).ok_or(invalid(0, Field::Probe))?;
-            check_probe(&p)?;
-            if (0..k).any(|j| self.probe_id(j) == Some(p.id)) {
-                return Err(invalid(0, Field::Probe));
-            }
-            content |= p.content_flags();
-        }
-        let flags = b[off::FLAGS];
-        let blocks = FLAG_GEOMETRIC | FLAG_BUDGET | FLAG_PARAMETERS | FLAG_WOBBLE | FLAG_PROBES;
-        if flags & !FLAGS_KNOWN != 0
-            || flags & !blocks != content
-            || (flags & FLAG_PARAMETERS != 0 && flags & FLAG_BUDGET == 0)
-        {
-            return Err(invalid(0, Field::Flags));
-        }
+        content |= self.check_probes()?;
+        self.check_flags(content)?;
         if let Some(budget) = self.budget() {
             budget.check(self)?;
         }
@@ -1026,6 +1035,79 @@ impl<'a> Table<'a> {
         #[cfg(feature = "wobble")]
         if let Some(w) = self.wobble() {
             w.check(self.joint_count())?;
+        }
+        Ok(())
+    }
+
+    /// Checks joint `i`'s record; returns the content flags its values call for. One joint at
+    /// a time, not `self.data()`: on a target without an FPU every f64 here is soft-float,
+    /// and a whole TableData on the boot stack would cost kilobytes.
+    fn check_joint(&self, i: usize) -> Result<u8, TableError> {
+        let no = i + 1;
+        let (Some(r), Some(j)) = (
+            self.bytes
+                .get(HEADER_LEN + i * JOINT_LEN..HEADER_LEN + (i + 1) * JOINT_LEN),
+            self.joint(i),
+        ) else {
+            return Err(invalid(no, Field::Reserved));
+        };
+        if rd_u16(r, off::J_RESERVED) != 0 {
+            return Err(invalid(no, Field::Reserved));
+        }
+        if j.axis > 2 {
+            return Err(invalid(no, Field::Axis));
+        }
+        if !(2..=i32::MAX as u32).contains(&j.counts) {
+            return Err(invalid(no, Field::Counts));
+        }
+        if usize::from(j.harmonic_count) > MAX_HARMONICS {
+            return Err(invalid(no, Field::HarmonicCount));
+        }
+        check_rotation(&j.rotation, &j.matrix).map_err(|_| invalid(no, Field::Rotation))?;
+        if !j.link.iter().all(|&x| within(x, limits::LENGTH_MM)) {
+            return Err(invalid(no, Field::Link));
+        }
+        if !within(j.thermal, limits::THERMAL) {
+            return Err(invalid(no, Field::Thermal));
+        }
+        if !within(j.gravity, limits::GRAVITY) {
+            return Err(invalid(no, Field::Gravity));
+        }
+        check_harmonics(no, r, &j)?;
+        Ok(j.content_flags())
+    }
+
+    /// Checks every probe's values, the first's and the others', and that their ids are all
+    /// distinct; returns the content flags their values call for.
+    fn check_probes(&self) -> Result<u8, TableError> {
+        if let Some(others) = self.other_probes() {
+            others.check()?;
+        }
+        let mut content = 0;
+        for k in 0..self.probe_count() {
+            let p = self.probe_at(k).ok_or(invalid(0, Field::Probe))?;
+            check_probe(&p)?;
+            if (0..k).any(|j| self.probe_id(j) == Some(p.id)) {
+                return Err(invalid(0, Field::Probe));
+            }
+            content |= p.content_flags();
+        }
+        Ok(content)
+    }
+
+    /// Checks the flags: every bit known, the content bits those the values call for
+    /// (`content`), and parameters only with a budget.
+    // With every feature every flag is known (`!FLAGS_KNOWN` is 0, the test always passes);
+    // without one, its block's flag is refused by it.
+    #[allow(clippy::bad_bit_mask)]
+    fn check_flags(&self, content: u8) -> Result<(), TableError> {
+        let flags = self.bytes[off::FLAGS];
+        let blocks = FLAG_GEOMETRIC | FLAG_BUDGET | FLAG_PARAMETERS | FLAG_WOBBLE | FLAG_PROBES;
+        if flags & !FLAGS_KNOWN != 0
+            || flags & !blocks != content
+            || (flags & FLAG_PARAMETERS != 0 && flags & FLAG_BUDGET == 0)
+        {
+            return Err(invalid(0, Field::Flags));
         }
         Ok(())
     }

@@ -110,6 +110,10 @@ type Used = (String, Vec<(usize, usize)>);
 /// An arm or a recording left out: (name, why).
 type LeftOut = (String, String);
 
+/// An arm's estimate of a candidate: each recording's (value, jackknife standard error), and
+/// their combination.
+type ArmEstimate = (Vec<(f64, f64)>, Combined);
+
 /// Each arm's recordings of [`MIN_UNITS`] sessions or more, and the arms and recordings left
 /// out with why.
 fn recordings(units: &[UnitData], arms: &[(String, Vec<usize>)]) -> (Vec<Used>, Vec<LeftOut>) {
@@ -180,8 +184,37 @@ pub fn pool_arms(
     if used.len() < super::fleet::MIN_FLEET_UNITS {
         return Ok(out);
     }
-    // Candidates every used recording can test: a value missing for one arm would leave the
-    // design's distribution estimated from the others only, unsaid.
+    let calib = geometric_options(opts);
+    for e in shared_vocabulary(&used, testable) {
+        if let Some(p) = pool_effect(
+            start,
+            units,
+            &used,
+            &calib,
+            e,
+            opts.alpha,
+            &mut out.left_out,
+        ) {
+            out.effects.push(p);
+        }
+    }
+    name_by_holm(&mut out.effects, opts.alpha);
+    out.effects
+        .sort_by(|a, b| a.design.mean_p.total_cmp(&b.design.mean_p));
+    let data: Vec<Vec<&Dataset>> = used
+        .iter()
+        .map(|(_, recs)| recs.iter().map(|(r, _)| &units[*r].data).collect())
+        .collect();
+    for p in out.effects.iter_mut().filter(|p| p.named) {
+        held_out_gains(start, &data, &calib, opts.alpha, p)?;
+    }
+    Ok(out)
+}
+
+/// The one-unknown candidates every used recording can test (`testable`, one list per
+/// recording): a value missing for one arm would leave the design's distribution estimated
+/// from the others only, unsaid.
+fn shared_vocabulary(used: &[Used], testable: &[Vec<Effect>]) -> BTreeSet<Effect> {
     let one_unknown = |r: usize| -> BTreeSet<Effect> {
         testable
             .get(r)
@@ -200,77 +233,92 @@ pub fn pool_arms(
     for r in all_recordings {
         vocabulary = vocabulary.intersection(&one_unknown(r)).copied().collect();
     }
-    let calib = geometric_options(opts);
-    'effects: for e in vocabulary {
-        // Each arm: every recording's estimate (its own probe and frame), then combined.
-        let mut per_arm: Vec<(Vec<(f64, f64)>, Combined)> = Vec::new();
-        for (_, recs) in &used {
-            let mut est = Vec::new();
-            for (r, _) in recs {
-                // A fit that fails (one candidate on one recording) leaves that candidate
-                // unpooled, said, rather than the whole fleet report.
-                match pooling::estimate(start, &units[*r].data, &calib, e) {
-                    Ok(Some(v)) => est.push(v),
-                    Ok(None) => continue 'effects,
-                    Err(err) => {
-                        out.left_out.push((
-                            e.spec(),
-                            format!("the fit of recording {} failed: {err}", units[*r].name),
-                        ));
-                        continue 'effects;
-                    }
+    vocabulary
+}
+
+/// Each used arm's estimate of `e`: every recording's own (its own probe and frame), then
+/// their combination. `None` when a recording cannot estimate it or its estimates do not
+/// combine; a fit that fails (one candidate on one recording) also pushes the reason to
+/// `left_out`, leaving that candidate unpooled rather than failing the whole fleet report.
+fn arm_estimates(
+    start: &Arm,
+    units: &[UnitData],
+    used: &[Used],
+    calib: &crate::fit::options::Options,
+    e: Effect,
+    left_out: &mut Vec<LeftOut>,
+) -> Option<Vec<ArmEstimate>> {
+    let mut per_arm = Vec::new();
+    for (_, recs) in used {
+        let mut est = Vec::new();
+        for (r, _) in recs {
+            match pooling::estimate(start, &units[*r].data, calib, e) {
+                Ok(Some(v)) => est.push(v),
+                Ok(None) => return None,
+                Err(err) => {
+                    left_out.push((
+                        e.spec(),
+                        format!("the fit of recording {} failed: {err}", units[*r].name),
+                    ));
+                    return None;
                 }
             }
-            let Some(c) = pooling::combine_recordings(&est) else {
-                continue 'effects;
-            };
-            per_arm.push((est, c));
         }
-        let y: Vec<f64> = per_arm.iter().map(|(_, c)| c.estimate).collect();
-        let se: Vec<f64> = per_arm.iter().map(|(_, c)| c.se).collect();
-        let Some((design, values)) = pooling::pool(&y, &se, opts.alpha) else {
-            continue;
-        };
-        let arms = used
-            .iter()
-            .zip(per_arm)
-            .zip(values)
-            .map(|(((name, recs), (est, combined)), value)| PooledArm {
-                arm: name.clone(),
-                recordings: recs.iter().map(|(r, _)| units[*r].name.clone()).collect(),
-                sessions: recs.iter().map(|(_, n)| n).sum(),
-                per_recording: est,
-                combined,
-                value,
-                holdout: None,
-            })
-            .collect();
-        out.effects.push(PooledEffect {
-            term: e.spec(),
-            effect: e,
-            design,
-            named: false,
-            arms,
-        });
+        let c = pooling::combine_recordings(&est)?;
+        per_arm.push((est, c));
     }
-    let ps: Vec<f64> = out.effects.iter().map(|p| p.design.mean_p).collect();
-    for (p, named) in out.effects.iter_mut().zip(holm(&ps, opts.alpha)) {
+    Some(per_arm)
+}
+
+/// The candidate `e` pooled over the used arms (not yet named: [`name_by_holm`] does that
+/// over all candidates), or `None` when it cannot be (see [`arm_estimates`]).
+fn pool_effect(
+    start: &Arm,
+    units: &[UnitData],
+    used: &[Used],
+    calib: &crate::fit::options::Options,
+    e: Effect,
+    alpha: f64,
+    left_out: &mut Vec<LeftOut>,
+) -> Option<PooledEffect> {
+    let per_arm = arm_estimates(start, units, used, calib, e, left_out)?;
+    let y: Vec<f64> = per_arm.iter().map(|(_, c)| c.estimate).collect();
+    let se: Vec<f64> = per_arm.iter().map(|(_, c)| c.se).collect();
+    let (design, values) = pooling::pool(&y, &se, alpha)?;
+    let arms = used
+        .iter()
+        .zip(per_arm)
+        .zip(values)
+        .map(|(((name, recs), (est, combined)), value)| PooledArm {
+            arm: name.clone(),
+            recordings: recs.iter().map(|(r, _)| units[*r].name.clone()).collect(),
+            sessions: recs.iter().map(|(_, n)| n).sum(),
+            per_recording: est,
+            combined,
+            value,
+            holdout: None,
+        })
+        .collect();
+    Some(PooledEffect {
+        term: e.spec(),
+        effect: e,
+        design,
+        named: false,
+        arms,
+    })
+}
+
+/// Names the candidates whose design mean passes Holm at `alpha` over all of them, and keeps
+/// an arm's pooled naming only where its candidate is named.
+fn name_by_holm(effects: &mut [PooledEffect], alpha: f64) {
+    let ps: Vec<f64> = effects.iter().map(|p| p.design.mean_p).collect();
+    for (p, named) in effects.iter_mut().zip(holm(&ps, alpha)) {
         p.named = named;
         p.design.named = named;
         for a in &mut p.arms {
             a.value.named_pooled &= named;
         }
     }
-    out.effects
-        .sort_by(|a, b| a.design.mean_p.total_cmp(&b.design.mean_p));
-    let data: Vec<Vec<&Dataset>> = used
-        .iter()
-        .map(|(_, recs)| recs.iter().map(|(r, _)| &units[*r].data).collect())
-        .collect();
-    for p in out.effects.iter_mut().filter(|p| p.named) {
-        held_out_gains(start, &data, &calib, opts.alpha, p)?;
-    }
-    Ok(out)
 }
 
 /// The nested held-out gain of every arm the pooled effect `p` is named for, over the sessions
