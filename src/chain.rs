@@ -285,10 +285,7 @@ impl<P: Evaluator> Chain<P> {
     }
 
     /// [`Chain::eval`], with the second-order gravity terms or without, with the wobble or
-    /// without. Its steps are separate functions marked `#[inline(always)]`, so that the
-    /// code generated is still one function; the M0's register allocation over it is not
-    /// quite the same (+0.9 % instructions a point on qemu-m0, +0.5 % on qemu-m4f:
-    /// `docs/results/architecture.md`, "Long functions, stop 36 (last)").
+    /// without.
     #[inline(always)]
     fn eval_with(
         &self,
@@ -297,32 +294,18 @@ impl<P: Evaluator> Chain<P> {
         second_order: bool,
         wobble: bool,
     ) -> Result<Point<P>, ChainError> {
-        let dt = self.model.check(counts, temp_mc)?;
+        let m = &self.model;
+        let dt = m.check(counts, temp_mc)?;
+        let zero = P::U::default();
+
+        // Base to tip.
         let mut records = [Record::<P>::UNINIT; MAX_JOINTS];
         // The wobble's rotation vector φ of each joint that wobbles (apart from the records:
         // without the feature it is never written and takes no stack).
         let mut phis = [const { MaybeUninit::<Vec3<P::U>>::uninit() }; MAX_JOINTS];
+        let mut q = Quat::<P>::default();
         // `check` made counts.len() = n ≤ MAX_JOINTS.
         let n = counts.len().min(MAX_JOINTS);
-        let q = self.base_to_tip(counts, n, dt, wobble, &mut records, &mut phis)?;
-        let back = self.tip_to_base(n, dt, second_order, wobble, &records, &phis);
-        Ok(self.point(&q, back, second_order))
-    }
-
-    /// The first pass, base to tip: each joint's angle recorded (and its frame where it is
-    /// compliant, φ where it wobbles), and the orientation Q of the tip returned.
-    #[inline(always)]
-    fn base_to_tip(
-        &self,
-        counts: &[u32],
-        n: usize,
-        dt: P::T,
-        wobble: bool,
-        records: &mut [Record<P>; MAX_JOINTS],
-        phis: &mut [MaybeUninit<Vec3<P::U>>; MAX_JOINTS],
-    ) -> Result<Quat<P>, ChainError> {
-        let m = &self.model;
-        let mut q = Quat::<P>::default();
         for i in 0..n {
             let (j, r, count) = (&m.joints[i], &self.rotation[i], counts[i]);
             let wobbles = wobble && self.wobble.has(i);
@@ -360,34 +343,25 @@ impl<P: Evaluator> Chain<P> {
             // than a record.
             rec.angle.write(angle);
         }
-        Ok(q)
-    }
 
-    /// The second pass, tip to base, over the records of the first. Three vectors share it,
-    /// each turned, rotated and relabelled joint by joint (one copy of that code: the
-    /// Cortex-M0 image's budget is 32 KiB): the tip w; with the second-order gravity terms
-    /// also the shift (how far the deflections of the joints already passed have moved the
-    /// tip: the spec's e_k is taken on the chain *without* gravity, so joint k's lever uses
-    /// the undeflected tip u = w − shift), and the probe direction as a 1024 mm vector (the
-    /// deflected chain's own direction, every deflection in its joint's angle).
-    #[inline(always)]
-    fn tip_to_base(
-        &self,
-        n: usize,
-        dt: P::T,
-        second_order: bool,
-        wobble: bool,
-        records: &[Record<P>; MAX_JOINTS],
-        phis: &[MaybeUninit<Vec3<P::U>>; MAX_JOINTS],
-    ) -> TipToBase<P> {
-        let m = &self.model;
+        // Tip to base. Three vectors share the pass, each turned, rotated and relabelled
+        // joint by joint (one copy of that code: the Cortex-M0 image's budget is 32 KiB):
+        // the tip w; with the second-order gravity terms also the shift (how far the
+        // deflections of the joints already passed have moved the tip: the spec's e_k is taken
+        // on the chain *without* gravity, so joint k's lever uses the undeflected tip
+        // u = w − shift), and the probe direction as a 1024 mm vector (the deflected chain's
+        // own direction, every deflection in its joint's angle).
+        const TIP: usize = 0;
+        const DIR: usize = 2;
         let carried = if second_order { 3 } else { 1 };
-        let mut out = TipToBase {
-            v: [[P::L::default(); 3]; 3],
-            omega: [P::U::default(); 3],
-            deflected: false,
-        };
-        out.v[DIR] = m.probe_dir.map(P::u_as_l1024);
+        // The tip, the shift, the direction.
+        let mut v: [Vec3<P::L>; 3] = [[P::L::default(); 3]; 3];
+        v[DIR] = m.probe_dir.map(P::u_as_l1024);
+        // Without the second-order terms: Ω = Σ e_k a_k, the first-order turn of the
+        // direction by the deflections (the deflected orientation is R(ω_1) … R(ω_N) Q with
+        // ω_k = e_k a_k about the undeflected axes).
+        let mut omega = [zero; 3];
+        let mut deflected = false;
         for i in (0..n).rev() {
             let (j, r) = (&m.joints[i], &self.rotation[i]);
             let rec = &records[i];
@@ -395,140 +369,85 @@ impl<P: Evaluator> Chain<P> {
             // with an error, before this pass).
             let mut a = unsafe { rec.angle.assume_init_read() };
             let link = j.link_at(dt);
-            let w = &mut out.v[TIP];
+            let w = &mut v[TIP];
             *w = [w[0] + link[0], w[1] + link[1], w[2] + link[2]];
             if j.has_gravity {
                 // SAFETY: the first pass wrote the frame exactly where `has_gravity`.
                 let f = unsafe { rec.frame.assume_init_read() };
-                a = out.deflect(a, j.gravity, &f, second_order);
+                let [w, shift, _] = &mut v;
+                let (ux, uy) = (w[0] - shift[0], w[1] - shift[1]);
+                let lever = ux.scale(f.vertical[1]) - uy.scale(f.vertical[0]);
+                let eg = P::gravity(j.gravity, lever);
+                if second_order {
+                    // The half angle h = e/2 of the deflection: sin h to third order, 1 − cos h
+                    // to second (errors h⁵/120 and h⁴/24: under 1e-12 at the table's largest
+                    // deflection, e ≈ 6.2e-3 on a 2064 mm lever); the joint turns by it.
+                    let h = P::half(eg);
+                    let h2 = h.scale(h);
+                    let sh = h + h.scale(h2).scale(P::SIN[0]);
+                    let ch = P::half(h2);
+                    a = a.turned_by(sh, ch);
+                    // The full deflection: sin e = 2 sin h (1 − (1 − cos h)), 1 − cos e = 2 sin² h.
+                    let se = sh - sh.scale(ch);
+                    let se = se + se;
+                    let ce = sh.scale(sh);
+                    let ce = ce + ce;
+                    // The deflected joint sees the undeflected tip at R(−e) u, the deflected at
+                    // w = u + shift: the shift grows by (I − R(−e)) u.
+                    *shift = [
+                        shift[0] + (ux.scale(ce) - uy.scale(se)),
+                        shift[1] + (uy.scale(ce) + ux.scale(se)),
+                        shift[2],
+                    ];
+                } else {
+                    a = a.turned(P::half(eg));
+                    let wk = f.axis.map(|x| x.scale(eg));
+                    omega = [omega[0] + wk[0], omega[1] + wk[1], omega[2] + wk[2]];
+                    deflected = true;
+                }
             }
+            let (sin2, omc) = a.double();
+            let e = &r.near;
             // SAFETY: the first pass wrote φ exactly where the joint wobbles.
             let phi = (wobble && self.wobble.has(i)).then(|| unsafe { phis[i].assume_init_read() });
-            let (sin2, omc) = a.double();
-            for x in out.v.iter_mut().take(carried) {
-                *x = carry(*x, &a, sin2, omc, phi.as_ref(), r);
+            for x in v.iter_mut().take(carried) {
+                // The remainder turn as a correction, the wobble's small turn, M''_i as
+                // x + E_i x, the relabelling.
+                let (p, q) = quarter_turns(a.q, (x[0], x[1]));
+                let mut t = [
+                    p - (q.scale(sin2) + p.scale(omc)),
+                    q + (p.scale(sin2) - q.scale(omc)),
+                    x[2],
+                ];
+                if let Some(phi) = &phi {
+                    t = turn_small(phi, t);
+                }
+                *x = relabel(
+                    [
+                        t[0] + (t[0].scale(e[0]) + t[1].scale(e[1]) + t[2].scale(e[2])),
+                        t[1] + (t[0].scale(e[3]) + t[1].scale(e[4]) + t[2].scale(e[5])),
+                        t[2] + (t[0].scale(e[6]) + t[1].scale(e[7]) + t[2].scale(e[8])),
+                    ],
+                    r.shift,
+                );
             }
         }
-        out
-    }
 
-    /// The point from the tip's orientation `q` and the second pass's vectors: the probe
-    /// direction is the carried one with the second-order terms, else n = Q v̂_p Q*, turned
-    /// by Ω to first order.
-    #[inline(always)]
-    fn point(&self, q: &Quat<P>, back: TipToBase<P>, second_order: bool) -> Point<P> {
         let dir = if second_order {
-            back.v[DIR].map(P::l1024_as_u)
+            v[DIR].map(P::l1024_as_u)
         } else {
-            let n = q.rotate(&self.model.probe_dir, q.rotation_factor());
-            if back.deflected {
-                let t = cross::<P>(&back.omega, &n);
+            // n = Q v̂_p Q*, turned by Ω to first order.
+            let n = q.rotate(&m.probe_dir, q.rotation_factor());
+            if deflected {
+                let t = cross::<P>(&omega, &n);
                 [n[0] + t[0], n[1] + t[1], n[2] + t[2]]
             } else {
                 n
             }
         };
-        Point {
-            xyz: back.v[TIP],
-            dir,
-        }
+        let w = v[TIP];
+        Ok(Point { xyz: w, dir })
     }
-}
-
-/// The tip in [`TipToBase::v`].
-const TIP: usize = 0;
-/// The probe direction (1024 mm) in [`TipToBase::v`], carried only with the second-order
-/// gravity terms.
-const DIR: usize = 2;
-
-/// What the tip-to-base pass carries and sums.
-struct TipToBase<P: Physics> {
-    /// The tip, the shift, the direction.
-    v: [Vec3<P::L>; 3],
-    /// Without the second-order terms: Ω = Σ e_k a_k, the first-order turn of the direction
-    /// by the deflections (the deflected orientation is R(ω_1) … R(ω_N) Q with ω_k = e_k a_k
-    /// about the undeflected axes).
-    omega: Vec3<P::U>,
-    /// Whether any joint has turned Ω.
-    deflected: bool,
-}
-
-impl<P: Physics> TipToBase<P> {
-    /// The joint's angle `a` turned by its gravity deflection e = g (u × w)·z (compliance
-    /// `g`, frame `f`), and the shift (second order) or Ω (first order) grown by it.
-    #[inline(always)]
-    fn deflect(
-        &mut self,
-        a: Quarter<P>,
-        g: P::Gravity,
-        f: &Frame<P>,
-        second_order: bool,
-    ) -> Quarter<P> {
-        let [w, shift, _] = &mut self.v;
-        let (ux, uy) = (w[0] - shift[0], w[1] - shift[1]);
-        let lever = ux.scale(f.vertical[1]) - uy.scale(f.vertical[0]);
-        let eg = P::gravity(g, lever);
-        if second_order {
-            // The half angle h = e/2 of the deflection: sin h to third order, 1 − cos h
-            // to second (errors h⁵/120 and h⁴/24: under 1e-12 at the table's largest
-            // deflection, e ≈ 6.2e-3 on a 2064 mm lever); the joint turns by it.
-            let h = P::half(eg);
-            let h2 = h.scale(h);
-            let sh = h + h.scale(h2).scale(P::SIN[0]);
-            let ch = P::half(h2);
-            // The full deflection: sin e = 2 sin h (1 − (1 − cos h)), 1 − cos e = 2 sin² h.
-            let se = sh - sh.scale(ch);
-            let se = se + se;
-            let ce = sh.scale(sh);
-            let ce = ce + ce;
-            // The deflected joint sees the undeflected tip at R(−e) u, the deflected at
-            // w = u + shift: the shift grows by (I − R(−e)) u.
-            *shift = [
-                shift[0] + (ux.scale(ce) - uy.scale(se)),
-                shift[1] + (uy.scale(ce) + ux.scale(se)),
-                shift[2],
-            ];
-            a.turned_by(sh, ch)
-        } else {
-            let wk = f.axis.map(|x| x.scale(eg));
-            let o = &mut self.omega;
-            *o = [o[0] + wk[0], o[1] + wk[1], o[2] + wk[2]];
-            self.deflected = true;
-            a.turned(P::half(eg))
-        }
-    }
-}
-
-/// One carried vector `x` through joint `r`'s step of the second pass: the remainder turn of
-/// the angle `a` (its double angle's sin2 and 1 − cos, `omc`) as a correction, the wobble's
-/// small turn `phi`, M''_i as x + E_i x, the relabelling.
-#[inline(always)]
-fn carry<P: Physics>(
-    x: Vec3<P::L>,
-    a: &Quarter<P>,
-    sin2: P::U,
-    omc: P::U,
-    phi: Option<&Vec3<P::U>>,
-    r: &JointRotation<P>,
-) -> Vec3<P::L> {
-    let (p, q) = quarter_turns(a.q, (x[0], x[1]));
-    let mut t = [
-        p - (q.scale(sin2) + p.scale(omc)),
-        q + (p.scale(sin2) - q.scale(omc)),
-        x[2],
-    ];
-    if let Some(phi) = phi {
-        t = turn_small(phi, t);
-    }
-    let e = &r.near;
-    relabel(
-        [
-            t[0] + (t[0].scale(e[0]) + t[1].scale(e[1]) + t[2].scale(e[2])),
-            t[1] + (t[0].scale(e[3]) + t[1].scale(e[4]) + t[2].scale(e[5])),
-            t[2] + (t[0].scale(e[6]) + t[1].scale(e[7]) + t[2].scale(e[8])),
-        ],
-        r.shift,
-    )
 }
 
 #[cfg(test)]
