@@ -73,6 +73,32 @@ pub struct Row {
     pub file: Option<std::sync::Arc<str>>,
 }
 
+impl Row {
+    /// A `point` row made in memory (simulated or designed): the ball at `xyz` in the
+    /// instrument frame, no line or file of its own.
+    pub fn point(
+        group: i64,
+        theta: Vec<f64>,
+        xyz: [f64; 3],
+        temp_c: f64,
+        probe: Option<u8>,
+    ) -> Row {
+        Row {
+            kind: Kind::Point,
+            group,
+            theta,
+            xyz: Some(xyz),
+            end: None,
+            length_mm: None,
+            sphere: None,
+            temp_c,
+            probe,
+            line: 0,
+            file: None,
+        }
+    }
+}
+
 /// What a `sphere` row touches.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Touch {

@@ -307,19 +307,7 @@ fn point_rows(
                 .sum::<Vector3<f64>>();
         let noise = Vector3::new(normal(rng), normal(rng), normal(rng)) * opts.noise_mm;
         let x = r * p + t + noise;
-        rows.push(Row {
-            kind: Kind::Point,
-            group: 1,
-            theta: th,
-            xyz: Some([x.x, x.y, x.z]),
-            end: None,
-            length_mm: None,
-            sphere: None,
-            temp_c: tc,
-            probe,
-            line: 0,
-            file: None,
-        });
+        rows.push(Row::point(1, th, [x.x, x.y, x.z], tc, probe));
     }
     rows
 }

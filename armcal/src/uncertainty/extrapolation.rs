@@ -249,25 +249,13 @@ impl JointSupport {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::data::{Kind, Row};
+    use crate::data::Row;
 
     /// A joint inside its calibration range has no excess; outside, its distance to the
     /// nearer end, the largest over the joints.
     #[test]
     fn the_range_excess_is_the_farthest_joints_distance_outside() {
-        let row = |theta: Vec<f64>| Row {
-            kind: Kind::Point,
-            group: 0,
-            theta,
-            xyz: Some([0.0; 3]),
-            end: None,
-            length_mm: None,
-            sphere: None,
-            temp_c: 20.0,
-            probe: None,
-            line: 0,
-            file: None,
-        };
+        let row = |theta: Vec<f64>| Row::point(0, theta, [0.0; 3], 20.0, None);
         let data = Dataset {
             rows: vec![row(vec![0.0, -1.0]), row(vec![0.5, 1.0])],
             dof: 2,

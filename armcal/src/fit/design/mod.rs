@@ -38,19 +38,7 @@ pub fn design_like(arm: &Arm, like: &Dataset, seed: u64) -> Dataset {
             let th = random_pose(&lim, &mut rng);
             let tc = next_temp(&mut rng);
             let p = forward::forward(mounted, &th, tc).p;
-            rows.push(Row {
-                kind: Kind::Point,
-                group: 0,
-                theta: th,
-                xyz: Some([p.x, p.y, p.z]),
-                end: None,
-                length_mm: None,
-                sphere: None,
-                temp_c: tc,
-                probe,
-                line: 0,
-                file: None,
-            });
+            rows.push(Row::point(0, th, [p.x, p.y, p.z], tc, probe));
         }
     }
     if like.rows.iter().any(|r| r.kind == Kind::Spat) {
