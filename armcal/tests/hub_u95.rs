@@ -310,6 +310,7 @@ fn random_budget(
         probing_mm: 0.002,
         temperature_c: 0.2,
         model_mm: 0.0,
+        pose: None,
     }
 }
 

@@ -180,6 +180,30 @@ pub struct Uncertainty {
     pub temperature_c: f64,
     /// What the model leaves unexplained, per axis (mm).
     pub model_mm: f64,
+    /// The pose part of `covariance` kept apart, for the leverage-scaled pose term; `None`
+    /// when the file has none (the budget then reads as `covariance` alone).
+    pub pose: Option<PoseLeverage>,
+}
+
+/// The pose part of the budget's covariance, kept apart so that a reading at a placement the
+/// calibration did not see can widen it (issue 27; keys `pose_factor`, `pose_shrink` and
+/// `pose_leverage_mean` of `[uncertainty]`, proposed in `docs/spec-reading.md`).
+///
+/// The pose part is P = D Dᵀ + b · C_fit, where D's columns are `factor` (the between-group
+/// spread of the parameters, low rank: one column per held-out group at most), b is
+/// `shrink`, and C_fit = (`covariance` − D Dᵀ)/(1 + b) is the fit's own covariance, so that
+/// `covariance` = C_fit + P is the budget read without these keys. A reading whose Jacobian
+/// is J has the leverage ratio ℓ = tr(J C_fit Jᵀ) / `leverage_mean` and the variance
+/// J `covariance` Jᵀ + (max(1, ℓ) − 1) · J P Jᵀ beside the reading's own terms: the pose part
+/// grows where the calibration's design gave the parameters little hold.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PoseLeverage {
+    /// D's columns, each one value per parameter in `parameters`' order (units).
+    pub factor: Vec<Vec<f64>>,
+    /// b ≥ 0: the weight of the fit's own covariance in the pose part.
+    pub shrink: f64,
+    /// The calibration rows' mean of tr(J C_fit Jᵀ) (mm²), > 0.
+    pub leverage_mean: f64,
 }
 
 impl Uncertainty {
@@ -300,6 +324,7 @@ pub fn parse(
         probing_mm: opt("probing_mm", limits.budget_mm)?,
         temperature_c: opt("temperature_c", limits.budget_temperature_c)?,
         model_mm: opt("model_mm", limits.budget_mm)?,
+        pose: None,
     })
 }
 

@@ -198,6 +198,7 @@ mod tests {
             probing_mm: 0.002,
             temperature_c: 0.2,
             model_mm: 0.0,
+            pose: None,
         };
         let kinds = |arm: &Arm| -> Vec<(Kind, u16, u8)> {
             let b = parameter_data(&budget, arm).unwrap().unwrap();

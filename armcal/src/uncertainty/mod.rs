@@ -123,6 +123,7 @@ impl Budget {
             probing_mm: self.probing_mm,
             temperature_c: self.temperature_c,
             model_mm: self.model_mm,
+            pose: None,
         })
     }
 
