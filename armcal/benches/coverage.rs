@@ -21,6 +21,7 @@
 use armcal::fit::design::poses::{limits, random_pose};
 use armcal::uncertainty::coverage::{self, Setup};
 use armcal::uncertainty::pose::conformal_scale;
+use armcal::uncertainty::realdata::forms;
 use armcal::uncertainty::{montecarlo, propagate, realdata, u95};
 use std::time::Instant;
 
@@ -343,6 +344,9 @@ fn mukca_variants() {
         return println!("MUKCa: no units");
     };
     let t0 = Instant::now();
+    if std::env::args().any(|a| a == "round4") {
+        return round4(&dir, &units);
+    }
     let v = Variants::score(
         units
             .iter()
@@ -373,7 +377,201 @@ fn mukca_variants() {
             ..realdata::Rule::product(realdata::fleet_scale(&v.others(k, 6)))
         },
     );
+    round4(&dir, &units);
     println!("  took {:.0} s", t0.elapsed().as_secs_f64());
+}
+
+/// The pose part's factors measured in round 4 (`realdata::forms`): ℓ indices 0 = C dev,
+/// 1 = P dev, 2 = C tip, 3 = joints.
+const ROUND4_FACTORS: [forms::Factor; 15] = [
+    forms::Factor::One,
+    forms::Factor::Floored(0),
+    forms::Factor::Floored(1),
+    forms::Factor::Mix(0, 1),
+    forms::Factor::Larger(0, 1),
+    forms::Factor::Floored(2),
+    forms::Factor::Mix(0, 2),
+    forms::Factor::Raw(0),
+    forms::Factor::Raw(1),
+    forms::Factor::Raw(2),
+    forms::Factor::Larger(0, 2),
+    forms::Factor::Floored(3),
+    forms::Factor::Root(3),
+    forms::Factor::Mix(0, 3),
+    forms::Factor::Larger(0, 3),
+];
+
+/// Round 4 of issue 27 (`docs/results/uncertainty.md`, "Round 4: panda_1 and dinova_2"):
+/// every unit with ≥ 3 sessions fitted once per training set, then every variant of
+/// [`ROUND4_FACTORS`] × (τ² scaled by the factor or not) × (validated κ × the t-ratio or
+/// not) nested; the choice among them scored by leaving units out; the U95's split per
+/// unit under the product, the leverage form and the chosen variants.
+fn round4(dir: &std::path::Path, names: &[(String, String)]) {
+    let t0 = Instant::now();
+    let units: Vec<forms::UnitRows> = names
+        .iter()
+        .filter_map(|(n, _)| armcal::mukca::load(dir, n).ok())
+        .filter_map(|u| forms::unit_rows(&u))
+        .collect();
+    println!(
+        "round 4: {} units fitted per training set in {:.0} s",
+        units.len(),
+        t0.elapsed().as_secs_f64()
+    );
+    println!("  leverage ratios per scored session (median over its probings, outer folds): ℓC ℓP ℓT ℓJ");
+    for u in &units {
+        for t in &u.outer {
+            let mut l: Vec<[f64; forms::NQ]> = t.scored.iter().map(|r| r.ratios(&t.norm)).collect();
+            let mut med = |k: usize| {
+                l.sort_by(|a, b| a[k].total_cmp(&b[k]));
+                l.get(l.len() / 2).map_or(f64::NAN, |x| x[k])
+            };
+            let (a, b, c, d) = (med(0), med(1), med(2), med(3));
+            let s = t.scored.first().map_or(-1, |r| r.session);
+            println!(
+                "    {}/{}: {a:.2} {b:.2} {c:.2} {d:.2}",
+                u.name,
+                u.sessions.get(&s).cloned().unwrap_or_default()
+            );
+        }
+    }
+    let kappas: Vec<forms::FactorKappas> = ROUND4_FACTORS
+        .iter()
+        .map(|f| forms::FactorKappas::of(&units, *f))
+        .collect();
+    println!("  κ scored in {:.0} s", t0.elapsed().as_secs_f64());
+    let mut variants = Vec::new();
+    for fk in &kappas {
+        for iso_scaled in [false, true] {
+            for t_corrected in [false, true] {
+                variants.push((
+                    forms::Variant {
+                        factor: fk.factor,
+                        iso_scaled,
+                        t_corrected,
+                    },
+                    fk,
+                ));
+            }
+        }
+    }
+    println!(
+        "  nested coverage per unit ({}), in the band 88–99 %, pooled:",
+        units.iter().map(|u| u.name.as_str()).collect::<Vec<_>>().join(" ")
+    );
+    let mut table = Vec::new();
+    let mut results = Vec::new();
+    for (v, fk) in &variants {
+        let r = forms::nested(&units, v, fk);
+        let cov: Vec<(f64, usize)> = r.iter().map(|x| (x.covered, x.probings)).collect();
+        let (inside, _) = forms::merit(&cov);
+        let n: usize = cov.iter().map(|c| c.1).sum();
+        let pooled = cov.iter().map(|(c, p)| c * *p as f64).sum::<f64>() / n.max(1) as f64;
+        println!(
+            "    {:<40} {}  — {inside}/{} in, pooled {pooled:.3}",
+            v.name(),
+            r.iter()
+                .map(|x| format!("{:.3}", x.covered))
+                .collect::<Vec<_>>()
+                .join(" "),
+            r.len()
+        );
+        table.push(cov);
+        results.push(r);
+    }
+    println!("  median U95 mm per unit:");
+    for ((v, _), r) in variants.iter().zip(&results) {
+        println!(
+            "    {:<40} {}",
+            v.name(),
+            r.iter()
+                .map(|x| format!("{:.3}", x.median_u95))
+                .collect::<Vec<_>>()
+                .join(" ")
+        );
+    }
+    println!(
+        "  sensitivity, not a selection: the product's κ (validated and fleet) times m, \
+         nested coverage per unit"
+    );
+    for m in [0.0, 0.1, 0.2, 0.3, 0.5, 0.7, 1.0] {
+        let mut fk = kappas[0].clone();
+        fk.two_session.iter_mut().for_each(|k| *k *= m);
+        fk.validated
+            .iter_mut()
+            .flatten()
+            .for_each(|k| *k *= m);
+        let r = forms::nested(&units, &variants[0].0, &fk);
+        println!(
+            "    m = {m:<4} {}",
+            r.iter()
+                .map(|x| format!("{:.3}", x.covered))
+                .collect::<Vec<_>>()
+                .join(" ")
+        );
+    }
+    let louo = forms::leave_one_unit_out(&table);
+    let n: usize = table[0].iter().map(|c| c.1).sum();
+    let pooled = louo
+        .iter()
+        .zip(&table[0])
+        .map(|((_, c), (_, p))| c * *p as f64)
+        .sum::<f64>()
+        / n.max(1) as f64;
+    println!("  the choice among the variants, each unit judged by the choice of the other units:");
+    for ((b, c), u) in louo.iter().zip(&units) {
+        println!("    {:<12} {:<40} {c:.3}", u.name, variants[*b].0.name());
+    }
+    println!(
+        "    {} of {} in the band, pooled {pooled:.3}",
+        louo.iter()
+            .filter(|(_, c)| (forms::BAND.0..=forms::BAND.1).contains(c))
+            .count(),
+        louo.len()
+    );
+    let mut shown: Vec<usize> = vec![0, 4];
+    for (b, _) in &louo {
+        if !shown.contains(b) {
+            shown.push(*b);
+        }
+    }
+    for &v in &shown {
+        println!(
+            "  {}: per fold κ (* fleet), τ mm, median U95 mm, median share of its trace              [parameters, own, pose, isotropic], coverage",
+            variants[v].0.name()
+        );
+        for (u, r) in units.iter().zip(&results[v]) {
+            for j in &r.folds {
+                let mut us: Vec<f64> = j.rows.iter().map(|x| x.1).collect();
+                us.sort_by(f64::total_cmp);
+                let share = |k: usize| {
+                    let mut s: Vec<f64> = j
+                        .rows
+                        .iter()
+                        .map(|x| x.2[k] / x.2.iter().sum::<f64>().max(1e-300))
+                        .collect();
+                    s.sort_by(f64::total_cmp);
+                    s.get(s.len() / 2).copied().unwrap_or(f64::NAN)
+                };
+                println!(
+                    "    {}/{}: κ {:.3}{} τ {:.4} U95 {:.3} [{:.2} {:.2} {:.2} {:.2}] {:.3} of {}",
+                    u.name,
+                    u.sessions.get(&j.session).cloned().unwrap_or_default(),
+                    j.kappa,
+                    if j.validated { "" } else { "*" },
+                    j.tau,
+                    us.get(us.len() / 2).copied().unwrap_or(f64::NAN),
+                    share(0),
+                    share(1),
+                    share(2),
+                    share(3),
+                    j.rows.iter().filter(|x| x.0).count() as f64 / j.rows.len().max(1) as f64,
+                    j.rows.len()
+                );
+            }
+        }
+    }
+    println!("  round 4 took {:.0} s", t0.elapsed().as_secs_f64());
 }
 
 /// The units with ≥ 3 sessions, their two-session scores under each of [`COLUMNS`] (plus ℓ

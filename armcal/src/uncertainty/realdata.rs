@@ -14,6 +14,8 @@
 //! the pose-dependent term ([`super::pose`]) and the isotropic term from their own
 //! leave-one-session-out fits, so the scored session never sets either.
 
+pub mod forms;
+
 use super::estimate::{self, Settings};
 use super::{propagate, u95, Budget};
 use crate::data::Dataset;
