@@ -383,7 +383,7 @@ fn mukca_variants() {
 
 /// The pose part's factors measured in round 4 (`realdata::forms`): ℓ indices 0 = C dev,
 /// 1 = P dev, 2 = C tip, 3 = joints.
-const ROUND4_FACTORS: [forms::Factor; 15] = [
+const ROUND4_FACTORS: [forms::Factor; 16] = [
     forms::Factor::One,
     forms::Factor::Floored(0),
     forms::Factor::Floored(1),
@@ -399,6 +399,7 @@ const ROUND4_FACTORS: [forms::Factor; 15] = [
     forms::Factor::Root(3),
     forms::Factor::Mix(0, 3),
     forms::Factor::Larger(0, 3),
+    forms::Factor::Larger(2, 3),
 ];
 
 /// Round 4 of issue 27 (`docs/results/uncertainty.md`, "Round 4: panda_1 and dinova_2"):
@@ -418,7 +419,9 @@ fn round4(dir: &std::path::Path, names: &[(String, String)]) {
         units.len(),
         t0.elapsed().as_secs_f64()
     );
-    println!("  leverage ratios per scored session (median over its probings, outer folds): ℓC ℓP ℓT ℓJ");
+    println!(
+        "  leverage ratios per scored session (median over its probings, outer folds): ℓC ℓP ℓT ℓJ"
+    );
     for u in &units {
         for t in &u.outer {
             let mut l: Vec<[f64; forms::NQ]> = t.scored.iter().map(|r| r.ratios(&t.norm)).collect();
@@ -440,6 +443,21 @@ fn round4(dir: &std::path::Path, names: &[(String, String)]) {
         .map(|f| forms::FactorKappas::of(&units, *f))
         .collect();
     println!("  κ scored in {:.0} s", t0.elapsed().as_secs_f64());
+    println!(
+        "  two-session κ per unit under each factor, and the 9 units' median (a product default):"
+    );
+    for fk in &kappas {
+        println!(
+            "    {:<24} {}  median {:.3}",
+            fk.factor.name(),
+            fk.two_session
+                .iter()
+                .map(|k| format!("{k:.3}"))
+                .collect::<Vec<_>>()
+                .join(" "),
+            realdata::fleet_scale(&fk.two_session)
+        );
+    }
     let mut variants = Vec::new();
     for fk in &kappas {
         for iso_scaled in [false, true] {
@@ -457,7 +475,11 @@ fn round4(dir: &std::path::Path, names: &[(String, String)]) {
     }
     println!(
         "  nested coverage per unit ({}), in the band 88–99 %, pooled:",
-        units.iter().map(|u| u.name.as_str()).collect::<Vec<_>>().join(" ")
+        units
+            .iter()
+            .map(|u| u.name.as_str())
+            .collect::<Vec<_>>()
+            .join(" ")
     );
     let mut table = Vec::new();
     let mut results = Vec::new();
@@ -497,10 +519,7 @@ fn round4(dir: &std::path::Path, names: &[(String, String)]) {
     for m in [0.0, 0.1, 0.2, 0.3, 0.5, 0.7, 1.0] {
         let mut fk = kappas[0].clone();
         fk.two_session.iter_mut().for_each(|k| *k *= m);
-        fk.validated
-            .iter_mut()
-            .flatten()
-            .for_each(|k| *k *= m);
+        fk.validated.iter_mut().flatten().for_each(|k| *k *= m);
         let r = forms::nested(&units, &variants[0].0, &fk);
         println!(
             "    m = {m:<4} {}",

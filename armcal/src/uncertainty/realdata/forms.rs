@@ -141,7 +141,9 @@ fn tip_traces(arm: &quatarm_ref::arm::Arm, c_only: &Budget, data: &Dataset) -> V
         .iter()
         .map(|r| {
             let probe = crate::fit::probes::index(arm, r);
-            propagate::point(arm, probe, c_only, &r.theta, r.temp_c).1.trace()
+            propagate::point(arm, probe, c_only, &r.theta, r.temp_c)
+                .1
+                .trace()
         })
         .collect()
 }
@@ -455,7 +457,11 @@ impl Variant {
             "{}{}{}",
             self.factor.name(),
             if self.iso_scaled { ", τ² × f" } else { "" },
-            if self.t_corrected { ", κ × t-ratio" } else { "" }
+            if self.t_corrected {
+                ", κ × t-ratio"
+            } else {
+                ""
+            }
         )
     }
 }
@@ -563,10 +569,10 @@ pub fn judge(t: &Trained, v: &Variant, own: f64, fleet: f64) -> Judged {
     let validated = t.groups >= 3;
     let kappa = if validated {
         own * if v.t_corrected {
-                t_ratio(t.groups)
-            } else {
-                1.0
-            }
+            t_ratio(t.groups)
+        } else {
+            1.0
+        }
     } else {
         fleet
     };
@@ -703,6 +709,10 @@ mod tests {
         assert_eq!(Factor::Larger(1, 2).at(&l), 9.0);
         assert_eq!(Factor::Raw(1).at(&l), 0.25);
         assert_eq!(Factor::Root(3).at(&l), 4.0);
+        // Round 4's candidate: the larger of the C leverage and the joints' ratio.
+        assert_eq!(Factor::Larger(0, 3).at(&l), 16.0);
+        assert_eq!(Factor::Larger(0, 3).at(&[4.0, 1.0, 1.0, 0.5]), 4.0);
+        assert_eq!(Factor::Larger(0, 3).at(&[0.2, 1.0, 1.0, 0.5]), 1.0);
         assert_eq!(Factor::Root(1).at(&l), 1.0);
         assert_eq!(Factor::Raw(0).at(&[f64::NAN, 1.0, 1.0, 1.0]), 1.0);
         assert_eq!(ratio(2.0, 0.0), 1.0);
@@ -730,6 +740,12 @@ mod tests {
         let f = joint_ratio(&data).expect("spread");
         let mean = data.rows.iter().map(|r| f(&r.theta)).sum::<f64>() / 20.0;
         assert!((mean - 1.0).abs() < 1e-9, "{mean}");
+        // Its normaliser is k (n − 1)/n for k moving joints and n rows (the sample
+        // covariance's identity): a table needs n, not another mean.
+        let sup = crate::uncertainty::extrapolation::JointSupport::of(&data).expect("spread");
+        let th = [0.3, -0.2];
+        let d2 = sup.distance(&th).powi(2);
+        assert!((f(&th) - d2 * 20.0 / (2.0 * 19.0)).abs() < 1e-9 * f(&th));
         assert!(f(&[1.0, 1.0]) > 10.0);
         let still = Dataset {
             rows: vec![row(0.1, 0.2); 5],
