@@ -174,6 +174,9 @@ pub fn joint_ratio(train: &Dataset) -> Option<impl Fn(&[f64]) -> f64> {
     (mean > 0.0).then_some(move |theta: &[f64]| sup.distance(theta).powi(2) / mean)
 }
 
+/// A [`joint_ratio`] kept per group.
+type JointRatio = Box<dyn Fn(&[f64]) -> f64>;
+
 /// The rows of `data` in groups other than `group`.
 fn others_of(data: &Dataset, group: i64) -> Dataset {
     Dataset {
@@ -318,13 +321,12 @@ fn inner_rows(
     let tip = tip_traces(arm, &c_only, data);
     // The joints' ratio of a held-out row against the *other* groups' joint angles: what a
     // fit without its group saw.
-    let mut joints: HashMap<i64, Option<Box<dyn Fn(&[f64]) -> f64>>> = HashMap::new();
+    let mut joints: HashMap<i64, Option<JointRatio>> = HashMap::new();
     rows.into_iter()
         .map(|r| {
             let group = data.rows[r.row].group;
             let jr = joints.entry(group).or_insert_with(|| {
-                joint_ratio(&others_of(data, group))
-                    .map(|f| Box::new(f) as Box<dyn Fn(&[f64]) -> f64>)
+                joint_ratio(&others_of(data, group)).map(|f| Box::new(f) as JointRatio)
             });
             let lj = jr.as_ref().map_or(1.0, |f| f(&data.rows[r.row].theta));
             let p = extra.get(&r.row).copied().unwrap_or_else(Matrix3::zeros);
