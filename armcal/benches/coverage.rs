@@ -548,6 +548,19 @@ fn round4(dir: &std::path::Path, names: &[(String, String)]) {
             .count(),
         louo.len()
     );
+    println!(
+        "  intervals (95 %): per unit Wilson over its probings (as if independent), pooled by \
+         resampling whole sessions (20,000 draws)"
+    );
+    for &v in &[0usize, 4] {
+        intervals(&variants[v].0.name(), &units, &results[v]);
+    }
+    let chosen: Vec<usize> = louo.iter().map(|(b, _)| *b).collect();
+    if chosen.windows(2).all(|w| w[0] == w[1]) {
+        if let Some(&b) = chosen.first() {
+            intervals(&variants[b].0.name(), &units, &results[b]);
+        }
+    }
     let mut shown: Vec<usize> = vec![0, 4];
     for (b, _) in &louo {
         if !shown.contains(b) {
@@ -591,6 +604,35 @@ fn round4(dir: &std::path::Path, names: &[(String, String)]) {
         }
     }
     println!("  round 4 took {:.0} s", t0.elapsed().as_secs_f64());
+}
+
+/// One variant's per-unit Wilson intervals and its pooled session-bootstrap interval.
+fn intervals(name: &str, units: &[forms::UnitRows], r: &[forms::UnitResult]) {
+    let mut sessions = Vec::new();
+    let cells: Vec<String> = units
+        .iter()
+        .zip(r)
+        .map(|(u, x)| {
+            let k: usize = x.folds.iter().flat_map(|j| &j.rows).filter(|r| r.0).count();
+            sessions.extend(
+                x.folds
+                    .iter()
+                    .map(|j| (j.rows.iter().filter(|r| r.0).count(), j.rows.len())),
+            );
+            let (lo, hi) = forms::wilson(k, x.probings);
+            format!("{} {:.3} [{lo:.3}, {hi:.3}]", u.name, x.covered)
+        })
+        .collect();
+    let (k, n) = sessions
+        .iter()
+        .fold((0, 0), |(a, b), (k, n)| (a + k, b + n));
+    let (lo, hi) = forms::session_bootstrap(&sessions, 20_000, 27);
+    println!(
+        "    {name}: {}; pooled {:.3} [{lo:.3}, {hi:.3}] over {} sessions",
+        cells.join(", "),
+        k as f64 / n.max(1) as f64,
+        sessions.len()
+    );
 }
 
 /// The units with ≥ 3 sessions, their two-session scores under each of [`COLUMNS`] (plus ℓ

@@ -695,6 +695,46 @@ pub fn leave_one_unit_out(table: &[Vec<(f64, usize)>]) -> Vec<(usize, f64)> {
         .collect()
 }
 
+/// The 95 % Wilson score interval of `k` covered of `n`, as if the probings were
+/// independent. They are not (a session's probings share its placement), so this is the
+/// narrowest honest reading of a unit's figure; [`session_bootstrap`] is the pooled one's.
+pub fn wilson(k: usize, n: usize) -> (f64, f64) {
+    if n == 0 {
+        return (0.0, 1.0);
+    }
+    let (z, nf) = (1.959_963_985, n as f64);
+    let p = k as f64 / nf;
+    let d = 1.0 + z * z / nf;
+    let c = (p + z * z / (2.0 * nf)) / d;
+    let h = z * (p * (1.0 - p) / nf + z * z / (4.0 * nf * nf)).sqrt() / d;
+    ((c - h).max(0.0), (c + h).min(1.0))
+}
+
+/// A 95 % interval of a pooled coverage with whole sessions resampled (percentile bootstrap,
+/// `draws` resamples from `seed`): `sessions` are (covered, probings) per session, the unit
+/// that is exchangeable. (0, 1) without sessions.
+pub fn session_bootstrap(sessions: &[(usize, usize)], draws: usize, seed: u64) -> (f64, f64) {
+    use rand::Rng;
+    if sessions.is_empty() || draws == 0 {
+        return (0.0, 1.0);
+    }
+    let mut rng = crate::rng::rng(seed);
+    let mut v: Vec<f64> = (0..draws)
+        .map(|_| {
+            let (mut k, mut n) = (0usize, 0usize);
+            for _ in 0..sessions.len() {
+                let s = sessions[rng.gen_range(0..sessions.len())];
+                k += s.0;
+                n += s.1;
+            }
+            k as f64 / n.max(1) as f64
+        })
+        .collect();
+    v.sort_by(f64::total_cmp);
+    let at = |q: f64| v[((q * draws as f64) as usize).min(draws - 1)];
+    (at(0.025), at(0.975))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -754,6 +794,24 @@ mod tests {
             ..data.clone()
         };
         assert!(joint_ratio(&still).is_none());
+    }
+
+    /// The intervals hold their point and widen with fewer probings or sessions.
+    #[test]
+    fn the_intervals_hold_the_figure_and_widen_with_less_data() {
+        let (lo, hi) = wilson(90, 100);
+        assert!(lo < 0.9 && hi > 0.9 && lo > 0.8 && hi < 0.96, "{lo} {hi}");
+        let (a, b) = wilson(900, 1000);
+        assert!(b - a < hi - lo);
+        assert_eq!(wilson(0, 0), (0.0, 1.0));
+        let same = [(50, 60); 8];
+        assert_eq!(session_bootstrap(&same, 200, 1), (50.0 / 60.0, 50.0 / 60.0));
+        let mixed = [(60, 60), (60, 60), (30, 60), (58, 60)];
+        let (lo, hi) = session_bootstrap(&mixed, 2000, 1);
+        assert!(
+            lo < 208.0 / 240.0 && hi > 208.0 / 240.0 && hi <= 1.0,
+            "{lo} {hi}"
+        );
     }
 
     /// The t-ratio shrinks a κ validated on spreads with one group fewer, most with few
