@@ -12,7 +12,11 @@
 //! budget with the pose-dependent term, its scale per session, the pooled coverage with the
 //! term's σ multiplied by m = 0…3 as a sensitivity, and both extrapolation flags per session);
 //! `mukca-variants` for the variants measured towards each unit in 88–99 % (forms of the pose
-//! term, a leverage-scaled one, κ pooled with the fleet's, few-groups factors).
+//! term, a leverage-scaled one, κ pooled with the fleet's, few-groups factors), then round 4
+//! (`armcal::uncertainty::realdata::forms`: the pose part times a per-reading factor from
+//! leverage ratios of the chain, the pose part, the tip and the joints, every unit nested,
+//! the choice among them scored by leaving units out); `mukca-variants round4` runs round 4
+//! alone.
 //! `new-user` runs the new user instead (`Setup::NEW_USER`: `default-6-full` as the
 //! truth, calibrated with the geometric model, the model term as `calibrate` estimates it);
 //! `held-out` runs the benchmark with the model term estimated from 5 folds as `calibrate`
