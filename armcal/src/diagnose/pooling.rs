@@ -163,7 +163,7 @@ pub fn interval_df(nu: f64, arms: usize) -> f64 {
 /// seldom (docs/results/claims.md §7.5).
 pub fn satterthwaite_df(own: f64, b: f64, nu: f64, design: f64, arms: usize) -> f64 {
     let total = own + design;
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return arms.saturating_sub(1).max(1) as f64;
     }
     let (o, d) = (own / total, design / total);
@@ -192,7 +192,7 @@ pub fn pool(y: &[f64], se: &[f64], df: &[f64], alpha: f64) -> Option<(Design, Ve
         || se.len() != k
         || df.len() != k
         || se.iter().any(|s| !(s.is_finite() && *s > 0.0))
-        || df.iter().any(|d| !(*d > 0.0))
+        || df.iter().any(|d| d.is_nan() || *d <= 0.0)
         || y.iter().any(|v| !v.is_finite())
     {
         return None;
