@@ -10,9 +10,10 @@
 //! **What is named.** The design's mean of each candidate is tested two-sided (Hartung–Knapp,
 //! arms − 1 degrees of freedom) and the p-values corrected by Holm over the candidates at the
 //! fleet's `alpha`; for a candidate that passes, the effect is named for every arm whose pooled
-//! interval (at 1 − `alpha`) excludes zero, and each such arm's **held-out gain** is measured
-//! nested ([`super::pooling::pooled_holdout`]: each session scored with the value pooled from
-//! the arm's other sessions and the other arms).
+//! interval (at 1 − `alpha`, t on the arm's own error's degrees of freedom or arms − 1 where
+//! fewer: [`super::pooling::interval_df`]) excludes zero, and each such arm's **held-out
+//! gain** is measured nested ([`super::pooling::pooled_holdout`]: each session scored with the
+//! value pooled from the arm's other sessions and the other arms).
 //!
 //! **Every recording of an arm.** The pooled model needs one estimate per physical arm; an arm
 //! of several recordings (each with its own tool and frame, so each fitted with its own probe:

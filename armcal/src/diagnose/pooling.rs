@@ -37,7 +37,10 @@
 //!
 //! **What is named.** The design's mean is tested first (t = μ̂ / se_HK, arms − 1 degrees of
 //! freedom, two-sided at `alpha`); only when it passes is the effect named for an arm, and then
-//! for every arm whose pooled interval θ̃_u ± t·se excludes zero. The gate keeps the chance of
+//! for every arm whose pooled interval θ̃_u ± t_df·se excludes zero, df the arm's own error's
+//! degrees of freedom (its sessions − 1) or arms − 1 where fewer ([`interval_df`]): each arm's
+//! error is itself estimated from a few sessions, and every part of its pooled error rests on
+//! such estimates (measured: [`simulated_coverage`]). The gate keeps the chance of
 //! naming the effect anywhere in a null fleet at `alpha`, not `alpha` per arm.
 //!
 //! **The design's spread** has a Q-profile interval (Viechtbauer 2007): the τ² at which the
