@@ -1,12 +1,15 @@
 //! The coverage of the pooled model's 95 % intervals on simulated fleets (issue 30): each
-//! arm's interval θ̃ ± t·se with τ̂²'s uncertainty (Morris's term) and with the plug-in error
-//! (τ̂² taken as known), and the design mean's Hartung–Knapp interval, over fleets of 3, 4 and
-//! 8 arms and a range of true spreads τ (in units of the arms' mean error), the errors
-//! estimated from 4 sessions as on MUKCa ([`armcal::diagnose::pooling::simulated_coverage`]).
+//! arm's interval θ̃ ± t·se with τ̂²'s uncertainty (Morris's term) on t with the product's
+//! degrees of freedom (the arm's own error's sessions − 1, or arms − 1 where fewer), with
+//! Satterthwaite's and with arms − 1 (round 3's), the Knapp–Hartung interval on both, and the
+//! plug-in error (τ̂² taken as known), and the design mean's Hartung–Knapp interval, over
+//! fleets of 3, 4 and 8 arms and a range of true spreads τ (in units of the arms' mean error),
+//! the errors estimated from 4 sessions as on MUKCa
+//! ([`armcal::diagnose::pooling::simulated_coverage`]).
 //!
-//!     cargo run --release -p armcal --example pooling_coverage [fleets [sessions]]
+//!     cargo run --release -p armcal --example pooling_coverage [fleets [sessions [alpha]]]
 //!
-//! 20 000 fleets per cell and 4 sessions by default (about 4 minutes on the shared 2-core
+//! 20 000 fleets per cell and 4 sessions by default (about 2 minutes on the shared 2-core
 //! machine); a large `sessions` (1000) makes the arms' errors known, which separates the
 //! shortfall due to τ̂² from the one due to each arm's own error being estimated.
 
@@ -21,17 +24,25 @@ fn main() {
         .nth(2)
         .and_then(|s| s.parse().ok())
         .unwrap_or(4);
+    let alpha: f64 = std::env::args()
+        .nth(3)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0.05);
     let t0 = std::time::Instant::now();
     println!(
-        "coverage of 95 % intervals, {fleets} simulated fleets per cell, errors from {sessions} sessions"
+        "coverage of {:.0} % intervals, {fleets} simulated fleets per cell, errors from {sessions} sessions",
+        100.0 * (1.0 - alpha)
     );
-    println!("arms  τ/s   arm: with τ̂² term  plug-in  (width ratio)   design mean (HK)");
+    println!(
+        "arms  τ/s  | Morris: own df  Satterthwaite  k−1 | KH: k−1  own df | plug-in | width/plug-in: Morris own df, Satt, k−1, KH k−1, KH own df | design mean (HK)"
+    );
     for arms in [3, 4, 8] {
         for tau in [0.0, 0.25, 0.5, 1.0, 2.0, 4.0] {
-            let c = simulated_coverage(arms, tau, sessions, fleets, 30 + arms as u64, 0.05);
+            let c = simulated_coverage(arms, tau, sessions, fleets, 30 + arms as u64, alpha);
+            let w = c.width;
             println!(
-                "{arms:>4}  {tau:>4.2}   {:>16.3}  {:>7.3}  ({:.2})          {:.3}",
-                c.with_tau, c.plugin, c.width_ratio, c.mean
+                "{arms:>4}  {tau:>4.2} | {:>14.3}  {:>13.3}  {:>3.3} | {:>7.3}  {:>6.3} | {:>7.3} | {:.2}, {:.2}, {:.2}, {:.2}, {:.2} | {:.3}",
+                c.with_df, c.satterthwaite, c.with_tau, c.kh, c.kh_df, c.plugin, w[0], w[1], w[2], w[3], w[4], c.mean
             );
         }
     }

@@ -53,8 +53,8 @@ fn opts() -> CalibOptions {
     }
 }
 
-/// Each arm's estimate (value, jackknife se) of joint 2's compliance.
-fn estimates(arms: &[(Arm, Dataset)], o: &CalibOptions) -> Vec<(f64, f64)> {
+/// Each arm's estimate (value, jackknife se, its df) of joint 2's compliance.
+fn estimates(arms: &[(Arm, Dataset)], o: &CalibOptions) -> Vec<pooling::Estimate> {
     arms.iter()
         .map(|(start, d)| {
             pooling::estimate(start, d, o, Effect::Gravity(1))
@@ -62,6 +62,14 @@ fn estimates(arms: &[(Arm, Dataset)], o: &CalibOptions) -> Vec<(f64, f64)> {
                 .expect("three sessions")
         })
         .collect()
+}
+
+/// The arms' estimates pooled at `ALPHA`.
+fn pool_estimates(est: &[pooling::Estimate]) -> (Design, Vec<Pooled>) {
+    let y: Vec<f64> = est.iter().map(|e| e.value).collect();
+    let se: Vec<f64> = est.iter().map(|e| e.se).collect();
+    let df: Vec<f64> = est.iter().map(|e| e.df).collect();
+    pooling::pool(&y, &se, &df, ALPHA).expect("pool")
 }
 
 fn print_pooled(names: &[String], d: &Design, arms: &[Pooled], unit: f64, uname: &str) {
@@ -78,12 +86,13 @@ fn print_pooled(names: &[String], d: &Design, arms: &[Pooled], unit: f64, uname:
     );
     for (n, a) in names.iter().zip(arms) {
         println!(
-            "    {n:<10} alone {:+.3} ± {:.3} (named {:<5})  pooled {:+.3} ± {:.3} (B = {:.2}, named {})",
+            "    {n:<10} alone {:+.3} ± {:.3} (named {:<5})  pooled {:+.3} ± {:.3} ({:.1} df, B = {:.2}, named {})",
             a.estimate / unit,
             a.se / unit,
             a.named_alone,
             a.pooled / unit,
             a.pooled_se / unit,
+            a.df,
             a.shrinkage,
             a.named_pooled
         );
@@ -103,9 +112,7 @@ fn simulated(seeds: u64, mean: f64) {
         .enumerate()
         .map(|(k, &g)| (Arm::default6(), arm_data(500 + k as u64, g)))
         .collect();
-    let est = estimates(&arms, &opts());
-    let (y, se): (Vec<f64>, Vec<f64>) = est.iter().copied().unzip();
-    let (d, pooled) = pooling::pool(&y, &se, ALPHA).expect("pool");
+    let (d, pooled) = pool_estimates(&estimates(&arms, &opts()));
     let names: Vec<String> = gs.iter().map(|g| format!("g={:.2}e-8", g * 1e8)).collect();
     print_pooled(&names, &d, &pooled, 1e-8, "e-8 rad/mm");
     // The single-arm diagnosis (sessions held out, the whole vocabulary up to order 1).
@@ -142,9 +149,7 @@ fn simulated(seeds: u64, mean: f64) {
         let arms: Vec<(Arm, Dataset)> = (0..8)
             .map(|k| (Arm::default6(), arm_data(10_000 + 100 * s + k, 0.0)))
             .collect();
-        let est = estimates(&arms, &opts());
-        let (y, se): (Vec<f64>, Vec<f64>) = est.iter().copied().unzip();
-        let (d, pooled) = pooling::pool(&y, &se, ALPHA).expect("pool");
+        let (d, pooled) = pool_estimates(&estimates(&arms, &opts()));
         design_named += d.named as usize;
         arm_names_pooled += pooled.iter().filter(|a| a.named_pooled).count();
         let alone = pooled.iter().filter(|a| a.named_alone).count();
@@ -199,10 +204,10 @@ fn mukca_grouping(
             .recordings
             .iter()
             .zip(&a.per_recording)
-            .map(|(r, (y, s))| format!("{r} {:+.3} ± {:.3}", y * 1e6, s * 1e6))
+            .map(|(r, e)| format!("{r} {:+.3} ± {:.3}", e.value * 1e6, e.se * 1e6))
             .collect();
         println!(
-            "    {:<8} {} → alone {:+.3} ± {:.3}{}; pooled {:+.3} ± {:.3} (plug-in ± {:.3}, B = {:.2}, named {})",
+            "    {:<8} {} → alone {:+.3} ± {:.3}{}; pooled {:+.3} ± {:.3} (plug-in ± {:.3}, {:.1} df, B = {:.2}, named {})",
             a.arm,
             per.join(", "),
             a.value.estimate * 1e6,
@@ -215,6 +220,7 @@ fn mukca_grouping(
             a.value.pooled * 1e6,
             a.value.pooled_se * 1e6,
             a.value.pooled_se_plugin * 1e6,
+            a.value.df,
             a.value.shrinkage,
             a.value.named_pooled
         );
@@ -228,12 +234,16 @@ fn mukca_grouping(
         .iter()
         .position(|a| a.arm == "panda_4")
         .expect("panda_4");
-    let others: Vec<(f64, f64)> = p
+    let others: Vec<pooling::Estimate> = p
         .arms
         .iter()
         .enumerate()
         .filter(|(i, _)| *i != i4)
-        .map(|(_, a)| (a.value.estimate, a.value.se))
+        .map(|(_, a)| pooling::Estimate {
+            value: a.value.estimate,
+            se: a.value.se,
+            df: a.value.se_df,
+        })
         .collect();
     let folds = pooling::pooled_holdout(
         start,

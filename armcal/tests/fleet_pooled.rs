@@ -56,7 +56,7 @@ fn pooled(gs: &[f64], seed: u64) -> PooledFleet {
 }
 
 #[test]
-fn a_spread_effect_too_small_for_each_arm_is_named_for_every_arm_pooled() {
+fn a_spread_effect_too_small_for_each_arm_is_named_for_more_arms_pooled_than_alone() {
     // 1.25…3.75e-9 rad/mm: each arm's own estimate is within ~2 of its jackknife errors.
     let gs: Vec<f64> = (0..8).map(|k| 2.5e-9 * (0.5 + k as f64 / 7.0)).collect();
     let p = pooled(&gs, 500);
@@ -73,34 +73,27 @@ fn a_spread_effect_too_small_for_each_arm_is_named_for_every_arm_pooled() {
         g.arms.iter().filter(|a| a.value.named_alone).count() < 8,
         "every arm alone already names it: the fleet is too easy to show pooling's power"
     );
-    // Every arm named by the pooled model or, where τ̂²'s uncertainty widens its pooled
-    // interval (a precise arm far from the design's mean, whose own estimate is then the strong
-    // one), by its own estimate: 6 of 8 by the pooled model at the fleet's α = 0.01 (8 of 8
-    // with the plug-in error, which covers too seldom: docs/results/claims.md §7.4), 3 alone. Each named arm
-    // has its nested held-out gain. At 1.25…3.75e-9 rad/mm the effect moves the ball by about
-    // a micrometre against 5 µm of noise: the pooled value helps the fleet's held-out sessions
-    // as a whole, not every arm's four.
+    // The pooled model names more arms than their own estimates do. At the fleet's α = 0.01
+    // each arm's pooled interval is on t with its own error's 3 degrees of freedom (t₃ =
+    // 5.84, where round 3's t₇ was 3.50: its 95 % interval then covered 0.88–0.92 on
+    // simulated fleets of 8 arms, now 0.93–0.96; docs/results/claims.md §7.5): 4 of 8 arms
+    // named here (6 of 8 on t₇), none alone (t₃ on their own errors). The arms left unnamed
+    // all have their pooled value on the design's side. Each named arm has its nested held-out
+    // gain; at 1.25…3.75e-9 rad/mm the effect moves the ball by about a micrometre against
+    // 5 µm of noise: the pooled value helps the named arms' held-out sessions as a whole, not
+    // every arm's four.
     let pooled_names = g.arms.iter().filter(|a| a.value.named_pooled).count();
     let alone_names = g.arms.iter().filter(|a| a.value.named_alone).count();
     assert!(
-        pooled_names >= 6 && pooled_names > alone_names,
+        pooled_names >= 4 && pooled_names > alone_names,
         "pooled {pooled_names}, alone {alone_names}: {:#?}",
         g.arms.iter().map(|a| a.value).collect::<Vec<_>>()
     );
     let (mut before, mut after, mut better, mut sessions) = (0.0, 0.0, 0, 0);
     for a in &g.arms {
-        assert!(
-            a.value.named_pooled || a.value.named_alone,
-            "{}: {:?}",
-            a.arm,
-            a.value
-        );
+        assert_eq!((a.value.se_df, a.value.df), (3.0, 3.0), "{:?}", a.value);
         if !a.value.named_pooled {
-            assert!(
-                a.value.pooled_se > 2.0 * a.value.pooled_se_plugin,
-                "{:?}",
-                a.value
-            );
+            assert!(a.value.pooled > 0.0 && a.holdout.is_none(), "{:?}", a.value);
             continue;
         }
         let h = a.holdout.as_ref().expect("held-out gain of a named arm");
@@ -205,15 +198,20 @@ fn an_arm_recorded_twice_pools_both_recordings_each_with_its_own_probe() {
     assert_eq!((a0.sessions, a0.per_recording.len()), (8, 2));
     // Each recording's tool is its own (fitted with its geometry): both see the compliance,
     // and their combination is the arm's estimate, between them.
-    for (y, _) in &a0.per_recording {
-        assert!((y / 3e-8 - 1.0).abs() < 0.2, "{:?}", a0.per_recording);
+    for e in &a0.per_recording {
+        assert!((e.value / 3e-8 - 1.0).abs() < 0.2, "{:?}", a0.per_recording);
+        assert_eq!(e.df, 3.0);
     }
-    let (lo, hi) = (
-        a0.per_recording[0].0.min(a0.per_recording[1].0),
-        a0.per_recording[0].0.max(a0.per_recording[1].0),
-    );
+    let (y0, y1) = (a0.per_recording[0].value, a0.per_recording[1].value);
+    let (lo, hi) = (y0.min(y1), y0.max(y1));
     assert!(lo <= a0.value.estimate && a0.value.estimate <= hi);
     assert_eq!(a0.combined.recordings, 2);
+    // Its error rests on both recordings' sessions: more degrees of freedom than either's 3.
+    assert!(
+        a0.combined.df > 3.0 && a0.combined.df <= 6.0,
+        "{:?}",
+        a0.combined
+    );
     // The held-out gain runs over the sessions of both recordings.
     let h = a0.holdout.as_ref().expect("held-out gain");
     assert_eq!(h.sessions, 8);

@@ -10,9 +10,10 @@
 //! **What is named.** The design's mean of each candidate is tested two-sided (Hartung–Knapp,
 //! arms − 1 degrees of freedom) and the p-values corrected by Holm over the candidates at the
 //! fleet's `alpha`; for a candidate that passes, the effect is named for every arm whose pooled
-//! interval (at 1 − `alpha`) excludes zero, and each such arm's **held-out gain** is measured
-//! nested ([`super::pooling::pooled_holdout`]: each session scored with the value pooled from
-//! the arm's other sessions and the other arms).
+//! interval (at 1 − `alpha`, t on the arm's own error's degrees of freedom or arms − 1 where
+//! fewer: [`super::pooling::interval_df`]) excludes zero, and each such arm's **held-out
+//! gain** is measured nested ([`super::pooling::pooled_holdout`]: each session scored with the
+//! value pooled from the arm's other sessions and the other arms).
 //!
 //! **Every recording of an arm.** The pooled model needs one estimate per physical arm; an arm
 //! of several recordings (each with its own tool and frame, so each fitted with its own probe:
@@ -27,7 +28,7 @@
 //! [`super::pooling`] (which it calls): neither of them knows it.
 
 use super::fleet::{geometric_options, holm, Fleet, Options, UnitData};
-use super::pooling::{self, Arm as PooledValue, Combined, Design};
+use super::pooling::{self, Arm as PooledValue, Combined, Design, Estimate};
 use crate::data::Dataset;
 use crate::fit::error::CalibError;
 use crate::fit::holdout::by_group;
@@ -45,8 +46,9 @@ pub struct PooledArm {
     pub recordings: Vec<String>,
     /// Their sessions, in all.
     pub sessions: usize,
-    /// Each recording's own estimate (value, jackknife standard error), in `recordings`' order.
-    pub per_recording: Vec<(f64, f64)>,
+    /// Each recording's own estimate (value, jackknife standard error and its degrees of
+    /// freedom), in `recordings`' order.
+    pub per_recording: Vec<Estimate>,
     /// Their combination (the arm's "alone" estimate below).
     pub combined: Combined,
     /// Alone and pooled.
@@ -110,9 +112,8 @@ type Used = (String, Vec<(usize, usize)>);
 /// An arm or a recording left out: (name, why).
 type LeftOut = (String, String);
 
-/// An arm's estimate of a candidate: each recording's (value, jackknife standard error), and
-/// their combination.
-type ArmEstimate = (Vec<(f64, f64)>, Combined);
+/// An arm's estimate of a candidate: each recording's, and their combination.
+type ArmEstimate = (Vec<Estimate>, Combined);
 
 /// Each arm's recordings of [`MIN_UNITS`] sessions or more, and the arms and recordings left
 /// out with why.
@@ -167,7 +168,8 @@ pub fn pool_fleet(
 }
 
 /// Pools every one-unknown candidate that every used arm's recording can test (`testable`,
-/// one list per recording) over the arms `arms` (name, recordings) of `units`.
+/// one list per recording) over the arms `arms` (name, recordings) of `units`, names them
+/// ([`pool_candidates`]) and measures each named arm's nested held-out gain.
 pub fn pool_arms(
     start: &Arm,
     units: &[UnitData],
@@ -175,6 +177,29 @@ pub fn pool_arms(
     testable: &[Vec<Effect>],
     opts: &Options,
 ) -> Result<PooledFleet, CalibError> {
+    let mut out = pool_candidates(start, units, arms, testable, opts);
+    let (used, _) = recordings(units, arms);
+    let calib = geometric_options(opts);
+    let data: Vec<Vec<&Dataset>> = used
+        .iter()
+        .map(|(_, recs)| recs.iter().map(|(r, _)| &units[*r].data).collect())
+        .collect();
+    for p in out.effects.iter_mut().filter(|p| p.named) {
+        held_out_gains(start, &data, &calib, opts.alpha, p)?;
+    }
+    Ok(out)
+}
+
+/// [`pool_arms`] without the held-out gains: the candidates pooled and named (Holm over them
+/// at `opts.alpha`, each arm by its pooled interval). What the power over simulated fleets
+/// counts (`examples/pooling_power.rs`), at a fifth of the fits.
+pub fn pool_candidates(
+    start: &Arm,
+    units: &[UnitData],
+    arms: &[(String, Vec<usize>)],
+    testable: &[Vec<Effect>],
+    opts: &Options,
+) -> PooledFleet {
     let (used, left_out) = recordings(units, arms);
     let mut out = PooledFleet {
         alpha: opts.alpha,
@@ -182,7 +207,7 @@ pub fn pool_arms(
         left_out,
     };
     if used.len() < super::fleet::MIN_FLEET_UNITS {
-        return Ok(out);
+        return out;
     }
     let calib = geometric_options(opts);
     for e in shared_vocabulary(&used, testable) {
@@ -201,14 +226,7 @@ pub fn pool_arms(
     name_by_holm(&mut out.effects, opts.alpha);
     out.effects
         .sort_by(|a, b| a.design.mean_p.total_cmp(&b.design.mean_p));
-    let data: Vec<Vec<&Dataset>> = used
-        .iter()
-        .map(|(_, recs)| recs.iter().map(|(r, _)| &units[*r].data).collect())
-        .collect();
-    for p in out.effects.iter_mut().filter(|p| p.named) {
-        held_out_gains(start, &data, &calib, opts.alpha, p)?;
-    }
-    Ok(out)
+    out
 }
 
 /// The one-unknown candidates every used recording can test (`testable`, one list per
@@ -284,7 +302,8 @@ fn pool_effect(
     let per_arm = arm_estimates(start, units, used, calib, e, left_out)?;
     let y: Vec<f64> = per_arm.iter().map(|(_, c)| c.estimate).collect();
     let se: Vec<f64> = per_arm.iter().map(|(_, c)| c.se).collect();
-    let (design, values) = pooling::pool(&y, &se, alpha)?;
+    let df: Vec<f64> = per_arm.iter().map(|(_, c)| c.df).collect();
+    let (design, values) = pooling::pool(&y, &se, &df, alpha)?;
     let arms = used
         .iter()
         .zip(per_arm)
@@ -331,16 +350,20 @@ fn held_out_gains(
     alpha: f64,
     p: &mut PooledEffect,
 ) -> Result<(), CalibError> {
-    let all: Vec<(f64, f64)> = p
+    let all: Vec<Estimate> = p
         .arms
         .iter()
-        .map(|a| (a.value.estimate, a.value.se))
+        .map(|a| Estimate {
+            value: a.value.estimate,
+            se: a.value.se,
+            df: a.value.se_df,
+        })
         .collect();
     for (i, a) in p.arms.iter_mut().enumerate() {
         if !a.value.named_pooled {
             continue;
         }
-        let others: Vec<(f64, f64)> = all
+        let others: Vec<Estimate> = all
             .iter()
             .enumerate()
             .filter(|(k, _)| *k != i)
@@ -348,7 +371,7 @@ fn held_out_gains(
             .collect();
         let mut folds = Vec::new();
         for (k, d) in data[i].iter().enumerate() {
-            let siblings: Vec<(f64, f64)> = a
+            let siblings: Vec<Estimate> = a
                 .per_recording
                 .iter()
                 .enumerate()
@@ -390,7 +413,7 @@ impl PooledFleet {
             s,
             "\npooled effects (each arm's value drawn from the design's distribution, \
              DerSimonian–Laird; the design's mean tested two-sided, Holm at α = {}; named for \
-             an arm whose pooled {:.0} % interval excludes 0)",
+             an arm whose pooled {:.0} % interval, t on its Satterthwaite df, excludes 0)",
             self.alpha,
             100.0 * (1.0 - self.alpha)
         );
@@ -423,13 +446,16 @@ impl PooledFleet {
             for a in &p.arms {
                 let _ = write!(
                     s,
-                    "    {} ({}): alone {:+.3e} ± {:.1e}, pooled {:+.3e} ± {:.1e} (B = {:.2}){}",
+                    "    {} ({}): alone {:+.3e} ± {:.1e} ({:.0} df), pooled {:+.3e} ± {:.1e} \
+                     ({:.1} df, B = {:.2}){}",
                     a.arm,
                     a.recordings.join(" + "),
                     a.value.estimate,
                     a.value.se,
+                    a.value.se_df,
                     a.value.pooled,
                     a.value.pooled_se,
+                    a.value.df,
                     a.value.shrinkage,
                     if a.value.named_pooled { ", named" } else { "" }
                 );
@@ -438,7 +464,7 @@ impl PooledFleet {
                         .recordings
                         .iter()
                         .zip(&a.per_recording)
-                        .map(|(r, (y, se))| format!("{r} {y:+.3e} ± {se:.1e}"))
+                        .map(|(r, e)| format!("{r} {:+.3e} ± {:.1e}", e.value, e.se))
                         .collect();
                     let _ = write!(
                         s,

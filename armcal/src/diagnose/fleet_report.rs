@@ -15,15 +15,18 @@
 //!             "effects": [{"term", "named", "design": {"arms", "mean", "mean_se",
 //!                          "mean_interval", "mean_p", "spread", "spread_interval", "named"},
 //!                          "arms": [{"arm", "recordings", "sessions", "per_recording":
-//!                                    [[value, se]], "combined": {"estimate", "se",
-//!                                    "recordings", "q", "q_p"}, "estimate", "se",
-//!                                    "named_alone", "shrinkage", "pooled", "pooled_se",
-//!                                    "pooled_se_plugin", "named_pooled", "holdout"}]}]}}
+//!                                    [{"value", "se", "df"}], "combined": {"estimate", "se",
+//!                                    "df", "recordings", "q", "q_p"}, "estimate", "se",
+//!                                    "se_df", "named_alone", "shrinkage", "pooled",
+//!                                    "pooled_se", "pooled_se_plugin", "df", "named_pooled",
+//!                                    "holdout"}]}]}}
 //! ```
 //!
 //! `pooled` is [`super::fleet_pooled`]'s stage: an arm's `per_recording` estimates (each
 //! recording fitted with its own probe and frame) combined into its `estimate`, then pooled
-//! over the arms; `pooled_se` carries τ̂²'s uncertainty, `pooled_se_plugin` does not.
+//! over the arms; `pooled_se` carries τ̂²'s uncertainty, `pooled_se_plugin` does not; an arm's
+//! interval is `pooled` ± t_`df`·`pooled_se`, `df` its own error's degrees of freedom
+//! (`se_df`: sessions − 1) or arms − 1 where fewer.
 //!
 //! A unit is an arm ([`super::same_arm`]): recordings of one physical arm are one unit.
 //!

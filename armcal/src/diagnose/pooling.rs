@@ -37,7 +37,10 @@
 //!
 //! **What is named.** The design's mean is tested first (t = μ̂ / se_HK, arms − 1 degrees of
 //! freedom, two-sided at `alpha`); only when it passes is the effect named for an arm, and then
-//! for every arm whose pooled interval θ̃_u ± t·se excludes zero. The gate keeps the chance of
+//! for every arm whose pooled interval θ̃_u ± t_df·se excludes zero, df the arm's own error's
+//! degrees of freedom (its sessions − 1) or arms − 1 where fewer ([`interval_df`]): each arm's
+//! error is itself estimated from a few sessions, and every part of its pooled error rests on
+//! such estimates (measured: [`simulated_coverage`]). The gate keeps the chance of
 //! naming the effect anywhere in a null fleet at `alpha`, not `alpha` per arm.
 //!
 //! **The design's spread** has a Q-profile interval (Viechtbauer 2007): the τ² at which the
@@ -57,7 +60,11 @@ pub struct Arm {
     pub estimate: f64,
     /// Its standard error.
     pub se: f64,
-    /// Whether its own estimate differs from zero at `alpha` (two-sided, normal).
+    /// The degrees of freedom of that error (its sessions − 1 for a jackknife; see
+    /// [`Estimate::df`]).
+    pub se_df: f64,
+    /// Whether its own estimate differs from zero at `alpha` (two-sided, Student's t on
+    /// `se_df` degrees of freedom).
     pub named_alone: bool,
     /// The shrinkage factor B (0: its own value kept, 1: the design's mean).
     pub shrinkage: f64,
@@ -67,6 +74,9 @@ pub struct Arm {
     pub pooled_se: f64,
     /// The plug-in standard error (τ̂² taken as known): shorter, kept for comparison.
     pub pooled_se_plugin: f64,
+    /// The degrees of freedom of its interval θ̃ ± t_df·`pooled_se` ([`interval_df`]: its
+    /// own error's `se_df`, or arms − 1 where fewer).
+    pub df: f64,
     /// Whether the pooled model names the effect for this arm.
     pub named_pooled: bool,
 }
@@ -137,14 +147,55 @@ fn chi2_upper(p: f64, k: usize) -> f64 {
     0.5 * (lo + hi)
 }
 
-/// Pools the arms' estimates `y` with standard errors `se` (see the module's text). `None`
-/// with fewer than [`super::fleet::MIN_FLEET_UNITS`] arms, or when some standard error is not
-/// a positive finite number (an arm whose estimate has no error bar cannot be weighed).
-pub fn pool(y: &[f64], se: &[f64], alpha: f64) -> Option<(Design, Vec<Arm>)> {
+/// The degrees of freedom of an arm's pooled interval: its own error's `nu` (sessions − 1),
+/// or the design's `arms` − 1 where that is fewer. Every part of the pooled variance rests on
+/// the arms' estimated errors, not only the arm's own part (1 − B)s²: μ̂'s weights and τ̂²
+/// are computed from them too, so the design's part is no surer than they are. Measured
+/// (`examples/pooling_coverage.rs`, docs/results/claims.md §7.5): Satterthwaite's df, which
+/// gives the design's part its arms − 1, covers 0.87–0.94 with 8 arms of 4 sessions; this
+/// 0.93–0.96.
+pub fn interval_df(nu: f64, arms: usize) -> f64 {
+    nu.min(arms.saturating_sub(1).max(1) as f64)
+}
+
+/// The Satterthwaite (1946) degrees of freedom of an arm's pooled variance `own` + `design`:
+/// `own` = (1 − B)s² moves with the arm's estimated error (ν = `nu`; its relative variance
+/// 2/ν scaled by (1 − B)², the part's sensitivity to s²), `design` = μ̂'s and τ̂²'s terms with
+/// the arms' `arms` − 1. Simulated beside [`interval_df`] and not used: it takes the design's
+/// part as resting on arms − 1 degrees of freedom whatever the arms' own, and covers too
+/// seldom (docs/results/claims.md §7.5).
+pub fn satterthwaite_df(own: f64, b: f64, nu: f64, design: f64, arms: usize) -> f64 {
+    let total = own + design;
+    if total.is_nan() || total <= 0.0 {
+        return arms.saturating_sub(1).max(1) as f64;
+    }
+    let (o, d) = (own / total, design / total);
+    let own_part = if nu.is_finite() {
+        (o * (1.0 - b)).powi(2) / nu
+    } else {
+        0.0
+    };
+    let design_part = d * d / arms.saturating_sub(1).max(1) as f64;
+    (1.0 / (own_part + design_part).max(1e-6)).min(1e6)
+}
+
+/// Whether `value` ± t_df·`se` excludes zero at `alpha` (two-sided Student's t).
+fn excludes_zero(value: f64, se: f64, df: f64, alpha: f64) -> bool {
+    2.0 * t_tail((value / se).abs(), df) < alpha
+}
+
+/// Pools the arms' estimates `y` with standard errors `se` of `df` degrees of freedom each
+/// (see the module's text; `f64::INFINITY` for an error taken as known). `None` with fewer
+/// than [`super::fleet::MIN_FLEET_UNITS`] arms, or when some standard error is not a positive
+/// finite number or some `df` is not positive (an arm whose estimate has no error bar cannot
+/// be weighed).
+pub fn pool(y: &[f64], se: &[f64], df: &[f64], alpha: f64) -> Option<(Design, Vec<Arm>)> {
     let k = y.len();
     if k < super::fleet::MIN_FLEET_UNITS
         || se.len() != k
+        || df.len() != k
         || se.iter().any(|s| !(s.is_finite() && *s > 0.0))
+        || df.iter().any(|d| d.is_nan() || *d <= 0.0)
         || y.iter().any(|v| !v.is_finite())
     {
         return None;
@@ -157,9 +208,9 @@ pub fn pool(y: &[f64], se: &[f64], alpha: f64) -> Option<(Design, Vec<Arm>)> {
     let (mu, mu_se, tau2, _q) = dersimonian_laird(&ys, &vs);
     let (mu, mu_se, tau2) = (mu * unit, mu_se * unit, tau2 * unit * unit);
     let v: Vec<f64> = se.iter().map(|s| s * s).collect();
-    let df = (k - 1) as f64;
-    let tc = t_critical(alpha, df);
-    let mean_p = 2.0 * t_tail((mu / mu_se).abs(), df);
+    let design_df = (k - 1) as f64;
+    let tc = t_critical(alpha, design_df);
+    let mean_p = 2.0 * t_tail((mu / mu_se).abs(), design_df);
     let named = mean_p < alpha;
     let lo = unit * unit * tau2_for(&ys, &vs, chi2_upper(alpha / 2.0, k - 1));
     let hi = unit * unit * tau2_for(&ys, &vs, chi2_upper(1.0 - alpha / 2.0, k - 1));
@@ -173,7 +224,6 @@ pub fn pool(y: &[f64], se: &[f64], alpha: f64) -> Option<(Design, Vec<Arm>)> {
         spread_interval: [lo.sqrt(), hi.sqrt()],
         named,
     };
-    let z = t_critical(alpha, 1e12);
     // τ̂²'s information in units of the largest error (as `dersimonian_laird` ran).
     let w: Vec<f64> = vs
         .iter()
@@ -185,25 +235,44 @@ pub fn pool(y: &[f64], se: &[f64], alpha: f64) -> Option<(Design, Vec<Arm>)> {
         .iter()
         .zip(&v)
         .zip(&w)
-        .map(|((&y, &v), &w)| {
+        .zip(df)
+        .map(|(((&y, &v), &w), &nu)| {
             let b = v / (v + tau2);
             let pooled = mu + (1.0 - b) * (y - mu);
-            let plugin = (1.0 - b) * v + b * b * mu_se * mu_se;
+            let own = (1.0 - b) * v;
+            let plugin = own + b * b * mu_se * mu_se;
             let var_b = 2.0 * b * b * w * w / (small * sw2);
             let pooled_se = (plugin + var_b * (y - mu).powi(2)).sqrt();
+            let df = interval_df(nu, k);
             Arm {
                 estimate: y,
                 se: v.sqrt(),
-                named_alone: (y / v.sqrt()).abs() > z,
+                se_df: nu,
+                named_alone: excludes_zero(y, v.sqrt(), nu.min(1e6), alpha),
                 shrinkage: b,
                 pooled,
                 pooled_se,
                 pooled_se_plugin: plugin.sqrt(),
-                named_pooled: named && (pooled / pooled_se).abs() > tc,
+                df,
+                named_pooled: named && excludes_zero(pooled, pooled_se, df, alpha),
             }
         })
         .collect();
     Some((design, arms))
+}
+
+/// One estimate of a one-unknown effect ([`estimate`]): its value, its standard error and the
+/// degrees of freedom of that error.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Estimate {
+    /// The value.
+    pub value: f64,
+    /// Its standard error.
+    pub se: f64,
+    /// The error's degrees of freedom: a jackknife over n sessions has n − 1 (the error of a
+    /// 4-session recording is itself uncertain by a factor χ²₃/3, which an interval that
+    /// takes it as known ignores).
+    pub df: f64,
 }
 
 /// One arm's estimate from its recordings ([`combine_recordings`]).
@@ -213,6 +282,10 @@ pub struct Combined {
     pub estimate: f64,
     /// Its standard error (widened by √(Q/(r − 1)) when that exceeds 1).
     pub se: f64,
+    /// The degrees of freedom of that error: Satterthwaite's (Σw)²/Σ(w²/ν_r) over the
+    /// recordings' errors (w = 1/s²; one recording: its own ν), combined with the Birge
+    /// ratio's r − 1 (1/df = 1/df_s + 1/(r − 1), relative variances adding) when it widens.
+    pub df: f64,
     /// Recordings combined.
     pub recordings: usize,
     /// Cochran's Q of the recordings about their mean (0 for one recording).
@@ -222,67 +295,112 @@ pub struct Combined {
     pub q_p: f64,
 }
 
-/// One arm's estimate from its recordings' estimates `est` (value, standard error), each
-/// fitted on its own recording with its own probe and frame: the inverse-variance mean, its
-/// error 1/√Σw widened by the Birge ratio √(Q/(r − 1)) when the recordings scatter more than
-/// their errors say (a level of the hierarchy with r = 2 or 3 recordings would estimate its
-/// spread from one or two differences; the ratio uses the same evidence without pretending to
-/// a variance). `None` for no recording or an error that is not a positive finite number.
-pub fn combine_recordings(est: &[(f64, f64)]) -> Option<Combined> {
+/// One arm's estimate from its recordings' estimates `est`, each fitted on its own recording
+/// with its own probe and frame: the inverse-variance mean, its error 1/√Σw widened by the
+/// Birge ratio √(Q/(r − 1)) when the recordings scatter more than their errors say (a level of
+/// the hierarchy with r = 2 or 3 recordings would estimate its spread from one or two
+/// differences; the ratio uses the same evidence without pretending to a variance), and that
+/// error's degrees of freedom ([`Combined::df`]). `None` for no recording, an error that is
+/// not a positive finite number or degrees of freedom that are not positive.
+pub fn combine_recordings(est: &[Estimate]) -> Option<Combined> {
     if est.is_empty()
         || est
             .iter()
-            .any(|(y, s)| !(y.is_finite() && s.is_finite() && *s > 0.0))
+            .any(|e| !(e.value.is_finite() && e.se.is_finite() && e.se > 0.0 && e.df > 0.0))
     {
         return None;
     }
     // In units of the largest error, so tiny values (rad/mm) keep their precision.
-    let unit = est.iter().map(|e| e.1).fold(0.0, f64::max);
-    let w: Vec<f64> = est.iter().map(|(_, s)| (unit / s).powi(2)).collect();
+    let unit = est.iter().map(|e| e.se).fold(0.0, f64::max);
+    let w: Vec<f64> = est.iter().map(|e| (unit / e.se).powi(2)).collect();
     let sw: f64 = w.iter().sum();
-    let mean = w.iter().zip(est).map(|(w, (y, _))| w * y).sum::<f64>() / sw;
+    let mean = w.iter().zip(est).map(|(w, e)| w * e.value).sum::<f64>() / sw;
     let q: f64 = w
         .iter()
         .zip(est)
-        .map(|(w, (y, _))| w * ((y - mean) / unit).powi(2))
+        .map(|(w, e)| w * ((e.value - mean) / unit).powi(2))
         .sum();
-    let r = est.len();
-    let (birge, q_p) = if r > 1 {
-        let df = (r - 1) as f64;
-        ((q / df).max(1.0), chi2_tail(q, r - 1))
+    let w_df: f64 = w
+        .iter()
+        .zip(est)
+        .filter(|(_, e)| e.df.is_finite())
+        .map(|(w, e)| w * w / e.df)
+        .sum();
+    let df_s = if w_df > 0.0 {
+        sw * sw / w_df
     } else {
-        (1.0, 1.0)
+        f64::INFINITY
+    };
+    let r = est.len();
+    let (birge, q_p, df) = if r > 1 {
+        let between = (r - 1) as f64;
+        let birge = (q / between).max(1.0);
+        let df = if birge > 1.0 {
+            1.0 / (1.0 / df_s + 1.0 / between)
+        } else {
+            df_s
+        };
+        (birge, chi2_tail(q, r - 1), df)
+    } else {
+        (1.0, 1.0, df_s)
     };
     Some(Combined {
         estimate: mean,
         se: unit * (birge / sw).sqrt(),
+        df,
         recordings: r,
         q,
         q_p,
     })
 }
 
-/// Coverage of the pooled intervals on simulated fleets ([`simulated_coverage`]).
+/// Coverage of the pooled intervals on simulated fleets ([`simulated_coverage`]): six
+/// intervals of an arm's true value side by side.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Coverage {
     /// Arm intervals drawn (fleets × arms).
     pub intervals: usize,
-    /// Share of arms whose true value lies in θ̃ ± t·`pooled_se` (with τ̂²'s uncertainty).
+    /// Share of arms whose true value lies in θ̃ ± t_df·`pooled_se`, df = [`interval_df`]:
+    /// the interval [`pool`] names by.
+    pub with_df: f64,
+    /// The same with t on the [`satterthwaite_df`] (simulated, not used).
+    pub satterthwaite: f64,
+    /// The same with t on arms − 1 degrees of freedom (each arm's own error taken as known;
+    /// issue 30's round 3).
     pub with_tau: f64,
-    /// The same with the plug-in error (τ̂² taken as known).
+    /// θ̃ ± t_{k−1}·√(f (1 − B)s² + B² se_HK(μ̂)²), f = se_HK(μ̂)² Σw ≥ 1 the Knapp–Hartung
+    /// factor (the arms' scatter about μ̂ over what their errors and τ̂² say), scaling the
+    /// arm's own part as Hartung–Knapp scales μ̂'s; no τ̂² term.
+    pub kh: f64,
+    /// The Knapp–Hartung interval with t on [`interval_df`].
+    pub kh_df: f64,
+    /// θ̃ ± t_{k−1}·`pooled_se_plugin` (τ̂² and the errors taken as known).
     pub plugin: f64,
     /// Share of fleets whose design-mean interval holds μ.
     pub mean: f64,
-    /// Mean half-width of the arm intervals with τ̂²'s uncertainty, over the plug-in's.
-    pub width_ratio: f64,
+    /// Mean half-width of each interval over the plug-in's, in the order `with_df`,
+    /// `satterthwaite`, `with_tau`, `kh`, `kh_df` (measured on every tenth fleet: t on
+    /// fractional degrees of freedom is a search).
+    pub width: [f64; 5],
+}
+
+/// The Knapp–Hartung standard error of arm `a`'s pooled value in a fleet pooled as `d` whose
+/// arms' errors are `se` ([`Coverage::kh`]).
+fn kh_se(a: &Arm, d: &Design, se: &[f64]) -> f64 {
+    let tau2 = d.spread * d.spread;
+    let sw: f64 = se.iter().map(|s| 1.0 / (s * s + tau2)).sum();
+    let f = (d.mean_se * d.mean_se * sw).max(1.0);
+    let b = a.shrinkage;
+    (f * (1.0 - b) * a.se * a.se + b * b * d.mean_se * d.mean_se).sqrt()
 }
 
 /// The coverage of [`pool`]'s intervals at 1 − `alpha` over `fleets` simulated fleets of
 /// `arms` arms (seeds from `seed`): each arm's true value θ_u ~ N(1, τ²), its error s_u
 /// spread 0.5…1.5 (mean 1), its estimate y_u ~ N(θ_u, s_u²), and the error the pooling sees
-/// estimated from `sessions` sessions (a jackknife: s_u² χ²/(sessions − 1)), as on real arms.
-/// `tau` is in units of the mean error. The coverage is the frequentist one of an empirical
-/// Bayes interval: over arms whose values are drawn from the design's distribution.
+/// estimated from `sessions` sessions (a jackknife: s_u² χ²/(sessions − 1), sessions − 1
+/// degrees of freedom), as on real arms. `tau` is in units of the mean error. The coverage is
+/// the frequentist one of an empirical Bayes interval: over arms whose values are drawn from
+/// the design's distribution.
 pub fn simulated_coverage(
     arms: usize,
     tau: f64,
@@ -292,10 +410,15 @@ pub fn simulated_coverage(
     alpha: f64,
 ) -> Coverage {
     let mut rng = crate::rng::rng(seed);
-    let df = sessions.saturating_sub(1).max(1);
-    let (mut n, mut with_tau, mut plugin, mut mean, mut pooled_fleets) = (0, 0, 0, 0, 0);
-    let (mut w_tau, mut w_plug) = (0.0, 0.0);
-    for _ in 0..fleets {
+    let nu = sessions.saturating_sub(1).max(1);
+    // Hits of `with_df`, `satterthwaite`, `with_tau`, `kh`, `kh_df`, `plugin`.
+    let mut hits = [0usize; 6];
+    let (mut n, mut mean, mut pooled_fleets) = (0, 0, 0);
+    let mut widths = [0.0; 6];
+    let tc = t_critical(alpha, (arms.max(2) - 1) as f64);
+    let tdf = t_critical(alpha, interval_df(nu as f64, arms));
+    let df = vec![nu as f64; arms];
+    for f in 0..fleets {
         let mut theta = Vec::with_capacity(arms);
         let mut y = Vec::with_capacity(arms);
         let mut se = Vec::with_capacity(arms);
@@ -304,35 +427,67 @@ pub fn simulated_coverage(
             let t = 1.0 + tau * crate::rng::normal(&mut rng);
             theta.push(t);
             y.push(t + s * crate::rng::normal(&mut rng));
-            let chi2: f64 = (0..df).map(|_| crate::rng::normal(&mut rng).powi(2)).sum();
-            se.push(s * (chi2 / df as f64).sqrt());
+            let chi2: f64 = (0..nu).map(|_| crate::rng::normal(&mut rng).powi(2)).sum();
+            se.push(s * (chi2 / nu as f64).sqrt());
         }
-        let Some((d, a)) = pool(&y, &se, alpha) else {
+        let Some((d, a)) = pool(&y, &se, &df, alpha) else {
             continue;
         };
         pooled_fleets += 1;
-        let tc = t_critical(alpha, (arms - 1) as f64);
         mean += (d.mean_interval[0] <= 1.0 && 1.0 <= d.mean_interval[1]) as usize;
         for (a, t) in a.iter().zip(&theta) {
             n += 1;
-            with_tau += ((a.pooled - t).abs() <= tc * a.pooled_se) as usize;
-            plugin += ((a.pooled - t).abs() <= tc * a.pooled_se_plugin) as usize;
-            w_tau += a.pooled_se;
-            w_plug += a.pooled_se_plugin;
+            let miss = (a.pooled - t).abs();
+            let kse = kh_se(a, &d, &se);
+            let own = (1.0 - a.shrinkage) * a.se * a.se;
+            let satt =
+                satterthwaite_df(own, a.shrinkage, nu as f64, a.pooled_se.powi(2) - own, arms);
+            // Satterthwaite's (index 1) is tested by its p: its t is a search.
+            let half = [
+                tdf * a.pooled_se,
+                0.0,
+                tc * a.pooled_se,
+                tc * kse,
+                tdf * kse,
+                tc * a.pooled_se_plugin,
+            ];
+            let satt_holds = 2.0 * t_tail(miss / a.pooled_se, satt) >= alpha;
+            for (i, (h, w)) in hits.iter_mut().zip(half).enumerate() {
+                *h += if i == 1 { satt_holds } else { miss <= w } as usize;
+            }
+            if f % 10 == 0 {
+                for (acc, w) in widths.iter_mut().zip(half) {
+                    *acc += w;
+                }
+                widths[1] += t_critical(alpha, satt) * a.pooled_se;
+            }
         }
     }
+    let share = |c: usize| c as f64 / n.max(1) as f64;
+    let of_plugin = |w: f64| w / widths[5].max(f64::MIN_POSITIVE);
     Coverage {
         intervals: n,
-        with_tau: with_tau as f64 / n.max(1) as f64,
-        plugin: plugin as f64 / n.max(1) as f64,
+        with_df: share(hits[0]),
+        satterthwaite: share(hits[1]),
+        with_tau: share(hits[2]),
+        kh: share(hits[3]),
+        kh_df: share(hits[4]),
+        plugin: share(hits[5]),
         mean: mean as f64 / pooled_fleets.max(1) as f64,
-        width_ratio: w_tau / w_plug.max(f64::MIN_POSITIVE),
+        width: [
+            of_plugin(widths[0]),
+            of_plugin(widths[1]),
+            of_plugin(widths[2]),
+            of_plugin(widths[3]),
+            of_plugin(widths[4]),
+        ],
     }
 }
 
 /// One arm's estimate of a one-unknown `effect` (a gravity compliance) from its sessions: the
 /// value fitted on all of them with the geometric model, and its jackknife standard error over
-/// the sessions (each left out in turn): √((n − 1)/n Σ (θ₋ₛ − θ̄)²). The sessions, not the rows,
+/// the sessions (each left out in turn): √((n − 1)/n Σ (θ₋ₛ − θ̄)²), on n − 1 degrees of
+/// freedom. The sessions, not the rows,
 /// are the replications (the in-sample error of a fit on real data is far too small: its
 /// residuals are not white). `None` below [`crate::stats::MIN_UNITS`] sessions or for an
 /// effect of more than one unknown.
@@ -341,7 +496,7 @@ pub fn estimate(
     data: &Dataset,
     opts: &crate::fit::options::Options,
     effect: Effect,
-) -> Result<Option<(f64, f64)>, CalibError> {
+) -> Result<Option<Estimate>, CalibError> {
     let params = effect.params();
     let folds = crate::fit::holdout::by_group(data);
     if params.len() != 1 || folds.len() < crate::stats::MIN_UNITS {
@@ -363,7 +518,11 @@ pub fn estimate(
     let k = loo.len() as f64;
     let mean = loo.iter().sum::<f64>() / k;
     let se = ((k - 1.0) / k * loo.iter().map(|x| (x - mean).powi(2)).sum::<f64>()).sqrt();
-    Ok(Some((value, se)))
+    Ok(Some(Estimate {
+        value,
+        se,
+        df: k - 1.0,
+    }))
 }
 
 /// One session of an arm scored with the pooled value fixed.
@@ -381,7 +540,7 @@ pub struct PooledFold {
 
 /// The held-out gain of the pooled estimate on one arm, nested: for each session, the arm's
 /// estimate from its other sessions ([`estimate`]), combined with its other recordings'
-/// `siblings` (value, standard error; [`combine_recordings`]), is pooled with the other arms'
+/// `siblings` ([`combine_recordings`]), is pooled with the other arms'
 /// `others`, the pooled value θ̃ is fixed in the arm's model, the geometric
 /// unknowns are fitted on the other sessions, and the session is scored against the
 /// geometric model fitted on the same sessions. The held-out session never informs θ̃.
@@ -392,8 +551,8 @@ pub fn pooled_holdout(
     data: &Dataset,
     opts: &crate::fit::options::Options,
     effect: Effect,
-    siblings: &[(f64, f64)],
-    others: &[(f64, f64)],
+    siblings: &[Estimate],
+    others: &[Estimate],
     alpha: f64,
 ) -> Result<Vec<PooledFold>, CalibError> {
     let params = effect.params();
@@ -417,10 +576,13 @@ pub fn pooled_holdout(
         let Some(arm) = combine_recordings(&recs) else {
             continue;
         };
-        let (mut y, mut se): (Vec<f64>, Vec<f64>) = others.iter().copied().unzip();
+        let mut y: Vec<f64> = others.iter().map(|e| e.value).collect();
+        let mut se: Vec<f64> = others.iter().map(|e| e.se).collect();
+        let mut df: Vec<f64> = others.iter().map(|e| e.df).collect();
         y.push(arm.estimate);
         se.push(arm.se);
-        let Some((_, arms)) = pool(&y, &se, alpha) else {
+        df.push(arm.df);
+        let Some((_, arms)) = pool(&y, &se, &df, alpha) else {
             continue;
         };
         let value = arms.last().map_or(arm.estimate, |a| a.pooled);
@@ -446,6 +608,16 @@ pub fn pooled_holdout(
 mod tests {
     use super::*;
 
+    /// Errors taken as known (infinite degrees of freedom).
+    fn known(k: usize) -> Vec<f64> {
+        vec![f64::INFINITY; k]
+    }
+
+    /// A recording's estimate whose error comes from 4 sessions.
+    fn est(value: f64, se: f64) -> Estimate {
+        Estimate { value, se, df: 3.0 }
+    }
+
     #[test]
     fn t_critical_matches_tables() {
         for (df, t) in [(2.0, 4.303), (7.0, 2.365), (30.0, 2.042), (1e12, 1.960)] {
@@ -463,7 +635,7 @@ mod tests {
         // two errors from zero; pooled, all are.
         let y = [0.5, 1.4, 0.9, 1.2, 0.6, 1.5, 0.8, 1.1];
         let se = [0.6; 8];
-        let (d, arms) = pool(&y, &se, 0.05).unwrap();
+        let (d, arms) = pool(&y, &se, &known(y.len()), 0.05).unwrap();
         assert!(d.named && d.mean_p < 0.01, "{d:?}");
         assert!((d.mean - 1.0).abs() < 1e-12);
         // The arms scatter less than their errors say: no spread between them is seen.
@@ -481,7 +653,7 @@ mod tests {
     fn a_precise_arm_keeps_its_own_value_and_a_spread_is_seen() {
         let y = [-4.0, -1.3, 1.34, 0.5, -2.0];
         let se = [0.1, 0.1, 0.1, 3.0, 0.2];
-        let (d, arms) = pool(&y, &se, 0.05).unwrap();
+        let (d, arms) = pool(&y, &se, &known(y.len()), 0.05).unwrap();
         assert!(d.spread > 1.0 && d.spread_interval[0] > 0.5, "{d:?}");
         assert!(d.spread_interval[0] <= d.spread && d.spread <= d.spread_interval[1]);
         // Precise arms keep their values; the poorly measured one is pulled to the mean.
@@ -497,10 +669,10 @@ mod tests {
         // The same fleet in rad/mm (1e-8) gives the same pooling, scaled.
         let y = [-4.0, -1.3, 1.34, 0.5, -2.0];
         let se = [0.1, 0.1, 0.1, 3.0, 0.2];
-        let (d, arms) = pool(&y, &se, 0.05).unwrap();
+        let (d, arms) = pool(&y, &se, &known(y.len()), 0.05).unwrap();
         let ys: Vec<f64> = y.iter().map(|v| v * 1e-8).collect();
         let ses: Vec<f64> = se.iter().map(|v| v * 1e-8).collect();
-        let (ds, arms_s) = pool(&ys, &ses, 0.05).unwrap();
+        let (ds, arms_s) = pool(&ys, &ses, &known(ys.len()), 0.05).unwrap();
         assert!((ds.spread / 1e-8 - d.spread).abs() < 1e-9 * d.spread.max(1.0));
         assert!((ds.mean_se / 1e-8 - d.mean_se).abs() < 1e-9);
         for (a, b) in arms.iter().zip(&arms_s) {
@@ -514,22 +686,22 @@ mod tests {
     fn recordings_of_one_arm_are_weighed_by_their_errors() {
         // Two recordings that agree: the inverse-variance mean, the error of their sum of
         // weights, no widening.
-        let c = combine_recordings(&[(1.0, 0.1), (1.1, 0.2)]).unwrap();
+        let c = combine_recordings(&[est(1.0, 0.1), est(1.1, 0.2)]).unwrap();
         assert!((c.estimate - (1.0 / 0.01 + 1.1 / 0.04) / (1.0 / 0.01 + 1.0 / 0.04)).abs() < 1e-12);
         assert!((c.se - (1.0f64 / (100.0 + 25.0)).sqrt()).abs() < 1e-12);
         assert!(c.q < 1.0 && c.q_p > 0.3 && c.recordings == 2);
         // Two that disagree by ten errors: widened by the Birge ratio, and the p says so.
-        let d = combine_recordings(&[(1.0, 0.1), (2.0, 0.1)]).unwrap();
+        let d = combine_recordings(&[est(1.0, 0.1), est(2.0, 0.1)]).unwrap();
         assert!((d.estimate - 1.5).abs() < 1e-12);
         assert!(
             (d.se - (0.005f64 * d.q).sqrt()).abs() < 1e-12 && d.q_p < 1e-6,
             "{d:?}"
         );
         // One recording is itself; the scale does not matter; a bad error is refused.
-        assert_eq!(combine_recordings(&[(3.0, 0.5)]).unwrap().se, 0.5);
-        let s = combine_recordings(&[(1e-8, 1e-9), (2e-8, 1e-9)]).unwrap();
+        assert_eq!(combine_recordings(&[est(3.0, 0.5)]).unwrap().se, 0.5);
+        let s = combine_recordings(&[est(1e-8, 1e-9), est(2e-8, 1e-9)]).unwrap();
         assert!((s.se / 1e-8 - d.se).abs() < 1e-12);
-        assert!(combine_recordings(&[(1.0, 0.0)]).is_none());
+        assert!(combine_recordings(&[est(1.0, 0.0)]).is_none());
         assert!(combine_recordings(&[]).is_none());
     }
 
@@ -539,7 +711,7 @@ mod tests {
         // never shortens the plug-in error.
         let y = [0.0, 0.2, -0.1, 0.1, 3.0];
         let se = [1.0; 5];
-        let (d, arms) = pool(&y, &se, 0.05).unwrap();
+        let (d, arms) = pool(&y, &se, &known(y.len()), 0.05).unwrap();
         for a in &arms {
             assert!(a.pooled_se >= a.pooled_se_plugin);
         }
@@ -562,19 +734,95 @@ mod tests {
         // Fleets of 4 arms whose errors come from 4 sessions (as MUKCa's): the plug-in interval
         // covers too seldom where the spread is about the arms' error; Morris's term gives part
         // of it back (the long run: `examples/pooling_coverage.rs`, docs/results/claims.md).
+        // With 4 arms of 3 df each, the arm's own df and arms − 1 agree: the same interval.
         for (tau, lo) in [(0.0, 0.93), (1.0, 0.89)] {
             let c = simulated_coverage(4, tau, 4, 300, 7, 0.05);
             assert_eq!(c.intervals, 1200);
             assert!(c.with_tau >= c.plugin + 0.015, "tau = {tau}: {c:?}");
             assert!(c.with_tau > lo && c.with_tau < 0.99, "tau = {tau}: {c:?}");
-            assert!(c.mean > 0.9 && c.width_ratio > 1.1, "tau = {tau}: {c:?}");
+            assert_eq!(c.with_df, c.with_tau);
+            assert!(c.mean > 0.9 && c.width[2] > 1.1, "tau = {tau}: {c:?}");
         }
     }
 
     #[test]
+    fn the_arms_own_degrees_of_freedom_bring_eight_arms_to_their_nominal_coverage() {
+        // 8 arms of 4 sessions: t on arms − 1 = 7 covers 0.87–0.92 (each arm's 3-df error taken
+        // as known); t on the arms' own 3 df 0.93–0.96 (20 000 fleets a cell: claims.md §7.5).
+        // Here 300 fleets a cell; 2400 correlated intervals, so a tolerance of about 0.02.
+        for tau in [0.0, 1.0] {
+            let c = simulated_coverage(8, tau, 4, 300, 7, 0.05);
+            assert_eq!(c.intervals, 2400);
+            assert!(c.with_df >= c.with_tau + 0.02, "tau = {tau}: {c:?}");
+            assert!(c.with_df > 0.91 && c.with_df < 0.98, "tau = {tau}: {c:?}");
+            assert!(c.with_tau < 0.94, "tau = {tau}: {c:?}");
+            // Satterthwaite's df (the design's part on 7) and the Knapp–Hartung factor on 7 df
+            // fall short as the round-3 interval does.
+            assert!(
+                c.satterthwaite < c.with_df && c.kh < c.with_df,
+                "tau = {tau}: {c:?}"
+            );
+            assert!(c.width[0] > c.width[2], "tau = {tau}: {c:?}");
+        }
+    }
+
+    #[test]
+    fn an_arm_interval_is_on_its_own_degrees_of_freedom_where_fewer_than_the_arms() {
+        let y = [0.5, 1.4, 0.9, 1.2, 0.6, 1.5, 0.8, 1.1];
+        let se = [0.6, 0.3, 0.6, 0.5, 0.6, 0.4, 0.6, 0.6];
+        let (_, sure) = pool(&y, &se, &known(8), 0.05).unwrap();
+        assert!(sure.iter().all(|a| a.df == 7.0), "{sure:?}");
+        let (_, four) = pool(&y, &se, &[3.0; 8], 0.05).unwrap();
+        assert!(
+            four.iter().all(|a| a.df == 3.0 && a.se_df == 3.0),
+            "{four:?}"
+        );
+        // Ten sessions an arm, four arms: the arms' 3 df are the fewer.
+        let (_, ten) = pool(&y[..4], &se[..4], &[9.0; 4], 0.05).unwrap();
+        assert!(ten.iter().all(|a| a.df == 3.0), "{ten:?}");
+        // The same fleet, the same pooled values and errors: only t changes.
+        for (a, b) in sure.iter().zip(&four) {
+            assert_eq!((a.pooled, a.pooled_se), (b.pooled, b.pooled_se));
+        }
+        // An estimate three errors from zero: named alone with its error known (z = 1.96), not
+        // with a 4-session error (t₃ = 3.18).
+        let y = [3.0, 0.1, -0.2, 0.3];
+        let (_, z) = pool(&y, &[1.0; 4], &known(4), 0.05).unwrap();
+        let (_, t) = pool(&y, &[1.0; 4], &[3.0; 4], 0.05).unwrap();
+        assert!(z[0].named_alone && !t[0].named_alone);
+    }
+
+    #[test]
+    fn satterthwaite_df_is_the_arms_where_its_own_part_dominates() {
+        assert!((satterthwaite_df(1.0, 0.0, 3.0, 0.0, 8) - 3.0).abs() < 1e-12);
+        assert!((satterthwaite_df(0.0, 1.0, 3.0, 1.0, 8) - 7.0).abs() < 1e-12);
+        // Two equal parts on 3 and 7 df: more than either, fewer than their sum.
+        let both = satterthwaite_df(1.0, 0.0, 3.0, 1.0, 8);
+        assert!(both > 7.0 && both < 10.0, "{both}");
+        // Shrunk by B = 0.5, the own part moves half as much with its error.
+        assert!((satterthwaite_df(1.0, 0.5, 3.0, 0.0, 8) - 12.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn the_error_of_an_arm_of_several_recordings_has_their_degrees_of_freedom() {
+        // Two 4-session recordings that agree, equal errors: 6 df; one: its own 3.
+        let c = combine_recordings(&[est(1.0, 0.1), est(1.05, 0.1)]).unwrap();
+        assert!((c.df - 6.0).abs() < 1e-9, "{c:?}");
+        assert_eq!(combine_recordings(&[est(1.0, 0.1)]).unwrap().df, 3.0);
+        // A precise recording and a poor one: about the precise one's 3.
+        let c = combine_recordings(&[est(1.0, 0.01), est(1.05, 1.0)]).unwrap();
+        assert!(c.df > 3.0 && c.df < 3.01, "{c:?}");
+        // Two that disagree: the Birge ratio's 1 df joins the errors' 6.
+        let d = combine_recordings(&[est(1.0, 0.1), est(2.0, 0.1)]).unwrap();
+        assert!((d.df - 1.0 / (1.0 / 6.0 + 1.0)).abs() < 1e-9, "{d:?}");
+    }
+
+    #[test]
     fn too_few_arms_or_bad_errors_are_refused() {
-        assert!(pool(&[1.0, 2.0], &[1.0, 1.0], 0.05).is_none());
-        assert!(pool(&[1.0, 2.0, 3.0], &[1.0, 0.0, 1.0], 0.05).is_none());
-        assert!(pool(&[1.0, f64::NAN, 3.0], &[1.0, 1.0, 1.0], 0.05).is_none());
+        assert!(pool(&[1.0, 2.0], &[1.0, 1.0], &[3.0; 2], 0.05).is_none());
+        assert!(pool(&[1.0, 2.0, 3.0], &[1.0, 0.0, 1.0], &[3.0; 3], 0.05).is_none());
+        assert!(pool(&[1.0, 2.0, 3.0], &[1.0, 1.0, 1.0], &[3.0, 0.0, 3.0], 0.05).is_none());
+        assert!(pool(&[1.0, 2.0, 3.0], &[1.0, 1.0, 1.0], &[3.0; 2], 0.05).is_none());
+        assert!(pool(&[1.0, f64::NAN, 3.0], &[1.0, 1.0, 1.0], &[3.0; 3], 0.05).is_none());
     }
 }
