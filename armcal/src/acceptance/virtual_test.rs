@@ -8,14 +8,17 @@
 //! draw then measures that ideal artefact with an arm drawn from the budget: a parameter error
 //! δ ~ N(0, C) shared by every reading (the arm is one arm during a test), and each reading's
 //! own angle, temperature, probing and model errors, all to first order through the reading's
-//! Jacobians (`uncertainty::propagate`). The statistics of each draw are computed exactly as
+//! Jacobians (`uncertainty::propagate`). A leverage-scaled pose part P (issue 27) is a second
+//! shared draw δ_P ~ N(0, P), which reading i sees times √(max(1, ℓ_i) − 1): its variance is
+//! the first order's J cov Jᵀ + (max(1, ℓ) − 1) J P Jᵀ, and the readings of one test share it
+//! as they share δ. The statistics of each draw are computed exactly as
 //! the test computes them, so their non-linearity (a form is a range, a location a maximum) is
 //! kept: an expected P_Form is not zero even on a perfect model.
 
 use super::statistics::{self, StatError, Test};
 use crate::data::Dataset;
 use crate::rng::{normal, rng};
-use crate::uncertainty::montecarlo::sqrt_cov;
+use crate::uncertainty::montecarlo::{pose_draw, pose_scale_at, sqrt_cov};
 use crate::uncertainty::propagate::{jacobians, Jacobians};
 use crate::uncertainty::Budget;
 use nalgebra::{DVector, Vector3};
@@ -58,6 +61,7 @@ pub fn predict(
         })
         .collect();
     let root = sqrt_cov(&budget.cov);
+    let widen: Vec<f64> = jac.iter().map(|j| pose_scale_at(budget, j)).collect();
     let sigma_theta = budget.sigma_theta(arm);
     let own = (budget.probing_mm.powi(2) + budget.model_mm.powi(2)).sqrt();
     let mut g = rng(seed);
@@ -65,13 +69,14 @@ pub fn predict(
     for _ in 0..draws {
         let z = DVector::from_fn(budget.params.len(), |_, _| normal(&mut g));
         let delta = &root * z;
+        let delta_pose = pose_draw(budget, &root, &mut g);
         let p: Vec<Vector3<f64>> = ideal
             .iter()
-            .zip(&jac)
-            .map(|(x, j)| {
+            .zip(jac.iter().zip(&widen))
+            .map(|(x, (j, w))| {
                 let mut p = *x;
-                for (col, dk) in j.pi.iter().zip(delta.iter()) {
-                    p -= col * *dk;
+                for (col, (dk, pk)) in j.pi.iter().zip(delta.iter().zip(delta_pose.iter())) {
+                    p -= col * (*dk + w * pk);
                 }
                 for (col, s) in j.theta.iter().zip(&sigma_theta) {
                     p += col * (s * normal(&mut g));

@@ -2,6 +2,11 @@
 //!
 //!   Σ_p = J_π C J_πᵀ + J_θ diag(σ_θ²) J_θᵀ + J_T σ_T² J_Tᵀ + (σ_probe² + σ_model²) I₃.
 //!
+//! With the budget's pose part kept apart ([`super::PoseSplit`], issue 27) the parameters'
+//! term of a reading is J C Jᵀ + (max(1, ℓ) − 1) J P Jᵀ, ℓ = tr(J C_fit Jᵀ)/mean of the same
+//! over the calibration's rows ([`widening`]): every reading's variance goes through
+//! [`point`] or [`group_deviations`], so the factor is applied here once.
+//!
 //! J_π is [`tip_jacobian`]'s analytic columns for the budget's parameters. J_θ is analytic too:
 //! a reading error moves the tip as a zero offset of the same joint does, a_k × (p − o_k)
 //! (the same column; the harmonic and gravity terms change that slope by their own size,
@@ -74,6 +79,48 @@ fn sandwich(a: &[Vector3<f64>], c: &DMatrix<f64>, b: &[Vector3<f64>]) -> Matrix3
     out
 }
 
+/// 3 × r: the columns `a` (one per parameter) times D.
+fn times_factor(a: &[Vector3<f64>], d: &DMatrix<f64>) -> nalgebra::Matrix3xX<f64> {
+    let mut out = nalgebra::Matrix3xX::zeros(d.ncols());
+    for (i, ai) in a.iter().enumerate() {
+        for k in 0..d.ncols() {
+            let x = d[(i, k)];
+            if x != 0.0 {
+                let mut c = out.column_mut(k);
+                c += ai * x;
+            }
+        }
+    }
+    out
+}
+
+/// A reading's leverage ratio ℓ = tr(J C_fit Jᵀ)/`leverage_mean` from its tip columns `tip`
+/// and J cov Jᵀ `tip_cov`: C_fit = (cov − D Dᵀ)/(1 + b), so tr J C_fit Jᵀ =
+/// (tr J cov Jᵀ − |J D|²)/(1 + b) and no n × n product is needed. `None` without a pose part.
+pub fn leverage(budget: &Budget, tip: &[Vector3<f64>], tip_cov: &Matrix3<f64>) -> Option<f64> {
+    let p = budget.pose.as_ref()?;
+    let jd = times_factor(tip, &p.factor);
+    let fit = (tip_cov.trace() - jd.norm_squared()).max(0.0) / (1.0 + p.shrink);
+    Some(fit / p.leverage_mean)
+}
+
+/// What the pose part adds to the parameters' term G cov Gᵀ = `gcg` at a reading of
+/// leverage ratio `l`: (max(1, ℓ) − 1) G P Gᵀ, with G P Gᵀ = (G D (G D)ᵀ + b G cov Gᵀ)/(1 + b).
+/// G is the reading's tip columns or, for a deviation from a group's mean, J_i − J̄; ℓ is
+/// always the tip's ([`leverage`]), the quantity the hub computes for a reading. Zero
+/// without a pose part or at ℓ ≤ 1.
+pub fn widening(budget: &Budget, l: Option<f64>, g: &[Vector3<f64>], gcg: &Matrix3<f64>) -> Matrix3<f64> {
+    let (Some(p), Some(l)) = (budget.pose.as_ref(), l) else {
+        return Matrix3::zeros();
+    };
+    let f = super::pose::leverage_factor(l) - 1.0;
+    if f <= 0.0 {
+        return Matrix3::zeros();
+    }
+    let gd = times_factor(g, &p.factor);
+    (&gd * gd.transpose() + gcg * p.shrink) * (f / (1.0 + p.shrink))
+}
+
 /// The terms of Σ_p that are the reading's own (angles, temperature, probing, model): those
 /// two readings do not share.
 pub fn own_terms(budget: &Budget, sigma_theta: &[f64], j: &Jacobians) -> Matrix3<f64> {
@@ -92,9 +139,30 @@ pub fn point(
     theta: &[f64],
     temp_c: f64,
 ) -> (Vector3<f64>, Matrix3<f64>) {
+    let (p, s, _) = point_with_leverage(arm, probe, budget, theta, temp_c);
+    (p, s)
+}
+
+/// [`point`] with the reading's leverage ratio ℓ (`None` without a pose part): the tip, Σ_p,
+/// ℓ.
+pub fn point_with_leverage(
+    arm: &Arm,
+    probe: usize,
+    budget: &Budget,
+    theta: &[f64],
+    temp_c: f64,
+) -> (Vector3<f64>, Matrix3<f64>, Option<f64>) {
     let j = jacobians(arm, probe, budget, theta, temp_c);
-    let s = sandwich(&j.pi, &budget.cov, &j.pi) + own_terms(budget, &budget.sigma_theta(arm), &j);
-    (j.p, s)
+    let jcj = sandwich(&j.pi, &budget.cov, &j.pi);
+    let l = leverage(budget, &j.pi, &jcj);
+    let s = jcj + widening(budget, l, &j.pi, &jcj) + own_terms(budget, &budget.sigma_theta(arm), &j);
+    (j.p, s, l)
+}
+
+/// A reading's leverage ratio from its Jacobians ([`leverage`]).
+pub fn leverage_at(budget: &Budget, j: &Jacobians) -> Option<f64> {
+    budget.pose.as_ref()?;
+    leverage(budget, &j.pi, &sandwich(&j.pi, &budget.cov, &j.pi))
 }
 
 /// The distance between two readings and its standard uncertainty: gauge-free, the
@@ -127,7 +195,8 @@ pub fn distance(arm: &Arm, budget: &Budget, a: (&[f64], f64), b: (&[f64], f64)) 
 /// `rows` of `data` (one `spat` point, one bar end): r_i = p_i − (1/n) Σ_j p_j. The parameters'
 /// part goes through J_i − J̄ (what all the group's probings share cancels), the readings' own
 /// parts as (1 − 2/n) Σ_i + (1/n²) Σ_j Σ_j. How MUKCa's authors judge a session, and what a
-/// held-out group's residuals are.
+/// held-out group's residuals are. With a pose part, each probing's pose part is scaled by
+/// its own tip's leverage factor (a variance per probing, as [`point`] gives it).
 pub fn group_deviations(
     arm: &Arm,
     b: &Budget,
@@ -159,7 +228,9 @@ pub fn group_deviations(
         .zip(js.iter().zip(&own))
         .map(|(&i, (j, o))| {
             let g: Vec<Vector3<f64>> = j.pi.iter().zip(&mean_j).map(|(a, m)| a - m).collect();
-            (i, o * (1.0 - 2.0 / n) + own_mean + sandwich(&g, &b.cov, &g))
+            let gcg = sandwich(&g, &b.cov, &g);
+            let widen = widening(b, leverage_at(b, j), &g, &gcg);
+            (i, o * (1.0 - 2.0 / n) + own_mean + gcg + widen)
         })
         .collect()
 }
