@@ -189,21 +189,28 @@ fn the_pose_term_is_estimated_from_sessions_and_covers_a_new_one() {
     assert_eq!(pose.groups, 5);
     assert!(pose.validated && pose.scale > 0.0, "{pose:?}");
     assert!(pose.covered[1] > pose.covered[0], "{pose:?}");
-    // The benchmark's variants go through the same estimate: scaled by the leverage ratio
-    // (a factor ≥ 1 per row), each row needs no more κ, so the conformal κ is no larger;
-    // pooled with the fleet's κ worth one group, κ² = (G κ² + κ_fleet²)/(G + 1).
+    // The product's term is leverage-scaled: kept apart as D and b, with the calibration
+    // rows' mean tip leverage (the file's `pose_*` keys). Stop 35's form (the term in C
+    // alone, the same at every leverage) needs no smaller κ: each row's factor is ≥ 1.
     let variant = |v: Settings| {
         let e = estimate::from_fit(&fit, &data, Some(&h), 0.0, &v).unwrap();
         e.model.unwrap().pose.unwrap()
     };
-    let lev = variant(Settings {
-        leverage_scaled: true,
+    let plain = variant(Settings {
+        leverage_scaled: false,
         ..s
     });
+    assert!(plain.leverage.is_none(), "{plain:?}");
     assert!(
-        lev.validated && lev.scale <= pose.scale * (1.0 + 1e-9),
-        "{lev:?}"
+        plain.validated && pose.scale <= plain.scale * (1.0 + 1e-9),
+        "{pose:?} vs {plain:?}"
     );
+    let lev = pose
+        .leverage
+        .clone()
+        .expect("the product's term is leverage-scaled");
+    assert!(lev.rank >= 1 && lev.rank <= 4 && lev.folded == 0, "{lev:?}");
+    assert!(lev.range[0] < 1.0 && lev.range[1] > 1.0, "{lev:?}");
     let pooled = variant(Settings {
         fleet_prior_groups: 1.0,
         two_group_scale: 2.0,
@@ -225,6 +232,32 @@ fn the_pose_term_is_estimated_from_sessions_and_covers_a_new_one() {
         },
     )
     .unwrap();
+    // `covariance` is today's budget, C + D Dᵀ + b C, C the fit's own (the budget without
+    // the term); the leverage mean is that of the calibration rows' tips under C.
+    let split = with.budget.pose.clone().unwrap();
+    let c = &without.budget.cov;
+    let rebuilt = c + &split.factor * split.factor.transpose() + c * split.shrink;
+    assert!((&rebuilt - &with.budget.cov).norm() <= 1e-12 * with.budget.cov.norm());
+    assert!((split.fit_covariance(&with.budget.cov) - c).norm() <= 1e-9 * c.norm());
+    let tips = armcal::uncertainty::pose::tip_leverages(&fit.arm, &with.budget.params, c, &data);
+    let mean = tips.iter().sum::<f64>() / tips.len() as f64;
+    assert!((split.leverage_mean - mean).abs() <= 1e-12 * mean);
+    assert_eq!(split.shrink, lev.shrink);
+    // Written and read back: the keys are in the file and the budget comes back whole.
+    let file = with.budget.to_file(&fit.arm).unwrap();
+    let text = quatarm_ref::calfile::write_with(&fit.arm, Some(&file), &[]);
+    for key in ["pose_factor", "pose_shrink", "pose_leverage_mean"] {
+        assert!(text.contains(&format!("{key} = ")), "{key}");
+    }
+    let back = quatarm_ref::calfile::parse(&text)
+        .unwrap()
+        .uncertainty
+        .unwrap();
+    assert_eq!(back, file);
+    assert_eq!(
+        armcal::uncertainty::Budget::from_file(&back).pose,
+        with.budget.pose
+    );
     let setup = Setup {
         readings: 1000,
         noise_mm: 0.0,

@@ -167,7 +167,10 @@ fn flag_leverage(
         .iter()
         .filter_map(|r| {
             let probe = armcal::fit::probes::index(arm, r);
-            armcal::uncertainty::propagate::point_with_leverage(arm, probe, budget, &r.theta, r.temp_c).2
+            armcal::uncertainty::propagate::point_with_leverage(
+                arm, probe, budget, &r.theta, r.temp_c,
+            )
+            .2
         })
         .fold(0.0, f64::max);
     let mut far = 0usize;

@@ -179,7 +179,11 @@ impl Budget {
             temperature_c: self.temperature_c,
             model_mm: self.model_mm,
             pose: self.pose.as_ref().map(|p| uncertainty::PoseLeverage {
-                factor: p.factor.column_iter().map(|c| c.iter().copied().collect()).collect(),
+                factor: p
+                    .factor
+                    .column_iter()
+                    .map(|c| c.iter().copied().collect())
+                    .collect(),
                 shrink: p.shrink,
                 leverage_mean: p.leverage_mean,
             }),

@@ -47,14 +47,16 @@ pub const SCALE_MAX: f64 = 30.0;
 /// κ for two groups, where the data cannot set it: borrowed from a fleet of other arms,
 /// measured in the same regime. On each MUKCa unit with ≥ 3 sessions, each pair of
 /// consecutive sessions (cyclic) is calibrated, S_b taken from its two leave-one-session-out
-/// fits, and every other session's probings scored ([`least_scales`]); the unit's κ is the
-/// conformal quantile of its scores ([`conformal_scale`]) and this is the median over the 9
-/// units (`cargo test --profile test -p armcal --bench coverage -- mukca`, the line
-/// `two-session κ`; `docs/results/uncertainty.md`). A median over units, not a quantile over
+/// fits, and every other session's probings scored ([`least_scales`]) under the product's
+/// leverage-scaled form (each probing's pose part times its tip's max(1, ℓ)); the unit's κ
+/// is the conformal quantile of its scores ([`conformal_scale`]) and this is the median over
+/// the 9 units (`cargo test --profile test -p armcal --bench coverage -- mukca`, the line
+/// `two-session κ of the fleet`; `docs/results/uncertainty.md`). 1.104 for the term without
+/// the leverage factor (stop 35's form, `Settings::leverage_scaled` off). A median over units, not a quantile over
 /// their pooled rows: the target is each unit's coverage, and one unit whose bad session no
 /// scale covers (panda_2 `high`) must not set every other unit's width. `--fleet-kappa`
 /// replaces it with the caller's fleet.
-pub const TWO_GROUP_SCALE: f64 = 1.104;
+pub const TWO_GROUP_SCALE: f64 = 0.968;
 
 /// Where the term came from (the report's provenance).
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -241,7 +243,10 @@ fn factor_of(s: &DMatrix<f64>, c: &DMatrix<f64>) -> (DMatrix<f64>, f64, usize) {
     let w = match &ch {
         Some(ch) => {
             let l = ch.l();
-            let li = l.clone().try_inverse().unwrap_or_else(|| DMatrix::identity(n, n));
+            let li = l
+                .clone()
+                .try_inverse()
+                .unwrap_or_else(|| DMatrix::identity(n, n));
             let m = &li * s * li.transpose();
             (m.clone() + m.transpose()) * 0.5
         }
@@ -288,7 +293,9 @@ pub fn tip_leverages(
         .iter()
         .map(|r| {
             let probe = crate::fit::probes::index(arm, r);
-            super::propagate::point(arm, probe, &b, &r.theta, r.temp_c).1.trace()
+            super::propagate::point(arm, probe, &b, &r.theta, r.temp_c)
+                .1
+                .trace()
         })
         .collect()
 }
@@ -361,10 +368,10 @@ pub fn conformal_scale(mut t: Vec<f64>) -> f64 {
     t[k - 1].min(finite)
 }
 
-/// The factor of the leverage-scaled variant of the term at a reading of leverage ratio `l`
-/// (its tr J C Jᵀ over the mean on the calibration's rows): max(1, l). Measured on MUKCa
-/// (`coverage` bench, `mukca-variants`), not in the budget: a factor per reading that the
-/// table's C cannot hold.
+/// The factor of the leverage-scaled term at a reading of leverage ratio `l` (its tip's
+/// tr J C_fit Jᵀ over the mean on the calibration's rows): max(1, l). The budget carries the
+/// term apart from C for it (the file's `pose_*` keys); [`super::propagate::widening`]
+/// applies it.
 pub fn leverage_factor(l: f64) -> f64 {
     if l.is_finite() {
         l.max(1.0)

@@ -109,7 +109,12 @@ pub fn leverage(budget: &Budget, tip: &[Vector3<f64>], tip_cov: &Matrix3<f64>) -
 /// G is the reading's tip columns or, for a deviation from a group's mean, J_i − J̄; ℓ is
 /// always the tip's ([`leverage`]), the quantity the hub computes for a reading. Zero
 /// without a pose part or at ℓ ≤ 1.
-pub fn widening(budget: &Budget, l: Option<f64>, g: &[Vector3<f64>], gcg: &Matrix3<f64>) -> Matrix3<f64> {
+pub fn widening(
+    budget: &Budget,
+    l: Option<f64>,
+    g: &[Vector3<f64>],
+    gcg: &Matrix3<f64>,
+) -> Matrix3<f64> {
     let (Some(p), Some(l)) = (budget.pose.as_ref(), l) else {
         return Matrix3::zeros();
     };
@@ -155,7 +160,8 @@ pub fn point_with_leverage(
     let j = jacobians(arm, probe, budget, theta, temp_c);
     let jcj = sandwich(&j.pi, &budget.cov, &j.pi);
     let l = leverage(budget, &j.pi, &jcj);
-    let s = jcj + widening(budget, l, &j.pi, &jcj) + own_terms(budget, &budget.sigma_theta(arm), &j);
+    let s =
+        jcj + widening(budget, l, &j.pi, &jcj) + own_terms(budget, &budget.sigma_theta(arm), &j);
     (j.p, s, l)
 }
 
@@ -323,5 +329,94 @@ mod tests {
         let (d, ud) = distance(&a, &b, (&th, 25.0), (&th, 25.0));
         assert_eq!(d, 0.0);
         assert!(ud == 0.0);
+    }
+
+    /// Issue 27: a budget whose pose part is kept apart gives the same Σ_p (and U95) as the
+    /// same covariance without it at a reading of ℓ ≤ 1, a larger one at ℓ > 1, and both
+    /// match the n × n formula J cov Jᵀ + (max(1, ℓ) − 1) J P Jᵀ, ℓ = tr(J C_fit Jᵀ)/mean.
+    #[test]
+    fn the_pose_part_widens_only_above_the_mean_leverage() {
+        use super::super::{u95, PoseSplit};
+        let a = arm();
+        let params = Terms::with(&[Effect::Thermal(Link::Probe)]).params(6);
+        let n = params.len();
+        let c_fit = DMatrix::from_fn(n, n, |i, j| {
+            if i == j {
+                1e-8 * (1.0 + i as f64 / n as f64)
+            } else {
+                2e-10
+            }
+        });
+        let d = DMatrix::from_fn(n, 3, |i, k| 1e-5 * ((i * 7 + k * 3) % 5) as f64 - 2e-5);
+        let shrink = 0.4;
+        let cov = &c_fit * (1.0 + shrink) + &d * d.transpose();
+        let mut plain = Budget::zero(6);
+        plain.params = params;
+        plain.cov = cov.clone();
+        plain.encoder_counts = vec![0.3; 6];
+        plain.probing_mm = 0.002;
+        plain.model_mm = 0.001;
+        let th = [0.3, -0.7, 1.1, 0.9, -2.0, 0.4];
+        let (_, s_plain) = point(&a, 0, &plain, &th, 25.0);
+        let j = jacobians(&a, 0, &plain, &th, 25.0);
+        let jm = nalgebra::Matrix3xX::from_columns(&j.pi);
+        let tr_fit = (&jm * &c_fit * jm.transpose()).trace();
+        let split = |mean: f64| PoseSplit {
+            factor: d.clone(),
+            shrink,
+            leverage_mean: mean,
+        };
+        let direct = |b: &Budget| {
+            let p = b.pose.as_ref().unwrap();
+            assert!((p.fit_covariance(&cov) - &c_fit).norm() < 1e-12 * c_fit.norm());
+            let l = tr_fit / p.leverage_mean;
+            let jpj = &jm * p.matrix(&cov) * jm.transpose();
+            let jcj = &jm * &cov * jm.transpose();
+            let m = jcj + jpj * (l.max(1.0) - 1.0);
+            let own = own_terms(b, &b.sigma_theta(&a), &j);
+            (Matrix3::from_iterator(m.iter().copied()) + own, l)
+        };
+        for (mean, widened) in [
+            (2.0 * tr_fit, false),
+            (tr_fit * (1.0 + 1e-9), false),
+            (tr_fit / 3.0, true),
+        ] {
+            let b = Budget {
+                pose: Some(split(mean)),
+                ..plain.clone()
+            };
+            let (_, s, l) = point_with_leverage(&a, 0, &b, &th, 25.0);
+            let (want, l_want) = direct(&b);
+            assert!(
+                (l.unwrap() - l_want).abs() <= 1e-12 * l_want,
+                "{l:?} {l_want}"
+            );
+            assert!((s - want).norm() <= 1e-12 * want.norm(), "{s} {want}");
+            let (u, u_plain) = (u95::u95(&s), u95::u95(&s_plain));
+            if widened {
+                assert!(u > u_plain * 1.01, "{u} {u_plain}");
+            } else {
+                assert_eq!(s, s_plain);
+                assert_eq!(u, u_plain);
+            }
+        }
+        // A deviation from a group's mean: its pose part scaled by its own tip's factor.
+        let b = Budget {
+            pose: Some(split(tr_fit / 3.0)),
+            ..plain.clone()
+        };
+        let rows = (0..3)
+            .map(|k| {
+                let mut t = th.to_vec();
+                t[4] += 0.2 * f64::from(k);
+                crate::data::Row::point(0, t, [0.0; 3], 25.0, None)
+            })
+            .collect();
+        let data = crate::data::Dataset::from_rows(rows, 6, true, "test").unwrap();
+        let wide = group_deviations(&a, &b, &data, &[0, 1, 2]);
+        let narrow = group_deviations(&a, &plain, &data, &[0, 1, 2]);
+        for ((_, w), (_, n)) in wide.iter().zip(&narrow) {
+            assert!(w.trace() > n.trace(), "{w} {n}");
+        }
     }
 }

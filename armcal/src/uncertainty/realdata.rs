@@ -197,11 +197,7 @@ fn hold_out(unit: &Unit, groups: &[i64], g: i64, rule: Rule) -> Result<Held, sup
 /// Each held-out probing's U95 under the nested budget `nested` as `calibrate --by-group`
 /// writes it: with the leverage rule its pose part is kept apart and scaled per probing by
 /// its tip's leverage ratio, by the product's own propagation.
-fn nested_u95(
-    arm: &Arm,
-    nested: &Budget,
-    test: &Dataset,
-) -> Vec<(usize, f64)> {
+fn nested_u95(arm: &Arm, nested: &Budget, test: &Dataset) -> Vec<(usize, f64)> {
     let ends = |d: &Dataset| -> Vec<Vec<usize>> {
         d.layout()
             .length
