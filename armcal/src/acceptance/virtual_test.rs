@@ -69,7 +69,13 @@ pub fn predict(
     for _ in 0..draws {
         let z = DVector::from_fn(budget.params.len(), |_, _| normal(&mut g));
         let delta = &root * z;
-        let delta_pose = pose_draw(budget, &root, &mut g);
+        // Drawn only where a reading sees it: a budget whose every reading is at ℓ ≤ 1
+        // draws as one without a pose part.
+        let delta_pose = if widen.iter().any(|w| *w > 0.0) {
+            pose_draw(budget, &root, &mut g)
+        } else {
+            DVector::zeros(budget.params.len())
+        };
         let p: Vec<Vector3<f64>> = ideal
             .iter()
             .zip(jac.iter().zip(&widen))
@@ -190,5 +196,62 @@ mod tests {
         // A form is a range: positive, of a few σ for 25 points.
         let f = p[&(Test::PForm, 1)];
         assert!(f.lo > 0.002 && f.hi < 0.02, "{f:?}");
+    }
+
+    /// Issue 27: a pose part kept apart widens the prediction where the readings' leverage
+    /// is above the calibration's mean, and leaves it as it was where it is below (the
+    /// draws then the same to the bit: no pose draw is seen by any reading).
+    #[test]
+    fn the_leverage_scaled_pose_part_widens_the_prediction() {
+        use crate::params::Param;
+        use nalgebra::DMatrix;
+        let arm = Arm::default6();
+        let data = test_set(&arm);
+        let params: Vec<Param> = (0..6).map(Param::ZeroOffset).collect();
+        let n = params.len();
+        let mut b = Budget::zero(6);
+        b.params = params;
+        b.cov = DMatrix::from_diagonal_element(n, n, 4e-10);
+        let d = DMatrix::from_fn(n, 1, |i, _| if i == 1 { 1e-5 } else { 0.0 });
+        b.cov += &d * d.transpose();
+        let at = |mean: f64| {
+            let mut w = b.clone();
+            w.pose = Some(crate::uncertainty::PoseSplit {
+                factor: d.clone(),
+                shrink: 0.0,
+                leverage_mean: mean,
+            });
+            predict(&arm, &w, &data, 400, 3).unwrap()
+        };
+        let plain = predict(&arm, &b, &data, 400, 3).unwrap();
+        // Each reading's tr(J C_fit Jᵀ): ℓ at a mean of 1.
+        let unit = Budget {
+            pose: Some(crate::uncertainty::PoseSplit {
+                factor: d.clone(),
+                shrink: 0.0,
+                leverage_mean: 1.0,
+            }),
+            ..b.clone()
+        };
+        let traces: Vec<f64> = data
+            .rows
+            .iter()
+            .map(|r| {
+                let j = jacobians(&arm, 0, &unit, &r.theta, r.temp_c);
+                crate::uncertainty::propagate::leverage_at(&unit, &j).unwrap()
+            })
+            .collect();
+        let most = traces.iter().copied().fold(0.0, f64::max);
+        let least = traces.iter().copied().fold(f64::INFINITY, f64::min);
+        // Every reading at ℓ ≤ 0.5, then every one at ℓ ≥ 10.
+        let (low, high) = (at(2.0 * most), at(least / 10.0));
+        let key = (Test::EUni, 11);
+        assert_eq!(low[&key], plain[&key]);
+        assert!(
+            high[&key].sd > 1.2 * plain[&key].sd,
+            "{:?} {:?}",
+            high[&key],
+            plain[&key]
+        );
     }
 }
