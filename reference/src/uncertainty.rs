@@ -357,7 +357,7 @@ pub fn parse(
 /// D's entries finite and within their parameter's limit (a column of D is a standard
 /// deviation of the parameters, like the square root of the covariance's diagonal), at most
 /// [`POSE_RANK_MAX`] columns of n values; b finite and ≥ 0; the leverage mean finite and
-/// > 0; and `covariance` − D Dᵀ positive semi-definite with the covariance's own tolerance
+/// positive; and `covariance` − D Dᵀ positive semi-definite with the covariance's own tolerance
 /// (C_fit (1 + b) is what is left, and a covariance cannot be negative).
 fn pose(
     t: &Table,
