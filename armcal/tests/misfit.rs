@@ -361,3 +361,75 @@ fn with_two_sessions_the_pose_terms_scale_is_the_fleets() {
         armcal::uncertainty::pose::TWO_GROUP_SCALE
     );
 }
+
+/// Issue 27 end to end: `calibrate --by-group` on three MUKCa sessions writes the
+/// leverage-scaled term (the three keys; the report's line says so with r, b, the mean and
+/// the calibration rows' ℓ range), and `eval --uncertainty` applies it per reading: a column
+/// `leverage` after U95, and with `--seen` a last column `far_leverage`, 0 at the
+/// calibration's own readings and 1 beyond the largest ℓ they have.
+#[test]
+fn calibrate_by_group_writes_the_leverage_keys_and_eval_applies_them() {
+    let d = workdir("misfit-leverage");
+    let mukca = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../data/mukca");
+    let data = mukca.join("mukca-panda-panda_6.csv");
+    let arm = mukca.join("mukca-panda-panda_6.toml");
+    #[rustfmt::skip]
+    let o = armcal_ok(&["calibrate", data.to_str().unwrap(), "--arm", arm.to_str().unwrap(),
+        "--by-group", "-o", "cal.toml", "--json"], &d);
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let notes = json["uncertainty"]["notes"].to_string();
+    assert!(notes.contains("leverage-scaled"), "{notes}");
+    let text = std::fs::read_to_string(d.join("cal.toml")).unwrap();
+    for key in ["pose_factor = [", "pose_shrink = ", "pose_leverage_mean = "] {
+        assert!(text.contains(key), "{key}");
+    }
+    let pose = &json["uncertainty"]["model_estimated"]["pose"]["leverage"];
+    let largest = pose["range"][1].as_f64().unwrap();
+    assert!(largest > 1.0, "{pose}");
+    // Three of the calibration's own readings, and the first with the shoulder raised far.
+    let csv = std::fs::read_to_string(&data).unwrap();
+    let mut q = String::from("j1,j2,j3,j4,j5,j6,j7\n");
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .take(3)
+        .map(|l| l.split(',').skip(2).take(7).collect())
+        .collect();
+    for r in &rows {
+        q += &format!("{}\n", r.join(","));
+    }
+    let mut far: Vec<f64> = rows[0].iter().map(|x| x.parse().unwrap()).collect();
+    far[1] -= 1.2;
+    far[3] += 1.2;
+    q += &format!(
+        "{}\n",
+        far.iter().map(f64::to_string).collect::<Vec<_>>().join(",")
+    );
+    std::fs::write(d.join("q.csv"), q).unwrap();
+    #[rustfmt::skip]
+    let o = armcal_ok(&["eval", "--calib", "cal.toml", "--uncertainty", "--seen",
+        data.to_str().unwrap(), "q.csv"], &d);
+    let out = String::from_utf8_lossy(&o.stdout).to_string();
+    let lines: Vec<&str> = out.lines().collect();
+    assert!(
+        lines[0].ends_with("U95,leverage,far,far_joints,far_leverage"),
+        "{out}"
+    );
+    let field = |l: &str, from_end: usize| -> f64 {
+        let v: Vec<&str> = l.split(',').collect();
+        v[v.len() - 1 - from_end].parse().unwrap()
+    };
+    for l in &lines[1..4] {
+        assert_eq!(field(l, 0), 0.0, "{out}");
+        assert!(field(l, 3) <= largest * (1.0 + 1e-3), "{out}");
+    }
+    // Measured: ℓ 2.26 against the calibration's largest 1.28.
+    let l = field(lines[4], 3);
+    assert!(l > largest, "{out}");
+    assert_eq!(field(lines[4], 0), 1.0, "{out}");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("1 of 4 readings have a leverage ratio above"),
+        "{err}"
+    );
+}
