@@ -189,21 +189,28 @@ fn the_pose_term_is_estimated_from_sessions_and_covers_a_new_one() {
     assert_eq!(pose.groups, 5);
     assert!(pose.validated && pose.scale > 0.0, "{pose:?}");
     assert!(pose.covered[1] > pose.covered[0], "{pose:?}");
-    // The benchmark's variants go through the same estimate: scaled by the leverage ratio
-    // (a factor ≥ 1 per row), each row needs no more κ, so the conformal κ is no larger;
-    // pooled with the fleet's κ worth one group, κ² = (G κ² + κ_fleet²)/(G + 1).
+    // The product's term is leverage-scaled: kept apart as D and b, with the calibration
+    // rows' mean tip leverage (the file's `pose_*` keys). Stop 35's form (the term in C
+    // alone, the same at every leverage) needs no smaller κ: each row's factor is ≥ 1.
     let variant = |v: Settings| {
         let e = estimate::from_fit(&fit, &data, Some(&h), 0.0, &v).unwrap();
         e.model.unwrap().pose.unwrap()
     };
-    let lev = variant(Settings {
-        leverage_scaled: true,
+    let plain = variant(Settings {
+        leverage_scaled: false,
         ..s
     });
+    assert!(plain.leverage.is_none(), "{plain:?}");
     assert!(
-        lev.validated && lev.scale <= pose.scale * (1.0 + 1e-9),
-        "{lev:?}"
+        plain.validated && pose.scale <= plain.scale * (1.0 + 1e-9),
+        "{pose:?} vs {plain:?}"
     );
+    let lev = pose
+        .leverage
+        .clone()
+        .expect("the product's term is leverage-scaled");
+    assert!(lev.rank >= 1 && lev.rank <= 4 && lev.folded == 0, "{lev:?}");
+    assert!(lev.range[0] < 1.0 && lev.range[1] > 1.0, "{lev:?}");
     let pooled = variant(Settings {
         fleet_prior_groups: 1.0,
         two_group_scale: 2.0,
@@ -225,6 +232,32 @@ fn the_pose_term_is_estimated_from_sessions_and_covers_a_new_one() {
         },
     )
     .unwrap();
+    // `covariance` is today's budget, C + D Dᵀ + b C, C the fit's own (the budget without
+    // the term); the leverage mean is that of the calibration rows' tips under C.
+    let split = with.budget.pose.clone().unwrap();
+    let c = &without.budget.cov;
+    let rebuilt = c + &split.factor * split.factor.transpose() + c * split.shrink;
+    assert!((&rebuilt - &with.budget.cov).norm() <= 1e-12 * with.budget.cov.norm());
+    assert!((split.fit_covariance(&with.budget.cov) - c).norm() <= 1e-9 * c.norm());
+    let tips = armcal::uncertainty::pose::tip_leverages(&fit.arm, &with.budget.params, c, &data);
+    let mean = tips.iter().sum::<f64>() / tips.len() as f64;
+    assert!((split.leverage_mean - mean).abs() <= 1e-12 * mean);
+    assert_eq!(split.shrink, lev.shrink);
+    // Written and read back: the keys are in the file and the budget comes back whole.
+    let file = with.budget.to_file(&fit.arm).unwrap();
+    let text = quatarm_ref::calfile::write_with(&fit.arm, Some(&file), &[]);
+    for key in ["pose_factor", "pose_shrink", "pose_leverage_mean"] {
+        assert!(text.contains(&format!("{key} = ")), "{key}");
+    }
+    let back = quatarm_ref::calfile::parse(&text)
+        .unwrap()
+        .uncertainty
+        .unwrap();
+    assert_eq!(back, file);
+    assert_eq!(
+        armcal::uncertainty::Budget::from_file(&back).pose,
+        with.budget.pose
+    );
     let setup = Setup {
         readings: 1000,
         noise_mm: 0.0,
@@ -326,5 +359,77 @@ fn with_two_sessions_the_pose_terms_scale_is_the_fleets() {
             .unwrap()
             .scale,
         armcal::uncertainty::pose::TWO_GROUP_SCALE
+    );
+}
+
+/// Issue 27 end to end: `calibrate --by-group` on three MUKCa sessions writes the
+/// leverage-scaled term (the three keys; the report's line says so with r, b, the mean and
+/// the calibration rows' ℓ range), and `eval --uncertainty` applies it per reading: a column
+/// `leverage` after U95, and with `--seen` a last column `far_leverage`, 0 at the
+/// calibration's own readings and 1 beyond the largest ℓ they have.
+#[test]
+fn calibrate_by_group_writes_the_leverage_keys_and_eval_applies_them() {
+    let d = workdir("misfit-leverage");
+    let mukca = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../data/mukca");
+    let data = mukca.join("mukca-panda-panda_6.csv");
+    let arm = mukca.join("mukca-panda-panda_6.toml");
+    #[rustfmt::skip]
+    let o = armcal_ok(&["calibrate", data.to_str().unwrap(), "--arm", arm.to_str().unwrap(),
+        "--by-group", "-o", "cal.toml", "--json"], &d);
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let notes = json["uncertainty"]["notes"].to_string();
+    assert!(notes.contains("leverage-scaled"), "{notes}");
+    let text = std::fs::read_to_string(d.join("cal.toml")).unwrap();
+    for key in ["pose_factor = [", "pose_shrink = ", "pose_leverage_mean = "] {
+        assert!(text.contains(key), "{key}");
+    }
+    let pose = &json["uncertainty"]["model_estimated"]["pose"]["leverage"];
+    let largest = pose["range"][1].as_f64().unwrap();
+    assert!(largest > 1.0, "{pose}");
+    // Three of the calibration's own readings, and the first with the shoulder raised far.
+    let csv = std::fs::read_to_string(&data).unwrap();
+    let mut q = String::from("j1,j2,j3,j4,j5,j6,j7\n");
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .take(3)
+        .map(|l| l.split(',').skip(2).take(7).collect())
+        .collect();
+    for r in &rows {
+        q += &format!("{}\n", r.join(","));
+    }
+    let mut far: Vec<f64> = rows[0].iter().map(|x| x.parse().unwrap()).collect();
+    far[1] -= 1.2;
+    far[3] += 1.2;
+    q += &format!(
+        "{}\n",
+        far.iter().map(f64::to_string).collect::<Vec<_>>().join(",")
+    );
+    std::fs::write(d.join("q.csv"), q).unwrap();
+    #[rustfmt::skip]
+    let o = armcal_ok(&["eval", "--calib", "cal.toml", "--uncertainty", "--seen",
+        data.to_str().unwrap(), "q.csv"], &d);
+    let out = String::from_utf8_lossy(&o.stdout).to_string();
+    let lines: Vec<&str> = out.lines().collect();
+    assert!(
+        lines[0].ends_with("U95,leverage,far,far_joints,far_leverage"),
+        "{out}"
+    );
+    let field = |l: &str, from_end: usize| -> f64 {
+        let v: Vec<&str> = l.split(',').collect();
+        v[v.len() - 1 - from_end].parse().unwrap()
+    };
+    for l in &lines[1..4] {
+        assert_eq!(field(l, 0), 0.0, "{out}");
+        assert!(field(l, 3) <= largest * (1.0 + 1e-3), "{out}");
+    }
+    // Measured: ℓ 2.26 against the calibration's largest 1.28.
+    let l = field(lines[4], 3);
+    assert!(l > largest, "{out}");
+    assert_eq!(field(lines[4], 0), 1.0, "{out}");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("1 of 4 readings have a leverage ratio above"),
+        "{err}"
     );
 }

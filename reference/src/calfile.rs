@@ -1127,6 +1127,160 @@ temperature_c = 0.2
         assert!(e.message.contains("positive semi-definite"), "{e}");
     }
 
+    /// The pose part of [`BUDGET`]'s covariance: D of rank 2, b, the leverage mean.
+    const POSE: &str = r#"pose_factor = [
+  [1e-5, 0.0, 0.0, 0.0],
+  [0.0, 2e-5, 3e-4, 0.0],
+]
+pose_shrink = 0.25
+pose_leverage_mean = 3.5e-5
+"#;
+
+    /// Issue 27: the three pose keys read, and write back bit for bit; a file without them
+    /// reads as before (no pose part, `model_mm` as it was).
+    #[test]
+    fn the_pose_keys_round_trip() {
+        let text = format!("{FULL}{BUDGET}model_mm = 0.004\n{POSE}");
+        let p = parse(&text).unwrap();
+        let u = p.uncertainty.clone().unwrap();
+        let pose = u.pose.clone().unwrap();
+        assert_eq!(pose.factor[1], vec![0.0, 2e-5, 3e-4, 0.0]);
+        assert_eq!((pose.shrink, pose.leverage_mean), (0.25, 3.5e-5));
+        assert_eq!(u.model_mm, 0.004);
+        assert!(
+            !p.unknown_keys.iter().any(|k| k.starts_with("uncertainty")),
+            "{:?}",
+            p.unknown_keys
+        );
+        // Values no decimal text holds exactly, to test the bits.
+        let mut odd = u.clone();
+        odd.pose.as_mut().unwrap().factor[0][0] = 1.0e-5 / 3.0;
+        odd.pose.as_mut().unwrap().shrink = 1.0 / 7.0;
+        odd.pose.as_mut().unwrap().leverage_mean = std::f64::consts::PI * 1e-5;
+        for u in [u, odd] {
+            let back = parse(&write_with(&p.arm, Some(&u), &[])).unwrap();
+            let b = back.uncertainty.unwrap();
+            let (x, y) = (b.pose.as_ref().unwrap(), u.pose.as_ref().unwrap());
+            assert_eq!(x.shrink.to_bits(), y.shrink.to_bits());
+            assert_eq!(x.leverage_mean.to_bits(), y.leverage_mean.to_bits());
+            for (a, c) in x.factor.iter().flatten().zip(y.factor.iter().flatten()) {
+                assert_eq!(a.to_bits(), c.to_bits());
+            }
+            assert_eq!(b, u);
+        }
+        let without = parse(&format!("{FULL}{BUDGET}model_mm = 0.004\n")).unwrap();
+        let u = without.uncertainty.unwrap();
+        assert_eq!((u.pose, u.model_mm), (None, 0.004));
+        // No parameters, no pose part.
+        let u = p.uncertainty.unwrap().without_covariance();
+        assert!(u.pose.is_none());
+    }
+
+    /// Issue 27: a pose part that is not one is refused with its key and index.
+    #[test]
+    fn pose_refusals_name_the_key() {
+        let many = format!(
+            "pose_factor = [\n{}]\n",
+            "  [0.0, 0.0, 0.0, 0.0],\n".repeat(crate::uncertainty::POSE_RANK_MAX + 1)
+        );
+        let cases = [
+            (
+                "pose_shrink = 0.25\n",
+                "",
+                "uncertainty.pose_shrink",
+                "missing",
+            ),
+            (
+                "pose_leverage_mean = 3.5e-5\n",
+                "",
+                "uncertainty.pose_leverage_mean",
+                "missing",
+            ),
+            (
+                "pose_factor = [\n  [1e-5, 0.0, 0.0, 0.0],\n  [0.0, 2e-5, 3e-4, 0.0],\n]\n",
+                "",
+                "uncertainty.pose_factor",
+                "missing",
+            ),
+            (
+                "pose_factor = [\n  [1e-5, 0.0, 0.0, 0.0],\n  [0.0, 2e-5, 3e-4, 0.0],\n]\n",
+                &many,
+                "uncertainty.pose_factor",
+                "at most 16",
+            ),
+            (
+                "[0.0, 2e-5, 3e-4, 0.0]",
+                "[0.0, 2e-5, 3e-4]",
+                "uncertainty.pose_factor[1]",
+                "3 values",
+            ),
+            (
+                "[1e-5, 0.0",
+                "[nan, 0.0",
+                "uncertainty.pose_factor[0][0]",
+                "finite",
+            ),
+            (
+                "[0.0, 2e-5, 3e-4, 0.0]",
+                "[0.0, 2e-5, 3e-4, \"x\"]",
+                "uncertainty.pose_factor[1][3]",
+                "finite",
+            ),
+            (
+                "pose_shrink = 0.25",
+                "pose_shrink = -0.25",
+                "uncertainty.pose_shrink",
+                "standard uncertainty",
+            ),
+            (
+                "pose_shrink = 0.25",
+                "pose_shrink = inf",
+                "uncertainty.pose_shrink",
+                "finite",
+            ),
+            (
+                "pose_leverage_mean = 3.5e-5",
+                "pose_leverage_mean = 0.0",
+                "uncertainty.pose_leverage_mean",
+                "> 0",
+            ),
+            // D Dᵀ larger than the covariance: 9e-10 against 4e-10 on the first diagonal.
+            (
+                "[1e-5, 0.0",
+                "[3e-5, 0.0",
+                "uncertainty.pose_factor",
+                "positive semi-definite",
+            ),
+            // A correlation the covariance does not have: the 2×2 minor of (1, 2) negative.
+            (
+                "[0.0, 2e-5, 3e-4, 0.0]",
+                "[0.0, 2.9e-5, 9.9e-4, 0.0]",
+                "uncertainty.pose_factor",
+                "positive semi-definite",
+            ),
+        ];
+        for (from, to, path, says) in cases {
+            let pose = POSE.replacen(from, to, 1);
+            assert_ne!(pose, POSE, "{from}");
+            let e = parse(&format!("{FULL}{BUDGET}{pose}")).unwrap_err();
+            assert_eq!(e.path, path, "{to}: {e}");
+            assert!(e.message.contains(says), "{to}: {e}");
+        }
+        // Beyond the parameter's own limit (joint.1.tilt.0, rad); the semi-definite check
+        // would refuse it too, but later and without the index.
+        let l = Limits {
+            angle_rad: 10.0,
+            ..Limits::NONE
+        };
+        let e = parse_with(
+            &format!("{FULL}{BUDGET}{}", POSE.replacen("[1e-5", "[50.0", 1)),
+            &l,
+        )
+        .unwrap_err();
+        assert_eq!(e.path, "uncertainty.pose_factor[0][0]", "{e}");
+        assert!(e.message.contains("limit"), "{e}");
+    }
+
     /// Issue 27, F1: a zero variance beside a non-zero covariance (eigenvalue −0.6e-6) passed
     /// the correlation matrix's check, which cannot see a zero variance; refused at the entry.
     #[test]

@@ -206,13 +206,31 @@ pub struct PoseLeverage {
     pub leverage_mean: f64,
 }
 
+/// The most columns `pose_factor` may have: D's rank r. The host's estimate gives one
+/// column per direction in which the held-out groups' fits differed (at most G − 1 for G
+/// groups) and folds any beyond the cap into `pose_shrink` (bounded, so the widening stays
+/// on the safe side); 16 holds a calibration of up to 17 sessions or placements whole (the
+/// largest MUKCa unit has 9), and costs a reading 16 × n multiply-adds per axis for J D, a
+/// quarter of the n² of J C Jᵀ at the table's 64 parameters. The hub's table uses the same
+/// constant (the lead unifies it with the hub's copy).
+pub const POSE_RANK_MAX: usize = 16;
+
+impl PoseLeverage {
+    /// D as a matrix: n rows (the parameters), r columns.
+    pub fn factor_matrix(&self, n: usize) -> DMatrix<f64> {
+        DMatrix::from_fn(n, self.factor.len(), |i, k| self.factor[k][i])
+    }
+}
+
 impl Uncertainty {
     /// The same budget without its parameters: the reading's own terms only (a table for
-    /// the fixed-point hubs, which refuse the parameter block).
+    /// the fixed-point hubs, which refuse the parameter block). The pose part, a part of the
+    /// parameters' covariance, goes with it.
     pub fn without_covariance(&self) -> Uncertainty {
         Uncertainty {
             parameters: Vec::new(),
             covariance: Vec::new(),
+            pose: None,
             ..self.clone()
         }
     }
@@ -231,7 +249,13 @@ const KEYS: &[&str] = &[
     "probing_mm",
     "temperature_c",
     "model_mm",
+    "pose_factor",
+    "pose_shrink",
+    "pose_leverage_mean",
 ];
+
+/// The pose part's keys: all three or none.
+const POSE_KEYS: [&str; 3] = ["pose_factor", "pose_shrink", "pose_leverage_mean"];
 
 fn err(path: impl Into<String>, message: impl Into<String>) -> CalFileError {
     CalFileError {
@@ -293,6 +317,7 @@ pub fn parse(
     }
     let parameters = parameters(t.get("parameters"), arm)?;
     let covariance = covariance(t.get("covariance"), &parameters, limits)?;
+    let pose = pose(t, &parameters, &covariance, limits)?;
     let opt = |key: &str, limit: f64| -> Result<f64, CalFileError> {
         t.get(key).map_or(Ok(0.0), |v| {
             non_negative(v, &format!("uncertainty.{key}"), limit)
@@ -324,9 +349,142 @@ pub fn parse(
         probing_mm: opt("probing_mm", limits.budget_mm)?,
         temperature_c: opt("temperature_c", limits.budget_temperature_c)?,
         model_mm: opt("model_mm", limits.budget_mm)?,
-        pose: None,
+        pose,
     })
 }
+
+/// The pose part (`pose_factor`, `pose_shrink`, `pose_leverage_mean`): all three or none;
+/// D's entries finite and within their parameter's limit (a column of D is a standard
+/// deviation of the parameters, like the square root of the covariance's diagonal), at most
+/// [`POSE_RANK_MAX`] columns of n values; b finite and ≥ 0; the leverage mean finite and
+/// positive; and `covariance` − D Dᵀ positive semi-definite with the covariance's own tolerance
+/// (C_fit (1 + b) is what is left, and a covariance cannot be negative).
+fn pose(
+    t: &Table,
+    parameters: &[Param],
+    covariance: &[f64],
+    limits: &Limits,
+) -> Result<Option<PoseLeverage>, CalFileError> {
+    let present: Vec<&str> = POSE_KEYS
+        .iter()
+        .copied()
+        .filter(|k| t.contains_key(*k))
+        .collect();
+    if present.is_empty() {
+        return Ok(None);
+    }
+    if let Some(missing) = POSE_KEYS.iter().find(|k| !t.contains_key(**k)) {
+        return Err(err(
+            format!("uncertainty.{missing}"),
+            format!(
+                "missing: the pose part needs pose_factor, pose_shrink and \
+                 pose_leverage_mean together (the file has {})",
+                present.join(", ")
+            ),
+        ));
+    }
+    let n = parameters.len();
+    const FACTOR: &str = "uncertainty.pose_factor";
+    let cols = t["pose_factor"]
+        .as_array()
+        .ok_or_else(|| err(FACTOR, "must be an array of columns (arrays of numbers)"))?;
+    if cols.len() > POSE_RANK_MAX {
+        return Err(err(
+            FACTOR,
+            format!(
+                "{} columns; at most {POSE_RANK_MAX} (the pose part's rank)",
+                cols.len()
+            ),
+        ));
+    }
+    let mut factor = Vec::with_capacity(cols.len());
+    for (k, col) in cols.iter().enumerate() {
+        let path = format!("{FACTOR}[{k}]");
+        let a = col
+            .as_array()
+            .ok_or_else(|| err(&path, "must be an array of numbers, one per parameter"))?;
+        if a.len() != n {
+            return Err(err(
+                &path,
+                format!("{} values; {n} parameters need {n}", a.len()),
+            ));
+        }
+        let mut v = Vec::with_capacity(n);
+        for (i, x) in a.iter().enumerate() {
+            let path = format!("{FACTOR}[{k}][{i}]");
+            let x = match x {
+                Value::Float(f) if f.is_finite() => *f,
+                Value::Integer(i) => *i as f64,
+                _ => return Err(err(path, "must be a finite number")),
+            };
+            let limit = limit(parameters[i], limits);
+            if x.abs() > limit {
+                return Err(err(
+                    path,
+                    format!("{x:e} is beyond the parameter's limit of {limit}"),
+                ));
+            }
+            v.push(x);
+        }
+        factor.push(v);
+    }
+    let shrink = non_negative(&t["pose_shrink"], "uncertainty.pose_shrink", f64::MAX)?;
+    const MEAN: &str = "uncertainty.pose_leverage_mean";
+    let leverage_mean = non_negative(&t["pose_leverage_mean"], MEAN, f64::MAX)?;
+    if leverage_mean <= 0.0 {
+        return Err(err(
+            MEAN,
+            "must be > 0: a mean of tr(J C Jᵀ) over the calibration's rows",
+        ));
+    }
+    let p = PoseLeverage {
+        factor,
+        shrink,
+        leverage_mean,
+    };
+    // covariance − D Dᵀ, judged on the covariance's correlation scale (its own diagonal):
+    // what rounding leaves of a zero C_fit is then a rounding-sized eigenvalue, not a NaN.
+    let d = p.factor_matrix(n);
+    let rest = DMatrix::from_row_slice(n, n, covariance) - &d * d.transpose();
+    let scale: Vec<f64> = (0..n).map(|i| covariance[i * n + i].sqrt()).collect();
+    // A parameter known exactly (zero variance, so zero covariances: checked above) has no
+    // pose part either.
+    if let Some((i, k)) = (0..n)
+        .filter(|&i| scale[i] == 0.0)
+        .find_map(|i| (0..d.ncols()).find(|&k| d[(i, k)] != 0.0).map(|k| (i, k)))
+    {
+        return Err(err(
+            format!("{FACTOR}[{k}][{i}]"),
+            "non-zero where the parameter's variance is zero: covariance − D Dᵀ is not \
+             positive semi-definite",
+        ));
+    }
+    let r = DMatrix::from_fn(n, n, |i, j| {
+        if scale[i] == 0.0 || scale[j] == 0.0 {
+            f64::from(u8::from(i == j))
+        } else {
+            rest[(i, j)] / (scale[i] * scale[j])
+        }
+    });
+    if n > 0 {
+        let min = SymmetricEigen::new(r).eigenvalues.min();
+        if min < -SEMI_DEFINITE_TOLERANCE {
+            return Err(err(
+                FACTOR,
+                format!(
+                    "covariance − D Dᵀ is not positive semi-definite (correlation-scale \
+                     eigenvalue {min:e}): the pose part is larger than the covariance it is a \
+                     part of"
+                ),
+            ));
+        }
+    }
+    Ok(Some(p))
+}
+
+/// The least eigenvalue a covariance's correlation matrix may have: rounding, not a
+/// negative variance.
+const SEMI_DEFINITE_TOLERANCE: f64 = 1e-8;
 
 fn parameters(v: Option<&Value>, arm: &Arm) -> Result<Vec<Param>, CalFileError> {
     let Some(v) = v else {
@@ -440,7 +598,7 @@ fn covariance(
     });
     if n > 0 {
         let min = SymmetricEigen::new(r).eigenvalues.min();
-        if min < -1e-8 {
+        if min < -SEMI_DEFINITE_TOLERANCE {
             return Err(err(
                 PATH,
                 format!("not positive semi-definite (correlation eigenvalue {min:e})"),
@@ -478,4 +636,14 @@ pub fn write(u: &Uncertainty, arm: &Arm, s: &mut String) {
     let _ = writeln!(s, "probing_mm = {}", num(u.probing_mm));
     let _ = writeln!(s, "temperature_c = {}", num(u.temperature_c));
     let _ = writeln!(s, "model_mm = {}", num(u.model_mm));
+    if let Some(p) = &u.pose {
+        let _ = writeln!(s, "pose_factor = [");
+        for col in &p.factor {
+            let vals: Vec<String> = col.iter().map(|x| num(*x)).collect();
+            let _ = writeln!(s, "  [{}],", vals.join(", "));
+        }
+        let _ = writeln!(s, "]");
+        let _ = writeln!(s, "pose_shrink = {}", num(p.shrink));
+        let _ = writeln!(s, "pose_leverage_mean = {}", num(p.leverage_mean));
+    }
 }

@@ -8,14 +8,17 @@
 //! draw then measures that ideal artefact with an arm drawn from the budget: a parameter error
 //! δ ~ N(0, C) shared by every reading (the arm is one arm during a test), and each reading's
 //! own angle, temperature, probing and model errors, all to first order through the reading's
-//! Jacobians (`uncertainty::propagate`). The statistics of each draw are computed exactly as
+//! Jacobians (`uncertainty::propagate`). A leverage-scaled pose part P (issue 27) is a second
+//! shared draw δ_P ~ N(0, P), which reading i sees times √(max(1, ℓ_i) − 1): its variance is
+//! the first order's J cov Jᵀ + (max(1, ℓ) − 1) J P Jᵀ, and the readings of one test share it
+//! as they share δ. The statistics of each draw are computed exactly as
 //! the test computes them, so their non-linearity (a form is a range, a location a maximum) is
 //! kept: an expected P_Form is not zero even on a perfect model.
 
 use super::statistics::{self, StatError, Test};
 use crate::data::Dataset;
 use crate::rng::{normal, rng};
-use crate::uncertainty::montecarlo::sqrt_cov;
+use crate::uncertainty::montecarlo::{pose_draw, pose_scale_at, sqrt_cov};
 use crate::uncertainty::propagate::{jacobians, Jacobians};
 use crate::uncertainty::Budget;
 use nalgebra::{DVector, Vector3};
@@ -58,6 +61,7 @@ pub fn predict(
         })
         .collect();
     let root = sqrt_cov(&budget.cov);
+    let widen: Vec<f64> = jac.iter().map(|j| pose_scale_at(budget, j)).collect();
     let sigma_theta = budget.sigma_theta(arm);
     let own = (budget.probing_mm.powi(2) + budget.model_mm.powi(2)).sqrt();
     let mut g = rng(seed);
@@ -65,13 +69,20 @@ pub fn predict(
     for _ in 0..draws {
         let z = DVector::from_fn(budget.params.len(), |_, _| normal(&mut g));
         let delta = &root * z;
+        // Drawn only where a reading sees it: a budget whose every reading is at ℓ ≤ 1
+        // draws as one without a pose part.
+        let delta_pose = if widen.iter().any(|w| *w > 0.0) {
+            pose_draw(budget, &root, &mut g)
+        } else {
+            DVector::zeros(budget.params.len())
+        };
         let p: Vec<Vector3<f64>> = ideal
             .iter()
-            .zip(&jac)
-            .map(|(x, j)| {
+            .zip(jac.iter().zip(&widen))
+            .map(|(x, (j, w))| {
                 let mut p = *x;
-                for (col, dk) in j.pi.iter().zip(delta.iter()) {
-                    p -= col * *dk;
+                for (col, (dk, pk)) in j.pi.iter().zip(delta.iter().zip(delta_pose.iter())) {
+                    p -= col * (*dk + w * pk);
                 }
                 for (col, s) in j.theta.iter().zip(&sigma_theta) {
                     p += col * (s * normal(&mut g));
@@ -185,5 +196,62 @@ mod tests {
         // A form is a range: positive, of a few σ for 25 points.
         let f = p[&(Test::PForm, 1)];
         assert!(f.lo > 0.002 && f.hi < 0.02, "{f:?}");
+    }
+
+    /// Issue 27: a pose part kept apart widens the prediction where the readings' leverage
+    /// is above the calibration's mean, and leaves it as it was where it is below (the
+    /// draws then the same to the bit: no pose draw is seen by any reading).
+    #[test]
+    fn the_leverage_scaled_pose_part_widens_the_prediction() {
+        use crate::params::Param;
+        use nalgebra::DMatrix;
+        let arm = Arm::default6();
+        let data = test_set(&arm);
+        let params: Vec<Param> = (0..6).map(Param::ZeroOffset).collect();
+        let n = params.len();
+        let mut b = Budget::zero(6);
+        b.params = params;
+        b.cov = DMatrix::from_diagonal_element(n, n, 4e-10);
+        let d = DMatrix::from_fn(n, 1, |i, _| if i == 1 { 1e-5 } else { 0.0 });
+        b.cov += &d * d.transpose();
+        let at = |mean: f64| {
+            let mut w = b.clone();
+            w.pose = Some(crate::uncertainty::PoseSplit {
+                factor: d.clone(),
+                shrink: 0.0,
+                leverage_mean: mean,
+            });
+            predict(&arm, &w, &data, 400, 3).unwrap()
+        };
+        let plain = predict(&arm, &b, &data, 400, 3).unwrap();
+        // Each reading's tr(J C_fit Jᵀ): ℓ at a mean of 1.
+        let unit = Budget {
+            pose: Some(crate::uncertainty::PoseSplit {
+                factor: d.clone(),
+                shrink: 0.0,
+                leverage_mean: 1.0,
+            }),
+            ..b.clone()
+        };
+        let traces: Vec<f64> = data
+            .rows
+            .iter()
+            .map(|r| {
+                let j = jacobians(&arm, 0, &unit, &r.theta, r.temp_c);
+                crate::uncertainty::propagate::leverage_at(&unit, &j).unwrap()
+            })
+            .collect();
+        let most = traces.iter().copied().fold(0.0, f64::max);
+        let least = traces.iter().copied().fold(f64::INFINITY, f64::min);
+        // Every reading at ℓ ≤ 0.5, then every one at ℓ ≥ 10.
+        let (low, high) = (at(2.0 * most), at(least / 10.0));
+        let key = (Test::EUni, 11);
+        assert_eq!(low[&key], plain[&key]);
+        assert!(
+            high[&key].sd > 1.2 * plain[&key].sd,
+            "{:?} {:?}",
+            high[&key],
+            plain[&key]
+        );
     }
 }

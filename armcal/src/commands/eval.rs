@@ -2,7 +2,7 @@
 
 use anyhow::Context;
 use armcal::eval::{evaluate, read_rows, Evaluator};
-use armcal::uncertainty::columns::{columns_observed, Method, HEADER};
+use armcal::uncertainty::columns::{columns_observed, Method};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -20,7 +20,8 @@ pub struct Args {
     /// the probe each reading was taken with; the first where absent); stdin if absent.
     input: Option<PathBuf>,
     /// Add each point's covariance and U95 (`cxx,cyy,czz,cxy,cxz,cyz` mm², `U95` mm) from the
-    /// calibration's `[uncertainty]` budget, computed on the f64 reference.
+    /// calibration's `[uncertainty]` budget, computed on the f64 reference; with a
+    /// leverage-scaled pose term (`pose_*` keys) also `leverage`, each reading's ℓ.
     #[arg(long)]
     uncertainty: bool,
     /// How the uncertainty is propagated.
@@ -35,7 +36,9 @@ pub struct Args {
     /// The data the calibration was fitted on (measured-data CSV): each reading farther from
     /// every calibration tip than twice their own spacing is flagged as extrapolated, in a
     /// column `far` (1: flagged), and each in a joint configuration outside the calibration's
-    /// spread in a last column `far_joints`; counts on stderr.
+    /// spread in a column `far_joints`; with `--uncertainty` and a leverage-scaled pose term,
+    /// each whose ℓ is above every calibration row's in a last column `far_leverage`; counts
+    /// on stderr.
     #[arg(long, value_name = "DATA.csv")]
     seen: Option<PathBuf>,
     /// Show the count of rows done and the time left on stderr even when it is not a terminal
@@ -95,6 +98,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         args.precision,
         &args.calib.display().to_string(),
     )?;
+    let mut leverage = Vec::new();
     if let Some(b) = &budget {
         let mut counter =
             armcal::progress::Counter::new(args.progress, "eval", "rows", rows.len() as u64);
@@ -111,20 +115,84 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let mut joined = String::with_capacity(out.len() * 2);
         let mut lines = out.lines();
         if let Some(h) = lines.next() {
-            joined.push_str(&format!("{h},{HEADER}\n"));
+            joined.push_str(&format!("{h},{}\n", extra.header));
         }
-        for (l, e) in lines.zip(&extra) {
+        for (l, e) in lines.zip(&extra.lines) {
             joined.push_str(&format!("{l},{e}\n"));
         }
         out = joined;
+        note_widened(&extra.leverage);
+        leverage = extra.leverage;
     }
     if let Some(seen) = &args.seen {
         out = flag_far(&arm, &rows, seen, &out)?;
+        if let (Some(b), true) = (&budget, leverage.iter().any(Option::is_some)) {
+            out = flag_leverage(&arm, b, seen, &leverage, &out)?;
+        }
     }
     let mut stdout = std::io::stdout().lock();
     stdout.write_all(out.as_bytes())?;
     stdout.flush()?;
     Ok(())
+}
+
+/// The count of readings whose pose part was widened (ℓ > 1), on stderr.
+fn note_widened(leverage: &[Option<f64>]) {
+    let l: Vec<f64> = leverage.iter().flatten().copied().collect();
+    let widened = l.iter().filter(|x| **x > 1.0).count();
+    if widened > 0 {
+        eprintln!(
+            "armcal: {widened} of {} readings have a leverage ratio ℓ above 1 (largest {:.2}): \
+             their pose-dependent term is multiplied by ℓ (column `leverage`)",
+            leverage.len(),
+            l.iter().copied().fold(0.0, f64::max)
+        );
+    }
+}
+
+/// `out` with a last column `far_leverage`: 1 where the reading's ℓ (`leverage`, one per
+/// row) is above every row's of the calibration data `seen` under the same budget — the
+/// parameters' leverage of a placement the calibration did not see, where the budget's
+/// pose term is extrapolated; the count goes to stderr.
+fn flag_leverage(
+    arm: &quatarm_ref::Arm,
+    budget: &armcal::uncertainty::Budget,
+    seen: &std::path::Path,
+    leverage: &[Option<f64>],
+    out: &str,
+) -> anyhow::Result<String> {
+    let data = armcal::data::read(seen, arm.dof())?;
+    let largest = data
+        .rows
+        .iter()
+        .filter_map(|r| {
+            let probe = armcal::fit::probes::index(arm, r);
+            armcal::uncertainty::propagate::point_with_leverage(
+                arm, probe, budget, &r.theta, r.temp_c,
+            )
+            .2
+        })
+        .fold(0.0, f64::max);
+    let mut far = 0usize;
+    let mut joined = String::with_capacity(out.len() + 2 * leverage.len() + 16);
+    let mut lines = out.lines();
+    if let Some(h) = lines.next() {
+        joined.push_str(&format!("{h},far_leverage\n"));
+    }
+    for (l, x) in lines.zip(leverage) {
+        let f = x.is_some_and(|x| x > largest);
+        far += usize::from(f);
+        joined.push_str(&format!("{l},{}\n", u8::from(f)));
+    }
+    if far > 0 {
+        eprintln!(
+            "armcal: warning: {far} of {} readings have a leverage ratio above every row of {} \
+             (ℓ > {largest:.2}): the pose term is extrapolated there",
+            leverage.len(),
+            seen.display()
+        );
+    }
+    Ok(joined)
 }
 
 /// `out` with two last columns: `far`, 1 where the reading's tip (the f64 reference's) is far

@@ -1,5 +1,7 @@
 //! `armcal eval --uncertainty`: the columns `cxx,cyy,czz,cxy,cxz,cyz,U95` of every row, by
-//! first-order propagation or by Monte Carlo (GUM Supplement 1) of the same budget.
+//! first-order propagation or by Monte Carlo (GUM Supplement 1) of the same budget. A budget
+//! with a leverage-scaled pose part (issue 27) adds a last column `leverage`, each reading's
+//! ℓ ([`super::propagate::leverage`]): its pose part was multiplied by max(1, ℓ).
 
 use super::{montecarlo, propagate, u95, Budget};
 use crate::eval::Rows;
@@ -17,6 +19,20 @@ pub enum Method {
 
 /// The header the columns add.
 pub const HEADER: &str = "cxx,cyy,czz,cxy,cxz,cyz,U95";
+
+/// The column a budget with a pose part adds after [`HEADER`].
+pub const LEVERAGE: &str = "leverage";
+
+/// The columns of every row, and each row's leverage ratio (`None` without a pose part).
+#[derive(Clone, Debug)]
+pub struct Columns {
+    /// The header's columns, then `leverage` where the budget has a pose part.
+    pub header: String,
+    /// One line per row (no leading comma).
+    pub lines: Vec<String>,
+    /// ℓ per row.
+    pub leverage: Vec<Option<f64>>,
+}
 
 fn line(s: &Matrix3<f64>, u: f64) -> String {
     let e = propagate::entries(s);
@@ -36,7 +52,7 @@ pub fn columns(
     draws: usize,
     seed: u64,
 ) -> Vec<String> {
-    columns_observed(arm, budget, rows, method, draws, seed, &mut || {})
+    columns_observed(arm, budget, rows, method, draws, seed, &mut || {}).lines
 }
 
 /// As [`columns`], calling `done` after each row (a progress counter).
@@ -48,25 +64,45 @@ pub fn columns_observed(
     draws: usize,
     seed: u64,
     done: &mut dyn FnMut(),
-) -> Vec<String> {
+) -> Columns {
     let root = montecarlo::sqrt_cov(&budget.cov);
     let mut rng = crate::rng::rng(seed);
-    rows.iter()
+    let mut leverage = Vec::with_capacity(rows.len());
+    let lines = rows
+        .iter()
         .map(|r| {
             let th = r.reading.radians(arm);
             let (t, probe) = (r.temp_c, r.probe);
-            let out = match method {
+            let (mut out, l) = match method {
                 Method::FirstOrder => {
-                    let (_, s) = propagate::point(arm, probe, budget, &th, t);
-                    line(&s, u95::u95(&s))
+                    let (_, s, l) = propagate::point_with_leverage(arm, probe, budget, &th, t);
+                    (line(&s, u95::u95(&s)), l)
                 }
                 Method::MonteCarlo => {
                     let o = montecarlo::point(arm, probe, budget, &root, &th, t, draws, &mut rng);
-                    line(&o.cov, o.u95)
+                    let l = budget.pose.as_ref().and_then(|_| {
+                        let j = propagate::jacobians(arm, probe, budget, &th, t);
+                        propagate::leverage_at(budget, &j)
+                    });
+                    (line(&o.cov, o.u95), l)
                 }
             };
+            if let Some(l) = l {
+                out.push_str(&format!(",{l:.4}"));
+            }
+            leverage.push(l);
             done();
             out
         })
-        .collect()
+        .collect();
+    let header = if budget.pose.is_some() {
+        format!("{HEADER},{LEVERAGE}")
+    } else {
+        HEADER.to_string()
+    };
+    Columns {
+        header,
+        lines,
+        leverage,
+    }
 }

@@ -45,9 +45,11 @@ pub struct Settings {
     /// How many groups' worth the fleet's κ weighs in a κ validated on this arm's own groups
     /// ([`super::pose::pooled_scale`]; 0: the own κ alone).
     pub fleet_prior_groups: f64,
-    /// The pose term at each held-out row times its leverage ratio
-    /// ([`super::pose::leverage_factor`]) when κ and the isotropic term are set: the
-    /// benchmark's variant, off in the product (the table cannot carry it).
+    /// The leverage-scaled pose term (on in the product, issue 27): κ and the isotropic
+    /// term set on held-out rows whose pose part is scaled by their tip's leverage factor
+    /// ([`super::pose::leverage_factor`]), and the term written apart from C (the file's
+    /// `pose_*` keys) so that every reading scales it by its own. Off: the term is a part of
+    /// C alone, the same at every leverage (stop 35's budget).
     pub leverage_scaled: bool,
 }
 
@@ -61,7 +63,7 @@ impl Default for Settings {
             temperature_c: 0.0,
             two_group_scale: super::pose::TWO_GROUP_SCALE,
             fleet_prior_groups: 0.0,
-            leverage_scaled: false,
+            leverage_scaled: true,
         }
     }
 }
@@ -197,6 +199,7 @@ pub fn from_fit(
         probing_mm: 0.0,
         temperature_c: s.temperature_c,
         model_mm: 0.0,
+        pose: None,
     };
     notes.push(reading_note(s.encoder_counts));
     let (probing, note) = probing_term(fit, data, &budget, s.probing_mm);
@@ -302,6 +305,7 @@ fn model_step(
             Some((tau, src, pose)) => {
                 if let Some(p) = pose {
                     budget.cov += &p.cov;
+                    budget.pose = p.split;
                     notes.push(pose_note(&p.source));
                 }
                 budget.model_mm = tau;
@@ -397,11 +401,36 @@ fn model_term(
 
 /// The report's line of a pose-dependent term.
 fn pose_note(p: &super::pose::PoseSource) -> String {
+    let form = match &p.leverage {
+        Some(l) => format!(
+            "leverage-scaled: kept apart from the parameters' covariance as D (rank {}) and \
+             b = {:.4} (pose_factor, pose_shrink), and at each reading multiplied by \
+             max(1, ℓ), ℓ its tip's tr(J C_fit Jᵀ) over the calibration rows' mean of \
+             {:.4e} mm² (pose_leverage_mean); ℓ of the calibration rows {:.2} to {:.2}, a \
+             reading above {:.2} is extrapolated{}",
+            l.rank,
+            l.shrink,
+            l.mean_mm2,
+            l.range[0],
+            l.range[1],
+            l.range[1],
+            if l.folded > 0 {
+                format!(
+                    "; {} directions of the spread beyond {} folded into b (bounded above)",
+                    l.folded,
+                    super::pose::POSE_RANK_MAX
+                )
+            } else {
+                String::new()
+            }
+        ),
+        None => "the same at every reading's leverage".to_string(),
+    };
     format!(
         "model, pose-dependent: the spread of the parameters between the {} groups held out \
          (S_b from their leave-one-group-out fits) times {:.3}², added to the parameters' \
-         covariance; {:.2} µm per axis RMS at the held-out rows, which it brings from {:.1} % \
-         to {:.1} % inside their 95 % region; {}",
+         covariance, {form}; {:.2} µm per axis RMS at the held-out rows, which it brings from \
+         {:.1} % to {:.1} % inside their 95 % region; {}",
         p.groups,
         p.scale,
         p.rms_mm * 1e3,

@@ -74,6 +74,45 @@ pub struct Budget {
     pub temperature_c: f64,
     /// Model, per axis (mm).
     pub model_mm: f64,
+    /// The pose part of `cov` kept apart, which a reading scales by its leverage ratio
+    /// ([`propagate`]); `None`: `cov` alone, the same at every reading's leverage.
+    pub pose: Option<PoseSplit>,
+}
+
+/// The pose part P = D Dᵀ + b C_fit of a budget's `cov` = C_fit + P (the file's
+/// `pose_factor`, `pose_shrink`, `pose_leverage_mean`: `quatarm_ref::uncertainty::PoseLeverage`,
+/// whose doc comment is the contract). Kept as D and b rather than P so that a reading's
+/// J P Jᵀ costs J D (3 × r per parameter) beside the J cov Jᵀ it already has.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PoseSplit {
+    /// D, one row per parameter, r ≤ [`uncertainty::POSE_RANK_MAX`] columns (units).
+    pub factor: DMatrix<f64>,
+    /// b ≥ 0.
+    pub shrink: f64,
+    /// The calibration rows' mean tr(J C_fit Jᵀ) of the tip (mm²), > 0.
+    pub leverage_mean: f64,
+}
+
+impl PoseSplit {
+    /// The pose part P = (D Dᵀ + b cov)/(1 + b) of `cov`.
+    pub fn matrix(&self, cov: &DMatrix<f64>) -> DMatrix<f64> {
+        (&self.factor * self.factor.transpose() + cov * self.shrink) / (1.0 + self.shrink)
+    }
+
+    /// The pose part m² P of the same C_fit: D m, b m² (what a budget whose pose part is
+    /// scaled by m carries; its `cov` is C_fit + m² P).
+    pub fn scaled(&self, m: f64) -> PoseSplit {
+        PoseSplit {
+            factor: &self.factor * m,
+            shrink: self.shrink * m * m,
+            leverage_mean: self.leverage_mean,
+        }
+    }
+
+    /// The fit's own covariance C_fit = (cov − D Dᵀ)/(1 + b).
+    pub fn fit_covariance(&self, cov: &DMatrix<f64>) -> DMatrix<f64> {
+        (cov - &self.factor * self.factor.transpose()) / (1.0 + self.shrink)
+    }
 }
 
 impl Budget {
@@ -86,6 +125,17 @@ impl Budget {
             probing_mm: 0.0,
             temperature_c: 0.0,
             model_mm: 0.0,
+            pose: None,
+        }
+    }
+
+    /// Only the parameters' covariance `cov` (no pose part, no reading's own terms): what
+    /// a covariance of the parameters alone predicts at the tip.
+    pub fn of_parameters(params: &[Param], cov: DMatrix<f64>, dof: usize) -> Budget {
+        Budget {
+            params: params.to_vec(),
+            cov,
+            ..Budget::zero(dof)
         }
     }
 
@@ -98,6 +148,11 @@ impl Budget {
             probing_mm: u.probing_mm,
             temperature_c: u.temperature_c,
             model_mm: u.model_mm,
+            pose: u.pose.as_ref().map(|p| PoseSplit {
+                factor: p.factor_matrix(u.parameters.len()),
+                shrink: p.shrink,
+                leverage_mean: p.leverage_mean,
+            }),
         }
     }
 
@@ -123,7 +178,15 @@ impl Budget {
             probing_mm: self.probing_mm,
             temperature_c: self.temperature_c,
             model_mm: self.model_mm,
-            pose: None,
+            pose: self.pose.as_ref().map(|p| uncertainty::PoseLeverage {
+                factor: p
+                    .factor
+                    .column_iter()
+                    .map(|c| c.iter().copied().collect())
+                    .collect(),
+                shrink: p.shrink,
+                leverage_mean: p.leverage_mean,
+            }),
         })
     }
 
@@ -169,6 +232,11 @@ mod tests {
             probing_mm: 0.002,
             temperature_c: 0.1,
             model_mm: 0.0,
+            pose: Some(PoseSplit {
+                factor: DMatrix::from_fn(n, 2, |i, k| if i == k { 5e-5 } else { 0.0 }),
+                shrink: 0.5,
+                leverage_mean: 2e-4,
+            }),
         };
         for p in &params {
             let name = uncertainty::name(*p, &arm).unwrap();

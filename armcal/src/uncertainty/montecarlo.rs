@@ -5,7 +5,9 @@
 //! Inputs per draw: the parameters from N(estimate, C) (a symmetric square root of C, so a
 //! semi-definite C is fine), each joint angle from N(θ, σ_θ²), the temperature from
 //! N(T, σ_T²), and the probing and model terms as N(0, (σ_probe² + σ_model²) I₃) added to the
-//! tip. The covariance reported is the draws' about their mean; U95 is the 95th percentile of
+//! tip. With a leverage-scaled pose part P (issue 27) the parameters also move by √(f − 1)
+//! times a draw of N(0, P), f = max(1, ℓ) the reading's factor ([`super::propagate`]): the
+//! parameters' variance is then cov + (f − 1) P, the first order's. The covariance reported is the draws' about their mean; U95 is the 95th percentile of
 //! the draws' distances from the estimate p (the centre the spec's sphere is about), which is
 //! what the first-order radius predicts.
 
@@ -24,6 +26,37 @@ pub fn sqrt_cov(c: &DMatrix<f64>) -> DMatrix<f64> {
     let e = SymmetricEigen::new(c.clone());
     let d = DMatrix::from_diagonal(&e.eigenvalues.map(|l| l.max(0.0).sqrt()));
     &e.eigenvectors * d * e.eigenvectors.transpose()
+}
+
+/// √(max(1, ℓ) − 1) at a reading: the factor of its extra pose draw (0 without a pose
+/// part or at ℓ ≤ 1).
+pub fn pose_scale(arm: &Arm, probe: usize, budget: &Budget, theta: &[f64], temp_c: f64) -> f64 {
+    if budget.pose.is_none() {
+        return 0.0;
+    }
+    let j = super::propagate::jacobians(arm, probe, budget, theta, temp_c);
+    pose_scale_at(budget, &j)
+}
+
+/// [`pose_scale`] from a reading's Jacobians.
+pub fn pose_scale_at(budget: &Budget, j: &super::propagate::Jacobians) -> f64 {
+    let l = super::propagate::leverage_at(budget, j);
+    l.map_or(0.0, |l| (super::pose::leverage_factor(l) - 1.0).sqrt())
+}
+
+/// One draw of the parameters from N(0, P), P = (D Dᵀ + b cov)/(1 + b) the budget's pose
+/// part: (D z + √b · `root` z′)/√(1 + b), `root` the square root of cov. Zero without one.
+pub fn pose_draw(budget: &Budget, root: &DMatrix<f64>, rng: &mut SimRng) -> DVector<f64> {
+    let k = budget.params.len();
+    let Some(p) = &budget.pose else {
+        return DVector::zeros(k);
+    };
+    let z = DVector::from_fn(p.factor.ncols(), |_, _| normal(rng));
+    let mut x = &p.factor * z;
+    if p.shrink > 0.0 {
+        x += root * DVector::from_fn(k, |_, _| normal(rng)) * p.shrink.sqrt();
+    }
+    x / (1.0 + p.shrink).sqrt()
 }
 
 /// What the draws say about one reading.
@@ -61,11 +94,15 @@ pub fn point(
     let st = budget.sigma_theta(arm);
     let extra = (budget.probing_mm.powi(2) + budget.model_mm.powi(2)).sqrt();
     let k = budget.params.len();
+    let widen = pose_scale(arm, probe, budget, theta, temp_c);
     let mut samples = Vec::with_capacity(draws);
     let mut th = theta.to_vec();
     for _ in 0..draws {
         let z = DVector::from_fn(k, |_, _| normal(rng));
-        let dx = root * z;
+        let mut dx = root * z;
+        if widen > 0.0 {
+            dx += pose_draw(budget, root, rng) * widen;
+        }
         let a = apply(arm, &budget.params, dx.as_slice());
         for (t, (t0, s)) in th.iter_mut().zip(theta.iter().zip(&st)) {
             *t = t0 + s * normal(rng);

@@ -47,14 +47,16 @@ pub const SCALE_MAX: f64 = 30.0;
 /// κ for two groups, where the data cannot set it: borrowed from a fleet of other arms,
 /// measured in the same regime. On each MUKCa unit with ≥ 3 sessions, each pair of
 /// consecutive sessions (cyclic) is calibrated, S_b taken from its two leave-one-session-out
-/// fits, and every other session's probings scored ([`least_scales`]); the unit's κ is the
-/// conformal quantile of its scores ([`conformal_scale`]) and this is the median over the 9
-/// units (`cargo test --profile test -p armcal --bench coverage -- mukca`, the line
-/// `two-session κ`; `docs/results/uncertainty.md`). A median over units, not a quantile over
+/// fits, and every other session's probings scored ([`least_scales`]) under the product's
+/// leverage-scaled form (each probing's pose part times its tip's max(1, ℓ)); the unit's κ
+/// is the conformal quantile of its scores ([`conformal_scale`]) and this is the median over
+/// the 9 units (`cargo test --profile test -p armcal --bench coverage -- mukca`, the line
+/// `two-session κ of the fleet`; `docs/results/uncertainty.md`). 1.104 for the term without
+/// the leverage factor (stop 35's form, `Settings::leverage_scaled` off). A median over units, not a quantile over
 /// their pooled rows: the target is each unit's coverage, and one unit whose bad session no
 /// scale covers (panda_2 `high`) must not set every other unit's width. `--fleet-kappa`
 /// replaces it with the caller's fleet.
-pub const TWO_GROUP_SCALE: f64 = 1.104;
+pub const TWO_GROUP_SCALE: f64 = 0.968;
 
 /// Where the term came from (the report's provenance).
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -71,7 +73,28 @@ pub struct PoseSource {
     pub covered: [f64; 2],
     /// RMS of the tip's standard deviation the term adds at the held-out rows (mm per axis).
     pub rms_mm: f64,
+    /// The leverage-scaled form's figures, when the term is kept apart for it.
+    pub leverage: Option<LeverageSource>,
 }
+
+/// What the report says of a leverage-scaled term (the file's `pose_*` keys).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct LeverageSource {
+    /// D's columns r.
+    pub rank: usize,
+    /// b.
+    pub shrink: f64,
+    /// The calibration rows' mean tr(J C_fit Jᵀ) of the tip (mm²).
+    pub mean_mm2: f64,
+    /// The least and the largest ℓ among the calibration rows: above the largest, a reading
+    /// is extrapolated ([`super::extrapolation`]'s sense, in the parameters' leverage).
+    pub range: [f64; 2],
+    /// Directions of the between-group spread beyond [`POSE_RANK_MAX`] folded into b (0:
+    /// none, the written covariance is today's exactly).
+    pub folded: usize,
+}
+
+pub use quatarm_ref::uncertainty::POSE_RANK_MAX;
 
 /// The term.
 #[derive(Clone, Debug)]
@@ -82,6 +105,9 @@ pub struct PoseTerm {
     pub extra: Vec<Matrix3<f64>>,
     /// Its provenance.
     pub source: PoseSource,
+    /// `cov` as D and b, with the calibration rows' leverage mean, for the leverage-scaled
+    /// form (`None`: the term is `cov` alone at every reading).
+    pub split: Option<super::PoseSplit>,
 }
 
 /// The group of each fold that fitted, when each left out one whole group.
@@ -147,6 +173,11 @@ pub fn between_with(
     c: &DMatrix<f64>,
     lambda: f64,
 ) -> DMatrix<f64> {
+    shrink_by(raw_between(params, fits, groups), c, lambda)
+}
+
+/// S_b before shrinking: (G − 1)² times the sample covariance of the fits' parameters.
+fn raw_between(params: &[Param], fits: &[&FoldFit], groups: usize) -> DMatrix<f64> {
     let p = params.len();
     let mut s = DMatrix::zeros(p, p);
     if fits.len() < 2 {
@@ -156,7 +187,7 @@ pub fn between_with(
         s += &d * d.transpose();
     }
     let g = groups as f64 - 1.0;
-    shrink_by(s * (g * g / (fits.len() - 1) as f64), c, lambda)
+    s * (g * g / (fits.len() - 1) as f64)
 }
 
 /// The weight of the prior (C's shape) in a spread of ν degrees of freedom: that of one
@@ -177,15 +208,96 @@ pub fn shrink(s: DMatrix<f64>, c: &DMatrix<f64>, nu: usize) -> DMatrix<f64> {
 
 /// [`shrink`] with the weight λ given.
 pub fn shrink_by(s: DMatrix<f64>, c: &DMatrix<f64>, lambda: f64) -> DMatrix<f64> {
+    let (s, w) = shrink_parts(s, c, lambda);
+    s + c * w
+}
+
+/// [`shrink_by`] in its two parts: ((1 − λ) s, λ t), the shrunk spread being the first plus
+/// the second times `c`; (s, 0) where it leaves `s` unchanged.
+fn shrink_parts(s: DMatrix<f64>, c: &DMatrix<f64>, lambda: f64) -> (DMatrix<f64>, f64) {
     let p = s.nrows();
     let Some(ch) = c.clone().cholesky() else {
-        return s;
+        return (s, 0.0);
     };
     let t = ch.solve(&s).trace() / p.max(1) as f64;
     if !(t.is_finite() && t > 0.0) {
-        return s;
+        return (s, 0.0);
     }
-    s * (1.0 - lambda) + c * (lambda * t)
+    (s * (1.0 - lambda), lambda * t)
+}
+
+/// A spread `s` (positive semi-definite) as D Dᵀ with at most [`POSE_RANK_MAX`] columns, and
+/// what did not fit: the largest eigenvalue, in `c`'s metric, of the directions left out
+/// (so that D Dᵀ + that × `c` ≥ `s`: the widening stays on the safe side). Eigenvectors in
+/// `c`'s metric (whitened by its Cholesky factor) when `c` is positive definite, so the
+/// columns kept are the directions the spread exceeds the fit's own covariance most; plain
+/// otherwise (nothing folded then: with no positive definite C the budget has no shrink
+/// either). Directions below 1e-12 of the largest are rounding: dropped. (D, folded weight,
+/// directions folded)
+fn factor_of(s: &DMatrix<f64>, c: &DMatrix<f64>) -> (DMatrix<f64>, f64, usize) {
+    let n = s.nrows();
+    if n == 0 {
+        return (DMatrix::zeros(0, 0), 0.0, 0);
+    }
+    let ch = c.clone().cholesky();
+    let w = match &ch {
+        Some(ch) => {
+            let l = ch.l();
+            let li = l
+                .clone()
+                .try_inverse()
+                .unwrap_or_else(|| DMatrix::identity(n, n));
+            let m = &li * s * li.transpose();
+            (m.clone() + m.transpose()) * 0.5
+        }
+        None => (s.clone() + s.transpose()) * 0.5,
+    };
+    let e = nalgebra::SymmetricEigen::new(w);
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|a, b| e.eigenvalues[*b].total_cmp(&e.eigenvalues[*a]));
+    let top = e.eigenvalues[order[0]].max(0.0);
+    let kept: Vec<usize> = order
+        .iter()
+        .copied()
+        .filter(|&k| e.eigenvalues[k] > 1e-12 * top)
+        .collect();
+    let r = kept.len().min(POSE_RANK_MAX);
+    let mut d = DMatrix::zeros(n, r);
+    for (col, &k) in kept[..r].iter().enumerate() {
+        let v = e.eigenvectors.column(k) * e.eigenvalues[k].sqrt();
+        d.set_column(col, &v);
+    }
+    if let Some(ch) = &ch {
+        d = ch.l() * d;
+    }
+    let folded = kept.len() - r;
+    let weight = if folded > 0 && ch.is_some() {
+        e.eigenvalues[kept[r]]
+    } else {
+        0.0
+    };
+    (d, weight, folded)
+}
+
+/// The tip's tr(J C Jᵀ) at every row of `data` (its own probe), C a covariance of `params`
+/// on the calibrated `arm`: the leverage of each calibration reading, whose mean is the
+/// file's `pose_leverage_mean` and against which a reading's ℓ is taken.
+pub fn tip_leverages(
+    arm: &quatarm_ref::arm::Arm,
+    params: &[Param],
+    c: &DMatrix<f64>,
+    data: &Dataset,
+) -> Vec<f64> {
+    let b = Budget::of_parameters(params, c.clone(), data.dof);
+    data.rows
+        .iter()
+        .map(|r| {
+            let probe = crate::fit::probes::index(arm, r);
+            super::propagate::point(arm, probe, &b, &r.theta, r.temp_c)
+                .1
+                .trace()
+        })
+        .collect()
 }
 
 /// What a covariance `cov` of the parameters alone predicts for the rows `judged`, in the
@@ -197,14 +309,7 @@ fn tip_part(
     data: &Dataset,
     judged: &[bool],
 ) -> Vec<RowCov> {
-    let b = Budget {
-        params: params.to_vec(),
-        cov,
-        encoder_counts: vec![0.0; data.dof],
-        probing_mm: 0.0,
-        temperature_c: 0.0,
-        model_mm: 0.0,
-    };
+    let b = Budget::of_parameters(params, cov, data.dof);
     super::misfit::row_covariances(arm, &b, data, judged, 0.0)
 }
 
@@ -263,10 +368,10 @@ pub fn conformal_scale(mut t: Vec<f64>) -> f64 {
     t[k - 1].min(finite)
 }
 
-/// The factor of the leverage-scaled variant of the term at a reading of leverage ratio `l`
-/// (its tr J C Jᵀ over the mean on the calibration's rows): max(1, l). Measured on MUKCa
-/// (`coverage` bench, `mukca-variants`), not in the budget: a factor per reading that the
-/// table's C cannot hold.
+/// The factor of the leverage-scaled term at a reading of leverage ratio `l` (its tip's
+/// tr J C_fit Jᵀ over the mean on the calibration's rows): max(1, l). The budget carries the
+/// term apart from C for it (the file's `pose_*` keys); [`super::propagate::widening`]
+/// applies it.
 pub fn leverage_factor(l: f64) -> f64 {
     if l.is_finite() {
         l.max(1.0)
@@ -333,17 +438,17 @@ pub fn estimate(
             }
         }
     }
-    if leverage {
-        let judged: Vec<bool> = h.judged.clone();
-        let lev: std::collections::HashMap<usize, f64> =
-            tip_part(arm, params, c.clone(), data, &judged)
-                .into_iter()
-                .map(|r| (r.row, r.s.trace()))
-                .collect();
-        let mean = lev.values().sum::<f64>() / lev.len().max(1) as f64;
+    // The leverage-scaled form: each held-out row's part times its tip's factor, ℓ against
+    // the mean over every calibration row (what the file's `pose_leverage_mean` holds, and
+    // what eval and the hub compute for a reading).
+    let lev = leverage.then(|| tip_leverages(arm, params, c, data));
+    let lev_mean = lev
+        .as_ref()
+        .map(|l| l.iter().sum::<f64>() / l.len().max(1) as f64)
+        .filter(|m| m.is_finite() && *m > 0.0);
+    if let (Some(lev), Some(mean)) = (&lev, lev_mean) {
         for (k, r) in rows.iter().enumerate() {
-            let l = lev.get(&r.row).map_or(1.0, |x| x / mean);
-            extra[k] *= leverage_factor(l);
+            extra[k] *= leverage_factor(lev[r.row] / mean);
         }
     }
     let deviation = |r: &RowCov| res[r.row].norm();
@@ -376,13 +481,43 @@ pub fn estimate(
         covered: [covered(0.0), covered(scale)],
         rms_mm: (extra.iter().map(|p| p.trace() / 3.0).sum::<f64>() / rows.len() as f64).sqrt()
             * scale,
+        leverage: None,
     };
     let k2 = scale * scale;
-    Some(PoseTerm {
-        cov: sb * (k2 * (1.0 + 1.0 / g_all as f64)),
+    let kk = k2 * (1.0 + 1.0 / g_all as f64);
+    let mut term = PoseTerm {
+        cov: sb * kk,
         extra: extra.into_iter().map(|p| p * k2).collect(),
         source,
-    })
+        split: None,
+    };
+    if let (Some(lev), Some(mean)) = (lev, lev_mean) {
+        // The same term as D Dᵀ + b C: κ²(1 + 1/G) ((1 − λ) S + λ t C), D from the first
+        // part, b = κ²(1 + 1/G) λ t; `cov` rebuilt from them so that the written
+        // covariance is C + D Dᵀ + b C to the bit the file holds.
+        let nu = h.fits.len().saturating_sub(1);
+        let (spread, w) = shrink_parts(raw_between(params, &all, g_all), c, prior_weight(nu));
+        let (d, fold, folded) = factor_of(&(spread * kk), c);
+        let split = super::PoseSplit {
+            factor: d,
+            shrink: kk * w + fold,
+            leverage_mean: mean,
+        };
+        let ratio = |x: &f64| x / mean;
+        term.source.leverage = Some(LeverageSource {
+            rank: split.factor.ncols(),
+            shrink: split.shrink,
+            mean_mm2: mean,
+            range: [
+                lev.iter().map(ratio).fold(f64::INFINITY, f64::min),
+                lev.iter().map(ratio).fold(0.0, f64::max),
+            ],
+            folded,
+        });
+        term.cov = &split.factor * split.factor.transpose() + c * split.shrink;
+        term.split = Some(split);
+    }
+    Some(term)
 }
 
 #[cfg(test)]

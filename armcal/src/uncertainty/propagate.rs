@@ -2,6 +2,11 @@
 //!
 //!   Σ_p = J_π C J_πᵀ + J_θ diag(σ_θ²) J_θᵀ + J_T σ_T² J_Tᵀ + (σ_probe² + σ_model²) I₃.
 //!
+//! With the budget's pose part kept apart ([`super::PoseSplit`], issue 27) the parameters'
+//! term of a reading is J C Jᵀ + (max(1, ℓ) − 1) J P Jᵀ, ℓ = tr(J C_fit Jᵀ)/mean of the same
+//! over the calibration's rows ([`widening`]): every reading's variance goes through
+//! [`point`] or [`group_deviations`], so the factor is applied here once.
+//!
 //! J_π is [`tip_jacobian`]'s analytic columns for the budget's parameters. J_θ is analytic too:
 //! a reading error moves the tip as a zero offset of the same joint does, a_k × (p − o_k)
 //! (the same column; the harmonic and gravity terms change that slope by their own size,
@@ -74,6 +79,53 @@ fn sandwich(a: &[Vector3<f64>], c: &DMatrix<f64>, b: &[Vector3<f64>]) -> Matrix3
     out
 }
 
+/// 3 × r: the columns `a` (one per parameter) times D.
+fn times_factor(a: &[Vector3<f64>], d: &DMatrix<f64>) -> nalgebra::Matrix3xX<f64> {
+    let mut out = nalgebra::Matrix3xX::zeros(d.ncols());
+    for (i, ai) in a.iter().enumerate() {
+        for k in 0..d.ncols() {
+            let x = d[(i, k)];
+            if x != 0.0 {
+                let mut c = out.column_mut(k);
+                c += ai * x;
+            }
+        }
+    }
+    out
+}
+
+/// A reading's leverage ratio ℓ = tr(J C_fit Jᵀ)/`leverage_mean` from its tip columns `tip`
+/// and J cov Jᵀ `tip_cov`: C_fit = (cov − D Dᵀ)/(1 + b), so tr J C_fit Jᵀ =
+/// (tr J cov Jᵀ − |J D|²)/(1 + b) and no n × n product is needed. `None` without a pose part.
+pub fn leverage(budget: &Budget, tip: &[Vector3<f64>], tip_cov: &Matrix3<f64>) -> Option<f64> {
+    let p = budget.pose.as_ref()?;
+    let jd = times_factor(tip, &p.factor);
+    let fit = (tip_cov.trace() - jd.norm_squared()).max(0.0) / (1.0 + p.shrink);
+    Some(fit / p.leverage_mean)
+}
+
+/// What the pose part adds to the parameters' term G cov Gᵀ = `gcg` at a reading of
+/// leverage ratio `l`: (max(1, ℓ) − 1) G P Gᵀ, with G P Gᵀ = (G D (G D)ᵀ + b G cov Gᵀ)/(1 + b).
+/// G is the reading's tip columns or, for a deviation from a group's mean, J_i − J̄; ℓ is
+/// always the tip's ([`leverage`]), the quantity the hub computes for a reading. Zero
+/// without a pose part or at ℓ ≤ 1.
+pub fn widening(
+    budget: &Budget,
+    l: Option<f64>,
+    g: &[Vector3<f64>],
+    gcg: &Matrix3<f64>,
+) -> Matrix3<f64> {
+    let (Some(p), Some(l)) = (budget.pose.as_ref(), l) else {
+        return Matrix3::zeros();
+    };
+    let f = super::pose::leverage_factor(l) - 1.0;
+    if f <= 0.0 {
+        return Matrix3::zeros();
+    }
+    let gd = times_factor(g, &p.factor);
+    (&gd * gd.transpose() + gcg * p.shrink) * (f / (1.0 + p.shrink))
+}
+
 /// The terms of Σ_p that are the reading's own (angles, temperature, probing, model): those
 /// two readings do not share.
 pub fn own_terms(budget: &Budget, sigma_theta: &[f64], j: &Jacobians) -> Matrix3<f64> {
@@ -92,9 +144,31 @@ pub fn point(
     theta: &[f64],
     temp_c: f64,
 ) -> (Vector3<f64>, Matrix3<f64>) {
+    let (p, s, _) = point_with_leverage(arm, probe, budget, theta, temp_c);
+    (p, s)
+}
+
+/// [`point`] with the reading's leverage ratio ℓ (`None` without a pose part): the tip, Σ_p,
+/// ℓ.
+pub fn point_with_leverage(
+    arm: &Arm,
+    probe: usize,
+    budget: &Budget,
+    theta: &[f64],
+    temp_c: f64,
+) -> (Vector3<f64>, Matrix3<f64>, Option<f64>) {
     let j = jacobians(arm, probe, budget, theta, temp_c);
-    let s = sandwich(&j.pi, &budget.cov, &j.pi) + own_terms(budget, &budget.sigma_theta(arm), &j);
-    (j.p, s)
+    let jcj = sandwich(&j.pi, &budget.cov, &j.pi);
+    let l = leverage(budget, &j.pi, &jcj);
+    let s =
+        jcj + widening(budget, l, &j.pi, &jcj) + own_terms(budget, &budget.sigma_theta(arm), &j);
+    (j.p, s, l)
+}
+
+/// A reading's leverage ratio from its Jacobians ([`leverage`]).
+pub fn leverage_at(budget: &Budget, j: &Jacobians) -> Option<f64> {
+    budget.pose.as_ref()?;
+    leverage(budget, &j.pi, &sandwich(&j.pi, &budget.cov, &j.pi))
 }
 
 /// The distance between two readings and its standard uncertainty: gauge-free, the
@@ -127,7 +201,8 @@ pub fn distance(arm: &Arm, budget: &Budget, a: (&[f64], f64), b: (&[f64], f64)) 
 /// `rows` of `data` (one `spat` point, one bar end): r_i = p_i − (1/n) Σ_j p_j. The parameters'
 /// part goes through J_i − J̄ (what all the group's probings share cancels), the readings' own
 /// parts as (1 − 2/n) Σ_i + (1/n²) Σ_j Σ_j. How MUKCa's authors judge a session, and what a
-/// held-out group's residuals are.
+/// held-out group's residuals are. With a pose part, each probing's pose part is scaled by
+/// its own tip's leverage factor (a variance per probing, as [`point`] gives it).
 pub fn group_deviations(
     arm: &Arm,
     b: &Budget,
@@ -159,7 +234,9 @@ pub fn group_deviations(
         .zip(js.iter().zip(&own))
         .map(|(&i, (j, o))| {
             let g: Vec<Vector3<f64>> = j.pi.iter().zip(&mean_j).map(|(a, m)| a - m).collect();
-            (i, o * (1.0 - 2.0 / n) + own_mean + sandwich(&g, &b.cov, &g))
+            let gcg = sandwich(&g, &b.cov, &g);
+            let widen = widening(b, leverage_at(b, j), &g, &gcg);
+            (i, o * (1.0 - 2.0 / n) + own_mean + gcg + widen)
         })
         .collect()
 }
@@ -252,5 +329,94 @@ mod tests {
         let (d, ud) = distance(&a, &b, (&th, 25.0), (&th, 25.0));
         assert_eq!(d, 0.0);
         assert!(ud == 0.0);
+    }
+
+    /// Issue 27: a budget whose pose part is kept apart gives the same Σ_p (and U95) as the
+    /// same covariance without it at a reading of ℓ ≤ 1, a larger one at ℓ > 1, and both
+    /// match the n × n formula J cov Jᵀ + (max(1, ℓ) − 1) J P Jᵀ, ℓ = tr(J C_fit Jᵀ)/mean.
+    #[test]
+    fn the_pose_part_widens_only_above_the_mean_leverage() {
+        use super::super::{u95, PoseSplit};
+        let a = arm();
+        let params = Terms::with(&[Effect::Thermal(Link::Probe)]).params(6);
+        let n = params.len();
+        let c_fit = DMatrix::from_fn(n, n, |i, j| {
+            if i == j {
+                1e-8 * (1.0 + i as f64 / n as f64)
+            } else {
+                2e-10
+            }
+        });
+        let d = DMatrix::from_fn(n, 3, |i, k| 1e-5 * ((i * 7 + k * 3) % 5) as f64 - 2e-5);
+        let shrink = 0.4;
+        let cov = &c_fit * (1.0 + shrink) + &d * d.transpose();
+        let mut plain = Budget::zero(6);
+        plain.params = params;
+        plain.cov = cov.clone();
+        plain.encoder_counts = vec![0.3; 6];
+        plain.probing_mm = 0.002;
+        plain.model_mm = 0.001;
+        let th = [0.3, -0.7, 1.1, 0.9, -2.0, 0.4];
+        let (_, s_plain) = point(&a, 0, &plain, &th, 25.0);
+        let j = jacobians(&a, 0, &plain, &th, 25.0);
+        let jm = nalgebra::Matrix3xX::from_columns(&j.pi);
+        let tr_fit = (&jm * &c_fit * jm.transpose()).trace();
+        let split = |mean: f64| PoseSplit {
+            factor: d.clone(),
+            shrink,
+            leverage_mean: mean,
+        };
+        let direct = |b: &Budget| {
+            let p = b.pose.as_ref().unwrap();
+            assert!((p.fit_covariance(&cov) - &c_fit).norm() < 1e-12 * c_fit.norm());
+            let l = tr_fit / p.leverage_mean;
+            let jpj = &jm * p.matrix(&cov) * jm.transpose();
+            let jcj = &jm * &cov * jm.transpose();
+            let m = jcj + jpj * (l.max(1.0) - 1.0);
+            let own = own_terms(b, &b.sigma_theta(&a), &j);
+            (Matrix3::from_iterator(m.iter().copied()) + own, l)
+        };
+        for (mean, widened) in [
+            (2.0 * tr_fit, false),
+            (tr_fit * (1.0 + 1e-9), false),
+            (tr_fit / 3.0, true),
+        ] {
+            let b = Budget {
+                pose: Some(split(mean)),
+                ..plain.clone()
+            };
+            let (_, s, l) = point_with_leverage(&a, 0, &b, &th, 25.0);
+            let (want, l_want) = direct(&b);
+            assert!(
+                (l.unwrap() - l_want).abs() <= 1e-12 * l_want,
+                "{l:?} {l_want}"
+            );
+            assert!((s - want).norm() <= 1e-12 * want.norm(), "{s} {want}");
+            let (u, u_plain) = (u95::u95(&s), u95::u95(&s_plain));
+            if widened {
+                assert!(u > u_plain * 1.01, "{u} {u_plain}");
+            } else {
+                assert_eq!(s, s_plain);
+                assert_eq!(u, u_plain);
+            }
+        }
+        // A deviation from a group's mean: its pose part scaled by its own tip's factor.
+        let b = Budget {
+            pose: Some(split(tr_fit / 3.0)),
+            ..plain.clone()
+        };
+        let rows = (0..3)
+            .map(|k| {
+                let mut t = th.to_vec();
+                t[4] += 0.2 * f64::from(k);
+                crate::data::Row::point(0, t, [0.0; 3], 25.0, None)
+            })
+            .collect();
+        let data = crate::data::Dataset::from_rows(rows, 6, true, "test").unwrap();
+        let wide = group_deviations(&a, &b, &data, &[0, 1, 2]);
+        let narrow = group_deviations(&a, &plain, &data, &[0, 1, 2]);
+        for ((_, w), (_, n)) in wide.iter().zip(&narrow) {
+            assert!(w.trace() > n.trace(), "{w} {n}");
+        }
     }
 }

@@ -84,7 +84,7 @@ impl Rule {
         Rule {
             two_group_scale,
             prior_groups: 0.0,
-            leverage: false,
+            leverage: true,
         }
     }
 }
@@ -166,7 +166,7 @@ fn hold_out(unit: &Unit, groups: &[i64], g: i64, rule: Rule) -> Result<Held, sup
             probings.push((i, d, u, (d * d - trace) / (3.0 * (1.0 - 1.0 / n))));
         }
     }
-    let nested_u95 = nested_u95(&fit.arm, &train_data, &budget, &nested, &pose, &test, rule);
+    let nested_u95 = nested_u95(&fit.arm, &nested, &test);
     let far = super::extrapolation::Support::of(&fit.arm, &train_data).map_or(0.0, |sup| {
         let m = crate::fit::probes::Mounted::new(&fit.arm);
         let n = test.rows.iter().filter(|r| sup.far(&m.tip(r))).count();
@@ -196,18 +196,10 @@ fn hold_out(unit: &Unit, groups: &[i64], g: i64, rule: Rule) -> Result<Held, sup
     })
 }
 
-/// Each held-out probing's U95 under the nested budget `nested` (whose C holds the pose part
-/// `pose`); with the leverage rule the pose part is scaled per probing by its leverage ratio
-/// against the training probings (`budget`'s C, the same normaliser as the validation's).
-fn nested_u95(
-    arm: &Arm,
-    train: &Dataset,
-    budget: &Budget,
-    nested: &Budget,
-    pose: &nalgebra::DMatrix<f64>,
-    test: &Dataset,
-    rule: Rule,
-) -> Vec<(usize, f64)> {
+/// Each held-out probing's U95 under the nested budget `nested` as `calibrate --by-group`
+/// writes it: with the leverage rule its pose part is kept apart and scaled per probing by
+/// its tip's leverage ratio, by the product's own propagation.
+fn nested_u95(arm: &Arm, nested: &Budget, test: &Dataset) -> Vec<(usize, f64)> {
     let ends = |d: &Dataset| -> Vec<Vec<usize>> {
         d.layout()
             .length
@@ -215,44 +207,13 @@ fn nested_u95(
             .flat_map(|l| [l.a.clone(), l.b.clone()])
             .collect()
     };
-    if !rule.leverage {
-        return ends(test)
-            .iter()
-            .flat_map(|end| socket_u95(arm, nested, test, end))
-            .map(|(i, u, _)| (i, u))
-            .collect();
-    }
-    let only = |cov: nalgebra::DMatrix<f64>| Budget {
-        params: budget.params.clone(),
-        cov,
-        encoder_counts: vec![0.0; test.dof],
-        probing_mm: 0.0,
-        temperature_c: 0.0,
-        model_mm: 0.0,
-    };
-    let c_only = only(budget.cov.clone());
-    let pose_only = only(pose.clone());
-    let rest = Budget {
-        cov: &nested.cov - pose,
-        ..nested.clone()
-    };
-    let train_lev: Vec<f64> = ends(train)
+    // The nested budget as written, the leverage-scaled pose part applied per probing by
+    // the product's own propagation (`propagate::group_deviations`).
+    ends(test)
         .iter()
-        .flat_map(|end| propagate::group_deviations(arm, &c_only, train, end))
-        .map(|(_, p)| p.trace())
-        .collect();
-    let mean = train_lev.iter().sum::<f64>() / train_lev.len().max(1) as f64;
-    let mut out = Vec::new();
-    for end in ends(test) {
-        let r = propagate::group_deviations(arm, &rest, test, &end);
-        let p = propagate::group_deviations(arm, &pose_only, test, &end);
-        let l = propagate::group_deviations(arm, &c_only, test, &end);
-        for ((i, s), ((_, p), (_, l))) in r.into_iter().zip(p.into_iter().zip(l)) {
-            let f = super::pose::leverage_factor(l.trace() / mean);
-            out.push((i, u95::u95(&(s + p * f))));
-        }
-    }
-    out
+        .flat_map(|end| socket_u95(arm, nested, test, end))
+        .map(|(i, u, _)| (i, u))
+        .collect()
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -332,6 +293,7 @@ pub fn unit_coverage(unit: &Unit, rule: Rule) -> Option<UnitCoverage> {
             for h in &held {
                 let mut b = h.nested.clone();
                 b.cov = &b.cov + &h.pose * (m * m - 1.0);
+                b.pose = b.pose.map(|p| p.scaled(m));
                 for end in h.test.layout().length.iter().flat_map(|l| [&l.a, &l.b]) {
                     for (i, u, _) in socket_u95(&h.arm, &b, &h.test, end) {
                         let d = h.probings.iter().find(|p| p.0 == i).map_or(0.0, |p| p.1);
@@ -372,7 +334,8 @@ fn socket_u95(arm: &Arm, b: &Budget, data: &Dataset, rows: &[usize]) -> Vec<(usi
         .collect()
 }
 
-/// The pose term's least covering κ for held-out probings when S_b comes from two sessions
+/// The (leverage-scaled) pose term's least covering κ for held-out probings when S_b comes
+/// from two sessions
 /// (the regime where the data cannot set κ, [`super::pose::TWO_GROUP_SCALE`]): for each pair
 /// of consecutive sessions (cyclic) of a unit with ≥ 3 sessions, the unit is calibrated on
 /// the pair, S_b (1 + 1/2) taken from the pair's two leave-one-session-out fits, and every
@@ -381,9 +344,10 @@ fn socket_u95(arm: &Arm, b: &Budget, data: &Dataset, rows: &[usize]) -> Vec<(usi
 /// is taken from the *other* units' scores, so a unit never sets its own.
 pub fn two_group_scores(unit: &Unit) -> Vec<f64> {
     let lambda = super::pose::prior_weight(1);
+    // [λ form, C itself, λ form × max(1, ℓ), ℓ]: the product's is the leverage-scaled one.
     two_group_scores_by_form(unit, &[lambda])
         .into_iter()
-        .map(|(_, t)| t[0])
+        .map(|(_, t)| t[2])
         .collect()
 }
 
@@ -391,11 +355,10 @@ pub fn two_group_scores(unit: &Unit) -> Vec<f64> {
 /// (`coverage` bench, `mukca-variants`): per scored probing, (its session, its least
 /// covering κ under each shrinkage weight λ of `lambdas` ([`super::pose::between_with`]),
 /// then under C itself (a term ∝ J C Jᵀ = σ̂² times the probing's leverage), then under the
-/// budget's form times max(1, ℓ), then ℓ itself). ℓ is the probing's leverage ratio: tr(J C
-/// Jᵀ) of its deviation over the mean of the same over the training probings, large where
-/// the placement is one the training design did not see. The last two are not
-/// representable in the table's C (a factor per reading), so they are measured here, not in
-/// the budget. For a unit with three sessions the pairs are the outer folds of the nested
+/// budget's form times max(1, ℓ), then ℓ itself). ℓ is the probing's leverage ratio as the
+/// product computes it: its tip's tr(J C Jᵀ) over the mean of the same over the training
+/// rows, large where the placement is one the training design did not see (the budget's
+/// form × max(1, ℓ) is the product's, the file's `pose_*` keys). For a unit with three sessions the pairs are the outer folds of the nested
 /// run, so these scores are its nested coverage as a function of κ.
 pub fn two_group_scores_by_form(unit: &Unit, lambdas: &[f64]) -> Vec<(i64, Vec<f64>)> {
     let groups = unit.groups();
@@ -429,36 +392,22 @@ pub fn two_group_scores_by_form(unit: &Unit, lambdas: &[f64]) -> Vec<(i64, Vec<f
         let rest = e.budget;
         let fits: Vec<&crate::fit::holdout::FoldFit> = inner.fits.iter().collect();
         // A budget of the parameters' covariance `cov` alone.
-        let only = |cov: nalgebra::DMatrix<f64>| Budget {
-            params: rest.params.clone(),
-            cov,
-            encoder_counts: vec![0.0; data.dof],
-            probing_mm: 0.0,
-            temperature_c: 0.0,
-            model_mm: 0.0,
-        };
+        let only = |cov: nalgebra::DMatrix<f64>| Budget::of_parameters(&rest.params, cov, data.dof);
         let poses: Vec<Budget> = lambdas
             .iter()
             .map(|&l| only(super::pose::between_with(&rest.params, &fits, 2, &rest.cov, l) * 1.5))
             .collect();
         let budget_form = only(super::pose::between(&rest.params, &fits, 2, &rest.cov) * 1.5);
         let c_only = only(rest.cov.clone());
-        // The leverage ratio's normaliser: the mean trace of J C Jᵀ over the training
-        // probings (their deviations from their socket's centre).
-        let lev = |d: &Dataset| -> Vec<f64> {
-            d.layout()
-                .length
-                .iter()
-                .flat_map(|l| [&l.a, &l.b])
-                .flat_map(|end| propagate::group_deviations(&fit.arm, &c_only, d, end))
-                .map(|(_, p)| p.trace())
-                .collect()
-        };
+        // The leverage ratio's normaliser: the mean tip tr(J C Jᵀ) over the training rows
+        // (the product's `pose_leverage_mean`).
+        let lev = |d: &Dataset| super::pose::tip_leverages(&fit.arm, &rest.params, &rest.cov, d);
         let train_lev = lev(&data);
         let mean_lev = train_lev.iter().sum::<f64>() / train_lev.len().max(1) as f64;
         for &s in groups.iter().filter(|s| !pair.contains(s)) {
             let test = unit.sessions_data(&[s]);
             let res = residuals(&fit.arm, &test, None);
+            let test_lev = lev(&test);
             for end in test.layout().length.iter().flat_map(|l| [&l.a, &l.b]) {
                 let m = 1.0 - 1.0 / end.len() as f64;
                 let (rows, d): (Vec<_>, Vec<_>) =
@@ -480,7 +429,7 @@ pub fn two_group_scores_by_form(unit: &Unit, lambdas: &[f64]) -> Vec<(i64, Vec<f
                     .into_iter()
                     .map(|(_, p)| p)
                     .collect();
-                let l: Vec<f64> = jc.iter().map(|p| p.trace() / mean_lev).collect();
+                let l: Vec<f64> = rows.iter().map(|r| test_lev[r.row] / mean_lev).collect();
                 per_form.push(super::pose::least_scales(&rows, &jc, &d));
                 let ext: Vec<_> = propagate::group_deviations(&fit.arm, &budget_form, &test, end)
                     .into_iter()
