@@ -114,18 +114,6 @@ fn ends(d: &Dataset) -> Vec<Vec<usize>> {
         .collect()
 }
 
-/// A budget of the parameters' covariance `cov` alone.
-fn only(params: &[crate::params::Param], cov: DMatrix<f64>, dof: usize) -> Budget {
-    Budget {
-        params: params.to_vec(),
-        cov,
-        encoder_counts: vec![0.0; dof],
-        probing_mm: 0.0,
-        temperature_c: 0.0,
-        model_mm: 0.0,
-    }
-}
-
 /// Per row of `rows` of `data`: (row, tr of the deviation under `b`) for every end.
 fn dev_traces(arm: &quatarm_ref::arm::Arm, b: &Budget, data: &Dataset) -> HashMap<usize, f64> {
     ends(data)
@@ -220,8 +208,8 @@ pub fn train(unit: &Unit, train: &[i64]) -> Option<Trained> {
     let g = all.len();
     let gf = g as f64;
     let p_all = pose::between(params, &all, g, c) * (1.0 + 1.0 / gf);
-    let c_only = only(params, c.clone(), data.dof);
-    let p_only = only(params, p_all.clone(), data.dof);
+    let c_only = Budget::of_parameters(params, c.clone(), data.dof);
+    let p_only = Budget::of_parameters(params, p_all.clone(), data.dof);
     // Normalisers over the training probings, each row against the training fit.
     let (tc, tp, tt) = (
         dev_traces(arm, &c_only, &data),
@@ -308,7 +296,7 @@ fn inner_rows(
         let Some(group) = fit.rows.first().map(|&i| data.rows[i].group) else {
             continue;
         };
-        let po = only(params, cov, data.dof);
+        let po = Budget::of_parameters(params, cov, data.dof);
         for e in ends(data)
             .into_iter()
             .filter(|e| e.first().is_some_and(|&i| data.rows[i].group == group))
@@ -316,7 +304,7 @@ fn inner_rows(
             extra.extend(propagate::group_deviations(arm, &po, data, &e));
         }
     }
-    let c_only = only(params, c.clone(), data.dof);
+    let c_only = Budget::of_parameters(params, c.clone(), data.dof);
     let cdev = dev_traces(arm, &c_only, data);
     let tip = tip_traces(arm, &c_only, data);
     // The joints' ratio of a held-out row against the *other* groups' joint angles: what a
