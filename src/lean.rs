@@ -98,11 +98,53 @@ struct LeanJoint {
     rate: [f32; 3],
     gravity: f32,
     has_gravity: bool,
-    /// Rx(α_i), as a quarter turn and a correction (the tip's turn).
-    alpha: Turn,
+    /// Rx(α_i) for the tip, as an exact quarter turn and a correction with the quarter turn's
+    /// selection made at boot ([`QuarterTurned`]).
+    alpha: QuarterTurned,
     /// cos α_i and sin α_i whole, the quarter turns applied at boot (exact): the plain turns
     /// of the direction and the vertical, which need no quarter-turn selection per point.
     alpha_whole: [f32; 2],
+}
+
+/// A turn by a constant angle q·π/2 + r (|r| ≤ π/4) of a pair (p, q) of coordinates, with the
+/// quarter turn chosen at boot instead of selected each point: (c₀, s₀) the quarter turn's
+/// cosine and sine (0 or ±1), A = −(s₀ sin r + c₀ (1 − cos r)) and B = s₀ (1 − cos r) − c₀ sin
+/// r, each exactly ±sin r or ±(1 − cos r) since one of c₀, s₀ is 0. Then
+///
+/// p' = ((A p + B q) + c₀ p) − s₀ q,   q' = ((A q − B p) + s₀ p) + c₀ q:
+///
+/// the first sum is the remainder's correction (the same two rounded products as the selected
+/// form's), the products by c₀ and s₀ are exact, one of them ±0, so the result is the quarter
+/// turned coordinate plus the correction rounded once — the numbers of the form that selects
+/// the quarter turn, bit for bit, in four multiply–adds a coordinate and no branch.
+#[derive(Clone, Copy, Debug, Default)]
+struct QuarterTurned {
+    a: f32,
+    b: f32,
+    c0: f32,
+    s0: f32,
+}
+
+impl QuarterTurned {
+    fn of(t: &Turn) -> QuarterTurned {
+        let (c0, s0) = quarter_turns(t.q, (1.0f32, 0.0));
+        QuarterTurned {
+            a: -(s0 * t.sin + c0 * t.omc),
+            b: s0 * t.omc - c0 * t.sin,
+            c0,
+            s0,
+        }
+    }
+
+    /// (p, q) turned.
+    #[inline(always)]
+    fn turn(&self, (p, q): (f32, f32)) -> (f32, f32) {
+        let k = self;
+        (
+            k.a * p + k.b * q + k.c0 * p - k.s0 * q,
+            k.a * q - k.b * p + k.s0 * p + k.c0 * q,
+        )
+    }
 }
 
 /// The lean f32 chain of an arm (or none, `on` false).
@@ -114,8 +156,10 @@ pub struct LeanF32 {
     /// one multiply ([`LeanJoint::unit`]).
     pow2: bool,
     joints: [LeanJoint; MAX_JOINTS],
-    /// Rz(a_1), applied last.
-    base: Turn,
+    /// Rz(a_1), applied last: the tip's turn with its quarter turn chosen at boot, and cos a_1,
+    /// sin a_1 whole for the direction.
+    base: QuarterTurned,
+    base_whole: [f32; 2],
     probe_dir: [f32; 3],
     /// Joints from the base up to the last compliant one: those the first pass turns the
     /// vertical through.
@@ -261,7 +305,10 @@ impl LeanForm<F32> for LeanF32 {
             *e = euler_zxz(&crate::model::z_frame_matrix(j.matrix, prev, j.axis));
             prev = j.axis;
         }
-        out.base = turn_of(euler[0][0])?;
+        let base = turn_of(euler[0][0])?;
+        out.base = QuarterTurned::of(&base);
+        let (cb, sb) = quarter_turns(base.q, (base.cos, base.sin));
+        out.base_whole = [cb, sb];
         for i in 0..n {
             let no = i + 1;
             let j = table
@@ -315,7 +362,7 @@ impl LeanForm<F32> for LeanF32 {
                 rate,
                 gravity: jm.gravity,
                 has_gravity: jm.has_gravity,
-                alpha,
+                alpha: QuarterTurned::of(&alpha),
                 alpha_whole: [ca, sa],
             };
             if jm.has_gravity {
@@ -495,27 +542,18 @@ impl LeanF32 {
             w = [p - (q * sin + p * omc), q + (p * sin - q * omc), w[2]];
             let (p, q) = quarter_turns(a.q, (d[0], d[1]));
             d = [p * cos - q * sin, p * sin + q * cos, d[2]];
-            // Rx(α): the tip by a quarter turn and a correction, the direction plainly.
-            let al = &j.alpha;
-            let (p, q) = quarter_turns(al.q, (w[1], w[2]));
-            w = [
-                w[0],
-                p - (q * al.sin + p * al.omc),
-                q + (p * al.sin - q * al.omc),
-            ];
+            // Rx(α): the tip by a quarter turn and a correction (chosen at boot), the
+            // direction plainly.
+            let (y, z) = j.alpha.turn((w[1], w[2]));
+            w = [w[0], y, z];
             let [ca, sa] = j.alpha_whole;
             d = [d[0], ca * d[1] - sa * d[2], sa * d[1] + ca * d[2]];
         });
         // Rz(a_1).
-        let b = &self.base;
-        let (p, q) = quarter_turns(b.q, (w[0], w[1]));
-        w = [
-            p - (q * b.sin + p * b.omc),
-            q + (p * b.sin - q * b.omc),
-            w[2],
-        ];
-        let (p, q) = quarter_turns(b.q, (d[0], d[1]));
-        d = [p * b.cos - q * b.sin, p * b.sin + q * b.cos, d[2]];
+        let (x, y) = self.base.turn((w[0], w[1]));
+        w = [x, y, w[2]];
+        let [cb, sb] = self.base_whole;
+        d = [cb * d[0] - sb * d[1], sb * d[0] + cb * d[1], d[2]];
         Ok(Point { xyz: w, dir: d })
     }
 }
