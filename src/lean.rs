@@ -147,6 +147,11 @@ impl QuarterTurned {
     }
 }
 
+/// [`LeanF32::run`]'s compliant joints read from each joint's flag.
+const RUNTIME: u8 = u8::MAX;
+/// The compliant joints of a six-axis arm with gravity on its hinges (joints 2, 4 and 6).
+const HINGES: u8 = 0b10_1010;
+
 /// The lean f32 chain of an arm (or none, `on` false).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct LeanF32 {
@@ -164,6 +169,8 @@ pub struct LeanF32 {
     /// Joints from the base up to the last compliant one: those the first pass turns the
     /// vertical through.
     vertical_joints: usize,
+    /// The compliant joints, bit i for joint i + 1 (the first eight).
+    gravity_mask: u8,
 }
 
 /// cos and sin of a binary angle t (one turn = 2^32) split as q·π/2 + r, in f64: (q, sin r,
@@ -367,6 +374,9 @@ impl LeanForm<F32> for LeanF32 {
             };
             if jm.has_gravity {
                 out.vertical_joints = i + 1;
+                if i < 8 {
+                    out.gravity_mask |= 1 << i;
+                }
             }
         }
         out.probe_dir = model.probe_dir;
@@ -388,16 +398,17 @@ impl LeanForm<F32> for LeanF32 {
     ) -> Result<Point<F32>, ChainError> {
         // Six joints (the hubs' arms) with the joint count a constant, so that the compiler
         // unrolls both passes, the power-of-two scales (the usual encoders) without a test
-        // per joint, and where the last joint is compliant (gravity on the hinges 2, 4, 6)
-        // the vertical carried through every joint without a test per joint (13 instructions
-        // a point fewer on qemu-m4f); any other count or scale with the same code, looped.
+        // per joint, and for gravity on the hinges 2, 4 and 6 (the six-axis arm's compliant
+        // joints) the compliant joints and the vertical's reach known to the compiler, so
+        // that neither is tested per joint; any other count, scale or compliant set with the
+        // same code, looped or testing the joints' flags.
         match (counts.len(), self.pow2) {
-            (6, true) if self.vertical_joints == 6 => {
-                self.run::<6, true, true>(model, counts, temp_mc)
+            (6, true) if self.gravity_mask == HINGES => {
+                self.run::<6, true, HINGES>(model, counts, temp_mc)
             }
-            (6, true) => self.run::<6, true, false>(model, counts, temp_mc),
-            (6, false) => self.run::<6, false, false>(model, counts, temp_mc),
-            _ => self.run::<0, false, false>(model, counts, temp_mc),
+            (6, true) => self.run::<6, true, RUNTIME>(model, counts, temp_mc),
+            (6, false) => self.run::<6, false, RUNTIME>(model, counts, temp_mc),
+            _ => self.run::<0, false, RUNTIME>(model, counts, temp_mc),
         }
     }
 
@@ -456,11 +467,10 @@ macro_rules! each_joint {
 
 impl LeanF32 {
     /// [`LeanForm::eval`] for `JOINTS` joints (0: as many as `counts` has); `POW2`: every
-    /// joint's scale is a power of two; `ALL_VERTICAL`: the first pass turns the vertical
-    /// through every joint, not only up to the last compliant one (the same results: the
-    /// verticals are read only where a joint is compliant).
+    /// joint's scale is a power of two; `GRAVITY`: the compliant joints (bit i for joint i +
+    /// 1) where they are this set, [`RUNTIME`] to read each joint's flag.
     #[inline(always)]
-    fn run<const JOINTS: usize, const POW2: bool, const ALL_VERTICAL: bool>(
+    fn run<const JOINTS: usize, const POW2: bool, const GRAVITY: u8>(
         &self,
         model: &Model<F32>,
         counts: &[u32],
@@ -495,7 +505,12 @@ impl LeanF32 {
                 omc,
                 e,
             });
-            if ALL_VERTICAL || i < self.vertical_joints {
+            let vertical = if GRAVITY == RUNTIME {
+                i < self.vertical_joints
+            } else {
+                i < (8 - GRAVITY.leading_zeros()) as usize
+            };
+            if vertical {
                 // Rx(−α), then Rz(−θ' − e) with e to first order.
                 let [ca, sa] = j.alpha_whole;
                 let (x, y, z) = if i == 0 {
@@ -532,7 +547,12 @@ impl LeanF32 {
                 [w[0] + link[0], w[1] + link[1], w[2] + link[2]]
             };
             let mut e = a.e;
-            if j.has_gravity {
+            let compliant = if GRAVITY == RUNTIME {
+                j.has_gravity
+            } else {
+                GRAVITY & (1 << i) != 0
+            };
+            if compliant {
                 // SAFETY: the first pass wrote the vertical of every joint up to the last
                 // compliant one.
                 let v = unsafe { verticals[i].assume_init_read() };
@@ -593,17 +613,18 @@ mod tests {
         let model = Model::<F32>::new(&table).unwrap();
         let lean = LeanF32::build(&table, &model, true).unwrap();
         assert!(lean.on && lean.pow2);
+        assert_eq!(lean.gravity_mask, HINGES);
         let quat = Chain::<F32>::new(&table).unwrap();
         let bits = |p: &Point<F32>| (p.xyz.map(f32::to_bits), p.dir.map(f32::to_bits));
         for k in 0..60u32 {
             let counts: [u32; 6] =
                 core::array::from_fn(|j| (k * 77_773 + j as u32 * 191_111) % (1 << 20));
             let temp = 10_000 + 400 * k as i32;
-            let a = lean.run::<6, true, false>(&model, &counts, temp).unwrap();
-            let b = lean.run::<6, false, false>(&model, &counts, temp).unwrap();
-            let c = lean.run::<0, false, false>(&model, &counts, temp).unwrap();
-            // The vertical through every joint: more verticals, read only where compliant.
-            let v = lean.run::<6, true, true>(&model, &counts, temp).unwrap();
+            let a = lean.run::<6, true, RUNTIME>(&model, &counts, temp).unwrap();
+            let b = lean.run::<6, false, RUNTIME>(&model, &counts, temp).unwrap();
+            let c = lean.run::<0, false, RUNTIME>(&model, &counts, temp).unwrap();
+            // The compliant set as a constant (the sample's are the hinges).
+            let v = lean.run::<6, true, HINGES>(&model, &counts, temp).unwrap();
             assert_eq!(bits(&a), bits(&v), "{counts:?}");
             assert_eq!(bits(&a), bits(&b), "{counts:?}");
             assert_eq!(bits(&a), bits(&c), "{counts:?}");
@@ -619,15 +640,15 @@ mod tests {
         counts[3] = 1 << 20;
         let want = Err(ChainError::CountOutOfRange { joint: 4 });
         assert_eq!(
-            lean.run::<6, true, false>(&model, &counts, 20_000).map(|_| ()),
+            lean.run::<6, true, RUNTIME>(&model, &counts, 20_000).map(|_| ()),
             want
         );
         assert_eq!(
-            lean.run::<6, false, false>(&model, &counts, 20_000).map(|_| ()),
+            lean.run::<6, false, RUNTIME>(&model, &counts, 20_000).map(|_| ()),
             want
         );
         assert_eq!(
-            lean.run::<0, false, false>(&model, &counts, 20_000).map(|_| ()),
+            lean.run::<0, false, RUNTIME>(&model, &counts, 20_000).map(|_| ()),
             want
         );
     }
