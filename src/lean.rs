@@ -136,6 +136,16 @@ impl QuarterTurned {
         }
     }
 
+    /// (p, q) turned where the quarter turns `quarters` are known to the compiler: the exact
+    /// quarter-turned coordinate added to the correction, without the products by c₀ and s₀
+    /// (the same numbers as [`QuarterTurned::turn`], less a sum with ±0).
+    #[inline(always)]
+    fn turn_known(&self, quarters: u8, (p, q): (f32, f32)) -> (f32, f32) {
+        let k = self;
+        let (bp, bq) = quarter_turns(quarters, (p, q));
+        (k.a * p + k.b * q + bp, k.a * q - k.b * p + bq)
+    }
+
     /// (p, q) turned.
     #[inline(always)]
     fn turn(&self, (p, q): (f32, f32)) -> (f32, f32) {
@@ -151,6 +161,12 @@ impl QuarterTurned {
 const RUNTIME: u8 = u8::MAX;
 /// The compliant joints of a six-axis arm with gravity on its hinges (joints 2, 4 and 6).
 const HINGES: u8 = 0b10_1010;
+/// [`LeanF32::run`]'s quarter turns of Rx(α) multiplied in from each joint's constants.
+const RUNTIME_ALPHA: u16 = u16::MAX;
+/// The six-axis arm's geometry: joint 1's axis along the base's (α₁ within π/4 of 0, no
+/// quarter turn), each next axis perpendicular to the one before (α within π/4 of π/2, one
+/// quarter turn).
+const PERPENDICULAR: u16 = 0b01_01_01_01_01_00;
 
 /// The lean f32 chain of an arm (or none, `on` false).
 #[derive(Clone, Copy, Debug, Default)]
@@ -171,6 +187,9 @@ pub struct LeanF32 {
     vertical_joints: usize,
     /// The compliant joints, bit i for joint i + 1 (the first eight).
     gravity_mask: u8,
+    /// The quarter turns of each joint's Rx(α), bits 2i and 2i + 1 for joint i + 1 (the
+    /// first eight).
+    alpha_quarters: u16,
 }
 
 /// cos and sin of a binary angle t (one turn = 2^32) split as q·π/2 + r, in f64: (q, sin r,
@@ -359,6 +378,9 @@ impl LeanForm<F32> for LeanF32 {
                 (jm.link, jm.link_rate)
             };
             let alpha = turn_of(euler[i][1])?;
+            if i < 8 {
+                out.alpha_quarters |= u16::from(alpha.q & 3) << (2 * i);
+            }
             let (ca, sa) = quarter_turns(alpha.q, (alpha.cos, alpha.sin));
             out.joints[i] = LeanJoint {
                 scale: jm.scale,
@@ -403,12 +425,15 @@ impl LeanForm<F32> for LeanF32 {
         // that neither is tested per joint; any other count, scale or compliant set with the
         // same code, looped or testing the joints' flags.
         match (counts.len(), self.pow2) {
-            (6, true) if self.gravity_mask == HINGES => {
-                self.run::<6, true, HINGES>(model, counts, temp_mc)
+            (6, true) if self.gravity_mask == HINGES && self.alpha_quarters == PERPENDICULAR => {
+                self.run::<6, true, HINGES, PERPENDICULAR>(model, counts, temp_mc)
             }
-            (6, true) => self.run::<6, true, RUNTIME>(model, counts, temp_mc),
-            (6, false) => self.run::<6, false, RUNTIME>(model, counts, temp_mc),
-            _ => self.run::<0, false, RUNTIME>(model, counts, temp_mc),
+            (6, true) if self.gravity_mask == HINGES => {
+                self.run::<6, true, HINGES, RUNTIME_ALPHA>(model, counts, temp_mc)
+            }
+            (6, true) => self.run::<6, true, RUNTIME, RUNTIME_ALPHA>(model, counts, temp_mc),
+            (6, false) => self.run::<6, false, RUNTIME, RUNTIME_ALPHA>(model, counts, temp_mc),
+            _ => self.run::<0, false, RUNTIME, RUNTIME_ALPHA>(model, counts, temp_mc),
         }
     }
 
@@ -468,9 +493,11 @@ macro_rules! each_joint {
 impl LeanF32 {
     /// [`LeanForm::eval`] for `JOINTS` joints (0: as many as `counts` has); `POW2`: every
     /// joint's scale is a power of two; `GRAVITY`: the compliant joints (bit i for joint i +
-    /// 1) where they are this set, [`RUNTIME`] to read each joint's flag.
+    /// 1) where they are this set, [`RUNTIME`] to read each joint's flag; `ALPHA`: the
+    /// quarter turns of the joints' Rx(α) (two bits a joint, [`LeanF32::alpha_quarters`])
+    /// where they are these, [`RUNTIME_ALPHA`] to multiply by the stored c₀ and s₀.
     #[inline(always)]
-    fn run<const JOINTS: usize, const POW2: bool, const GRAVITY: u8>(
+    fn run<const JOINTS: usize, const POW2: bool, const GRAVITY: u8, const ALPHA: u16>(
         &self,
         model: &Model<F32>,
         counts: &[u32],
@@ -571,7 +598,11 @@ impl LeanF32 {
             d = [p * cos - q * sin, p * sin + q * cos, d[2]];
             // Rx(α): the tip by a quarter turn and a correction (chosen at boot), the
             // direction plainly.
-            let (y, z) = j.alpha.turn((w[1], w[2]));
+            let (y, z) = if ALPHA == RUNTIME_ALPHA {
+                j.alpha.turn((w[1], w[2]))
+            } else {
+                j.alpha.turn_known(((ALPHA >> (2 * i)) & 3) as u8, (w[1], w[2]))
+            };
             w = [w[0], y, z];
             let [ca, sa] = j.alpha_whole;
             d = [d[0], ca * d[1] - sa * d[2], sa * d[1] + ca * d[2]];
@@ -620,12 +651,18 @@ mod tests {
             let counts: [u32; 6] =
                 core::array::from_fn(|j| (k * 77_773 + j as u32 * 191_111) % (1 << 20));
             let temp = 10_000 + 400 * k as i32;
-            let a = lean.run::<6, true, RUNTIME>(&model, &counts, temp).unwrap();
-            let b = lean.run::<6, false, RUNTIME>(&model, &counts, temp).unwrap();
-            let c = lean.run::<0, false, RUNTIME>(&model, &counts, temp).unwrap();
-            // The compliant set as a constant (the sample's are the hinges).
-            let v = lean.run::<6, true, HINGES>(&model, &counts, temp).unwrap();
+            let a = lean.run::<6, true, RUNTIME, RUNTIME_ALPHA>(&model, &counts, temp).unwrap();
+            let b = lean.run::<6, false, RUNTIME, RUNTIME_ALPHA>(&model, &counts, temp).unwrap();
+            let c = lean.run::<0, false, RUNTIME, RUNTIME_ALPHA>(&model, &counts, temp).unwrap();
+            // The compliant set as a constant (the sample's are the hinges), and the quarter
+            // turns of α as constants (the sample's own).
+            let v = lean.run::<6, true, HINGES, RUNTIME_ALPHA>(&model, &counts, temp).unwrap();
             assert_eq!(bits(&a), bits(&v), "{counts:?}");
+            let k = match lean.alpha_quarters {
+                PERPENDICULAR => lean.run::<6, true, HINGES, PERPENDICULAR>(&model, &counts, temp),
+                q => panic!("the sample's quarter turns {q:#b}: add their copy to the test"),
+            };
+            assert_eq!(bits(&a), bits(&k.unwrap()), "{counts:?}");
             assert_eq!(bits(&a), bits(&b), "{counts:?}");
             assert_eq!(bits(&a), bits(&c), "{counts:?}");
             let q = quat.eval_quaternion(&counts, temp).unwrap();
@@ -640,15 +677,15 @@ mod tests {
         counts[3] = 1 << 20;
         let want = Err(ChainError::CountOutOfRange { joint: 4 });
         assert_eq!(
-            lean.run::<6, true, RUNTIME>(&model, &counts, 20_000).map(|_| ()),
+            lean.run::<6, true, RUNTIME, RUNTIME_ALPHA>(&model, &counts, 20_000).map(|_| ()),
             want
         );
         assert_eq!(
-            lean.run::<6, false, RUNTIME>(&model, &counts, 20_000).map(|_| ()),
+            lean.run::<6, false, RUNTIME, RUNTIME_ALPHA>(&model, &counts, 20_000).map(|_| ()),
             want
         );
         assert_eq!(
-            lean.run::<0, false, RUNTIME>(&model, &counts, 20_000).map(|_| ()),
+            lean.run::<0, false, RUNTIME, RUNTIME_ALPHA>(&model, &counts, 20_000).map(|_| ()),
             want
         );
     }
