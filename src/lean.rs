@@ -601,7 +601,8 @@ impl LeanF32 {
             let (y, z) = if ALPHA == RUNTIME_ALPHA {
                 j.alpha.turn((w[1], w[2]))
             } else {
-                j.alpha.turn_known(((ALPHA >> (2 * i)) & 3) as u8, (w[1], w[2]))
+                j.alpha
+                    .turn_known(((ALPHA >> (2 * i)) & 3) as u8, (w[1], w[2]))
             };
             w = [w[0], y, z];
             let [ca, sa] = j.alpha_whole;
@@ -620,13 +621,14 @@ impl LeanF32 {
 mod tests {
     use super::*;
 
-    /// The three copies of the lean pass (six joints written out with power-of-two scales,
-    /// six written out with any scale, looped) give the same numbers bit for bit, and agree
+    /// The copies of the lean pass (six joints written out with power-of-two scales, with
+    /// the compliant set and then also the quarter turns of α constants, six written out
+    /// with any scale, looped) give the same numbers bit for bit, and agree
     /// with the quaternion chain to f32's rounding (under 1 µm, 2e-6 on the direction) — a
     /// joint without harmonics or thermal expansion (zeros stored, no flag) included; a count
     /// out of range is refused by each, naming its joint.
     #[test]
-    fn the_three_copies_agree() {
+    fn the_copies_agree() {
         use crate::chain::Chain;
         use crate::table::{tests::sample, FLAG_GEOMETRIC, MAX_TABLE_LEN};
         let mut data = sample();
@@ -651,12 +653,20 @@ mod tests {
             let counts: [u32; 6] =
                 core::array::from_fn(|j| (k * 77_773 + j as u32 * 191_111) % (1 << 20));
             let temp = 10_000 + 400 * k as i32;
-            let a = lean.run::<6, true, RUNTIME, RUNTIME_ALPHA>(&model, &counts, temp).unwrap();
-            let b = lean.run::<6, false, RUNTIME, RUNTIME_ALPHA>(&model, &counts, temp).unwrap();
-            let c = lean.run::<0, false, RUNTIME, RUNTIME_ALPHA>(&model, &counts, temp).unwrap();
+            let a = lean
+                .run::<6, true, RUNTIME, RUNTIME_ALPHA>(&model, &counts, temp)
+                .unwrap();
+            let b = lean
+                .run::<6, false, RUNTIME, RUNTIME_ALPHA>(&model, &counts, temp)
+                .unwrap();
+            let c = lean
+                .run::<0, false, RUNTIME, RUNTIME_ALPHA>(&model, &counts, temp)
+                .unwrap();
             // The compliant set as a constant (the sample's are the hinges), and the quarter
             // turns of α as constants (the sample's own).
-            let v = lean.run::<6, true, HINGES, RUNTIME_ALPHA>(&model, &counts, temp).unwrap();
+            let v = lean
+                .run::<6, true, HINGES, RUNTIME_ALPHA>(&model, &counts, temp)
+                .unwrap();
             assert_eq!(bits(&a), bits(&v), "{counts:?}");
             let k = match lean.alpha_quarters {
                 PERPENDICULAR => lean.run::<6, true, HINGES, PERPENDICULAR>(&model, &counts, temp),
@@ -677,15 +687,23 @@ mod tests {
         counts[3] = 1 << 20;
         let want = Err(ChainError::CountOutOfRange { joint: 4 });
         assert_eq!(
-            lean.run::<6, true, RUNTIME, RUNTIME_ALPHA>(&model, &counts, 20_000).map(|_| ()),
+            lean.run::<6, true, RUNTIME, RUNTIME_ALPHA>(&model, &counts, 20_000)
+                .map(|_| ()),
             want
         );
         assert_eq!(
-            lean.run::<6, false, RUNTIME, RUNTIME_ALPHA>(&model, &counts, 20_000).map(|_| ()),
+            lean.run::<6, false, RUNTIME, RUNTIME_ALPHA>(&model, &counts, 20_000)
+                .map(|_| ()),
             want
         );
         assert_eq!(
-            lean.run::<0, false, RUNTIME, RUNTIME_ALPHA>(&model, &counts, 20_000).map(|_| ()),
+            lean.run::<0, false, RUNTIME, RUNTIME_ALPHA>(&model, &counts, 20_000)
+                .map(|_| ()),
+            want
+        );
+        assert_eq!(
+            lean.run::<6, true, HINGES, PERPENDICULAR>(&model, &counts, 20_000)
+                .map(|_| ()),
             want
         );
     }
