@@ -492,10 +492,11 @@ macro_rules! each_joint {
 
 impl LeanF32 {
     /// [`LeanForm::eval`] for `JOINTS` joints (0: as many as `counts` has); `POW2`: every
-    /// joint's scale is a power of two; `GRAVITY`: the compliant joints (bit i for joint i +
-    /// 1) where they are this set, [`RUNTIME`] to read each joint's flag; `ALPHA`: the
-    /// quarter turns of the joints' Rx(α) (two bits a joint, [`LeanF32::alpha_quarters`])
-    /// where they are these, [`RUNTIME_ALPHA`] to multiply by the stored c₀ and s₀.
+    /// joint's scale is a power of two; `GRAVITY`: the compliant joints where they are this
+    /// set (bit i for the joint numbered i + 1), [`RUNTIME`] to read each joint's flag;
+    /// `ALPHA`: the quarter turns of the joints' Rx(α) (two bits a joint,
+    /// [`LeanF32::alpha_quarters`]) where they are these, [`RUNTIME_ALPHA`] to multiply by
+    /// the stored c₀ and s₀.
     #[inline(always)]
     fn run<const JOINTS: usize, const POW2: bool, const GRAVITY: u8, const ALPHA: u16>(
         &self,
