@@ -98,12 +98,75 @@ struct LeanJoint {
     rate: [f32; 3],
     gravity: f32,
     has_gravity: bool,
-    /// Rx(α_i), as a quarter turn and a correction (the tip's turn).
-    alpha: Turn,
+    /// Rx(α_i) for the tip, as an exact quarter turn and a correction with the quarter turn's
+    /// selection made at boot ([`QuarterTurned`]).
+    alpha: QuarterTurned,
     /// cos α_i and sin α_i whole, the quarter turns applied at boot (exact): the plain turns
     /// of the direction and the vertical, which need no quarter-turn selection per point.
     alpha_whole: [f32; 2],
 }
+
+/// A turn by a constant angle q·π/2 + r (|r| ≤ π/4) of a pair (p, q) of coordinates, with the
+/// quarter turn chosen at boot instead of selected each point: (c₀, s₀) the quarter turn's
+/// cosine and sine (0 or ±1), A = −(s₀ sin r + c₀ (1 − cos r)) and B = s₀ (1 − cos r) − c₀ sin
+/// r, each exactly ±sin r or ±(1 − cos r) since one of c₀, s₀ is 0. Then
+///
+/// p' = ((A p + B q) + c₀ p) − s₀ q,   q' = ((A q − B p) + s₀ p) + c₀ q:
+///
+/// the first sum is the remainder's correction (the same two rounded products as the selected
+/// form's), the products by c₀ and s₀ are exact, one of them ±0, so the result is the quarter
+/// turned coordinate plus the correction rounded once — the numbers of the form that selects
+/// the quarter turn, bit for bit, in four multiply–adds a coordinate and no branch.
+#[derive(Clone, Copy, Debug, Default)]
+struct QuarterTurned {
+    a: f32,
+    b: f32,
+    c0: f32,
+    s0: f32,
+}
+
+impl QuarterTurned {
+    fn of(t: &Turn) -> QuarterTurned {
+        let (c0, s0) = quarter_turns(t.q, (1.0f32, 0.0));
+        QuarterTurned {
+            a: -(s0 * t.sin + c0 * t.omc),
+            b: s0 * t.omc - c0 * t.sin,
+            c0,
+            s0,
+        }
+    }
+
+    /// (p, q) turned where the quarter turns `quarters` are known to the compiler: the exact
+    /// quarter-turned coordinate added to the correction, without the products by c₀ and s₀
+    /// (the same numbers as [`QuarterTurned::turn`], less a sum with ±0).
+    #[inline(always)]
+    fn turn_known(&self, quarters: u8, (p, q): (f32, f32)) -> (f32, f32) {
+        let k = self;
+        let (bp, bq) = quarter_turns(quarters, (p, q));
+        (k.a * p + k.b * q + bp, k.a * q - k.b * p + bq)
+    }
+
+    /// (p, q) turned.
+    #[inline(always)]
+    fn turn(&self, (p, q): (f32, f32)) -> (f32, f32) {
+        let k = self;
+        (
+            k.a * p + k.b * q + k.c0 * p - k.s0 * q,
+            k.a * q - k.b * p + k.s0 * p + k.c0 * q,
+        )
+    }
+}
+
+/// [`LeanF32::run`]'s compliant joints read from each joint's flag.
+const RUNTIME: u8 = u8::MAX;
+/// The compliant joints of a six-axis arm with gravity on its hinges (joints 2, 4 and 6).
+const HINGES: u8 = 0b10_1010;
+/// [`LeanF32::run`]'s quarter turns of Rx(α) multiplied in from each joint's constants.
+const RUNTIME_ALPHA: u16 = u16::MAX;
+/// The six-axis arm's geometry: joint 1's axis along the base's (α₁ within π/4 of 0, no
+/// quarter turn), each next axis perpendicular to the one before (α within π/4 of π/2, one
+/// quarter turn).
+const PERPENDICULAR: u16 = 0b01_01_01_01_01_00;
 
 /// The lean f32 chain of an arm (or none, `on` false).
 #[derive(Clone, Copy, Debug, Default)]
@@ -114,12 +177,19 @@ pub struct LeanF32 {
     /// one multiply ([`LeanJoint::unit`]).
     pow2: bool,
     joints: [LeanJoint; MAX_JOINTS],
-    /// Rz(a_1), applied last.
-    base: Turn,
+    /// Rz(a_1), applied last: the tip's turn with its quarter turn chosen at boot, and cos a_1,
+    /// sin a_1 whole for the direction.
+    base: QuarterTurned,
+    base_whole: [f32; 2],
     probe_dir: [f32; 3],
     /// Joints from the base up to the last compliant one: those the first pass turns the
     /// vertical through.
     vertical_joints: usize,
+    /// The compliant joints, bit i for joint i + 1 (the first eight).
+    gravity_mask: u8,
+    /// The quarter turns of each joint's Rx(α), bits 2i and 2i + 1 for joint i + 1 (the
+    /// first eight).
+    alpha_quarters: u16,
 }
 
 /// cos and sin of a binary angle t (one turn = 2^32) split as q·π/2 + r, in f64: (q, sin r,
@@ -261,7 +331,10 @@ impl LeanForm<F32> for LeanF32 {
             *e = euler_zxz(&crate::model::z_frame_matrix(j.matrix, prev, j.axis));
             prev = j.axis;
         }
-        out.base = turn_of(euler[0][0])?;
+        let base = turn_of(euler[0][0])?;
+        out.base = QuarterTurned::of(&base);
+        let (cb, sb) = quarter_turns(base.q, (base.cos, base.sin));
+        out.base_whole = [cb, sb];
         for i in 0..n {
             let no = i + 1;
             let j = table
@@ -305,6 +378,9 @@ impl LeanForm<F32> for LeanF32 {
                 (jm.link, jm.link_rate)
             };
             let alpha = turn_of(euler[i][1])?;
+            if i < 8 {
+                out.alpha_quarters |= u16::from(alpha.q & 3) << (2 * i);
+            }
             let (ca, sa) = quarter_turns(alpha.q, (alpha.cos, alpha.sin));
             out.joints[i] = LeanJoint {
                 scale: jm.scale,
@@ -315,11 +391,14 @@ impl LeanForm<F32> for LeanF32 {
                 rate,
                 gravity: jm.gravity,
                 has_gravity: jm.has_gravity,
-                alpha,
+                alpha: QuarterTurned::of(&alpha),
                 alpha_whole: [ca, sa],
             };
             if jm.has_gravity {
                 out.vertical_joints = i + 1;
+                if i < 8 {
+                    out.gravity_mask |= 1 << i;
+                }
             }
         }
         out.probe_dir = model.probe_dir;
@@ -341,11 +420,20 @@ impl LeanForm<F32> for LeanF32 {
     ) -> Result<Point<F32>, ChainError> {
         // Six joints (the hubs' arms) with the joint count a constant, so that the compiler
         // unrolls both passes, the power-of-two scales (the usual encoders) without a test
-        // per joint; any other count or scale with the same code, looped.
+        // per joint, and for gravity on the hinges 2, 4 and 6 (the six-axis arm's compliant
+        // joints) the compliant joints and the vertical's reach known to the compiler, so
+        // that neither is tested per joint; any other count, scale or compliant set with the
+        // same code, looped or testing the joints' flags.
         match (counts.len(), self.pow2) {
-            (6, true) => self.run::<6, true>(model, counts, temp_mc),
-            (6, false) => self.run::<6, false>(model, counts, temp_mc),
-            _ => self.run::<0, false>(model, counts, temp_mc),
+            (6, true) if self.gravity_mask == HINGES && self.alpha_quarters == PERPENDICULAR => {
+                self.run::<6, true, HINGES, PERPENDICULAR>(model, counts, temp_mc)
+            }
+            (6, true) if self.gravity_mask == HINGES => {
+                self.run::<6, true, HINGES, RUNTIME_ALPHA>(model, counts, temp_mc)
+            }
+            (6, true) => self.run::<6, true, RUNTIME, RUNTIME_ALPHA>(model, counts, temp_mc),
+            (6, false) => self.run::<6, false, RUNTIME, RUNTIME_ALPHA>(model, counts, temp_mc),
+            _ => self.run::<0, false, RUNTIME, RUNTIME_ALPHA>(model, counts, temp_mc),
         }
     }
 
@@ -404,9 +492,13 @@ macro_rules! each_joint {
 
 impl LeanF32 {
     /// [`LeanForm::eval`] for `JOINTS` joints (0: as many as `counts` has); `POW2`: every
-    /// joint's scale is a power of two.
+    /// joint's scale is a power of two; `GRAVITY`: the compliant joints where they are this
+    /// set (bit i for the joint numbered i + 1), [`RUNTIME`] to read each joint's flag;
+    /// `ALPHA`: the quarter turns of the joints' Rx(α) (two bits a joint,
+    /// [`LeanF32::alpha_quarters`]) where they are these, [`RUNTIME_ALPHA`] to multiply by
+    /// the stored c₀ and s₀.
     #[inline(always)]
-    fn run<const JOINTS: usize, const POW2: bool>(
+    fn run<const JOINTS: usize, const POW2: bool, const GRAVITY: u8, const ALPHA: u16>(
         &self,
         model: &Model<F32>,
         counts: &[u32],
@@ -441,7 +533,12 @@ impl LeanF32 {
                 omc,
                 e,
             });
-            if i < self.vertical_joints {
+            let vertical = if GRAVITY == RUNTIME {
+                i < self.vertical_joints
+            } else {
+                i < (8 - GRAVITY.leading_zeros()) as usize
+            };
+            if vertical {
                 // Rx(−α), then Rz(−θ' − e) with e to first order.
                 let [ca, sa] = j.alpha_whole;
                 let (x, y, z) = if i == 0 {
@@ -478,7 +575,12 @@ impl LeanF32 {
                 [w[0] + link[0], w[1] + link[1], w[2] + link[2]]
             };
             let mut e = a.e;
-            if j.has_gravity {
+            let compliant = if GRAVITY == RUNTIME {
+                j.has_gravity
+            } else {
+                GRAVITY & (1 << i) != 0
+            };
+            if compliant {
                 // SAFETY: the first pass wrote the vertical of every joint up to the last
                 // compliant one.
                 let v = unsafe { verticals[i].assume_init_read() };
@@ -495,27 +597,23 @@ impl LeanF32 {
             w = [p - (q * sin + p * omc), q + (p * sin - q * omc), w[2]];
             let (p, q) = quarter_turns(a.q, (d[0], d[1]));
             d = [p * cos - q * sin, p * sin + q * cos, d[2]];
-            // Rx(α): the tip by a quarter turn and a correction, the direction plainly.
-            let al = &j.alpha;
-            let (p, q) = quarter_turns(al.q, (w[1], w[2]));
-            w = [
-                w[0],
-                p - (q * al.sin + p * al.omc),
-                q + (p * al.sin - q * al.omc),
-            ];
+            // Rx(α): the tip by a quarter turn and a correction (chosen at boot), the
+            // direction plainly.
+            let (y, z) = if ALPHA == RUNTIME_ALPHA {
+                j.alpha.turn((w[1], w[2]))
+            } else {
+                j.alpha
+                    .turn_known(((ALPHA >> (2 * i)) & 3) as u8, (w[1], w[2]))
+            };
+            w = [w[0], y, z];
             let [ca, sa] = j.alpha_whole;
             d = [d[0], ca * d[1] - sa * d[2], sa * d[1] + ca * d[2]];
         });
         // Rz(a_1).
-        let b = &self.base;
-        let (p, q) = quarter_turns(b.q, (w[0], w[1]));
-        w = [
-            p - (q * b.sin + p * b.omc),
-            q + (p * b.sin - q * b.omc),
-            w[2],
-        ];
-        let (p, q) = quarter_turns(b.q, (d[0], d[1]));
-        d = [p * b.cos - q * b.sin, p * b.sin + q * b.cos, d[2]];
+        let (x, y) = self.base.turn((w[0], w[1]));
+        w = [x, y, w[2]];
+        let [cb, sb] = self.base_whole;
+        d = [cb * d[0] - sb * d[1], sb * d[0] + cb * d[1], d[2]];
         Ok(Point { xyz: w, dir: d })
     }
 }
@@ -524,13 +622,14 @@ impl LeanF32 {
 mod tests {
     use super::*;
 
-    /// The three copies of the lean pass (six joints written out with power-of-two scales,
-    /// six written out with any scale, looped) give the same numbers bit for bit, and agree
+    /// The copies of the lean pass (six joints written out with power-of-two scales, with
+    /// the compliant set and then also the quarter turns of α constants, six written out
+    /// with any scale, looped) give the same numbers bit for bit, and agree
     /// with the quaternion chain to f32's rounding (under 1 µm, 2e-6 on the direction) — a
     /// joint without harmonics or thermal expansion (zeros stored, no flag) included; a count
     /// out of range is refused by each, naming its joint.
     #[test]
-    fn the_three_copies_agree() {
+    fn the_copies_agree() {
         use crate::chain::Chain;
         use crate::table::{tests::sample, FLAG_GEOMETRIC, MAX_TABLE_LEN};
         let mut data = sample();
@@ -548,15 +647,33 @@ mod tests {
         let model = Model::<F32>::new(&table).unwrap();
         let lean = LeanF32::build(&table, &model, true).unwrap();
         assert!(lean.on && lean.pow2);
+        assert_eq!(lean.gravity_mask, HINGES);
         let quat = Chain::<F32>::new(&table).unwrap();
         let bits = |p: &Point<F32>| (p.xyz.map(f32::to_bits), p.dir.map(f32::to_bits));
         for k in 0..60u32 {
             let counts: [u32; 6] =
                 core::array::from_fn(|j| (k * 77_773 + j as u32 * 191_111) % (1 << 20));
             let temp = 10_000 + 400 * k as i32;
-            let a = lean.run::<6, true>(&model, &counts, temp).unwrap();
-            let b = lean.run::<6, false>(&model, &counts, temp).unwrap();
-            let c = lean.run::<0, false>(&model, &counts, temp).unwrap();
+            let a = lean
+                .run::<6, true, RUNTIME, RUNTIME_ALPHA>(&model, &counts, temp)
+                .unwrap();
+            let b = lean
+                .run::<6, false, RUNTIME, RUNTIME_ALPHA>(&model, &counts, temp)
+                .unwrap();
+            let c = lean
+                .run::<0, false, RUNTIME, RUNTIME_ALPHA>(&model, &counts, temp)
+                .unwrap();
+            // The compliant set as a constant (the sample's are the hinges), and the quarter
+            // turns of α as constants (the sample's own).
+            let v = lean
+                .run::<6, true, HINGES, RUNTIME_ALPHA>(&model, &counts, temp)
+                .unwrap();
+            assert_eq!(bits(&a), bits(&v), "{counts:?}");
+            let k = match lean.alpha_quarters {
+                PERPENDICULAR => lean.run::<6, true, HINGES, PERPENDICULAR>(&model, &counts, temp),
+                q => panic!("the sample's quarter turns {q:#b}: add their copy to the test"),
+            };
+            assert_eq!(bits(&a), bits(&k.unwrap()), "{counts:?}");
             assert_eq!(bits(&a), bits(&b), "{counts:?}");
             assert_eq!(bits(&a), bits(&c), "{counts:?}");
             let q = quat.eval_quaternion(&counts, temp).unwrap();
@@ -571,15 +688,23 @@ mod tests {
         counts[3] = 1 << 20;
         let want = Err(ChainError::CountOutOfRange { joint: 4 });
         assert_eq!(
-            lean.run::<6, true>(&model, &counts, 20_000).map(|_| ()),
+            lean.run::<6, true, RUNTIME, RUNTIME_ALPHA>(&model, &counts, 20_000)
+                .map(|_| ()),
             want
         );
         assert_eq!(
-            lean.run::<6, false>(&model, &counts, 20_000).map(|_| ()),
+            lean.run::<6, false, RUNTIME, RUNTIME_ALPHA>(&model, &counts, 20_000)
+                .map(|_| ()),
             want
         );
         assert_eq!(
-            lean.run::<0, false>(&model, &counts, 20_000).map(|_| ()),
+            lean.run::<0, false, RUNTIME, RUNTIME_ALPHA>(&model, &counts, 20_000)
+                .map(|_| ()),
+            want
+        );
+        assert_eq!(
+            lean.run::<6, true, HINGES, PERPENDICULAR>(&model, &counts, 20_000)
+                .map(|_| ()),
             want
         );
     }

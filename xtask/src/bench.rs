@@ -413,8 +413,8 @@ pub fn run(only: Option<&str>, calib: Option<&std::path::Path>) -> Result<()> {
     println!(
         "(the product's lean form's counted floor for this arm, from src/lean.rs (xtask/src/floor.rs), \
          one instruction an operation, no fused multiply-add: {} floating-point, {} loads and \
-         stores, {} integer: {} in all, before any quarter-turn selection (4 a joint), register \
-         move or flag test)",
+         stores, {} integer: {} in all, before the quarter-turn selections (2 a joint: the first \
+         pass's quadrant, the second pass's Rz), register moves or flag tests)",
         f.fp,
         f.memory,
         f.integer,
