@@ -352,7 +352,9 @@ fn pose_for(
     let w = nalgebra::DMatrix::from_fn(p, r, |i, j| q[(i, j)] * (0.3 + 0.6 * j as f64 / r as f64));
     let d = s * w;
     quatarm_ref::uncertainty::PoseLeverage {
-        factor: (0..r).map(|j| d.column(j).iter().copied().collect()).collect(),
+        factor: (0..r)
+            .map(|j| d.column(j).iter().copied().collect())
+            .collect(),
         shrink,
         leverage_mean: mean,
     }

@@ -1140,7 +1140,9 @@ impl<'a> Table<'a> {
     /// The calibration's parameter covariance, where the table has it (never without the
     /// `parameters` feature, which refuses a table with the block).
     pub fn parameters(&self) -> Option<parameters::Parameters<'a>> {
-        if self.flags() & FLAG_PARAMETERS == 0 {
+        // Without the feature a table with the block was refused: nothing to read (and no
+        // code for it in the 32 KiB image).
+        if !cfg!(feature = "parameters") || self.flags() & FLAG_PARAMETERS == 0 {
             return None;
         }
         let at = core_len(self.joint_count()) + budget::LEN;

@@ -272,7 +272,11 @@ pub(crate) mod tests {
         let (good, n) = encoded();
         let f = |x: f32| x.to_le_bytes();
         let cases: [(&str, usize, [u8; 4]); 9] = [
-            ("r = 0 (its length then disagrees, or is refused)", AT, [0, 0, 0, 0]),
+            (
+                "r = 0 (its length then disagrees, or is refused)",
+                AT,
+                [0, 0, 0, 0],
+            ),
             ("reserved", AT + 2, [1, 0, 0, 0]),
             ("negative shrink", AT + 4, f(-0.5)),
             ("NaN shrink", AT + 4, f(f32::NAN)),
@@ -341,6 +345,17 @@ pub(crate) mod tests {
             };
             assert!(block.block_len().is_none(), "r = {count}");
         }
+    }
+
+    /// The fuzz corpus's seed with a pose part (the shipped 52-parameter budget, a
+    /// version-3 table, r = 3) is a table the parser takes, its part read back.
+    #[test]
+    fn the_fuzz_seed_with_a_pose_part_is_a_table() {
+        let seed = include_bytes!("../../fuzz/corpus/table_parse/seed-default-6-full-pose.bin");
+        let t = Table::parse(seed).unwrap();
+        let pose = t.parameters().unwrap().pose().unwrap();
+        assert_eq!((t.parameters().unwrap().count(), pose.count()), (52, 3));
+        assert_eq!((pose.shrink(), pose.leverage_mean()), (0.2, 1e-6));
     }
 
     proptest::proptest! {

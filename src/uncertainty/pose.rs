@@ -57,7 +57,10 @@ impl<'a> PosePart<'a> {
 
     /// The leverage ratio ℓ of a reading whose G = J C Jᵀ is `g` and E = J D is `e` (nm).
     pub fn leverage(&self, g: &Covariance, e: &[[f32; 3]]) -> f32 {
-        let norm: f32 = e.iter().map(|x| x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sum();
+        let norm: f32 = e
+            .iter()
+            .map(|x| x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
+            .sum();
         (g.0[0] + g.0[1] + g.0[2] - norm) * self.keep * self.inverse_mean
     }
 

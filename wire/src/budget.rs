@@ -324,7 +324,9 @@ mod tests {
         ];
         let mut budget = Uncertainty {
             parameters: keys,
-            covariance: (0..36).map(|k| if k % 7 == 0 { 1e-10 } else { 0.0 }).collect(),
+            covariance: (0..36)
+                .map(|k| if k % 7 == 0 { 1e-10 } else { 0.0 })
+                .collect(),
             encoder_counts: vec![0.3; 6],
             probing_mm: 0.002,
             temperature_c: 0.2,
@@ -368,8 +370,14 @@ mod tests {
         };
         for (msg, key) in [
             (bad(&|p| p.factor.clear()), "pose_factor: 0 columns"),
-            (bad(&|p| p.factor = vec![vec![0.0; 6]; 17]), "pose_factor: 17 columns"),
-            (bad(&|p| p.factor[1].pop().map(drop).unwrap()), "pose_factor[1]: 5 values"),
+            (
+                bad(&|p| p.factor = vec![vec![0.0; 6]; 17]),
+                "pose_factor: 17 columns",
+            ),
+            (
+                bad(&|p| p.factor[1].pop().map(drop).unwrap()),
+                "pose_factor[1]: 5 values",
+            ),
             (bad(&|p| p.factor[0][3] = f64::NAN), "pose_factor[0][3]"),
             (bad(&|p| p.shrink = -0.1), "pose_shrink"),
             (bad(&|p| p.leverage_mean = 0.0), "pose_leverage_mean"),
