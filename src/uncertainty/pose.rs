@@ -71,7 +71,7 @@ impl<'a> PosePart<'a> {
         let e = self.product(d, &mut e);
         let f = self.leverage(g, e) - 1.0;
         // ℓ ≤ 1 (or a NaN, which a validated table cannot give): J C Jᵀ as it is.
-        if !(f > 0.0) {
+        if f.is_nan() || f <= 0.0 {
             return;
         }
         let scale = 1.0 + f * self.shrink;
