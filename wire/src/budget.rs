@@ -344,9 +344,9 @@ mod tests {
             (pose.count(), pose.shrink(), pose.leverage_mean()),
             (2, 0.4, 3e-6)
         );
-        for i in 0..6 {
-            for j in 0..2 {
-                assert_eq!(pose.entry(i, j), Some(factor[j][i] as f32));
+        for (j, column) in factor.iter().enumerate() {
+            for (i, x) in column.iter().enumerate() {
+                assert_eq!(pose.entry(i, j), Some(*x as f32));
             }
         }
         let without = Uncertainty {
