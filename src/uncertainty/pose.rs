@@ -313,3 +313,40 @@ mod tests {
         }
     }
 }
+
+/// The Pico's profile (`fixed-u95`) does not take the pose part: a table with it is refused by
+/// the parameter block's flag (here, where `cargo xtask test` runs the profile's tests).
+#[cfg(all(test, feature = "fixed-u95"))]
+mod refused {
+    use crate::table::budget::BudgetData;
+    use crate::table::parameters::{Column, Kind, ParameterData};
+    use crate::table::pose::PoseData;
+    use crate::table::tests::sample;
+    use crate::table::{Field, Table, TableError, MAX_TABLE_LEN};
+
+    #[test]
+    fn the_fixed_point_profile_refuses_the_pose_part_by_its_flag() {
+        let columns = [Column::new(Kind::Turn, 1)];
+        let block = ParameterData {
+            columns: &columns,
+            factor: &[1e-5],
+            pose: Some(PoseData {
+                factor: &[2e-6],
+                count: 1,
+                shrink: 0.0,
+                leverage_mean: 1e-6,
+            }),
+        };
+        let mut buf = [0u8; MAX_TABLE_LEN];
+        let n = sample()
+            .encode_full(Some(&BudgetData::default()), Some(&block), &mut buf)
+            .unwrap();
+        assert_eq!(
+            Table::parse(&buf[..n]).unwrap_err(),
+            TableError::Invalid {
+                joint: 0,
+                field: Field::Flags
+            }
+        );
+    }
+}
