@@ -326,3 +326,190 @@ fn geometry_keys(j: usize) -> [quatarm_ref::uncertainty::Param; 6] {
         Param::LinkError(j, 2),
     ]
 }
+
+/// A pose part for the budget `u` (issue 27, `quatarm_ref::uncertainty::PoseLeverage`): D =
+/// S W with C = S Sᵀ and W's r columns orthogonal, of norms 0.3 to 0.9 (so that C − D Dᵀ
+/// stays positive semidefinite, as the host's estimate makes it), b from `shrink`, and m
+/// `mean`; seeded.
+fn pose_for(
+    u: &quatarm_ref::uncertainty::Uncertainty,
+    r: usize,
+    shrink: f64,
+    mean: f64,
+    seed: u64,
+) -> quatarm_ref::uncertainty::PoseLeverage {
+    let p = u.parameters.len();
+    let c = u.matrix();
+    let eig = ((&c + c.transpose()) * 0.5).symmetric_eigen();
+    let mut s = eig.eigenvectors.clone();
+    for (k, lambda) in eig.eigenvalues.iter().enumerate() {
+        s.column_mut(k).scale_mut(lambda.max(0.0).sqrt());
+    }
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let q = nalgebra::DMatrix::from_fn(p, r, |_, _| rng.gen_range(-1.0..1.0))
+        .qr()
+        .q();
+    let w = nalgebra::DMatrix::from_fn(p, r, |i, j| q[(i, j)] * (0.3 + 0.6 * j as f64 / r as f64));
+    let d = s * w;
+    quatarm_ref::uncertainty::PoseLeverage {
+        factor: (0..r)
+            .map(|j| d.column(j).iter().copied().collect())
+            .collect(),
+        shrink,
+        leverage_mean: mean,
+    }
+}
+
+/// What the hub is compared with: the reading's Σ_p from the formula of
+/// `quatarm_ref::uncertainty::PoseLeverage`, written here in f64 from the host's analytic
+/// Jacobian J over the budget's parameters: own terms + J C Jᵀ + (max(1, ℓ) − 1) J P Jᵀ,
+/// P = D Dᵀ + b C_fit, C_fit = (C − D Dᵀ)/(1 + b), ℓ = tr(J C_fit Jᵀ)/m. Returns Σ_p (mm²),
+/// ℓ, and Σ_p without the pose part (the plain J C Jᵀ).
+fn host_with_pose(
+    arm: &quatarm_ref::Arm,
+    u: &quatarm_ref::uncertainty::Uncertainty,
+    theta: &[f64],
+    temp_c: f64,
+) -> (Matrix3<f64>, f64, Matrix3<f64>) {
+    use armcal::uncertainty::{propagate, Budget};
+    let pose = u.pose.as_ref().expect("a budget with a pose part");
+    let host = Budget::from_file(u);
+    let jac = propagate::jacobians(arm, 0, &host, theta, temp_c);
+    let own = propagate::own_terms(&host, &host.sigma_theta(arm), &jac);
+    let p = u.parameters.len();
+    let j = nalgebra::DMatrix::from_fn(3, p, |a, i| jac.pi[i][a]);
+    let c = u.matrix();
+    let d = nalgebra::DMatrix::from_fn(p, pose.factor.len(), |i, k| pose.factor[k][i]);
+    let ddt = &d * d.transpose();
+    let c_fit = (&c - &ddt) / (1.0 + pose.shrink);
+    let pp = &ddt + &c_fit * pose.shrink;
+    let sandwich = |m: &nalgebra::DMatrix<f64>| -> Matrix3<f64> {
+        let s = &j * m * j.transpose();
+        Matrix3::from_fn(|a, b| s[(a, b)])
+    };
+    let leverage = sandwich(&c_fit).trace() / pose.leverage_mean;
+    let plain = own + sandwich(&c);
+    (
+        plain + sandwich(&pp) * (leverage.max(1.0) - 1.0),
+        leverage,
+        plain,
+    )
+}
+
+/// The hub's U95 with the budget's pose part (issue 27) against [`host_with_pose`] at 200
+/// random readings, with the f32 and the fixed-point chains' frames: returns the worst
+/// relative error, the leverages seen (smallest, largest) and the largest change the part
+/// makes to the host's U95. `None` where the hub's build does not take the part (the Pico's
+/// profile, `--features quatarm/fixed-u95`: the table is refused by the block's flag).
+fn hub_against_pose_formula(
+    arm: &quatarm_ref::Arm,
+    u: &quatarm_ref::uncertainty::Uncertainty,
+    seed: u64,
+) -> Option<(f64, (f64, f64), f64)> {
+    use quatarm::uncertainty::Uncertainty;
+    use quatarm::{Fixed, F32};
+    let bytes = match armcal::tablebuild::build_with(arm, Some(u)) {
+        Ok(b) => b,
+        Err(e) if e.to_string().contains("invalid flags") => {
+            println!("this build refuses the pose part by its flag: {e}");
+            return None;
+        }
+        Err(e) => panic!("{e}"),
+    };
+    let table = quatarm::Table::parse(&bytes).unwrap();
+    let r = u.pose.as_ref().unwrap().factor.len();
+    assert_eq!(
+        table.parameters().unwrap().pose().map(|p| p.count()),
+        Some(r)
+    );
+    let h32 = Uncertainty::<F32>::new(&table).unwrap().unwrap();
+    let hfx = Uncertainty::<Fixed>::new(&table).unwrap().unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let (mut worst, mut lev, mut change) = (0.0f64, (f64::INFINITY, 0.0f64), 0.0f64);
+    for _ in 0..200 {
+        let counts: Vec<u32> = arm
+            .joints
+            .iter()
+            .map(|j| rng.gen_range(0..j.encoder_counts))
+            .collect();
+        let temp_mc: i32 = rng.gen_range(16_000..28_000);
+        let (theta, t) = (arm.counts_to_rad(&counts), f64::from(temp_mc) / 1000.0);
+        let (s, l, plain) = host_with_pose(arm, u, &theta, t);
+        lev = (lev.0.min(l), lev.1.max(l));
+        let want_nm = u95(&s) * 1e6;
+        change = change.max(want_nm / (u95(&plain) * 1e6) - 1.0);
+        for got in [
+            h32.covariance(&counts, temp_mc).unwrap().u95_nm(),
+            hfx.covariance(&counts, temp_mc).unwrap().u95_nm(),
+        ] {
+            worst = worst.max((f64::from(got) / want_nm - 1.0).abs());
+        }
+    }
+    Some((worst, lev, change))
+}
+
+/// The mean of tr(J C_fit Jᵀ) (mm²) over 50 random readings of `arm` for the budget `u` with
+/// its pose part: the scale that puts the readings' leverage about 1.
+fn mean_fit_trace(arm: &quatarm_ref::Arm, u: &quatarm_ref::uncertainty::Uncertainty) -> f64 {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(99);
+    let mut sum = 0.0;
+    for _ in 0..50 {
+        let counts: Vec<u32> = arm
+            .joints
+            .iter()
+            .map(|j| rng.gen_range(0..j.encoder_counts))
+            .collect();
+        let (_, l, _) = host_with_pose(arm, u, &arm.counts_to_rad(&counts), 20.0);
+        sum += l * u.pose.as_ref().unwrap().leverage_mean;
+    }
+    sum / 50.0
+}
+
+/// Issue 27: the hub streams the same U95 as the host's formula for the same table, within
+/// 0.1 %, with the budget's pose part: the shipped 52-parameter budget with r = 1, 8 and 16
+/// columns of D, b = 0 and b > 0, m at the readings' mean (ℓ on both sides of 1) and at a
+/// twentieth of it (ℓ ≫ 1). The part must widen U95 (by 2–100 % here) for the test to test it.
+#[test]
+fn hub_u95_with_the_pose_part_agrees_with_the_formula() {
+    let full = quatarm_ref::calfile::parse(include_str!("../../data/default-6-full.toml")).unwrap();
+    let shipped = full.uncertainty.clone().unwrap();
+    let mut cases = Vec::new();
+    for (r, shrink, seed) in [(1usize, 0.0, 41u64), (8, 0.5, 42), (16, 0.2, 43)] {
+        let mut u = shipped.clone();
+        u.pose = Some(pose_for(&u, r, shrink, 1.0, seed));
+        let mean = mean_fit_trace(&full.arm, &u);
+        for (what, m) in [("m the mean", mean), ("m a twentieth", mean / 20.0)] {
+            u.pose.as_mut().unwrap().leverage_mean = m;
+            cases.push((
+                format!("default-6-full, 52 parameters, r = {r}, b = {shrink}, {what}"),
+                full.arm.clone(),
+                u.clone(),
+            ));
+        }
+    }
+    let seen = cases.len();
+    let (mut extremes, mut widest) = ((f64::INFINITY, 0.0f64), 0.0f64);
+    for (k, (what, arm, u)) in cases.into_iter().enumerate() {
+        let Some((worst, (lo, hi), change)) = hub_against_pose_formula(&arm, &u, 60 + k as u64)
+        else {
+            return;
+        };
+        println!(
+            "{what}: worst hub U95 error {worst:.2e}, ℓ from {lo:.2} to {hi:.1}, the part widens \
+             U95 by up to {:.1} %",
+            100.0 * change
+        );
+        extremes = (extremes.0.min(lo), extremes.1.max(hi));
+        widest = widest.max(change);
+        assert!(worst < 1e-3, "{what}: {worst}");
+    }
+    assert_eq!(seen, 6);
+    assert!(widest > 0.3, "the part hardly widens U95: {widest}");
+    // Both sides of ℓ = 1 were met, and leverages far above it.
+    assert!(
+        extremes.0 < 1.0 && extremes.1 > 10.0,
+        "ℓ from {} to {}",
+        extremes.0,
+        extremes.1
+    );
+}

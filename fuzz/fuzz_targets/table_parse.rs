@@ -1,11 +1,12 @@
 //! The binary table parser (`quatarm::table`): any bytes in flash are refused with an error or
 //! accepted as a table whose every value is inside the table's limits, which re-encodes to the
-//! same values (to the same bytes in the current format), and from which both chains build or
-//! refuse cleanly. Never a panic.
+//! same values (to the same bytes in the current format; the parameter block's pose part
+//! with it), and from which both chains build or refuse cleanly. Never a panic.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 use quatarm::table::parameters::{Column, ParameterData};
+use quatarm::table::pose::PoseData;
 use quatarm::uncertainty::Uncertainty;
 use quatarm::{Chain, ChainError, Fixed, MatrixChain, Table, F32};
 
@@ -25,11 +26,29 @@ fuzz_target!(|bytes: &[u8]| {
             .flat_map(|i| p.factor_row(i).chunks_exact(4))
             .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
             .collect();
-        (columns, factor)
+        // The budget's pose part (issue 27), where the block has one.
+        let pose = p.pose().map(|pose| {
+            let d: Vec<f32> = pose
+                .factor()
+                .chunks_exact(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                .collect();
+            (d, pose.count(), pose.shrink(), pose.leverage_mean())
+        });
+        (columns, factor, pose)
     });
-    let parameters = block
-        .as_ref()
-        .map(|(columns, factor)| ParameterData { columns, factor });
+    let parameters = block.as_ref().map(|(columns, factor, pose)| ParameterData {
+        columns,
+        factor,
+        pose: pose
+            .as_ref()
+            .map(|(d, count, shrink, leverage_mean)| PoseData {
+                factor: d,
+                count: *count,
+                shrink: *shrink,
+                leverage_mean: *leverage_mean,
+            }),
+    });
     let mut out = vec![0u8; quatarm::table::MAX_TABLE_LEN];
     let n = data
         .encode_full(budget.as_ref(), parameters.as_ref(), &mut out)

@@ -42,7 +42,8 @@
 //!               thermal expansion κ_p (1/°C, f64), stylus ball diameter (mm, f64; 0 unknown)
 //! 48+N·248+64    the uncertainty budget, where flag bit4 is set ([`budget`]: its layout)
 //!   … +80        the parameter covariance, where flag bit5 is set ([`parameters`]: its
-//!                layout; its parameter count is its first field)
+//!                layout; its parameter count is its first field), and after its factor
+//!                the budget's pose part where the block's own flag says so ([`pose`])
 //!   …            the axis wobble, where flag bit6 is set ([`wobble`]: its layout; its joint
 //!                count is its first field)
 //!   …            the arm's other probes, where flag bit7 is set ([`probes`]: its layout;
@@ -65,6 +66,7 @@ use core::fmt;
 
 pub mod budget;
 pub mod parameters;
+pub mod pose;
 pub mod probes;
 pub mod wobble;
 
@@ -391,7 +393,16 @@ fn is_v4_len(len: usize) -> bool {
 #[cfg(feature = "parameters")]
 #[inline(never)]
 fn is_block_len(len: usize) -> bool {
-    (1..=parameters::MAX_PARAMETERS).any(|p| len == parameters::len(p))
+    (1..=parameters::MAX_PARAMETERS).any(|p| {
+        // The block alone, or with a pose part of 1 to MAX_FACTORS columns.
+        len.checked_sub(parameters::len(p)).is_some_and(|rest| {
+            let column = 4 * p;
+            rest == 0
+                || rest.checked_sub(pose::HEAD_LEN).is_some_and(|d| {
+                    d % column == 0 && (1..=pose::MAX_FACTORS).contains(&(d / column))
+                })
+        })
+    })
 }
 
 #[cfg(not(feature = "parameters"))]
@@ -416,7 +427,10 @@ const fn core_len(joints: usize) -> usize {
 /// Largest table length: 7 joints with a budget and 8 probes, `parameters::MAX_PARAMETERS`
 /// parameters where the `parameters` feature reads them and every joint's wobble where the
 /// `wobble` feature does (12,308 bytes with the first, 13,824 with both; without either,
-/// [`MAX_PLAIN_TABLE_LEN`]).
+/// [`MAX_PLAIN_TABLE_LEN`]). A block with the budget's pose part ([`pose`]) must fit too:
+/// the hubs keep two buffers of this length in RAM and 16 KiB slots, so the part is not
+/// added to it. A 6-joint table of 52 parameters with D's 16 columns is 11.8 KB; the host's
+/// builder refuses a table longer than this.
 pub const MAX_TABLE_LEN: usize = MAX_PLAIN_TABLE_LEN
     + if cfg!(feature = "parameters") {
         parameters::len(parameters::MAX_PARAMETERS)
@@ -960,7 +974,7 @@ impl<'a> Table<'a> {
                 // The block states its own size; a count that cannot be read counts as 0 and
                 // fails the length check below or the block's own.
                 let at = core_len(n) + budget::LEN;
-                len += parameters::len(parameters::stated_count(bytes.get(at..).unwrap_or(&[])));
+                len += parameters::stated_len(bytes.get(at..).unwrap_or(&[]));
             }
         }
         if flags & FLAG_WOBBLE != 0 {
@@ -1126,13 +1140,15 @@ impl<'a> Table<'a> {
     /// The calibration's parameter covariance, where the table has it (never without the
     /// `parameters` feature, which refuses a table with the block).
     pub fn parameters(&self) -> Option<parameters::Parameters<'a>> {
-        if self.flags() & FLAG_PARAMETERS == 0 {
+        // Without the feature a table with the block was refused: nothing to read (and no
+        // code for it in the 32 KiB image).
+        if !cfg!(feature = "parameters") || self.flags() & FLAG_PARAMETERS == 0 {
             return None;
         }
         let at = core_len(self.joint_count()) + budget::LEN;
-        let p = parameters::stated_count(self.bytes.get(at..).unwrap_or(&[]));
+        let len = parameters::stated_len(self.bytes.get(at..).unwrap_or(&[]));
         self.bytes
-            .get(at..at + parameters::len(p))
+            .get(at..at + len)
             .map(parameters::Parameters::new)
     }
 
@@ -1145,9 +1161,7 @@ impl<'a> Table<'a> {
             at += budget::LEN;
         }
         if cfg!(feature = "parameters") && self.flags() & FLAG_PARAMETERS != 0 {
-            at += parameters::len(parameters::stated_count(
-                self.bytes.get(at..).unwrap_or(&[]),
-            ));
+            at += parameters::stated_len(self.bytes.get(at..).unwrap_or(&[]));
         }
         at
     }

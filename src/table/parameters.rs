@@ -21,7 +21,7 @@
 //! offset   size        field                     (little-endian, after the budget)
 //! ------   ----        ---------------------------------------------------------------
 //!      0      2        parameter count P (1..=64)
-//!      2      2        reserved, 0
+//!      2      2        flags: bit 0 the pose part follows L ([`super::pose`]); the others 0
 //!      4   P·24        one column record per parameter, in C's order:
 //!                        +0  1  kind (`Kind`: 0 turn, 1 turn·sin hθ, 2 turn·cos hθ,
 //!                               3 turn·gravity lever, 4 tilt, 5 shift, 6 tilt·sin hθ,
@@ -34,6 +34,7 @@
 //!                        +20 4  w1 (f32, per °C; kinds 5 and 8; else 0)
 //! 4+P·24  4·P(P+1)/2   L, lower triangular, C = L Lᵀ, row by row: L00, L10, L11, L20, …
 //!                      (f32, the parameters' units: rad, mm, rad/mm, 1/°C)
+//!   …    12+4·P·r      the pose part, where flag bit 0 is set ([`super::pose`]: its layout)
 //! ```
 //!
 //! What each kind's column is, at a reading with tip p, joint origins o_k, axes a_k, frames
@@ -56,6 +57,7 @@
 //! Vectors are in the calibration file's frames (each joint's axis its own x, y or z), as the
 //! host's reference has them; the hub relabels them into its chain's z-axis frames.
 
+use super::pose::{self, Pose, PoseData};
 use super::{Field, TableError, MAX_JOINTS};
 
 /// Most parameters a table carries: 64 fill a 16 KiB slot to 11.9 KB with 7 joints.
@@ -64,7 +66,18 @@ pub const MAX_PARAMETERS: usize = 64;
 pub const COLUMN_LEN: usize = 24;
 const HEAD_LEN: usize = 4;
 
-/// Length of the block for `p` parameters.
+/// The block's flag: the pose part follows L ([`super::pose`]).
+pub const FLAG_POSE: u16 = 1 << 0;
+
+/// The block's flags this firmware reads: the Pico's profile (`fixed-u95`, J·L in integers)
+/// does not take the pose part, and refuses its flag.
+const FLAGS_KNOWN: u16 = if cfg!(feature = "fixed-u95") {
+    0
+} else {
+    FLAG_POSE
+};
+
+/// Length of the block for `p` parameters, without the pose part.
 pub const fn len(p: usize) -> usize {
     HEAD_LEN + p * COLUMN_LEN + 4 * factor_len(p)
 }
@@ -182,20 +195,35 @@ pub struct ParameterData<'a> {
     pub columns: &'a [Column],
     /// The factor L, row by row, [`factor_len`]`(P)` entries.
     pub factor: &'a [f32],
+    /// The budget's pose part, where it has one ([`super::pose`]).
+    pub pose: Option<PoseData<'a>>,
 }
 
 impl ParameterData<'_> {
-    /// The block's length in bytes; `None` if P is 0, above [`MAX_PARAMETERS`], or the
-    /// factor's length is not P's.
+    /// The block's length in bytes, its pose part's included; `None` if P is 0, above
+    /// [`MAX_PARAMETERS`], the factor's length is not P's, or the pose part is malformed
+    /// ([`PoseData::part_len`]).
     pub fn block_len(&self) -> Option<usize> {
         let p = self.columns.len();
-        ((1..=MAX_PARAMETERS).contains(&p) && self.factor.len() == factor_len(p)).then(|| len(p))
+        if !(1..=MAX_PARAMETERS).contains(&p) || self.factor.len() != factor_len(p) {
+            return None;
+        }
+        let part = match &self.pose {
+            Some(pose) => pose.part_len(p)?,
+            None => 0,
+        };
+        Some(len(p) + part)
     }
 
     /// Writes the block into `out` (exactly [`Self::block_len`] bytes).
     pub(super) fn encode(&self, out: &mut [u8]) {
         let p = self.columns.len();
         out[0..2].copy_from_slice(&(p as u16).to_le_bytes());
+        let flags = if self.pose.is_some() { FLAG_POSE } else { 0 };
+        out[2..4].copy_from_slice(&flags.to_le_bytes());
+        if let Some(pose) = &self.pose {
+            pose.encode(&mut out[len(p)..]);
+        }
         for (c, rec) in self
             .columns
             .iter()
@@ -223,6 +251,23 @@ fn rd_f32(b: &[u8], at: usize) -> f32 {
 /// The parameter count the block at `bytes` states (0 if it cannot be read).
 pub(super) fn stated_count(bytes: &[u8]) -> usize {
     usize::from(super::rd_u16(bytes, 0))
+}
+
+/// The length the block at `bytes` states: its count's, and its pose part's where its flag
+/// is set. The count is clamped to one past [`MAX_PARAMETERS`] (which the check refuses), so
+/// that no stated count overflows a 32-bit length.
+pub(super) fn stated_len(bytes: &[u8]) -> usize {
+    let p = stated_count(bytes).min(MAX_PARAMETERS + 1);
+    let base = len(p);
+    if stated_flags(bytes) & FLAG_POSE == 0 {
+        return base;
+    }
+    base + pose::stated_len(bytes.get(base..).unwrap_or(&[]), p)
+}
+
+/// The block's flags field.
+fn stated_flags(bytes: &[u8]) -> u16 {
+    super::rd_u16(bytes, 2)
 }
 
 impl<'a> Parameters<'a> {
@@ -262,6 +307,15 @@ impl<'a> Parameters<'a> {
             .unwrap_or(&[])
     }
 
+    /// The budget's pose part, where the block has one ([`super::pose`]).
+    pub fn pose(&self) -> Option<Pose<'a>> {
+        if stated_flags(self.bytes) & FLAG_POSE == 0 {
+            return None;
+        }
+        let p = self.count();
+        self.bytes.get(len(p)..).map(|b| Pose::new(b, p))
+    }
+
     /// L's row `i` (its first i + 1 entries), as raw little-endian bytes.
     pub fn factor_row(&self, i: usize) -> &'a [u8] {
         let at = HEAD_LEN + self.count() * COLUMN_LEN + 4 * factor_len(i);
@@ -282,8 +336,15 @@ impl<'a> Parameters<'a> {
             field: Field::Budget,
         };
         let p = self.count();
-        if !(1..=MAX_PARAMETERS).contains(&p) || super::rd_u16(self.bytes, 2) != 0 {
+        if !(1..=MAX_PARAMETERS).contains(&p) {
             return Err(bad);
+        }
+        // A flag this firmware does not read: refused as the header's unknown flags are.
+        if stated_flags(self.bytes) & !FLAGS_KNOWN != 0 {
+            return Err(TableError::Invalid {
+                joint: 0,
+                field: Field::Flags,
+            });
         }
         let ok = |x: f32| x.is_finite() && x.abs() <= LIMIT;
         for i in 0..p {
@@ -320,7 +381,10 @@ impl<'a> Parameters<'a> {
                 return Err(bad);
             }
         }
-        Ok(())
+        match self.pose() {
+            Some(pose) => pose.check(),
+            None => Ok(()),
+        }
     }
 }
 
@@ -378,6 +442,7 @@ mod tests {
         let block = ParameterData {
             columns: &cols,
             factor: &FACTOR,
+            pose: None,
         };
         let n = sample()
             .encode_full(Some(&BudgetData::default()), Some(&block), &mut buf)
@@ -416,6 +481,7 @@ mod tests {
         let block = ParameterData {
             columns: &cols,
             factor: &FACTOR,
+            pose: None,
         };
         let mut buf = [0u8; MAX_TABLE_LEN];
         let n = sample()
@@ -441,7 +507,7 @@ mod tests {
     fn a_bad_block_is_refused() {
         let (good, n) = encoded();
         let rec = |i: usize| AT + 4 + i * COLUMN_LEN;
-        let cases: [(&str, usize, &[u8]); 6] = [
+        let cases: [(&str, usize, &[u8]); 5] = [
             ("unknown kind", rec(0), &[9]),
             ("joint past the table", rec(0) + 1, &[6]),
             ("harmonic without order", rec(1) + 2, &[0, 0]),
@@ -451,7 +517,6 @@ mod tests {
                 AT + 4 + 3 * COLUMN_LEN,
                 &f32::NAN.to_le_bytes(),
             ),
-            ("reserved", AT + 2, &[1, 0]),
         ];
         for (what, at, bytes) in cases {
             let mut b = good;
@@ -465,6 +530,25 @@ mod tests {
                 other => panic!("{what}: {other:?}"),
             }
         }
+        // A block flag this firmware does not know: refused by it, not read as a length.
+        let mut b = good;
+        b[AT + 2] = 2;
+        recrc(&mut b[..n]);
+        assert_eq!(
+            Table::parse(&b[..n]).unwrap_err(),
+            TableError::Invalid {
+                joint: 0,
+                field: Field::Flags
+            }
+        );
+        // The pose flag on a block without the part: its length disagrees.
+        let mut b = good;
+        b[AT + 2] = 1;
+        recrc(&mut b[..n]);
+        assert!(matches!(
+            Table::parse(&b[..n]),
+            Err(TableError::BadLength(_))
+        ));
         let mut b = [0u8; MAX_TABLE_LEN];
         let m = sample().encode(&mut b).unwrap();
         b[7] |= FLAG_PARAMETERS;

@@ -3,7 +3,8 @@
 //! Σ_p = J_π C J_πᵀ + J_θ diag(σ_θ²) J_θᵀ + J_T σ_T² J_Tᵀ + (σ_probe² + σ_model²) I₃, in two
 //! parts from the table: the reading's own terms ([`own`], from the budget) and the
 //! calibration's parameter part ([`parameters`], from the parameter block, with C's Cholesky
-//! factor). Both take their Jacobian columns analytically from one pass of the matrix chain
+//! factor; widened at a reading of high leverage where the block has the budget's pose part,
+//! [`pose`]). Both take their Jacobian columns analytically from one pass of the matrix chain
 //! that keeps its frames ([`MatrixChain::eval_frames`]): the joints' axes and origins, cos θ
 //! and sin θ of the readings, the links' expansion. [`radius::u95`] gives the radius of the
 //! 95 % sphere.
@@ -16,6 +17,7 @@
 pub mod fixed_product;
 pub mod own;
 pub mod parameters;
+pub mod pose;
 pub mod radius;
 
 mod grid;
@@ -27,12 +29,20 @@ use crate::table::Table;
 
 pub use own::OwnTerms;
 pub use parameters::ParameterPart;
+pub use pose::PosePart;
 
 /// Σ_p, in nm²: xx, yy, zz, xy, xz, yz (the order of `armcal eval --uncertainty`'s columns).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Covariance(pub [f32; 6]);
 
 impl Covariance {
+    /// Σ += other.
+    fn add(&mut self, other: &Covariance) {
+        for (s, x) in self.0.iter_mut().zip(other.0) {
+            *s += x;
+        }
+    }
+
     /// Σ += w d dᵀ.
     fn add_outer(&mut self, d: [f32; 3], w: f32) {
         let c = &mut self.0;

@@ -14,7 +14,7 @@
 //! [`BLOCK`] of L's columns, their accumulators kept in registers while L's rows stream past:
 //! each entry of L is loaded once and each column of J_π once a block.
 
-use super::Covariance;
+use super::{Covariance, PosePart};
 use crate::matrix::Frames;
 use crate::model::{unpermute_inline, ChainError, BASE_AXIS, REFERENCE_TEMP_MC};
 use crate::rotate::{cross, Vec3};
@@ -49,6 +49,8 @@ pub struct ParameterPart<'a> {
     /// L in integers, for the product on a core without an FPU (feature `fixed-u95`).
     #[cfg(feature = "fixed-u95")]
     fixed: super::fixed_product::FixedFactor,
+    /// The budget's pose part, where the block has it ([`super::pose`]).
+    pose: Option<PosePart<'a>>,
 }
 
 /// A parameter's record as every point reads it: the table's, with its vector relabelled
@@ -127,7 +129,7 @@ fn harmonic(turn: [f32; 2], order: u16) -> [f32; 2] {
 
 /// g += d · l.
 #[inline(always)]
-fn accumulate(g: &mut [f32; 3], d: &[f32; 3], l: f32) {
+pub(super) fn accumulate(g: &mut [f32; 3], d: &[f32; 3], l: f32) {
     g[0] += d[0] * l;
     g[1] += d[1] * l;
     g[2] += d[2] * l;
@@ -137,11 +139,22 @@ fn accumulate(g: &mut [f32; 3], d: &[f32; 3], l: f32) {
 /// allow it (the hub's flash: the block's factor starts at a multiple of 4 bytes in the
 /// format, and the table region is aligned), else the raw little-endian bytes (a host's
 /// buffer of any alignment).
-trait Entries: Copy {
+pub(super) trait Entries: Copy {
     /// The [`BLOCK`] entries from entry `at` on; `None` past the end.
     fn block(self, at: usize) -> Option<[f32; BLOCK]>;
     /// Entry `at`; `None` past the end.
     fn one(self, at: usize) -> Option<f32>;
+
+    /// The `W` entries from entry `at` on; `None` past the end (the pose part's rows of D,
+    /// [`super::pose`]).
+    #[inline(always)]
+    fn run<const W: usize>(self, at: usize) -> Option<[f32; W]> {
+        let mut v = [0.0; W];
+        for (b, x) in v.iter_mut().enumerate() {
+            *x = self.one(at + b)?;
+        }
+        Some(v)
+    }
 
     /// g_b += L_(i, k0 + b) d_i for a whole block (its BLOCK columns k0 … k0 + 5 all within
     /// L): `d` holds the columns of the rows k0, k0 + 1, … to the last, the first five the
@@ -194,6 +207,10 @@ impl Entries for &[f32] {
     #[inline(always)]
     fn block(self, at: usize) -> Option<[f32; BLOCK]> {
         self.get(at..at + BLOCK)?.try_into().ok()
+    }
+    #[inline(always)]
+    fn run<const W: usize>(self, at: usize) -> Option<[f32; W]> {
+        self.get(at..at + W)?.try_into().ok()
     }
     #[inline(always)]
     fn one(self, at: usize) -> Option<f32> {
@@ -345,7 +362,7 @@ impl Entries for &[u8] {
 
 /// The factor's bytes as f32 where they are aligned for it (and the machine is little
 /// endian, the format's order); `None` otherwise.
-fn as_f32(bytes: &[u8]) -> Option<&[f32]> {
+pub(super) fn as_f32(bytes: &[u8]) -> Option<&[f32]> {
     if cfg!(target_endian = "big") {
         return None;
     }
@@ -469,6 +486,7 @@ impl<'a> ParameterPart<'a> {
                 count,
             )
             .ok_or(ChainError::Range { joint: 0 })?,
+            pose: block.pose().map(|p| PosePart::new(&p)),
         }))
     }
 
@@ -484,11 +502,30 @@ impl<'a> ParameterPart<'a> {
         self.count
     }
 
+    /// The budget's pose part, where the block has it.
+    pub fn pose(&self) -> Option<&PosePart<'a>> {
+        self.pose.as_ref()
+    }
+
     /// Σ += J_π C J_πᵀ (nm²) at a reading at `temp_mc` whose frames are `frames` and tip `p`
-    /// (mm).
+    /// (mm); where the block has the budget's pose part, Σ += J_π C J_πᵀ + (max(1, ℓ) − 1)
+    /// · J_π P J_πᵀ ([`super::pose`]).
     pub fn add_to(&self, frames: &Frames, p: Vec3<f32>, temp_mc: i32, sigma: &mut Covariance) {
         let mut d = [[0.0f32; 3]; MAX_PARAMETERS];
         let d = self.columns(frames, p, temp_mc, &mut d);
+        match &self.pose {
+            None => self.product(d, sigma),
+            Some(pose) => {
+                let mut g = Covariance::default();
+                self.product(d, &mut g);
+                pose.widen(d, &mut g);
+                sigma.add(&g);
+            }
+        }
+    }
+
+    /// Σ += J_π C J_πᵀ = (J_π L)(J_π L)ᵀ for J_π's columns `d`.
+    fn product(&self, d: &[[f32; 3]], sigma: &mut Covariance) {
         // In integers where the feature asks for it (a core without an FPU); the f32 product
         // stays compiled (its tests compare the two), and drops out of the image.
         #[cfg(feature = "fixed-u95")]
@@ -586,7 +623,11 @@ mod tests {
         factor: &[f32],
         buf: &'a mut [u8; MAX_TABLE_LEN],
     ) -> Table<'a> {
-        let block = ParameterData { columns, factor };
+        let block = ParameterData {
+            columns,
+            factor,
+            pose: None,
+        };
         let n = several()
             .encode_full(Some(&BudgetData::default()), Some(&block), buf)
             .unwrap();

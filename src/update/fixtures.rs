@@ -96,6 +96,7 @@ pub fn table_with_blocks(link: f64) -> Vec<u8> {
     let block = ParameterData {
         columns: &columns,
         factor: &factor,
+        pose: None,
     };
     let mut bytes = [0u8; MAX_TABLE_LEN];
     let len = data

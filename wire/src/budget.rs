@@ -1,13 +1,15 @@
 //! The calibration's uncertainty budget as the hub carries it: the reading's own terms
 //! (`quatarm::table::budget`) and the parameter covariance (`quatarm::table::parameters`:
-//! each parameter as the way it moves the tip, and C's Cholesky factor).
+//! each parameter as the way it moves the tip, and C's Cholesky factor), with the budget's
+//! pose part after it where the budget has one (`quatarm::table::pose`).
 
 use nalgebra::DMatrix;
 use quatarm::table::budget::BudgetData;
-use quatarm::table::parameters::{Column, Kind, ParameterData, MAX_PARAMETERS};
+use quatarm::table::parameters::{Column, Kind, ParameterData, LIMIT, MAX_PARAMETERS};
+use quatarm::table::pose::{PoseData, MAX_FACTORS};
 use quatarm::table::MAX_JOINTS;
 use quatarm_ref::forward::tilt_axis;
-use quatarm_ref::uncertainty::{Link, Param, Uncertainty};
+use quatarm_ref::uncertainty::{Link, Param, PoseLeverage, Uncertainty};
 use quatarm_ref::Arm;
 
 /// The table's budget of a calibration file's `[uncertainty]` section.
@@ -31,6 +33,21 @@ pub struct Block {
     pub columns: Vec<Column>,
     /// C's lower Cholesky factor, row by row.
     pub factor: Vec<f32>,
+    /// The budget's pose part, where it has one.
+    pub pose: Option<PoseBlock>,
+}
+
+/// A budget's pose part, owned, as the table holds it (`quatarm::table::pose`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PoseBlock {
+    /// D row by parameter: row i holds D_i0 … D_i(r−1).
+    pub factor: Vec<f32>,
+    /// r, D's columns.
+    pub count: usize,
+    /// b.
+    pub shrink: f32,
+    /// m (mm²).
+    pub leverage_mean: f32,
 }
 
 impl Block {
@@ -39,8 +56,69 @@ impl Block {
         ParameterData {
             columns: &self.columns,
             factor: &self.factor,
+            pose: self.pose.as_ref().map(|p| PoseData {
+                factor: &p.factor,
+                count: p.count,
+                shrink: p.shrink,
+                leverage_mean: p.leverage_mean,
+            }),
         }
     }
+}
+
+/// The table's pose part of a budget over `p` parameters (`quatarm_ref::uncertainty::
+/// PoseLeverage`: D's columns, b, m). `Err` names the key and says why the hub could not
+/// take it: more columns than [`MAX_FACTORS`] (the cap the host's estimate keeps to), a
+/// column of another length than the parameters', a value that is not finite or not within
+/// the table's limits (b ≥ 0, m > 0, each within `quatarm::table::parameters::LIMIT`) — or
+/// that f32 rounds to 0 (m) or out of range.
+pub fn pose_data(pose: &PoseLeverage, p: usize) -> Result<PoseBlock, String> {
+    let r = pose.factor.len();
+    if !(1..=MAX_FACTORS).contains(&r) {
+        return Err(format!(
+            "pose_factor: {r} columns; a table carries 1 to {MAX_FACTORS} (the hub's J·D \
+             costs 3 · P multiply-adds a column)"
+        ));
+    }
+    if let Some((j, c)) = pose.factor.iter().enumerate().find(|(_, c)| c.len() != p) {
+        return Err(format!(
+            "pose_factor[{j}]: {} values for {p} parameters",
+            c.len()
+        ));
+    }
+    let limit = f64::from(LIMIT);
+    let within = |x: f64| x.is_finite() && x.abs() <= limit;
+    if let Some((j, i)) = (0..r)
+        .flat_map(|j| (0..p).map(move |i| (j, i)))
+        .find(|&(j, i)| !within(pose.factor[j][i]))
+    {
+        return Err(format!(
+            "pose_factor[{j}][{i}]: {} is not finite or beyond {limit:e}",
+            pose.factor[j][i]
+        ));
+    }
+    if !(within(pose.shrink) && pose.shrink >= 0.0) {
+        return Err(format!(
+            "pose_shrink: {} is not a shrink (finite, 0 to {limit:e})",
+            pose.shrink
+        ));
+    }
+    let m = pose.leverage_mean as f32;
+    if !(within(pose.leverage_mean) && m > 0.0) {
+        return Err(format!(
+            "pose_leverage_mean: {} mm² is not a mean leverage (finite, > 0 in f32, up to \
+             {limit:e})",
+            pose.leverage_mean
+        ));
+    }
+    Ok(PoseBlock {
+        factor: (0..p)
+            .flat_map(|i| pose.factor.iter().map(move |c| c[i] as f32))
+            .collect(),
+        count: r,
+        shrink: pose.shrink as f32,
+        leverage_mean: m,
+    })
 }
 
 /// The parameter block of a budget: one column record per listed parameter and C's lower
@@ -63,6 +141,7 @@ pub fn parameter_data(u: &Uncertainty, arm: &Arm) -> Result<Option<Block>, Strin
             .map(|p| column(*p, arm))
             .collect::<Result<_, _>>()?,
         factor: factor(&u.matrix())?,
+        pose: u.pose.as_ref().map(|pose| pose_data(pose, p)).transpose()?,
     }))
 }
 
@@ -229,6 +308,114 @@ mod tests {
         assert!(b.columns[..3]
             .iter()
             .all(|c| c.kind == Kind::Shift && c.order == 0));
+    }
+
+    /// The budget's pose part reaches the table: D's columns as the rows' entries, b and m;
+    /// a budget without one writes the block as before; a malformed one is refused naming
+    /// its key, and so is one that would make the table longer than a hub holds.
+    #[test]
+    fn the_pose_part_reaches_the_table_or_is_refused_by_key() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/default-6.toml");
+        let arm = quatarm_ref::calfile::read(&path).unwrap().arm;
+        let keys: Vec<Param> = (0..6).map(Param::ZeroOffset).collect();
+        let factor = vec![
+            (0..6).map(|i| 1e-6 * i as f64).collect::<Vec<_>>(),
+            (0..6).map(|i| -2e-6 * i as f64 + 1e-7).collect(),
+        ];
+        let mut budget = Uncertainty {
+            parameters: keys,
+            covariance: (0..36)
+                .map(|k| if k % 7 == 0 { 1e-10 } else { 0.0 })
+                .collect(),
+            encoder_counts: vec![0.3; 6],
+            probing_mm: 0.002,
+            temperature_c: 0.2,
+            model_mm: 0.0,
+            pose: Some(PoseLeverage {
+                factor: factor.clone(),
+                shrink: 0.4,
+                leverage_mean: 3e-6,
+            }),
+        };
+        let table = crate::tablebuild::build_with(&arm, Some(&budget)).unwrap();
+        let t = quatarm::Table::parse(&table).unwrap();
+        let pose = t.parameters().unwrap().pose().unwrap();
+        assert_eq!(
+            (pose.count(), pose.shrink(), pose.leverage_mean()),
+            (2, 0.4, 3e-6)
+        );
+        for (j, column) in factor.iter().enumerate() {
+            for (i, x) in column.iter().enumerate() {
+                assert_eq!(pose.entry(i, j), Some(*x as f32));
+            }
+        }
+        let without = Uncertainty {
+            pose: None,
+            ..budget.clone()
+        };
+        let plain = crate::tablebuild::build_with(&arm, Some(&without)).unwrap();
+        assert_eq!(plain.len(), table.len() - quatarm::table::pose::len(6, 2));
+        assert!(quatarm::Table::parse(&plain)
+            .unwrap()
+            .parameters()
+            .unwrap()
+            .pose()
+            .is_none());
+        let bad = |f: &dyn Fn(&mut PoseLeverage)| {
+            let mut u = budget.clone();
+            f(u.pose.as_mut().unwrap());
+            crate::tablebuild::build_with(&arm, Some(&u))
+                .unwrap_err()
+                .to_string()
+        };
+        for (msg, key) in [
+            (bad(&|p| p.factor.clear()), "pose_factor: 0 columns"),
+            (
+                bad(&|p| p.factor = vec![vec![0.0; 6]; 17]),
+                "pose_factor: 17 columns",
+            ),
+            (
+                bad(&|p| p.factor[1].pop().map(drop).unwrap()),
+                "pose_factor[1]: 5 values",
+            ),
+            (bad(&|p| p.factor[0][3] = f64::NAN), "pose_factor[0][3]"),
+            (bad(&|p| p.shrink = -0.1), "pose_shrink"),
+            (bad(&|p| p.leverage_mean = 0.0), "pose_leverage_mean"),
+            (bad(&|p| p.leverage_mean = 1e-50), "pose_leverage_mean"),
+        ] {
+            assert!(msg.contains(key), "{msg}");
+        }
+        // 64 parameters with 16 columns: 4,108 bytes more than a hub holds with them.
+        let keys: Vec<Param> = (0..6)
+            .flat_map(|j| {
+                [Param::ZeroOffset(j), Param::Tilt(j, 0), Param::Tilt(j, 1)]
+                    .into_iter()
+                    .chain((0..3).map(move |c| Param::LinkError(j, c)))
+            })
+            .chain((0..28).map(|k| Param::Harmonic {
+                joint: k % 6,
+                order: 1 + (k / 6) as u32,
+                cos: false,
+            }))
+            .collect();
+        let p = keys.len();
+        assert_eq!(p, 64);
+        budget.parameters = keys;
+        budget.covariance = (0..p * p)
+            .map(|k| if k % (p + 1) == 0 { 1e-10 } else { 0.0 })
+            .collect();
+        budget.pose = Some(PoseLeverage {
+            factor: vec![vec![1e-6; p]; 16],
+            shrink: 0.0,
+            leverage_mean: 1e-6,
+        });
+        let msg = crate::tablebuild::build_with(&arm, Some(&budget))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.contains("pose_factor") && msg.contains("a hub holds at most"),
+            "{msg}"
+        );
     }
 
     /// L Lᵀ gives C back, also for a singular C (one parameter a copy of another).

@@ -9,6 +9,8 @@
 //! (`quatarm::table::probes`). Layout: `quatarm::table`.
 
 use crate::budget::{budget_data, parameter_data};
+use quatarm::table::parameters::MAX_PARAMETERS;
+use quatarm::table::pose;
 use quatarm::table::wobble::{WobbleData, WobbleTerm, MAX_TERMS as WOBBLE_TERMS};
 use quatarm::table::{
     quat_to_matrix, Harmonic, JointData, ProbeData, TableData, FLAG_GEOMETRIC, MAX_HARMONICS,
@@ -341,10 +343,22 @@ pub fn build_release(
         None => None,
     };
     let block = parameters.as_ref().map(|b| b.data());
-    let mut buf = vec![0u8; MAX_TABLE_LEN];
+    // Room for a pose part past what a hub holds, so that such a table is refused by name.
+    let room = MAX_TABLE_LEN + pose::len(MAX_PARAMETERS, pose::MAX_FACTORS);
+    let mut buf = vec![0u8; room];
     let len = data
         .encode_full(budget.map(budget_data).as_ref(), block.as_ref(), &mut buf)
         .map_err(|e| err("(table)", e.to_string()))?;
+    if len > MAX_TABLE_LEN {
+        let r = block.and_then(|b| b.pose).map_or(0, |p| p.count);
+        return Err(err(
+            "uncertainty.pose_factor",
+            format!(
+                "with the pose part's {r} columns the table is {len} bytes; a hub holds at \
+                 most {MAX_TABLE_LEN}: write fewer columns"
+            ),
+        ));
+    }
     buf.truncate(len);
     quatarm::Table::parse(&buf).map_err(|e| match e {
         quatarm::TableError::Invalid { joint, field } if joint > 0 => err(

@@ -359,14 +359,30 @@ fn pico_profile(tc: &Toolchain, calib: &Path) -> Result<Vec<Row>> {
 
 /// `cargo xtask bench-target`: every board with every firmware tool chain this machine has
 /// (or only the one `QUATARM_FIRMWARE` names).
-pub fn run(only: Option<&str>, calib: Option<&std::path::Path>) -> Result<()> {
+pub fn run(
+    only: Option<&str>,
+    calib: Option<&std::path::Path>,
+    pose_factors: Option<usize>,
+) -> Result<()> {
     setup::ensure()?;
     let path = calib.map_or_else(default_calibration_path, std::path::Path::to_path_buf);
     // With the calibration's uncertainty budget where it has one: whole for the f32 boards,
     // without the parameters' covariance for the fixed-point ones: qemu-m0 (the minimal
     // profile) refuses the block, and rp-pico, which takes it, runs no QEMU (its profile's
     // rows, `pico_profile`, take the table whole).
-    let parsed = quatarm_ref::calfile::read(&path)?;
+    let mut parsed = quatarm_ref::calfile::read(&path)?;
+    if let Some(r) = pose_factors {
+        let u = parsed
+            .uncertainty
+            .as_mut()
+            .context("--pose-factors needs a calibration with a budget")?;
+        u.pose = Some(synthetic_pose(u, r));
+        println!(
+            "(the budget with a synthetic pose part of r = {r} columns of D over its {} parameters; \
+             every reading's leverage above 1)",
+            u.parameters.len()
+        );
+    }
     let table_for = |b: &Board| -> Result<Vec<u8>> {
         let budget = match &parsed.uncertainty {
             Some(u) if b.precision != "f32" => Some(u.without_covariance()),
@@ -427,6 +443,32 @@ pub fn run(only: Option<&str>, calib: Option<&std::path::Path>) -> Result<()> {
         side_by_side(&parsed.arm, &path, products)?;
     }
     Ok(())
+}
+
+/// A pose part of `r` columns for the budget `u` (`--pose-factors`): what U95's cost on the
+/// hub depends on is r, P and whether a reading's leverage is above 1 (its outer products),
+/// not D's values. D_ij = ±σ_i/4 (σ_i = √C_ii, the sign varying with i + j), b = 0.2, and
+/// m = 1e-12 mm² (1 nm²), which puts every reading's leverage far above 1.
+fn synthetic_pose(
+    u: &quatarm_ref::uncertainty::Uncertainty,
+    r: usize,
+) -> quatarm_ref::uncertainty::PoseLeverage {
+    let p = u.parameters.len();
+    let sigma = |i: usize| u.covariance[i * p + i].max(0.0).sqrt();
+    quatarm_ref::uncertainty::PoseLeverage {
+        factor: (0..r)
+            .map(|j| {
+                (0..p)
+                    .map(|i| {
+                        let sign = if (i + j) % 3 == 0 { 1.0 } else { -0.5 };
+                        sign * sigma(i) / 4.0
+                    })
+                    .collect()
+            })
+            .collect(),
+        shrink: 0.2,
+        leverage_mean: 1e-12,
+    }
 }
 
 /// The board whose core the C baselines are measured on (QEMU mps2-an386, Cortex-M4F).

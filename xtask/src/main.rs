@@ -65,6 +65,10 @@ enum Cmd {
         /// Calibration file to measure with (default: data/default-6-full.toml).
         #[arg(long)]
         calib: Option<std::path::PathBuf>,
+        /// Give the calibration's budget a pose part of this many columns of D (issue 27;
+        /// synthetic values, every reading's leverage above 1: U95's widest path).
+        #[arg(long)]
+        pose_factors: Option<usize>,
     },
     /// Run the fuzz targets of fuzz/ (libFuzzer, cargo-fuzz), each for a while.
     Fuzz {
@@ -102,7 +106,11 @@ fn main() -> Result<()> {
         Cmd::Build { board } => build::run(board.as_deref()),
         Cmd::Test => test::run(),
         Cmd::Demo { all } => demo::run(all),
-        Cmd::BenchTarget { board, calib } => bench::run(board.as_deref(), calib.as_deref()),
+        Cmd::BenchTarget {
+            board,
+            calib,
+            pose_factors,
+        } => bench::run(board.as_deref(), calib.as_deref(), pose_factors),
         Cmd::Fuzz { target, seconds } => fuzz::run(target.as_deref(), seconds),
         Cmd::Soak {
             board,
