@@ -12,6 +12,11 @@ use quatarm_ref::forward::tilt_axis;
 use quatarm_ref::uncertainty::{Link, Param, PoseLeverage, Uncertainty};
 use quatarm_ref::Arm;
 
+// The file's cap on the pose part's columns (what `armcal` estimates and `quatarm_ref`
+// reads) is the table's: the two crates cannot see each other, so the one crate that sees
+// both holds them equal at compile time.
+const _: () = assert!(quatarm_ref::uncertainty::POSE_RANK_MAX == MAX_FACTORS);
+
 /// The table's budget of a calibration file's `[uncertainty]` section.
 pub fn budget_data(u: &Uncertainty) -> BudgetData {
     let mut encoder_counts = [0.0; MAX_JOINTS];
