@@ -502,6 +502,12 @@ fn hub_u95_with_the_pose_part_agrees_with_the_formula() {
         extremes = (extremes.0.min(lo), extremes.1.max(hi));
         widest = widest.max(change);
         assert!(worst < 1e-3, "{what}: {worst}");
+        // And against what `armcal eval --uncertainty` computes for the same file (its
+        // propagation of the budget with the pose part, `propagate::point`): the hub streams
+        // eval's U95.
+        let (eval_worst, _) = hub_against_host(&arm, &u, 80 + k as u64);
+        println!("{what}: worst hub U95 error against eval's {eval_worst:.2e}");
+        assert!(eval_worst < 1e-3, "{what}, against eval: {eval_worst}");
     }
     assert_eq!(seen, 6);
     assert!(widest > 0.3, "the part hardly widens U95: {widest}");
