@@ -266,10 +266,9 @@ impl LeanForm<F32> for LeanF32 {
             *e = euler_zxz(&crate::model::z_frame_matrix(j.matrix, prev, j.axis));
             prev = j.axis;
         }
-        let Some(wobble) = LeanWobble::build(table, &euler[..n])? else {
+        if !out.wobble.build_in(table, &euler[..n])? {
             return Ok(LeanF32::default());
-        };
-        out.wobble = wobble;
+        }
         out.base = turn_of(euler[0][0])?;
         for i in 0..n {
             let no = i + 1;

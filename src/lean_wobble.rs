@@ -88,19 +88,23 @@ pub struct LeanWobble {
 }
 
 impl LeanWobble {
-    /// The wobble of `table`'s arm in the lean form, whose joints' z-x-z Euler angles are
-    /// `euler` ([`crate::lean`]): one that is off where no joint wobbles, `None` where the
-    /// form does not take it (an axis's z part past [`MAX_AXIS_Z`]).
-    pub(crate) fn build(
+    /// Fills `self` (all zeros, off) with the wobble of `table`'s arm in the lean form, whose
+    /// joints' z-x-z Euler angles are `euler` ([`crate::lean`]): left off where no joint
+    /// wobbles; `false` where the form does not take it (an axis's z part past
+    /// [`MAX_AXIS_Z`]). In place: the chain is copied at boot, and each copy of these 900
+    /// bytes counted on the hub's stack (a first version that returned one took the
+    /// qemu-m4f hub's stack peak to 65,332 of its 65,536 bytes).
+    pub(crate) fn build_in(
+        &mut self,
         table: &Table<'_>,
         euler: &[[u32; 3]],
-    ) -> Result<Option<LeanWobble>, ChainError> {
+    ) -> Result<bool, ChainError> {
         #[cfg(feature = "wobble")]
         {
             use crate::lean::{mat_vec, rz, turn_cos_sin};
             use crate::model::{sort_by_order, units, unpermute};
             let n = euler.len();
-            let mut out = LeanWobble::default();
+            let out = self;
             for i in 0..n {
                 let w = table.joint_wobble(i);
                 if w.count == 0 {
@@ -116,7 +120,7 @@ impl LeanWobble {
                 let f1 = mat_vec(&turn_b, unpermute(w.f1, axis));
                 let f2 = mat_vec(&turn_b, unpermute(w.f2, axis));
                 if f1[2].abs() + f2[2].abs() > MAX_AXIS_Z {
-                    return Ok(None);
+                    return Ok(false);
                 }
                 let next = if i + 1 < n { euler[i + 1][0] } else { 0 };
                 let offset = euler[i][2].wrapping_add(next);
@@ -150,12 +154,12 @@ impl LeanWobble {
                 )?;
                 out.on = true;
             }
-            Ok(Some(out))
+            Ok(true)
         }
         #[cfg(not(feature = "wobble"))]
         {
             let _ = (table, euler);
-            Ok(Some(LeanWobble {}))
+            Ok(true)
         }
     }
 
