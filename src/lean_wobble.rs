@@ -22,11 +22,12 @@
 //! the tip and the direction to second order. The vertical of the first pass takes the small
 //! turns to first order (it scales the gravity deflection only: 1e-4 of 4e-5 rad).
 //!
-//! **What φ costs.** φx, φy and the linear part of φz are harmonic series in θ' (the terms'
-//! sin hθ', cos hθ' by [`Multiples`] from the pass's own cos θ', sin θ'), each term's six
-//! coefficients formed at boot. The second-order part of φz, ½ A B (f1 × f2)·ẑ − ½ φx φy, is a
-//! quadratic form in φx, φy: A and B are f1·φ and f2·φ to second order, f1 and f2 turned by
-//! Rz(b_i) having components along z of the size of the joint's tilt only.
+//! **What φ costs.** φx and φy are harmonic series in θ' (the terms' sin hθ', cos hθ' by
+//! [`Multiples`] from the pass's own cos θ', sin θ'), each term's four coefficients formed at
+//! boot. φz needs no series of its own: (φx, φy) = A (f1x, f1y) + B (f2x, f2y) to first order
+//! (f1 and f2 turned by Rz(b_i), whose z parts are of the size of the joint's tilt only), so A
+//! and B are a fixed linear map of φx, φy, and φz − ½ φx φy = A f1z + B f2z + ½ A B (f1 × f2)·ẑ
+//! − ½ φx φy is a linear and a quadratic form in φx, φy, five constants a joint.
 //!
 //! **Left out**, each third order: the x and y parts of ½ A B f1 × f2 (the tilt times A B),
 //! f1's and f2's z parts inside A and B (the tilt times |φ|), the commutator of φz's first-order
@@ -57,25 +58,32 @@ use core::mem::MaybeUninit;
 /// with it (module docs). An arm past it runs the quaternion chain.
 pub const MAX_AXIS_Z: f64 = 0.01;
 
-/// One wobble term: the (sin hθ', cos hθ') coefficients of φx, φy and φz's linear part.
+/// One wobble term: the (sin hθ', cos hθ') coefficients of φx and φy.
 #[cfg(feature = "wobble")]
 #[derive(Clone, Copy, Debug, Default)]
 struct Term {
     order: u32,
     x: [f32; 2],
     y: [f32; 2],
-    z: [f32; 2],
 }
+
+/// Most wobble terms of all joints together the form keeps (the table allows
+/// [`crate::table::wobble::MAX_TERMS`] a joint, 28 for seven joints): each copy of the chain is on the hub's stack
+/// at boot, and per-joint room for four took the qemu-m4f hub's stack peak to 64,732 of its
+/// 65,536 bytes (measured). An arm with more runs the quaternion chain.
+pub const MAX_LEAN_TERMS: usize = 16;
 
 /// One joint's wobble in the lean form (no terms where it has none).
 #[cfg(feature = "wobble")]
 #[derive(Clone, Copy, Debug, Default)]
 struct WobbleJoint {
+    /// Its terms, `terms[start..start + count]` of [`LeanWobble`], sorted by order
+    /// ([`Multiples`] only advances).
+    start: u8,
     count: u8,
-    /// Sorted by order ([`Multiples`] only advances).
-    terms: [Term; MAX_TERMS],
-    /// φz's second-order part as q_xx φx² + q_xy φx φy + q_yy φy².
-    quad: [f32; 3],
+    /// φz − ½ φx φy as φx (l_x + q_xx φx + q_xy φy) + φy (l_y + q_yy φy): (l_x, l_y, q_xx,
+    /// q_xy, q_yy).
+    z: [f32; 5],
 }
 
 /// The wobble's constants of an arm's lean form (empty without the `wobble` feature).
@@ -85,15 +93,16 @@ pub struct LeanWobble {
     on: bool,
     #[cfg(feature = "wobble")]
     joints: [WobbleJoint; MAX_JOINTS],
+    #[cfg(feature = "wobble")]
+    terms: [Term; MAX_LEAN_TERMS],
 }
 
 impl LeanWobble {
     /// Fills `self` (all zeros, off) with the wobble of `table`'s arm in the lean form, whose
     /// joints' z-x-z Euler angles are `euler` ([`crate::lean`]): left off where no joint
     /// wobbles; `false` where the form does not take it (an axis's z part past
-    /// [`MAX_AXIS_Z`]). In place: the chain is copied at boot, and each copy of these 900
-    /// bytes counted on the hub's stack (a first version that returned one took the
-    /// qemu-m4f hub's stack peak to 65,332 of its 65,536 bytes).
+    /// [`MAX_AXIS_Z`], more than [`MAX_LEAN_TERMS`] terms). In place: a first version that
+    /// returned one took the qemu-m4f hub's stack peak from 64,732 to 65,332 bytes.
     pub(crate) fn build_in(
         &mut self,
         table: &Table<'_>,
@@ -105,6 +114,7 @@ impl LeanWobble {
             use crate::model::{sort_by_order, units, unpermute};
             let n = euler.len();
             let out = self;
+            let mut taken = 0usize;
             for i in 0..n {
                 let w = table.joint_wobble(i);
                 if w.count == 0 {
@@ -124,9 +134,11 @@ impl LeanWobble {
                 }
                 let next = if i + 1 < n { euler[i + 1][0] } else { 0 };
                 let offset = euler[i][2].wrapping_add(next);
-                let jw = &mut out.joints[i];
                 let used = usize::from(w.count).min(MAX_TERMS);
-                for (t, src) in jw.terms.iter_mut().zip(&w.terms[..used]) {
+                let Some(terms) = out.terms.get_mut(taken..taken + used) else {
+                    return Ok(false);
+                };
+                for (t, src) in terms.iter_mut().zip(&w.terms[..used]) {
                     let order = u32::from(src.order);
                     // θ = θ' − offset: (s, c) → (s cos hc + c sin hc, c cos hc − s sin hc).
                     let (ch, sh) = turn_cos_sin(offset.wrapping_mul(order));
@@ -137,18 +149,26 @@ impl LeanWobble {
                         order,
                         x: units::<F32, 2>(along(0), no)?,
                         y: units::<F32, 2>(along(1), no)?,
-                        z: units::<F32, 2>(along(2), no)?,
                     };
                 }
-                sort_by_order(&mut jw.terms[..used], |t| t.order);
-                jw.count = used as u8;
-                // ½ A B kz − ½ φx φy with A = f1·φ, B = f2·φ (x and y parts).
-                let kz = 0.5 * (f1[0] * f2[1] - f1[1] * f2[0]);
-                jw.quad = units::<F32, 3>(
+                sort_by_order(terms, |t| t.order);
+                let jw = &mut out.joints[i];
+                (jw.start, jw.count) = (taken as u8, used as u8);
+                taken += used;
+                // (A, B) = M⁻¹ (φx, φy), M = [[f1x, f2x], [f1y, f2y]], |det M| ≥ 1 − MAX_AXIS_Z²
+                // (unit orthogonal axes): A = ax·φ, B = bx·φ.
+                let det = f1[0] * f2[1] - f1[1] * f2[0];
+                let (ax, bx) = ([f2[1] / det, -f2[0] / det], [-f1[1] / det, f1[0] / det]);
+                // A f1z + B f2z, then ½ A B kz − ½ φx φy, kz = (f1 × f2)·ẑ = det.
+                let l = [0, 1].map(|k| ax[k] * f1[2] + bx[k] * f2[2]);
+                let h = 0.5 * det;
+                jw.z = units::<F32, 5>(
                     [
-                        kz * f1[0] * f2[0],
-                        kz * (f1[0] * f2[1] + f1[1] * f2[0]) - 0.5,
-                        kz * f1[1] * f2[1],
+                        l[0],
+                        l[1],
+                        h * ax[0] * bx[0],
+                        h * (ax[0] * bx[1] + ax[1] * bx[0]) - 0.5,
+                        h * ax[1] * bx[1],
                     ],
                     no,
                 )?;
@@ -184,16 +204,15 @@ impl LeanWobble {
     fn phi(&self, i: usize, c: f32, s: f32) -> [f32; 3] {
         let j = &self.joints[i];
         let mut m = Multiples::<F32>::new(c, s);
-        let (mut x, mut y, mut z) = (0.0f32, 0.0f32, 0.0f32);
-        for t in j.terms.iter().take(usize::from(j.count)) {
+        let (mut x, mut y) = (0.0f32, 0.0f32);
+        let (start, count) = (usize::from(j.start), usize::from(j.count));
+        for t in self.terms.iter().skip(start).take(count) {
             m.advance(t.order);
             x += m.s * t.x[0] + m.c * t.x[1];
             y += m.s * t.y[0] + m.c * t.y[1];
-            z += m.s * t.z[0] + m.c * t.z[1];
         }
-        let [qxx, qxy, qyy] = j.quad;
-        z += x * (qxx * x + qxy * y) + qyy * (y * y);
-        [x, y, z]
+        let [lx, ly, qxx, qxy, qyy] = j.z;
+        [x, y, x * (lx + (qxx * x + qxy * y)) + y * (ly + qyy * y)]
     }
 }
 
@@ -466,11 +485,28 @@ mod tests {
         }
     }
 
-    /// An axis whose z part is past [`MAX_AXIS_Z`] is left to the quaternion chain; just
-    /// under it the lean form takes the arm.
+    /// An axis whose z part is past [`MAX_AXIS_Z`], or more than [`MAX_LEAN_TERMS`] terms in
+    /// all, are left to the quaternion chain; just under either the lean form takes the arm.
     #[test]
-    fn a_steep_axis_is_left_to_the_quaternion_chain() {
+    fn a_steep_axis_or_many_terms_are_left_to_the_quaternion_chain() {
         assert!(chain_of(&wobbling(0.009, 1.0)).is_lean());
         assert!(!chain_of(&wobbling(0.011, 1.0)).is_lean());
+        // 10 terms; four on joint 3 (14), then joint 1's up to four (16, 17).
+        let mut data = wobbling(0.003, 1.0);
+        // (Joint 3's axes as joint 1's: both turn about z.)
+        data.wobble[2] = WobbleData {
+            terms: data.wobble[3].terms,
+            count: 4,
+            ..data.wobble[0]
+        };
+        assert!(chain_of(&data).is_lean());
+        data.wobble[0].terms[1] = term(5, [1e-5, 0.0], [0.0, 1e-5]);
+        data.wobble[0].count = 2;
+        data.wobble[0].terms[2] = term(6, [1e-5, 0.0], [0.0, 1e-5]);
+        data.wobble[0].count = 3;
+        assert!(chain_of(&data).is_lean());
+        data.wobble[0].terms[3] = term(7, [1e-5, 0.0], [0.0, 1e-5]);
+        data.wobble[0].count = 4;
+        assert!(!chain_of(&data).is_lean());
     }
 }
