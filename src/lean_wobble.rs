@@ -205,8 +205,13 @@ impl LeanWobble {
         let j = &self.joints[i];
         let mut m = Multiples::<F32>::new(c, s);
         let (mut x, mut y) = (0.0f32, 0.0f32);
-        let (start, count) = (usize::from(j.start), usize::from(j.count));
-        for t in self.terms.iter().skip(start).take(count) {
+        let start = usize::from(j.start);
+        // (A slice: `skip(start).take(count)` took 32 instructions a point more, measured.)
+        let terms = self
+            .terms
+            .get(start..start + usize::from(j.count))
+            .unwrap_or(&[]);
+        for t in terms {
             m.advance(t.order);
             x += m.s * t.x[0] + m.c * t.x[1];
             y += m.s * t.y[0] + m.c * t.y[1];
