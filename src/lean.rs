@@ -1,6 +1,7 @@
 //! The lean f32 chain: the same calibrated model as [`crate::chain`], evaluated in the form
 //! that takes the fewest instructions on a Cortex-M4F, which the hub runs by default for an
-//! arm it fits (f32, no axis wobble, first-order gravity, harmonics of orders 1 and 2).
+//! arm it fits (f32, first-order gravity, harmonics of orders 1 and 2; an axis wobble by
+//! [`crate::lean_wobble`]'s pass, written with this one's per-joint steps, where it takes it).
 //!
 //! **The form.** Each joint's fixed rotation in its z-axis frame ([`crate::model`]) is split
 //! at boot, in f64, into Euler angles M̃_i = Rz(a_i) Rx(α_i) Rz(b_i). A turn about z commutes
@@ -414,6 +415,7 @@ macro_rules! each_joint {
 }
 
 /// The joints written out or looped, for the wobble's pass ([`crate::lean_wobble`]) too.
+#[cfg(feature = "wobble")]
 pub(crate) use each_joint;
 
 impl LeanF32 {

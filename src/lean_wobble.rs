@@ -23,7 +23,7 @@
 //! turns to first order (it scales the gravity deflection only: 1e-4 of 4e-5 rad).
 //!
 //! **What φ costs.** φx and φy are harmonic series in θ' (the terms' sin hθ', cos hθ' by
-//! [`Multiples`] from the pass's own cos θ', sin θ'), each term's four coefficients formed at
+//! `angle::Multiples` from the pass's own cos θ', sin θ'), each term's four coefficients formed at
 //! boot. φz needs no series of its own: (φx, φy) = A (f1x, f1y) + B (f2x, f2y) to first order
 //! (f1 and f2 turned by Rz(b_i), whose z parts are of the size of the joint's tilt only), so A
 //! and B are a fixed linear map of φx, φy, and φz − ½ φx φy = A f1z + B f2z + ½ A B (f1 × f2)·ẑ
@@ -44,7 +44,7 @@
 use crate::angle::Multiples;
 use crate::lean::LeanF32;
 #[cfg(feature = "wobble")]
-use crate::lean::{each_joint, rx_dir, rx_tip, turn_z_with_cos, turn_z, turned, Angle, Turn};
+use crate::lean::{each_joint, rx_dir, rx_tip, turn_z, turn_z_with_cos, turned, Angle, Turn};
 use crate::model::{ChainError, Model, Point};
 use crate::scalar::F32;
 use crate::table::Table;
@@ -144,7 +144,8 @@ impl LeanWobble {
                     let (ch, sh) = turn_cos_sin(offset.wrapping_mul(order));
                     let rot = |[s, c]: [f64; 2]| [s * ch + c * sh, c * ch - s * sh];
                     let (a, b) = (rot(src.alpha), rot(src.beta));
-                    let along = |k: usize| [a[0] * f1[k] + b[0] * f2[k], a[1] * f1[k] + b[1] * f2[k]];
+                    let along =
+                        |k: usize| [a[0] * f1[k] + b[0] * f2[k], a[1] * f1[k] + b[1] * f2[k]];
                     *t = Term {
                         order,
                         x: units::<F32, 2>(along(0), no)?,
@@ -317,8 +318,16 @@ fn run<const JOINTS: usize, const POW2: bool>(
         (w, d) = turn_z(a.q, sin, omc, w, d);
         // Ry(φy), to second order, on the tip and the direction.
         let h = 0.5 * (py * py);
-        w = [w[0] + (py * w[2] - h * w[0]), w[1], w[2] - (py * w[0] + h * w[2])];
-        d = [d[0] + (py * d[2] - h * d[0]), d[1], d[2] - (py * d[0] + h * d[2])];
+        w = [
+            w[0] + (py * w[2] - h * w[0]),
+            w[1],
+            w[2] - (py * w[0] + h * w[2]),
+        ];
+        d = [
+            d[0] + (py * d[2] - h * d[0]),
+            d[1],
+            d[2] - (py * d[0] + h * d[2]),
+        ];
         // Rx(α + φx): the tip's correction and the direction's cos α, sin α turned by φx.
         let al = &j.alpha;
         let (sin, omc) = turned(al.sin, al.omc, px);
