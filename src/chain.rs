@@ -205,7 +205,8 @@ impl<P: Evaluator> Chain<P> {
         }
         let second_order = model.second_order_gravity;
         let wobble = Wobble::new(table, &model)?;
-        let lean = P::Lean::build(table, &model, !wobble.any())?;
+        // The lean form takes the wobble where it can ([`crate::lean_wobble`]).
+        let lean = P::Lean::build(table, &model, true)?;
         Ok(Chain {
             model,
             rotation,

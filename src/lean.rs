@@ -1,6 +1,7 @@
 //! The lean f32 chain: the same calibrated model as [`crate::chain`], evaluated in the form
 //! that takes the fewest instructions on a Cortex-M4F, which the hub runs by default for an
-//! arm it fits (f32, no axis wobble, first-order gravity, harmonics of orders 1 and 2).
+//! arm it fits (f32, first-order gravity, harmonics of orders 1 and 2; an axis wobble by
+//! [`crate::lean_wobble`]'s pass, written with this one's per-joint steps, where it takes it).
 //!
 //! **The form.** Each joint's fixed rotation in its z-axis frame ([`crate::model`]) is split
 //! at boot, in f64, into Euler angles M̃_i = Rz(a_i) Rx(α_i) Rz(b_i). A turn about z commutes
@@ -28,6 +29,7 @@
 //! costs come from: `docs/results/speed.md`.
 
 use crate::angle::{quarter_turns, CountScale, Quarter};
+use crate::lean_wobble::LeanWobble;
 use crate::model::{units, unpermute, ChainError, Model, Point, BASE_AXIS};
 use crate::physics::Physics;
 use crate::scalar::{Arithmetic, F32};
@@ -38,8 +40,9 @@ use core::mem::MaybeUninit;
 /// What a chain's evaluator offers as its lean form: the f32 chain of this module, or none.
 pub trait LeanForm<P: Physics>: Copy + Debug {
     /// The lean form of `table`'s arm, or one that does not apply (`applies` false) where the
-    /// arm has what the form does not take (`eligible` false: an axis wobble or second-order
-    /// gravity).
+    /// arm has what the form does not take (second-order gravity, harmonics past order 2, an
+    /// axis wobble [`crate::lean_wobble`] does not take) or the caller wants none (`eligible`
+    /// false).
     fn build(table: &Table<'_>, model: &Model<P>, eligible: bool) -> Result<Self, ChainError>;
     /// Whether [`LeanForm::eval`] evaluates this arm.
     fn applies(&self) -> bool;
@@ -71,12 +74,12 @@ impl<P: Physics> LeanForm<P> for NoLean {
 
 /// A turn as an exact quarter turn and a remainder of at most π/4: q, sin r, 1 − cos r.
 #[derive(Clone, Copy, Debug, Default)]
-struct Turn {
-    q: u8,
-    sin: f32,
-    omc: f32,
+pub(crate) struct Turn {
+    pub(crate) q: u8,
+    pub(crate) sin: f32,
+    pub(crate) omc: f32,
     /// cos r = 1 − omc, for the direction's plain rotation.
-    cos: f32,
+    pub(crate) cos: f32,
 }
 
 /// One joint's constants in the lean form. A term the joint does not have is stored as zeros
@@ -84,7 +87,7 @@ struct Turn {
 /// the per-point code tests no flag for it; gravity keeps its flag, since its term needs the
 /// vertical the first pass computes only up to the last compliant joint.
 #[derive(Clone, Copy, Debug, Default)]
-struct LeanJoint {
+pub(crate) struct LeanJoint {
     scale: CountScale,
     /// The binary angle of one count where the counts per revolution are a power of two
     /// ([`CountScale::unit`]), else 0.
@@ -96,14 +99,18 @@ struct LeanJoint {
     /// v'_i = Rz(−a_(i+1)) v_i and its thermal rate (zeros without thermal expansion).
     link: [f32; 3],
     rate: [f32; 3],
-    gravity: f32,
-    has_gravity: bool,
+    pub(crate) gravity: f32,
+    pub(crate) has_gravity: bool,
     /// Rx(α_i) for the tip, as an exact quarter turn and a correction with the quarter turn's
     /// selection made at boot ([`QuarterTurned`]).
-    alpha: QuarterTurned,
+    pub(crate) alpha: QuarterTurned,
+    /// Rx(α_i) as its quarter turn and remainder: the wobble's pass turns the remainder by
+    /// φx per point ([`crate::lean_wobble`]).
+    #[cfg(feature = "wobble")]
+    pub(crate) alpha_turn: Turn,
     /// cos α_i and sin α_i whole, the quarter turns applied at boot (exact): the plain turns
     /// of the direction and the vertical, which need no quarter-turn selection per point.
-    alpha_whole: [f32; 2],
+    pub(crate) alpha_whole: [f32; 2],
 }
 
 /// A turn by a constant angle q·π/2 + r (|r| ≤ π/4) of a pair (p, q) of coordinates, with the
@@ -118,7 +125,7 @@ struct LeanJoint {
 /// turned coordinate plus the correction rounded once — the numbers of the form that selects
 /// the quarter turn, bit for bit, in four multiply–adds a coordinate and no branch.
 #[derive(Clone, Copy, Debug, Default)]
-struct QuarterTurned {
+pub(crate) struct QuarterTurned {
     a: f32,
     b: f32,
     c0: f32,
@@ -148,7 +155,7 @@ impl QuarterTurned {
 
     /// (p, q) turned.
     #[inline(always)]
-    fn turn(&self, (p, q): (f32, f32)) -> (f32, f32) {
+    pub(crate) fn turn(&self, (p, q): (f32, f32)) -> (f32, f32) {
         let k = self;
         (
             k.a * p + k.b * q + k.c0 * p - k.s0 * q,
@@ -175,21 +182,24 @@ pub struct LeanF32 {
     n: usize,
     /// Every joint's counts per revolution are a power of two: the count's binary angle is
     /// one multiply ([`LeanJoint::unit`]).
-    pow2: bool,
-    joints: [LeanJoint; MAX_JOINTS],
+    pub(crate) pow2: bool,
+    pub(crate) joints: [LeanJoint; MAX_JOINTS],
     /// Rz(a_1), applied last: the tip's turn with its quarter turn chosen at boot, and cos a_1,
     /// sin a_1 whole for the direction.
-    base: QuarterTurned,
-    base_whole: [f32; 2],
-    probe_dir: [f32; 3],
+    pub(crate) base: QuarterTurned,
+    pub(crate) base_whole: [f32; 2],
+    pub(crate) probe_dir: [f32; 3],
     /// Joints from the base up to the last compliant one: those the first pass turns the
     /// vertical through.
-    vertical_joints: usize,
+    pub(crate) vertical_joints: usize,
     /// The compliant joints, bit i for joint i + 1 (the first eight).
     gravity_mask: u8,
     /// The quarter turns of each joint's Rx(α), bits 2i and 2i + 1 for joint i + 1 (the
     /// first eight).
     alpha_quarters: u16,
+    /// The axis wobble's constants where the arm has one ([`crate::lean_wobble`]; its pass
+    /// runs instead of this module's).
+    pub(crate) wobble: LeanWobble,
 }
 
 /// cos and sin of a binary angle t (one turn = 2^32) split as q·π/2 + r, in f64: (q, sin r,
@@ -211,7 +221,7 @@ fn split_turn(t: u32) -> (u8, f64, f64) {
 }
 
 /// cos and sin of a binary angle, in f64.
-fn turn_cos_sin(t: u32) -> (f64, f64) {
+pub(crate) fn turn_cos_sin(t: u32) -> (f64, f64) {
     let (q, s, omc) = split_turn(t);
     quarter_turns(q, (1.0 - omc, s))
 }
@@ -244,7 +254,7 @@ fn binary_angle(c: f64, s: f64) -> u32 {
 }
 
 /// R(z, t) as a matrix.
-fn rz(t: u32) -> [[f64; 3]; 3] {
+pub(crate) fn rz(t: u32) -> [[f64; 3]; 3] {
     let (c, s) = turn_cos_sin(t);
     [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
 }
@@ -265,7 +275,7 @@ fn mat_mul(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
     out
 }
 
-fn mat_vec(m: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
+pub(crate) fn mat_vec(m: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
     [0, 1, 2].map(|r| m[r][0] * v[0] + m[r][1] * v[1] + m[r][2] * v[2])
 }
 
@@ -296,13 +306,13 @@ fn turn_of(t: u32) -> Result<Turn, ChainError> {
 
 /// One reading's angle of a joint, as the first pass leaves it for the second.
 #[derive(Clone, Copy)]
-struct Angle {
-    q: u8,
+pub(crate) struct Angle {
+    pub(crate) q: u8,
     /// sin r and 1 − cos r of the remainder r, |r| ≤ π/4.
-    sin: f32,
-    omc: f32,
-    /// The harmonic error, rad.
-    e: f32,
+    pub(crate) sin: f32,
+    pub(crate) omc: f32,
+    /// The harmonic error, rad (with the wobble's turn about z, [`crate::lean_wobble`]).
+    pub(crate) e: f32,
 }
 
 impl LeanForm<F32> for LeanF32 {
@@ -330,6 +340,9 @@ impl LeanForm<F32> for LeanF32 {
                 .ok_or(ChainError::Range { joint: i as u8 + 1 })?;
             *e = euler_zxz(&crate::model::z_frame_matrix(j.matrix, prev, j.axis));
             prev = j.axis;
+        }
+        if !out.wobble.build_in(table, &euler[..n])? {
+            return Ok(LeanF32::default());
         }
         let base = turn_of(euler[0][0])?;
         out.base = QuarterTurned::of(&base);
@@ -392,6 +405,8 @@ impl LeanForm<F32> for LeanF32 {
                 gravity: jm.gravity,
                 has_gravity: jm.has_gravity,
                 alpha: QuarterTurned::of(&alpha),
+                #[cfg(feature = "wobble")]
+                alpha_turn: alpha,
                 alpha_whole: [ca, sa],
             };
             if jm.has_gravity {
@@ -423,7 +438,11 @@ impl LeanForm<F32> for LeanF32 {
         // per joint, and for gravity on the hinges 2, 4 and 6 (the six-axis arm's compliant
         // joints) the compliant joints and the vertical's reach known to the compiler, so
         // that neither is tested per joint; any other count, scale or compliant set with the
-        // same code, looped or testing the joints' flags.
+        // same code, looped or testing the joints' flags. An arm with an axis wobble runs the
+        // wobble's pass instead.
+        if self.wobble.on() {
+            return crate::lean_wobble::eval(self, &self.wobble, model, counts, temp_mc);
+        }
         match (counts.len(), self.pow2) {
             (6, true) if self.gravity_mask == HINGES && self.alpha_quarters == PERPENDICULAR => {
                 self.run::<6, true, HINGES, PERPENDICULAR>(model, counts, temp_mc)
@@ -490,6 +509,10 @@ macro_rules! each_joint {
     };
 }
 
+/// The joints written out or looped, for the wobble's pass ([`crate::lean_wobble`]) too.
+#[cfg(feature = "wobble")]
+pub(crate) use each_joint;
+
 impl LeanF32 {
     /// [`LeanForm::eval`] for `JOINTS` joints (0: as many as `counts` has); `POW2`: every
     /// joint's scale is a power of two; `GRAVITY`: the compliant joints where they are this
@@ -511,28 +534,10 @@ impl LeanF32 {
         // Base to tip: the angles, and the vertical up to the last compliant joint.
         let mut zb = [0.0f32, 0.0, 1.0];
         each_joint!(JOINTS, n, false, |i| {
-            let (j, count) = (&self.joints[i], counts[i]);
-            if count >= j.scale.counts() {
-                return Err(ChainError::CountOutOfRange { joint: i as u8 + 1 });
-            }
-            let t = if POW2 {
-                count.wrapping_mul(j.unit)
-            } else {
-                j.scale.binary(count)
-            };
-            let t = t.wrapping_add(j.offset);
-            let a = Quarter::<F32>::from_binary(t);
-            let (sin, omc) = a.double();
-            let (c, s) = quarter_turns(a.q, (1.0 - omc, sin));
-            // Zero coefficients (a joint without harmonics) give e = ±0.
-            let [s1, c1, s2, c2] = j.harmonics;
-            let e = s * (s1 + c * s2 - s * c2) + c * (c1 + c * c2);
-            angles[i].write(Angle {
-                q: a.q,
-                sin,
-                omc,
-                e,
-            });
+            let j = &self.joints[i];
+            let (a, c, s) = j.reading::<POW2>(i, counts[i])?;
+            let e = j.harmonic_error(c, s);
+            angles[i].write(Angle { e, ..a });
             let vertical = if GRAVITY == RUNTIME {
                 i < self.vertical_joints
             } else {
@@ -566,8 +571,7 @@ impl LeanF32 {
             let a = unsafe { angles[i].assume_init_read() };
             // The link at temperature (a zero rate without thermal expansion: the link itself).
             // (Written out: `map` over the three became a call once the joints were unrolled.)
-            let (v, r) = (&j.link, &j.rate);
-            let link = [v[0] + r[0] * dt, v[1] + r[1] * dt, v[2] + r[2] * dt];
+            let link = j.link_at(dt);
             w = if i + 1 == n {
                 // The tip's link: 0 + link, without the additions.
                 link
@@ -586,17 +590,9 @@ impl LeanF32 {
                 let v = unsafe { verticals[i].assume_init_read() };
                 e += j.gravity * (w[0] * v[1] - w[1] * v[0]);
             }
-            // The remainder r turned by e to second order (|e| ≤ 1e-3: error e³/6 < 2e-10).
-            let h = 0.5 * (e * e);
-            let c = 1.0 - a.omc;
-            let sin = a.sin + (c * e - a.sin * h);
-            let omc = a.omc + (a.sin * e + c * h);
-            let cos = 1.0 - omc;
-            // Rz(θ'): the quarter turns, the remainder as a correction.
-            let (p, q) = quarter_turns(a.q, (w[0], w[1]));
-            w = [p - (q * sin + p * omc), q + (p * sin - q * omc), w[2]];
-            let (p, q) = quarter_turns(a.q, (d[0], d[1]));
-            d = [p * cos - q * sin, p * sin + q * cos, d[2]];
+            // Rz(θ'): the quarter turns, the remainder turned by e as a correction.
+            let (sin, omc) = turned(a.sin, a.omc, e);
+            (w, d) = turn_z(a.q, sin, omc, w, d);
             // Rx(α): the tip by a quarter turn and a correction (chosen at boot), the
             // direction plainly.
             let (y, z) = if ALPHA == RUNTIME_ALPHA {
@@ -606,16 +602,116 @@ impl LeanF32 {
                     .turn_known(((ALPHA >> (2 * i)) & 3) as u8, (w[1], w[2]))
             };
             w = [w[0], y, z];
-            let [ca, sa] = j.alpha_whole;
-            d = [d[0], ca * d[1] - sa * d[2], sa * d[1] + ca * d[2]];
+            d = rx_dir(j.alpha_whole, d);
         });
         // Rz(a_1).
-        let (x, y) = self.base.turn((w[0], w[1]));
-        w = [x, y, w[2]];
-        let [cb, sb] = self.base_whole;
-        d = [cb * d[0] - sb * d[1], sb * d[0] + cb * d[1], d[2]];
+        (w, d) = self.rz_base(w, d);
         Ok(Point { xyz: w, dir: d })
     }
+}
+
+// The per-joint steps of the pass, by name: this module's pass and the wobble's
+// ([`crate::lean_wobble`]) are both written with them.
+
+impl LeanF32 {
+    /// Rz(a_1), the last turn of both passes: the tip by its quarter turn chosen at boot and
+    /// the correction, the direction plainly by cos a_1, sin a_1 whole.
+    #[inline(always)]
+    pub(crate) fn rz_base(&self, w: [f32; 3], d: [f32; 3]) -> ([f32; 3], [f32; 3]) {
+        let (x, y) = self.base.turn((w[0], w[1]));
+        let [cb, sb] = self.base_whole;
+        (
+            [x, y, w[2]],
+            [cb * d[0] - sb * d[1], sb * d[0] + cb * d[1], d[2]],
+        )
+    }
+}
+
+impl LeanJoint {
+    /// The reading's angle θ' = θ + offset as a quarter turn and a remainder (`e` zero), and
+    /// its cos and sin whole; a count past the scale is refused, naming joint `i + 1`.
+    /// `POW2`: the scale is a power of two ([`LeanJoint::unit`]).
+    #[inline(always)]
+    pub(crate) fn reading<const POW2: bool>(
+        &self,
+        i: usize,
+        count: u32,
+    ) -> Result<(Angle, f32, f32), ChainError> {
+        if count >= self.scale.counts() {
+            return Err(ChainError::CountOutOfRange { joint: i as u8 + 1 });
+        }
+        let t = if POW2 {
+            count.wrapping_mul(self.unit)
+        } else {
+            self.scale.binary(count)
+        };
+        let a = Quarter::<F32>::from_binary(t.wrapping_add(self.offset));
+        let (sin, omc) = a.double();
+        let (c, s) = quarter_turns(a.q, (1.0 - omc, sin));
+        let angle = Angle {
+            q: a.q,
+            sin,
+            omc,
+            e: 0.0,
+        };
+        Ok((angle, c, s))
+    }
+
+    /// The harmonic error at θ' (cos `c`, sin `s`); zero coefficients (a joint without
+    /// harmonics) give ±0.
+    #[inline(always)]
+    pub(crate) fn harmonic_error(&self, c: f32, s: f32) -> f32 {
+        let [s1, c1, s2, c2] = self.harmonics;
+        s * (s1 + c * s2 - s * c2) + c * (c1 + c * c2)
+    }
+
+    /// The link at temperature (a zero rate without thermal expansion: the link itself).
+    /// (Written out: `map` over the three became a call once the joints were unrolled.)
+    #[inline(always)]
+    pub(crate) fn link_at(&self, dt: f32) -> [f32; 3] {
+        let (v, r) = (&self.link, &self.rate);
+        [v[0] + r[0] * dt, v[1] + r[1] * dt, v[2] + r[2] * dt]
+    }
+}
+
+/// A remainder's sin r and 1 − cos r turned by a small angle e, to second order (|e| ≤ 1e-3:
+/// error e³/6 < 2e-10).
+#[inline(always)]
+pub(crate) fn turned(sin: f32, omc: f32, e: f32) -> (f32, f32) {
+    let h = 0.5 * (e * e);
+    let c = 1.0 - omc;
+    (sin + (c * e - sin * h), omc + (sin * e + c * h))
+}
+
+/// Rz by q quarter turns and a remainder: the tip `w` as a correction, the direction `d`
+/// plainly (cos r = 1 − omc).
+#[inline(always)]
+pub(crate) fn turn_z(q: u8, sin: f32, omc: f32, w: [f32; 3], d: [f32; 3]) -> ([f32; 3], [f32; 3]) {
+    let cos = 1.0 - omc;
+    let (p, r) = quarter_turns(q, (w[0], w[1]));
+    let w = [p - (r * sin + p * omc), r + (p * sin - r * omc), w[2]];
+    let (p, r) = quarter_turns(q, (d[0], d[1]));
+    let d = [p * cos - r * sin, p * sin + r * cos, d[2]];
+    (w, d)
+}
+
+/// Rx(α) of the tip: a quarter turn and a correction (the wobble's pass, whose α is turned
+/// by φx per point; the lean pass's α is [`QuarterTurned`]).
+#[cfg(feature = "wobble")]
+#[inline(always)]
+pub(crate) fn rx_tip(al: &Turn, w: [f32; 3]) -> [f32; 3] {
+    let (p, q) = quarter_turns(al.q, (w[1], w[2]));
+    [
+        w[0],
+        p - (q * al.sin + p * al.omc),
+        q + (p * al.sin - q * al.omc),
+    ]
+}
+
+/// Rx(α) of the direction, plainly by cos α and sin α whole.
+#[inline(always)]
+pub(crate) fn rx_dir([ca, sa]: [f32; 2], d: [f32; 3]) -> [f32; 3] {
+    [d[0], ca * d[1] - sa * d[2], sa * d[1] + ca * d[2]]
 }
 
 #[cfg(test)]

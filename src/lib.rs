@@ -81,6 +81,7 @@ pub(crate) mod angle;
 pub mod chain;
 pub mod encoder;
 pub mod lean;
+pub mod lean_wobble;
 pub mod matrix;
 pub mod model;
 pub mod physics;

@@ -492,7 +492,7 @@ fn product(
         flash: row.flash,
         chains,
         lean: row.lean,
-        wobble: Some((WOBBLE_CALIBRATION.into(), wobble.chains.0)),
+        wobble: Some((WOBBLE_CALIBRATION.into(), wobble.chains.0, wobble.lean)),
         u95: row.u95[1],
     })
 }

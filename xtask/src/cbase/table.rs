@@ -18,8 +18,9 @@ pub struct Product {
     pub chains: (f64, f64, f64),
     /// Whether the hub's chain is the lean form.
     pub lean: bool,
-    /// The hub's chain with an axis wobble on every joint (its calibration file), if measured.
-    pub wobble: Option<(String, f64)>,
+    /// The hub's chain with an axis wobble on every joint (its calibration file; instructions
+    /// a point; whether it ran the lean form), if measured.
+    pub wobble: Option<(String, f64, bool)>,
     /// U95 as the hub streams it, a point.
     pub u95: Option<f64>,
 }
@@ -83,11 +84,14 @@ pub fn render(
                 acc(a)
             ));
         }
-        if let Some((file, n)) = &p.wobble {
+        if let Some((file, n, lean)) = &p.wobble {
             let a = wa.as_ref().map_or("–".into(), acc);
+            let form = if *lean { "lean" } else { "quaternion" };
+            // Issue 32 asks for the wobble chain within 1.4× of the hub's chain without it.
             s.push_str(&format!(
-                "| quatarm hub's chain with an axis wobble on every joint ({file}) | {} | {n:.0} | (same image) | {a} |\n",
-                p.compiler
+                "| quatarm hub's chain ({form}) with an axis wobble on every joint ({file}) | {} | {n:.0} ({:.2}× the hub's chain without it) | (same image) | {a} |\n",
+                p.compiler,
+                n / h
             ));
         }
         if let Some(u) = p.u95 {

@@ -1,0 +1,525 @@
+//! The lean f32 chain with an axis wobble: the same calibrated model as
+//! [`crate::chain::Chain::eval_quaternion`] with its wobble ([`crate::wobble`]), in the lean
+//! form of [`crate::lean`], which the hub runs instead of the quaternion chain for an arm whose
+//! joints wobble (behind the `wobble` feature: without it this module is empty and a table with
+//! the block is refused).
+//!
+//! **The form.** Joint i's varied rotation in its z-axis frame is M̃_i W(φ_i) Rz(θ_i), with
+//! M̃_i = Rz(a_i) Rx(α_i) Rz(b_i) split at boot ([`crate::lean`]) and W(φ) the wobble's small
+//! turn about the rotation vector φ = A f1 + B f2 + ½ A B f1 × f2 ([`crate::wobble`]). Rz(b_i)
+//! moves through W (Rz(b) W(φ) = W(Rz(b) φ) Rz(b)), so the lean form's count offset stays as it
+//! is and the wobble's axes are turned by Rz(b_i) at boot; its harmonics, of the raw reading
+//! like the encoder's, take coefficients rotated by the offset (exact identities, in f64 at
+//! boot). What is left per point is a small turn between Rx(α_i) and Rz(θ'_i), which the pass
+//! splits, to second order, into turns about the axes it already has:
+//!
+//! W(φ) = Rx(φx) Ry(φy) Rz(φz − ½ φx φy) + O(|φ|³)
+//!
+//! (Baker–Campbell–Hausdorff: Rx(a) Ry(b) = exp(a x̂ + b ŷ + ½ a b ẑ) to second order). So
+//! φz − ½ φx φy joins the joint's harmonic error (the remainder is already turned by it, to
+//! second order), φx joins α (Rx(α + φx): the tip's correction turned by φx, cos α and sin α
+//! of the direction turned to second order) and only Ry(φy) is a turn of its own, applied to
+//! the tip and the direction to second order. The vertical of the first pass takes the small
+//! turns to first order (it scales the gravity deflection only: 1e-4 of 4e-5 rad).
+//!
+//! **What φ costs.** φx and φy are harmonic series in θ' (the terms' sin hθ', cos hθ' by
+//! `angle::Multiples` from the pass's own cos θ', sin θ'), each term's four coefficients formed at
+//! boot. φz needs no series of its own: (φx, φy) = A (f1x, f1y) + B (f2x, f2y) to first order
+//! (f1 and f2 turned by Rz(b_i), whose z parts are of the size of the joint's tilt only), so A
+//! and B are a fixed linear map of φx, φy, and φz − ½ φx φy = A f1z + B f2z + ½ A B (f1 × f2)·ẑ
+//! − ½ φx φy is a linear and a quadratic form in φx, φy, five constants a joint.
+//!
+//! **Left out**, each third order: the x and y parts of ½ A B f1 × f2 (the tilt times A B),
+//! f1's and f2's z parts inside A and B (the tilt times |φ|), the commutator of φz's first-order
+//! part with φx, φy (½ |φz| |φ|), and the turns' own third-order terms (|φ|³/6). With the
+//! table's |A| + |B| ≤ 1e-3 ([`crate::table::limits::HARMONIC_SUM`]) and the axes' z parts at
+//! most [`MAX_AXIS_Z`] (else the quaternion chain runs), each is under 5e-9 rad, 10 nm on a 2 m
+//! lever; a real wobble (≤ 1e-4) leaves under 1e-11 rad.
+//!
+//! The pass is written with the lean form's per-joint steps, by their names
+//! ([`crate::lean`]): the reading, the harmonic error, the link, the remainder turned, Rz and
+//! Rx; no fused multiply-add, so the host's numbers are the hub's bit for bit.
+
+#[cfg(feature = "wobble")]
+use crate::angle::Multiples;
+use crate::lean::LeanF32;
+#[cfg(feature = "wobble")]
+use crate::lean::{each_joint, rx_dir, rx_tip, turn_z, turned, Angle, Turn};
+use crate::model::{ChainError, Model, Point};
+use crate::scalar::F32;
+use crate::table::Table;
+#[cfg(feature = "wobble")]
+use crate::table::{wobble::MAX_TERMS, MAX_JOINTS};
+#[cfg(feature = "wobble")]
+use core::mem::MaybeUninit;
+
+/// Largest z part (|f1·ẑ| + |f2·ẑ|, in the joint's z-axis frame) of a wobbling joint's two
+/// axes that the form takes: a bearing's tilt of a few mrad; the terms it leaves out grow
+/// with it (module docs). An arm past it runs the quaternion chain.
+pub const MAX_AXIS_Z: f64 = 0.01;
+
+/// One wobble term: the (sin hθ', cos hθ') coefficients of φx and φy.
+#[cfg(feature = "wobble")]
+#[derive(Clone, Copy, Debug, Default)]
+struct Term {
+    order: u32,
+    x: [f32; 2],
+    y: [f32; 2],
+}
+
+/// Most wobble terms of all joints together the form keeps (the table allows
+/// [`crate::table::wobble::MAX_TERMS`] a joint, 28 for seven joints): each copy of the chain is on the hub's stack
+/// at boot, and per-joint room for four took the qemu-m4f hub's stack peak to 64,732 of its
+/// 65,536 bytes (measured). An arm with more runs the quaternion chain.
+pub const MAX_LEAN_TERMS: usize = 16;
+
+/// One joint's wobble in the lean form (no terms where it has none).
+#[cfg(feature = "wobble")]
+#[derive(Clone, Copy, Debug, Default)]
+struct WobbleJoint {
+    /// Its terms, `terms[start..start + count]` of [`LeanWobble`], sorted by order
+    /// ([`Multiples`] only advances).
+    start: u8,
+    count: u8,
+    /// φz − ½ φx φy as φx (l_x + q_xx φx + q_xy φy) + φy (l_y + q_yy φy): (l_x, l_y, q_xx,
+    /// q_xy, q_yy).
+    z: [f32; 5],
+}
+
+/// The wobble's constants of an arm's lean form (empty without the `wobble` feature).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LeanWobble {
+    #[cfg(feature = "wobble")]
+    on: bool,
+    #[cfg(feature = "wobble")]
+    joints: [WobbleJoint; MAX_JOINTS],
+    #[cfg(feature = "wobble")]
+    terms: [Term; MAX_LEAN_TERMS],
+}
+
+impl LeanWobble {
+    /// Fills `self` (all zeros, off) with the wobble of `table`'s arm in the lean form, whose
+    /// joints' z-x-z Euler angles are `euler` ([`crate::lean`]): left off where no joint
+    /// wobbles; `false` where the form does not take it (an axis's z part past
+    /// [`MAX_AXIS_Z`], more than [`MAX_LEAN_TERMS`] terms). In place: a first version that
+    /// returned one took the qemu-m4f hub's stack peak from 64,732 to 65,332 bytes.
+    pub(crate) fn build_in(
+        &mut self,
+        table: &Table<'_>,
+        euler: &[[u32; 3]],
+    ) -> Result<bool, ChainError> {
+        #[cfg(feature = "wobble")]
+        {
+            use crate::lean::{mat_vec, rz, turn_cos_sin};
+            use crate::model::{sort_by_order, units, unpermute};
+            let n = euler.len();
+            let out = self;
+            let mut taken = 0usize;
+            for i in 0..n {
+                let w = table.joint_wobble(i);
+                if w.count == 0 {
+                    continue;
+                }
+                let no = i + 1;
+                let axis = table
+                    .joint(i)
+                    .ok_or(ChainError::Range { joint: no as u8 })?
+                    .axis;
+                // The axes in the joint's z-axis frame, then through Rz(b_i).
+                let turn_b = rz(euler[i][2]);
+                let f1 = mat_vec(&turn_b, unpermute(w.f1, axis));
+                let f2 = mat_vec(&turn_b, unpermute(w.f2, axis));
+                if f1[2].abs() + f2[2].abs() > MAX_AXIS_Z {
+                    return Ok(false);
+                }
+                let next = if i + 1 < n { euler[i + 1][0] } else { 0 };
+                let offset = euler[i][2].wrapping_add(next);
+                let used = usize::from(w.count).min(MAX_TERMS);
+                let Some(terms) = out.terms.get_mut(taken..taken + used) else {
+                    return Ok(false);
+                };
+                for (t, src) in terms.iter_mut().zip(&w.terms[..used]) {
+                    let order = u32::from(src.order);
+                    // θ = θ' − offset: (s, c) → (s cos hc + c sin hc, c cos hc − s sin hc).
+                    let (ch, sh) = turn_cos_sin(offset.wrapping_mul(order));
+                    let rot = |[s, c]: [f64; 2]| [s * ch + c * sh, c * ch - s * sh];
+                    let (a, b) = (rot(src.alpha), rot(src.beta));
+                    let along =
+                        |k: usize| [a[0] * f1[k] + b[0] * f2[k], a[1] * f1[k] + b[1] * f2[k]];
+                    *t = Term {
+                        order,
+                        x: units::<F32, 2>(along(0), no)?,
+                        y: units::<F32, 2>(along(1), no)?,
+                    };
+                }
+                sort_by_order(terms, |t| t.order);
+                let jw = &mut out.joints[i];
+                (jw.start, jw.count) = (taken as u8, used as u8);
+                taken += used;
+                // (A, B) = M⁻¹ (φx, φy), M = [[f1x, f2x], [f1y, f2y]], |det M| ≥ 1 − MAX_AXIS_Z²
+                // (unit orthogonal axes): A = ax·φ, B = bx·φ.
+                let det = f1[0] * f2[1] - f1[1] * f2[0];
+                let (ax, bx) = ([f2[1] / det, -f2[0] / det], [-f1[1] / det, f1[0] / det]);
+                // A f1z + B f2z, then ½ A B kz − ½ φx φy, kz = (f1 × f2)·ẑ = det.
+                let l = [0, 1].map(|k| ax[k] * f1[2] + bx[k] * f2[2]);
+                let h = 0.5 * det;
+                jw.z = units::<F32, 5>(
+                    [
+                        l[0],
+                        l[1],
+                        h * ax[0] * bx[0],
+                        h * (ax[0] * bx[1] + ax[1] * bx[0]) - 0.5,
+                        h * ax[1] * bx[1],
+                    ],
+                    no,
+                )?;
+                out.on = true;
+            }
+            Ok(true)
+        }
+        #[cfg(not(feature = "wobble"))]
+        {
+            let _ = (table, euler);
+            Ok(true)
+        }
+    }
+
+    /// Whether the arm wobbles (this module's pass runs; always `false` without the feature,
+    /// at compile time).
+    #[inline(always)]
+    pub(crate) fn on(&self) -> bool {
+        #[cfg(feature = "wobble")]
+        {
+            self.on
+        }
+        #[cfg(not(feature = "wobble"))]
+        {
+            false
+        }
+    }
+
+    /// Joint `i`'s φx, φy and φz − ½ φx φy at θ' (cos `c`, sin `s`); zeros where it does not
+    /// wobble.
+    #[cfg(feature = "wobble")]
+    #[inline(always)]
+    fn phi(&self, i: usize, c: f32, s: f32) -> [f32; 3] {
+        let j = &self.joints[i];
+        let mut m = Multiples::<F32>::new(c, s);
+        let (mut x, mut y) = (0.0f32, 0.0f32);
+        let start = usize::from(j.start);
+        // (A slice: `skip(start).take(count)` took 32 instructions a point more, measured.)
+        let terms = self
+            .terms
+            .get(start..start + usize::from(j.count))
+            .unwrap_or(&[]);
+        for t in terms {
+            m.advance(t.order);
+            x += m.s * t.x[0] + m.c * t.x[1];
+            y += m.s * t.y[0] + m.c * t.y[1];
+        }
+        let [lx, ly, qxx, qxy, qyy] = j.z;
+        [x, y, x * (lx + (qxx * x + qxy * y)) + y * (ly + qyy * y)]
+    }
+}
+
+/// The probe-ball centre and direction of `lean`'s arm with its wobble `wobble`, as
+/// [`crate::chain::Chain::eval`]. Out of line: the lean pass without the wobble stays the
+/// function it was.
+#[inline(never)]
+pub(crate) fn eval(
+    lean: &LeanF32,
+    wobble: &LeanWobble,
+    model: &Model<F32>,
+    counts: &[u32],
+    temp_mc: i32,
+) -> Result<Point<F32>, ChainError> {
+    #[cfg(feature = "wobble")]
+    {
+        // Six joints with power-of-two scales written out (the hubs' arms), any other arm
+        // looped, as the lean pass without the wobble.
+        if counts.len() == 6 && lean.pow2 {
+            run::<6, true>(lean, wobble, model, counts, temp_mc)
+        } else {
+            run::<0, false>(lean, wobble, model, counts, temp_mc)
+        }
+    }
+    #[cfg(not(feature = "wobble"))]
+    {
+        // Never called: `LeanWobble::on` is false.
+        let _ = (lean, wobble, model, counts, temp_mc);
+        Err(ChainError::Range { joint: 0 })
+    }
+}
+
+/// [`eval`] for `JOINTS` joints (0: as many as `counts` has); `POW2`: every joint's scale is
+/// a power of two.
+#[cfg(feature = "wobble")]
+#[inline(always)]
+fn run<const JOINTS: usize, const POW2: bool>(
+    lean: &LeanF32,
+    wobble: &LeanWobble,
+    model: &Model<F32>,
+    counts: &[u32],
+    temp_mc: i32,
+) -> Result<Point<F32>, ChainError> {
+    let dt = model.check(counts, temp_mc)?;
+    let n = if JOINTS > 0 { JOINTS } else { counts.len() }.min(MAX_JOINTS);
+    let mut angles = [const { MaybeUninit::<Angle>::uninit() }; MAX_JOINTS];
+    // φx, φy of each joint (zeros where it does not wobble).
+    let mut phis = [const { MaybeUninit::<[f32; 2]>::uninit() }; MAX_JOINTS];
+    let mut verticals = [const { MaybeUninit::<[f32; 2]>::uninit() }; MAX_JOINTS];
+    // Base to tip: the angles (φz in the error), φ, and the vertical up to the last compliant
+    // joint.
+    let mut zb = [0.0f32, 0.0, 1.0];
+    each_joint!(JOINTS, n, false, |i| {
+        let j = &lean.joints[i];
+        let (a, c, s) = j.reading::<POW2>(i, counts[i])?;
+        let [px, py, pz] = wobble.phi(i, c, s);
+        let e = j.harmonic_error(c, s) + pz;
+        angles[i].write(Angle { e, ..a });
+        phis[i].write([px, py]);
+        if i < lean.vertical_joints {
+            // Rx(−α), Rx(−φx), Ry(−φy), Rz(−θ' − e), the small turns to first order.
+            let [ca, sa] = j.alpha_whole;
+            let (y, z) = (ca * zb[1] + sa * zb[2], ca * zb[2] - sa * zb[1]);
+            let (y, z) = (y + px * z, z - px * y);
+            let (x, z) = (zb[0] - py * z, z + py * zb[0]);
+            let (x, y) = (c * x + s * y, c * y - s * x);
+            zb = [x + e * y, y - e * x, z];
+            // Written for every joint up to the last compliant one (read only where
+            // compliant), as the lean pass does.
+            verticals[i].write([zb[0], zb[1]]);
+        }
+    });
+
+    // Tip to base.
+    let mut w = [0.0f32; 3];
+    let mut d = lean.probe_dir;
+    each_joint!(JOINTS, n, true, |i| {
+        let j = &lean.joints[i];
+        // SAFETY: the first pass wrote every angle and φ below n (it returns early only with
+        // an error, before this pass).
+        let (a, [px, py]) = unsafe { (angles[i].assume_init_read(), phis[i].assume_init_read()) };
+        let link = j.link_at(dt);
+        w = if i + 1 == n {
+            link
+        } else {
+            [w[0] + link[0], w[1] + link[1], w[2] + link[2]]
+        };
+        let mut e = a.e;
+        if j.has_gravity {
+            // SAFETY: the first pass wrote the vertical of every joint up to the last
+            // compliant one.
+            let v = unsafe { verticals[i].assume_init_read() };
+            e += j.gravity * (w[0] * v[1] - w[1] * v[0]);
+        }
+        // Rz(θ' + e), e with φz's part.
+        let (sin, omc) = turned(a.sin, a.omc, e);
+        (w, d) = turn_z(a.q, sin, omc, w, d);
+        // Ry(φy), to second order, on the tip and the direction.
+        let h = 0.5 * (py * py);
+        w = [
+            w[0] + (py * w[2] - h * w[0]),
+            w[1],
+            w[2] - (py * w[0] + h * w[2]),
+        ];
+        d = [
+            d[0] + (py * d[2] - h * d[0]),
+            d[1],
+            d[2] - (py * d[0] + h * d[2]),
+        ];
+        // Rx(α + φx): the tip's correction and the direction's cos α, sin α turned by φx.
+        let al = &j.alpha_turn;
+        let (sin, omc) = turned(al.sin, al.omc, px);
+        w = rx_tip(
+            &Turn {
+                q: al.q,
+                sin,
+                omc,
+                cos: 1.0 - omc,
+            },
+            w,
+        );
+        let [ca, sa] = j.alpha_whole;
+        let h = 0.5 * (px * px);
+        d = rx_dir([ca - (sa * px + ca * h), sa + (ca * px - sa * h)], d);
+    });
+    // Rz(a_1).
+    (w, d) = lean.rz_base(w, d);
+    Ok(Point { xyz: w, dir: d })
+}
+
+#[cfg(all(test, feature = "wobble"))]
+mod tests {
+    use super::*;
+    use crate::chain::Chain;
+    use crate::lean::LeanForm;
+    use crate::table::wobble::{WobbleData, WobbleTerm};
+    use crate::table::{tests::sample, TableData, FLAG_GEOMETRIC, MAX_TABLE_LEN};
+
+    fn term(order: u16, alpha: [f64; 2], beta: [f64; 2]) -> WobbleTerm {
+        WobbleTerm { order, alpha, beta }
+    }
+
+    /// The sample arm (first-order gravity) with a wobble on five of its six joints: orders
+    /// 1 to 64, up to four terms, axes turned about z and tilted by `tilt` rad as the table
+    /// builder makes them (f1 = Rz(−Δθ) Ry(−tilt) x̂, f2 = Rz(−Δθ) ŷ), a worn bearing's
+    /// 1e-4 rad on each term times `size`.
+    fn wobbling(tilt: f64, size: f64) -> TableData {
+        let mut data = sample();
+        for j in data.joints.iter_mut().filter(|j| j.gravity != 0.0) {
+            j.gravity = 1e-8;
+        }
+        let terms: [&[WobbleTerm]; 6] = [
+            &[term(1, [-3.2e-5, -8.4e-5], [-4.1e-5, -4.7e-5])],
+            &[
+                term(2, [5.3e-5, 4.5e-5], [-5.7e-5, 5.6e-5]),
+                term(4, [1.5e-5, -4.3e-5], [-2.5e-5, 3.3e-5]),
+            ],
+            &[],
+            &[
+                term(1, [1.4e-5, 7.0e-5], [5.8e-5, -9.7e-6]),
+                term(3, [9.3e-6, -4.2e-5], [-6.0e-6, 1.7e-5]),
+                term(4, [2e-5, 0.0], [0.0, -2e-5]),
+                term(64, [0.0, 1e-5], [-1e-5, 0.0]),
+            ],
+            &[term(2, [1.6e-5, -4.8e-5], [3.9e-5, -7.7e-5])],
+            &[
+                term(4, [-1.5e-5, 3.8e-5], [-3.1e-5, -1.2e-5]),
+                term(3, [1.7e-5, -7.3e-6], [3.9e-6, 6.4e-6]),
+            ],
+        ];
+        for (k, t) in terms.iter().enumerate() {
+            if t.is_empty() {
+                continue;
+            }
+            let turn = 0.4 + k as f64;
+            let (c, s) = (turn.cos(), turn.sin());
+            let (ct, st) = (tilt.cos(), tilt.sin());
+            // In the z-axis frame, then in the file's frame of the joint's axis (the inverse
+            // relabelling).
+            let back = [1, 0, 2][usize::from(data.joints[k].axis.min(2))];
+            let mut w = WobbleData {
+                f1: crate::model::unpermute([c * ct, -s * ct, st], back),
+                f2: crate::model::unpermute([s, c, 0.0], back),
+                count: t.len() as u8,
+                ..WobbleData::default()
+            };
+            for (dst, src) in w.terms.iter_mut().zip(*t) {
+                *dst = WobbleTerm {
+                    alpha: src.alpha.map(|a| a * size),
+                    beta: src.beta.map(|b| b * size),
+                    ..*src
+                };
+            }
+            data.wobble[k] = w;
+        }
+        data.flags = data.content_flags() | FLAG_GEOMETRIC;
+        data
+    }
+
+    fn chain_of(data: &TableData) -> Chain<F32> {
+        let mut buf = [0u8; MAX_TABLE_LEN];
+        let len = data.encode(&mut buf).unwrap();
+        Chain::<F32>::new(&Table::parse(&buf[..len]).unwrap()).unwrap()
+    }
+
+    fn counts_of(k: u32) -> [u32; 6] {
+        core::array::from_fn(|j| (k * 77_773 + j as u32 * 191_111) % (1 << 20))
+    }
+
+    /// The two copies of the pass (six joints written out, looped) give the same numbers bit
+    /// for bit; they agree with the quaternion chain with its wobble to f32's rounding (under
+    /// 0.5 µm, 1e-6 on the direction), while the wobble moves the tip by far more than that
+    /// (the lean pass without it misses by micrometres); a count out of range is refused by
+    /// each, naming its joint.
+    #[test]
+    fn the_copies_agree_and_meet_the_quaternion_chain() {
+        let data = wobbling(0.003, 1.0);
+        let chain = chain_of(&data);
+        assert!(chain.is_lean());
+        let mut buf = [0u8; MAX_TABLE_LEN];
+        let len = data.encode(&mut buf).unwrap();
+        let table = Table::parse(&buf[..len]).unwrap();
+        let model = Model::<F32>::new(&table).unwrap();
+        let lean = LeanF32::build(&table, &model, true).unwrap();
+        let wobble = lean.wobble;
+        assert!(lean.applies() && lean.pow2 && wobble.on());
+        // The same arm's lean pass with the wobble left out.
+        let mut still = lean;
+        still.wobble = LeanWobble::default();
+        let bits = |p: &Point<F32>| (p.xyz.map(f32::to_bits), p.dir.map(f32::to_bits));
+        let mut moved = 0i64;
+        for k in 0..200u32 {
+            let counts = counts_of(k);
+            let temp = 10_000 + 125 * k as i32;
+            let a = run::<6, true>(&lean, &wobble, &model, &counts, temp).unwrap();
+            let b = run::<0, false>(&lean, &wobble, &model, &counts, temp).unwrap();
+            assert_eq!(bits(&a), bits(&b), "{counts:?}");
+            assert_eq!(bits(&a), bits(&chain.eval(&counts, temp).unwrap()));
+            let q = chain.eval_quaternion(&counts, temp).unwrap();
+            let (pa, pq) = (a.xyz_nm(), q.xyz_nm());
+            let (da, dq) = (a.dir_e9(), q.dir_e9());
+            for m in 0..3 {
+                assert!((pa[m] - pq[m]).abs() < 500, "{counts:?}: {pa:?} {pq:?}");
+                assert!((da[m] - dq[m]).abs() < 1_000, "{counts:?}: {da:?} {dq:?}");
+            }
+            let s = still.eval(&model, &counts, temp).unwrap().xyz_nm();
+            moved = moved.max((0..3).map(|m| i64::from(s[m] - pa[m]).abs()).max().unwrap());
+        }
+        assert!(moved > 20_000, "the wobble moves the tip by {moved} nm");
+        let mut counts = [5u32; 6];
+        counts[3] = 1 << 20;
+        let want = Err(ChainError::CountOutOfRange { joint: 4 });
+        let r6 = run::<6, true>(&lean, &wobble, &model, &counts, 20_000);
+        let r0 = run::<0, false>(&lean, &wobble, &model, &counts, 20_000);
+        assert_eq!(r6.map(|_| ()), want);
+        assert_eq!(r0.map(|_| ()), want);
+    }
+
+    /// At the table's largest wobble (Σ |coefficients| up to 0.98e-3 a joint, the limit 1e-3) the left-out third
+    /// order terms stay under the module's bound: the form within 1 µm of the quaternion
+    /// chain, 2e-6 on the direction (the two chains' own roundings included).
+    #[test]
+    fn the_largest_wobble_stays_second_order_exact() {
+        let chain = chain_of(&wobbling(0.003, 3.0));
+        assert!(chain.is_lean());
+        for k in 0..200u32 {
+            let counts = counts_of(k);
+            let (a, q) = (
+                chain.eval(&counts, 20_000).unwrap(),
+                chain.eval_quaternion(&counts, 20_000).unwrap(),
+            );
+            let (pa, pq, da, dq) = (a.xyz_nm(), q.xyz_nm(), a.dir_e9(), q.dir_e9());
+            for m in 0..3 {
+                assert!((pa[m] - pq[m]).abs() < 1_000, "{counts:?}: {pa:?} {pq:?}");
+                assert!((da[m] - dq[m]).abs() < 2_000, "{counts:?}: {da:?} {dq:?}");
+            }
+        }
+    }
+
+    /// An axis whose z part is past [`MAX_AXIS_Z`], or more than [`MAX_LEAN_TERMS`] terms in
+    /// all, are left to the quaternion chain; just under either the lean form takes the arm.
+    #[test]
+    fn a_steep_axis_or_many_terms_are_left_to_the_quaternion_chain() {
+        assert!(chain_of(&wobbling(0.009, 1.0)).is_lean());
+        assert!(!chain_of(&wobbling(0.011, 1.0)).is_lean());
+        // 10 terms; four on joint 3 (14), then joint 1's up to four (16, 17).
+        let mut data = wobbling(0.003, 1.0);
+        // (Joint 3's axes as joint 1's: both turn about z.)
+        data.wobble[2] = WobbleData {
+            terms: data.wobble[3].terms,
+            count: 4,
+            ..data.wobble[0]
+        };
+        assert!(chain_of(&data).is_lean());
+        data.wobble[0].terms[1] = term(5, [1e-5, 0.0], [0.0, 1e-5]);
+        data.wobble[0].count = 2;
+        data.wobble[0].terms[2] = term(6, [1e-5, 0.0], [0.0, 1e-5]);
+        data.wobble[0].count = 3;
+        assert!(chain_of(&data).is_lean());
+        data.wobble[0].terms[3] = term(7, [1e-5, 0.0], [0.0, 1e-5]);
+        data.wobble[0].count = 4;
+        assert!(!chain_of(&data).is_lean());
+    }
+}
