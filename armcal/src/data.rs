@@ -166,6 +166,12 @@ pub struct Unit {
 }
 
 impl Layout {
+    /// Each `length` group's two ends (the rows probing ball `a`, then those probing `b`): the
+    /// rows that share one centre, which a held-out check judges by their deviations from it.
+    pub fn length_ends(&self) -> impl Iterator<Item = &Vec<usize>> {
+        self.length.iter().flat_map(|l| [&l.a, &l.b])
+    }
+
     /// The units, in the order the calibration visits its residual blocks: `point` rows one
     /// by one, then `spat`, `length` (ball `a`'s rows, then `b`'s) and `sphere` groups.
     pub fn units(&self) -> Vec<Unit> {

@@ -136,7 +136,7 @@ fn spat_probing(fit: &Fit, data: &Dataset, budget: &Budget) -> Option<(f64, usiz
         .spat
         .iter()
         .map(|g| &g.rows)
-        .chain(layout.length.iter().flat_map(|g| [&g.a, &g.b]))
+        .chain(layout.length_ends())
         .map(|g| (g, 3, 3))
         // A sphere row's residual is radial: one equation per row, less the centre's three.
         .chain(layout.sphere.iter().map(|g| (&g.rows, 1, 3)));

@@ -67,12 +67,7 @@ impl Support {
             .iter()
             .map(|&i| vec![i])
             .chain(layout.spat.iter().map(|g| g.rows.clone()))
-            .chain(
-                layout
-                    .length
-                    .iter()
-                    .flat_map(|g| [g.a.clone(), g.b.clone()]),
-            )
+            .chain(layout.length_ends().cloned())
             .chain(layout.sphere.iter().map(|g| g.rows.clone()));
         let mut count = 0;
         for (k, rows) in places.enumerate() {

@@ -192,12 +192,11 @@ pub fn row_covariances(
             m: 1.0,
         });
     }
-    let groups = layout.spat.iter().map(|g| g.rows.clone()).chain(
-        layout
-            .length
-            .iter()
-            .flat_map(|g| [g.a.clone(), g.b.clone()]),
-    );
+    let groups = layout
+        .spat
+        .iter()
+        .map(|g| g.rows.clone())
+        .chain(layout.length_ends().cloned());
     for rows in groups {
         if rows.len() < 2 || !rows.iter().all(|&i| judged[i]) {
             continue;

@@ -159,7 +159,7 @@ fn hold_out(unit: &Unit, groups: &[i64], g: i64, rule: Rule) -> Result<Held, sup
     let test = unit.sessions_data(&[g]);
     let res = residuals(&fit.arm, &test, None);
     let mut probings = Vec::new();
-    for end in test.layout().length.iter().flat_map(|l| [&l.a, &l.b]) {
+    for end in test.layout().length_ends() {
         let n = end.len() as f64;
         for (i, u, trace) in socket_u95(&fit.arm, &budget, &test, end) {
             let d = res.rows[i].norm();
@@ -200,13 +200,7 @@ fn hold_out(unit: &Unit, groups: &[i64], g: i64, rule: Rule) -> Result<Held, sup
 /// writes it: with the leverage rule its pose part is kept apart and scaled per probing by
 /// its tip's leverage ratio, by the product's own propagation.
 fn nested_u95(arm: &Arm, nested: &Budget, test: &Dataset) -> Vec<(usize, f64)> {
-    let ends = |d: &Dataset| -> Vec<Vec<usize>> {
-        d.layout()
-            .length
-            .iter()
-            .flat_map(|l| [l.a.clone(), l.b.clone()])
-            .collect()
-    };
+    let ends = |d: &Dataset| -> Vec<Vec<usize>> { d.layout().length_ends().cloned().collect() };
     // The nested budget as written, the leverage-scaled pose part applied per probing by
     // the product's own propagation (`propagate::group_deviations`).
     ends(test)
@@ -258,7 +252,7 @@ pub fn unit_coverage(unit: &Unit, rule: Rule) -> Option<UnitCoverage> {
             .max(0.0)
             .sqrt();
         model_sum += b.model_mm;
-        for end in h.test.layout().length.iter().flat_map(|l| [&l.a, &l.b]) {
+        for end in h.test.layout().length_ends() {
             for (i, u, _) in socket_u95(&h.arm, &b, &h.test, end) {
                 let d = h.probings.iter().find(|p| p.0 == i).map_or(0.0, |p| p.1);
                 inside_model += usize::from(d <= u);
@@ -294,7 +288,7 @@ pub fn unit_coverage(unit: &Unit, rule: Rule) -> Option<UnitCoverage> {
                 let mut b = h.nested.clone();
                 b.cov = &b.cov + &h.pose * (m * m - 1.0);
                 b.pose = b.pose.map(|p| p.scaled(m));
-                for end in h.test.layout().length.iter().flat_map(|l| [&l.a, &l.b]) {
+                for end in h.test.layout().length_ends() {
                     for (i, u, _) in socket_u95(&h.arm, &b, &h.test, end) {
                         let d = h.probings.iter().find(|p| p.0 == i).map_or(0.0, |p| p.1);
                         inside += usize::from(d <= u);
@@ -408,7 +402,7 @@ pub fn two_group_scores_by_form(unit: &Unit, lambdas: &[f64]) -> Vec<(i64, Vec<f
             let test = unit.sessions_data(&[s]);
             let res = residuals(&fit.arm, &test, None);
             let test_lev = lev(&test);
-            for end in test.layout().length.iter().flat_map(|l| [&l.a, &l.b]) {
+            for end in test.layout().length_ends() {
                 let m = 1.0 - 1.0 / end.len() as f64;
                 let (rows, d): (Vec<_>, Vec<_>) =
                     propagate::group_deviations(&fit.arm, &rest, &test, end)

@@ -107,11 +107,7 @@ pub struct UnitRows {
 
 /// The ends (bar ends) of a dataset: the groups whose probings share a centre.
 fn ends(d: &Dataset) -> Vec<Vec<usize>> {
-    d.layout()
-        .length
-        .iter()
-        .flat_map(|l| [l.a.clone(), l.b.clone()])
-        .collect()
+    d.layout().length_ends().cloned().collect()
 }
 
 /// Per row of `rows` of `data`: (row, tr of the deviation under `b`) for every end.
