@@ -441,7 +441,7 @@ impl LeanForm<F32> for LeanF32 {
         // same code, looped or testing the joints' flags. An arm with an axis wobble runs the
         // wobble's pass instead.
         if self.wobble.on() {
-            return crate::lean_wobble::eval(self, &self.wobble, model, counts, temp_mc);
+            return crate::lean_wobble::eval(self, model, counts, temp_mc);
         }
         match (counts.len(), self.pow2) {
             (6, true) if self.gravity_mask == HINGES && self.alpha_quarters == PERPENDICULAR => {

@@ -222,13 +222,12 @@ impl LeanWobble {
     }
 }
 
-/// The probe-ball centre and direction of `lean`'s arm with its wobble `wobble`, as
+/// The probe-ball centre and direction of `lean`'s arm with its wobble (`lean.wobble`), as
 /// [`crate::chain::Chain::eval`]. Out of line: the lean pass without the wobble stays the
 /// function it was.
 #[inline(never)]
 pub(crate) fn eval(
     lean: &LeanF32,
-    wobble: &LeanWobble,
     model: &Model<F32>,
     counts: &[u32],
     temp_mc: i32,
@@ -238,15 +237,15 @@ pub(crate) fn eval(
         // Six joints with power-of-two scales written out (the hubs' arms), any other arm
         // looped, as the lean pass without the wobble.
         if counts.len() == 6 && lean.pow2 {
-            run::<6, true>(lean, wobble, model, counts, temp_mc)
+            run::<6, true>(lean, model, counts, temp_mc)
         } else {
-            run::<0, false>(lean, wobble, model, counts, temp_mc)
+            run::<0, false>(lean, model, counts, temp_mc)
         }
     }
     #[cfg(not(feature = "wobble"))]
     {
         // Never called: `LeanWobble::on` is false.
-        let _ = (lean, wobble, model, counts, temp_mc);
+        let _ = (lean, model, counts, temp_mc);
         Err(ChainError::Range { joint: 0 })
     }
 }
@@ -257,11 +256,11 @@ pub(crate) fn eval(
 #[inline(always)]
 fn run<const JOINTS: usize, const POW2: bool>(
     lean: &LeanF32,
-    wobble: &LeanWobble,
     model: &Model<F32>,
     counts: &[u32],
     temp_mc: i32,
 ) -> Result<Point<F32>, ChainError> {
+    let wobble = &lean.wobble;
     let dt = model.check(counts, temp_mc)?;
     let n = if JOINTS > 0 { JOINTS } else { counts.len() }.min(MAX_JOINTS);
     let mut angles = [const { MaybeUninit::<Angle>::uninit() }; MAX_JOINTS];
@@ -443,8 +442,7 @@ mod tests {
         let table = Table::parse(&buf[..len]).unwrap();
         let model = Model::<F32>::new(&table).unwrap();
         let lean = LeanF32::build(&table, &model, true).unwrap();
-        let wobble = lean.wobble;
-        assert!(lean.applies() && lean.pow2 && wobble.on());
+        assert!(lean.applies() && lean.pow2 && lean.wobble.on());
         // The same arm's lean pass with the wobble left out.
         let mut still = lean;
         still.wobble = LeanWobble::default();
@@ -453,8 +451,8 @@ mod tests {
         for k in 0..200u32 {
             let counts = counts_of(k);
             let temp = 10_000 + 125 * k as i32;
-            let a = run::<6, true>(&lean, &wobble, &model, &counts, temp).unwrap();
-            let b = run::<0, false>(&lean, &wobble, &model, &counts, temp).unwrap();
+            let a = run::<6, true>(&lean, &model, &counts, temp).unwrap();
+            let b = run::<0, false>(&lean, &model, &counts, temp).unwrap();
             assert_eq!(bits(&a), bits(&b), "{counts:?}");
             assert_eq!(bits(&a), bits(&chain.eval(&counts, temp).unwrap()));
             let q = chain.eval_quaternion(&counts, temp).unwrap();
@@ -471,8 +469,8 @@ mod tests {
         let mut counts = [5u32; 6];
         counts[3] = 1 << 20;
         let want = Err(ChainError::CountOutOfRange { joint: 4 });
-        let r6 = run::<6, true>(&lean, &wobble, &model, &counts, 20_000);
-        let r0 = run::<0, false>(&lean, &wobble, &model, &counts, 20_000);
+        let r6 = run::<6, true>(&lean, &model, &counts, 20_000);
+        let r0 = run::<0, false>(&lean, &model, &counts, 20_000);
         assert_eq!(r6.map(|_| ()), want);
         assert_eq!(r0.map(|_| ()), want);
     }
