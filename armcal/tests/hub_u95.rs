@@ -357,6 +357,7 @@ fn pose_for(
             .collect(),
         shrink,
         leverage_mean: mean,
+        joints: None,
     }
 }
 

@@ -1281,6 +1281,111 @@ pose_leverage_mean = 3.5e-5
         assert!(e.message.contains("limit"), "{e}");
     }
 
+    /// The joint leverage of a six-joint arm: μ and a diagonal-plus-one W.
+    const JOINTS: &str = r#"pose_joint_mean = [0.1, -0.5, 1.0, 0.0, 0.25, 0.0]
+pose_joint_weight = [
+  2.0, 0.5, 0.0, 0.0, 0.0, 0.0,
+  0.5, 1.0, 0.0, 0.0, 0.0, 0.0,
+  0.0, 0.0, 1.5, 0.0, 0.0, 0.0,
+  0.0, 0.0, 0.0, 0.8, 0.0, 0.0,
+  0.0, 0.0, 0.0, 0.0, 0.7, 0.0,
+  0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+]
+"#;
+
+    /// Issue 27: the joint leverage's keys read, give ℓJ = (θ − μ)ᵀ W (θ − μ), and write
+    /// back bit for bit.
+    #[test]
+    fn the_joint_leverage_round_trips_and_is_its_formula() {
+        let p = parse(&format!("{FULL}{BUDGET}{POSE}{JOINTS}")).unwrap();
+        let u = p.uncertainty.clone().unwrap();
+        let j = u.pose.as_ref().unwrap().joints.clone().unwrap();
+        assert_eq!(j.mean[1], -0.5);
+        assert_eq!(j.ratio(&j.mean), 0.0);
+        // θ − μ = (1, 1, 0, 0, 0, 5): 2 + 2·0.5 + 1 = 4; joint 6 did not move (W row 0).
+        let mut theta = j.mean.clone();
+        theta[0] += 1.0;
+        theta[1] += 1.0;
+        theta[5] += 5.0;
+        assert!((j.ratio(&theta) - 4.0).abs() < 1e-12, "{}", j.ratio(&theta));
+        assert!(
+            !p.unknown_keys.iter().any(|k| k.starts_with("uncertainty")),
+            "{:?}",
+            p.unknown_keys
+        );
+        let mut odd = u.clone();
+        odd.pose.as_mut().unwrap().joints.as_mut().unwrap().mean[0] = 1.0 / 3.0;
+        for u in [u, odd] {
+            let back = parse(&write_with(&p.arm, Some(&u), &[])).unwrap();
+            assert_eq!(back.uncertainty.unwrap(), u);
+        }
+    }
+
+    /// Issue 27: a joint leverage that is not one is refused with its key and index.
+    #[test]
+    fn joint_leverage_refusals_name_the_key() {
+        let cases = [
+            (
+                "pose_joint_weight = [",
+                "pose_joint_wait = [",
+                "uncertainty.pose_joint_weight",
+                "missing",
+            ),
+            (
+                "pose_joint_mean = [",
+                "pose_joint_man = [",
+                "uncertainty.pose_joint_mean",
+                "missing",
+            ),
+            (
+                "[0.1, -0.5, 1.0, 0.0, 0.25, 0.0]",
+                "[0.1, -0.5, 1.0, 0.0, 0.25]",
+                "uncertainty.pose_joint_mean",
+                "5 values",
+            ),
+            (
+                "[0.1, -0.5,",
+                "[0.1, -500.0,",
+                "uncertainty.pose_joint_mean[1]",
+                "beyond",
+            ),
+            (
+                "[0.1, -0.5,",
+                "[0.1, nan,",
+                "uncertainty.pose_joint_mean[1]",
+                "finite",
+            ),
+            (
+                "  0.5, 1.0, 0.0",
+                "  0.4, 1.0, 0.0",
+                "uncertainty.pose_joint_weight[6]",
+                "symmetric",
+            ),
+            (
+                "  2.0, 0.5,",
+                "  -2.0, 0.5,",
+                "uncertainty.pose_joint_weight",
+                "semi-definite",
+            ),
+            (
+                "  0.0, 0.0, 0.0, 0.0, 0.0, 0.0,\n]",
+                "]",
+                "uncertainty.pose_joint_weight",
+                "30 values",
+            ),
+        ];
+        for (from, to, path, says) in cases {
+            let joints = JOINTS.replacen(from, to, 1);
+            assert_ne!(joints, JOINTS, "{from}");
+            let e = parse(&format!("{FULL}{BUDGET}{POSE}{joints}")).unwrap_err();
+            assert_eq!(e.path, path, "{to}: {e}");
+            assert!(e.message.contains(says), "{to}: {e}");
+        }
+        // Without the pose part the joint keys have nothing to widen.
+        let e = parse(&format!("{FULL}{BUDGET}{JOINTS}")).unwrap_err();
+        assert_eq!(e.path, "uncertainty.pose_joint_mean", "{e}");
+    }
+
     /// Issue 27, F1: a zero variance beside a non-zero covariance (eigenvalue −0.6e-6) passed
     /// the correlation matrix's check, which cannot see a zero variance; refused at the entry.
     #[test]

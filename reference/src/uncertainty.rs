@@ -204,6 +204,44 @@ pub struct PoseLeverage {
     pub shrink: f64,
     /// The calibration rows' mean of tr(J C_fit Jᵀ) (mm²), > 0.
     pub leverage_mean: f64,
+    /// The joint-space leverage (keys `pose_joint_mean`, `pose_joint_weight`); `None` when
+    /// the file has none (the factor is then max(1, ℓ)).
+    pub joints: Option<JointLeverage>,
+}
+
+/// The joint-space leverage ratio ℓJ of a reading (issue 27, keys `pose_joint_mean` and
+/// `pose_joint_weight` of `[uncertainty]`, proposed in `docs/spec-reading.md`).
+///
+/// The tip's ℓ (above) measures how little hold the calibration's design gave the parameters
+/// *at the reading's tip*; on real arms the model's misfit also grows where the arm's *joint
+/// configuration* is one the calibration did not see (a raised artefact bends shoulder and
+/// elbow otherwise: MUKCa kuka_14 `raised_left`, panda_1 `back-high`), whatever the tip's ℓ.
+/// ℓJ = (θ − μ)ᵀ W (θ − μ), with θ the reading's joint angles as the measured-data file gives
+/// them (rad), μ the calibration rows' mean and W their inverse covariance scaled so that
+/// ℓJ's mean over the calibration rows is 1 (W = Σ⁻¹ · n / (k (n − 1)) for n rows and k
+/// joints that moved; rows and columns of joints that did not move are 0). With it the
+/// factor on the pose part is max(1, ℓ, ℓJ).
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointLeverage {
+    /// μ: one value per joint (rad).
+    pub mean: Vec<f64>,
+    /// W: joints² values, row-major, symmetric positive semi-definite (1/rad²).
+    pub weight: Vec<f64>,
+}
+
+impl JointLeverage {
+    /// ℓJ of joint angles `theta` (rad): (θ − μ)ᵀ W (θ − μ), ≥ 0. Angles beyond the joints
+    /// the file gives are ignored; missing ones count as at the mean.
+    pub fn ratio(&self, theta: &[f64]) -> f64 {
+        let k = self.mean.len();
+        let d: Vec<f64> = (0..k)
+            .map(|j| theta.get(j).map_or(0.0, |t| t - self.mean[j]))
+            .collect();
+        let q: f64 = (0..k)
+            .map(|i| d[i] * (0..k).map(|j| self.weight[i * k + j] * d[j]).sum::<f64>())
+            .sum();
+        q.max(0.0)
+    }
 }
 
 /// The most columns `pose_factor` may have: D's rank r. The host's estimate gives one
@@ -252,10 +290,19 @@ const KEYS: &[&str] = &[
     "pose_factor",
     "pose_shrink",
     "pose_leverage_mean",
+    "pose_joint_mean",
+    "pose_joint_weight",
 ];
 
 /// The pose part's keys: all three or none.
 const POSE_KEYS: [&str; 3] = ["pose_factor", "pose_shrink", "pose_leverage_mean"];
+
+/// The joint leverage's keys: both or none, and only with [`POSE_KEYS`].
+const JOINT_KEYS: [&str; 2] = ["pose_joint_mean", "pose_joint_weight"];
+
+/// The largest |μ| a joint's mean angle may have (rad): a few turns, far beyond any joint's
+/// range, so that a misplaced unit (degrees, counts) is refused where it is read.
+pub const JOINT_MEAN_LIMIT: f64 = 64.0;
 
 fn err(path: impl Into<String>, message: impl Into<String>) -> CalFileError {
     CalFileError {
@@ -317,7 +364,7 @@ pub fn parse(
     }
     let parameters = parameters(t.get("parameters"), arm)?;
     let covariance = covariance(t.get("covariance"), &parameters, limits)?;
-    let pose = pose(t, &parameters, &covariance, limits)?;
+    let pose = pose(t, &parameters, &covariance, limits, arm.dof())?;
     let opt = |key: &str, limit: f64| -> Result<f64, CalFileError> {
         t.get(key).map_or(Ok(0.0), |v| {
             non_negative(v, &format!("uncertainty.{key}"), limit)
@@ -364,6 +411,7 @@ fn pose(
     parameters: &[Param],
     covariance: &[f64],
     limits: &Limits,
+    dof: usize,
 ) -> Result<Option<PoseLeverage>, CalFileError> {
     let present: Vec<&str> = POSE_KEYS
         .iter()
@@ -371,6 +419,13 @@ fn pose(
         .filter(|k| t.contains_key(*k))
         .collect();
     if present.is_empty() {
+        if let Some(k) = JOINT_KEYS.iter().find(|k| t.contains_key(**k)) {
+            return Err(err(
+                format!("uncertainty.{k}"),
+                "the joint leverage widens the pose part: it needs pose_factor, pose_shrink \
+                 and pose_leverage_mean",
+            ));
+        }
         return Ok(None);
     }
     if let Some(missing) = POSE_KEYS.iter().find(|k| !t.contains_key(**k)) {
@@ -441,6 +496,7 @@ fn pose(
         factor,
         shrink,
         leverage_mean,
+        joints: joints(t, dof)?,
     };
     // covariance − D Dᵀ, judged on the covariance's correlation scale (its own diagonal):
     // what rounding leaves of a zero C_fit is then a rounding-sized eigenvalue, not a NaN.
@@ -485,6 +541,102 @@ fn pose(
 /// The least eigenvalue a covariance's correlation matrix may have: rounding, not a
 /// negative variance.
 const SEMI_DEFINITE_TOLERANCE: f64 = 1e-8;
+
+/// A finite number at `path`.
+fn finite(x: &Value, path: &str) -> Result<f64, CalFileError> {
+    match x {
+        Value::Float(f) if f.is_finite() => Ok(*f),
+        Value::Integer(i) => Ok(*i as f64),
+        _ => Err(err(path, "must be a finite number")),
+    }
+}
+
+/// The joint leverage: `pose_joint_mean` (one angle a joint, |μ| ≤ [`JOINT_MEAN_LIMIT`])
+/// and `pose_joint_weight` (joints² numbers, row-major, symmetric and positive
+/// semi-definite to rounding), both or neither.
+fn joints(t: &Table, dof: usize) -> Result<Option<JointLeverage>, CalFileError> {
+    let present: Vec<&str> = JOINT_KEYS
+        .iter()
+        .copied()
+        .filter(|k| t.contains_key(*k))
+        .collect();
+    if present.is_empty() {
+        return Ok(None);
+    }
+    if let Some(missing) = JOINT_KEYS.iter().find(|k| !t.contains_key(**k)) {
+        return Err(err(
+            format!("uncertainty.{missing}"),
+            format!(
+                "missing: the joint leverage needs pose_joint_mean and pose_joint_weight \
+                 together (the file has {})",
+                present.join(", ")
+            ),
+        ));
+    }
+    let numbers = |key: &str, len: usize, what: &str| -> Result<Vec<f64>, CalFileError> {
+        let path = format!("uncertainty.{key}");
+        let a = t[key]
+            .as_array()
+            .ok_or_else(|| err(&path, format!("must be an array of {what}")))?;
+        if a.len() != len {
+            return Err(err(
+                &path,
+                format!(
+                    "{} values; this arm's {dof} joints need {len} ({what})",
+                    a.len()
+                ),
+            ));
+        }
+        a.iter()
+            .enumerate()
+            .map(|(i, x)| finite(x, &format!("{path}[{i}]")))
+            .collect()
+    };
+    let mean = numbers("pose_joint_mean", dof, "angles in rad, one a joint")?;
+    if let Some((i, x)) = mean
+        .iter()
+        .enumerate()
+        .find(|(_, x)| x.abs() > JOINT_MEAN_LIMIT)
+    {
+        return Err(err(
+            format!("uncertainty.pose_joint_mean[{i}]"),
+            format!("{x:e} rad is beyond {JOINT_MEAN_LIMIT} rad: not a joint's mean angle"),
+        ));
+    }
+    const WEIGHT: &str = "uncertainty.pose_joint_weight";
+    let weight = numbers("pose_joint_weight", dof * dof, "joints² numbers, row-major")?;
+    let w = DMatrix::from_row_slice(dof, dof, &weight);
+    let scale = w.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    for i in 0..dof {
+        for j in 0..i {
+            if (w[(i, j)] - w[(j, i)]).abs() > 1e-9 * scale {
+                return Err(err(
+                    format!("{WEIGHT}[{}]", i * dof + j),
+                    format!(
+                        "{:e} differs from its transpose [{}] ({:e}): the weight must be \
+                         symmetric",
+                        w[(i, j)],
+                        j * dof + i,
+                        w[(j, i)]
+                    ),
+                ));
+            }
+        }
+    }
+    if dof > 0 && scale > 0.0 {
+        let min = SymmetricEigen::new(&w / scale).eigenvalues.min();
+        if min < -SEMI_DEFINITE_TOLERANCE {
+            return Err(err(
+                WEIGHT,
+                format!(
+                    "not positive semi-definite (relative eigenvalue {min:e}): a joint \
+                     configuration would get a negative leverage"
+                ),
+            ));
+        }
+    }
+    Ok(Some(JointLeverage { mean, weight }))
+}
 
 fn parameters(v: Option<&Value>, arm: &Arm) -> Result<Vec<Param>, CalFileError> {
     let Some(v) = v else {
@@ -645,5 +797,15 @@ pub fn write(u: &Uncertainty, arm: &Arm, s: &mut String) {
         let _ = writeln!(s, "]");
         let _ = writeln!(s, "pose_shrink = {}", num(p.shrink));
         let _ = writeln!(s, "pose_leverage_mean = {}", num(p.leverage_mean));
+        if let Some(j) = &p.joints {
+            let vals: Vec<String> = j.mean.iter().map(|x| num(*x)).collect();
+            let _ = writeln!(s, "pose_joint_mean = [{}]", vals.join(", "));
+            let _ = writeln!(s, "pose_joint_weight = [");
+            for row in j.weight.chunks(j.mean.len().max(1)) {
+                let vals: Vec<String> = row.iter().map(|x| num(*x)).collect();
+                let _ = writeln!(s, "  {},", vals.join(", "));
+            }
+            let _ = writeln!(s, "]");
+        }
     }
 }

@@ -340,6 +340,7 @@ mod tests {
                 factor: factor.clone(),
                 shrink: 0.4,
                 leverage_mean: 3e-6,
+                joints: None,
             }),
         };
         let table = crate::tablebuild::build_with(&arm, Some(&budget)).unwrap();
@@ -413,6 +414,7 @@ mod tests {
             factor: vec![vec![1e-6; p]; 16],
             shrink: 0.0,
             leverage_mean: 1e-6,
+            joints: None,
         });
         let msg = crate::tablebuild::build_with(&arm, Some(&budget))
             .unwrap_err()

@@ -468,6 +468,7 @@ fn synthetic_pose(
             .collect(),
         shrink: 0.2,
         leverage_mean: 1e-12,
+        joints: None,
     }
 }
 

@@ -220,6 +220,7 @@ mod tests {
                 factor: d.clone(),
                 shrink: 0.0,
                 leverage_mean: mean,
+                joints: None,
             });
             predict(&arm, &w, &data, 400, 3).unwrap()
         };
@@ -230,6 +231,7 @@ mod tests {
                 factor: d.clone(),
                 shrink: 0.0,
                 leverage_mean: 1.0,
+                joints: None,
             }),
             ..b.clone()
         };

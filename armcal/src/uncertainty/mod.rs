@@ -91,6 +91,9 @@ pub struct PoseSplit {
     pub shrink: f64,
     /// The calibration rows' mean tr(J C_fit Jᵀ) of the tip (mm²), > 0.
     pub leverage_mean: f64,
+    /// The joint-space leverage, when the budget has one (the file's `pose_joint_mean`,
+    /// `pose_joint_weight`).
+    pub joints: Option<uncertainty::JointLeverage>,
 }
 
 impl PoseSplit {
@@ -106,6 +109,7 @@ impl PoseSplit {
             factor: &self.factor * m,
             shrink: self.shrink * m * m,
             leverage_mean: self.leverage_mean,
+            joints: self.joints.clone(),
         }
     }
 
@@ -152,6 +156,7 @@ impl Budget {
                 factor: p.factor_matrix(u.parameters.len()),
                 shrink: p.shrink,
                 leverage_mean: p.leverage_mean,
+                joints: p.joints.clone(),
             }),
         }
     }
@@ -186,6 +191,7 @@ impl Budget {
                     .collect(),
                 shrink: p.shrink,
                 leverage_mean: p.leverage_mean,
+                joints: p.joints.clone(),
             }),
         })
     }
@@ -236,6 +242,10 @@ mod tests {
                 factor: DMatrix::from_fn(n, 2, |i, k| if i == k { 5e-5 } else { 0.0 }),
                 shrink: 0.5,
                 leverage_mean: 2e-4,
+                joints: Some(uncertainty::JointLeverage {
+                    mean: vec![0.25; 6],
+                    weight: (0..36).map(|k| if k % 7 == 0 { 3.0 } else { 0.0 }).collect(),
+                }),
             }),
         };
         for p in &params {

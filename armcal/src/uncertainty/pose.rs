@@ -502,6 +502,8 @@ pub fn estimate(
             factor: d,
             shrink: kk * w + fold,
             leverage_mean: mean,
+            // The joint leverage is estimated beside the pose part (issue 27, round 5).
+            joints: None,
         };
         let ratio = |x: &f64| x / mean;
         term.source.leverage = Some(LeverageSource {

@@ -365,6 +365,7 @@ mod tests {
             factor: d.clone(),
             shrink,
             leverage_mean: mean,
+            joints: None,
         };
         let direct = |b: &Budget| {
             let p = b.pose.as_ref().unwrap();
