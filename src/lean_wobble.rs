@@ -44,7 +44,10 @@
 use crate::angle::Multiples;
 use crate::lean::LeanF32;
 #[cfg(feature = "wobble")]
-use crate::lean::{each_joint, rx_dir, rx_tip, turn_z, turned, Angle, Turn};
+use crate::lean::{
+    each_joint, rx_dir, rx_tip, turn_z, turned, Angle, Turn, HINGES, PERPENDICULAR, RUNTIME,
+    RUNTIME_ALPHA,
+};
 use crate::model::{ChainError, Model, Point};
 use crate::scalar::F32;
 use crate::table::Table;
@@ -81,6 +84,9 @@ struct WobbleJoint {
     /// ([`Multiples`] only advances).
     start: u8,
     count: u8,
+    /// Its terms' orders where each is one of 1 to 4 and no two are the same, bit h − 1 for
+    /// order h (the six-axis copy's terms, [`small_series`]); 0 where it does not wobble.
+    orders: u8,
     /// φz − ½ φx φy as φx (l_x + q_xx φx + q_xy φy) + φy (l_y + q_yy φy): (l_x, l_y, q_xx,
     /// q_xy, q_yy).
     z: [f32; 5],
@@ -91,6 +97,10 @@ struct WobbleJoint {
 pub struct LeanWobble {
     #[cfg(feature = "wobble")]
     on: bool,
+    /// Every wobbling joint's terms have distinct orders of 1 to 4 (the bearings' first
+    /// harmonics): the six-axis copy forms each order's multiple without `Multiples`' loop.
+    #[cfg(feature = "wobble")]
+    small: bool,
     #[cfg(feature = "wobble")]
     joints: [WobbleJoint; MAX_JOINTS],
     #[cfg(feature = "wobble")]
@@ -114,6 +124,7 @@ impl LeanWobble {
             use crate::model::{sort_by_order, units, unpermute};
             let n = euler.len();
             let out = self;
+            out.small = true;
             let mut taken = 0usize;
             for i in 0..n {
                 let w = table.joint_wobble(i);
@@ -153,8 +164,16 @@ impl LeanWobble {
                     };
                 }
                 sort_by_order(terms, |t| t.order);
+                let mut orders = 0u8;
+                for t in terms.iter() {
+                    let bit = 1u8.checked_shl(t.order.wrapping_sub(1)).unwrap_or(0);
+                    if !(1..=4).contains(&t.order) || orders & bit != 0 {
+                        out.small = false;
+                    }
+                    orders |= bit;
+                }
                 let jw = &mut out.joints[i];
-                (jw.start, jw.count) = (taken as u8, used as u8);
+                (jw.start, jw.count, jw.orders) = (taken as u8, used as u8, orders);
                 taken += used;
                 // (A, B) = M⁻¹ (φx, φy), M = [[f1x, f2x], [f1y, f2y]], |det M| ≥ 1 − MAX_AXIS_Z²
                 // (unit orthogonal axes): A = ax·φ, B = bx·φ.
@@ -199,27 +218,84 @@ impl LeanWobble {
     }
 
     /// Joint `i`'s φx, φy and φz − ½ φx φy at θ' (cos `c`, sin `s`); zeros where it does not
-    /// wobble.
+    /// wobble. `SMALL`: the arm's orders are [`LeanWobble::small`]'s (each joint's terms by
+    /// [`small_series`]), else `Multiples` advances through them.
     #[cfg(feature = "wobble")]
     #[inline(always)]
-    fn phi(&self, i: usize, c: f32, s: f32) -> [f32; 3] {
+    fn phi<const SMALL: bool>(&self, i: usize, c: f32, s: f32) -> [f32; 3] {
         let j = &self.joints[i];
-        let mut m = Multiples::<F32>::new(c, s);
-        let (mut x, mut y) = (0.0f32, 0.0f32);
         let start = usize::from(j.start);
         // (A slice: `skip(start).take(count)` took 32 instructions a point more, measured.)
         let terms = self
             .terms
             .get(start..start + usize::from(j.count))
             .unwrap_or(&[]);
-        for t in terms {
-            m.advance(t.order);
-            x += m.s * t.x[0] + m.c * t.x[1];
-            y += m.s * t.y[0] + m.c * t.y[1];
-        }
+        let (x, y) = if SMALL {
+            small_series(j.orders, terms, c, s)
+        } else {
+            let mut m = Multiples::<F32>::new(c, s);
+            let (mut x, mut y) = (0.0f32, 0.0f32);
+            for t in terms {
+                m.advance(t.order);
+                x += m.s * t.x[0] + m.c * t.x[1];
+                y += m.s * t.y[0] + m.c * t.y[1];
+            }
+            (x, y)
+        };
         let [lx, ly, qxx, qxy, qyy] = j.z;
         [x, y, x * (lx + (qxx * x + qxy * y)) + y * (ly + qyy * y)]
     }
+}
+
+/// φx, φy of a joint's terms (sorted by order) whose orders are the bits of `orders` (bit
+/// h − 1 for order h ≤ 4): one jump to the code of that set of orders ([`series`]); zeros
+/// where `orders` is 0 or `terms` is not as many as its bits.
+#[cfg(feature = "wobble")]
+#[inline(always)]
+fn small_series(orders: u8, terms: &[Term], c: f32, s: f32) -> (f32, f32) {
+    macro_rules! arms {
+        ($($m:literal $k:literal),*) => {
+            match orders {
+                $($m => match terms.first_chunk::<$k>() {
+                    Some(t) if terms.len() == $k => series::<$m, $k>(c, s, t),
+                    _ => (0.0, 0.0),
+                },)*
+                _ => (0.0, 0.0),
+            }
+        };
+    }
+    arms!(1 1, 2 1, 3 2, 4 1, 5 2, 6 2, 7 3, 8 1, 9 2, 10 2, 11 3, 12 2, 13 3, 14 3, 15 4)
+}
+
+/// φx, φy of `K` terms whose orders are the bits of `M` (bit h − 1 for order h ≤ 4), sorted
+/// by order: only the multiples these orders need, each formed as `Multiples::advance` forms
+/// it (order 2 by doubling, 3 by a step from 2, 4 by a step from 3 where 3 is a term, else by
+/// doubling 2), and the sums as its loop adds them, so that the numbers are the looped
+/// copy's bit for bit — without its loop, its tests of the order or its branches.
+#[cfg(feature = "wobble")]
+#[inline(always)]
+fn series<const M: u8, const K: usize>(c: f32, s: f32, t: &[Term; K]) -> (f32, f32) {
+    let double = |(c, s): (f32, f32)| {
+        let cs = c * s;
+        ((c - s) * (c + s), cs + cs)
+    };
+    let step = |(ch, sh): (f32, f32)| (ch * c - sh * s, sh * c + ch * s);
+    let m1 = (c, s);
+    let m2 = double(m1);
+    let m3 = step(m2);
+    let m4 = if M & 4 != 0 { step(m3) } else { double(m2) };
+    let m = [m1, m2, m3, m4];
+    let (mut x, mut y) = (0.0f32, 0.0f32);
+    let mut k = 0;
+    for (h, &(mc, ms)) in m.iter().enumerate() {
+        if M & (1 << h) != 0 {
+            let t = &t[k];
+            x += ms * t.x[0] + mc * t.x[1];
+            y += ms * t.y[0] + mc * t.y[1];
+            k += 1;
+        }
+    }
+    (x, y)
 }
 
 /// The probe-ball centre and direction of `lean`'s arm with its wobble (`lean.wobble`), as
@@ -236,10 +312,20 @@ pub(crate) fn eval(
     {
         // Six joints with power-of-two scales written out (the hubs' arms), any other arm
         // looped, as the lean pass without the wobble.
+        // The six-axis arm of the hubs (gravity on the hinges, perpendicular axes, the
+        // wobble's orders at most 4) with those known to the compiler, as the lean pass's own
+        // copy.
         if counts.len() == 6 && lean.pow2 {
-            run::<6, true>(lean, model, counts, temp_mc)
+            if lean.wobble.small
+                && lean.gravity_mask == HINGES
+                && lean.alpha_quarters == PERPENDICULAR
+            {
+                run::<6, true, HINGES, PERPENDICULAR, true>(lean, model, counts, temp_mc)
+            } else {
+                run::<6, true, RUNTIME, RUNTIME_ALPHA, false>(lean, model, counts, temp_mc)
+            }
         } else {
-            run::<0, false>(lean, model, counts, temp_mc)
+            run::<0, false, RUNTIME, RUNTIME_ALPHA, false>(lean, model, counts, temp_mc)
         }
     }
     #[cfg(not(feature = "wobble"))]
@@ -251,10 +337,18 @@ pub(crate) fn eval(
 }
 
 /// [`eval`] for `JOINTS` joints (0: as many as `counts` has); `POW2`: every joint's scale is
-/// a power of two.
+/// a power of two; `GRAVITY` and `ALPHA` the compliant joints and the quarter turns of α
+/// where known to the compiler, as the lean pass's (`RUNTIME`, `RUNTIME_ALPHA`: read from
+/// the joints); `SMALL`: the terms' orders are [`LeanWobble::small`]'s.
 #[cfg(feature = "wobble")]
 #[inline(always)]
-fn run<const JOINTS: usize, const POW2: bool>(
+fn run<
+    const JOINTS: usize,
+    const POW2: bool,
+    const GRAVITY: u8,
+    const ALPHA: u16,
+    const SMALL: bool,
+>(
     lean: &LeanF32,
     model: &Model<F32>,
     counts: &[u32],
@@ -273,14 +367,25 @@ fn run<const JOINTS: usize, const POW2: bool>(
     each_joint!(JOINTS, n, false, |i| {
         let j = &lean.joints[i];
         let (a, c, s) = j.reading::<POW2>(i, counts[i])?;
-        let [px, py, pz] = wobble.phi(i, c, s);
+        let [px, py, pz] = wobble.phi::<SMALL>(i, c, s);
         let e = j.harmonic_error(c, s) + pz;
         angles[i].write(Angle { e, ..a });
         phis[i].write([px, py]);
-        if i < lean.vertical_joints {
+        let vertical = if GRAVITY == RUNTIME {
+            i < lean.vertical_joints
+        } else {
+            i < (8 - GRAVITY.leading_zeros()) as usize
+        };
+        if vertical {
             // Rx(−α), Rx(−φx), Ry(−φy), Rz(−θ' − e), the small turns to first order.
             let [ca, sa] = j.alpha_whole;
-            let (y, z) = (ca * zb[1] + sa * zb[2], ca * zb[2] - sa * zb[1]);
+            let (y, z) = if i == 0 {
+                // The base frame's vertical (0, 0, 1) itself: the same numbers without the
+                // products by 0 and 1, as the lean pass.
+                (sa, ca)
+            } else {
+                (ca * zb[1] + sa * zb[2], ca * zb[2] - sa * zb[1])
+            };
             let (y, z) = (y + px * z, z - px * y);
             let (x, z) = (zb[0] - py * z, z + py * zb[0]);
             let (x, y) = (c * x + s * y, c * y - s * x);
@@ -306,7 +411,12 @@ fn run<const JOINTS: usize, const POW2: bool>(
             [w[0] + link[0], w[1] + link[1], w[2] + link[2]]
         };
         let mut e = a.e;
-        if j.has_gravity {
+        let compliant = if GRAVITY == RUNTIME {
+            j.has_gravity
+        } else {
+            GRAVITY & (1 << i) != 0
+        };
+        if compliant {
             // SAFETY: the first pass wrote the vertical of every joint up to the last
             // compliant one.
             let v = unsafe { verticals[i].assume_init_read() };
@@ -332,7 +442,11 @@ fn run<const JOINTS: usize, const POW2: bool>(
         let (sin, omc) = turned(al.sin, al.omc, px);
         w = rx_tip(
             &Turn {
-                q: al.q,
+                q: if ALPHA == RUNTIME_ALPHA {
+                    al.q
+                } else {
+                    ((ALPHA >> (2 * i)) & 3) as u8
+                },
                 sin,
                 omc,
                 cos: 1.0 - omc,
@@ -427,52 +541,109 @@ mod tests {
         core::array::from_fn(|j| (k * 77_773 + j as u32 * 191_111) % (1 << 20))
     }
 
-    /// The two copies of the pass (six joints written out, looped) give the same numbers bit
-    /// for bit; they agree with the quaternion chain with its wobble to f32's rounding (under
-    /// 0.5 µm, 1e-6 on the direction), while the wobble moves the tip by far more than that
-    /// (the lean pass without it misses by micrometres); a count out of range is refused by
-    /// each, naming its joint.
+    /// The copies of the pass (six joints written out, looped; on an arm whose orders are 1
+    /// to 4, the six-axis copy with the compliant set, the quarter turns of α and the orders
+    /// known) give the same numbers bit for bit; they agree with the quaternion chain with
+    /// its wobble to f32's rounding (under 0.5 µm, 1e-6 on the direction), while the wobble
+    /// moves the tip by far more than that (the lean pass without it misses by micrometres);
+    /// a count out of range is refused by each, naming its joint.
     #[test]
     fn the_copies_agree_and_meet_the_quaternion_chain() {
-        let data = wobbling(0.003, 1.0);
-        let chain = chain_of(&data);
-        assert!(chain.is_lean());
-        let mut buf = [0u8; MAX_TABLE_LEN];
-        let len = data.encode(&mut buf).unwrap();
-        let table = Table::parse(&buf[..len]).unwrap();
-        let model = Model::<F32>::new(&table).unwrap();
-        let lean = LeanF32::build(&table, &model, true).unwrap();
-        assert!(lean.applies() && lean.pow2 && lean.wobble.on());
-        // The same arm's lean pass with the wobble left out.
-        let mut still = lean;
-        still.wobble = LeanWobble::default();
-        let bits = |p: &Point<F32>| (p.xyz.map(f32::to_bits), p.dir.map(f32::to_bits));
-        let mut moved = 0i64;
-        for k in 0..200u32 {
-            let counts = counts_of(k);
-            let temp = 10_000 + 125 * k as i32;
-            let a = run::<6, true>(&lean, &model, &counts, temp).unwrap();
-            let b = run::<0, false>(&lean, &model, &counts, temp).unwrap();
-            assert_eq!(bits(&a), bits(&b), "{counts:?}");
-            assert_eq!(bits(&a), bits(&chain.eval(&counts, temp).unwrap()));
-            let q = chain.eval_quaternion(&counts, temp).unwrap();
-            let (pa, pq) = (a.xyz_nm(), q.xyz_nm());
-            let (da, dq) = (a.dir_e9(), q.dir_e9());
-            for m in 0..3 {
-                assert!((pa[m] - pq[m]).abs() < 500, "{counts:?}: {pa:?} {pq:?}");
-                assert!((da[m] - dq[m]).abs() < 1_000, "{counts:?}: {da:?} {dq:?}");
+        // With joint 4's order-64 term (`Multiples`' loop), and without it (orders 1 to 4).
+        let mut small = wobbling(0.003, 1.0);
+        small.wobble[3].count = 3;
+        for (data, is_small) in [(wobbling(0.003, 1.0), false), (small, true)] {
+            let chain = chain_of(&data);
+            assert!(chain.is_lean());
+            let mut buf = [0u8; MAX_TABLE_LEN];
+            let len = data.encode(&mut buf).unwrap();
+            let table = Table::parse(&buf[..len]).unwrap();
+            let model = Model::<F32>::new(&table).unwrap();
+            let lean = LeanF32::build(&table, &model, true).unwrap();
+            assert!(lean.applies() && lean.pow2 && lean.wobble.on());
+            assert_eq!(lean.wobble.small, is_small);
+            assert_eq!(
+                (lean.gravity_mask, lean.alpha_quarters),
+                (HINGES, PERPENDICULAR)
+            );
+            // The same arm's lean pass with the wobble left out.
+            let mut still = lean;
+            still.wobble = LeanWobble::default();
+            let bits = |p: &Point<F32>| (p.xyz.map(f32::to_bits), p.dir.map(f32::to_bits));
+            let mut moved = 0i64;
+            for k in 0..200u32 {
+                let counts = counts_of(k);
+                let temp = 10_000 + 125 * k as i32;
+                let a = run::<6, true, RUNTIME, RUNTIME_ALPHA, false>(&lean, &model, &counts, temp)
+                    .unwrap();
+                let b =
+                    run::<0, false, RUNTIME, RUNTIME_ALPHA, false>(&lean, &model, &counts, temp)
+                        .unwrap();
+                assert_eq!(bits(&a), bits(&b), "{counts:?}");
+                if is_small {
+                    let f =
+                        run::<6, true, HINGES, PERPENDICULAR, true>(&lean, &model, &counts, temp)
+                            .unwrap();
+                    assert_eq!(bits(&a), bits(&f), "{counts:?}");
+                }
+                assert_eq!(bits(&a), bits(&chain.eval(&counts, temp).unwrap()));
+                let q = chain.eval_quaternion(&counts, temp).unwrap();
+                let (pa, pq) = (a.xyz_nm(), q.xyz_nm());
+                let (da, dq) = (a.dir_e9(), q.dir_e9());
+                for m in 0..3 {
+                    assert!((pa[m] - pq[m]).abs() < 500, "{counts:?}: {pa:?} {pq:?}");
+                    assert!((da[m] - dq[m]).abs() < 1_000, "{counts:?}: {da:?} {dq:?}");
+                }
+                let s = still.eval(&model, &counts, temp).unwrap().xyz_nm();
+                moved = moved.max((0..3).map(|m| i64::from(s[m] - pa[m]).abs()).max().unwrap());
             }
-            let s = still.eval(&model, &counts, temp).unwrap().xyz_nm();
-            moved = moved.max((0..3).map(|m| i64::from(s[m] - pa[m]).abs()).max().unwrap());
+            assert!(moved > 20_000, "the wobble moves the tip by {moved} nm");
+            let mut counts = [5u32; 6];
+            counts[3] = 1 << 20;
+            let want = Err(ChainError::CountOutOfRange { joint: 4 });
+            let r6 = run::<6, true, RUNTIME, RUNTIME_ALPHA, false>(&lean, &model, &counts, 20_000);
+            let r0 = run::<0, false, RUNTIME, RUNTIME_ALPHA, false>(&lean, &model, &counts, 20_000);
+            let rf = run::<6, true, HINGES, PERPENDICULAR, true>(&lean, &model, &counts, 20_000);
+            assert_eq!(r6.map(|_| ()), want);
+            assert_eq!(r0.map(|_| ()), want);
+            assert_eq!(rf.map(|_| ()), want);
         }
-        assert!(moved > 20_000, "the wobble moves the tip by {moved} nm");
-        let mut counts = [5u32; 6];
-        counts[3] = 1 << 20;
-        let want = Err(ChainError::CountOutOfRange { joint: 4 });
-        let r6 = run::<6, true>(&lean, &model, &counts, 20_000);
-        let r0 = run::<0, false>(&lean, &model, &counts, 20_000);
-        assert_eq!(r6.map(|_| ()), want);
-        assert_eq!(r0.map(|_| ()), want);
+    }
+
+    /// Every set of orders 1 to 4 that [`small_series`] jumps to gives `Multiples`' loop's
+    /// φx, φy bit for bit (on angles all round the circle); a set whose terms are not as
+    /// many as its bits gives zeros.
+    #[test]
+    fn each_set_of_orders_is_the_loop_s() {
+        let pool: [Term; 4] = core::array::from_fn(|k| Term {
+            order: 0,
+            x: [1.3e-5 * (k as f32 + 1.0), -2.1e-5],
+            y: [-0.7e-5, 3.9e-5 / (k as f32 + 1.0)],
+        });
+        for orders in 1u8..16 {
+            let terms: Vec<Term> = (0..4u32)
+                .filter(|h| orders & (1 << h) != 0)
+                .zip(&pool)
+                .map(|(h, t)| Term { order: h + 1, ..*t })
+                .collect();
+            for k in 0..97 {
+                let th = 0.37 + 0.0671 * k as f64;
+                let (c, s) = (th.cos() as f32, th.sin() as f32);
+                let mut m = Multiples::<F32>::new(c, s);
+                let (mut x, mut y) = (0.0f32, 0.0f32);
+                for t in &terms {
+                    m.advance(t.order);
+                    x += m.s * t.x[0] + m.c * t.x[1];
+                    y += m.s * t.y[0] + m.c * t.y[1];
+                }
+                let got = small_series(orders, &terms, c, s);
+                assert_eq!(
+                    (got.0.to_bits(), got.1.to_bits()),
+                    (x.to_bits(), y.to_bits())
+                );
+            }
+            assert_eq!(small_series(orders, &terms[1..], 0.6, 0.8), (0.0, 0.0));
+        }
     }
 
     /// At the table's largest wobble (Σ |coefficients| up to 0.98e-3 a joint, the limit 1e-3) the left-out third
