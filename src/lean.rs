@@ -695,19 +695,6 @@ pub(crate) fn turn_z(q: u8, sin: f32, omc: f32, w: [f32; 3], d: [f32; 3]) -> ([f
     (w, d)
 }
 
-/// Rx(α) of the tip: a quarter turn and a correction (the wobble's pass, whose α is turned
-/// by φx per point; the lean pass's α is [`QuarterTurned`]).
-#[cfg(feature = "wobble")]
-#[inline(always)]
-pub(crate) fn rx_tip(al: &Turn, w: [f32; 3]) -> [f32; 3] {
-    let (p, q) = quarter_turns(al.q, (w[1], w[2]));
-    [
-        w[0],
-        p - (q * al.sin + p * al.omc),
-        q + (p * al.sin - q * al.omc),
-    ]
-}
-
 /// Rx(α) of the direction, plainly by cos α and sin α whole.
 #[inline(always)]
 pub(crate) fn rx_dir([ca, sa]: [f32; 2], d: [f32; 3]) -> [f32; 3] {

@@ -41,12 +41,13 @@
 //! Rx; no fused multiply-add, so the host's numbers are the hub's bit for bit.
 
 #[cfg(feature = "wobble")]
+use crate::angle::quarter_turns;
+#[cfg(feature = "wobble")]
 use crate::angle::Multiples;
 use crate::lean::LeanF32;
 #[cfg(feature = "wobble")]
 use crate::lean::{
-    each_joint, rx_dir, rx_tip, turn_z, turned, Angle, Turn, HINGES, PERPENDICULAR, RUNTIME,
-    RUNTIME_ALPHA,
+    each_joint, rx_dir, turn_z, turned, Angle, HINGES, PERPENDICULAR, RUNTIME, RUNTIME_ALPHA,
 };
 use crate::model::{ChainError, Model, Point};
 use crate::scalar::F32;
@@ -104,8 +105,20 @@ pub struct LeanWobble {
     #[cfg(feature = "wobble")]
     joints: [WobbleJoint; MAX_JOINTS],
     #[cfg(feature = "wobble")]
-    terms: [Term; MAX_LEAN_TERMS],
+    /// (Three more than [`MAX_LEAN_TERMS`], left zero: the six-axis copy reads four terms from
+    /// any start below [`MAX_LEAN_TERMS`] with no bounds test.)
+    terms: [Term; MAX_LEAN_TERMS + 3],
+    /// ½ Σ |φ|² over the joints is at most [`MAX_DIRECTION_SECOND_ORDER`] (bounded by the terms'
+    /// coefficients): the direction takes the small turns Rx(φx) Ry(φy) to first order.
+    #[cfg(feature = "wobble")]
+    dir_first: bool,
 }
+
+/// Largest bound on the direction's error from taking each joint's Rx(φx) Ry(φy) to first
+/// order (½ Σ |φ|² over the joints, |φ| bounded by the sum of its terms' coefficients at
+/// boot): a fifth of the 1e-6 the direction is held to. The default arm's wobble of 1e-4
+/// (`data/default-6-wobble.toml`) bounds it by 1.4e-7; the tip keeps the second order.
+pub const MAX_DIRECTION_SECOND_ORDER: f64 = 2e-7;
 
 impl LeanWobble {
     /// Fills `self` (all zeros, off) with the wobble of `table`'s arm in the lean form, whose
@@ -126,6 +139,7 @@ impl LeanWobble {
             let out = self;
             out.small = true;
             let mut taken = 0usize;
+            let mut second = 0.0f64;
             for i in 0..n {
                 let w = table.joint_wobble(i);
                 if w.count == 0 {
@@ -146,6 +160,9 @@ impl LeanWobble {
                 let next = if i + 1 < n { euler[i + 1][0] } else { 0 };
                 let offset = euler[i][2].wrapping_add(next);
                 let used = usize::from(w.count).min(MAX_TERMS);
+                if taken + used > MAX_LEAN_TERMS {
+                    return Ok(false);
+                }
                 let Some(terms) = out.terms.get_mut(taken..taken + used) else {
                     return Ok(false);
                 };
@@ -165,13 +182,17 @@ impl LeanWobble {
                 }
                 sort_by_order(terms, |t| t.order);
                 let mut orders = 0u8;
+                let (mut bx_, mut by_) = (0.0f64, 0.0f64);
                 for t in terms.iter() {
+                    bx_ += f64::from(t.x[0].abs() + t.x[1].abs());
+                    by_ += f64::from(t.y[0].abs() + t.y[1].abs());
                     let bit = 1u8.checked_shl(t.order.wrapping_sub(1)).unwrap_or(0);
                     if !(1..=4).contains(&t.order) || orders & bit != 0 {
                         out.small = false;
                     }
                     orders |= bit;
                 }
+                second += 0.5 * (bx_ * bx_ + by_ * by_);
                 let jw = &mut out.joints[i];
                 (jw.start, jw.count, jw.orders) = (taken as u8, used as u8, orders);
                 taken += used;
@@ -194,6 +215,7 @@ impl LeanWobble {
                 )?;
                 out.on = true;
             }
+            out.dir_first = second <= MAX_DIRECTION_SECOND_ORDER;
             Ok(true)
         }
         #[cfg(not(feature = "wobble"))]
@@ -225,20 +247,24 @@ impl LeanWobble {
     fn phi<const SMALL: bool>(&self, i: usize, c: f32, s: f32) -> [f32; 3] {
         let j = &self.joints[i];
         let start = usize::from(j.start);
-        // (A slice: `skip(start).take(count)` took 32 instructions a point more, measured.)
-        let terms = self
-            .terms
-            .get(start..start + usize::from(j.count))
-            .unwrap_or(&[]);
         let (x, y) = if SMALL {
-            small_series(j.orders, terms, c, s)
+            // Four terms from the start (the pool has three more): no bounds test.
+            match self.terms[start.min(MAX_LEAN_TERMS - 1)..].first_chunk::<4>() {
+                Some(t) => small_series(j.orders, t, c, s),
+                None => (0.0, 0.0),
+            }
         } else {
+            // (A slice: `skip(start).take(count)` took 32 instructions a point more, measured.)
+            let terms = self
+                .terms
+                .get(start..start + usize::from(j.count))
+                .unwrap_or(&[]);
             let mut m = Multiples::<F32>::new(c, s);
             let (mut x, mut y) = (0.0f32, 0.0f32);
             for t in terms {
                 m.advance(t.order);
-                x += m.s * t.x[0] + m.c * t.x[1];
-                y += m.s * t.y[0] + m.c * t.y[1];
+                x = x + m.s * t.x[0] + m.c * t.x[1];
+                y = y + m.s * t.y[0] + m.c * t.y[1];
             }
             (x, y)
         };
@@ -247,34 +273,33 @@ impl LeanWobble {
     }
 }
 
-/// φx, φy of a joint's terms (sorted by order) whose orders are the bits of `orders` (bit
-/// h − 1 for order h ≤ 4): one jump to the code of that set of orders ([`series`]); zeros
-/// where `orders` is 0 or `terms` is not as many as its bits.
+/// φx, φy of a joint's terms (sorted by order, the first as many as `orders` has bits, the
+/// rest not read) whose orders are the bits of `orders` (bit h − 1 for order h ≤ 4): one
+/// jump to the code of that set of orders ([`series`]); zeros where `orders` is 0.
 #[cfg(feature = "wobble")]
 #[inline(always)]
-fn small_series(orders: u8, terms: &[Term], c: f32, s: f32) -> (f32, f32) {
+fn small_series(orders: u8, terms: &[Term; 4], c: f32, s: f32) -> (f32, f32) {
     macro_rules! arms {
-        ($($m:literal $k:literal),*) => {
+        ($($m:literal),*) => {
             match orders {
-                $($m => match terms.first_chunk::<$k>() {
-                    Some(t) if terms.len() == $k => series::<$m, $k>(c, s, t),
-                    _ => (0.0, 0.0),
-                },)*
+                $($m => series::<$m>(c, s, terms),)*
                 _ => (0.0, 0.0),
             }
         };
     }
-    arms!(1 1, 2 1, 3 2, 4 1, 5 2, 6 2, 7 3, 8 1, 9 2, 10 2, 11 3, 12 2, 13 3, 14 3, 15 4)
+    arms!(1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)
 }
 
-/// φx, φy of `K` terms whose orders are the bits of `M` (bit h − 1 for order h ≤ 4), sorted
-/// by order: only the multiples these orders need, each formed as `Multiples::advance` forms
-/// it (order 2 by doubling, 3 by a step from 2, 4 by a step from 3 where 3 is a term, else by
-/// doubling 2), and the sums as its loop adds them, so that the numbers are the looped
-/// copy's bit for bit — without its loop, its tests of the order or its branches.
+/// φx, φy of the terms whose orders are the bits of `M` (bit h − 1 for order h ≤ 4), sorted
+/// by order, the first of `t`: only the multiples these orders need, each formed as
+/// `Multiples::advance` forms it (order 2 by doubling, 3 by a step from 2, 4 by a step from 3
+/// where 3 is a term, else by doubling 2), and the sums as its loop adds them (a multiply–add
+/// a product), so that the numbers are the looped copy's bit for bit (but for the sign of a
+/// zero sum: the first term is not added to 0) — without its loop, its tests of the order
+/// or its branches.
 #[cfg(feature = "wobble")]
 #[inline(always)]
-fn series<const M: u8, const K: usize>(c: f32, s: f32, t: &[Term; K]) -> (f32, f32) {
+fn series<const M: u8>(c: f32, s: f32, t: &[Term; 4]) -> (f32, f32) {
     let double = |(c, s): (f32, f32)| {
         let cs = c * s;
         ((c - s) * (c + s), cs + cs)
@@ -290,8 +315,13 @@ fn series<const M: u8, const K: usize>(c: f32, s: f32, t: &[Term; K]) -> (f32, f
     for (h, &(mc, ms)) in m.iter().enumerate() {
         if M & (1 << h) != 0 {
             let t = &t[k];
-            x += ms * t.x[0] + mc * t.x[1];
-            y += ms * t.y[0] + mc * t.y[1];
+            if k == 0 {
+                x = ms * t.x[0] + mc * t.x[1];
+                y = ms * t.y[0] + mc * t.y[1];
+            } else {
+                x = x + ms * t.x[0] + mc * t.x[1];
+                y = y + ms * t.y[0] + mc * t.y[1];
+            }
             k += 1;
         }
     }
@@ -317,6 +347,7 @@ pub(crate) fn eval(
         // copy.
         if counts.len() == 6 && lean.pow2 {
             if lean.wobble.small
+                && lean.wobble.dir_first
                 && lean.gravity_mask == HINGES
                 && lean.alpha_quarters == PERPENDICULAR
             {
@@ -339,7 +370,8 @@ pub(crate) fn eval(
 /// [`eval`] for `JOINTS` joints (0: as many as `counts` has); `POW2`: every joint's scale is
 /// a power of two; `GRAVITY` and `ALPHA` the compliant joints and the quarter turns of α
 /// where known to the compiler, as the lean pass's (`RUNTIME`, `RUNTIME_ALPHA`: read from
-/// the joints); `SMALL`: the terms' orders are [`LeanWobble::small`]'s.
+/// the joints); `SMALL`: the terms' orders are [`LeanWobble::small`]'s and the direction
+/// takes its small turns to first order ([`LeanWobble::dir_first`]; the other copies read it).
 #[cfg(feature = "wobble")]
 #[inline(always)]
 fn run<
@@ -422,44 +454,83 @@ fn run<
             let v = unsafe { verticals[i].assume_init_read() };
             e += j.gravity * (w[0] * v[1] - w[1] * v[0]);
         }
-        // Rz(θ' + e), e with φz's part.
+        // Rz(θ' + e), e with φz's part; Ry(φy) and Rx(α + φx) (the tip's correction and the
+        // direction's cos α, sin α turned by φx), the tip's turns by `turn_tip`.
         let (sin, omc) = turned(a.sin, a.omc, e);
-        (w, d) = turn_z(a.q, sin, omc, w, d);
-        // Ry(φy), to second order, on the tip and the direction.
-        let h = 0.5 * (py * py);
-        w = [
-            w[0] + (py * w[2] - h * w[0]),
-            w[1],
-            w[2] - (py * w[0] + h * w[2]),
-        ];
-        d = [
-            d[0] + (py * d[2] - h * d[0]),
-            d[1],
-            d[2] - (py * d[0] + h * d[2]),
-        ];
-        // Rx(α + φx): the tip's correction and the direction's cos α, sin α turned by φx.
         let al = &j.alpha_turn;
-        let (sin, omc) = turned(al.sin, al.omc, px);
-        w = rx_tip(
-            &Turn {
-                q: if ALPHA == RUNTIME_ALPHA {
-                    al.q
-                } else {
-                    ((ALPHA >> (2 * i)) & 3) as u8
-                },
-                sin,
-                omc,
-                cos: 1.0 - omc,
-            },
-            w,
-        );
+        let (asin, aomc) = turned(al.sin, al.omc, px);
+        let qa = if ALPHA == RUNTIME_ALPHA {
+            al.q
+        } else {
+            ((ALPHA >> (2 * i)) & 3) as u8
+        };
+        let h = 0.5 * (py * py);
+        w = turn_tip((a.q, sin, omc), (py, h), (qa, asin, aomc), w);
+        // The direction: Rz plainly, then Ry(φy) and Rx(α + φx).
+        (_, d) = turn_z(a.q, sin, omc, w, d);
         let [ca, sa] = j.alpha_whole;
-        let h = 0.5 * (px * px);
-        d = rx_dir([ca - (sa * px + ca * h), sa + (ca * px - sa * h)], d);
+        let first = if SMALL { true } else { wobble.dir_first };
+        if first {
+            // Rx(φx) Ry(φy) to first order, d + (φx, φy, 0) × d (within
+            // MAX_DIRECTION_SECOND_ORDER), then Rx(α) as the lean pass.
+            d = [
+                d[0] + py * d[2],
+                d[1] - px * d[2],
+                d[2] + (px * d[1] - py * d[0]),
+            ];
+            d = rx_dir([ca, sa], d);
+        } else {
+            // Ry(φy), and cos α, sin α turned by φx, to second order.
+            d = [
+                d[0] + (py * d[2] - h * d[0]),
+                d[1],
+                d[2] - (py * d[0] + h * d[2]),
+            ];
+            let h = 0.5 * (px * px);
+            d = rx_dir([ca - (sa * px + ca * h), sa + (ca * px - sa * h)], d);
+        }
     });
     // Rz(a_1).
     (w, d) = lean.rz_base(w, d);
     Ok(Point { xyz: w, dir: d })
+}
+
+/// The tip `w` turned by Rz (quarter turns `qz`, the remainder's sin and 1 − cos), then
+/// Ry(φy) to second order (`py`, h = ½ φy²), then Rx (quarter turns `qa` and the remainder
+/// turned by φx): with each large coordinate rounded as often as the lean pass rounds it.
+/// Ry's corrections are small (φy times the tip); added to x and z on their own, each would
+/// round a large coordinate once more a joint (two more roundings of up to 0.5 ulp at
+/// 1.5 m, 0.06 µm each). Instead x's joins Rz's correction of x, and z's (dz) the sum that
+/// Rx's quarter turn takes z into: the corrections' products take z − dz rounded (a small
+/// rounding, scaled by sin or 1 − cos of the remainder), the large sum z itself and dz
+/// exactly.
+#[cfg(feature = "wobble")]
+#[inline(always)]
+fn turn_tip(
+    (qz, sin, omc): (u8, f32, f32),
+    (py, h): (f32, f32),
+    (qa, asin, aomc): (u8, f32, f32),
+    w: [f32; 3],
+) -> [f32; 3] {
+    // Rz: x's correction kept apart; x1, x after it, only for Ry's small products.
+    let (p, r) = quarter_turns(qz, (w[0], w[1]));
+    let cx = r * sin + p * omc;
+    let x1 = p - cx;
+    let y = r + (p * sin - r * omc);
+    let z = w[2];
+    // Ry(φy): x += py z − h x, z −= py x + h z.
+    let x = p - (cx - (py * z - h * x1));
+    let dz = py * x1 + h * z;
+    // Rx: the quarter turns of (y, z), of (y, z − dz) for the correction and of (−0, −dz)
+    // (−0: a sum with it the compiler can drop where the quarter turn puts it on r).
+    let (p, r) = quarter_turns(qa, (y, z));
+    let (pc, rc) = quarter_turns(qa, (y, z - dz));
+    let (dp, dr) = quarter_turns(qa, (-0.0f32, -dz));
+    [
+        x,
+        p - ((rc * asin + pc * aomc) - dp),
+        r + ((pc * asin - rc * aomc) + dr),
+    ]
 }
 
 #[cfg(all(test, feature = "wobble"))]
@@ -562,6 +633,7 @@ mod tests {
             let lean = LeanF32::build(&table, &model, true).unwrap();
             assert!(lean.applies() && lean.pow2 && lean.wobble.on());
             assert_eq!(lean.wobble.small, is_small);
+            assert!(lean.wobble.dir_first);
             assert_eq!(
                 (lean.gravity_mask, lean.alpha_quarters),
                 (HINGES, PERPENDICULAR)
@@ -611,8 +683,7 @@ mod tests {
     }
 
     /// Every set of orders 1 to 4 that [`small_series`] jumps to gives `Multiples`' loop's
-    /// φx, φy bit for bit (on angles all round the circle); a set whose terms are not as
-    /// many as its bits gives zeros.
+    /// φx, φy bit for bit (on angles all round the circle); no orders give zeros.
     #[test]
     fn each_set_of_orders_is_the_loop_s() {
         let pool: [Term; 4] = core::array::from_fn(|k| Term {
@@ -633,17 +704,19 @@ mod tests {
                 let (mut x, mut y) = (0.0f32, 0.0f32);
                 for t in &terms {
                     m.advance(t.order);
-                    x += m.s * t.x[0] + m.c * t.x[1];
-                    y += m.s * t.y[0] + m.c * t.y[1];
+                    x = x + m.s * t.x[0] + m.c * t.x[1];
+                    y = y + m.s * t.y[0] + m.c * t.y[1];
                 }
-                let got = small_series(orders, &terms, c, s);
+                let mut four = [Term::default(); 4];
+                four[..terms.len()].copy_from_slice(&terms);
+                let got = small_series(orders, &four, c, s);
                 assert_eq!(
                     (got.0.to_bits(), got.1.to_bits()),
                     (x.to_bits(), y.to_bits())
                 );
             }
-            assert_eq!(small_series(orders, &terms[1..], 0.6, 0.8), (0.0, 0.0));
         }
+        assert_eq!(small_series(0, &pool, 0.6, 0.8), (0.0, 0.0));
     }
 
     /// At the table's largest wobble (Σ |coefficients| up to 0.98e-3 a joint, the limit 1e-3) the left-out third
