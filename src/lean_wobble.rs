@@ -17,9 +17,12 @@
 //!
 //! (Baker–Campbell–Hausdorff: Rx(a) Ry(b) = exp(a x̂ + b ŷ + ½ a b ẑ) to second order). So
 //! φz − ½ φx φy joins the joint's harmonic error (the remainder is already turned by it, to
-//! second order), φx joins α (Rx(α + φx): the tip's correction turned by φx, cos α and sin α
-//! of the direction turned to second order) and only Ry(φy) is a turn of its own, applied to
-//! the tip and the direction to second order. The vertical of the first pass takes the small
+//! second order), φx joins α (Rx(α + φx): the tip's correction turned by φx) and only Ry(φy)
+//! is a turn of its own, applied to the tip to second order, its corrections joined to the
+//! sums Rz and Rx already round (`turn_tip`: each large coordinate rounded as often as in the
+//! lean pass). The direction takes Rx(φx) Ry(φy) to first order where a boot bound on ½ Σ
+//! |φ|² allows ([`MAX_DIRECTION_SECOND_ORDER`]), else Ry and cos α, sin α turned by φx to
+//! second order. The vertical of the first pass takes the small
 //! turns to first order (it scales the gravity deflection only: 1e-4 of 4e-5 rad).
 //!
 //! **What φ costs.** φx and φy are harmonic series in θ' (the terms' sin hθ', cos hθ' by
