@@ -165,15 +165,15 @@ impl QuarterTurned {
 }
 
 /// [`LeanF32::run`]'s compliant joints read from each joint's flag.
-const RUNTIME: u8 = u8::MAX;
+pub(crate) const RUNTIME: u8 = u8::MAX;
 /// The compliant joints of a six-axis arm with gravity on its hinges (joints 2, 4 and 6).
-const HINGES: u8 = 0b10_1010;
+pub(crate) const HINGES: u8 = 0b10_1010;
 /// [`LeanF32::run`]'s quarter turns of Rx(α) multiplied in from each joint's constants.
-const RUNTIME_ALPHA: u16 = u16::MAX;
+pub(crate) const RUNTIME_ALPHA: u16 = u16::MAX;
 /// The six-axis arm's geometry: joint 1's axis along the base's (α₁ within π/4 of 0, no
 /// quarter turn), each next axis perpendicular to the one before (α within π/4 of π/2, one
 /// quarter turn).
-const PERPENDICULAR: u16 = 0b01_01_01_01_01_00;
+pub(crate) const PERPENDICULAR: u16 = 0b01_01_01_01_01_00;
 
 /// The lean f32 chain of an arm (or none, `on` false).
 #[derive(Clone, Copy, Debug, Default)]
@@ -193,10 +193,10 @@ pub struct LeanF32 {
     /// vertical through.
     pub(crate) vertical_joints: usize,
     /// The compliant joints, bit i for joint i + 1 (the first eight).
-    gravity_mask: u8,
+    pub(crate) gravity_mask: u8,
     /// The quarter turns of each joint's Rx(α), bits 2i and 2i + 1 for joint i + 1 (the
     /// first eight).
-    alpha_quarters: u16,
+    pub(crate) alpha_quarters: u16,
     /// The axis wobble's constants where the arm has one ([`crate::lean_wobble`]; its pass
     /// runs instead of this module's).
     pub(crate) wobble: LeanWobble,
@@ -693,19 +693,6 @@ pub(crate) fn turn_z(q: u8, sin: f32, omc: f32, w: [f32; 3], d: [f32; 3]) -> ([f
     let (p, r) = quarter_turns(q, (d[0], d[1]));
     let d = [p * cos - r * sin, p * sin + r * cos, d[2]];
     (w, d)
-}
-
-/// Rx(α) of the tip: a quarter turn and a correction (the wobble's pass, whose α is turned
-/// by φx per point; the lean pass's α is [`QuarterTurned`]).
-#[cfg(feature = "wobble")]
-#[inline(always)]
-pub(crate) fn rx_tip(al: &Turn, w: [f32; 3]) -> [f32; 3] {
-    let (p, q) = quarter_turns(al.q, (w[1], w[2]));
-    [
-        w[0],
-        p - (q * al.sin + p * al.omc),
-        q + (p * al.sin - q * al.omc),
-    ]
 }
 
 /// Rx(α) of the direction, plainly by cos α and sin α whole.

@@ -17,9 +17,12 @@
 //!
 //! (Baker–Campbell–Hausdorff: Rx(a) Ry(b) = exp(a x̂ + b ŷ + ½ a b ẑ) to second order). So
 //! φz − ½ φx φy joins the joint's harmonic error (the remainder is already turned by it, to
-//! second order), φx joins α (Rx(α + φx): the tip's correction turned by φx, cos α and sin α
-//! of the direction turned to second order) and only Ry(φy) is a turn of its own, applied to
-//! the tip and the direction to second order. The vertical of the first pass takes the small
+//! second order), φx joins α (Rx(α + φx): the tip's correction turned by φx) and only Ry(φy)
+//! is a turn of its own, applied to the tip to second order, its corrections joined to the
+//! sums Rz and Rx already round (`turn_tip`: each large coordinate rounded as often as in the
+//! lean pass). The direction takes Rx(φx) Ry(φy) to first order where a boot bound on ½ Σ
+//! |φ|² allows ([`MAX_DIRECTION_SECOND_ORDER`]), else Ry and cos α, sin α turned by φx to
+//! second order. The vertical of the first pass takes the small
 //! turns to first order (it scales the gravity deflection only: 1e-4 of 4e-5 rad).
 //!
 //! **What φ costs.** φx and φy are harmonic series in θ' (the terms' sin hθ', cos hθ' by
@@ -41,10 +44,14 @@
 //! Rx; no fused multiply-add, so the host's numbers are the hub's bit for bit.
 
 #[cfg(feature = "wobble")]
+use crate::angle::quarter_turns;
+#[cfg(feature = "wobble")]
 use crate::angle::Multiples;
 use crate::lean::LeanF32;
 #[cfg(feature = "wobble")]
-use crate::lean::{each_joint, rx_dir, rx_tip, turn_z, turned, Angle, Turn};
+use crate::lean::{
+    each_joint, rx_dir, turn_z, turned, Angle, HINGES, PERPENDICULAR, RUNTIME, RUNTIME_ALPHA,
+};
 use crate::model::{ChainError, Model, Point};
 use crate::scalar::F32;
 use crate::table::Table;
@@ -81,6 +88,9 @@ struct WobbleJoint {
     /// ([`Multiples`] only advances).
     start: u8,
     count: u8,
+    /// Its terms' orders where each is one of 1 to 4 and no two are the same, bit h − 1 for
+    /// order h (the six-axis copy's terms, [`small_series`]); 0 where it does not wobble.
+    orders: u8,
     /// φz − ½ φx φy as φx (l_x + q_xx φx + q_xy φy) + φy (l_y + q_yy φy): (l_x, l_y, q_xx,
     /// q_xy, q_yy).
     z: [f32; 5],
@@ -91,11 +101,27 @@ struct WobbleJoint {
 pub struct LeanWobble {
     #[cfg(feature = "wobble")]
     on: bool,
+    /// Every wobbling joint's terms have distinct orders of 1 to 4 (the bearings' first
+    /// harmonics): the six-axis copy forms each order's multiple without `Multiples`' loop.
+    #[cfg(feature = "wobble")]
+    small: bool,
     #[cfg(feature = "wobble")]
     joints: [WobbleJoint; MAX_JOINTS],
     #[cfg(feature = "wobble")]
-    terms: [Term; MAX_LEAN_TERMS],
+    /// (Three more than [`MAX_LEAN_TERMS`], left zero: the six-axis copy reads four terms from
+    /// any start below [`MAX_LEAN_TERMS`] with no bounds test.)
+    terms: [Term; MAX_LEAN_TERMS + 3],
+    /// ½ Σ |φ|² over the joints is at most [`MAX_DIRECTION_SECOND_ORDER`] (bounded by the terms'
+    /// coefficients): the direction takes the small turns Rx(φx) Ry(φy) to first order.
+    #[cfg(feature = "wobble")]
+    dir_first: bool,
 }
+
+/// Largest bound on the direction's error from taking each joint's Rx(φx) Ry(φy) to first
+/// order (½ Σ |φ|² over the joints, |φ| bounded by the sum of its terms' coefficients at
+/// boot): a fifth of the 1e-6 the direction is held to. The default arm's wobble of 1e-4
+/// (`data/default-6-wobble.toml`) bounds it by 1.4e-7; the tip keeps the second order.
+pub const MAX_DIRECTION_SECOND_ORDER: f64 = 2e-7;
 
 impl LeanWobble {
     /// Fills `self` (all zeros, off) with the wobble of `table`'s arm in the lean form, whose
@@ -114,7 +140,9 @@ impl LeanWobble {
             use crate::model::{sort_by_order, units, unpermute};
             let n = euler.len();
             let out = self;
+            out.small = true;
             let mut taken = 0usize;
+            let mut second = 0.0f64;
             for i in 0..n {
                 let w = table.joint_wobble(i);
                 if w.count == 0 {
@@ -135,6 +163,9 @@ impl LeanWobble {
                 let next = if i + 1 < n { euler[i + 1][0] } else { 0 };
                 let offset = euler[i][2].wrapping_add(next);
                 let used = usize::from(w.count).min(MAX_TERMS);
+                if taken + used > MAX_LEAN_TERMS {
+                    return Ok(false);
+                }
                 let Some(terms) = out.terms.get_mut(taken..taken + used) else {
                     return Ok(false);
                 };
@@ -153,8 +184,20 @@ impl LeanWobble {
                     };
                 }
                 sort_by_order(terms, |t| t.order);
+                let mut orders = 0u8;
+                let (mut bx_, mut by_) = (0.0f64, 0.0f64);
+                for t in terms.iter() {
+                    bx_ += f64::from(t.x[0].abs() + t.x[1].abs());
+                    by_ += f64::from(t.y[0].abs() + t.y[1].abs());
+                    let bit = 1u8.checked_shl(t.order.wrapping_sub(1)).unwrap_or(0);
+                    if !(1..=4).contains(&t.order) || orders & bit != 0 {
+                        out.small = false;
+                    }
+                    orders |= bit;
+                }
+                second += 0.5 * (bx_ * bx_ + by_ * by_);
                 let jw = &mut out.joints[i];
-                (jw.start, jw.count) = (taken as u8, used as u8);
+                (jw.start, jw.count, jw.orders) = (taken as u8, used as u8, orders);
                 taken += used;
                 // (A, B) = M⁻¹ (φx, φy), M = [[f1x, f2x], [f1y, f2y]], |det M| ≥ 1 − MAX_AXIS_Z²
                 // (unit orthogonal axes): A = ax·φ, B = bx·φ.
@@ -175,6 +218,7 @@ impl LeanWobble {
                 )?;
                 out.on = true;
             }
+            out.dir_first = second <= MAX_DIRECTION_SECOND_ORDER;
             Ok(true)
         }
         #[cfg(not(feature = "wobble"))]
@@ -199,27 +243,92 @@ impl LeanWobble {
     }
 
     /// Joint `i`'s φx, φy and φz − ½ φx φy at θ' (cos `c`, sin `s`); zeros where it does not
-    /// wobble.
+    /// wobble. `SMALL`: the arm's orders are [`LeanWobble::small`]'s (each joint's terms by
+    /// [`small_series`]), else `Multiples` advances through them.
     #[cfg(feature = "wobble")]
     #[inline(always)]
-    fn phi(&self, i: usize, c: f32, s: f32) -> [f32; 3] {
+    fn phi<const SMALL: bool>(&self, i: usize, c: f32, s: f32) -> [f32; 3] {
         let j = &self.joints[i];
-        let mut m = Multiples::<F32>::new(c, s);
-        let (mut x, mut y) = (0.0f32, 0.0f32);
         let start = usize::from(j.start);
-        // (A slice: `skip(start).take(count)` took 32 instructions a point more, measured.)
-        let terms = self
-            .terms
-            .get(start..start + usize::from(j.count))
-            .unwrap_or(&[]);
-        for t in terms {
-            m.advance(t.order);
-            x += m.s * t.x[0] + m.c * t.x[1];
-            y += m.s * t.y[0] + m.c * t.y[1];
-        }
+        let (x, y) = if SMALL {
+            // Four terms from the start (the pool has three more): no bounds test.
+            match self.terms[start.min(MAX_LEAN_TERMS - 1)..].first_chunk::<4>() {
+                Some(t) => small_series(j.orders, t, c, s),
+                None => (0.0, 0.0),
+            }
+        } else {
+            // (A slice: `skip(start).take(count)` took 32 instructions a point more, measured.)
+            let terms = self
+                .terms
+                .get(start..start + usize::from(j.count))
+                .unwrap_or(&[]);
+            let mut m = Multiples::<F32>::new(c, s);
+            let (mut x, mut y) = (0.0f32, 0.0f32);
+            for t in terms {
+                m.advance(t.order);
+                x = x + m.s * t.x[0] + m.c * t.x[1];
+                y = y + m.s * t.y[0] + m.c * t.y[1];
+            }
+            (x, y)
+        };
         let [lx, ly, qxx, qxy, qyy] = j.z;
         [x, y, x * (lx + (qxx * x + qxy * y)) + y * (ly + qyy * y)]
     }
+}
+
+/// φx, φy of a joint's terms (sorted by order, the first as many as `orders` has bits, the
+/// rest not read) whose orders are the bits of `orders` (bit h − 1 for order h ≤ 4): one
+/// jump to the code of that set of orders ([`series`]); zeros where `orders` is 0.
+#[cfg(feature = "wobble")]
+#[inline(always)]
+fn small_series(orders: u8, terms: &[Term; 4], c: f32, s: f32) -> (f32, f32) {
+    macro_rules! arms {
+        ($($m:literal),*) => {
+            match orders {
+                $($m => series::<$m>(c, s, terms),)*
+                _ => (0.0, 0.0),
+            }
+        };
+    }
+    arms!(1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)
+}
+
+/// φx, φy of the terms whose orders are the bits of `M` (bit h − 1 for order h ≤ 4), sorted
+/// by order, the first of `t`: only the multiples these orders need, each formed as
+/// `Multiples::advance` forms it (order 2 by doubling, 3 by a step from 2, 4 by a step from 3
+/// where 3 is a term, else by doubling 2), and the sums as its loop adds them (a multiply–add
+/// a product), so that the numbers are the looped copy's bit for bit (but for the sign of a
+/// zero sum: the first term is not added to 0) — without its loop, its tests of the order
+/// or its branches.
+#[cfg(feature = "wobble")]
+#[inline(always)]
+fn series<const M: u8>(c: f32, s: f32, t: &[Term; 4]) -> (f32, f32) {
+    let double = |(c, s): (f32, f32)| {
+        let cs = c * s;
+        ((c - s) * (c + s), cs + cs)
+    };
+    let step = |(ch, sh): (f32, f32)| (ch * c - sh * s, sh * c + ch * s);
+    let m1 = (c, s);
+    let m2 = double(m1);
+    let m3 = step(m2);
+    let m4 = if M & 4 != 0 { step(m3) } else { double(m2) };
+    let m = [m1, m2, m3, m4];
+    let (mut x, mut y) = (0.0f32, 0.0f32);
+    let mut k = 0;
+    for (h, &(mc, ms)) in m.iter().enumerate() {
+        if M & (1 << h) != 0 {
+            let t = &t[k];
+            if k == 0 {
+                x = ms * t.x[0] + mc * t.x[1];
+                y = ms * t.y[0] + mc * t.y[1];
+            } else {
+                x = x + ms * t.x[0] + mc * t.x[1];
+                y = y + ms * t.y[0] + mc * t.y[1];
+            }
+            k += 1;
+        }
+    }
+    (x, y)
 }
 
 /// The probe-ball centre and direction of `lean`'s arm with its wobble (`lean.wobble`), as
@@ -236,10 +345,21 @@ pub(crate) fn eval(
     {
         // Six joints with power-of-two scales written out (the hubs' arms), any other arm
         // looped, as the lean pass without the wobble.
+        // The six-axis arm of the hubs (gravity on the hinges, perpendicular axes, the
+        // wobble's orders at most 4) with those known to the compiler, as the lean pass's own
+        // copy.
         if counts.len() == 6 && lean.pow2 {
-            run::<6, true>(lean, model, counts, temp_mc)
+            if lean.wobble.small
+                && lean.wobble.dir_first
+                && lean.gravity_mask == HINGES
+                && lean.alpha_quarters == PERPENDICULAR
+            {
+                run::<6, true, HINGES, PERPENDICULAR, true>(lean, model, counts, temp_mc)
+            } else {
+                run::<6, true, RUNTIME, RUNTIME_ALPHA, false>(lean, model, counts, temp_mc)
+            }
         } else {
-            run::<0, false>(lean, model, counts, temp_mc)
+            run::<0, false, RUNTIME, RUNTIME_ALPHA, false>(lean, model, counts, temp_mc)
         }
     }
     #[cfg(not(feature = "wobble"))]
@@ -251,10 +371,19 @@ pub(crate) fn eval(
 }
 
 /// [`eval`] for `JOINTS` joints (0: as many as `counts` has); `POW2`: every joint's scale is
-/// a power of two.
+/// a power of two; `GRAVITY` and `ALPHA` the compliant joints and the quarter turns of α
+/// where known to the compiler, as the lean pass's (`RUNTIME`, `RUNTIME_ALPHA`: read from
+/// the joints); `SMALL`: the terms' orders are [`LeanWobble::small`]'s and the direction
+/// takes its small turns to first order ([`LeanWobble::dir_first`]; the other copies read it).
 #[cfg(feature = "wobble")]
 #[inline(always)]
-fn run<const JOINTS: usize, const POW2: bool>(
+fn run<
+    const JOINTS: usize,
+    const POW2: bool,
+    const GRAVITY: u8,
+    const ALPHA: u16,
+    const SMALL: bool,
+>(
     lean: &LeanF32,
     model: &Model<F32>,
     counts: &[u32],
@@ -273,14 +402,25 @@ fn run<const JOINTS: usize, const POW2: bool>(
     each_joint!(JOINTS, n, false, |i| {
         let j = &lean.joints[i];
         let (a, c, s) = j.reading::<POW2>(i, counts[i])?;
-        let [px, py, pz] = wobble.phi(i, c, s);
+        let [px, py, pz] = wobble.phi::<SMALL>(i, c, s);
         let e = j.harmonic_error(c, s) + pz;
         angles[i].write(Angle { e, ..a });
         phis[i].write([px, py]);
-        if i < lean.vertical_joints {
+        let vertical = if GRAVITY == RUNTIME {
+            i < lean.vertical_joints
+        } else {
+            i < (8 - GRAVITY.leading_zeros()) as usize
+        };
+        if vertical {
             // Rx(−α), Rx(−φx), Ry(−φy), Rz(−θ' − e), the small turns to first order.
             let [ca, sa] = j.alpha_whole;
-            let (y, z) = (ca * zb[1] + sa * zb[2], ca * zb[2] - sa * zb[1]);
+            let (y, z) = if i == 0 {
+                // The base frame's vertical (0, 0, 1) itself: the same numbers without the
+                // products by 0 and 1, as the lean pass.
+                (sa, ca)
+            } else {
+                (ca * zb[1] + sa * zb[2], ca * zb[2] - sa * zb[1])
+            };
             let (y, z) = (y + px * z, z - px * y);
             let (x, z) = (zb[0] - py * z, z + py * zb[0]);
             let (x, y) = (c * x + s * y, c * y - s * x);
@@ -306,46 +446,94 @@ fn run<const JOINTS: usize, const POW2: bool>(
             [w[0] + link[0], w[1] + link[1], w[2] + link[2]]
         };
         let mut e = a.e;
-        if j.has_gravity {
+        let compliant = if GRAVITY == RUNTIME {
+            j.has_gravity
+        } else {
+            GRAVITY & (1 << i) != 0
+        };
+        if compliant {
             // SAFETY: the first pass wrote the vertical of every joint up to the last
             // compliant one.
             let v = unsafe { verticals[i].assume_init_read() };
             e += j.gravity * (w[0] * v[1] - w[1] * v[0]);
         }
-        // Rz(θ' + e), e with φz's part.
+        // Rz(θ' + e), e with φz's part; Ry(φy) and Rx(α + φx) (the tip's correction and the
+        // direction's cos α, sin α turned by φx), the tip's turns by `turn_tip`.
         let (sin, omc) = turned(a.sin, a.omc, e);
-        (w, d) = turn_z(a.q, sin, omc, w, d);
-        // Ry(φy), to second order, on the tip and the direction.
-        let h = 0.5 * (py * py);
-        w = [
-            w[0] + (py * w[2] - h * w[0]),
-            w[1],
-            w[2] - (py * w[0] + h * w[2]),
-        ];
-        d = [
-            d[0] + (py * d[2] - h * d[0]),
-            d[1],
-            d[2] - (py * d[0] + h * d[2]),
-        ];
-        // Rx(α + φx): the tip's correction and the direction's cos α, sin α turned by φx.
         let al = &j.alpha_turn;
-        let (sin, omc) = turned(al.sin, al.omc, px);
-        w = rx_tip(
-            &Turn {
-                q: al.q,
-                sin,
-                omc,
-                cos: 1.0 - omc,
-            },
-            w,
-        );
+        let (asin, aomc) = turned(al.sin, al.omc, px);
+        let qa = if ALPHA == RUNTIME_ALPHA {
+            al.q
+        } else {
+            ((ALPHA >> (2 * i)) & 3) as u8
+        };
+        let h = 0.5 * (py * py);
+        w = turn_tip((a.q, sin, omc), (py, h), (qa, asin, aomc), w);
+        // The direction: Rz plainly, then Ry(φy) and Rx(α + φx).
+        (_, d) = turn_z(a.q, sin, omc, w, d);
         let [ca, sa] = j.alpha_whole;
-        let h = 0.5 * (px * px);
-        d = rx_dir([ca - (sa * px + ca * h), sa + (ca * px - sa * h)], d);
+        let first = if SMALL { true } else { wobble.dir_first };
+        if first {
+            // Rx(φx) Ry(φy) to first order, d + (φx, φy, 0) × d (within
+            // MAX_DIRECTION_SECOND_ORDER), then Rx(α) as the lean pass.
+            d = [
+                d[0] + py * d[2],
+                d[1] - px * d[2],
+                d[2] + (px * d[1] - py * d[0]),
+            ];
+            d = rx_dir([ca, sa], d);
+        } else {
+            // Ry(φy), and cos α, sin α turned by φx, to second order.
+            d = [
+                d[0] + (py * d[2] - h * d[0]),
+                d[1],
+                d[2] - (py * d[0] + h * d[2]),
+            ];
+            let h = 0.5 * (px * px);
+            d = rx_dir([ca - (sa * px + ca * h), sa + (ca * px - sa * h)], d);
+        }
     });
     // Rz(a_1).
     (w, d) = lean.rz_base(w, d);
     Ok(Point { xyz: w, dir: d })
+}
+
+/// The tip `w` turned by Rz (quarter turns `qz`, the remainder's sin and 1 − cos), then
+/// Ry(φy) to second order (`py`, h = ½ φy²), then Rx (quarter turns `qa` and the remainder
+/// turned by φx): with each large coordinate rounded as often as the lean pass rounds it.
+/// Ry's corrections are small (φy times the tip); added to x and z on their own, each would
+/// round a large coordinate once more a joint (two more roundings of up to 0.5 ulp at
+/// 1.5 m, 0.06 µm each). Instead x's joins Rz's correction of x, and z's (dz) the sum that
+/// Rx's quarter turn takes z into: the corrections' products take z − dz rounded (a small
+/// rounding, scaled by sin or 1 − cos of the remainder), the large sum z itself and dz
+/// exactly.
+#[cfg(feature = "wobble")]
+#[inline(always)]
+fn turn_tip(
+    (qz, sin, omc): (u8, f32, f32),
+    (py, h): (f32, f32),
+    (qa, asin, aomc): (u8, f32, f32),
+    w: [f32; 3],
+) -> [f32; 3] {
+    // Rz: x's correction kept apart; x1, x after it, only for Ry's small products.
+    let (p, r) = quarter_turns(qz, (w[0], w[1]));
+    let cx = r * sin + p * omc;
+    let x1 = p - cx;
+    let y = r + (p * sin - r * omc);
+    let z = w[2];
+    // Ry(φy): x += py z − h x, z −= py x + h z.
+    let x = p - (cx - (py * z - h * x1));
+    let dz = py * x1 + h * z;
+    // Rx: the quarter turns of (y, z), of (y, z − dz) for the correction and of (−0, −dz)
+    // (−0: a sum with it the compiler can drop where the quarter turn puts it on r).
+    let (p, r) = quarter_turns(qa, (y, z));
+    let (pc, rc) = quarter_turns(qa, (y, z - dz));
+    let (dp, dr) = quarter_turns(qa, (-0.0f32, -dz));
+    [
+        x,
+        p - ((rc * asin + pc * aomc) - dp),
+        r + ((pc * asin - rc * aomc) + dr),
+    ]
 }
 
 #[cfg(all(test, feature = "wobble"))]
@@ -427,52 +615,111 @@ mod tests {
         core::array::from_fn(|j| (k * 77_773 + j as u32 * 191_111) % (1 << 20))
     }
 
-    /// The two copies of the pass (six joints written out, looped) give the same numbers bit
-    /// for bit; they agree with the quaternion chain with its wobble to f32's rounding (under
-    /// 0.5 µm, 1e-6 on the direction), while the wobble moves the tip by far more than that
-    /// (the lean pass without it misses by micrometres); a count out of range is refused by
-    /// each, naming its joint.
+    /// The copies of the pass (six joints written out, looped; on an arm whose orders are 1
+    /// to 4, the six-axis copy with the compliant set, the quarter turns of α and the orders
+    /// known) give the same numbers bit for bit; they agree with the quaternion chain with
+    /// its wobble to f32's rounding (under 0.5 µm, 1e-6 on the direction), while the wobble
+    /// moves the tip by far more than that (the lean pass without it misses by micrometres);
+    /// a count out of range is refused by each, naming its joint.
     #[test]
     fn the_copies_agree_and_meet_the_quaternion_chain() {
-        let data = wobbling(0.003, 1.0);
-        let chain = chain_of(&data);
-        assert!(chain.is_lean());
-        let mut buf = [0u8; MAX_TABLE_LEN];
-        let len = data.encode(&mut buf).unwrap();
-        let table = Table::parse(&buf[..len]).unwrap();
-        let model = Model::<F32>::new(&table).unwrap();
-        let lean = LeanF32::build(&table, &model, true).unwrap();
-        assert!(lean.applies() && lean.pow2 && lean.wobble.on());
-        // The same arm's lean pass with the wobble left out.
-        let mut still = lean;
-        still.wobble = LeanWobble::default();
-        let bits = |p: &Point<F32>| (p.xyz.map(f32::to_bits), p.dir.map(f32::to_bits));
-        let mut moved = 0i64;
-        for k in 0..200u32 {
-            let counts = counts_of(k);
-            let temp = 10_000 + 125 * k as i32;
-            let a = run::<6, true>(&lean, &model, &counts, temp).unwrap();
-            let b = run::<0, false>(&lean, &model, &counts, temp).unwrap();
-            assert_eq!(bits(&a), bits(&b), "{counts:?}");
-            assert_eq!(bits(&a), bits(&chain.eval(&counts, temp).unwrap()));
-            let q = chain.eval_quaternion(&counts, temp).unwrap();
-            let (pa, pq) = (a.xyz_nm(), q.xyz_nm());
-            let (da, dq) = (a.dir_e9(), q.dir_e9());
-            for m in 0..3 {
-                assert!((pa[m] - pq[m]).abs() < 500, "{counts:?}: {pa:?} {pq:?}");
-                assert!((da[m] - dq[m]).abs() < 1_000, "{counts:?}: {da:?} {dq:?}");
+        // With joint 4's order-64 term (`Multiples`' loop), and without it (orders 1 to 4).
+        let mut small = wobbling(0.003, 1.0);
+        small.wobble[3].count = 3;
+        for (data, is_small) in [(wobbling(0.003, 1.0), false), (small, true)] {
+            let chain = chain_of(&data);
+            assert!(chain.is_lean());
+            let mut buf = [0u8; MAX_TABLE_LEN];
+            let len = data.encode(&mut buf).unwrap();
+            let table = Table::parse(&buf[..len]).unwrap();
+            let model = Model::<F32>::new(&table).unwrap();
+            let lean = LeanF32::build(&table, &model, true).unwrap();
+            assert!(lean.applies() && lean.pow2 && lean.wobble.on());
+            assert_eq!(lean.wobble.small, is_small);
+            assert!(lean.wobble.dir_first);
+            assert_eq!(
+                (lean.gravity_mask, lean.alpha_quarters),
+                (HINGES, PERPENDICULAR)
+            );
+            // The same arm's lean pass with the wobble left out.
+            let mut still = lean;
+            still.wobble = LeanWobble::default();
+            let bits = |p: &Point<F32>| (p.xyz.map(f32::to_bits), p.dir.map(f32::to_bits));
+            let mut moved = 0i64;
+            for k in 0..200u32 {
+                let counts = counts_of(k);
+                let temp = 10_000 + 125 * k as i32;
+                let a = run::<6, true, RUNTIME, RUNTIME_ALPHA, false>(&lean, &model, &counts, temp)
+                    .unwrap();
+                let b =
+                    run::<0, false, RUNTIME, RUNTIME_ALPHA, false>(&lean, &model, &counts, temp)
+                        .unwrap();
+                assert_eq!(bits(&a), bits(&b), "{counts:?}");
+                if is_small {
+                    let f =
+                        run::<6, true, HINGES, PERPENDICULAR, true>(&lean, &model, &counts, temp)
+                            .unwrap();
+                    assert_eq!(bits(&a), bits(&f), "{counts:?}");
+                }
+                assert_eq!(bits(&a), bits(&chain.eval(&counts, temp).unwrap()));
+                let q = chain.eval_quaternion(&counts, temp).unwrap();
+                let (pa, pq) = (a.xyz_nm(), q.xyz_nm());
+                let (da, dq) = (a.dir_e9(), q.dir_e9());
+                for m in 0..3 {
+                    assert!((pa[m] - pq[m]).abs() < 500, "{counts:?}: {pa:?} {pq:?}");
+                    assert!((da[m] - dq[m]).abs() < 1_000, "{counts:?}: {da:?} {dq:?}");
+                }
+                let s = still.eval(&model, &counts, temp).unwrap().xyz_nm();
+                moved = moved.max((0..3).map(|m| i64::from(s[m] - pa[m]).abs()).max().unwrap());
             }
-            let s = still.eval(&model, &counts, temp).unwrap().xyz_nm();
-            moved = moved.max((0..3).map(|m| i64::from(s[m] - pa[m]).abs()).max().unwrap());
+            assert!(moved > 20_000, "the wobble moves the tip by {moved} nm");
+            let mut counts = [5u32; 6];
+            counts[3] = 1 << 20;
+            let want = Err(ChainError::CountOutOfRange { joint: 4 });
+            let r6 = run::<6, true, RUNTIME, RUNTIME_ALPHA, false>(&lean, &model, &counts, 20_000);
+            let r0 = run::<0, false, RUNTIME, RUNTIME_ALPHA, false>(&lean, &model, &counts, 20_000);
+            let rf = run::<6, true, HINGES, PERPENDICULAR, true>(&lean, &model, &counts, 20_000);
+            assert_eq!(r6.map(|_| ()), want);
+            assert_eq!(r0.map(|_| ()), want);
+            assert_eq!(rf.map(|_| ()), want);
         }
-        assert!(moved > 20_000, "the wobble moves the tip by {moved} nm");
-        let mut counts = [5u32; 6];
-        counts[3] = 1 << 20;
-        let want = Err(ChainError::CountOutOfRange { joint: 4 });
-        let r6 = run::<6, true>(&lean, &model, &counts, 20_000);
-        let r0 = run::<0, false>(&lean, &model, &counts, 20_000);
-        assert_eq!(r6.map(|_| ()), want);
-        assert_eq!(r0.map(|_| ()), want);
+    }
+
+    /// Every set of orders 1 to 4 that [`small_series`] jumps to gives `Multiples`' loop's
+    /// φx, φy bit for bit (on angles all round the circle); no orders give zeros.
+    #[test]
+    fn each_set_of_orders_is_the_loop_s() {
+        let pool: [Term; 4] = core::array::from_fn(|k| Term {
+            order: 0,
+            x: [1.3e-5 * (k as f32 + 1.0), -2.1e-5],
+            y: [-0.7e-5, 3.9e-5 / (k as f32 + 1.0)],
+        });
+        for orders in 1u8..16 {
+            let terms: Vec<Term> = (0..4u32)
+                .filter(|h| orders & (1 << h) != 0)
+                .zip(&pool)
+                .map(|(h, t)| Term { order: h + 1, ..*t })
+                .collect();
+            for k in 0..97 {
+                let th = 0.37 + 0.0671 * k as f64;
+                let (c, s) = (th.cos() as f32, th.sin() as f32);
+                let mut m = Multiples::<F32>::new(c, s);
+                let (mut x, mut y) = (0.0f32, 0.0f32);
+                for t in &terms {
+                    m.advance(t.order);
+                    x = x + m.s * t.x[0] + m.c * t.x[1];
+                    y = y + m.s * t.y[0] + m.c * t.y[1];
+                }
+                let mut four = [Term::default(); 4];
+                four[..terms.len()].copy_from_slice(&terms);
+                let got = small_series(orders, &four, c, s);
+                assert_eq!(
+                    (got.0.to_bits(), got.1.to_bits()),
+                    (x.to_bits(), y.to_bits())
+                );
+            }
+        }
+        assert_eq!(small_series(0, &pool, 0.6, 0.8), (0.0, 0.0));
     }
 
     /// At the table's largest wobble (Σ |coefficients| up to 0.98e-3 a joint, the limit 1e-3) the left-out third
