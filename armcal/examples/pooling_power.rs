@@ -20,7 +20,10 @@
 //! Every rule is counted at the fleet's α = 0.01 and at 0.05 (the same estimates re-pooled,
 //! Holm over the candidates at 0.05).
 //!
-//!     cargo run --release -p armcal --example pooling_power [seeds [null_seeds [mixed_seeds]]]
+//!     cargo run --release -p armcal --example pooling_power [seeds [null_seeds [mixed_seeds [parts]]]]
+//!
+//! `parts` (all by default) picks fleets: a comma-separated list of `spread`, `null`, `mixed6`,
+//! `mixed7` (`pooling_power 0 0 150 mixed7`: the 7+1 mixed fleet over 150 seeds).
 //!
 //! 20, 40 and 30 by default: 180 fleets, about 10 minutes release on the shared 2-core
 //! machine (docs/results/claims.md §7.6).
@@ -268,10 +271,15 @@ fn main() {
             .unwrap_or(default)
     };
     let (seeds, null_seeds, mixed_seeds) = (arg(1, 20), arg(2, 40), arg(3, 30));
+    // Which fleets to run: a comma-separated list of `spread`, `null`, `mixed6`, `mixed7`.
+    let parts = std::env::args()
+        .nth(4)
+        .unwrap_or_else(|| "spread,null,mixed6,mixed7".to_string());
+    let part = |name: &str| parts.split(',').any(|p| p == name);
     let t = std::time::Instant::now();
     let cols = labels();
     let mut summary = Vec::new();
-    for mean in MEANS {
+    for mean in MEANS.into_iter().filter(|_| part("spread")) {
         let (tally, design, others) = run("spread fleet", &spread(mean, ARMS), 500, seeds);
         println!("({:.0} s)", t.elapsed().as_secs_f64());
         summary.push((
@@ -282,10 +290,15 @@ fn main() {
             others,
         ));
     }
-    let (tally, design, others) = run("null fleet", &[0.0; ARMS], 10_000, null_seeds);
-    println!("({:.0} s)", t.elapsed().as_secs_f64());
-    summary.push(("null".to_string(), null_seeds, tally, design, others));
-    for with in MIXED_WITH {
+    if part("null") {
+        let (tally, design, others) = run("null fleet", &[0.0; ARMS], 10_000, null_seeds);
+        println!("({:.0} s)", t.elapsed().as_secs_f64());
+        summary.push(("null".to_string(), null_seeds, tally, design, others));
+    }
+    for with in MIXED_WITH
+        .into_iter()
+        .filter(|w| part(&format!("mixed{w}")))
+    {
         let mut gs = spread(MIXED, with);
         gs.resize(ARMS, 0.0);
         let (tally, design, others) = run("mixed fleet", &gs, 30_000, mixed_seeds);
