@@ -23,7 +23,7 @@
 //!     cargo run --release -p armcal --example pooling_power [seeds [null_seeds [mixed_seeds [parts]]]]
 //!
 //! `parts` (all by default) picks fleets: a comma-separated list of `spread`, `null`, `mixed6`,
-//! `mixed7` (`pooling_power 0 0 150 mixed7`: the 7+1 mixed fleet over 150 seeds).
+//! `mixed7` (`pooling_power 0 0 300 mixed7`: the 7+1 mixed fleet over 300 seeds).
 //!
 //! 20, 40 and 30 by default: 180 fleets, 7.5 minutes release on the shared 2-core
 //! machine (docs/results/claims.md §7.6).
