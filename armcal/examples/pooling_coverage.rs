@@ -1,7 +1,8 @@
 //! The coverage of the pooled model's 95 % intervals on simulated fleets (issue 30): each
 //! arm's interval θ̃ ± t·se with τ̂²'s uncertainty (Morris's term) on t with the product's
 //! degrees of freedom (the arm's own error's sessions − 1, or arms − 1 where fewer), with
-//! Satterthwaite's and with arms − 1 (round 3's), the Knapp–Hartung interval on both, and the
+//! Satterthwaite's, with arms − 1 (round 3's) and with the df that grow with the arm's
+//! shrinkage (round 5's candidate, `pooling::shrinkage_df`), the Knapp–Hartung interval on both, and the
 //! plug-in error (τ̂² taken as known), and the design mean's Hartung–Knapp interval, over
 //! fleets of 3, 4 and 8 arms and a range of true spreads τ (in units of the arms' mean error),
 //! the errors estimated from 4 sessions as on MUKCa
@@ -34,15 +35,15 @@ fn main() {
         100.0 * (1.0 - alpha)
     );
     println!(
-        "arms  τ/s  | Morris: own df  Satterthwaite  k−1 | KH: k−1  own df | plug-in | width/plug-in: Morris own df, Satt, k−1, KH k−1, KH own df | design mean (HK)"
+        "arms  τ/s  | Morris: own df  Satterthwaite  k−1  shrinkage df | KH: k−1  own df | plug-in | width/plug-in: Morris own df, Satt, k−1, KH k−1, KH own df, shrinkage df | design mean (HK)"
     );
     for arms in [3, 4, 8] {
         for tau in [0.0, 0.25, 0.5, 1.0, 2.0, 4.0] {
             let c = simulated_coverage(arms, tau, sessions, fleets, 30 + arms as u64, alpha);
             let w = c.width;
             println!(
-                "{arms:>4}  {tau:>4.2} | {:>14.3}  {:>13.3}  {:>3.3} | {:>7.3}  {:>6.3} | {:>7.3} | {:.2}, {:.2}, {:.2}, {:.2}, {:.2} | {:.3}",
-                c.with_df, c.satterthwaite, c.with_tau, c.kh, c.kh_df, c.plugin, w[0], w[1], w[2], w[3], w[4], c.mean
+                "{arms:>4}  {tau:>4.2} | {:>14.3}  {:>13.3}  {:>3.3}  {:>12.3} | {:>7.3}  {:>6.3} | {:>7.3} | {:.2}, {:.2}, {:.2}, {:.2}, {:.2}, {:.2} | {:.3}",
+                c.with_df, c.satterthwaite, c.with_tau, c.shrinkage, c.kh, c.kh_df, c.plugin, w[0], w[1], w[2], w[3], w[4], w[5], c.mean
             );
         }
     }

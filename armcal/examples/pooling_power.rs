@@ -1,44 +1,59 @@
 //! Power and false causes of the pooled stage of `armcal diagnose --fleet` over seeds (issue
-//! 30, round 4): simulated fleets of 8 `default-6` arms (120 tracker points in 4 sessions
-//! each), one with the shoulder's gravity compliance spread ±50 % around a mean (`spread`),
-//! one with nothing hidden (`null`), each over `seeds` seeds. Every one-unknown candidate the
-//! arms can test is pooled and named as the product does
-//! ([`armcal::diagnose::fleet_pooled::pool_candidates`]: Holm over the candidates at the
+//! 30, rounds 4–5): simulated fleets of 8 `default-6` arms (120 tracker points in 4 sessions
+//! each). Every one-unknown candidate the arms can test is pooled and named as the product
+//! does ([`armcal::diagnose::fleet_pooled::pool_candidates`]: Holm over the candidates at the
 //! fleet's α = 0.01, each arm by its pooled 99 % interval, t on its own error's degrees of
-//! freedom or arms − 1 where fewer), beside the rules it replaces or could add:
+//! freedom or arms − 1 where fewer), and the shoulder's candidate is also named by every rule
+//! of [`armcal::diagnose::pooling_rules`] (the single-arm test among them).
 //!
-//! - round 3: the pooled interval on t with arms − 1 degrees of freedom;
-//! - Satterthwaite: on [`pooling::satterthwaite_df`];
-//! - one-sided: the design's mean passed, the arm's pooled value on its side, one-sided at α
-//!   on the product's degrees of freedom;
-//! - or own: the product's rule, or, once the design's mean passes, the arm's own interval
-//!   (t on its sessions − 1) excluding 0 on the mean's side;
-//! - own alone: the arm's own estimate, t on its sessions − 1 (no pooling);
-//! - α = 0.05: the product's rule at α = 0.05 (the candidates re-pooled from the same
-//!   estimates, Holm over them).
+//! Three kinds of fleet:
+//! - **the power curve**: the shoulder's gravity compliance spread ±50 % over the 8 arms
+//!   around each of the means 2.5, 5, 7.5 and 10e-9 rad/mm (`seeds` fleets each, the same
+//!   seeds at every mean: seed 500 + 100 s + arm, s = 0…, the first being §6's fleet);
+//! - **the null fleet**: nothing hidden (`null_seeds` fleets, seeds 10 000 + 100 s + arm): any
+//!   arm named is a false cause;
+//! - **the mixed fleets**: 6 (then 7) arms with the compliance spread ±50 % around 1e-8 rad/mm
+//!   and 2 (then 1) without it (`mixed_seeds` fleets each, seeds 30 000 + 100 s + arm): where
+//!   the design's mean passes, the arms without the effect that a rule names are its false
+//!   causes.
 //!
-//! A third fleet has half its arms with twice the spread fleet's compliances and half with
-//! none: where the design's mean passes, the arms without the effect that a rule names are
-//! its false causes.
+//! Every rule is counted at the fleet's α = 0.01 and at 0.05 (the same estimates re-pooled,
+//! Holm over the candidates at 0.05).
 //!
-//!     cargo run --release -p armcal --example pooling_power [seeds [mean compliance]]
+//!     cargo run --release -p armcal --example pooling_power [seeds [null_seeds [mixed_seeds [parts]]]]
 //!
-//! 20 seeds each and a mean of 2.5e-9 rad/mm by default (the fleet of
-//! `examples/pooling_fleet.rs`, whose seed 0 is this one's); a few minutes release.
+//! `parts` (all by default) picks fleets: a comma-separated list of `spread`, `null`, `mixed6`,
+//! `mixed7` (`pooling_power 0 0 300 mixed7`: the 7+1 mixed fleet over 300 seeds).
+//!
+//! 20, 40 and 30 by default: 180 fleets, 7.5 minutes release on the shared 2-core
+//! machine (docs/results/claims.md §7.6).
 
 use armcal::data::{Dataset, Kind};
 use armcal::diagnose::candidates;
 use armcal::diagnose::fleet::{self, UnitData};
 use armcal::diagnose::fleet_pooled::{pool_candidates, PooledEffect};
-use armcal::diagnose::pooling;
+use armcal::diagnose::pooling::{self, Arm as PooledArm};
+use armcal::diagnose::pooling_rules::RULES;
 use armcal::params::Effect;
 use armcal::sim;
-use armcal::stats::{t_critical, t_tail};
 use quatarm_ref::arm::Arm;
 
 const ROWS: usize = 120;
 const SESSIONS: usize = 4;
 const ARMS: usize = 8;
+
+/// The means of the power curve (rad/mm).
+const MEANS: [f64; 4] = [2.5e-9, 5e-9, 7.5e-9, 1e-8];
+
+/// The mean of the mixed fleets' arms with the effect (rad/mm): every such arm's own estimate
+/// names it in 0.73 of (fleet, arm) pairs at α = 0.01 on the spread fleet of this mean.
+const MIXED: f64 = 1e-8;
+
+/// Arms of each mixed fleet with the effect (the rest have none): with 2 of 8 without it the
+/// design's mean cannot pass Holm at 0.01 over 5 candidates whatever the magnitude (the two
+/// zeros make the arms' scatter, and Hartung–Knapp's error, grow with the mean), so the
+/// fleet with 1 of 8 without it is where the gate can pass at 0.01.
+const MIXED_WITH: [usize; 2] = [6, 7];
 
 /// A `default-6` arm with its own geometric errors and a shoulder compliance `g` (rad/mm).
 fn arm_data(seed: u64, g: f64) -> Dataset {
@@ -60,63 +75,63 @@ fn arm_data(seed: u64, g: f64) -> Dataset {
     Dataset::from_rows(rows, 6, false, "(simulated arm)").expect("rows")
 }
 
-/// The rules compared, in the order of [`named`]'s columns.
-const RULES: [&str; 7] = [
-    "product (own df)",
-    "round 3 (k − 1 df)",
-    "Satterthwaite df",
-    "one-sided, own df",
-    "product or own",
-    "own estimate alone",
-    "product at α = 0.05",
-];
+/// The levels every rule is counted at: the fleet's α (Holm over the candidates at 0.01, the
+/// product's) and 0.05 (the same estimates re-pooled, Holm at 0.05).
+const ALPHAS: [f64; 2] = [0.01, 0.05];
 
-/// Which arms each rule names for `p` (one row per rule, [`RULES`]); `named05` whether its
-/// design mean passes Holm at 0.05 over the fleet's candidates.
-fn named(p: &PooledEffect, named05: bool, alpha: f64) -> Vec<Vec<bool>> {
-    let k = p.arms.len();
-    let tk = t_critical(alpha, (k - 1) as f64);
+/// Column labels: every rule of [`RULES`] at each of [`ALPHAS`].
+fn labels() -> Vec<String> {
+    ALPHAS
+        .iter()
+        .flat_map(|a| RULES.iter().map(move |r| format!("{} @ {a}", r.label())))
+        .collect()
+}
+
+/// Which arms each column of [`labels`] names for the shoulder's pooled candidate `p`
+/// (pooled at the fleet's α, its design named by Holm over the fleet's candidates);
+/// `named05` whether its design mean passes Holm at 0.05 over them. Returns the columns and
+/// whether the design passed at each of [`ALPHAS`].
+fn named(p: &PooledEffect, named05: bool) -> (Vec<Vec<bool>>, [bool; 2]) {
     let y: Vec<f64> = p.arms.iter().map(|a| a.value.estimate).collect();
     let se: Vec<f64> = p.arms.iter().map(|a| a.value.se).collect();
     let df: Vec<f64> = p.arms.iter().map(|a| a.value.se_df).collect();
-    let re = pooling::pool(&y, &se, &df, 0.05);
-    let mut out = vec![Vec::with_capacity(k); RULES.len()];
-    for (i, a) in p.arms.iter().enumerate() {
-        let v = &a.value;
-        let own = 2.0 * t_tail((v.estimate / v.se).abs(), v.se_df) < alpha;
-        let z = (v.pooled / v.pooled_se).abs();
-        let own_part = (1.0 - v.shrinkage) * v.se * v.se;
-        let satt = pooling::satterthwaite_df(
-            own_part,
-            v.shrinkage,
-            v.se_df,
-            v.pooled_se.powi(2) - own_part,
-            k,
-        );
-        let mean_side = v.pooled * p.design.mean > 0.0;
-        let row = [
-            v.named_pooled,
-            p.named && z > tk,
-            p.named && 2.0 * t_tail(z, satt) < alpha,
-            p.named && mean_side && t_tail(z, v.df) < alpha,
-            v.named_pooled || (p.named && own && v.estimate * p.design.mean > 0.0),
-            own,
-            named05 && re.as_ref().is_some_and(|(_, arms)| arms[i].named_pooled),
-        ];
-        for (o, r) in out.iter_mut().zip(row) {
-            o.push(r);
+    let first: Vec<PooledArm> = p.arms.iter().map(|a| a.value).collect();
+    let mut out = Vec::new();
+    let mut passed = [false; 2];
+    for (i, &alpha) in ALPHAS.iter().enumerate() {
+        let (d, arms) = if i == 0 {
+            (p.design, first.clone())
+        } else {
+            match pooling::pool(&y, &se, &df, alpha) {
+                Some((mut d, arms)) => {
+                    d.named = named05;
+                    (d, arms)
+                }
+                None => (p.design, first.clone()),
+            }
+        };
+        passed[i] = d.named;
+        for r in RULES {
+            out.push(arms.iter().map(|a| r.names(&d, a, alpha)).collect());
         }
     }
-    out
+    (out, passed)
 }
 
-/// The shoulder candidate in one fleet: each rule's arms, and whether its design mean passed.
-type Shoulder = (Vec<Vec<bool>>, bool);
+/// One fleet's outcome.
+struct Outcome {
+    /// Per column of [`labels`], per arm: named.
+    named: Vec<Vec<bool>>,
+    /// Whether the shoulder's design mean passed Holm at each of [`ALPHAS`].
+    design: [bool; 2],
+    /// Other candidates named at the fleet's α (candidate, arms named).
+    others: Vec<(String, usize)>,
+    /// Whether some other candidate's design mean passed Holm at 0.05.
+    others05: bool,
+}
 
-/// One fleet of compliances `gs` (arm k's data from seed `base + k`): the shoulder
-/// candidate's naming, and the other candidates named (candidate, arms) at the product's α
-/// and at 0.05.
-fn fleet_once(gs: &[f64], base: u64) -> (Shoulder, Vec<(String, usize)>, Vec<String>) {
+/// One fleet of compliances `gs` (arm k's data from seed `base + k`).
+fn fleet_once(gs: &[f64], base: u64) -> Outcome {
     let start = Arm::default6();
     let units: Vec<UnitData> = gs
         .iter()
@@ -146,44 +161,54 @@ fn fleet_once(gs: &[f64], base: u64) -> (Shoulder, Vec<(String, usize)>, Vec<Str
     let p = pool_candidates(&start, &units, &arms, &testable, &o);
     let ps: Vec<f64> = p.effects.iter().map(|e| e.design.mean_p).collect();
     let holm05 = fleet::holm(&ps, 0.05);
-    let mut shoulder = (vec![vec![false; gs.len()]; RULES.len()], false);
-    let mut others = Vec::new();
-    let mut others05 = Vec::new();
+    let mut out = Outcome {
+        named: vec![vec![false; gs.len()]; labels().len()],
+        design: [false; 2],
+        others: Vec::new(),
+        others05: false,
+    };
     for (e, &n05) in p.effects.iter().zip(&holm05) {
         if e.effect == Effect::Gravity(1) {
-            shoulder = (named(e, n05, o.alpha), e.named);
+            (out.named, out.design) = named(e, n05);
         } else {
             if e.named {
                 let arms = e.arms.iter().filter(|a| a.value.named_pooled).count();
-                others.push((e.term.clone(), arms));
+                out.others.push((e.term.clone(), arms));
             }
-            if n05 {
-                others05.push(e.term.clone());
-            }
+            out.others05 |= n05;
         }
     }
-    (shoulder, others, others05)
+    out
 }
 
-fn run(title: &str, gs: &[f64], base: u64, seeds: u64) {
+/// Per column: arms with the effect named, fleets with every such arm named, arms without it
+/// named, fleets with any of those named.
+type Tally = Vec<[usize; 4]>;
+
+/// Runs `seeds` fleets of compliances `gs`, prints each and the summary; returns the tally,
+/// the fleets whose design mean passed at each of [`ALPHAS`], and the fleets with another
+/// candidate named at the fleet's α.
+fn run(title: &str, gs: &[f64], base: u64, seeds: u64) -> (Tally, [usize; 2], usize) {
     let with: Vec<bool> = gs.iter().map(|g| *g != 0.0).collect();
     let n_with = with.iter().filter(|w| **w).count();
     let n_without = gs.len() - n_with;
     let gs_text: Vec<String> = gs.iter().map(|g| format!("{:.2}", g * 1e9)).collect();
+    let cols = labels();
     println!(
         "{title}: {seeds} fleets of {} arms, joint-2 compliance [{}]e-9 rad/mm",
         gs.len(),
         gs_text.join(", ")
     );
-    println!("  seed  design  arms with the effect named, then arms without it named, per rule ({}) | other candidates named (α = 0.01) (α = 0.05)", RULES.join(", "));
-    // Per rule: arms with the effect named, fleets with every such arm named, arms without
-    // it named, fleets with any of those named.
-    let mut tally = vec![[0usize; 4]; RULES.len()];
-    let (mut design, mut other_fleets, mut other_arms, mut other05) = (0, 0, 0, 0);
+    println!(
+        "  seed  design  arms with the effect named/arms without it named, per rule ({}) | other candidates named (α = 0.01), any at 0.05",
+        cols.join(", ")
+    );
+    let mut tally: Tally = vec![[0usize; 4]; cols.len()];
+    let (mut design, mut other_fleets, mut other_arms, mut other05) = ([0; 2], 0, 0, 0);
     for s in 0..seeds {
-        let ((rules, d), others, others05) = fleet_once(gs, base + 100 * s);
+        let o = fleet_once(gs, base + 100 * s);
         let mut cells = Vec::new();
-        for (t, r) in tally.iter_mut().zip(&rules) {
+        for (t, r) in tally.iter_mut().zip(&o.named) {
             let right = r.iter().zip(&with).filter(|(n, w)| **n && **w).count();
             let wrong = r.iter().zip(&with).filter(|(n, w)| **n && !**w).count();
             t[0] += right;
@@ -193,23 +218,27 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64) {
             cells.push(format!("{right}/{wrong}"));
         }
         println!(
-            "  {s:>4}  {:<6}  {} | {:?} {:?}",
-            d,
+            "  {s:>4}  {:<11}  {} | {:?} {}",
+            format!("{}/{}", o.design[0], o.design[1]),
             cells.join("  "),
-            others,
-            others05
+            o.others,
+            o.others05
         );
-        design += d as usize;
-        other_fleets += (!others.is_empty()) as usize;
-        other_arms += others.iter().map(|o| o.1).sum::<usize>();
-        other05 += (!others05.is_empty()) as usize;
+        for (n, d) in design.iter_mut().zip(o.design) {
+            *n += d as usize;
+        }
+        other_fleets += (!o.others.is_empty()) as usize;
+        other_arms += o.others.iter().map(|o| o.1).sum::<usize>();
+        other05 += o.others05 as usize;
     }
     println!(
-        "  design mean of joint 2's compliance named (Holm, α = 0.01): {design}/{seeds} fleets"
+        "  design mean of joint 2's compliance named (Holm): {}/{seeds} fleets at α = 0.01, {}/{seeds} at 0.05",
+        design[0],
+        design[1]
     );
-    for (name, t) in RULES.iter().zip(&tally) {
+    for (name, t) in cols.iter().zip(&tally) {
         println!(
-            "  {name:<20} with the effect: {}/{} (fleet, arm) pairs named ({:.3}), every such arm in {}/{seeds} fleets; \
+            "  {name:<29} with the effect: {}/{} (fleet, arm) pairs named ({:.3}), every such arm in {}/{seeds} fleets; \
              without it: {}/{} named, in {}/{seeds} fleets",
             t[0],
             n_with as u64 * seeds,
@@ -224,36 +253,85 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64) {
         "  other candidates named: in {other_fleets}/{seeds} fleets ({other_arms} arms) at α = 0.01; \
          design means in {other05}/{seeds} fleets at α = 0.05"
     );
+    (tally, design, other_fleets)
+}
+
+/// A compliance spread ±50 % around `mean` over `n` arms.
+fn spread(mean: f64, n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|k| mean * (0.5 + k as f64 / (n.max(2) - 1) as f64))
+        .collect()
 }
 
 fn main() {
-    let seeds: u64 = std::env::args()
-        .nth(1)
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(20);
-    let mean: f64 = std::env::args()
-        .nth(2)
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(2.5e-9);
+    let arg = |i: usize, default: u64| -> u64 {
+        std::env::args()
+            .nth(i)
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(default)
+    };
+    let (seeds, null_seeds, mixed_seeds) = (arg(1, 20), arg(2, 40), arg(3, 30));
+    // Which fleets to run: a comma-separated list of `spread`, `null`, `mixed6`, `mixed7`.
+    let parts = std::env::args()
+        .nth(4)
+        .unwrap_or_else(|| "spread,null,mixed6,mixed7".to_string());
+    let part = |name: &str| parts.split(',').any(|p| p == name);
     let t = std::time::Instant::now();
-    let gs: Vec<f64> = (0..ARMS)
-        .map(|k| mean * (0.5 + k as f64 / (ARMS - 1) as f64))
-        .collect();
-    run("spread fleet", &gs, 500, seeds);
-    println!("({:.0} s)", t.elapsed().as_secs_f64());
-    run("null fleet", &[0.0; ARMS], 10_000, seeds);
-    println!("({:.0} s)", t.elapsed().as_secs_f64());
-    // Half the arms with twice the spread fleet's compliances, half with none: the per-arm
-    // rule's false causes where the design's mean passes.
-    let half: Vec<f64> = (0..ARMS)
-        .map(|k| {
-            if k < ARMS / 2 {
-                2.0 * mean * (0.5 + k as f64 / (ARMS / 2 - 1) as f64)
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    run("half fleet", &half, 20_000, seeds);
+    let cols = labels();
+    let mut summary = Vec::new();
+    for mean in MEANS.into_iter().filter(|_| part("spread")) {
+        let (tally, design, others) = run("spread fleet", &spread(mean, ARMS), 500, seeds);
+        println!("({:.0} s)", t.elapsed().as_secs_f64());
+        summary.push((
+            format!("spread {:.1}e-9", mean * 1e9),
+            seeds,
+            tally,
+            design,
+            others,
+        ));
+    }
+    if part("null") {
+        let (tally, design, others) = run("null fleet", &[0.0; ARMS], 10_000, null_seeds);
+        println!("({:.0} s)", t.elapsed().as_secs_f64());
+        summary.push(("null".to_string(), null_seeds, tally, design, others));
+    }
+    for with in MIXED_WITH
+        .into_iter()
+        .filter(|w| part(&format!("mixed{w}")))
+    {
+        let mut gs = spread(MIXED, with);
+        gs.resize(ARMS, 0.0);
+        let (tally, design, others) = run("mixed fleet", &gs, 30_000, mixed_seeds);
+        println!("({:.0} s)", t.elapsed().as_secs_f64());
+        summary.push((
+            format!("mixed {with}+{} at {:.1}e-9", ARMS - with, MIXED * 1e9),
+            mixed_seeds,
+            tally,
+            design,
+            others,
+        ));
+    }
+    // One table: per fleet and column, with-effect pairs named / fleets with all of them named
+    // / without-effect arms named / fleets with a false cause.
+    println!(
+        "\nsummary (per column: pairs with the effect named | fleets with every such arm named | \
+         arms without it named | fleets with a false cause)"
+    );
+    println!(
+        "fleet | seeds | design passes at 0.01, 0.05 | other candidates named | {}",
+        cols.join(" | ")
+    );
+    for (name, n, tally, design, others) in &summary {
+        let cells: Vec<String> = tally
+            .iter()
+            .map(|t| format!("{} | {} | {} | {}", t[0], t[1], t[2], t[3]))
+            .collect();
+        println!(
+            "{name} | {n} | {}, {} | {others} | {}",
+            design[0],
+            design[1],
+            cells.join(" || ")
+        );
+    }
     println!("({:.0} s)", t.elapsed().as_secs_f64());
 }

@@ -413,7 +413,8 @@ impl PooledFleet {
             s,
             "\npooled effects (each arm's value drawn from the design's distribution, \
              DerSimonian–Laird; the design's mean tested two-sided, Holm at α = {}; named for \
-             an arm whose pooled {:.0} % interval, t on its Satterthwaite df, excludes 0)",
+             an arm whose pooled {:.0} % interval, t on its own error's df or arms − 1 where \
+             fewer, excludes 0)",
             self.alpha,
             100.0 * (1.0 - self.alpha)
         );

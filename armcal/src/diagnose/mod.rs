@@ -30,6 +30,7 @@ pub mod nested;
 pub mod patterns;
 pub mod plots;
 pub mod pooling;
+pub mod pooling_rules;
 pub mod report;
 pub mod same_arm;
 pub mod scenario;
