@@ -537,7 +537,26 @@ impl LeanF32 {
             let j = &self.joints[i];
             let (a, c, s) = j.reading::<POW2>(i, counts[i])?;
             let e = j.harmonic_error(c, s);
-            angles[i].write(Angle { e, ..a });
+            let compliant = if GRAVITY == RUNTIME {
+                j.has_gravity
+            } else {
+                GRAVITY & (1 << i) != 0
+            };
+            angles[i].write(if compliant {
+                // Gravity's deflection joins e in the second pass, which turns the remainder.
+                Angle { e, ..a }
+            } else {
+                // The whole error is known here: the remainder turned now, with the numbers
+                // the second pass would give (the same operations on the same values), so
+                // that e is neither kept nor read back.
+                let (sin, omc) = turned(a.sin, a.omc, e);
+                Angle {
+                    sin,
+                    omc,
+                    e: 0.0,
+                    ..a
+                }
+            });
             let vertical = if GRAVITY == RUNTIME {
                 i < self.vertical_joints
             } else {
@@ -578,20 +597,23 @@ impl LeanF32 {
             } else {
                 [w[0] + link[0], w[1] + link[1], w[2] + link[2]]
             };
-            let mut e = a.e;
             let compliant = if GRAVITY == RUNTIME {
                 j.has_gravity
             } else {
                 GRAVITY & (1 << i) != 0
             };
-            if compliant {
+            let (sin, omc) = if compliant {
                 // SAFETY: the first pass wrote the vertical of every joint up to the last
                 // compliant one.
                 let v = unsafe { verticals[i].assume_init_read() };
-                e += j.gravity * (w[0] * v[1] - w[1] * v[0]);
-            }
-            // Rz(θ'): the quarter turns, the remainder turned by e as a correction.
-            let (sin, omc) = turned(a.sin, a.omc, e);
+                let e = a.e + j.gravity * (w[0] * v[1] - w[1] * v[0]);
+                // The remainder turned by the harmonic error and the deflection together.
+                turned(a.sin, a.omc, e)
+            } else {
+                // Turned by the first pass.
+                (a.sin, a.omc)
+            };
+            // Rz(θ'): the quarter turns, the turned remainder as a correction.
             (w, d) = turn_z(a.q, sin, omc, w, d);
             // Rx(α): the tip by a quarter turn and a correction (chosen at boot), the
             // direction plainly.
