@@ -573,7 +573,11 @@ impl LeanF32 {
                     let (y, z) = (ca * zb[1] + sa * zb[2], ca * zb[2] - sa * zb[1]);
                     (c * zb[0] + s * y, c * y - s * zb[0], z)
                 };
-                zb = [x + e * y, y - e * x, z];
+                // Turned by Rz(−θ') alone, without the harmonic error e: the vertical is
+                // then off by at most Σ|e| (about 3e-4 rad on the hubs' arms) about the joints'
+                // axes, which moves each deflection g (w × ẑ_base)·ẑ_k of about 4e-5 rad by
+                // some 1e-8 rad (docs/results/speed.md, "The lean chain from 835").
+                zb = [x, y, z];
                 // Written for every joint up to the last compliant one (read only where
                 // compliant): a store is cheaper than testing the flag.
                 verticals[i].write([zb[0], zb[1]]);
