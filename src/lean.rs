@@ -884,7 +884,10 @@ mod tests {
             assert_eq!(q, want_q, "{t:#x}");
             let ri = t.wrapping_sub(u32::from(q) << 30) as i32;
             let exact = f64::from(ri) * (core::f64::consts::PI / 2_147_483_648.0);
-            assert!(exact.abs() <= core::f64::consts::FRAC_PI_4 + 1e-12, "{t:#x}");
+            assert!(
+                exact.abs() <= core::f64::consts::FRAC_PI_4 + 1e-12,
+                "{t:#x}"
+            );
             // The angle as the f32 path has it (r to f32, scaled by π/2^31 in f32: at most
             // three roundings, 2e-7 relative): the test bounds the polynomials and their
             // rounding, not the input's.
