@@ -18,9 +18,11 @@
 //! the quaternion chain does, so that each large partial sum is rounded about once a turn.
 //!
 //! **Gravity** needs the base frame's vertical in each compliant joint's frame, which only a
-//! base-to-tip pass has: a first pass turns (0, 0, 1) by Rx(−α_k) Rz(−θ'_k − e_k) (the
-//! vertical is a unit vector: rounding here scales the deflection, 1e-7 of 4e-5 rad, not the
-//! tip) and keeps the joints' angles; the second pass, tip to base, adds each deflection
+//! base-to-tip pass has: a first pass turns (0, 0, 1) by Rx(−α_k) Rz(−θ'_k) (the vertical
+//! is a unit vector: rounding here scales the deflection, 1e-7 of 4e-5 rad, not the tip; the
+//! harmonic errors left out of its turns move it by Σ|e|, a bound measured in
+//! `docs/results/speed.md`) and keeps the joints' angles (a joint without gravity's with its
+//! remainder already turned by its harmonic error); the second pass, tip to base, adds each deflection
 //! e_k = g_k (w × ẑ_base)·ẑ_k to its joint's angle before the turn, so the direction
 //! and the tip are both deflected exactly (no Σ e_k a_k correction afterwards).
 //!
@@ -28,7 +30,7 @@
 //! and the hub falls back to it for any arm this form does not take. Where the two forms'
 //! costs come from: `docs/results/speed.md`.
 
-use crate::angle::{quarter_turns, CountScale, Quarter};
+use crate::angle::{quarter_turns, CountScale};
 use crate::lean_wobble::LeanWobble;
 use crate::model::{units, unpermute, ChainError, Model, Point, BASE_AXIS};
 use crate::physics::Physics;
@@ -311,7 +313,9 @@ pub(crate) struct Angle {
     /// sin r and 1 − cos r of the remainder r, |r| ≤ π/4.
     pub(crate) sin: f32,
     pub(crate) omc: f32,
-    /// The harmonic error, rad (with the wobble's turn about z, [`crate::lean_wobble`]).
+    /// The harmonic error, rad (with the wobble's turn about z, [`crate::lean_wobble`]);
+    /// where [`LeanF32::run`] turns the remainder by it in the first pass (a joint without
+    /// gravity), 0 and unread: `sin` and `omc` are then the turned remainder's.
     pub(crate) e: f32,
 }
 
@@ -537,14 +541,33 @@ impl LeanF32 {
             let j = &self.joints[i];
             let (a, c, s) = j.reading::<POW2>(i, counts[i])?;
             let e = j.harmonic_error(c, s);
-            angles[i].write(Angle { e, ..a });
+            let compliant = if GRAVITY == RUNTIME {
+                j.has_gravity
+            } else {
+                GRAVITY & (1 << i) != 0
+            };
+            angles[i].write(if compliant {
+                // Gravity's deflection joins e in the second pass, which turns the remainder.
+                Angle { e, ..a }
+            } else {
+                // The whole error is known here: the remainder turned now, with the numbers
+                // the second pass would give (the same operations on the same values), so
+                // that e is neither kept nor read back.
+                let (sin, omc) = turned(a.sin, a.omc, e);
+                Angle {
+                    sin,
+                    omc,
+                    e: 0.0,
+                    ..a
+                }
+            });
             let vertical = if GRAVITY == RUNTIME {
                 i < self.vertical_joints
             } else {
                 i < (8 - GRAVITY.leading_zeros()) as usize
             };
             if vertical {
-                // Rx(−α), then Rz(−θ' − e) with e to first order.
+                // Rx(−α), then Rz(−θ') (without the harmonic error e: below).
                 let [ca, sa] = j.alpha_whole;
                 let (x, y, z) = if i == 0 {
                     // The base frame's vertical is (0, 0, 1) itself: the same numbers without
@@ -554,7 +577,11 @@ impl LeanF32 {
                     let (y, z) = (ca * zb[1] + sa * zb[2], ca * zb[2] - sa * zb[1]);
                     (c * zb[0] + s * y, c * y - s * zb[0], z)
                 };
-                zb = [x + e * y, y - e * x, z];
+                // Turned by Rz(−θ') alone, without the harmonic error e: the vertical is
+                // then off by at most Σ|e| (5.4e-4 rad on default-6-full) about the joints'
+                // axes, which moves each deflection g (w × ẑ_base)·ẑ_k of up to 5e-5 rad by
+                // at most 3e-8 rad (docs/results/speed.md, "The lean chain from 835").
+                zb = [x, y, z];
                 // Written for every joint up to the last compliant one (read only where
                 // compliant): a store is cheaper than testing the flag.
                 verticals[i].write([zb[0], zb[1]]);
@@ -578,20 +605,23 @@ impl LeanF32 {
             } else {
                 [w[0] + link[0], w[1] + link[1], w[2] + link[2]]
             };
-            let mut e = a.e;
             let compliant = if GRAVITY == RUNTIME {
                 j.has_gravity
             } else {
                 GRAVITY & (1 << i) != 0
             };
-            if compliant {
+            let (sin, omc) = if compliant {
                 // SAFETY: the first pass wrote the vertical of every joint up to the last
                 // compliant one.
                 let v = unsafe { verticals[i].assume_init_read() };
-                e += j.gravity * (w[0] * v[1] - w[1] * v[0]);
-            }
-            // Rz(θ'): the quarter turns, the remainder turned by e as a correction.
-            let (sin, omc) = turned(a.sin, a.omc, e);
+                let e = a.e + j.gravity * (w[0] * v[1] - w[1] * v[0]);
+                // The remainder turned by the harmonic error and the deflection together.
+                turned(a.sin, a.omc, e)
+            } else {
+                // Turned by the first pass.
+                (a.sin, a.omc)
+            };
+            // Rz(θ'): the quarter turns, the turned remainder as a correction.
             (w, d) = turn_z(a.q, sin, omc, w, d);
             // Rx(α): the tip by a quarter turn and a correction (chosen at boot), the
             // direction plainly.
@@ -645,11 +675,10 @@ impl LeanJoint {
         } else {
             self.scale.binary(count)
         };
-        let a = Quarter::<F32>::from_binary(t.wrapping_add(self.offset));
-        let (sin, omc) = a.double();
-        let (c, s) = quarter_turns(a.q, (1.0 - omc, sin));
+        let (q, sin, omc) = remainder(t.wrapping_add(self.offset));
+        let (c, s) = quarter_turns(q, (1.0 - omc, sin));
         let angle = Angle {
-            q: a.q,
+            q,
             sin,
             omc,
             e: 0.0,
@@ -672,6 +701,35 @@ impl LeanJoint {
         let (v, r) = (&self.link, &self.rate);
         [v[0] + r[0] * dt, v[1] + r[1] * dt, v[2] + r[2] * dt]
     }
+}
+
+/// Minimax sin r − r = r³ (S₁ + r² (S₂ + r² S₃)) on |r| ≤ π/4, fitted with the coefficients
+/// rounded to f32: absolute error 2.3e-9 (of f32's rounding of sin r, up to 3e-8).
+const SIN_R: [f32; 3] = [-0.166_666_51, 0.008_331_979, -0.000_194_956_46];
+/// Minimax 1 − cos r = r² (C₀ + r² (C₁ + r² (C₂ + r² C₃))) on |r| ≤ π/4, likewise: absolute
+/// error 1.7e-9.
+const OMC_R: [f32; 4] = [0.5, -0.041_666_623, 0.001_388_676_3, -2.439_040_3e-5];
+
+/// A binary angle t (one turn = 2^32) as q quarter turns and a remainder r, |r| ≤ π/4: q,
+/// sin r and 1 − cos r, each from its own polynomial in r. The chain's turns want these two
+/// (a quarter turn and a correction); [`crate::angle::Quarter`] takes them from the half
+/// angle's sine and cosine (both its chains want the half angle), which costs a multiply–add
+/// more each and the doubling's four operations: 17 floating-point operations a joint here
+/// become 15, for errors of 2e-9, far under f32's rounding of the results.
+#[inline(always)]
+pub(crate) fn remainder(t: u32) -> (u8, f32, f32) {
+    /// π / 2^31: the remainder's binary angle in radians.
+    const K: f32 = (core::f64::consts::PI / 2_147_483_648.0) as f32;
+    let q = t.wrapping_add(1 << 29) >> 30;
+    // |r| ≤ 2^29; as f32 a relative error of at most 6e-8 (none for a 2^20-count encoder).
+    let r = t.wrapping_sub(q << 30) as i32;
+    let x = r as f32 * K;
+    let z = x * x;
+    let [s1, s2, s3] = SIN_R;
+    let [c0, c1, c2, c3] = OMC_R;
+    let sin = x + x * z * (s1 + z * (s2 + z * s3));
+    let omc = z * (c0 + z * (c1 + z * (c2 + z * c3)));
+    (q as u8, sin, omc)
 }
 
 /// A remainder's sin r and 1 − cos r turned by a small angle e, to second order (|e| ≤ 1e-3:
@@ -790,6 +848,45 @@ mod tests {
                 .map(|_| ()),
             want
         );
+    }
+
+    /// The per-point remainder: q and r as the binary angle has them, sin r and 1 − cos r
+    /// within f32's rounding (an ulp of the result and the polynomials' 2e-9) of f64's, over
+    /// the whole turn and at the quarter turns' edges.
+    #[test]
+    fn remainder_matches_f64() {
+        let mut t = 0u32;
+        let mut worst = [0.0f64; 2];
+        for k in 0..200_000u32 {
+            t = t.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            let t = match k % 4 {
+                0 => t,
+                // The quarter turns' edges (r = ±π/4).
+                1 => (t & 0xc000_0000).wrapping_add(1 << 29),
+                2 => (t & 0xc000_0000).wrapping_add((1 << 29) - 1),
+                _ => (t & 0xffff_f000) | 0x1ff,
+            };
+            let (q, sin, omc) = remainder(t);
+            let (want_q, _, _) = split_turn(t);
+            assert_eq!(q, want_q, "{t:#x}");
+            let ri = t.wrapping_sub(u32::from(q) << 30) as i32;
+            let exact = f64::from(ri) * (core::f64::consts::PI / 2_147_483_648.0);
+            assert!(
+                exact.abs() <= core::f64::consts::FRAC_PI_4 + 1e-12,
+                "{t:#x}"
+            );
+            // The angle as the f32 path has it (r to f32, scaled by π/2^31 in f32: at most
+            // three roundings, 2e-7 relative): the test bounds the polynomials and their
+            // rounding, not the input's.
+            let r = f64::from(ri as f32 * (core::f64::consts::PI / 2_147_483_648.0) as f32);
+            assert!((r - exact).abs() <= 2e-7 * exact.abs(), "{t:#x}");
+            let es = (f64::from(sin) - r.sin()).abs();
+            let eo = (f64::from(omc) - (1.0 - r.cos())).abs();
+            worst = [worst[0].max(es), worst[1].max(eo)];
+        }
+        // An ulp at 0.71 is 6e-8, at 0.29 3e-8: at most about an ulp and a half each.
+        assert!(worst[0] < 9e-8 && worst[1] < 5e-8, "{worst:?}");
+        assert!(worst[0] > 0.0 && worst[1] > 0.0);
     }
 
     /// The boot's angles: a binary angle comes back from its own cosine and sine, and the

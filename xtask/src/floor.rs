@@ -82,12 +82,15 @@ pub struct Floor {
     pub integer: u32,
 }
 
-/// [`Floor`] of the product's form for `arm` (the power-of-two scales of the hub's encoders). Per joint, first pass: the remainder to f32 and its sine
-/// and 1 − cos (2 + 1 + 4 + 3), doubled (4), cos r (1), the harmonic error (5), the vertical
-/// turned by Rx, Rz and e (4 + 4 + 4; 3 for the first joint, whose vertical is ẑ); second
-/// pass: the link at temperature added (6; 3 for the tip's), the turn by e (10), Rz on the
-/// tip and the direction (6 + 4), Rx on both (6 + 4), gravity's deflection (3 where
-/// compliant). Per point: the temperature (1), the base's Rz (6 + 4).
+/// [`Floor`] of the product's form for `arm` (the power-of-two scales of the hub's encoders).
+/// Per joint, first pass: the remainder r to f32 in radians and its square (2 + 1), sin r
+/// (4: two multiply–adds of the Horner form, r·r², the last multiply–add) and 1 − cos r (4:
+/// three multiply–adds, the product by r²), cos r (1), the harmonic error (5), the vertical
+/// turned by Rx and Rz (4 + 4; 2 for the first joint, whose vertical is ẑ); second pass (the
+/// remainder's turn by e in the first pass for a joint without gravity: the same count): the
+/// link at temperature added (6; 3 for the tip's), the turn by e (10), Rz on the tip and the
+/// direction (6 + 4), Rx on both (6 + 4), gravity's deflection (3 where compliant). Per point:
+/// the temperature (1), the base's Rz (6 + 4).
 pub fn product_lean(arm: &Arm) -> Floor {
     let compliant = arm.joints.iter().filter(|j| j.gravity != 0.0).count() as u32;
     product_counts(arm.dof() as u32, compliant)
@@ -95,14 +98,15 @@ pub fn product_lean(arm: &Arm) -> Floor {
 
 /// [`product_lean`] for `joints` joints, `compliant` of them with gravity.
 fn product_counts(joints: u32, compliant: u32) -> Floor {
-    let first = 2 + 1 + 4 + 3 + 4 + 1 + 5 + 12;
+    let first = 2 + 1 + 4 + 4 + 1 + 5 + 8;
     let second = 6 + 10 + 6 + 4 + 6 + 4;
-    let fp = joints * (first + second) + 3 * compliant + 1 + 10 - (12 - 3) - 3;
+    let fp = joints * (first + second) + 3 * compliant + 1 + 10 - (8 - 2) - 3;
     // Count, its limit, the unit, the offset, 4 harmonic coefficients and cos α, sin α (10);
-    // the record (4) and the vertical (2) stored and read back (12); the link and its rate
-    // (6), Rx's sin and 1 − cos (2), cos α and sin α again (2); gravity and the vertical (3
-    // where compliant). The base turn's 3 and the probe direction's 3, the point's 6 stores.
-    let memory = joints * (10 + 12 + 10) + 3 * compliant + 12;
+    // the record (q, sin r, 1 − cos r; e as well where compliant) and the vertical (2) stored
+    // and read back (10, 2 more where compliant); the link and its rate (6), Rx's sin and
+    // 1 − cos (2), cos α and sin α again (2); gravity and the vertical (3 where compliant).
+    // The base turn's 3 and the probe direction's 3, the point's 6 stores.
+    let memory = joints * (10 + 10 + 10) + (2 + 3) * compliant + 12;
     // Range check (2), multiply, offset, quadrant (add, and, subtract, shift), to f32 (1).
     let integer = joints * 9;
     Floor {
@@ -134,9 +138,9 @@ mod tests {
     #[test]
     fn the_lean_floor_of_the_hub_arm() {
         let f = product_counts(6, 3);
-        assert_eq!((f.fp, f.memory, f.integer), (416, 213, 54));
+        assert_eq!((f.fp, f.memory, f.integer), (377, 207, 54));
         // Each joint and each compliant joint adds its share.
-        assert_eq!(product_counts(7, 3).fp - f.fp, 68);
+        assert_eq!(product_counts(7, 3).fp - f.fp, 61);
         assert_eq!(product_counts(6, 4).fp - f.fp, 3);
     }
 }
