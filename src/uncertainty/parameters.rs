@@ -21,6 +21,7 @@ use crate::rotate::{cross, Vec3};
 use crate::scalar::F32;
 use crate::table::parameters::{factor_len, Column, Kind, MAX_PARAMETERS};
 use crate::table::{Table, MAX_JOINTS};
+use core::mem::MaybeUninit;
 
 /// Columns of L whose sums J_π L's block accumulates at once: 6 × 3 accumulators, a column
 /// of J_π and a row's 6 entries of L fill 27 of the Cortex-M4F's 32 single-precision
@@ -452,6 +453,16 @@ const IDENTITY: [[f32; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.
 /// nm per mm.
 const NM_PER_MM: f32 = 1.0e6;
 
+/// What every column of a point reads from its joint: the frames, and per joint the lever
+/// p − o_k, the turn a_k × (p − o_k) (nm) and cos 2θ, sin 2θ ([`harmonic`] of order 2, once
+/// a joint instead of once a column).
+struct Joint<'f> {
+    frames: &'f Frames,
+    levers: &'f [Vec3<f32>; MAX_JOINTS],
+    turns: &'f [Vec3<f32>; MAX_JOINTS],
+    second: &'f [[f32; 2]; MAX_JOINTS],
+}
+
 impl<'a> ParameterPart<'a> {
     /// The part of a validated table; `None` where it has no parameter block.
     pub fn new(table: &Table<'a>) -> Result<Option<ParameterPart<'a>>, ChainError> {
@@ -511,7 +522,9 @@ impl<'a> ParameterPart<'a> {
     /// (mm); where the block has the budget's pose part, Σ += J_π C J_πᵀ + (max(1, ℓ) − 1)
     /// · J_π P J_πᵀ ([`super::pose`]).
     pub fn add_to(&self, frames: &Frames, p: Vec3<f32>, temp_mc: i32, sigma: &mut Covariance) {
-        let mut d = [[0.0f32; 3]; MAX_PARAMETERS];
+        // Not zeroed first (768 bytes, a `memset` a point): `columns` writes the part it
+        // hands back.
+        let mut d = [MaybeUninit::uninit(); MAX_PARAMETERS];
         let d = self.columns(frames, p, temp_mc, &mut d);
         match &self.pose {
             None => self.product(d, sigma),
@@ -551,11 +564,12 @@ impl<'a> ParameterPart<'a> {
         frames: &Frames,
         p: Vec3<f32>,
         temp_mc: i32,
-        d: &'d mut [[f32; 3]; MAX_PARAMETERS],
+        d: &'d mut [MaybeUninit<[f32; 3]>; MAX_PARAMETERS],
     ) -> &'d [[f32; 3]] {
         let dt = temp_mc.wrapping_sub(REFERENCE_TEMP_MC) as f32 * 1.0e-3;
         let mut levers = [[0.0f32; 3]; MAX_JOINTS];
         let mut turns = [[0.0f32; 3]; MAX_JOINTS];
+        let mut second = [[0.0f32; 2]; MAX_JOINTS];
         for k in 0..self.joints {
             let r = &frames.rotation[k];
             levers[k] = sub(p, frames.origin[k]);
@@ -563,26 +577,29 @@ impl<'a> ParameterPart<'a> {
                 cross::<F32>(&[r[0][2], r[1][2], r[2][2]], &levers[k]),
                 NM_PER_MM,
             );
+            second[k] = harmonic(frames.turn[k], 2);
         }
         let n = self.count;
+        let joint = Joint {
+            frames,
+            levers: &levers,
+            turns: &turns,
+            second: &second,
+        };
         for (di, rec) in d.iter_mut().zip(&self.records[..n]) {
-            *di = self.column(rec, frames, &levers, &turns, dt);
+            di.write(self.column(rec, &joint, dt));
         }
-        &d[..n]
+        // SAFETY: the loop wrote d[0 … n − 1] (n = count ≤ MAX_PARAMETERS, the length of both
+        // `records` and `d`), and MaybeUninit<T> has T's layout.
+        unsafe { core::slice::from_raw_parts(d.as_ptr().cast::<[f32; 3]>(), n) }
     }
 
     /// ∂p/∂π for one parameter (nm per the parameter's unit), from its joint's lever and
     /// turn.
-    fn column(
-        &self,
-        rec: &Record,
-        frames: &Frames,
-        levers: &[Vec3<f32>; MAX_JOINTS],
-        turns: &[Vec3<f32>; MAX_JOINTS],
-        dt: f32,
-    ) -> Vec3<f32> {
+    fn column(&self, rec: &Record, joint: &Joint<'_>, dt: f32) -> Vec3<f32> {
+        let frames = joint.frames;
         let k = usize::from(rec.joint).min(MAX_JOINTS - 1);
-        let (r, lever, turn) = (&frames.rotation[k], levers[k], turns[k]);
+        let (r, lever, turn) = (&frames.rotation[k], joint.levers[k], joint.turns[k]);
         let tilt = || {
             let before = if k == 0 {
                 &IDENTITY
@@ -591,7 +608,13 @@ impl<'a> ParameterPart<'a> {
             };
             cross::<F32>(&mat_vec(before, rec.vector), &lever)
         };
-        let weight = || harmonic(frames.turn[k], rec.order);
+        // Orders 1 and 2 (a calibration's usual harmonics) from the joint's, the same
+        // numbers `harmonic` gives (order 1 is cos θ, sin θ as the chain formed them).
+        let weight = || match rec.order {
+            1 => frames.turn[k],
+            2 => joint.second[k],
+            h => harmonic(frames.turn[k], h),
+        };
         match rec.kind {
             Kind::Turn => turn,
             Kind::TurnSin => scaled(turn, weight()[1]),
@@ -704,7 +727,7 @@ mod tests {
             let mut got = Covariance::default();
             part.add_to(&frames, tip.xyz, 23_000, &mut got);
             // Σ = J L Lᵀ Jᵀ in f64 from the same columns.
-            let mut cols = [[0.0f32; 3]; MAX_PARAMETERS];
+            let mut cols = [MaybeUninit::uninit(); MAX_PARAMETERS];
             let d: std::vec::Vec<[f64; 3]> = part
                 .columns(&frames, tip.xyz, 23_000, &mut cols)
                 .iter()
