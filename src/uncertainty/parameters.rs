@@ -43,8 +43,6 @@ pub struct ParameterPart<'a> {
     records: [Record; MAX_PARAMETERS],
     /// Number of parameters.
     count: usize,
-    /// Joints in the table: the frames whose levers a point's columns use.
-    joints: usize,
     /// The id of the probe mounted: a probe's shift ([`Kind::ProbeShift`]) of another is 0.
     probe: u8,
     /// L in integers, for the product on a core without an FPU (feature `fixed-u95`).
@@ -157,14 +155,18 @@ pub(super) trait Entries: Copy {
         Some(v)
     }
 
-    /// g_b += L_(i, k0 + b) d_i for a whole block (its BLOCK columns k0 … k0 + 5 all within
-    /// L): `d` holds the columns of the rows k0, k0 + 1, … to the last, the first five the
+    /// g_b = Σ_i L_(i, k0 + b) d_i for a whole block (its BLOCK columns k0 … k0 + 5 all
+    /// within L; `g` overwritten, so the caller need not zero it): `d` holds the columns of the rows k0, k0 + 1, … to the last, the first five the
     /// block's triangle (row k0 + r holds r + 1 of its entries), the rest whole rows.
     #[inline(always)]
     fn whole_block(self, g: &mut [[f32; 3]; BLOCK], d: &[[f32; 3]], k0: usize) {
         whole_block_portable(self, g, d, k0);
     }
 }
+
+/// The accumulators' start in the assembly block: its 18 sums loaded from here (one `vldm`).
+#[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+static ZERO_BLOCK: [f32; 3 * BLOCK] = [0.0; 3 * BLOCK];
 
 /// [`Entries::whole_block`] in Rust, for every target.
 #[inline(always)]
@@ -174,7 +176,7 @@ fn whole_block_portable<E: Entries>(
     d: &[[f32; 3]],
     k0: usize,
 ) {
-    let mut acc = *g;
+    let mut acc = [[0.0f32; 3]; BLOCK];
     let (top, rest) = d.split_at(d.len().min(BLOCK - 1));
     triangle_rows(&mut acc, top, factor, k0, BLOCK);
     rows_portable(factor, &mut acc, rest, k0 + BLOCK - 1, k0);
@@ -234,17 +236,17 @@ impl Entries for &[f32] {
         if rows < BLOCK || factor_len(k0 + rows - 1) + k0 + BLOCK > self.len() {
             return whole_block_portable(self, g, d, k0);
         }
-        // SAFETY: `g` holds 18 f32 (read and written) and `d` `rows` ≥ 6 triples (read). Row
-        // k0 + r's entries start at entry factor_len(k0 + r) + k0 = that of row k0 plus
-        // Σ_(j<r) (k0 + 1 + j); the triangle's row r reads r + 1 of them, the whole rows 6,
-        // the last ending at the entry checked above. The floating-point registers it uses
-        // are saved and restored on the stack inside (Rust's `sreg` operands need
-        // double-precision VFP2, which this FPU does not have); the core registers it
-        // writes are declared.
+        // SAFETY: `g` holds 18 f32 (written), `ZERO_BLOCK` 18 (read), and `d` `rows` ≥ 6
+        // triples (read). Row k0 + r's entries start at entry factor_len(k0 + r) + k0 = that
+        // of row k0 plus Σ_(j<r) (k0 + 1 + j); the triangle's row r reads r + 1 of them, the
+        // whole rows 6, the last ending at the entry checked above. The floating-point
+        // registers it uses are saved and restored on the stack inside (Rust's `sreg`
+        // operands need double-precision VFP2, which this FPU does not have); the core
+        // registers it writes are declared.
         unsafe {
             core::arch::asm!(
                 "vpush {{s0-s26}}",
-                "vldmia {g}, {{s0-s17}}",
+                "vldmia {z}, {{s0-s17}}",
                 // The triangle: rows k0 … k0 + 4, 1 to 5 entries.
                 "vldmia {d}!, {{s18-s20}}",
                 "vldr s21, [{l}]",
@@ -340,6 +342,7 @@ impl Entries for &[f32] {
                 "vstmia {g}, {{s0-s17}}",
                 "vpop {{s0-s26}}",
                 g = in(reg) g.as_mut_ptr(),
+                z = in(reg) ZERO_BLOCK.as_ptr(),
                 d = inout(reg) d.as_ptr() => _,
                 l = inout(reg) self.as_ptr().add(factor_len(k0) + k0) => _,
                 step = inout(reg) k0 + 1 => _,
@@ -374,7 +377,8 @@ pub(super) fn as_f32(bytes: &[u8]) -> Option<&[f32]> {
     (head.is_empty() && tail.is_empty()).then_some(mid)
 }
 
-/// One block of BLOCK columns of J_π L from k0 on (`width` of them within L): `d` holds the
+/// One block of BLOCK columns of J_π L from k0 on (`width` of them within L) into `g`
+/// (overwritten; a narrow block's columns past `width` zero): `d` holds the
 /// columns of the rows k0, k0 + 1, … to the last. Out of line and indexed by constants only,
 /// so that the 18 sums stay in registers (inlined into `add_to`, its sums went to the stack
 /// at every row: measured on qemu-m4f).
@@ -390,7 +394,7 @@ fn block<E: Entries>(
         factor.whole_block(g, d, k0);
     } else {
         // The last, narrow block: all its rows are its triangle's.
-        let mut acc = *g;
+        let mut acc = [[0.0f32; 3]; BLOCK];
         triangle_rows(&mut acc, d, factor, k0, width);
         *g = acc;
     }
@@ -431,8 +435,9 @@ fn triangle_rows<E: Entries>(
 fn product<E: Entries>(d: &[[f32; 3]], factor: E, sigma: &mut Covariance) {
     let n = d.len();
     let mut k0 = 0;
+    // Each block overwrites it (zeroing it a block was a `memset` call: measured on qemu-m4f).
+    let mut g = [[0.0f32; 3]; BLOCK];
     while k0 < n {
-        let mut g = [[0.0f32; 3]; BLOCK];
         let width = (n - k0).min(BLOCK);
         block(&mut g, d.get(k0..).unwrap_or(&[]), factor, k0, width);
         for gb in &g[..width] {
@@ -489,7 +494,6 @@ impl<'a> ParameterPart<'a> {
             factor,
             records,
             count,
-            joints: table.joint_count().min(MAX_JOINTS),
             probe: table.probe().id,
             #[cfg(feature = "fixed-u95")]
             fixed: super::fixed_product::FixedFactor::new(
@@ -567,18 +571,19 @@ impl<'a> ParameterPart<'a> {
         d: &'d mut [MaybeUninit<[f32; 3]>; MAX_PARAMETERS],
     ) -> &'d [[f32; 3]] {
         let dt = temp_mc.wrapping_sub(REFERENCE_TEMP_MC) as f32 * 1.0e-3;
-        let mut levers = [[0.0f32; 3]; MAX_JOINTS];
-        let mut turns = [[0.0f32; 3]; MAX_JOINTS];
-        let mut second = [[0.0f32; 2]; MAX_JOINTS];
-        for k in 0..self.joints {
+        // Every one of the MAX_JOINTS frames (those past the table's joints are the frames'
+        // zeros, and no record of a validated table names them): each array written once,
+        // where zeroing it first and filling the table's joints cost a `memset` call each
+        // (~70 instructions; measured on qemu-m4f).
+        let levers: [Vec3<f32>; MAX_JOINTS] = core::array::from_fn(|k| sub(p, frames.origin[k]));
+        let turns: [Vec3<f32>; MAX_JOINTS] = core::array::from_fn(|k| {
             let r = &frames.rotation[k];
-            levers[k] = sub(p, frames.origin[k]);
-            turns[k] = scaled(
+            scaled(
                 cross::<F32>(&[r[0][2], r[1][2], r[2][2]], &levers[k]),
                 NM_PER_MM,
-            );
-            second[k] = harmonic(frames.turn[k], 2);
-        }
+            )
+        });
+        let second: [[f32; 2]; MAX_JOINTS] = core::array::from_fn(|k| harmonic(frames.turn[k], 2));
         let n = self.count;
         let joint = Joint {
             frames,
