@@ -159,7 +159,6 @@ const WIDE: usize = 8;
 /// [`columns_aligned`] (`vmla` rounds the product, then the sum; the first row's `vmul` is
 /// its 0 + x but for the sign of a zero), so the same values.
 /// `false` (nothing done) where the block does not lie within D or on another core.
-#[allow(unused_variables)]
 fn eight_columns(d: &[[f32; 3]], factor: &[f32], r: usize, j0: usize, out: &mut [Column]) -> bool {
     let rows = d.len();
     // Row i's 8 entries start at i · r + j0; the last row's end within D.
