@@ -34,3 +34,11 @@ fn an_older_calibration_number_is_refused() {
 fn a_table_signed_by_a_retired_key_is_refused_after_a_rotation() {
     common::key_rotation("qemu-m4f");
 }
+
+/// The budget's pose part through the hub's assembly: every streamed U95 equal to the host
+/// build's (`common::pose_part_u95_is_the_host_builds`).
+#[test]
+#[ignore = "needs QEMU and the cross tool chain: run by cargo xtask test"]
+fn the_pose_parts_u95_is_the_host_builds() {
+    common::pose_part_u95_is_the_host_builds("qemu-m4f");
+}

@@ -26,6 +26,7 @@ use crate::chain::Evaluator;
 use crate::matrix::{Frames, MatrixChain};
 use crate::model::ChainError;
 use crate::table::Table;
+use core::cell::RefCell;
 
 pub use own::OwnTerms;
 pub use parameters::ParameterPart;
@@ -69,6 +70,11 @@ pub struct Uncertainty<'a, P: Evaluator> {
     chain: MatrixChain<P>,
     own: OwnTerms,
     parameters: Option<ParameterPart<'a>>,
+    /// The frames of the last reading, reused: `eval_frames` writes every joint of the
+    /// table at each reading (and the expansion), the entries past them stay the zeros they
+    /// start as. A fresh `Frames::default()` a point was a 404-byte `memset` call (with
+    /// Debian's `core` a loop of 5 instructions a word; `docs/results/speed.md`).
+    frames: RefCell<Frames>,
 }
 
 impl<'a, P: Evaluator> Uncertainty<'a, P> {
@@ -82,6 +88,7 @@ impl<'a, P: Evaluator> Uncertainty<'a, P> {
             chain: MatrixChain::new(table)?,
             own,
             parameters: ParameterPart::new(table)?,
+            frames: RefCell::new(Frames::default()),
         }))
     }
 
@@ -107,12 +114,18 @@ impl<'a, P: Evaluator> Uncertainty<'a, P> {
     /// Σ_p of a reading (`counts`, `temp_mc`): one pass of the matrix chain for the frames,
     /// then the columns. An error is the chain's (a reading it refuses).
     pub fn covariance(&self, counts: &[u32], temp_mc: i32) -> Result<Covariance, ChainError> {
-        let mut frames = Frames::default();
-        let tip = self.chain.eval_frames(counts, temp_mc, &mut frames)?;
+        // Never borrowed elsewhere (nothing here re-enters); were it, a fresh one.
+        let mut kept = self.frames.try_borrow_mut();
+        let mut spare = None;
+        let frames: &mut Frames = match kept.as_deref_mut() {
+            Ok(f) => f,
+            Err(_) => spare.insert(Frames::default()),
+        };
+        let tip = self.chain.eval_frames(counts, temp_mc, frames)?;
         let p = tip.xyz.map(P::l_to_f32);
-        let mut sigma = self.own.covariance(&frames, p);
+        let mut sigma = self.own.covariance(frames, p);
         if let Some(part) = &self.parameters {
-            part.add_to(&frames, p, temp_mc, &mut sigma);
+            part.add_to(frames, p, temp_mc, &mut sigma);
         }
         Ok(sigma)
     }

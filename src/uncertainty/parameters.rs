@@ -21,6 +21,7 @@ use crate::rotate::{cross, Vec3};
 use crate::scalar::F32;
 use crate::table::parameters::{factor_len, Column, Kind, MAX_PARAMETERS};
 use crate::table::{Table, MAX_JOINTS};
+use core::mem::MaybeUninit;
 
 /// Columns of L whose sums J_π L's block accumulates at once: 6 × 3 accumulators, a column
 /// of J_π and a row's 6 entries of L fill 27 of the Cortex-M4F's 32 single-precision
@@ -42,8 +43,6 @@ pub struct ParameterPart<'a> {
     records: [Record; MAX_PARAMETERS],
     /// Number of parameters.
     count: usize,
-    /// Joints in the table: the frames whose levers a point's columns use.
-    joints: usize,
     /// The id of the probe mounted: a probe's shift ([`Kind::ProbeShift`]) of another is 0.
     probe: u8,
     /// L in integers, for the product on a core without an FPU (feature `fixed-u95`).
@@ -156,14 +155,18 @@ pub(super) trait Entries: Copy {
         Some(v)
     }
 
-    /// g_b += L_(i, k0 + b) d_i for a whole block (its BLOCK columns k0 … k0 + 5 all within
-    /// L): `d` holds the columns of the rows k0, k0 + 1, … to the last, the first five the
+    /// g_b = Σ_i L_(i, k0 + b) d_i for a whole block (its BLOCK columns k0 … k0 + 5 all
+    /// within L; `g` overwritten, so the caller need not zero it): `d` holds the columns of the rows k0, k0 + 1, … to the last, the first five the
     /// block's triangle (row k0 + r holds r + 1 of its entries), the rest whole rows.
     #[inline(always)]
     fn whole_block(self, g: &mut [[f32; 3]; BLOCK], d: &[[f32; 3]], k0: usize) {
         whole_block_portable(self, g, d, k0);
     }
 }
+
+/// The accumulators' start in the assembly block: its 18 sums loaded from here (one `vldm`).
+#[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+static ZERO_BLOCK: [f32; 3 * BLOCK] = [0.0; 3 * BLOCK];
 
 /// [`Entries::whole_block`] in Rust, for every target.
 #[inline(always)]
@@ -173,7 +176,7 @@ fn whole_block_portable<E: Entries>(
     d: &[[f32; 3]],
     k0: usize,
 ) {
-    let mut acc = *g;
+    let mut acc = [[0.0f32; 3]; BLOCK];
     let (top, rest) = d.split_at(d.len().min(BLOCK - 1));
     triangle_rows(&mut acc, top, factor, k0, BLOCK);
     rows_portable(factor, &mut acc, rest, k0 + BLOCK - 1, k0);
@@ -233,17 +236,17 @@ impl Entries for &[f32] {
         if rows < BLOCK || factor_len(k0 + rows - 1) + k0 + BLOCK > self.len() {
             return whole_block_portable(self, g, d, k0);
         }
-        // SAFETY: `g` holds 18 f32 (read and written) and `d` `rows` ≥ 6 triples (read). Row
-        // k0 + r's entries start at entry factor_len(k0 + r) + k0 = that of row k0 plus
-        // Σ_(j<r) (k0 + 1 + j); the triangle's row r reads r + 1 of them, the whole rows 6,
-        // the last ending at the entry checked above. The floating-point registers it uses
-        // are saved and restored on the stack inside (Rust's `sreg` operands need
-        // double-precision VFP2, which this FPU does not have); the core registers it
-        // writes are declared.
+        // SAFETY: `g` holds 18 f32 (written), `ZERO_BLOCK` 18 (read), and `d` `rows` ≥ 6
+        // triples (read). Row k0 + r's entries start at entry factor_len(k0 + r) + k0 = that
+        // of row k0 plus Σ_(j<r) (k0 + 1 + j); the triangle's row r reads r + 1 of them, the
+        // whole rows 6, the last ending at the entry checked above. The floating-point
+        // registers it uses are saved and restored on the stack inside (Rust's `sreg`
+        // operands need double-precision VFP2, which this FPU does not have); the core
+        // registers it writes are declared.
         unsafe {
             core::arch::asm!(
                 "vpush {{s0-s26}}",
-                "vldmia {g}, {{s0-s17}}",
+                "vldmia {z}, {{s0-s17}}",
                 // The triangle: rows k0 … k0 + 4, 1 to 5 entries.
                 "vldmia {d}!, {{s18-s20}}",
                 "vldr s21, [{l}]",
@@ -339,6 +342,7 @@ impl Entries for &[f32] {
                 "vstmia {g}, {{s0-s17}}",
                 "vpop {{s0-s26}}",
                 g = in(reg) g.as_mut_ptr(),
+                z = in(reg) ZERO_BLOCK.as_ptr(),
                 d = inout(reg) d.as_ptr() => _,
                 l = inout(reg) self.as_ptr().add(factor_len(k0) + k0) => _,
                 step = inout(reg) k0 + 1 => _,
@@ -373,7 +377,8 @@ pub(super) fn as_f32(bytes: &[u8]) -> Option<&[f32]> {
     (head.is_empty() && tail.is_empty()).then_some(mid)
 }
 
-/// One block of BLOCK columns of J_π L from k0 on (`width` of them within L): `d` holds the
+/// One block of BLOCK columns of J_π L from k0 on (`width` of them within L) into `g`
+/// (overwritten; a narrow block's columns past `width` zero): `d` holds the
 /// columns of the rows k0, k0 + 1, … to the last. Out of line and indexed by constants only,
 /// so that the 18 sums stay in registers (inlined into `add_to`, its sums went to the stack
 /// at every row: measured on qemu-m4f).
@@ -389,7 +394,7 @@ fn block<E: Entries>(
         factor.whole_block(g, d, k0);
     } else {
         // The last, narrow block: all its rows are its triangle's.
-        let mut acc = *g;
+        let mut acc = [[0.0f32; 3]; BLOCK];
         triangle_rows(&mut acc, d, factor, k0, width);
         *g = acc;
     }
@@ -430,8 +435,9 @@ fn triangle_rows<E: Entries>(
 fn product<E: Entries>(d: &[[f32; 3]], factor: E, sigma: &mut Covariance) {
     let n = d.len();
     let mut k0 = 0;
+    // Each block overwrites it (zeroing it a block was a `memset` call: measured on qemu-m4f).
+    let mut g = [[0.0f32; 3]; BLOCK];
     while k0 < n {
-        let mut g = [[0.0f32; 3]; BLOCK];
         let width = (n - k0).min(BLOCK);
         block(&mut g, d.get(k0..).unwrap_or(&[]), factor, k0, width);
         for gb in &g[..width] {
@@ -451,6 +457,16 @@ const IDENTITY: [[f32; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.
 
 /// nm per mm.
 const NM_PER_MM: f32 = 1.0e6;
+
+/// What every column of a point reads from its joint: the frames, and per joint the lever
+/// p − o_k, the turn a_k × (p − o_k) (nm) and cos 2θ, sin 2θ ([`harmonic`] of order 2, once
+/// a joint instead of once a column).
+struct Joint<'f> {
+    frames: &'f Frames,
+    levers: &'f [Vec3<f32>; MAX_JOINTS],
+    turns: &'f [Vec3<f32>; MAX_JOINTS],
+    second: &'f [[f32; 2]; MAX_JOINTS],
+}
 
 impl<'a> ParameterPart<'a> {
     /// The part of a validated table; `None` where it has no parameter block.
@@ -478,7 +494,6 @@ impl<'a> ParameterPart<'a> {
             factor,
             records,
             count,
-            joints: table.joint_count().min(MAX_JOINTS),
             probe: table.probe().id,
             #[cfg(feature = "fixed-u95")]
             fixed: super::fixed_product::FixedFactor::new(
@@ -511,7 +526,9 @@ impl<'a> ParameterPart<'a> {
     /// (mm); where the block has the budget's pose part, Σ += J_π C J_πᵀ + (max(1, ℓ) − 1)
     /// · J_π P J_πᵀ ([`super::pose`]).
     pub fn add_to(&self, frames: &Frames, p: Vec3<f32>, temp_mc: i32, sigma: &mut Covariance) {
-        let mut d = [[0.0f32; 3]; MAX_PARAMETERS];
+        // Not zeroed first (768 bytes, a `memset` a point): `columns` writes the part it
+        // hands back.
+        let mut d = [MaybeUninit::uninit(); MAX_PARAMETERS];
         let d = self.columns(frames, p, temp_mc, &mut d);
         match &self.pose {
             None => self.product(d, sigma),
@@ -551,38 +568,43 @@ impl<'a> ParameterPart<'a> {
         frames: &Frames,
         p: Vec3<f32>,
         temp_mc: i32,
-        d: &'d mut [[f32; 3]; MAX_PARAMETERS],
+        d: &'d mut [MaybeUninit<[f32; 3]>; MAX_PARAMETERS],
     ) -> &'d [[f32; 3]] {
         let dt = temp_mc.wrapping_sub(REFERENCE_TEMP_MC) as f32 * 1.0e-3;
-        let mut levers = [[0.0f32; 3]; MAX_JOINTS];
-        let mut turns = [[0.0f32; 3]; MAX_JOINTS];
-        for k in 0..self.joints {
+        // Every one of the MAX_JOINTS frames (those past the table's joints are the frames'
+        // zeros, and no record of a validated table names them): each array written once,
+        // where zeroing it first and filling the table's joints cost a `memset` call each
+        // (~70 instructions; measured on qemu-m4f).
+        let levers: [Vec3<f32>; MAX_JOINTS] = core::array::from_fn(|k| sub(p, frames.origin[k]));
+        let turns: [Vec3<f32>; MAX_JOINTS] = core::array::from_fn(|k| {
             let r = &frames.rotation[k];
-            levers[k] = sub(p, frames.origin[k]);
-            turns[k] = scaled(
+            scaled(
                 cross::<F32>(&[r[0][2], r[1][2], r[2][2]], &levers[k]),
                 NM_PER_MM,
-            );
-        }
+            )
+        });
+        let second: [[f32; 2]; MAX_JOINTS] = core::array::from_fn(|k| harmonic(frames.turn[k], 2));
         let n = self.count;
+        let joint = Joint {
+            frames,
+            levers: &levers,
+            turns: &turns,
+            second: &second,
+        };
         for (di, rec) in d.iter_mut().zip(&self.records[..n]) {
-            *di = self.column(rec, frames, &levers, &turns, dt);
+            di.write(self.column(rec, &joint, dt));
         }
-        &d[..n]
+        // SAFETY: the loop wrote d[0 … n − 1] (n = count ≤ MAX_PARAMETERS, the length of both
+        // `records` and `d`), and MaybeUninit<T> has T's layout.
+        unsafe { core::slice::from_raw_parts(d.as_ptr().cast::<[f32; 3]>(), n) }
     }
 
     /// ∂p/∂π for one parameter (nm per the parameter's unit), from its joint's lever and
     /// turn.
-    fn column(
-        &self,
-        rec: &Record,
-        frames: &Frames,
-        levers: &[Vec3<f32>; MAX_JOINTS],
-        turns: &[Vec3<f32>; MAX_JOINTS],
-        dt: f32,
-    ) -> Vec3<f32> {
+    fn column(&self, rec: &Record, joint: &Joint<'_>, dt: f32) -> Vec3<f32> {
+        let frames = joint.frames;
         let k = usize::from(rec.joint).min(MAX_JOINTS - 1);
-        let (r, lever, turn) = (&frames.rotation[k], levers[k], turns[k]);
+        let (r, lever, turn) = (&frames.rotation[k], joint.levers[k], joint.turns[k]);
         let tilt = || {
             let before = if k == 0 {
                 &IDENTITY
@@ -591,7 +613,13 @@ impl<'a> ParameterPart<'a> {
             };
             cross::<F32>(&mat_vec(before, rec.vector), &lever)
         };
-        let weight = || harmonic(frames.turn[k], rec.order);
+        // Orders 1 and 2 (a calibration's usual harmonics) from the joint's, the same
+        // numbers `harmonic` gives (order 1 is cos θ, sin θ as the chain formed them).
+        let weight = || match rec.order {
+            1 => frames.turn[k],
+            2 => joint.second[k],
+            h => harmonic(frames.turn[k], h),
+        };
         match rec.kind {
             Kind::Turn => turn,
             Kind::TurnSin => scaled(turn, weight()[1]),
@@ -704,7 +732,7 @@ mod tests {
             let mut got = Covariance::default();
             part.add_to(&frames, tip.xyz, 23_000, &mut got);
             // Σ = J L Lᵀ Jᵀ in f64 from the same columns.
-            let mut cols = [[0.0f32; 3]; MAX_PARAMETERS];
+            let mut cols = [MaybeUninit::uninit(); MAX_PARAMETERS];
             let d: std::vec::Vec<[f64; 3]> = part
                 .columns(&frames, tip.xyz, 23_000, &mut cols)
                 .iter()

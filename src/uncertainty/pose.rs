@@ -17,6 +17,10 @@
 use super::parameters::{accumulate, as_f32, Entries, BLOCK};
 use super::Covariance;
 use crate::table::pose::{Pose, MAX_FACTORS};
+use core::mem::MaybeUninit;
+
+/// A column of E = J D as `product` writes it (not zeroed before).
+pub type Column = MaybeUninit<[f32; 3]>;
 
 /// nm² per mm² (m is in mm², Σ_p in nm²).
 const NM2_PER_MM2: f32 = 1.0e12;
@@ -67,7 +71,9 @@ impl<'a> PosePart<'a> {
     /// `g`, J C Jᵀ of a reading whose columns of J are `d` (nm per the parameter's unit),
     /// becomes J C Jᵀ + (max(1, ℓ) − 1) · J P Jᵀ.
     pub fn widen(&self, d: &[[f32; 3]], g: &mut Covariance) {
-        let mut e = [[0.0f32; 3]; MAX_FACTORS];
+        // Not zeroed first (a `memset` a point): `product` writes the r columns it hands
+        // back.
+        let mut e = [MaybeUninit::uninit(); MAX_FACTORS];
         let e = self.product(d, &mut e);
         let f = self.leverage(g, e) - 1.0;
         // ℓ ≤ 1 (or a NaN, which a validated table cannot give): J C Jᵀ as it is.
@@ -84,22 +90,21 @@ impl<'a> PosePart<'a> {
         }
     }
 
-    /// E = J D (nm) into `e`, its r columns returned.
-    pub fn product<'e>(
-        &self,
-        d: &[[f32; 3]],
-        e: &'e mut [[f32; 3]; MAX_FACTORS],
-    ) -> &'e [[f32; 3]] {
+    /// E = J D (nm) into `e`, its r columns written and returned.
+    pub fn product<'e>(&self, d: &[[f32; 3]], e: &'e mut [Column; MAX_FACTORS]) -> &'e [[f32; 3]] {
         match as_f32(self.factor) {
             Some(aligned) => product_aligned(d, aligned, self.count, e),
             None => product(d, self.factor, self.count, e),
         }
-        &e[..self.count]
+        // SAFETY: both products write every column j < r (each block's `out` whole, the
+        // blocks j0 … j0 + width − 1 covering 0 … r − 1; r = count ≤ MAX_FACTORS), and
+        // MaybeUninit<T> has T's layout.
+        unsafe { core::slice::from_raw_parts(e.as_ptr().cast::<[f32; 3]>(), self.count) }
     }
 }
 
 /// E's columns j = 0 … r − 1, [`BLOCK`] at a time (the last block narrower).
-fn product<E: Entries>(d: &[[f32; 3]], factor: E, r: usize, e: &mut [[f32; 3]; MAX_FACTORS]) {
+fn product<E: Entries>(d: &[[f32; 3]], factor: E, r: usize, e: &mut [Column; MAX_FACTORS]) {
     let mut j0 = 0;
     while j0 < r {
         let width = (r - j0).min(BLOCK);
@@ -120,8 +125,13 @@ fn product<E: Entries>(d: &[[f32; 3]], factor: E, r: usize, e: &mut [[f32; 3]; M
 /// row's W entries are W loads with no bounds check of their own (the generic loop's
 /// `Entries::run` checked each row and cost ~9 instructions a column of D a parameter on
 /// qemu-m4f). The same sums in the same order: the same bits.
-fn product_aligned(d: &[[f32; 3]], factor: &[f32], r: usize, e: &mut [[f32; 3]; MAX_FACTORS]) {
+fn product_aligned(d: &[[f32; 3]], factor: &[f32], r: usize, e: &mut [Column; MAX_FACTORS]) {
     let mut j0 = 0;
+    // Blocks of 8 columns in assembly where the core has it (`eight_columns`), the rest
+    // (r mod 8) in Rust.
+    while j0 + WIDE <= r && eight_columns(d, factor, r, j0, &mut e[j0..j0 + WIDE]) {
+        j0 += WIDE;
+    }
     while j0 < r {
         let width = (r - j0).min(BLOCK);
         let out = &mut e[j0..j0 + width];
@@ -137,6 +147,115 @@ fn product_aligned(d: &[[f32; 3]], factor: &[f32], r: usize, e: &mut [[f32; 3]; 
     }
 }
 
+/// Columns of D a block of [`eight_columns`] takes at once.
+const WIDE: usize = 8;
+
+/// `out` becomes E_j = Σ_i D_ij d_i for the 8 columns j0 … j0 + 7 of D,
+/// in assembly on a Cortex-M with single-precision floating point: the 24 sums in s0–s23
+/// throughout, a row's column of J in s24–s26 and its 8 entries of D in s27–s31 (5, then 3),
+/// so each `vldm` loads several entries and the three axes share each: 30 instructions a row
+/// of 8 entries (the compiler's blocks of 6 and 2 took ~4.5–5 an entry; measured on
+/// qemu-m4f, `docs/results/speed.md`). The same multiply-adds in the same order as
+/// [`columns_aligned`] (`vmla` rounds the product, then the sum; the first row's `vmul` is
+/// its 0 + x but for the sign of a zero), so the same values.
+/// `false` (nothing done) where the block does not lie within D or on another core.
+fn eight_columns(d: &[[f32; 3]], factor: &[f32], r: usize, j0: usize, out: &mut [Column]) -> bool {
+    let rows = d.len();
+    // Row i's 8 entries start at i · r + j0; the last row's end within D.
+    if rows == 0 || out.len() != WIDE || j0 + WIDE > r || (rows - 1) * r + j0 + WIDE > factor.len()
+    {
+        return false;
+    }
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+    {
+        // SAFETY: `out` holds 24 f32 (read and written), `d` `rows` ≥ 1 triples (read); row
+        // i reads D's entries i · r + j0 … i · r + j0 + 7, all within `factor` by the check
+        // above. The floating-point registers are saved and restored on the stack inside (as
+        // in `parameters`' block: `sreg` operands need VFP2); the core registers it writes
+        // are declared.
+        unsafe {
+            core::arch::asm!(
+                "vpush {{s0-s31}}",
+                // The first row: the sums start at its products (0 + x is x).
+                "vldmia {d}!, {{s24-s26}}",
+                "vldmia {l}!, {{s27-s31}}",
+                "vmul.f32 s0, s24, s27",
+                "vmul.f32 s1, s25, s27",
+                "vmul.f32 s2, s26, s27",
+                "vmul.f32 s3, s24, s28",
+                "vmul.f32 s4, s25, s28",
+                "vmul.f32 s5, s26, s28",
+                "vmul.f32 s6, s24, s29",
+                "vmul.f32 s7, s25, s29",
+                "vmul.f32 s8, s26, s29",
+                "vmul.f32 s9, s24, s30",
+                "vmul.f32 s10, s25, s30",
+                "vmul.f32 s11, s26, s30",
+                "vmul.f32 s12, s24, s31",
+                "vmul.f32 s13, s25, s31",
+                "vmul.f32 s14, s26, s31",
+                "vldmia {l}, {{s27-s29}}",
+                "add.w {l}, {l}, {skip}",
+                "vmul.f32 s15, s24, s27",
+                "vmul.f32 s16, s25, s27",
+                "vmul.f32 s17, s26, s27",
+                "vmul.f32 s18, s24, s28",
+                "vmul.f32 s19, s25, s28",
+                "vmul.f32 s20, s26, s28",
+                "vmul.f32 s21, s24, s29",
+                "vmul.f32 s22, s25, s29",
+                "vmul.f32 s23, s26, s29",
+                "cmp {n}, #0",
+                "beq 3f",
+                // The rows after it.
+                "2:",
+                "vldmia {d}!, {{s24-s26}}",
+                "vldmia {l}!, {{s27-s31}}",
+                "vmla.f32 s0, s24, s27",
+                "vmla.f32 s1, s25, s27",
+                "vmla.f32 s2, s26, s27",
+                "vmla.f32 s3, s24, s28",
+                "vmla.f32 s4, s25, s28",
+                "vmla.f32 s5, s26, s28",
+                "vmla.f32 s6, s24, s29",
+                "vmla.f32 s7, s25, s29",
+                "vmla.f32 s8, s26, s29",
+                "vmla.f32 s9, s24, s30",
+                "vmla.f32 s10, s25, s30",
+                "vmla.f32 s11, s26, s30",
+                "vmla.f32 s12, s24, s31",
+                "vmla.f32 s13, s25, s31",
+                "vmla.f32 s14, s26, s31",
+                "vldmia {l}, {{s27-s29}}",
+                "add.w {l}, {l}, {skip}",
+                "vmla.f32 s15, s24, s27",
+                "vmla.f32 s16, s25, s27",
+                "vmla.f32 s17, s26, s27",
+                "vmla.f32 s18, s24, s28",
+                "vmla.f32 s19, s25, s28",
+                "vmla.f32 s20, s26, s28",
+                "vmla.f32 s21, s24, s29",
+                "vmla.f32 s22, s25, s29",
+                "vmla.f32 s23, s26, s29",
+                "subs {n}, #1",
+                "bne 2b",
+                "3:",
+                "vstmia {e}, {{s0-s23}}",
+                "vpop {{s0-s31}}",
+                e = in(reg) out.as_mut_ptr().cast::<f32>(),
+                d = inout(reg) d.as_ptr() => _,
+                l = inout(reg) factor.as_ptr().add(j0) => _,
+                // From the row's sixth entry to the next row's first.
+                skip = in(reg) 4 * (r - 5),
+                n = inout(reg) rows - 1 => _,
+            );
+        }
+        return true;
+    }
+    #[allow(unreachable_code)]
+    false
+}
+
 /// [`columns`] for aligned f32 rows (`r` > 0, j0 + W ≤ r by [`product_aligned`]).
 #[inline(never)]
 fn columns_aligned<const W: usize>(
@@ -144,7 +263,7 @@ fn columns_aligned<const W: usize>(
     factor: &[f32],
     r: usize,
     j0: usize,
-    out: &mut [[f32; 3]],
+    out: &mut [Column],
 ) {
     let mut acc = [[0.0f32; 3]; W];
     if r > 0 && j0 + W <= r {
@@ -158,7 +277,7 @@ fn columns_aligned<const W: usize>(
         }
     }
     for (o, a) in out.iter_mut().zip(acc) {
-        *o = a;
+        o.write(a);
     }
 }
 
@@ -171,7 +290,7 @@ fn columns<E: Entries, const W: usize>(
     factor: E,
     r: usize,
     j0: usize,
-    out: &mut [[f32; 3]],
+    out: &mut [Column],
 ) {
     let mut acc = [[0.0f32; 3]; W];
     let mut at = j0;
@@ -185,7 +304,7 @@ fn columns<E: Entries, const W: usize>(
         at += r;
     }
     for (o, a) in out.iter_mut().zip(acc) {
-        *o = a;
+        o.write(a);
     }
 }
 
@@ -271,7 +390,7 @@ mod tests {
                     );
                 }
                 // The leverage itself.
-                let mut e = [[0.0f32; 3]; MAX_FACTORS];
+                let mut e = [MaybeUninit::uninit(); MAX_FACTORS];
                 let e = pp.product(&cols, &mut e);
                 let l = pp.leverage(&Covariance(g.map(|x| x as f32)), e);
                 assert!((f64::from(l) * m_scale - 1.0).abs() < 1e-3, "{l}");
@@ -296,11 +415,16 @@ mod tests {
         let mut odd = std::vec![0u8; 4 * d.len() + 8];
         let at_odd = at + 1;
         odd[at_odd..at_odd + 4 * d.len()].copy_from_slice(&bytes[at..at + 4 * d.len()]);
-        let (mut e1, mut e2) = ([[0.0f32; 3]; MAX_FACTORS], [[0.0f32; 3]; MAX_FACTORS]);
+        let (mut e1, mut e2) = (
+            [MaybeUninit::uninit(); MAX_FACTORS],
+            [MaybeUninit::uninit(); MAX_FACTORS],
+        );
         let a = part(&bytes[at..at + 4 * d.len()], r, 0.0, 1.0);
         let b = part(&odd[at_odd..at_odd + 4 * d.len()], r, 0.0, 1.0);
         assert!(as_f32(a.factor).is_some() && as_f32(b.factor).is_none());
-        assert_eq!(a.product(&cols, &mut e1), b.product(&cols, &mut e2));
+        let e1 = a.product(&cols, &mut e1);
+        assert_eq!(e1, b.product(&cols, &mut e2));
+        assert_eq!(e1.len(), r);
         for j in 0..r {
             let want: [f64; 3] = core::array::from_fn(|c| {
                 (0..p)
