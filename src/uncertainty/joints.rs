@@ -66,17 +66,20 @@ impl JointPart {
     /// ℓJ of a reading's `counts` (≥ 0; counts beyond the table's joints are ignored, missing
     /// ones count as at the mean, as the host's `JointLeverage::ratio`).
     pub fn ratio(&self, counts: &[u32]) -> f32 {
+        let k = self.count.min(MAX_JOINTS);
         let mut d = [0.0f32; MAX_JOINTS];
-        for (i, (x, &c)) in d.iter_mut().zip(counts).enumerate().take(self.count) {
-            *x = c as f32 * self.radians_per_count[i] - self.mean[i];
+        let angles = self.radians_per_count.iter().zip(&self.mean);
+        for ((x, &c), (r, m)) in d.iter_mut().zip(counts).zip(angles).take(k) {
+            *x = c as f32 * r - m;
         }
+        // W's rows one after the other: row i's k − i entries pair with d_i … d_(k−1).
+        let mut w = self.weight.iter();
         let mut q = 0.0f32;
-        let mut at = 0;
-        for i in 0..self.count {
+        for i in 0..k {
             let mut row = 0.0f32;
-            for dj in &d[i..self.count] {
-                row += self.weight.get(at).copied().unwrap_or(0.0) * dj;
-                at += 1;
+            // d first: when the row's d runs out, zip takes no entry of W past the row.
+            for (dj, wij) in d[i..k].iter().zip(&mut w) {
+                row += wij * dj;
             }
             q += d[i] * row;
         }

@@ -78,7 +78,7 @@ impl<'a> PosePart<'a> {
         let e = self.product(d, &mut e);
         let f = self
             .leverage(g, e)
-            .max(self.joints.map_or(0.0, |j| j.ratio(counts)))
+            .max(self.joints.as_ref().map_or(0.0, |j| j.ratio(counts)))
             - 1.0;
         // ℓ ≤ 1 (or a NaN, which a validated table cannot give): J C Jᵀ as it is.
         if f.is_nan() || f <= 0.0 {
