@@ -325,8 +325,8 @@ pub(crate) mod tests {
         assert_eq!((pose.count(), pose.entry(2, 1)), (2, Some(D[5])));
         let j = pose.joints().unwrap();
         assert_eq!(j.count(), 6);
-        for i in 0..6 {
-            assert_eq!(j.mean(i), Some(MEAN[i]));
+        for (i, m) in MEAN.iter().enumerate() {
+            assert_eq!(j.mean(i), Some(*m));
         }
         assert_eq!(j.mean(6), None);
         let mut at = 0;
