@@ -363,9 +363,10 @@ fn pose_for(
 
 /// What the hub is compared with: the reading's Σ_p from the formula of
 /// `quatarm_ref::uncertainty::PoseLeverage`, written here in f64 from the host's analytic
-/// Jacobian J over the budget's parameters: own terms + J C Jᵀ + (max(1, ℓ) − 1) J P Jᵀ,
-/// P = D Dᵀ + b C_fit, C_fit = (C − D Dᵀ)/(1 + b), ℓ = tr(J C_fit Jᵀ)/m. Returns Σ_p (mm²),
-/// ℓ, and Σ_p without the pose part (the plain J C Jᵀ).
+/// Jacobian J over the budget's parameters: own terms + J C Jᵀ + (max(1, ℓ, ℓJ) − 1) J P Jᵀ,
+/// P = D Dᵀ + b C_fit, C_fit = (C − D Dᵀ)/(1 + b), ℓ = tr(J C_fit Jᵀ)/m, and ℓJ =
+/// (θ − μ)ᵀ W (θ − μ) where the part has the joint leverage (else 0). Returns Σ_p (mm²),
+/// ℓ, and Σ_p without the pose part (the plain J C Jᵀ); [`joint_ratio`] gives ℓJ.
 fn host_with_pose(
     arm: &quatarm_ref::Arm,
     u: &quatarm_ref::uncertainty::Uncertainty,
@@ -389,24 +390,70 @@ fn host_with_pose(
         Matrix3::from_fn(|a, b| s[(a, b)])
     };
     let leverage = sandwich(&c_fit).trace() / pose.leverage_mean;
+    let factor = leverage.max(joint_ratio(u, theta)).max(1.0);
     let plain = own + sandwich(&c);
-    (
-        plain + sandwich(&pp) * (leverage.max(1.0) - 1.0),
-        leverage,
-        plain,
-    )
+    (plain + sandwich(&pp) * (factor - 1.0), leverage, plain)
+}
+
+/// ℓJ = (θ − μ)ᵀ W (θ − μ) of the budget's joint leverage at joint angles `theta` (rad, as
+/// `Arm::counts_to_rad` gives them: no wrap), written out in f64; 0 without one.
+fn joint_ratio(u: &quatarm_ref::uncertainty::Uncertainty, theta: &[f64]) -> f64 {
+    let Some(j) = u.pose.as_ref().and_then(|p| p.joints.as_ref()) else {
+        return 0.0;
+    };
+    let k = j.mean.len();
+    let d = nalgebra::DVector::from_fn(k, |i, _| theta[i] - j.mean[i]);
+    let w = nalgebra::DMatrix::from_row_slice(k, k, &j.weight);
+    (d.transpose() * w * d)[(0, 0)]
+}
+
+/// A joint leverage for `arm`: μ at mid-turn (π, the mean of the readings [0, 2π) the tests
+/// draw) but for joint 1 at 1 rad, and W = s · A Aᵀ / (k · π²/3) with A = I + a random
+/// coupling (seeded), so that ℓJ of uniform readings is about `s` on average and W has every
+/// off-diagonal entry.
+fn joints_for(
+    arm: &quatarm_ref::Arm,
+    s: f64,
+    seed: u64,
+) -> quatarm_ref::uncertainty::JointLeverage {
+    let k = arm.joints.len();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let a = nalgebra::DMatrix::from_fn(k, k, |i, j| {
+        f64::from(u8::from(i == j)) + 0.3 * rng.gen_range(-1.0..1.0)
+    });
+    let w = &a * a.transpose() * (s / (k as f64 * std::f64::consts::PI.powi(2) / 3.0));
+    let w = (&w + w.transpose()) * 0.5;
+    quatarm_ref::uncertainty::JointLeverage {
+        mean: (0..k)
+            .map(|i| if i == 1 { 1.0 } else { std::f64::consts::PI })
+            .collect(),
+        weight: w.transpose().as_slice().to_vec(),
+    }
+}
+
+/// What [`hub_against_pose_formula`] saw: the worst relative error of the hub's U95, the
+/// leverages ℓ and ℓJ (smallest, largest), the largest change the part makes to the host's
+/// U95, and the readings at which ℓJ was below 1, the largest of max(1, ℓ, ℓJ), and above 10.
+#[derive(Debug, Default)]
+struct PoseSeen {
+    worst: f64,
+    leverage: (f64, f64),
+    joint: (f64, f64),
+    change: f64,
+    joint_below_1: usize,
+    joint_largest: usize,
+    joint_above_10: usize,
 }
 
 /// The hub's U95 with the budget's pose part (issue 27) against [`host_with_pose`] at 200
-/// random readings, with the f32 and the fixed-point chains' frames: returns the worst
-/// relative error, the leverages seen (smallest, largest) and the largest change the part
-/// makes to the host's U95. `None` where the hub's build does not take the part (the Pico's
-/// profile, `--features quatarm/fixed-u95`: the table is refused by the block's flag).
+/// random readings, with the f32 and the fixed-point chains' frames. `None` where the hub's
+/// build does not take the part (the Pico's profile, `--features quatarm/fixed-u95`: the
+/// table is refused by the block's flag).
 fn hub_against_pose_formula(
     arm: &quatarm_ref::Arm,
     u: &quatarm_ref::uncertainty::Uncertainty,
     seed: u64,
-) -> Option<(f64, (f64, f64), f64)> {
+) -> Option<PoseSeen> {
     use quatarm::uncertainty::Uncertainty;
     use quatarm::{Fixed, F32};
     let bytes = match armcal::tablebuild::build_with(arm, Some(u)) {
@@ -419,14 +466,19 @@ fn hub_against_pose_formula(
     };
     let table = quatarm::Table::parse(&bytes).unwrap();
     let r = u.pose.as_ref().unwrap().factor.len();
-    assert_eq!(
-        table.parameters().unwrap().pose().map(|p| p.count()),
-        Some(r)
-    );
+    let pose = table.parameters().unwrap().pose();
+    assert_eq!(pose.map(|p| p.count()), Some(r));
+    let has_joints = u.pose.as_ref().unwrap().joints.is_some();
+    // A budget with the joint leverage never builds a table without it.
+    assert_eq!(pose.and_then(|p| p.joints()).is_some(), has_joints);
     let h32 = Uncertainty::<F32>::new(&table).unwrap().unwrap();
     let hfx = Uncertainty::<Fixed>::new(&table).unwrap().unwrap();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let (mut worst, mut lev, mut change) = (0.0f64, (f64::INFINITY, 0.0f64), 0.0f64);
+    let mut seen = PoseSeen {
+        leverage: (f64::INFINITY, 0.0),
+        joint: (f64::INFINITY, 0.0),
+        ..PoseSeen::default()
+    };
     for _ in 0..200 {
         let counts: Vec<u32> = arm
             .joints
@@ -436,17 +488,24 @@ fn hub_against_pose_formula(
         let temp_mc: i32 = rng.gen_range(16_000..28_000);
         let (theta, t) = (arm.counts_to_rad(&counts), f64::from(temp_mc) / 1000.0);
         let (s, l, plain) = host_with_pose(arm, u, &theta, t);
-        lev = (lev.0.min(l), lev.1.max(l));
+        seen.leverage = (seen.leverage.0.min(l), seen.leverage.1.max(l));
+        if has_joints {
+            let lj = joint_ratio(u, &theta);
+            seen.joint = (seen.joint.0.min(lj), seen.joint.1.max(lj));
+            seen.joint_below_1 += usize::from(lj < 1.0);
+            seen.joint_largest += usize::from(lj > l.max(1.0));
+            seen.joint_above_10 += usize::from(lj > 10.0);
+        }
         let want_nm = u95(&s) * 1e6;
-        change = change.max(want_nm / (u95(&plain) * 1e6) - 1.0);
+        seen.change = seen.change.max(want_nm / (u95(&plain) * 1e6) - 1.0);
         for got in [
             h32.covariance(&counts, temp_mc).unwrap().u95_nm(),
             hfx.covariance(&counts, temp_mc).unwrap().u95_nm(),
         ] {
-            worst = worst.max((f64::from(got) / want_nm - 1.0).abs());
+            seen.worst = seen.worst.max((f64::from(got) / want_nm - 1.0).abs());
         }
     }
-    Some((worst, lev, change))
+    Some(seen)
 }
 
 /// The mean of tr(J C_fit Jᵀ) (mm²) over 50 random readings of `arm` for the budget `u` with
@@ -491,7 +550,12 @@ fn hub_u95_with_the_pose_part_agrees_with_the_formula() {
     let seen = cases.len();
     let (mut extremes, mut widest) = ((f64::INFINITY, 0.0f64), 0.0f64);
     for (k, (what, arm, u)) in cases.into_iter().enumerate() {
-        let Some((worst, (lo, hi), change)) = hub_against_pose_formula(&arm, &u, 60 + k as u64)
+        let Some(PoseSeen {
+            worst,
+            leverage: (lo, hi),
+            change,
+            ..
+        }) = hub_against_pose_formula(&arm, &u, 60 + k as u64)
         else {
             return;
         };
@@ -519,4 +583,69 @@ fn hub_u95_with_the_pose_part_agrees_with_the_formula() {
         extremes.0,
         extremes.1
     );
+}
+
+/// Issue 27: the hub streams the same U95 as the host's formula within 0.1 % with the
+/// budget's joint leverage too, the factor max(1, ℓ, ℓJ): the shipped 52-parameter budget with
+/// r = 8 and 16, W scaled so that ℓJ of the readings is about 1 (ℓJ on both sides of 1, the
+/// largest of the three at some readings and not at others) and about 30 (ℓJ ≫ 1). The joint
+/// leverage must change U95 against the same table without it, for the test to test it.
+#[test]
+fn hub_u95_with_the_joint_leverage_agrees_with_the_formula() {
+    let full = quatarm_ref::calfile::parse(include_str!("../../data/default-6-full.toml")).unwrap();
+    let shipped = full.uncertainty.clone().unwrap();
+    let mut totals = PoseSeen::default();
+    let (mut extremes, mut cases) = ((f64::INFINITY, 0.0f64), 0);
+    for (r, shrink, scale, seed) in [(8usize, 0.5, 1.0, 44u64), (16, 0.2, 30.0, 45)] {
+        let mut u = shipped.clone();
+        u.pose = Some(pose_for(&u, r, shrink, 1.0, seed));
+        let mean = mean_fit_trace(&full.arm, &u);
+        u.pose.as_mut().unwrap().leverage_mean = mean;
+        let without = u.clone();
+        u.pose.as_mut().unwrap().joints = Some(joints_for(&full.arm, scale, seed));
+        let what = format!("default-6-full, r = {r}, b = {shrink}, ℓJ about {scale}");
+        let Some(seen) = hub_against_pose_formula(&full.arm, &u, 70 + seed) else {
+            return;
+        };
+        let Some(plain) = hub_against_pose_formula(&full.arm, &without, 70 + seed) else {
+            return;
+        };
+        println!(
+            "{what}: worst hub U95 error {:.2e}, ℓ from {:.2} to {:.1}, ℓJ from {:.2} to {:.1} \
+             (below 1 at {}, the largest at {}, above 10 at {} of 200 readings); the pose part \
+             widens U95 by up to {:.1} % with ℓJ, {:.1} % without",
+            seen.worst,
+            seen.leverage.0,
+            seen.leverage.1,
+            seen.joint.0,
+            seen.joint.1,
+            seen.joint_below_1,
+            seen.joint_largest,
+            seen.joint_above_10,
+            100.0 * seen.change,
+            100.0 * plain.change
+        );
+        assert!(seen.worst < 1e-3, "{what}: {}", seen.worst);
+        assert!(
+            seen.change > plain.change * 1.1,
+            "{what}: ℓJ hardly changes U95 ({} against {})",
+            seen.change,
+            plain.change
+        );
+        extremes = (extremes.0.min(seen.joint.0), extremes.1.max(seen.joint.1));
+        totals.joint_below_1 += seen.joint_below_1;
+        totals.joint_largest += seen.joint_largest;
+        totals.joint_above_10 += seen.joint_above_10;
+        cases += 1;
+    }
+    assert_eq!(cases, 2);
+    assert!(
+        extremes.0 < 1.0 && extremes.1 > 10.0,
+        "ℓJ from {extremes:?}"
+    );
+    // ℓJ below 1, the largest of the three, and not the largest, each at some readings.
+    assert!(totals.joint_below_1 > 0, "{totals:?}");
+    assert!(totals.joint_largest > 0, "{totals:?}");
+    assert!(totals.joint_largest < 400, "{totals:?}");
+    assert!(totals.joint_above_10 > 0, "{totals:?}");
 }

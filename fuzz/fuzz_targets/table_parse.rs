@@ -1,10 +1,11 @@
 //! The binary table parser (`quatarm::table`): any bytes in flash are refused with an error or
 //! accepted as a table whose every value is inside the table's limits, which re-encodes to the
 //! same values (to the same bytes in the current format; the parameter block's pose part
-//! with it), and from which both chains build or refuse cleanly. Never a panic.
+//! and its joint leverage with it), and from which both chains build or refuse cleanly. Never a panic.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
+use quatarm::table::joint_leverage::JointLeverageData;
 use quatarm::table::parameters::{Column, ParameterData};
 use quatarm::table::pose::PoseData;
 use quatarm::uncertainty::Uncertainty;
@@ -33,7 +34,19 @@ fuzz_target!(|bytes: &[u8]| {
                 .chunks_exact(4)
                 .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
                 .collect();
-            (d, pose.count(), pose.shrink(), pose.leverage_mean())
+            // Its joint leverage (μ, W's upper triangle), where it has one.
+            let joints = pose.joints().map(|j| {
+                let k = j.count();
+                let mean: Vec<f32> = (0..k)
+                    .map(|i| j.mean(i).expect("an accepted part's means read back"))
+                    .collect();
+                let weight: Vec<f32> = (0..k)
+                    .flat_map(|a| (a..k).map(move |b| (a, b)))
+                    .map(|(a, b)| j.weight(a, b).expect("an accepted part's W reads back"))
+                    .collect();
+                (mean, weight)
+            });
+            (d, pose.count(), pose.shrink(), pose.leverage_mean(), joints)
         });
         (columns, factor, pose)
     });
@@ -42,11 +55,14 @@ fuzz_target!(|bytes: &[u8]| {
         factor,
         pose: pose
             .as_ref()
-            .map(|(d, count, shrink, leverage_mean)| PoseData {
+            .map(|(d, count, shrink, leverage_mean, joints)| PoseData {
                 factor: d,
                 count: *count,
                 shrink: *shrink,
                 leverage_mean: *leverage_mean,
+                joints: joints
+                    .as_ref()
+                    .map(|(mean, weight)| JointLeverageData { mean, weight }),
             }),
     });
     let mut out = vec![0u8; quatarm::table::MAX_TABLE_LEN];

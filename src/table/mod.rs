@@ -65,6 +65,7 @@
 use core::fmt;
 
 pub mod budget;
+pub mod joint_leverage;
 pub mod parameters;
 pub mod pose;
 pub mod probes;
@@ -383,7 +384,9 @@ fn is_v4_len(len: usize) -> bool {
                 // Then the budget, and the parameter block after it, or neither.
                 rest == 0
                     || rest == budget::LEN
-                    || rest.checked_sub(budget::LEN).is_some_and(is_block_len)
+                    || rest
+                        .checked_sub(budget::LEN)
+                        .is_some_and(|b| is_block_len(b, n))
             })
         })
     })
@@ -392,21 +395,28 @@ fn is_v4_len(len: usize) -> bool {
 // Out of line: inlined into the loops above, its 64 lengths were unrolled into 5 KB.
 #[cfg(feature = "parameters")]
 #[inline(never)]
-fn is_block_len(len: usize) -> bool {
+fn is_block_len(len: usize, joints: usize) -> bool {
     (1..=parameters::MAX_PARAMETERS).any(|p| {
-        // The block alone, or with a pose part of 1 to MAX_FACTORS columns.
+        // The block alone, or with a pose part of 1 to MAX_FACTORS columns, with or without
+        // the joint leverage of the table's joints.
         len.checked_sub(parameters::len(p)).is_some_and(|rest| {
             let column = 4 * p;
-            rest == 0
-                || rest.checked_sub(pose::HEAD_LEN).is_some_and(|d| {
+            let is_pose = |d: usize| {
+                d.checked_sub(pose::HEAD_LEN).is_some_and(|d| {
                     d % column == 0 && (1..=pose::MAX_FACTORS).contains(&(d / column))
                 })
+            };
+            rest == 0
+                || is_pose(rest)
+                || rest
+                    .checked_sub(joint_leverage::len(joints))
+                    .is_some_and(is_pose)
         })
     })
 }
 
 #[cfg(not(feature = "parameters"))]
-fn is_block_len(_: usize) -> bool {
+fn is_block_len(_: usize, _: usize) -> bool {
     false
 }
 

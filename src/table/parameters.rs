@@ -382,7 +382,7 @@ impl<'a> Parameters<'a> {
             }
         }
         match self.pose() {
-            Some(pose) => pose.check(),
+            Some(pose) => pose.check(joints),
             None => Ok(()),
         }
     }

@@ -22,16 +22,23 @@
 //! offset  size   field                     (little-endian, right after the factor L)
 //! ------  ----   ---------------------------------------------------------------
 //!      0     2   factor count r (1..=MAX_FACTORS)
-//!      2     2   reserved, 0
+//!      2     2   flags: bit 0 the joint leverage follows D ([`super::joint_leverage`]);
+//!                the others 0 (the whole field was reserved, 0, before)
 //!      4     4   shrink b (f32, 0..=LIMIT)
 //!      8     4   leverage mean m (f32, mm², > 0 and ≤ LIMIT)
 //!     12 4·P·r   D row by parameter, in C's order: row i holds D_i0 … D_i(r−1)
 //!                (f32, the parameters' units, each within LIMIT)
+//!      …   …     the joint leverage, where flag bit 0 is set (its layout there)
 //! ```
+//!
+//! A hub from before the joint leverage refuses a table with it (its length counts no joint
+//! part, and its check wants the flags' field 0), so it never applies max(1, ℓ) alone where
+//! the budget says max(1, ℓ, ℓJ).
 //!
 //! Its numbers are f32 like the rest of the block: U95 needs 1e-3. D is stored by parameter
 //! (as L is, row by row) so that the hub's J·D runs over the rows with J's column once each.
 
+use super::joint_leverage::{self, JointLeverage, JointLeverageData};
 use super::parameters::LIMIT;
 use super::{rd_u16, rd_u32, Field, TableError};
 
@@ -43,15 +50,23 @@ pub const MAX_FACTORS: usize = 16;
 /// Length of the part's head (r, reserved, b, m).
 pub const HEAD_LEN: usize = 12;
 
-/// Length of the part for `p` parameters and `r` columns of D.
+/// The part's flag: the joint leverage follows D ([`super::joint_leverage`]).
+pub const FLAG_JOINTS: u16 = 1 << 0;
+
+/// Length of the part for `p` parameters and `r` columns of D, without the joint leverage.
 pub const fn len(p: usize, r: usize) -> usize {
     HEAD_LEN + 4 * p * r
 }
 
-/// The length the part at `bytes` states for `p` parameters (its r clamped to one past
-/// [`MAX_FACTORS`], which the check refuses, so that no stated count overflows a length).
+/// The length the part at `bytes` states for `p` parameters: D's, and the joint leverage's
+/// where its flag is set (its r clamped to one past [`MAX_FACTORS`], which the check
+/// refuses, so that no stated count overflows a length).
 pub(super) fn stated_len(bytes: &[u8], p: usize) -> usize {
-    len(p, usize::from(rd_u16(bytes, 0)).min(MAX_FACTORS + 1))
+    let base = len(p, usize::from(rd_u16(bytes, 0)).min(MAX_FACTORS + 1));
+    if rd_u16(bytes, 2) & FLAG_JOINTS == 0 {
+        return base;
+    }
+    base + joint_leverage::stated_len(bytes.get(base..).unwrap_or(&[]))
 }
 
 /// The part to write ([`super::parameters::ParameterData::pose`]).
@@ -65,19 +80,38 @@ pub struct PoseData<'a> {
     pub shrink: f32,
     /// m (mm²).
     pub leverage_mean: f32,
+    /// The joint leverage, where the budget has it.
+    pub joints: Option<JointLeverageData<'a>>,
 }
 
 impl PoseData<'_> {
-    /// The part's length for `p` parameters; `None` if r is 0 or above [`MAX_FACTORS`] or D
-    /// does not hold p · r entries.
+    /// The part's length for `p` parameters; `None` if r is 0 or above [`MAX_FACTORS`], D
+    /// does not hold p · r entries, or the joint leverage is malformed
+    /// ([`JointLeverageData::part_len`]).
     pub fn part_len(&self, p: usize) -> Option<usize> {
         let r = self.count;
-        ((1..=MAX_FACTORS).contains(&r) && self.factor.len() == p * r).then(|| len(p, r))
+        if !((1..=MAX_FACTORS).contains(&r) && self.factor.len() == p * r) {
+            return None;
+        }
+        let joints = match &self.joints {
+            Some(j) => j.part_len()?,
+            None => 0,
+        };
+        Some(len(p, r) + joints)
     }
 
     /// Writes the part into `out` (exactly [`Self::part_len`] bytes).
     pub(super) fn encode(&self, out: &mut [u8]) {
         out[0..2].copy_from_slice(&(self.count as u16).to_le_bytes());
+        let flags = if self.joints.is_some() {
+            FLAG_JOINTS
+        } else {
+            0
+        };
+        out[2..4].copy_from_slice(&flags.to_le_bytes());
+        if let Some(j) = &self.joints {
+            j.encode(&mut out[HEAD_LEN + 4 * self.factor.len()..]);
+        }
         out[4..8].copy_from_slice(&self.shrink.to_le_bytes());
         out[8..12].copy_from_slice(&self.leverage_mean.to_le_bytes());
         for (chunk, x) in out[HEAD_LEN..].chunks_exact_mut(4).zip(self.factor) {
@@ -125,6 +159,16 @@ impl<'a> Pose<'a> {
         self.bytes.get(HEAD_LEN..HEAD_LEN + n).unwrap_or(&[])
     }
 
+    /// The joint leverage, where the part has it ([`super::joint_leverage`]).
+    pub fn joints(&self) -> Option<JointLeverage<'a>> {
+        if rd_u16(self.bytes, 2) & FLAG_JOINTS == 0 {
+            return None;
+        }
+        self.bytes
+            .get(len(self.parameters, self.count())..)
+            .map(JointLeverage::new)
+    }
+
     /// D's entry (i, j).
     pub fn entry(&self, i: usize, j: usize) -> Option<f32> {
         let r = self.count();
@@ -135,10 +179,12 @@ impl<'a> Pose<'a> {
         self.bytes.get(at..at + 4).map(|_| rd_f32(self.bytes, at))
     }
 
-    /// Everything well formed: r within 1..=[`MAX_FACTORS`], the reserved field 0, b finite
-    /// and within 0..=[`LIMIT`], m finite, > 0 and within [`LIMIT`], every entry of D finite
-    /// and within [`LIMIT`] (what the boot applies to a table that has the part).
-    pub(super) fn check(&self) -> Result<(), TableError> {
+    /// Everything well formed: r within 1..=[`MAX_FACTORS`], no flag but
+    /// [`FLAG_JOINTS`], b finite and within 0..=[`LIMIT`], m finite, > 0 and within
+    /// [`LIMIT`], every entry of D finite and within [`LIMIT`], and the joint leverage where
+    /// flagged ([`JointLeverage`]'s check, for the table's `joints`): what the boot applies
+    /// to a table that has the part.
+    pub(super) fn check(&self, joints: usize) -> Result<(), TableError> {
         let bad = TableError::Invalid {
             joint: 0,
             field: Field::Budget,
@@ -146,7 +192,7 @@ impl<'a> Pose<'a> {
         let r = self.count();
         let (b, m) = (self.shrink(), self.leverage_mean());
         let ok = (1..=MAX_FACTORS).contains(&r)
-            && rd_u16(self.bytes, 2) == 0
+            && rd_u16(self.bytes, 2) & !FLAG_JOINTS == 0
             && b.is_finite()
             && (0.0..=LIMIT).contains(&b)
             && m.is_finite()
@@ -162,7 +208,10 @@ impl<'a> Pose<'a> {
         if !self.factor().chunks_exact(4).all(within) {
             return Err(bad);
         }
-        Ok(())
+        match self.joints() {
+            Some(j) => j.check(joints),
+            None => Ok(()),
+        }
     }
 }
 
@@ -215,6 +264,7 @@ pub(crate) mod tests {
                 count: 2,
                 shrink: 0.25,
                 leverage_mean: 2.5e-6,
+                joints: None,
             }),
         };
         let n = sample()
@@ -225,6 +275,146 @@ pub(crate) mod tests {
 
     /// Where the pose part starts in the 6-joint sample.
     const AT: usize = 48 + 6 * 248 + 64 + 80 + parameters::len(3);
+
+    /// μ of the 6-joint sample's joint leverage (rad).
+    const MEAN: [f32; 6] = [0.5, 1.0, 3.0, 6.0, 0.1, 2.0];
+    /// W's upper triangle (1/rad²): diagonal 4, 2, 1, 0 (a joint that did not move), 8, 0.5
+    /// and a few couplings.
+    const WEIGHT: [f32; 21] = [
+        4.0, 0.5, 0.0, 0.0, -0.3, 0.0, //
+        2.0, 0.2, 0.0, 0.0, 0.0, //
+        1.0, 0.0, 0.1, 0.0, //
+        0.0, 0.0, 0.0, //
+        8.0, -1.0, //
+        0.5,
+    ];
+
+    /// The sample table with the pose part of [`encoded`] and a joint leverage after D.
+    pub(crate) fn encoded_with_joints() -> ([u8; MAX_TABLE_LEN], usize) {
+        let mut buf = [0u8; MAX_TABLE_LEN];
+        let block = ParameterData {
+            columns: &COLUMNS,
+            factor: &FACTOR,
+            pose: Some(PoseData {
+                factor: &D,
+                count: 2,
+                shrink: 0.25,
+                leverage_mean: 2.5e-6,
+                joints: Some(JointLeverageData {
+                    mean: &MEAN,
+                    weight: &WEIGHT,
+                }),
+            }),
+        };
+        let n = sample()
+            .encode_full(Some(&BudgetData::default()), Some(&block), &mut buf)
+            .unwrap();
+        (buf, n)
+    }
+
+    /// Where the joint leverage starts in [`encoded_with_joints`].
+    const JOINTS_AT: usize = AT + len(3, 2);
+
+    #[test]
+    fn the_joint_leverage_round_trips() {
+        let (buf, n) = encoded_with_joints();
+        assert_eq!(n, JOINTS_AT + joint_leverage::len(6) + TAIL_LEN);
+        assert!(is_table_len(n));
+        let t = Table::parse(&buf[..n]).unwrap();
+        let pose = t.parameters().unwrap().pose().unwrap();
+        assert_eq!((pose.count(), pose.entry(2, 1)), (2, Some(D[5])));
+        let j = pose.joints().unwrap();
+        assert_eq!(j.count(), 6);
+        for (i, m) in MEAN.iter().enumerate() {
+            assert_eq!(j.mean(i), Some(*m));
+        }
+        assert_eq!(j.mean(6), None);
+        let mut at = 0;
+        for a in 0..6 {
+            for b in a..6 {
+                assert_eq!(j.weight(a, b), Some(WEIGHT[at]), "({a}, {b})");
+                assert_eq!(j.weight(b, a), Some(WEIGHT[at]), "({b}, {a})");
+                at += 1;
+            }
+        }
+        assert_eq!(j.weight(0, 6), None);
+        // Without it: the table of `encoded`, its flag clear.
+        let (plain, m) = encoded();
+        assert_eq!(m, n - joint_leverage::len(6));
+        // Only the table's length field and the pose part's flags differ before the part.
+        for i in 0..JOINTS_AT {
+            if !((40..44).contains(&i) || i == AT + 2) {
+                assert_eq!(buf[i], plain[i], "byte {i}");
+            }
+        }
+        assert_eq!(buf[AT + 2], FLAG_JOINTS as u8);
+        assert!(Table::parse(&plain[..m])
+            .unwrap()
+            .parameters()
+            .unwrap()
+            .pose()
+            .unwrap()
+            .joints()
+            .is_none());
+    }
+
+    /// A corrupted joint leverage is refused, its CRC made to match: a count other than the
+    /// table's joints, the reserved field, a mean not finite or past its limit, a weight not
+    /// finite or past its limit, a negative diagonal; and a truncated one (the table's length
+    /// then disagrees with what the part states). So is a table with the part read as a hub
+    /// from before it reads it (its flag cleared: the length disagrees).
+    #[test]
+    fn a_bad_joint_leverage_is_refused() {
+        let (good, n) = encoded_with_joints();
+        let f = |x: f32| x.to_le_bytes();
+        let mean = |i: usize| JOINTS_AT + joint_leverage::HEAD_LEN + 4 * i;
+        let weight = |k: usize| mean(6) + 4 * k;
+        let cases: [(&str, usize, std::vec::Vec<u8>); 11] = [
+            ("k = 7 on a 6-joint table", JOINTS_AT, std::vec![7, 0]),
+            ("k = 5 on a 6-joint table", JOINTS_AT, std::vec![5, 0]),
+            ("reserved", JOINTS_AT + 2, std::vec![1, 0]),
+            ("NaN mean", mean(3), f(f32::NAN).to_vec()),
+            ("mean past the limit", mean(0), f(64.5).to_vec()),
+            ("negative mean past the limit", mean(5), f(-100.0).to_vec()),
+            ("infinite weight", weight(4), f(f32::NEG_INFINITY).to_vec()),
+            ("weight past the limit", weight(1), f(2e12).to_vec()),
+            ("negative diagonal", weight(6), f(-1e-3).to_vec()),
+            ("an unknown flag of the pose part", AT + 2, std::vec![3, 0]),
+            (
+                "the flag cleared (a hub from before)",
+                AT + 2,
+                std::vec![0, 0],
+            ),
+        ];
+        for (what, at, bytes) in cases {
+            let mut b = good;
+            b[at..at + bytes.len()].copy_from_slice(&bytes);
+            recrc(&mut b[..n]);
+            match Table::parse(&b[..n]) {
+                Err(TableError::Invalid {
+                    field: Field::Budget,
+                    ..
+                })
+                | Err(TableError::BadLength(_)) => {}
+                other => panic!("{what}: {other:?}"),
+            }
+        }
+        // Truncated: the last weight cut off, the length field and CRC made to agree.
+        let short = n - 4;
+        let mut b = good;
+        b.copy_within(n - TAIL_LEN..n, short - TAIL_LEN);
+        b[40..44].copy_from_slice(&(short as u32).to_le_bytes());
+        recrc(&mut b[..short]);
+        assert!(matches!(
+            Table::parse(&b[..short]),
+            Err(TableError::BadLength(_))
+        ));
+        // The writer refuses what the reader would: μ of 5 joints or 8, W of the wrong length.
+        for (m, w) in [(&MEAN[..5], &WEIGHT[..15]), (&MEAN[..], &WEIGHT[..20])] {
+            let part = JointLeverageData { mean: m, weight: w };
+            assert!(part.part_len().is_none(), "{} means", m.len());
+        }
+    }
 
     #[test]
     fn the_pose_part_round_trips() {
@@ -312,6 +502,7 @@ pub(crate) mod tests {
                 count: MAX_FACTORS,
                 shrink: 0.0,
                 leverage_mean: 1e-6,
+                joints: None,
             }),
         };
         let m = sample()
@@ -341,6 +532,7 @@ pub(crate) mod tests {
                     count,
                     shrink: 0.0,
                     leverage_mean: 1e-6,
+                    joints: None,
                 }),
             };
             assert!(block.block_len().is_none(), "r = {count}");
@@ -366,6 +558,39 @@ pub(crate) mod tests {
             let at = at % n;
             b[at] ^= 1 << bit;
             proptest::prop_assert!(Table::parse(&b[..n]).is_err());
+        }
+
+        /// Any bit flipped in a table with a joint leverage is refused.
+        #[test]
+        fn flipped_bytes_of_a_joint_leverage_table_are_refused(at in 0usize..2200, bit in 0u8..8) {
+            let (mut b, n) = encoded_with_joints();
+            let at = at % n;
+            b[at] ^= 1 << bit;
+            proptest::prop_assert!(Table::parse(&b[..n]).is_err());
+        }
+
+        /// A joint leverage whose bytes are random, its CRC made to match, is refused or read
+        /// within its limits; never a panic.
+        #[test]
+        fn a_random_joint_leverage_is_refused_or_within_limits(
+            bytes in proptest::collection::vec(proptest::num::u8::ANY, joint_leverage::len(6))
+        ) {
+            let (mut b, n) = encoded_with_joints();
+            b[JOINTS_AT..JOINTS_AT + joint_leverage::len(6)].copy_from_slice(&bytes);
+            recrc(&mut b[..n]);
+            if let Ok(t) = Table::parse(&b[..n]) {
+                let j = t.parameters().unwrap().pose().unwrap().joints().unwrap();
+                proptest::prop_assert_eq!(j.count(), 6);
+                for i in 0..6 {
+                    let m = j.mean(i).unwrap();
+                    proptest::prop_assert!(m.is_finite() && m.abs() <= joint_leverage::MEAN_LIMIT);
+                    proptest::prop_assert!(j.weight(i, i).unwrap() >= 0.0);
+                    for k in 0..6 {
+                        let w = j.weight(i, k).unwrap();
+                        proptest::prop_assert!(w.is_finite() && w.abs() <= joint_leverage::WEIGHT_LIMIT);
+                    }
+                }
+            }
         }
 
         /// A pose part whose bytes are random, its CRC made to match, is refused or read

@@ -15,6 +15,7 @@
 
 #[cfg(feature = "fixed-u95")]
 pub mod fixed_product;
+pub mod joints;
 pub mod own;
 pub mod parameters;
 pub mod pose;
@@ -125,7 +126,7 @@ impl<'a, P: Evaluator> Uncertainty<'a, P> {
         let p = tip.xyz.map(P::l_to_f32);
         let mut sigma = self.own.covariance(frames, p);
         if let Some(part) = &self.parameters {
-            part.add_to(frames, p, temp_mc, &mut sigma);
+            part.add_to(frames, p, temp_mc, counts, &mut sigma);
         }
         Ok(sigma)
     }

@@ -501,7 +501,7 @@ impl<'a> ParameterPart<'a> {
                 count,
             )
             .ok_or(ChainError::Range { joint: 0 })?,
-            pose: block.pose().map(|p| PosePart::new(&p)),
+            pose: block.pose().map(|p| PosePart::new(&p, table)),
         }))
     }
 
@@ -523,9 +523,16 @@ impl<'a> ParameterPart<'a> {
     }
 
     /// Σ += J_π C J_πᵀ (nm²) at a reading at `temp_mc` whose frames are `frames` and tip `p`
-    /// (mm); where the block has the budget's pose part, Σ += J_π C J_πᵀ + (max(1, ℓ) − 1)
-    /// · J_π P J_πᵀ ([`super::pose`]).
-    pub fn add_to(&self, frames: &Frames, p: Vec3<f32>, temp_mc: i32, sigma: &mut Covariance) {
+    /// (mm) and counts `counts`; where the block has the budget's pose part,
+    /// Σ += J_π C J_πᵀ + (max(1, ℓ, ℓJ) − 1) · J_π P J_πᵀ ([`super::pose`]).
+    pub fn add_to(
+        &self,
+        frames: &Frames,
+        p: Vec3<f32>,
+        temp_mc: i32,
+        counts: &[u32],
+        sigma: &mut Covariance,
+    ) {
         // Not zeroed first (768 bytes, a `memset` a point): `columns` writes the part it
         // hands back.
         let mut d = [MaybeUninit::uninit(); MAX_PARAMETERS];
@@ -535,7 +542,7 @@ impl<'a> ParameterPart<'a> {
             Some(pose) => {
                 let mut g = Covariance::default();
                 self.product(d, &mut g);
-                pose.widen(d, &mut g);
+                pose.widen(d, counts, &mut g);
                 sigma.add(&g);
             }
         }
@@ -687,7 +694,7 @@ mod tests {
             .unwrap();
         let trace = |part: &ParameterPart<'_>| {
             let mut sigma = Covariance::default();
-            part.add_to(&frames, tip.xyz, 20_000, &mut sigma);
+            part.add_to(&frames, tip.xyz, 20_000, &[1, 2, 3, 4, 5, 6], &mut sigma);
             sigma.0[0] + sigma.0[1] + sigma.0[2]
         };
         // nm²: 1 µm alone, then 1 + 4.
@@ -730,7 +737,13 @@ mod tests {
                 .eval_frames(&[100, 2000, 30_000, 4, 50, 6000], 23_000, &mut frames)
                 .unwrap();
             let mut got = Covariance::default();
-            part.add_to(&frames, tip.xyz, 23_000, &mut got);
+            part.add_to(
+                &frames,
+                tip.xyz,
+                23_000,
+                &[100, 2000, 30_000, 4, 50, 6000],
+                &mut got,
+            );
             // Σ = J L Lᵀ Jᵀ in f64 from the same columns.
             let mut cols = [MaybeUninit::uninit(); MAX_PARAMETERS];
             let d: std::vec::Vec<[f64; 3]> = part

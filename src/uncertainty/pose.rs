@@ -10,13 +10,16 @@
 //! - J P Jᵀ = b/(1 + b) · (G − E Eᵀ) + E Eᵀ;
 //!
 //! so with f = max(1, ℓ) − 1 and β = b/(1 + b) the part is (1 + f β) G + f/(1 + b) · E Eᵀ:
-//! a scale of G and r outer products, no second pass over L. Cost: 3 · P · r multiply-adds
+//! a scale of G and r outer products, no second pass over L. Where the table has the joint
+//! leverage, f = max(1, ℓ, ℓJ) − 1 instead, ℓJ from the reading's counts ([`super::joints`]). Cost: 3 · P · r multiply-adds
 //! for E (the J·D rows stream past like L's, [`super::parameters::BLOCK`] columns of D at
 //! a time, their sums in registers), the rest a few dozen operations.
 
+use super::joints::JointPart;
 use super::parameters::{accumulate, as_f32, Entries, BLOCK};
 use super::Covariance;
 use crate::table::pose::{Pose, MAX_FACTORS};
+use crate::table::Table;
 use core::mem::MaybeUninit;
 
 /// A column of E = J D as `product` writes it (not zeroed before).
@@ -38,12 +41,14 @@ pub struct PosePart<'a> {
     keep: f32,
     /// 1/m, per nm².
     inverse_mean: f32,
+    /// The joint leverage ℓJ, where the part has it ([`super::joints`]).
+    joints: Option<JointPart>,
 }
 
 impl<'a> PosePart<'a> {
     /// The part of a validated table's pose part (b ≥ 0 and 0 < m ≤ 1e6 mm² there, so the
     /// divisions are finite: 1/m at most 1/(the smallest positive f32 · 10^12), ~1e33).
-    pub fn new(pose: &Pose<'a>) -> PosePart<'a> {
+    pub fn new(pose: &Pose<'a>, table: &Table<'a>) -> PosePart<'a> {
         let keep = 1.0 / (1.0 + pose.shrink());
         PosePart {
             factor: pose.factor(),
@@ -51,6 +56,7 @@ impl<'a> PosePart<'a> {
             shrink: pose.shrink() * keep,
             keep,
             inverse_mean: 1.0 / (pose.leverage_mean() * NM2_PER_MM2),
+            joints: pose.joints().map(|j| JointPart::new(table, &j)),
         }
     }
 
@@ -68,14 +74,18 @@ impl<'a> PosePart<'a> {
         (g.0[0] + g.0[1] + g.0[2] - norm) * self.keep * self.inverse_mean
     }
 
-    /// `g`, J C Jᵀ of a reading whose columns of J are `d` (nm per the parameter's unit),
-    /// becomes J C Jᵀ + (max(1, ℓ) − 1) · J P Jᵀ.
-    pub fn widen(&self, d: &[[f32; 3]], g: &mut Covariance) {
+    /// `g`, J C Jᵀ of a reading at `counts` whose columns of J are `d` (nm per the
+    /// parameter's unit), becomes J C Jᵀ + (max(1, ℓ, ℓJ) − 1) · J P Jᵀ (ℓJ 0 where the part
+    /// has no joint leverage).
+    pub fn widen(&self, d: &[[f32; 3]], counts: &[u32], g: &mut Covariance) {
         // Not zeroed first (a `memset` a point): `product` writes the r columns it hands
         // back.
         let mut e = [MaybeUninit::uninit(); MAX_FACTORS];
         let e = self.product(d, &mut e);
-        let f = self.leverage(g, e) - 1.0;
+        let f = self
+            .leverage(g, e)
+            .max(self.joints.as_ref().map_or(0.0, |j| j.ratio(counts)))
+            - 1.0;
         // ℓ ≤ 1 (or a NaN, which a validated table cannot give): J C Jᵀ as it is.
         if f.is_nan() || f <= 0.0 {
             return;
@@ -322,6 +332,7 @@ mod tests {
             shrink: b * keep,
             keep,
             inverse_mean: 1.0 / (m * NM2_PER_MM2),
+            joints: None,
         }
     }
 
@@ -380,7 +391,7 @@ mod tests {
                 let pp = part(&bytes, r, b as f32, m as f32);
                 let cols: Vec<[f32; 3]> = j.iter().map(|c| c.map(|x| x as f32)).collect();
                 let mut got = Covariance(g.map(|x| x as f32));
-                pp.widen(&cols, &mut got);
+                pp.widen(&cols, &[], &mut got);
                 let scale = want[0] + want[1] + want[2];
                 for (x, w) in got.0.iter().zip(want) {
                     assert!(
@@ -443,34 +454,48 @@ mod tests {
 #[cfg(all(test, feature = "fixed-u95"))]
 mod refused {
     use crate::table::budget::BudgetData;
+    use crate::table::joint_leverage::JointLeverageData;
     use crate::table::parameters::{Column, Kind, ParameterData};
     use crate::table::pose::PoseData;
     use crate::table::tests::sample;
     use crate::table::{Field, Table, TableError, MAX_TABLE_LEN};
 
+    /// With or without the joint leverage inside it (the sample's 6 joints).
     #[test]
     fn the_fixed_point_profile_refuses_the_pose_part_by_its_flag() {
         let columns = [Column::new(Kind::Turn, 1)];
-        let block = ParameterData {
-            columns: &columns,
-            factor: &[1e-5],
-            pose: Some(PoseData {
-                factor: &[2e-6],
-                count: 1,
-                shrink: 0.0,
-                leverage_mean: 1e-6,
+        let (mean, weight) = ([1.0f32; 6], [0.5f32; 21]);
+        for joints in [
+            None,
+            Some(JointLeverageData {
+                mean: &mean,
+                weight: &weight,
             }),
-        };
-        let mut buf = [0u8; MAX_TABLE_LEN];
-        let n = sample()
-            .encode_full(Some(&BudgetData::default()), Some(&block), &mut buf)
-            .unwrap();
-        assert_eq!(
-            Table::parse(&buf[..n]).unwrap_err(),
-            TableError::Invalid {
-                joint: 0,
-                field: Field::Flags
-            }
-        );
+        ] {
+            let block = ParameterData {
+                columns: &columns,
+                factor: &[1e-5],
+                pose: Some(PoseData {
+                    factor: &[2e-6],
+                    count: 1,
+                    shrink: 0.0,
+                    leverage_mean: 1e-6,
+                    joints,
+                }),
+            };
+            let mut buf = [0u8; MAX_TABLE_LEN];
+            let n = sample()
+                .encode_full(Some(&BudgetData::default()), Some(&block), &mut buf)
+                .unwrap();
+            assert_eq!(
+                Table::parse(&buf[..n]).unwrap_err(),
+                TableError::Invalid {
+                    joint: 0,
+                    field: Field::Flags
+                },
+                "joint leverage: {}",
+                joints.is_some()
+            );
+        }
     }
 }

@@ -1,21 +1,26 @@
 //! The calibration's uncertainty budget as the hub carries it: the reading's own terms
 //! (`quatarm::table::budget`) and the parameter covariance (`quatarm::table::parameters`:
 //! each parameter as the way it moves the tip, and C's Cholesky factor), with the budget's
-//! pose part after it where the budget has one (`quatarm::table::pose`).
+//! pose part after it where the budget has one (`quatarm::table::pose`), and the joint
+//! leverage after that where the pose part has one (`quatarm::table::joint_leverage`).
 
 use nalgebra::DMatrix;
 use quatarm::table::budget::BudgetData;
+use quatarm::table::joint_leverage::{self, JointLeverageData};
 use quatarm::table::parameters::{Column, Kind, ParameterData, LIMIT, MAX_PARAMETERS};
 use quatarm::table::pose::{PoseData, MAX_FACTORS};
 use quatarm::table::MAX_JOINTS;
 use quatarm_ref::forward::tilt_axis;
-use quatarm_ref::uncertainty::{Link, Param, PoseLeverage, Uncertainty};
+use quatarm_ref::uncertainty::{JointLeverage, Link, Param, PoseLeverage, Uncertainty};
 use quatarm_ref::Arm;
 
 // The file's cap on the pose part's columns (what `armcal` estimates and `quatarm_ref`
 // reads) is the table's: the two crates cannot see each other, so the one crate that sees
 // both holds them equal at compile time.
 const _: () = assert!(quatarm_ref::uncertainty::POSE_RANK_MAX == MAX_FACTORS);
+// The same for the limit on a joint's mean angle.
+const _: () =
+    assert!(quatarm_ref::uncertainty::JOINT_MEAN_LIMIT == joint_leverage::MEAN_LIMIT as f64);
 
 /// The table's budget of a calibration file's `[uncertainty]` section.
 pub fn budget_data(u: &Uncertainty) -> BudgetData {
@@ -53,6 +58,18 @@ pub struct PoseBlock {
     pub shrink: f32,
     /// m (mm²).
     pub leverage_mean: f32,
+    /// The joint leverage, where the budget has one.
+    pub joints: Option<JointBlock>,
+}
+
+/// A budget's joint leverage, owned, as the table holds it
+/// (`quatarm::table::joint_leverage`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointBlock {
+    /// μ, one angle a joint (rad).
+    pub mean: Vec<f32>,
+    /// W's upper triangle, row by row (1/rad²).
+    pub weight: Vec<f32>,
 }
 
 impl Block {
@@ -66,6 +83,10 @@ impl Block {
                 count: p.count,
                 shrink: p.shrink,
                 leverage_mean: p.leverage_mean,
+                joints: p.joints.as_ref().map(|j| JointLeverageData {
+                    mean: &j.mean,
+                    weight: &j.weight,
+                }),
             }),
         }
     }
@@ -76,8 +97,9 @@ impl Block {
 /// take it: more columns than [`MAX_FACTORS`] (the cap the host's estimate keeps to), a
 /// column of another length than the parameters', a value that is not finite or not within
 /// the table's limits (b ≥ 0, m > 0, each within `quatarm::table::parameters::LIMIT`) — or
-/// that f32 rounds to 0 (m) or out of range.
-pub fn pose_data(pose: &PoseLeverage, p: usize) -> Result<PoseBlock, String> {
+/// that f32 rounds to 0 (m) or out of range — and its joint leverage ([`joint_data`]) for
+/// an arm of `dof` joints.
+pub fn pose_data(pose: &PoseLeverage, p: usize, dof: usize) -> Result<PoseBlock, String> {
     let r = pose.factor.len();
     if !(1..=MAX_FACTORS).contains(&r) {
         return Err(format!(
@@ -123,6 +145,75 @@ pub fn pose_data(pose: &PoseLeverage, p: usize) -> Result<PoseBlock, String> {
         count: r,
         shrink: pose.shrink as f32,
         leverage_mean: m,
+        joints: pose
+            .joints
+            .as_ref()
+            .map(|j| joint_data(j, dof))
+            .transpose()?,
+    })
+}
+
+/// The table's joint leverage of a budget for an arm of `dof` joints
+/// (`quatarm_ref::uncertainty::JointLeverage`: μ, W). `Err` names the key and says why the
+/// hub could not take it: lengths other than the arm's joints', a mean that is not finite or
+/// beyond `joint_leverage::MEAN_LIMIT`, a weight that is not finite, beyond
+/// `joint_leverage::WEIGHT_LIMIT` in f32 or not symmetric to f32's rounding, or a negative
+/// diagonal (a budget that the hub would misread is never written without its joints).
+pub fn joint_data(joints: &JointLeverage, dof: usize) -> Result<JointBlock, String> {
+    let k = joints.mean.len();
+    if k != dof || !(quatarm::table::MIN_JOINTS..=MAX_JOINTS).contains(&k) {
+        return Err(format!(
+            "pose_joint_mean: {k} values; the table's arm has {dof} joints"
+        ));
+    }
+    if joints.weight.len() != k * k {
+        return Err(format!(
+            "pose_joint_weight: {} values; {k} joints need {}",
+            joints.weight.len(),
+            k * k
+        ));
+    }
+    let mean_limit = f64::from(joint_leverage::MEAN_LIMIT);
+    if let Some((i, x)) = joints
+        .mean
+        .iter()
+        .enumerate()
+        .find(|(_, x)| !(x.is_finite() && x.abs() <= mean_limit))
+    {
+        return Err(format!(
+            "pose_joint_mean[{i}]: {x:e} rad is not finite or beyond {mean_limit} rad"
+        ));
+    }
+    let limit = f64::from(joint_leverage::WEIGHT_LIMIT);
+    let w = |i: usize, j: usize| joints.weight[i * k + j];
+    let mut weight = Vec::with_capacity(joint_leverage::weight_len(k));
+    for i in 0..k {
+        for j in i..k {
+            let (x, y) = (w(i, j), w(j, i));
+            let at = i * k + j;
+            if !(x.is_finite() && x.abs() <= limit) {
+                return Err(format!(
+                    "pose_joint_weight[{at}]: {x:e} is not finite or beyond {limit:e} 1/rad²"
+                ));
+            }
+            if i == j && x < 0.0 {
+                return Err(format!(
+                    "pose_joint_weight[{at}]: {x:e} is a negative diagonal entry"
+                ));
+            }
+            // The table keeps the upper triangle: the lower one must be the same number.
+            if (x - y).abs() > 1e-6 * x.abs().max(y.abs()) {
+                return Err(format!(
+                    "pose_joint_weight[{at}]: {x:e} differs from its transpose [{}] ({y:e})",
+                    j * k + i
+                ));
+            }
+            weight.push(x as f32);
+        }
+    }
+    Ok(JointBlock {
+        mean: joints.mean.iter().map(|&x| x as f32).collect(),
+        weight,
     })
 }
 
@@ -146,7 +237,11 @@ pub fn parameter_data(u: &Uncertainty, arm: &Arm) -> Result<Option<Block>, Strin
             .map(|p| column(*p, arm))
             .collect::<Result<_, _>>()?,
         factor: factor(&u.matrix())?,
-        pose: u.pose.as_ref().map(|pose| pose_data(pose, p)).transpose()?,
+        pose: u
+            .pose
+            .as_ref()
+            .map(|pose| pose_data(pose, p, arm.joints.len()))
+            .transpose()?,
     }))
 }
 
@@ -423,6 +518,87 @@ mod tests {
             msg.contains("pose_factor") && msg.contains("a hub holds at most"),
             "{msg}"
         );
+    }
+
+    /// The budget's joint leverage reaches the table (μ, W's upper triangle) whenever the
+    /// budget has it — a budget with joints never builds a table without them — and a
+    /// malformed one is refused naming its key.
+    #[test]
+    fn the_joint_leverage_reaches_the_table_or_is_refused_by_key() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/default-6.toml");
+        let arm = quatarm_ref::calfile::read(&path).unwrap().arm;
+        let mean = vec![0.5, 1.0, 3.0, 6.0, -0.1, 2.0];
+        // W symmetric: 1 + i on the diagonal, 0.1 · (i + j) off it.
+        let weight: Vec<f64> = (0..36)
+            .map(|x| {
+                let (i, j) = (x / 6, x % 6);
+                if i == j {
+                    1.0 + i as f64
+                } else {
+                    0.1 * (i + j) as f64
+                }
+            })
+            .collect();
+        let budget = Uncertainty {
+            parameters: (0..6).map(Param::ZeroOffset).collect(),
+            covariance: (0..36)
+                .map(|k| if k % 7 == 0 { 1e-10 } else { 0.0 })
+                .collect(),
+            encoder_counts: vec![0.3; 6],
+            probing_mm: 0.002,
+            temperature_c: 0.2,
+            model_mm: 0.0,
+            pose: Some(PoseLeverage {
+                factor: vec![(0..6).map(|i| 1e-6 * i as f64).collect()],
+                shrink: 0.4,
+                leverage_mean: 3e-6,
+                joints: Some(JointLeverage {
+                    mean: mean.clone(),
+                    weight: weight.clone(),
+                }),
+            }),
+        };
+        let table = crate::tablebuild::build_with(&arm, Some(&budget)).unwrap();
+        let t = quatarm::Table::parse(&table).unwrap();
+        let j = t.parameters().unwrap().pose().unwrap().joints().unwrap();
+        assert_eq!(j.count(), 6);
+        for i in 0..6 {
+            assert_eq!(j.mean(i), Some(mean[i] as f32));
+            for k in 0..6 {
+                assert_eq!(j.weight(i, k), Some(weight[i * 6 + k] as f32), "({i}, {k})");
+            }
+        }
+        let mut without = budget.clone();
+        without.pose.as_mut().unwrap().joints = None;
+        let plain = crate::tablebuild::build_with(&arm, Some(&without)).unwrap();
+        assert_eq!(plain.len(), table.len() - joint_leverage::len(6));
+        let bad = |f: &dyn Fn(&mut JointLeverage)| {
+            let mut u = budget.clone();
+            f(u.pose.as_mut().unwrap().joints.as_mut().unwrap());
+            crate::tablebuild::build_with(&arm, Some(&u))
+                .unwrap_err()
+                .to_string()
+        };
+        for (msg, key) in [
+            (
+                bad(&|j| j.mean.truncate(5)),
+                "pose_joint_mean: 5 values; the table's arm has 6",
+            ),
+            (
+                bad(&|j| j.weight.truncate(35)),
+                "pose_joint_weight: 35 values",
+            ),
+            (bad(&|j| j.mean[2] = f64::NAN), "pose_joint_mean[2]"),
+            (bad(&|j| j.mean[4] = -64.5), "pose_joint_mean[4]"),
+            (bad(&|j| j.weight[7] = 2e12), "pose_joint_weight[7]"),
+            (bad(&|j| j.weight[14] = -1e-3), "pose_joint_weight[14]"),
+            (
+                bad(&|j| j.weight[3] = 5.0),
+                "pose_joint_weight[3]: 5e0 differs",
+            ),
+        ] {
+            assert!(msg.contains(key), "{key}: {msg}");
+        }
     }
 
     /// L Lᵀ gives C back, also for a singular C (one parameter a copy of another).

@@ -362,7 +362,7 @@ fn pico_profile(tc: &Toolchain, calib: &Path) -> Result<Vec<Row>> {
 pub fn run(
     only: Option<&str>,
     calib: Option<&std::path::Path>,
-    pose_factors: Option<usize>,
+    pose_factors: Option<(usize, bool)>,
 ) -> Result<()> {
     setup::ensure()?;
     let path = calib.map_or_else(default_calibration_path, std::path::Path::to_path_buf);
@@ -371,16 +371,26 @@ pub fn run(
     // profile) refuses the block, and rp-pico, which takes it, runs no QEMU (its profile's
     // rows, `pico_profile`, take the table whole).
     let mut parsed = quatarm_ref::calfile::read(&path)?;
-    if let Some(r) = pose_factors {
+    if let Some((r, joints)) = pose_factors {
+        let dof = parsed.arm.joints.len();
         let u = parsed
             .uncertainty
             .as_mut()
             .context("--pose-factors needs a calibration with a budget")?;
-        u.pose = Some(synthetic_pose(u, r));
+        let mut pose = synthetic_pose(u, r);
+        if joints {
+            pose.joints = Some(synthetic_joints(dof));
+        }
+        u.pose = Some(pose);
         println!(
-            "(the budget with a synthetic pose part of r = {r} columns of D over its {} parameters; \
+            "(the budget with a synthetic pose part of r = {r} columns of D over its {} parameters{}; \
              every reading's leverage above 1)",
-            u.parameters.len()
+            u.parameters.len(),
+            if joints {
+                format!(" and the joint leverage of its {dof} joints")
+            } else {
+                String::new()
+            }
         );
     }
     let table_for = |b: &Board| -> Result<Vec<u8>> {
@@ -469,6 +479,18 @@ fn synthetic_pose(
         shrink: 0.2,
         leverage_mean: 1e-12,
         joints: None,
+    }
+}
+
+/// A joint leverage for `k` joints (`--pose-joints`): what ℓJ's cost depends on is k, not
+/// μ's or W's values. μ = π for every joint, W = 0.1 · (I + 0.1 · (1 1ᵀ − I)) (1/rad²):
+/// dense, positive definite, every entry read.
+fn synthetic_joints(k: usize) -> quatarm_ref::uncertainty::JointLeverage {
+    quatarm_ref::uncertainty::JointLeverage {
+        mean: vec![std::f64::consts::PI; k],
+        weight: (0..k * k)
+            .map(|x| if x % (k + 1) == 0 { 0.1 } else { 0.01 })
+            .collect(),
     }
 }
 

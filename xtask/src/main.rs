@@ -69,6 +69,10 @@ enum Cmd {
         /// synthetic values, every reading's leverage above 1: U95's widest path).
         #[arg(long)]
         pose_factors: Option<usize>,
+        /// With `--pose-factors`: give the pose part the joint leverage too (issue 27,
+        /// synthetic μ and a dense W: ℓJ's cost on every reading).
+        #[arg(long, requires = "pose_factors")]
+        pose_joints: bool,
     },
     /// Run the fuzz targets of fuzz/ (libFuzzer, cargo-fuzz), each for a while.
     Fuzz {
@@ -110,7 +114,12 @@ fn main() -> Result<()> {
             board,
             calib,
             pose_factors,
-        } => bench::run(board.as_deref(), calib.as_deref(), pose_factors),
+            pose_joints,
+        } => bench::run(
+            board.as_deref(),
+            calib.as_deref(),
+            pose_factors.map(|r| (r, pose_joints)),
+        ),
         Cmd::Fuzz { target, seconds } => fuzz::run(target.as_deref(), seconds),
         Cmd::Soak {
             board,
