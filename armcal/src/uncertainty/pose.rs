@@ -48,15 +48,17 @@ pub const SCALE_MAX: f64 = 30.0;
 /// measured in the same regime. On each MUKCa unit with ≥ 3 sessions, each pair of
 /// consecutive sessions (cyclic) is calibrated, S_b taken from its two leave-one-session-out
 /// fits, and every other session's probings scored ([`least_scales`]) under the product's
-/// leverage-scaled form (each probing's pose part times its tip's max(1, ℓ)); the unit's κ
-/// is the conformal quantile of its scores ([`conformal_scale`]) and this is the median over
-/// the 9 units (`cargo test --profile test -p armcal --bench coverage -- mukca`, the line
-/// `two-session κ of the fleet`; `docs/results/uncertainty.md`). 1.104 for the term without
-/// the leverage factor (stop 35's form, `Settings::leverage_scaled` off). A median over units, not a quantile over
-/// their pooled rows: the target is each unit's coverage, and one unit whose bad session no
-/// scale covers (panda_2 `high`) must not set every other unit's width. `--fleet-kappa`
-/// replaces it with the caller's fleet.
-pub const TWO_GROUP_SCALE: f64 = 0.968;
+/// form (each probing's pose part times its max(1, ℓ, ℓJ), ℓ its tip's, ℓJ its joint angles'
+/// against the pair's); the unit's κ is the conformal quantile of its scores
+/// ([`conformal_scale`]) and this is the median over the 9 units
+/// (`cargo test --profile test -p armcal --bench coverage -- mukca`, the line `two-session κ
+/// of the fleet`; `docs/results/uncertainty.md`, round 5). 0.968 under stop 37's max(1, ℓ)
+/// (`mukca no-joints`), 1.104 for the term without the leverage factor (stop 35's form,
+/// `Settings::leverage_scaled` off). A median over units, not a quantile over their pooled
+/// rows: the target is each unit's coverage, and one unit whose bad session no scale covers
+/// (panda_2 `high`) must not set every other unit's width. `--fleet-kappa` replaces it with
+/// the caller's fleet.
+pub const TWO_GROUP_SCALE: f64 = 0.664;
 
 /// Where the term came from (the report's provenance).
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -471,14 +473,18 @@ pub fn estimate(
         .filter(|_| joint_leverage)
         .and_then(|_| super::extrapolation::JointSupport::of(data));
     if let (Some(lev), Some(mean)) = (&lev, lev_mean) {
-        let mut without: std::collections::HashMap<i64, Option<quatarm_ref::uncertainty::JointLeverage>> =
-            std::collections::HashMap::new();
+        let mut without: std::collections::HashMap<
+            i64,
+            Option<quatarm_ref::uncertainty::JointLeverage>,
+        > = std::collections::HashMap::new();
         for (k, r) in rows.iter().enumerate() {
             let row = &data.rows[r.row];
             let lj = joints.as_ref().and_then(|_| {
                 without
                     .entry(row.group)
-                    .or_insert_with(|| super::extrapolation::joint_leverage_without(data, row.group))
+                    .or_insert_with(|| {
+                        super::extrapolation::joint_leverage_without(data, row.group)
+                    })
                     .as_ref()
                     .map(|j| j.ratio(&row.theta))
             });
