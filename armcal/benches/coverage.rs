@@ -196,18 +196,44 @@ fn placement() {
                 println!("  {} seed {seed}: a bar could not be placed", new.name);
                 continue;
             };
-            let a = placement::new_session_coverage(&unit, false);
-            let b = placement::new_session_coverage(&unit, true);
+            let (ca, cb) = (
+                placement::coverage(&unit, false),
+                placement::coverage(&unit, true),
+            );
+            let a = ca.as_ref().and_then(|c| placement::new_session(&unit, c));
+            let b = cb.as_ref().and_then(|c| placement::new_session(&unit, c));
             let show = |x: Option<(f64, usize)>| {
                 x.map_or("failed".to_string(), |(f, n)| format!("{f:.3} of {n}"))
             };
             println!(
-                "  {:<10} seed {seed}: max(1, ℓ) {}   max(1, ℓ, ℓJ) {}   ({:.0} s)",
+                "  {:<10} seed {seed}: max(1, ℓ) {}   max(1, ℓ, ℓJ) {}   (new session's median \
+                 ℓJ {:.1}; {:.0} s)",
                 new.name,
                 show(a),
                 show(b),
+                placement::new_session_joint_leverage(&unit).unwrap_or(f64::NAN),
                 t0.elapsed().as_secs_f64()
             );
+            for (form, c) in [("max(1, ℓ)", &ca), ("max(1, ℓ, ℓJ)", &cb)] {
+                if let Some(c) = c {
+                    println!(
+                        "    {form}: every session held out {}; median U95 {:.4} mm, RMS \
+                         deviation {:.4} mm{}",
+                        c.per_session
+                            .iter()
+                            .map(|(s, _, f, ..)| format!("{s} {f:.3}"))
+                            .collect::<Vec<_>>()
+                            .join(", "),
+                        c.nested_u95_mm,
+                        c.rms_deviation_mm,
+                        if c.failed.is_empty() {
+                            String::new()
+                        } else {
+                            format!("; failed: {}", c.failed.join("; "))
+                        }
+                    );
+                }
+            }
             for (k, x) in [a, b].into_iter().enumerate() {
                 if let Some((f, n)) = x {
                     sum[k].0 += f * n as f64;

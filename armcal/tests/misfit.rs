@@ -501,12 +501,15 @@ fn calibrate_by_group_writes_the_leverage_keys_and_eval_applies_them() {
         assert!(field(l, 4) <= largest * (1.0 + 1e-3), "{out}");
     }
     // Each reading's `joint_leverage` is the file's ℓJ of its angles (4 decimals written).
-    for (l, th) in lines[1..].iter().zip(rows.iter().map(|r| {
-        r.iter()
-            .map(|x| x.parse::<f64>().unwrap())
-            .collect::<Vec<_>>()
-    }).chain(std::iter::once(far.clone())))
-    {
+    for (l, th) in lines[1..].iter().zip(
+        rows.iter()
+            .map(|r| {
+                r.iter()
+                    .map(|x| x.parse::<f64>().unwrap())
+                    .collect::<Vec<_>>()
+            })
+            .chain(std::iter::once(far.clone())),
+    ) {
         let want = written.ratio(&th);
         assert!(
             (field(l, 3) - want).abs() <= 6e-5 + 1e-4 * want,

@@ -408,8 +408,10 @@ fn model_term(
 
 /// The report's line of a pose-dependent term.
 fn pose_note(p: &super::pose::PoseSource) -> String {
-    let form = match &p.leverage {
-        Some(l) => format!(
+    let form =
+        match &p.leverage {
+            Some(l) => {
+                format!(
             "leverage-scaled: kept apart from the parameters' covariance as D (rank {}) and \
              b = {:.4} (pose_factor, pose_shrink), and at each reading multiplied by \
              {}, ℓ its tip's tr(J C_fit Jᵀ) over the calibration rows' mean of \
@@ -446,9 +448,10 @@ fn pose_note(p: &super::pose::PoseSource) -> String {
             } else {
                 String::new()
             }
-        ),
-        None => "the same at every reading's leverage".to_string(),
-    };
+        )
+            }
+            None => "the same at every reading's leverage".to_string(),
+        };
     format!(
         "model, pose-dependent: the spread of the parameters between the {} groups held out \
          (S_b from their leave-one-group-out fits) times {:.3}², added to the parameters' \

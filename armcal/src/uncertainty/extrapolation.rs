@@ -295,7 +295,13 @@ mod tests {
         let rows: Vec<Row> = (0..25)
             .map(|k| {
                 let t = f64::from(k) * 0.37;
-                Row::point(0, vec![t.sin() * 0.3, 0.8, (1.7 * t).cos() * 0.2 + 0.1 * t], [0.0; 3], 20.0, None)
+                Row::point(
+                    0,
+                    vec![t.sin() * 0.3, 0.8, (1.7 * t).cos() * 0.2 + 0.1 * t],
+                    [0.0; 3],
+                    20.0,
+                    None,
+                )
             })
             .collect();
         let data = Dataset {
@@ -328,7 +334,8 @@ mod tests {
         };
         let det = c(0, 0) * c(1, 1) - c(0, 1) * c(0, 1);
         let d = [th[0] - m[0], th[2] - m[1]];
-        let d2 = (c(1, 1) * d[0] * d[0] - 2.0 * c(0, 1) * d[0] * d[1] + c(0, 0) * d[1] * d[1]) / det;
+        let d2 =
+            (c(1, 1) * d[0] * d[0] - 2.0 * c(0, 1) * d[0] * d[1] + c(0, 0) * d[1] * d[1]) / det;
         assert!((s.distance(&th).powi(2) - d2).abs() < 1e-9 * d2, "{d2}");
         assert!((l.ratio(&th) - d2 * 25.0 / (2.0 * 24.0)).abs() < 1e-9 * d2);
         // The rows outside one group: the same estimate on fewer rows.

@@ -244,7 +244,9 @@ mod tests {
                 leverage_mean: 2e-4,
                 joints: Some(uncertainty::JointLeverage {
                     mean: vec![0.25; 6],
-                    weight: (0..36).map(|k| if k % 7 == 0 { 3.0 } else { 0.0 }).collect(),
+                    weight: (0..36)
+                        .map(|k| if k % 7 == 0 { 3.0 } else { 0.0 })
+                        .collect(),
                 }),
             }),
         };

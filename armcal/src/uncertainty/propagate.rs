@@ -123,7 +123,10 @@ impl Leverage {
     /// max(1, ℓ, ℓJ), [`super::pose::leverage_factor`]); `None` without a pose part.
     pub fn ratio(&self) -> Option<f64> {
         let l = self.tip?;
-        Some(self.joints.map_or(l, |j| if j.is_finite() { l.max(j) } else { l }))
+        Some(
+            self.joints
+                .map_or(l, |j| if j.is_finite() { l.max(j) } else { l }),
+        )
     }
 }
 
@@ -469,8 +472,12 @@ mod tests {
             let jpj = &jm * PoseSplit::matrix(b.pose.as_ref().unwrap(), &cov) * jm.transpose();
             let jcj = &jm * &cov * jm.transpose();
             let m = jcj + jpj * (lj_want.max(l_tip).max(1.0) - 1.0);
-            let want = Matrix3::from_iterator(m.iter().copied()) + own_terms(&b, &b.sigma_theta(&a), &j);
-            assert!((s - want).norm() <= 1e-12 * want.norm(), "{lj_want}: {s} {want}");
+            let want =
+                Matrix3::from_iterator(m.iter().copied()) + own_terms(&b, &b.sigma_theta(&a), &j);
+            assert!(
+                (s - want).norm() <= 1e-12 * want.norm(),
+                "{lj_want}: {s} {want}"
+            );
             if lj_want < 1.0 {
                 assert_eq!(s, s_plain, "ℓ, ℓJ ≤ 1: the budget read without the keys");
             } else {

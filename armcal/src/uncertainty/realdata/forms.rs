@@ -155,7 +155,6 @@ pub fn joint_ratio(train: &Dataset) -> Option<impl Fn(&[f64]) -> f64> {
 /// A [`joint_ratio`] kept per group.
 type JointRatio = Box<dyn Fn(&[f64]) -> f64>;
 
-
 /// Calibrates `unit` on `train` and keeps what every variant needs (see [`Trained`]).
 /// `None` when the fit or its validation by session fails.
 pub fn train(unit: &Unit, train: &[i64]) -> Option<Trained> {

@@ -130,8 +130,7 @@ fn session(
             rng,
         )?;
         for r in &mut bar {
-            r.theta =
-                crate::sim::read_encoders(truth, &r.theta, proto.encoder_noise_counts, rng);
+            r.theta = crate::sim::read_encoders(truth, &r.theta, proto.encoder_noise_counts, rng);
         }
         rows.extend(bar);
     }
@@ -166,20 +165,40 @@ pub fn unit(
     })
 }
 
-/// The new placement's session's coverage under the product's nested path with the factor
-/// max(1, ℓ, ℓJ) (`joint_leverage`) or max(1, ℓ): (covered, probings), `None` when its
-/// calibration failed.
-pub fn new_session_coverage(unit: &Unit, joint_leverage: bool) -> Option<(f64, usize)> {
+/// The unit's coverage under the product's nested path with the factor max(1, ℓ, ℓJ)
+/// (`joint_leverage`) or max(1, ℓ); `None` with fewer than two sessions.
+pub fn coverage(unit: &Unit, joint_leverage: bool) -> Option<super::UnitCoverage> {
     let rule = super::Rule {
         joint_leverage,
         ..super::Rule::product(super::super::pose::TWO_GROUP_SCALE)
     };
-    let c = super::unit_coverage(unit, rule)?;
+    super::unit_coverage(unit, rule)
+}
+
+/// The new placement's session's (covered, probings) in `c`, `None` when its calibration
+/// failed.
+pub fn new_session(unit: &Unit, c: &super::UnitCoverage) -> Option<(f64, usize)> {
     let last = unit.sessions.values().last()?;
     c.per_session
         .iter()
         .find(|s| &s.0 == last)
         .map(|s| (s.2, s.1))
+}
+
+/// The new session's median ℓJ against the training sessions' joint angles (what the
+/// calibration on them writes), `None` without a spread.
+pub fn new_session_joint_leverage(unit: &Unit) -> Option<f64> {
+    let groups = unit.groups();
+    let (&last, train) = groups.split_last()?;
+    let l = super::super::extrapolation::joint_leverage(&unit.sessions_data(train))?;
+    let mut v: Vec<f64> = unit
+        .sessions_data(&[last])
+        .rows
+        .iter()
+        .map(|r| l.ratio(&r.theta))
+        .collect();
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied()
 }
 
 #[cfg(test)]
