@@ -191,8 +191,14 @@ fn placement() {
     for new in placement::NEW {
         let mut sum = [(0.0, 0usize); 2];
         for seed in 0..seeds {
-            let Some(unit) = placement::unit(&truth, &nominal, &new, &placement::PROTOCOL, seed)
-            else {
+            let Some(unit) = placement::unit(
+                &truth,
+                &nominal,
+                &placement::TRAINING,
+                &new,
+                &placement::PROTOCOL,
+                seed,
+            ) else {
                 println!("  {} seed {seed}: a bar could not be placed", new.name);
                 continue;
             };

@@ -137,11 +137,12 @@ fn session(
     Some(rows)
 }
 
-/// A unit of `truth` measured at the [`TRAINING`] placements and at `new`, the last session
-/// (group 5), calibrated from the `nominal` arm; seeded with `seed`.
+/// A unit of `truth` measured at the `training` placements (the benchmark's: [`TRAINING`])
+/// and at `new`, the last session, calibrated from the `nominal` arm; seeded with `seed`.
 pub fn unit(
     truth: &Arm,
     nominal: &Arm,
+    training: &[Placement],
     new: &Placement,
     proto: &Protocol,
     seed: u64,
@@ -149,7 +150,7 @@ pub fn unit(
     let mut rng = crate::rng::rng(seed);
     let mut rows = Vec::new();
     let mut sessions = BTreeMap::new();
-    for (k, p) in TRAINING.iter().chain(std::iter::once(new)).enumerate() {
+    for (k, p) in training.iter().chain(std::iter::once(new)).enumerate() {
         let g = k as i64 + 1;
         rows.extend(session(truth, p, proto, g, &mut rng)?);
         sessions.insert(g, p.name.to_string());
