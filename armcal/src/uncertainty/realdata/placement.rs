@@ -74,7 +74,7 @@ pub const NEW: [Placement; 2] = [
 /// How a session is measured.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Protocol {
-    /// Bar placements per session.
+    /// Bar placements per session (all one `length` group: 1 for a calibration).
     pub bars: usize,
     /// Probings per bar (half at each end).
     pub probings: usize,
@@ -86,12 +86,14 @@ pub struct Protocol {
     pub encoder_noise_counts: f64,
 }
 
-/// The protocol the benchmark uses: 8 bars of 300 mm per session, 10 probings each, 10 µm
-/// probing noise, one count of encoder noise.
+/// The protocol the benchmark uses: as a MUKCa session, one placement of a two-socket bar
+/// (a session's rows are one `length` group, its ends a and b: more bars in one session
+/// would be read as one group), here 200 mm, probed 60 times; 10 µm probing noise, one
+/// count of encoder noise.
 pub const PROTOCOL: Protocol = Protocol {
-    bars: 8,
-    probings: 10,
-    bar_mm: 300.0,
+    bars: 1,
+    probings: 60,
+    bar_mm: 200.0,
     noise_mm: 0.01,
     encoder_noise_counts: 1.0,
 };
