@@ -30,6 +30,9 @@ use armcal::uncertainty::{montecarlo, propagate, realdata, u95};
 use std::time::Instant;
 
 fn main() {
+    if std::env::args().any(|a| a == "placement") {
+        return placement();
+    }
     if std::env::args().any(|a| a == "mukca-variants") {
         return mukca_variants();
     }
@@ -157,13 +160,128 @@ fn first_order_against_monte_carlo(setup: &Setup) {
 }
 
 /// Held-out coverage on every MUKCa unit with two sessions or more.
+/// Issue 27 round 5's check of ℓJ outside its selection
+/// ([`realdata::placement`]): per seed (the first number argument, 4 by default) and new
+/// placement, the new placement's session's coverage under max(1, ℓ) and max(1, ℓ, ℓJ).
+fn placement() {
+    use realdata::placement;
+    let t0 = Instant::now();
+    let seeds = std::env::args()
+        .skip(1)
+        .find_map(|a| a.parse::<u64>().ok())
+        .unwrap_or(4);
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/default-6-full.toml");
+    let truth = match quatarm_ref::calfile::read(&path) {
+        Ok(p) => p.arm,
+        Err(e) => return println!("{}: {e}", path.display()),
+    };
+    let nominal = quatarm_ref::arm::Arm::default6();
+    println!(
+        "placements: truth default-6-full (harmonics, gravity compliance; the geometric model \
+         fitted), 4 training sessions at placements {}, scored on a new one; {} bars × {} \
+         probings a session",
+        placement::TRAINING
+            .iter()
+            .map(|p| p.name)
+            .collect::<Vec<_>>()
+            .join(", "),
+        placement::PROTOCOL.bars,
+        placement::PROTOCOL.probings
+    );
+    for new in placement::NEW {
+        let mut sum = [(0.0, 0usize); 2];
+        for seed in 0..seeds {
+            let Some(unit) = placement::unit(
+                &truth,
+                &nominal,
+                &placement::TRAINING,
+                &new,
+                &placement::PROTOCOL,
+                seed,
+            ) else {
+                println!("  {} seed {seed}: a bar could not be placed", new.name);
+                continue;
+            };
+            let (ca, cb) = (
+                placement::coverage(&unit, false),
+                placement::coverage(&unit, true),
+            );
+            let a = ca.as_ref().and_then(|c| placement::new_session(&unit, c));
+            let b = cb.as_ref().and_then(|c| placement::new_session(&unit, c));
+            let show = |x: Option<(f64, usize)>| {
+                x.map_or("failed".to_string(), |(f, n)| format!("{f:.3} of {n}"))
+            };
+            println!(
+                "  {:<10} seed {seed}: max(1, ℓ) {}   max(1, ℓ, ℓJ) {}   (new session's median \
+                 ℓJ {:.1}; {:.0} s)",
+                new.name,
+                show(a),
+                show(b),
+                placement::new_session_joint_leverage(&unit).unwrap_or(f64::NAN),
+                t0.elapsed().as_secs_f64()
+            );
+            for (form, c) in [("max(1, ℓ)", &ca), ("max(1, ℓ, ℓJ)", &cb)] {
+                if let Some(c) = c {
+                    println!(
+                        "    {form}: every session held out {}; median U95 {:.4} mm, RMS \
+                         deviation {:.4} mm{}",
+                        c.per_session
+                            .iter()
+                            .map(|(s, _, f, ..)| format!("{s} {f:.3}"))
+                            .collect::<Vec<_>>()
+                            .join(", "),
+                        c.nested_u95_mm,
+                        c.rms_deviation_mm,
+                        if c.failed.is_empty() {
+                            String::new()
+                        } else {
+                            format!("; failed: {}", c.failed.join("; "))
+                        }
+                    );
+                }
+            }
+            for (k, x) in [a, b].into_iter().enumerate() {
+                if let Some((f, n)) = x {
+                    sum[k].0 += f * n as f64;
+                    sum[k].1 += n;
+                }
+            }
+        }
+        println!(
+            "  {:<10} pooled over seeds: max(1, ℓ) {:.3} of {}, max(1, ℓ, ℓJ) {:.3} of {}",
+            new.name,
+            sum[0].0 / sum[0].1.max(1) as f64,
+            sum[0].1,
+            sum[1].0 / sum[1].1.max(1) as f64,
+            sum[1].1
+        );
+    }
+    println!("  took {:.0} s", t0.elapsed().as_secs_f64());
+}
+
 fn mukca() {
     let dir = armcal::mukca::default_dir();
     let units = match armcal::mukca::unit_names(&dir) {
         Ok(u) => u,
         Err(e) => return println!("MUKCa: {e}"),
     };
-    println!("MUKCa, whole sessions held out: probings within their predicted 95 % region");
+    // `mukca no-joints`: stop 37's factor max(1, ℓ), for the table beside the product's
+    // max(1, ℓ, ℓJ).
+    let joints = !std::env::args().any(|a| a == "no-joints");
+    let rule = |fleet: f64| realdata::Rule {
+        joint_leverage: joints,
+        ..realdata::Rule::product(fleet)
+    };
+    println!(
+        "MUKCa, whole sessions held out: probings within their predicted 95 % region; the pose \
+         part's factor {}",
+        if joints {
+            "max(1, ℓ, ℓJ) (the product's)"
+        } else {
+            "max(1, ℓ) (stop 37's, `no-joints`)"
+        }
+    );
+    let mut sessions: Vec<(usize, usize)> = Vec::new();
     println!(
         "  unit                 sessions  probings  covered  +model  nested  median U95 mm \
          (+model) [nested]  RMS dev mm  probing mm  model mm  nested model mm"
@@ -180,7 +298,10 @@ fn mukca() {
     }
     // The pose term's κ for two training sessions, per unit (conformal over its own
     // pair-trained scores); a unit is judged with the median of the *other* units' values.
-    let scores: Vec<Vec<f64>> = loaded.iter().map(realdata::two_group_scores).collect();
+    let scores: Vec<Vec<f64>> = loaded
+        .iter()
+        .map(|u| realdata::two_group_scores_with(u, joints))
+        .collect();
     let kappa2: Vec<Option<f64>> = loaded
         .iter()
         .zip(&scores)
@@ -224,7 +345,7 @@ fn mukca() {
             .collect();
         let mean_fleet = realdata::fleet_scale_mean_coverage(&other_scores);
         let name = &unit.name;
-        let Some(c) = realdata::unit_coverage(unit, realdata::Rule::product(fleet)) else {
+        let Some(c) = realdata::unit_coverage(unit, rule(fleet)) else {
             println!("  {name:<20} one session: nothing to hold out");
             continue;
         };
@@ -259,7 +380,7 @@ fn mukca() {
                 .join(", ")
         );
         if c.sessions == 3 {
-            if let Some(a) = realdata::unit_coverage(unit, realdata::Rule::product(mean_fleet)) {
+            if let Some(a) = realdata::unit_coverage(unit, rule(mean_fleet)) {
                 println!(
                     "    sensitivity: κ at the other units' mean coverage 95 % {mean_fleet:.3}: \
                      nested {:.3}, median U95 {:.4} mm",
@@ -276,6 +397,22 @@ fn mukca() {
             }
             pooled += c.covered_nested * c.probings as f64;
             judged += c.probings;
+            sessions.extend(
+                c.per_session
+                    .iter()
+                    .map(|(_, n, f, ..)| ((f * *n as f64).round() as usize, *n)),
+            );
+            let k = (c.covered_nested * c.probings as f64).round() as usize;
+            let (lo, hi) = forms::wilson(k, c.probings);
+            println!(
+                "    nested {:.3} (Wilson 95 % [{lo:.3}, {hi:.3}]), {}",
+                c.covered_nested,
+                if (0.88..=0.99).contains(&c.covered_nested) {
+                    "in the band 88–99 %"
+                } else {
+                    "outside 88–99 %"
+                }
+            );
         }
         per_session.extend(c.per_session.iter().map(|(s, n, f, x, j, r)| {
             format!(
@@ -291,9 +428,12 @@ fn mukca() {
             println!("    not judged: {f}");
         }
     }
+    let (lo, hi) = forms::session_bootstrap(&sessions, 20_000, 27);
     println!(
-        "  pooled over units with ≥ 3 sessions, nested model term: {:.3} of {judged} probings",
-        pooled / judged.max(1) as f64
+        "  pooled over units with ≥ 3 sessions, nested model term: {:.3} of {judged} probings \
+         (95 % [{lo:.3}, {hi:.3}], {} whole sessions resampled)",
+        pooled / judged.max(1) as f64,
+        sessions.len()
     );
     println!(
         "  pooled, sensitivity (3-session units at the other units' mean-coverage κ): {:.3}",

@@ -3,6 +3,7 @@
 use anyhow::Context;
 use armcal::eval::{evaluate, read_rows, Evaluator};
 use armcal::uncertainty::columns::{columns_observed, Method};
+use armcal::uncertainty::propagate::Leverage;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -21,7 +22,8 @@ pub struct Args {
     input: Option<PathBuf>,
     /// Add each point's covariance and U95 (`cxx,cyy,czz,cxy,cxz,cyz` mm², `U95` mm) from the
     /// calibration's `[uncertainty]` budget, computed on the f64 reference; with a
-    /// leverage-scaled pose term (`pose_*` keys) also `leverage`, each reading's ℓ.
+    /// leverage-scaled pose term (`pose_*` keys) also `leverage`, each reading's ℓ, and with
+    /// a joint leverage (`pose_joint_*` keys) `joint_leverage`, its ℓJ.
     #[arg(long)]
     uncertainty: bool,
     /// How the uncertainty is propagated.
@@ -37,8 +39,8 @@ pub struct Args {
     /// every calibration tip than twice their own spacing is flagged as extrapolated, in a
     /// column `far` (1: flagged), and each in a joint configuration outside the calibration's
     /// spread in a column `far_joints`; with `--uncertainty` and a leverage-scaled pose term,
-    /// each whose ℓ is above every calibration row's in a last column `far_leverage`; counts
-    /// on stderr.
+    /// each whose leverage ratio (ℓ, or max(ℓ, ℓJ) with a joint leverage) is above every
+    /// calibration row's in a last column `far_leverage`; counts on stderr.
     #[arg(long, value_name = "DATA.csv")]
     seen: Option<PathBuf>,
     /// Show the count of rows done and the time left on stderr even when it is not a terminal
@@ -126,7 +128,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if let Some(seen) = &args.seen {
         out = flag_far(&arm, &rows, seen, &out)?;
-        if let (Some(b), true) = (&budget, leverage.iter().any(Option::is_some)) {
+        if let (Some(b), true) = (&budget, leverage.iter().any(|l| l.tip.is_some())) {
             out = flag_leverage(&arm, b, seen, &leverage, &out)?;
         }
     }
@@ -136,29 +138,41 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The count of readings whose pose part was widened (ℓ > 1), on stderr.
-fn note_widened(leverage: &[Option<f64>]) {
-    let l: Vec<f64> = leverage.iter().flatten().copied().collect();
+/// What the factor on the pose part was taken of, for the messages: ℓ, or max(ℓ, ℓJ) where
+/// the budget has a joint leverage.
+fn ratio_name(leverage: &[Leverage]) -> &'static str {
+    if leverage.iter().any(|l| l.joints.is_some()) {
+        "max(ℓ, ℓJ) (columns `leverage`, `joint_leverage`)"
+    } else {
+        "ℓ (column `leverage`)"
+    }
+}
+
+/// The count of readings whose pose part was widened (ratio above 1), on stderr.
+fn note_widened(leverage: &[Leverage]) {
+    let l: Vec<f64> = leverage.iter().filter_map(Leverage::ratio).collect();
     let widened = l.iter().filter(|x| **x > 1.0).count();
     if widened > 0 {
         eprintln!(
-            "armcal: {widened} of {} readings have a leverage ratio ℓ above 1 (largest {:.2}): \
-             their pose-dependent term is multiplied by ℓ (column `leverage`)",
+            "armcal: {widened} of {} readings have a leverage ratio above 1 (largest {:.2}): \
+             their pose-dependent term is multiplied by {}",
             leverage.len(),
-            l.iter().copied().fold(0.0, f64::max)
+            l.iter().copied().fold(0.0, f64::max),
+            ratio_name(leverage)
         );
     }
 }
 
-/// `out` with a last column `far_leverage`: 1 where the reading's ℓ (`leverage`, one per
-/// row) is above every row's of the calibration data `seen` under the same budget — the
+/// `out` with a last column `far_leverage`: 1 where the reading's leverage ratio (the
+/// factor's, [`Leverage::ratio`]: ℓ, or max(ℓ, ℓJ) with a joint leverage; one per row) is
+/// above every row's of the calibration data `seen` under the same budget — the
 /// parameters' leverage of a placement the calibration did not see, where the budget's
 /// pose term is extrapolated; the count goes to stderr.
 fn flag_leverage(
     arm: &quatarm_ref::Arm,
     budget: &armcal::uncertainty::Budget,
     seen: &std::path::Path,
-    leverage: &[Option<f64>],
+    leverage: &[Leverage],
     out: &str,
 ) -> anyhow::Result<String> {
     let data = armcal::data::read(seen, arm.dof())?;
@@ -171,6 +185,7 @@ fn flag_leverage(
                 arm, probe, budget, &r.theta, r.temp_c,
             )
             .2
+            .ratio()
         })
         .fold(0.0, f64::max);
     let mut far = 0usize;
@@ -180,15 +195,16 @@ fn flag_leverage(
         joined.push_str(&format!("{h},far_leverage\n"));
     }
     for (l, x) in lines.zip(leverage) {
-        let f = x.is_some_and(|x| x > largest);
+        let f = x.ratio().is_some_and(|x| x > largest);
         far += usize::from(f);
         joined.push_str(&format!("{l},{}\n", u8::from(f)));
     }
     if far > 0 {
         eprintln!(
-            "armcal: warning: {far} of {} readings have a leverage ratio above every row of {} \
-             (ℓ > {largest:.2}): the pose term is extrapolated there",
+            "armcal: warning: {far} of {} readings have a leverage ratio {} above every row of \
+             {} (> {largest:.2}): the pose term is extrapolated there",
             leverage.len(),
+            ratio_name(leverage),
             seen.display()
         );
     }

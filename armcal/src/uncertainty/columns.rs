@@ -1,7 +1,9 @@
 //! `armcal eval --uncertainty`: the columns `cxx,cyy,czz,cxy,cxz,cyz,U95` of every row, by
 //! first-order propagation or by Monte Carlo (GUM Supplement 1) of the same budget. A budget
-//! with a leverage-scaled pose part (issue 27) adds a last column `leverage`, each reading's
-//! ℓ ([`super::propagate::leverage`]): its pose part was multiplied by max(1, ℓ).
+//! with a leverage-scaled pose part (issue 27) adds a column `leverage`, each reading's
+//! ℓ ([`super::propagate::leverage`]), and one with a joint leverage a last column
+//! `joint_leverage`, its ℓJ ([`super::propagate::joint_leverage`]): its pose part was
+//! multiplied by max(1, ℓ, ℓJ) (max(1, ℓ) without the joint leverage).
 
 use super::{montecarlo, propagate, u95, Budget};
 use crate::eval::Rows;
@@ -23,15 +25,19 @@ pub const HEADER: &str = "cxx,cyy,czz,cxy,cxz,cyz,U95";
 /// The column a budget with a pose part adds after [`HEADER`].
 pub const LEVERAGE: &str = "leverage";
 
+/// The column a budget with a joint leverage adds after [`LEVERAGE`].
+pub const JOINT_LEVERAGE: &str = "joint_leverage";
+
 /// The columns of every row, and each row's leverage ratio (`None` without a pose part).
 #[derive(Clone, Debug)]
 pub struct Columns {
-    /// The header's columns, then `leverage` where the budget has a pose part.
+    /// The header's columns, then `leverage` where the budget has a pose part and
+    /// `joint_leverage` where it has a joint leverage.
     pub header: String,
     /// One line per row (no leading comma).
     pub lines: Vec<String>,
-    /// ℓ per row.
-    pub leverage: Vec<Option<f64>>,
+    /// ℓ and ℓJ per row.
+    pub leverage: Vec<propagate::Leverage>,
 }
 
 fn line(s: &Matrix3<f64>, u: f64) -> String {
@@ -80,25 +86,31 @@ pub fn columns_observed(
                 }
                 Method::MonteCarlo => {
                     let o = montecarlo::point(arm, probe, budget, &root, &th, t, draws, &mut rng);
-                    let l = budget.pose.as_ref().and_then(|_| {
-                        let j = propagate::jacobians(arm, probe, budget, &th, t);
-                        propagate::leverage_at(budget, &j)
-                    });
+                    let l = match budget.pose {
+                        Some(_) => propagate::leverages_at(
+                            budget,
+                            &propagate::jacobians(arm, probe, budget, &th, t),
+                        ),
+                        None => propagate::Leverage::default(),
+                    };
                     (line(&o.cov, o.u95), l)
                 }
             };
-            if let Some(l) = l {
-                out.push_str(&format!(",{l:.4}"));
+            if let Some(x) = l.tip {
+                out.push_str(&format!(",{x:.4}"));
+                if let Some(j) = l.joints {
+                    out.push_str(&format!(",{j:.4}"));
+                }
             }
             leverage.push(l);
             done();
             out
         })
         .collect();
-    let header = if budget.pose.is_some() {
-        format!("{HEADER},{LEVERAGE}")
-    } else {
-        HEADER.to_string()
+    let header = match &budget.pose {
+        Some(p) if p.joints.is_some() => format!("{HEADER},{LEVERAGE},{JOINT_LEVERAGE}"),
+        Some(_) => format!("{HEADER},{LEVERAGE}"),
+        None => HEADER.to_string(),
     };
     Columns {
         header,

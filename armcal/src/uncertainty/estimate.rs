@@ -51,6 +51,11 @@ pub struct Settings {
     /// `pose_*` keys) so that every reading scales it by its own. Off: the term is a part of
     /// C alone, the same at every leverage (stop 35's budget).
     pub leverage_scaled: bool,
+    /// With `leverage_scaled`, the joint leverage ℓJ too (on in the product, issue 27 round
+    /// 5): estimated from the calibration rows' joint angles and written beside the pose
+    /// part (the file's `pose_joint_*` keys), the factor max(1, ℓ, ℓJ) in κ's validation and
+    /// at every reading. Off: max(1, ℓ) (stop 37's budget; the benchmark's comparison).
+    pub joint_leverage: bool,
 }
 
 impl Default for Settings {
@@ -64,6 +69,7 @@ impl Default for Settings {
             two_group_scale: super::pose::TWO_GROUP_SCALE,
             fleet_prior_groups: 0.0,
             leverage_scaled: true,
+            joint_leverage: true,
         }
     }
 }
@@ -376,6 +382,7 @@ fn model_term(
         s.two_group_scale,
         s.fleet_prior_groups,
         s.leverage_scaled,
+        s.joint_leverage,
     );
     let zero = nalgebra::Matrix3::zeros();
     let sc: Vec<misfit::Score> = rows
@@ -401,19 +408,37 @@ fn model_term(
 
 /// The report's line of a pose-dependent term.
 fn pose_note(p: &super::pose::PoseSource) -> String {
-    let form = match &p.leverage {
-        Some(l) => format!(
+    let form =
+        match &p.leverage {
+            Some(l) => {
+                format!(
             "leverage-scaled: kept apart from the parameters' covariance as D (rank {}) and \
              b = {:.4} (pose_factor, pose_shrink), and at each reading multiplied by \
-             max(1, ℓ), ℓ its tip's tr(J C_fit Jᵀ) over the calibration rows' mean of \
+             {}, ℓ its tip's tr(J C_fit Jᵀ) over the calibration rows' mean of \
              {:.4e} mm² (pose_leverage_mean); ℓ of the calibration rows {:.2} to {:.2}, a \
-             reading above {:.2} is extrapolated{}",
+             reading above {:.2} is extrapolated{}{}",
             l.rank,
             l.shrink,
+            if l.joints.is_some() { "max(1, ℓ, ℓJ)" } else { "max(1, ℓ)" },
             l.mean_mm2,
             l.range[0],
             l.range[1],
             l.range[1],
+            match &l.joints {
+                Some(j) => format!(
+                    "; ℓJ the joint angles' leverage (θ − μ)ᵀ W (θ − μ) (pose_joint_mean, \
+                     pose_joint_weight), estimated from the {} calibration rows over joints \
+                     {} (mean 1 over them; the held-out rows' ℓJ, against the other groups' \
+                     angles, applied where κ was validated)",
+                    j.rows,
+                    j.joints
+                        .iter()
+                        .map(|k| format!("j{k}"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+                None => String::new(),
+            },
             if l.folded > 0 {
                 format!(
                     "; {} directions of the spread beyond {} folded into b (bounded above)",
@@ -423,9 +448,10 @@ fn pose_note(p: &super::pose::PoseSource) -> String {
             } else {
                 String::new()
             }
-        ),
-        None => "the same at every reading's leverage".to_string(),
-    };
+        )
+            }
+            None => "the same at every reading's leverage".to_string(),
+        };
     format!(
         "model, pose-dependent: the spread of the parameters between the {} groups held out \
          (S_b from their leave-one-group-out fits) times {:.3}², added to the parameters' \

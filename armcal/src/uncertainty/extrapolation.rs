@@ -24,6 +24,7 @@
 use crate::data::Dataset;
 use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;
+use quatarm_ref::uncertainty::JointLeverage;
 use serde::Serialize;
 
 /// A reading is far beyond this many spacings.
@@ -169,25 +170,59 @@ impl JointRange {
 /// does; the model's error at a new placement grows with how different the *joint
 /// configuration* is (a raised artefact bends the shoulder and elbow the other way), which is
 /// what this measures. Rows of a joint that never moved carry no spread and are ignored.
+///
+/// Built on the budget's joint leverage ([`JointLeverage`], the file's `pose_joint_mean` and
+/// `pose_joint_weight`): the one place the calibration's joint mean, covariance and inverse
+/// are computed. The squared distance is ℓJ · k (n − 1)/n (ℓJ's normaliser, the sample
+/// covariance's identity: the mean d² over the rows is k (n − 1)/n).
 #[derive(Clone, Debug)]
 pub struct JointSupport {
-    mean: nalgebra::DVector<f64>,
-    /// Inverse covariance of the calibration's joint angles (moving joints only).
-    inv: nalgebra::DMatrix<f64>,
-    moving: Vec<usize>,
+    /// ℓJ of the calibration's rows: μ and W = Σ⁻¹ · n/(k (n − 1)), zero rows and columns
+    /// for the joints that did not move.
+    pub leverage: JointLeverage,
+    /// The joints that moved (indices into the rows' angles).
+    pub moving: Vec<usize>,
+    /// The rows the spread was taken over.
+    pub rows: usize,
+    /// k (n − 1)/n: d² = ℓJ times this.
+    d2_per_ratio: f64,
     /// The largest Mahalanobis distance of a calibration row.
     pub threshold: f64,
 }
 
+/// The joint leverage of a calibration `data` (the rows' joint angles), `None` without two
+/// rows or with a singular spread: what `calibrate --by-group` and `diagnose -o` write beside
+/// the pose part.
+pub fn joint_leverage(data: &Dataset) -> Option<JointLeverage> {
+    JointSupport::of(data).map(|s| s.leverage)
+}
+
+/// The joint leverage of `data`'s rows outside `group`: what a fit without that group (a
+/// held-out session) saw, against which its rows' ℓJ is scored when κ is validated.
+pub fn joint_leverage_without(data: &Dataset, group: i64) -> Option<JointLeverage> {
+    let others = Dataset {
+        rows: data
+            .rows
+            .iter()
+            .filter(|r| r.group != group)
+            .cloned()
+            .collect(),
+        ..data.clone()
+    };
+    joint_leverage(&others)
+}
+
 impl JointSupport {
-    /// The support of `data`'s joint angles; `None` without rows or with a singular spread.
+    /// The support of `data`'s joint angles; `None` without two rows or with a singular
+    /// spread.
     pub fn of(data: &Dataset) -> Option<JointSupport> {
         let n = data.rows.len();
         if n < 2 {
             return None;
         }
+        let dof = data.dof;
         let col = |j: usize| data.rows.iter().map(move |r| r.theta[j]);
-        let moving: Vec<usize> = (0..data.dof)
+        let moving: Vec<usize> = (0..dof)
             .filter(|&j| {
                 let (lo, hi) = col(j).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
                     (a.min(x), b.max(x))
@@ -199,21 +234,32 @@ impl JointSupport {
         if k == 0 {
             return None;
         }
+        let mean: Vec<f64> = (0..dof).map(|j| col(j).sum::<f64>() / n as f64).collect();
         let x = |r: &crate::data::Row| {
-            nalgebra::DVector::from_iterator(k, moving.iter().map(|&j| r.theta[j]))
+            nalgebra::DVector::from_iterator(k, moving.iter().map(|&j| r.theta[j] - mean[j]))
         };
-        let mean = data.rows.iter().map(x).sum::<nalgebra::DVector<f64>>() / n as f64;
         let mut cov = nalgebra::DMatrix::zeros(k, k);
         for r in &data.rows {
-            let d = x(r) - &mean;
+            let d = x(r);
             cov += &d * d.transpose();
         }
         cov /= (n - 1) as f64;
         let inv = cov.try_inverse()?;
+        let d2_per_ratio = k as f64 * (n - 1) as f64 / n as f64;
+        let mut weight = vec![0.0; dof * dof];
+        for (a, &i) in moving.iter().enumerate() {
+            for (b, &j) in moving.iter().enumerate() {
+                weight[i * dof + j] = 0.5 * (inv[(a, b)] + inv[(b, a)]) / d2_per_ratio;
+            }
+        }
+        if !weight.iter().all(|w| w.is_finite()) {
+            return None;
+        }
         let mut s = JointSupport {
-            mean,
-            inv,
+            leverage: JointLeverage { mean, weight },
             moving,
+            rows: n,
+            d2_per_ratio,
             threshold: 0.0,
         };
         s.threshold = data
@@ -226,13 +272,7 @@ impl JointSupport {
 
     /// Mahalanobis distance of joint angles `theta` from the calibration's.
     pub fn distance(&self, theta: &[f64]) -> f64 {
-        let d = nalgebra::DVector::from_iterator(
-            self.moving.len(),
-            self.moving
-                .iter()
-                .map(|&j| theta.get(j).copied().unwrap_or(0.0)),
-        ) - &self.mean;
-        (d.transpose() * &self.inv * &d)[(0, 0)].max(0.0).sqrt()
+        (self.leverage.ratio(theta) * self.d2_per_ratio).sqrt()
     }
 
     /// Is `theta` outside every calibration row's distance?
@@ -245,6 +285,74 @@ impl JointSupport {
 mod tests {
     use super::*;
     use crate::data::Row;
+
+    /// ℓJ's contract on the rows it was estimated from: its mean over them is 1, a joint
+    /// that never moved has zero rows and columns in W (its angle changes nothing) and its
+    /// mean is the rows' value, and the support's distance is the plain Mahalanobis one of
+    /// the moving joints in their sample covariance.
+    #[test]
+    fn the_joint_leverages_mean_over_its_rows_is_one() {
+        let rows: Vec<Row> = (0..25)
+            .map(|k| {
+                let t = f64::from(k) * 0.37;
+                Row::point(
+                    0,
+                    vec![t.sin() * 0.3, 0.8, (1.7 * t).cos() * 0.2 + 0.1 * t],
+                    [0.0; 3],
+                    20.0,
+                    None,
+                )
+            })
+            .collect();
+        let data = Dataset {
+            rows,
+            dof: 3,
+            has_temperature: false,
+            warnings: Vec::new(),
+            source: "test".into(),
+        };
+        let s = JointSupport::of(&data).expect("two joints moved");
+        let l = &s.leverage;
+        assert_eq!(s.moving, vec![0, 2]);
+        assert_eq!(s.rows, 25);
+        let mean = data.rows.iter().map(|r| l.ratio(&r.theta)).sum::<f64>() / 25.0;
+        assert!((mean - 1.0).abs() < 1e-12, "{mean}");
+        assert!((l.mean[1] - 0.8).abs() < 1e-12);
+        for k in 0..3 {
+            assert_eq!(l.weight[3 + k], 0.0);
+            assert_eq!(l.weight[3 * k + 1], 0.0);
+        }
+        let th = [0.5, -3.0, 1.0];
+        let mut moved = th;
+        moved[1] = 2.0;
+        assert_eq!(l.ratio(&th), l.ratio(&moved));
+        // The direct Mahalanobis d² of joints 1 and 3 in their sample covariance.
+        let x: Vec<[f64; 2]> = data.rows.iter().map(|r| [r.theta[0], r.theta[2]]).collect();
+        let m = [0, 1].map(|a| x.iter().map(|v| v[a]).sum::<f64>() / 25.0);
+        let c = |a: usize, b: usize| {
+            x.iter().map(|v| (v[a] - m[a]) * (v[b] - m[b])).sum::<f64>() / 24.0
+        };
+        let det = c(0, 0) * c(1, 1) - c(0, 1) * c(0, 1);
+        let d = [th[0] - m[0], th[2] - m[1]];
+        let d2 =
+            (c(1, 1) * d[0] * d[0] - 2.0 * c(0, 1) * d[0] * d[1] + c(0, 0) * d[1] * d[1]) / det;
+        assert!((s.distance(&th).powi(2) - d2).abs() < 1e-9 * d2, "{d2}");
+        assert!((l.ratio(&th) - d2 * 25.0 / (2.0 * 24.0)).abs() < 1e-9 * d2);
+        // The rows outside one group: the same estimate on fewer rows.
+        let mut grouped = data.clone();
+        grouped.rows.iter_mut().take(5).for_each(|r| r.group = 1);
+        let without = joint_leverage_without(&grouped, 1).expect("spread");
+        let rest = Dataset {
+            rows: data.rows[5..].to_vec(),
+            ..data.clone()
+        };
+        assert_eq!(Some(without), joint_leverage(&rest));
+        let still = Dataset {
+            rows: vec![data.rows[0].clone(); 4],
+            ..data.clone()
+        };
+        assert!(joint_leverage(&still).is_none());
+    }
 
     /// A joint inside its calibration range has no excess; outside, its distance to the
     /// nearer end, the largest over the joints.

@@ -28,8 +28,8 @@ pub fn sqrt_cov(c: &DMatrix<f64>) -> DMatrix<f64> {
     &e.eigenvectors * d * e.eigenvectors.transpose()
 }
 
-/// √(max(1, ℓ) − 1) at a reading: the factor of its extra pose draw (0 without a pose
-/// part or at ℓ ≤ 1).
+/// √(max(1, ℓ, ℓJ) − 1) at a reading: the factor of its extra pose draw (0 without a pose
+/// part or at ℓ, ℓJ ≤ 1; [`super::propagate::Leverage::ratio`]).
 pub fn pose_scale(arm: &Arm, probe: usize, budget: &Budget, theta: &[f64], temp_c: f64) -> f64 {
     if budget.pose.is_none() {
         return 0.0;
@@ -40,7 +40,7 @@ pub fn pose_scale(arm: &Arm, probe: usize, budget: &Budget, theta: &[f64], temp_
 
 /// [`pose_scale`] from a reading's Jacobians.
 pub fn pose_scale_at(budget: &Budget, j: &super::propagate::Jacobians) -> f64 {
-    let l = super::propagate::leverage_at(budget, j);
+    let l = super::propagate::leverages_at(budget, j).ratio();
     l.map_or(0.0, |l| (super::pose::leverage_factor(l) - 1.0).sqrt())
 }
 

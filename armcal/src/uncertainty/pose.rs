@@ -48,15 +48,17 @@ pub const SCALE_MAX: f64 = 30.0;
 /// measured in the same regime. On each MUKCa unit with ≥ 3 sessions, each pair of
 /// consecutive sessions (cyclic) is calibrated, S_b taken from its two leave-one-session-out
 /// fits, and every other session's probings scored ([`least_scales`]) under the product's
-/// leverage-scaled form (each probing's pose part times its tip's max(1, ℓ)); the unit's κ
-/// is the conformal quantile of its scores ([`conformal_scale`]) and this is the median over
-/// the 9 units (`cargo test --profile test -p armcal --bench coverage -- mukca`, the line
-/// `two-session κ of the fleet`; `docs/results/uncertainty.md`). 1.104 for the term without
-/// the leverage factor (stop 35's form, `Settings::leverage_scaled` off). A median over units, not a quantile over
-/// their pooled rows: the target is each unit's coverage, and one unit whose bad session no
-/// scale covers (panda_2 `high`) must not set every other unit's width. `--fleet-kappa`
-/// replaces it with the caller's fleet.
-pub const TWO_GROUP_SCALE: f64 = 0.968;
+/// form (each probing's pose part times its max(1, ℓ, ℓJ), ℓ its tip's, ℓJ its joint angles'
+/// against the pair's); the unit's κ is the conformal quantile of its scores
+/// ([`conformal_scale`]) and this is the median over the 9 units
+/// (`cargo test --profile test -p armcal --bench coverage -- mukca`, the line `two-session κ
+/// of the fleet`; `docs/results/uncertainty.md`, round 5). 0.968 under stop 37's max(1, ℓ)
+/// (`mukca no-joints`), 1.104 for the term without the leverage factor (stop 35's form,
+/// `Settings::leverage_scaled` off). A median over units, not a quantile over their pooled
+/// rows: the target is each unit's coverage, and one unit whose bad session no scale covers
+/// (panda_2 `high`) must not set every other unit's width. `--fleet-kappa` replaces it with
+/// the caller's fleet.
+pub const TWO_GROUP_SCALE: f64 = 0.664;
 
 /// Where the term came from (the report's provenance).
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -92,6 +94,19 @@ pub struct LeverageSource {
     /// Directions of the between-group spread beyond [`POSE_RANK_MAX`] folded into b (0:
     /// none, the written covariance is today's exactly).
     pub folded: usize,
+    /// The joint leverage written beside it (the file's `pose_joint_*` keys), when the
+    /// calibration's joint angles had a spread to estimate it from.
+    pub joints: Option<JointsSource>,
+}
+
+/// What the report says of the joint leverage ℓJ: estimated from which rows and joints.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct JointsSource {
+    /// Calibration rows its mean and covariance were taken over.
+    pub rows: usize,
+    /// The joints that moved (1-based, as the data's j1..jN), the others' rows and columns
+    /// of W being 0.
+    pub joints: Vec<usize>,
 }
 
 pub use quatarm_ref::uncertainty::POSE_RANK_MAX;
@@ -369,7 +384,9 @@ pub fn conformal_scale(mut t: Vec<f64>) -> f64 {
 }
 
 /// The factor of the leverage-scaled term at a reading of leverage ratio `l` (its tip's
-/// tr J C_fit Jᵀ over the mean on the calibration's rows): max(1, l). The budget carries the
+/// tr J C_fit Jᵀ over the mean on the calibration's rows, or the larger of that and its
+/// joints' ℓJ where the budget has a joint leverage: [`super::propagate::Leverage::ratio`]):
+/// max(1, l). The budget carries the
 /// term apart from C for it (the file's `pose_*` keys); [`super::propagate::widening`]
 /// applies it.
 pub fn leverage_factor(l: f64) -> f64 {
@@ -395,7 +412,8 @@ pub fn pooled_scale(own: f64, groups: usize, fleet: f64, prior_groups: f64) -> f
 /// on the calibrated `arm`; `rows` what the rest of the budget predicts for the held-out rows
 /// ([`super::misfit::row_covariances`]) and `res` their residuals
 /// ([`super::misfit::without_frame`]); `two_group_scale` κ when only two groups fitted
-/// (see [`TWO_GROUP_SCALE`]). `None` unless the folds were whole groups, at least two of
+/// (see [`TWO_GROUP_SCALE`]); `leverage` the leverage-scaled form, `joint_leverage` with
+/// the joints' ℓJ in its factor (both the product's). `None` unless the folds were whole groups, at least two of
 /// them fitted and the term is not zero.
 #[allow(clippy::too_many_arguments)]
 pub fn estimate(
@@ -409,6 +427,7 @@ pub fn estimate(
     two_group_scale: f64,
     prior_groups: f64,
     leverage: bool,
+    joint_leverage: bool,
 ) -> Option<PoseTerm> {
     let groups = fold_groups(data, &h.fits)?;
     let g_all = groups.len();
@@ -446,9 +465,34 @@ pub fn estimate(
         .as_ref()
         .map(|l| l.iter().sum::<f64>() / l.len().max(1) as f64)
         .filter(|m| m.is_finite() && *m > 0.0);
+    // With it the joints' ℓJ, the factor max(1, ℓ, ℓJ) that eval applies: κ is validated
+    // with the factor it is applied with. A held-out row's ℓJ is taken against the joint
+    // angles of the groups other than its own (what a fit without its group saw: a new
+    // session's ℓJ against the calibration), the written one against every row.
+    let joints = lev_mean
+        .filter(|_| joint_leverage)
+        .and_then(|_| super::extrapolation::JointSupport::of(data));
     if let (Some(lev), Some(mean)) = (&lev, lev_mean) {
+        let mut without: std::collections::HashMap<
+            i64,
+            Option<quatarm_ref::uncertainty::JointLeverage>,
+        > = std::collections::HashMap::new();
         for (k, r) in rows.iter().enumerate() {
-            extra[k] *= leverage_factor(lev[r.row] / mean);
+            let row = &data.rows[r.row];
+            let lj = joints.as_ref().and_then(|_| {
+                without
+                    .entry(row.group)
+                    .or_insert_with(|| {
+                        super::extrapolation::joint_leverage_without(data, row.group)
+                    })
+                    .as_ref()
+                    .map(|j| j.ratio(&row.theta))
+            });
+            let l = super::propagate::Leverage {
+                tip: Some(lev[r.row] / mean),
+                joints: lj,
+            };
+            extra[k] *= leverage_factor(l.ratio().unwrap_or(1.0));
         }
     }
     let deviation = |r: &RowCov| res[r.row].norm();
@@ -502,8 +546,9 @@ pub fn estimate(
             factor: d,
             shrink: kk * w + fold,
             leverage_mean: mean,
-            // The joint leverage is estimated beside the pose part (issue 27, round 5).
-            joints: None,
+            // The joint leverage estimated beside the pose part over every calibration row
+            // (issue 27, round 5): its mean over them is 1.
+            joints: joints.as_ref().map(|j| j.leverage.clone()),
         };
         let ratio = |x: &f64| x / mean;
         term.source.leverage = Some(LeverageSource {
@@ -515,6 +560,10 @@ pub fn estimate(
                 lev.iter().map(ratio).fold(0.0, f64::max),
             ],
             folded,
+            joints: joints.as_ref().map(|j| JointsSource {
+                rows: j.rows,
+                joints: j.moving.iter().map(|&k| k + 1).collect(),
+            }),
         });
         term.cov = &split.factor * split.factor.transpose() + c * split.shrink;
         term.split = Some(split);

@@ -3,9 +3,10 @@
 //!   Σ_p = J_π C J_πᵀ + J_θ diag(σ_θ²) J_θᵀ + J_T σ_T² J_Tᵀ + (σ_probe² + σ_model²) I₃.
 //!
 //! With the budget's pose part kept apart ([`super::PoseSplit`], issue 27) the parameters'
-//! term of a reading is J C Jᵀ + (max(1, ℓ) − 1) J P Jᵀ, ℓ = tr(J C_fit Jᵀ)/mean of the same
-//! over the calibration's rows ([`widening`]): every reading's variance goes through
-//! [`point`] or [`group_deviations`], so the factor is applied here once.
+//! term of a reading is J C Jᵀ + (max(1, ℓ, ℓJ) − 1) J P Jᵀ, ℓ = tr(J C_fit Jᵀ)/mean of the
+//! same over the calibration's rows, ℓJ the joint angles' leverage when the budget has one
+//! ([`Leverage`], [`widening`]): every reading's variance goes through [`point`] or
+//! [`group_deviations`], so the factor is applied here once.
 //!
 //! J_π is [`tip_jacobian`]'s analytic columns for the budget's parameters. J_θ is analytic too:
 //! a reading error moves the tip as a zero offset of the same joint does, a_k × (p − o_k)
@@ -32,6 +33,8 @@ pub struct Jacobians {
     pub theta: Vec<Vector3<f64>>,
     /// ∂p/∂T (mm/°C).
     pub temp: Vector3<f64>,
+    /// The reading's joint angles (rad), for its joint leverage ℓJ.
+    pub theta_rad: Vec<f64>,
 }
 
 /// The Jacobians at a reading (θ rad, T °C) taken with the arm's probe at index `probe`
@@ -62,6 +65,7 @@ pub fn jacobians(
         pi: cols,
         theta: theta_cols,
         temp,
+        theta_rad: theta.to_vec(),
     }
 }
 
@@ -104,11 +108,41 @@ pub fn leverage(budget: &Budget, tip: &[Vector3<f64>], tip_cov: &Matrix3<f64>) -
     Some(fit / p.leverage_mean)
 }
 
+/// A reading's two leverage ratios: the tip's ℓ ([`leverage`]) and the joints' ℓJ
+/// ([`joint_leverage`]); each `None` where the budget has no such part.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Leverage {
+    /// ℓ = tr(J C_fit Jᵀ)/mean: `None` without a pose part.
+    pub tip: Option<f64>,
+    /// ℓJ = (θ − μ)ᵀ W (θ − μ): `None` without the budget's joint leverage.
+    pub joints: Option<f64>,
+}
+
+impl Leverage {
+    /// The ratio the pose part's factor takes: max(ℓ, ℓJ) (the factor is then
+    /// max(1, ℓ, ℓJ), [`super::pose::leverage_factor`]); `None` without a pose part.
+    pub fn ratio(&self) -> Option<f64> {
+        let l = self.tip?;
+        Some(
+            self.joints
+                .map_or(l, |j| if j.is_finite() { l.max(j) } else { l }),
+        )
+    }
+}
+
+/// A reading's joint leverage ℓJ at joint angles `theta` (rad): `None` unless the budget's
+/// pose part carries a [`quatarm_ref::uncertainty::JointLeverage`].
+pub fn joint_leverage(budget: &Budget, theta: &[f64]) -> Option<f64> {
+    let j = budget.pose.as_ref()?.joints.as_ref()?;
+    Some(j.ratio(theta))
+}
+
 /// What the pose part adds to the parameters' term G cov Gᵀ = `gcg` at a reading of
-/// leverage ratio `l`: (max(1, ℓ) − 1) G P Gᵀ, with G P Gᵀ = (G D (G D)ᵀ + b G cov Gᵀ)/(1 + b).
-/// G is the reading's tip columns or, for a deviation from a group's mean, J_i − J̄; ℓ is
-/// always the tip's ([`leverage`]), the quantity the hub computes for a reading. Zero
-/// without a pose part or at ℓ ≤ 1.
+/// leverage ratio `l`: (max(1, l) − 1) G P Gᵀ, with G P Gᵀ = (G D (G D)ᵀ + b G cov Gᵀ)/(1 + b).
+/// G is the reading's tip columns or, for a deviation from a group's mean, J_i − J̄; `l` is
+/// always the reading's own [`Leverage::ratio`], max(ℓ, ℓJ) (the tip's ℓ alone without a
+/// joint leverage), the quantities the hub computes for a reading. Zero without a pose part
+/// or at l ≤ 1.
 pub fn widening(
     budget: &Budget,
     l: Option<f64>,
@@ -148,27 +182,39 @@ pub fn point(
     (p, s)
 }
 
-/// [`point`] with the reading's leverage ratio ℓ (`None` without a pose part): the tip, Σ_p,
-/// ℓ.
+/// [`point`] with the reading's leverage ratios (the tip's ℓ, `None` without a pose part;
+/// the joints' ℓJ, `None` without a joint leverage): the tip, Σ_p, the ratios.
 pub fn point_with_leverage(
     arm: &Arm,
     probe: usize,
     budget: &Budget,
     theta: &[f64],
     temp_c: f64,
-) -> (Vector3<f64>, Matrix3<f64>, Option<f64>) {
+) -> (Vector3<f64>, Matrix3<f64>, Leverage) {
     let j = jacobians(arm, probe, budget, theta, temp_c);
     let jcj = sandwich(&j.pi, &budget.cov, &j.pi);
-    let l = leverage(budget, &j.pi, &jcj);
-    let s =
-        jcj + widening(budget, l, &j.pi, &jcj) + own_terms(budget, &budget.sigma_theta(arm), &j);
+    let l = Leverage {
+        tip: leverage(budget, &j.pi, &jcj),
+        joints: joint_leverage(budget, theta),
+    };
+    let s = jcj
+        + widening(budget, l.ratio(), &j.pi, &jcj)
+        + own_terms(budget, &budget.sigma_theta(arm), &j);
     (j.p, s, l)
 }
 
-/// A reading's leverage ratio from its Jacobians ([`leverage`]).
+/// A reading's tip leverage ratio ℓ from its Jacobians ([`leverage`]).
 pub fn leverage_at(budget: &Budget, j: &Jacobians) -> Option<f64> {
     budget.pose.as_ref()?;
     leverage(budget, &j.pi, &sandwich(&j.pi, &budget.cov, &j.pi))
+}
+
+/// A reading's two leverage ratios from its Jacobians.
+pub fn leverages_at(budget: &Budget, j: &Jacobians) -> Leverage {
+    Leverage {
+        tip: leverage_at(budget, j),
+        joints: joint_leverage(budget, &j.theta_rad),
+    }
 }
 
 /// The distance between two readings and its standard uncertainty: gauge-free, the
@@ -202,7 +248,7 @@ pub fn distance(arm: &Arm, budget: &Budget, a: (&[f64], f64), b: (&[f64], f64)) 
 /// part goes through J_i − J̄ (what all the group's probings share cancels), the readings' own
 /// parts as (1 − 2/n) Σ_i + (1/n²) Σ_j Σ_j. How MUKCa's authors judge a session, and what a
 /// held-out group's residuals are. With a pose part, each probing's pose part is scaled by
-/// its own tip's leverage factor (a variance per probing, as [`point`] gives it).
+/// its own leverage factor max(1, ℓ, ℓJ) (a variance per probing, as [`point`] gives it).
 pub fn group_deviations(
     arm: &Arm,
     b: &Budget,
@@ -235,7 +281,7 @@ pub fn group_deviations(
         .map(|(&i, (j, o))| {
             let g: Vec<Vector3<f64>> = j.pi.iter().zip(&mean_j).map(|(a, m)| a - m).collect();
             let gcg = sandwich(&g, &b.cov, &g);
-            let widen = widening(b, leverage_at(b, j), &g, &gcg);
+            let widen = widening(b, leverages_at(b, j).ratio(), &g, &gcg);
             (i, o * (1.0 - 2.0 / n) + own_mean + gcg + widen)
         })
         .collect()
@@ -389,7 +435,7 @@ mod tests {
             let (_, s, l) = point_with_leverage(&a, 0, &b, &th, 25.0);
             let (want, l_want) = direct(&b);
             assert!(
-                (l.unwrap() - l_want).abs() <= 1e-12 * l_want,
+                (l.tip.unwrap() - l_want).abs() <= 1e-12 * l_want,
                 "{l:?} {l_want}"
             );
             assert!((s - want).norm() <= 1e-12 * want.norm(), "{s} {want}");
@@ -400,6 +446,46 @@ mod tests {
                 assert_eq!(s, s_plain);
                 assert_eq!(u, u_plain);
             }
+        }
+        // With a joint leverage the factor is max(1, ℓ, ℓJ): ℓJ below both leaves Σ_p as the
+        // tip's ℓ made it, above them it sets the factor alone.
+        let lo = tr_fit * 2.0;
+        let l_tip = tr_fit / lo;
+        for lj_want in [0.2, 0.4, 7.5] {
+            // W = w I on the six joints, μ = 0: ℓJ = w |θ|².
+            let w = lj_want / th.iter().map(|x| x * x).sum::<f64>();
+            let joints = quatarm_ref::uncertainty::JointLeverage {
+                mean: vec![0.0; 6],
+                weight: (0..36).map(|k| if k % 7 == 0 { w } else { 0.0 }).collect(),
+            };
+            let b = Budget {
+                pose: Some(PoseSplit {
+                    joints: Some(joints),
+                    ..split(lo)
+                }),
+                ..plain.clone()
+            };
+            let (_, s, l) = point_with_leverage(&a, 0, &b, &th, 25.0);
+            assert!((l.joints.unwrap() - lj_want).abs() < 1e-12 * lj_want);
+            assert!((l.tip.unwrap() - l_tip).abs() < 1e-12);
+            assert!((l.ratio().unwrap() - lj_want.max(l_tip)).abs() < 1e-12 * lj_want);
+            let jpj = &jm * PoseSplit::matrix(b.pose.as_ref().unwrap(), &cov) * jm.transpose();
+            let jcj = &jm * &cov * jm.transpose();
+            let m = jcj + jpj * (lj_want.max(l_tip).max(1.0) - 1.0);
+            let want =
+                Matrix3::from_iterator(m.iter().copied()) + own_terms(&b, &b.sigma_theta(&a), &j);
+            assert!(
+                (s - want).norm() <= 1e-12 * want.norm(),
+                "{lj_want}: {s} {want}"
+            );
+            if lj_want < 1.0 {
+                assert_eq!(s, s_plain, "ℓ, ℓJ ≤ 1: the budget read without the keys");
+            } else {
+                assert!(u95::u95(&s) > u95::u95(&s_plain) * 1.01);
+            }
+            // Monte Carlo's extra pose draw takes the same factor.
+            let mc = crate::uncertainty::montecarlo::pose_scale_at(&b, &j);
+            assert!((mc - (lj_want.max(l_tip).max(1.0) - 1.0).sqrt()).abs() < 1e-12);
         }
         // A deviation from a group's mean: its pose part scaled by its own tip's factor.
         let b = Budget {

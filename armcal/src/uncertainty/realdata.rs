@@ -15,6 +15,7 @@
 //! leave-one-session-out fits, so the scored session never sets either.
 
 pub mod forms;
+pub mod placement;
 
 use super::estimate::{self, Settings};
 use super::{propagate, u95, Budget};
@@ -76,6 +77,9 @@ pub struct Rule {
     /// The leverage-scaled variant ([`super::pose::leverage_factor`]): the pose part of each
     /// probing's covariance times its leverage ratio, in the validation and in the scoring.
     pub leverage: bool,
+    /// With `leverage`, the joints' ℓJ in the factor, max(1, ℓ, ℓJ) (the product's since
+    /// round 5; off: stop 37's max(1, ℓ)).
+    pub joint_leverage: bool,
 }
 
 impl Rule {
@@ -85,6 +89,7 @@ impl Rule {
             two_group_scale,
             prior_groups: 0.0,
             leverage: true,
+            joint_leverage: true,
         }
     }
 }
@@ -141,6 +146,7 @@ fn hold_out(unit: &Unit, groups: &[i64], g: i64, rule: Rule) -> Result<Held, sup
             two_group_scale: rule.two_group_scale,
             fleet_prior_groups: rule.prior_groups,
             leverage_scaled: rule.leverage,
+            joint_leverage: rule.joint_leverage,
             ..Settings::default()
         };
         let e = estimate::from_fit(&fit, &train_data, Some(&inner), 0.0, &with)?;
@@ -337,11 +343,19 @@ fn socket_u95(arm: &Arm, b: &Budget, data: &Dataset, rows: &[usize]) -> Vec<(usi
 /// ([`super::pose::least_scales`]). Empty with fewer than 3 sessions. A fleet's κ for a unit
 /// is taken from the *other* units' scores, so a unit never sets its own.
 pub fn two_group_scores(unit: &Unit) -> Vec<f64> {
+    two_group_scores_with(unit, true)
+}
+
+/// [`two_group_scores`] under the factor max(1, ℓ, ℓJ) (`joint_leverage`, the product's) or
+/// max(1, ℓ) (stop 37's).
+pub fn two_group_scores_with(unit: &Unit, joint_leverage: bool) -> Vec<f64> {
     let lambda = super::pose::prior_weight(1);
-    // [λ form, C itself, λ form × max(1, ℓ), ℓ]: the product's is the leverage-scaled one.
+    // [λ form, C itself, λ form × max(1, ℓ), ℓ, λ form × max(1, ℓ, ℓJ)]: the product's is
+    // the leverage-scaled one.
+    let at = if joint_leverage { 4 } else { 2 };
     two_group_scores_by_form(unit, &[lambda])
         .into_iter()
-        .map(|(_, t)| t[2])
+        .map(|(_, t)| t[at])
         .collect()
 }
 
@@ -349,7 +363,8 @@ pub fn two_group_scores(unit: &Unit) -> Vec<f64> {
 /// (`coverage` bench, `mukca-variants`): per scored probing, (its session, its least
 /// covering κ under each shrinkage weight λ of `lambdas` ([`super::pose::between_with`]),
 /// then under C itself (a term ∝ J C Jᵀ = σ̂² times the probing's leverage), then under the
-/// budget's form times max(1, ℓ), then ℓ itself). ℓ is the probing's leverage ratio as the
+/// budget's form times max(1, ℓ), then ℓ itself, then the budget's form times
+/// max(1, ℓ, ℓJ), ℓJ against the pair's joint angles). ℓ is the probing's leverage ratio as the
 /// product computes it: its tip's tr(J C Jᵀ) over the mean of the same over the training
 /// rows, large where the placement is one the training design did not see (the budget's
 /// form × max(1, ℓ) is the product's, the file's `pose_*` keys). For a unit with three sessions the pairs are the outer folds of the nested
@@ -398,6 +413,7 @@ pub fn two_group_scores_by_form(unit: &Unit, lambdas: &[f64]) -> Vec<(i64, Vec<f
         let lev = |d: &Dataset| super::pose::tip_leverages(&fit.arm, &rest.params, &rest.cov, d);
         let train_lev = lev(&data);
         let mean_lev = train_lev.iter().sum::<f64>() / train_lev.len().max(1) as f64;
+        let joints = super::extrapolation::joint_leverage(&data);
         for &s in groups.iter().filter(|s| !pair.contains(s)) {
             let test = unit.sessions_data(&[s]);
             let res = residuals(&fit.arm, &test, None);
@@ -431,7 +447,22 @@ pub fn two_group_scores_by_form(unit: &Unit, lambdas: &[f64]) -> Vec<(i64, Vec<f
                     .map(|((_, p), l)| p * l.max(1.0))
                     .collect();
                 per_form.push(super::pose::least_scales(&rows, &ext, &d));
+                let ext_j: Vec<_> = ext
+                    .iter()
+                    .zip(&rows)
+                    .zip(&l)
+                    .map(|((p, r), l)| {
+                        let ratio = propagate::Leverage {
+                            tip: Some(*l),
+                            joints: joints.as_ref().map(|j| j.ratio(&test.rows[r.row].theta)),
+                        }
+                        .ratio()
+                        .unwrap_or(1.0);
+                        p * (super::pose::leverage_factor(ratio) / l.max(1.0))
+                    })
+                    .collect();
                 per_form.push(l);
+                per_form.push(super::pose::least_scales(&rows, &ext_j, &d));
                 out.extend((0..rows.len()).map(|r| (s, per_form.iter().map(|f| f[r]).collect())));
             }
         }

@@ -141,38 +141,19 @@ fn means(rows: &[Row]) -> [f64; NQ] {
     m
 }
 
-/// The joints' leverage ratio against the training rows `train`: a reading's Mahalanobis
-/// d² in their joint angles over its mean on them (≈ the moving joints' count). A placement
+/// The joints' leverage ratio ℓJ against the training rows `train` (the budget's
+/// [`quatarm_ref::uncertainty::JointLeverage`], estimated by
+/// [`super::super::extrapolation::joint_leverage`]: its mean over them is 1). A placement
 /// whose joint configuration the training did not see (a raised artefact bends shoulder and
 /// elbow otherwise) has a large ratio whatever its tip's leverage. `None` when the training
 /// joints have no spread to measure with.
 pub fn joint_ratio(train: &Dataset) -> Option<impl Fn(&[f64]) -> f64> {
-    let sup = super::super::extrapolation::JointSupport::of(train)?;
-    let n = train.rows.len().max(1) as f64;
-    let mean = train
-        .rows
-        .iter()
-        .map(|r| sup.distance(&r.theta).powi(2))
-        .sum::<f64>()
-        / n;
-    (mean > 0.0).then_some(move |theta: &[f64]| sup.distance(theta).powi(2) / mean)
+    let l = super::super::extrapolation::joint_leverage(train)?;
+    Some(move |theta: &[f64]| l.ratio(theta))
 }
 
 /// A [`joint_ratio`] kept per group.
 type JointRatio = Box<dyn Fn(&[f64]) -> f64>;
-
-/// The rows of `data` in groups other than `group`.
-fn others_of(data: &Dataset, group: i64) -> Dataset {
-    Dataset {
-        rows: data
-            .rows
-            .iter()
-            .filter(|r| r.group != group)
-            .cloned()
-            .collect(),
-        ..data.clone()
-    }
-}
 
 /// Calibrates `unit` on `train` and keeps what every variant needs (see [`Trained`]).
 /// `None` when the fit or its validation by session fails.
@@ -310,7 +291,8 @@ fn inner_rows(
         .map(|r| {
             let group = data.rows[r.row].group;
             let jr = joints.entry(group).or_insert_with(|| {
-                joint_ratio(&others_of(data, group)).map(|f| Box::new(f) as JointRatio)
+                super::super::extrapolation::joint_leverage_without(data, group)
+                    .map(|l| Box::new(move |t: &[f64]| l.ratio(t)) as JointRatio)
             });
             let lj = jr.as_ref().map_or(1.0, |f| f(&data.rows[r.row].theta));
             let p = extra.get(&r.row).copied().unwrap_or_else(Matrix3::zeros);

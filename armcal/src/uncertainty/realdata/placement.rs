@@ -1,0 +1,235 @@
+//! A check of the joint leverage ℓJ outside the data it was chosen on (issue 27, round 5):
+//! a simulated arm whose model misses effects, measured in sessions at placements of the
+//! work, the last at a placement none of the others saw.
+//!
+//! ℓJ entered the product after round 4's first variants failed MUKCa's panda_1, a selection
+//! on the scored sessions. This is evidence not chosen on MUKCa: the truth is
+//! `data/default-6-full.toml` (encoder harmonics and gravity compliance on the hinges, which
+//! the default geometric model fitted here leaves out; at the reference temperature its
+//! thermal terms are zero), each session a ball bar probed at several places with the
+//! shoulder (j2) and elbow (j4) held in a window — a placement. The unit is handed to the
+//! product's nested path ([`super::unit_coverage`]) as a MUKCa unit would be: the new
+//! placement's session is scored with the budget `calibrate --by-group` writes from the
+//! others alone, under max(1, ℓ) and under max(1, ℓ, ℓJ).
+
+use crate::data::{Dataset, Kind};
+use crate::fit::design::groups::{length_group, Turns};
+use crate::fit::design::poses::{limits, Limits};
+use crate::mukca::Unit;
+use crate::rng::SimRng;
+use quatarm_ref::arm::Arm;
+use std::collections::BTreeMap;
+
+/// A placement: the windows (rad) the shoulder j2 and the elbow j4 are held in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Placement {
+    /// Its name in the per-session figures.
+    pub name: &'static str,
+    /// j2's window (least, greatest).
+    pub j2: (f64, f64),
+    /// j4's window.
+    pub j4: (f64, f64),
+}
+
+/// The training placements: the shoulder forward and the elbow bent forward, four windows
+/// side by side.
+pub const TRAINING: [Placement; 4] = [
+    Placement {
+        name: "front-low",
+        j2: (0.3, 0.7),
+        j4: (0.9, 1.3),
+    },
+    Placement {
+        name: "front-far",
+        j2: (0.6, 1.0),
+        j4: (0.5, 0.9),
+    },
+    Placement {
+        name: "front-near",
+        j2: (0.2, 0.6),
+        j4: (1.3, 1.7),
+    },
+    Placement {
+        name: "front-mid",
+        j2: (0.5, 0.9),
+        j4: (0.8, 1.2),
+    },
+];
+
+/// The new placements scored: raised (shoulder and elbow near upright), and bent the other
+/// way (both negative: the tip in front of the base again, the links loaded otherwise).
+pub const NEW: [Placement; 2] = [
+    Placement {
+        name: "raised",
+        j2: (-0.1, 0.2),
+        j4: (0.1, 0.5),
+    },
+    Placement {
+        name: "bent-back",
+        j2: (-0.9, -0.5),
+        j4: (-1.3, -0.9),
+    },
+];
+
+/// How a session is measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Protocol {
+    /// Bar placements per session (all one `length` group: 1 for a calibration).
+    pub bars: usize,
+    /// Probings per bar (half at each end).
+    pub probings: usize,
+    /// The bar's length (mm).
+    pub bar_mm: f64,
+    /// Probing noise per axis (mm).
+    pub noise_mm: f64,
+    /// Encoder noise (counts).
+    pub encoder_noise_counts: f64,
+}
+
+/// The protocol the benchmark uses: as a MUKCa session, one placement of a two-socket bar
+/// (a session's rows are one `length` group, its ends a and b: more bars in one session
+/// would be read as one group), here 200 mm, probed 60 times; 10 µm probing noise, one
+/// count of encoder noise.
+pub const PROTOCOL: Protocol = Protocol {
+    bars: 1,
+    probings: 60,
+    bar_mm: 200.0,
+    noise_mm: 0.01,
+    encoder_noise_counts: 1.0,
+};
+
+fn window(arm: &Arm, p: &Placement) -> Limits {
+    let mut lim = limits(arm);
+    lim.lo[1] = p.j2.0;
+    lim.hi[1] = p.j2.1;
+    lim.lo[3] = p.j4.0;
+    lim.hi[3] = p.j4.1;
+    lim
+}
+
+/// One session at placement `p` of `truth` (group `group`): `None` if a bar could not be
+/// placed within the windows.
+fn session(
+    truth: &Arm,
+    p: &Placement,
+    proto: &Protocol,
+    group: i64,
+    rng: &mut SimRng,
+) -> Option<Vec<crate::data::Row>> {
+    let turns = Turns::new(truth, &[]).ok()?;
+    let lim = window(truth, p);
+    let mut temp = |_: &mut SimRng| quatarm_ref::forward::REFERENCE_TEMP_C;
+    let mut rows = Vec::new();
+    for _ in 0..proto.bars {
+        let mut bar = length_group(
+            &turns,
+            &lim,
+            proto.probings,
+            proto.bar_mm,
+            proto.noise_mm,
+            group,
+            &mut temp,
+            rng,
+        )?;
+        for r in &mut bar {
+            r.theta = crate::sim::read_encoders(truth, &r.theta, proto.encoder_noise_counts, rng);
+        }
+        rows.extend(bar);
+    }
+    Some(rows)
+}
+
+/// A unit of `truth` measured at the `training` placements (the benchmark's: [`TRAINING`])
+/// and at `new`, the last session, calibrated from the `nominal` arm; seeded with `seed`.
+pub fn unit(
+    truth: &Arm,
+    nominal: &Arm,
+    training: &[Placement],
+    new: &Placement,
+    proto: &Protocol,
+    seed: u64,
+) -> Option<Unit> {
+    let mut rng = crate::rng::rng(seed);
+    let mut rows = Vec::new();
+    let mut sessions = BTreeMap::new();
+    for (k, p) in training.iter().chain(std::iter::once(new)).enumerate() {
+        let g = k as i64 + 1;
+        rows.extend(session(truth, p, proto, g, &mut rng)?);
+        sessions.insert(g, p.name.to_string());
+    }
+    let data = Dataset::from_rows(rows, truth.dof(), false, "(simulated placements)").ok()?;
+    debug_assert!(data.rows.iter().all(|r| r.kind == Kind::Length));
+    Some(Unit {
+        name: format!("sim-{}-{seed}", new.name),
+        stem: "sim".into(),
+        arm: nominal.clone(),
+        data,
+        sessions,
+    })
+}
+
+/// The unit's coverage under the product's nested path with the factor max(1, ℓ, ℓJ)
+/// (`joint_leverage`) or max(1, ℓ); `None` with fewer than two sessions.
+pub fn coverage(unit: &Unit, joint_leverage: bool) -> Option<super::UnitCoverage> {
+    let rule = super::Rule {
+        joint_leverage,
+        ..super::Rule::product(super::super::pose::TWO_GROUP_SCALE)
+    };
+    super::unit_coverage(unit, rule)
+}
+
+/// The new placement's session's (covered, probings) in `c`, `None` when its calibration
+/// failed.
+pub fn new_session(unit: &Unit, c: &super::UnitCoverage) -> Option<(f64, usize)> {
+    let last = unit.sessions.values().last()?;
+    c.per_session
+        .iter()
+        .find(|s| &s.0 == last)
+        .map(|s| (s.2, s.1))
+}
+
+/// The new session's median ℓJ against the training sessions' joint angles (what the
+/// calibration on them writes), `None` without a spread.
+pub fn new_session_joint_leverage(unit: &Unit) -> Option<f64> {
+    let groups = unit.groups();
+    let (&last, train) = groups.split_last()?;
+    let l = super::super::extrapolation::joint_leverage(&unit.sessions_data(train))?;
+    let mut v: Vec<f64> = unit
+        .sessions_data(&[last])
+        .rows
+        .iter()
+        .map(|r| l.ratio(&r.theta))
+        .collect();
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A session's joints stay in its placement's windows (up to the encoders' counts) and
+    /// the new placements' windows overlap none of the training ones in j2 or j4.
+    #[test]
+    fn sessions_keep_their_placement() {
+        let arm = Arm::default6();
+        let proto = Protocol {
+            bars: 2,
+            probings: 4,
+            ..PROTOCOL
+        };
+        let mut rng = crate::rng::rng(3);
+        let rows = session(&arm, &NEW[1], &proto, 7, &mut rng).expect("reachable");
+        assert_eq!(rows.len(), 8);
+        for r in &rows {
+            assert_eq!(r.group, 7);
+            assert!((-0.9 - 1e-5..=-0.5 + 1e-5).contains(&r.theta[1]), "{r:?}");
+            assert!((-1.3 - 1e-5..=-0.9 + 1e-5).contains(&r.theta[3]), "{r:?}");
+        }
+        for n in NEW {
+            for t in TRAINING {
+                assert!(n.j2.1 <= t.j2.0 || n.j4.1 <= t.j4.0, "{n:?} {t:?}");
+            }
+        }
+    }
+}
