@@ -216,8 +216,8 @@ pub struct PoseLeverage {
 /// *at the reading's tip*; on real arms the model's misfit also grows where the arm's *joint
 /// configuration* is one the calibration did not see (a raised artefact bends shoulder and
 /// elbow otherwise: MUKCa kuka_14 `raised_left`, panda_1 `back-high`), whatever the tip's ℓ.
-/// ℓJ = (θ − μ)ᵀ W (θ − μ), with θ the reading's joint angles as the measured-data file gives
-/// them (rad), μ the calibration rows' mean and W their inverse covariance scaled so that
+/// ℓJ = dᵀ W d, d = θ − μ taken to [−π, π) ([`wrap`]), with θ the reading's joint angles as
+/// the measured-data file gives them (rad), μ the calibration rows' (circular) mean and W their inverse covariance scaled so that
 /// ℓJ's mean over the calibration rows is 1 (W = Σ⁻¹ · n / (k (n − 1)) for n rows and k
 /// joints that moved; rows and columns of joints that did not move are 0). With it the
 /// factor on the pose part is max(1, ℓ, ℓJ).
@@ -230,17 +230,30 @@ pub struct JointLeverage {
 }
 
 impl JointLeverage {
-    /// ℓJ of joint angles `theta` (rad): (θ − μ)ᵀ W (θ − μ), ≥ 0. Angles beyond the joints
-    /// the file gives are ignored; missing ones count as at the mean.
+    /// ℓJ of joint angles `theta` (rad): dᵀ W d with d = θ − μ taken to [−π, π) (a joint
+    /// angle and the same angle a turn on are one configuration: a data file's (−π, π] and
+    /// a hub's counts' [0, 2π) give the same ℓJ), ≥ 0. Angles beyond the joints the file
+    /// gives are ignored; missing ones count as at the mean.
     pub fn ratio(&self, theta: &[f64]) -> f64 {
         let k = self.mean.len();
         let d: Vec<f64> = (0..k)
-            .map(|j| theta.get(j).map_or(0.0, |t| t - self.mean[j]))
+            .map(|j| theta.get(j).map_or(0.0, |t| wrap(t - self.mean[j])))
             .collect();
         let q: f64 = (0..k)
             .map(|i| d[i] * (0..k).map(|j| self.weight[i * k + j] * d[j]).sum::<f64>())
             .sum();
         q.max(0.0)
+    }
+}
+
+/// An angle difference `x` (rad) taken to [−π, π): the nearest turn's.
+pub fn wrap(x: f64) -> f64 {
+    let tau = std::f64::consts::TAU;
+    let w = x - (x / tau).round() * tau;
+    if w >= std::f64::consts::PI {
+        w - tau
+    } else {
+        w
     }
 }
 

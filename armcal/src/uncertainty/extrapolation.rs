@@ -24,7 +24,7 @@
 use crate::data::Dataset;
 use nalgebra::Vector3;
 use quatarm_ref::arm::Arm;
-use quatarm_ref::uncertainty::JointLeverage;
+use quatarm_ref::uncertainty::{wrap, JointLeverage};
 use serde::Serialize;
 
 /// A reading is far beyond this many spacings.
@@ -234,9 +234,19 @@ impl JointSupport {
         if k == 0 {
             return None;
         }
-        let mean: Vec<f64> = (0..dof).map(|j| col(j).sum::<f64>() / n as f64).collect();
+        // Each joint's mean on the circle: the deviations from the circular mean direction,
+        // each taken to the nearest turn, averaged — the plain mean for a joint away from
+        // the ±π branch, and one that does not split a joint's spread across it (the hub's
+        // angles are in [0, 2π), a data file's often in (−π, π]).
+        let mean: Vec<f64> = (0..dof)
+            .map(|j| {
+                let (s, c) = col(j).fold((0.0, 0.0), |(s, c), t| (s + t.sin(), c + t.cos()));
+                let centre = s.atan2(c);
+                centre + col(j).map(|t| wrap(t - centre)).sum::<f64>() / n as f64
+            })
+            .collect();
         let x = |r: &crate::data::Row| {
-            nalgebra::DVector::from_iterator(k, moving.iter().map(|&j| r.theta[j] - mean[j]))
+            nalgebra::DVector::from_iterator(k, moving.iter().map(|&j| wrap(r.theta[j] - mean[j])))
         };
         let mut cov = nalgebra::DMatrix::zeros(k, k);
         for r in &data.rows {
@@ -285,6 +295,46 @@ impl JointSupport {
 mod tests {
     use super::*;
     use crate::data::Row;
+
+    /// A joint whose calibration angles straddle the ±π branch (a data file's (−π, π]) has
+    /// its mean near π and the spread of its nearest-turn deviations: the same ℓJ for every
+    /// reading as the same rows a turn on (the hub's [0, 2π)), and a mean ℓJ of 1 over them.
+    #[test]
+    fn a_joint_across_the_branch_has_one_spread() {
+        let pi = std::f64::consts::PI;
+        let data = |shift: bool| Dataset {
+            rows: (0..20)
+                .map(|k| {
+                    let t = f64::from(k) * 0.61;
+                    let mut a = pi - 0.3 + 0.5 * (t.sin() + 1.0) * 0.6; // π − 0.3 … π + 0.3
+                    if !shift && a > pi {
+                        a -= std::f64::consts::TAU;
+                    }
+                    Row::point(0, vec![a, (1.3 * t).cos()], [0.0; 3], 20.0, None)
+                })
+                .collect(),
+            dof: 2,
+            has_temperature: false,
+            warnings: Vec::new(),
+            source: "test".into(),
+        };
+        let (file, turned) = (data(false), data(true));
+        let a = JointSupport::of(&file).unwrap().leverage;
+        let b = JointSupport::of(&turned).unwrap().leverage;
+        assert!(wrap(a.mean[0] - pi).abs() < 0.3, "{}", a.mean[0]);
+        assert!(
+            a.weight[0] > 1.0,
+            "the joint's spread is its 0.6 rad, not 2π: {}",
+            a.weight[0]
+        );
+        for (ra, rb) in file.rows.iter().zip(&turned.rows) {
+            let (x, y) = (a.ratio(&ra.theta), b.ratio(&rb.theta));
+            assert!((x - y).abs() < 1e-9 * (1.0 + x), "{x} against {y}");
+            assert!((a.ratio(&rb.theta) - x).abs() < 1e-9 * (1.0 + x));
+        }
+        let mean = file.rows.iter().map(|r| a.ratio(&r.theta)).sum::<f64>() / 20.0;
+        assert!((mean - 1.0).abs() < 1e-12, "{mean}");
+    }
 
     /// ℓJ's contract on the rows it was estimated from: its mean over them is 1, a joint
     /// that never moved has zero rows and columns in W (its angle changes nothing) and its
