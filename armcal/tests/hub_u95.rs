@@ -395,14 +395,17 @@ fn host_with_pose(
     (plain + sandwich(&pp) * (factor - 1.0), leverage, plain)
 }
 
-/// ℓJ = (θ − μ)ᵀ W (θ − μ) of the budget's joint leverage at joint angles `theta` (rad, as
-/// `Arm::counts_to_rad` gives them: no wrap), written out in f64; 0 without one.
+/// ℓJ = dᵀ W d, d = θ − μ to the nearest turn, of the budget's joint leverage at joint angles
+/// `theta` (rad, as `Arm::counts_to_rad` gives them), written out in f64; 0 without one.
 fn joint_ratio(u: &quatarm_ref::uncertainty::Uncertainty, theta: &[f64]) -> f64 {
     let Some(j) = u.pose.as_ref().and_then(|p| p.joints.as_ref()) else {
         return 0.0;
     };
     let k = j.mean.len();
-    let d = nalgebra::DVector::from_fn(k, |i, _| theta[i] - j.mean[i]);
+    let d = nalgebra::DVector::from_fn(k, |i, _| {
+        let x = theta[i] - j.mean[i];
+        x - (x / std::f64::consts::TAU).round() * std::f64::consts::TAU
+    });
     let w = nalgebra::DMatrix::from_row_slice(k, k, &j.weight);
     (d.transpose() * w * d)[(0, 0)]
 }
@@ -626,6 +629,11 @@ fn hub_u95_with_the_joint_leverage_agrees_with_the_formula() {
             100.0 * plain.change
         );
         assert!(seen.worst < 1e-3, "{what}: {}", seen.worst);
+        // And against eval's own propagation of the same budget (`propagate::point`, which
+        // applies max(1, ℓ, ℓJ) through `propagate::Leverage`): the hub streams eval's U95.
+        let (eval_worst, _) = hub_against_host(&full.arm, &u, 90 + seed);
+        println!("{what}: worst hub U95 error against eval's {eval_worst:.2e}");
+        assert!(eval_worst < 1e-3, "{what}: against eval {eval_worst}");
         assert!(
             seen.change > plain.change * 1.1,
             "{what}: ℓJ hardly changes U95 ({} against {})",
