@@ -17,6 +17,9 @@
 //! leverage ratios of the chain, the pose part, the tip and the joints, every unit nested,
 //! the choice among them scored by leaving units out); `mukca-variants round4` runs round 4
 //! alone.
+//! `placement [seeds] [hard=K]` checks ℓJ outside the data it was chosen on
+//! (`armcal::uncertainty::realdata::placement`: simulated units whose last session is at a
+//! new placement, under max(1, ℓ) and max(1, ℓ, ℓJ); `hard=K` the harder arm's factor).
 //! `new-user` runs the issue's new user instead (`Setup::NEW_USER`: `default-6-full` as the
 //! truth, calibrated with the geometric model, the model term as `calibrate` estimates it);
 //! `held-out` runs the benchmark with the model term estimated from 5 folds as `calibrate`
@@ -163,23 +166,62 @@ fn first_order_against_monte_carlo(setup: &Setup) {
 /// Issue 27 round 5's check of ℓJ outside its selection
 /// ([`realdata::placement`]): per seed (the first number argument, 4 by default) and new
 /// placement, the new placement's session's coverage under max(1, ℓ) and max(1, ℓ, ℓJ).
+/// One held-out session of the placement check under one factor.
+struct PlacedSession {
+    seed: u64,
+    name: String,
+    /// Whether it is the scenario's new placement (else a training one held out in turn).
+    new: bool,
+    covered: usize,
+    probings: usize,
+    /// Median nested U95 and RMS deviation from the socket's centre (mm).
+    u95_mm: f64,
+    rms_mm: f64,
+    /// Median ℓJ against the other sessions (the same under both factors).
+    joint_leverage: f64,
+    /// The pose term's κ its nested calibration validated.
+    kappa: f64,
+}
+
+fn median_of(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+/// `placement [seeds] [hard=K]` (issue 27, rounds 5 and 6): ℓJ checked outside the data it
+/// was chosen on. Simulated units of five sessions (four training placements, then a new
+/// one), every session held out in turn through the product's nested path, under
+/// max(1, ℓ) and max(1, ℓ, ℓJ). Seven scenarios: `default-6-full` with the new placement
+/// `raised` and `bent-back` (round 5's), and the same truth with its harmonics and gravity
+/// compliance multiplied by K (default 5, [`realdata::placement::amplified`]) at those two
+/// and at each far placement (`realdata::placement::FAR`). Per seed every session's coverage, κ, median U95
+/// and RMS deviation; per scenario the pooled coverage over every held-out session, the new
+/// placement's and the training sessions' apart, with three 95 % intervals (Wilson over
+/// probings as if independent; percentile bootstraps resampling whole sessions and whole
+/// seeds), the worst session and the median over sessions of their median U95. A seed is
+/// the honest replicate (its sessions share one calibration design and κ), so the seeds'
+/// bootstrap is the interval to read.
 fn placement() {
     use realdata::placement;
     let t0 = Instant::now();
     let seeds = std::env::args()
         .skip(1)
         .find_map(|a| a.parse::<u64>().ok())
-        .unwrap_or(4);
+        .unwrap_or(10);
+    let k = std::env::args()
+        .find_map(|a| a.strip_prefix("hard=").and_then(|v| v.parse::<f64>().ok()))
+        .unwrap_or(5.0);
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/default-6-full.toml");
     let truth = match quatarm_ref::calfile::read(&path) {
         Ok(p) => p.arm,
         Err(e) => return println!("{}: {e}", path.display()),
     };
+    let hard = placement::amplified(&truth, k);
     let nominal = quatarm_ref::arm::Arm::default6();
     println!(
-        "placements: truth default-6-full (harmonics, gravity compliance; the geometric model \
-         fitted), 4 training sessions at placements {}, scored on a new one; {} bars × {} \
-         probings a session",
+        "placements: the geometric model fitted, 4 training sessions at placements {}, then a \
+         new one; {} bar × {} probings a session; every session held out in turn; {seeds} \
+         seeds",
         placement::TRAINING
             .iter()
             .map(|p| p.name)
@@ -188,75 +230,181 @@ fn placement() {
         placement::PROTOCOL.bars,
         placement::PROTOCOL.probings
     );
-    for new in placement::NEW {
-        let mut sum = [(0.0, 0usize); 2];
+    let hard_name = format!("default-6-full, harmonics and gravity ×{k}");
+    // Round 5's two scenarios, then the harder arm at every new placement (round 6).
+    let scenarios: Vec<(&str, &quatarm_ref::arm::Arm, placement::Placement)> = placement::NEW
+        .iter()
+        .map(|p| ("default-6-full", &truth, *p))
+        .chain(
+            placement::NEW
+                .iter()
+                .chain(&placement::FAR)
+                .map(|p| (hard_name.as_str(), &hard, *p)),
+        )
+        .collect();
+    const FORMS: [&str; 2] = ["max(1, ℓ)", "max(1, ℓ, ℓJ)"];
+    for (label, truth, new) in scenarios {
+        let t1 = Instant::now();
+        let mut all: [Vec<PlacedSession>; 2] = Default::default();
         for seed in 0..seeds {
             let Some(unit) = placement::unit(
-                &truth,
+                truth,
                 &nominal,
                 &placement::TRAINING,
                 &new,
                 &placement::PROTOCOL,
                 seed,
             ) else {
-                println!("  {} seed {seed}: a bar could not be placed", new.name);
+                println!(
+                    "  {label} / {} seed {seed}: a bar could not be placed",
+                    new.name
+                );
                 continue;
             };
-            let (ca, cb) = (
+            let lj = placement::session_joint_leverages(&unit);
+            let c = [
                 placement::coverage(&unit, false),
                 placement::coverage(&unit, true),
-            );
-            let a = ca.as_ref().and_then(|c| placement::new_session(&unit, c));
-            let b = cb.as_ref().and_then(|c| placement::new_session(&unit, c));
-            let show = |x: Option<(f64, usize)>| {
-                x.map_or("failed".to_string(), |(f, n)| format!("{f:.3} of {n}"))
-            };
+            ];
             println!(
-                "  {:<10} seed {seed}: max(1, ℓ) {}   max(1, ℓ, ℓJ) {}   (new session's median \
-                 ℓJ {:.1}; {:.0} s)",
-                new.name,
-                show(a),
-                show(b),
-                placement::new_session_joint_leverage(&unit).unwrap_or(f64::NAN),
-                t0.elapsed().as_secs_f64()
+                "  {label} / new {} seed {seed}: session  ℓJ  RMS dev mm | {} covered, κ, \
+                 median U95 mm | {} the same",
+                new.name, FORMS[0], FORMS[1]
             );
-            for (form, c) in [("max(1, ℓ)", &ca), ("max(1, ℓ, ℓJ)", &cb)] {
-                if let Some(c) = c {
-                    println!(
-                        "    {form}: every session held out {}; median U95 {:.4} mm, RMS \
-                         deviation {:.4} mm{}",
-                        c.per_session
-                            .iter()
-                            .map(|(s, _, f, ..)| format!("{s} {f:.3}"))
-                            .collect::<Vec<_>>()
-                            .join(", "),
+            for name in unit.sessions.values() {
+                let joint_leverage = lj.get(name).copied().unwrap_or(f64::NAN);
+                let (mut cells, mut rms) = (Vec::new(), f64::NAN);
+                for (f, c) in c.iter().enumerate() {
+                    let Some(c) = c else { continue };
+                    let Some(i) = c.per_session.iter().position(|s| &s.0 == name) else {
+                        cells.push("failed".to_string());
+                        continue;
+                    };
+                    let (n, frac) = (c.per_session[i].1, c.per_session[i].2);
+                    let [u95_mm, rms_mm] = c.per_session_u95_rms_mm[i];
+                    let kappa = c.pose_scale.get(i).map_or(f64::NAN, |p| p.0);
+                    cells.push(format!("{frac:.3} of {n}, κ {kappa:.3}, U95 {u95_mm:.3}"));
+                    rms = rms_mm;
+                    all[f].push(PlacedSession {
+                        seed,
+                        name: name.clone(),
+                        new: name == new.name,
+                        covered: (frac * n as f64).round() as usize,
+                        probings: n,
+                        u95_mm,
+                        rms_mm,
+                        joint_leverage,
+                        kappa,
+                    });
+                }
+                println!(
+                    "    {name:<11} {joint_leverage:>5.1} {rms:>6.3} | {}",
+                    cells.join(" | ")
+                );
+            }
+            for (f, c) in c.iter().enumerate() {
+                match c {
+                    Some(c) => println!(
+                        "    {}: every session held out {:.3} of {}, median U95 {:.3} mm{}",
+                        FORMS[f],
+                        c.covered_nested,
+                        c.probings,
                         c.nested_u95_mm,
-                        c.rms_deviation_mm,
                         if c.failed.is_empty() {
                             String::new()
                         } else {
                             format!("; failed: {}", c.failed.join("; "))
                         }
-                    );
+                    ),
+                    None => println!("    {}: no coverage (fewer than 2 sessions)", FORMS[f]),
                 }
             }
-            for (k, x) in [a, b].into_iter().enumerate() {
-                if let Some((f, n)) = x {
-                    sum[k].0 += f * n as f64;
-                    sum[k].1 += n;
+        }
+        placement_summary(label, new.name, &all, t1.elapsed().as_secs_f64());
+    }
+    println!("  took {:.0} s", t0.elapsed().as_secs_f64());
+}
+
+/// A scenario's pooled figures under each factor: every held-out session, the new
+/// placement's, the training ones'; then the sessions ℓJ moved.
+fn placement_summary(label: &str, new: &str, all: &[Vec<PlacedSession>; 2], secs: f64) {
+    const FORMS: [&str; 2] = ["max(1, ℓ)", "max(1, ℓ, ℓJ)"];
+    println!("  SUMMARY {label} / new {new} ({secs:.0} s)");
+    let factor_free = &all[1];
+    for (what, pick) in [("new", true), ("training", false)] {
+        let s: Vec<&PlacedSession> = factor_free.iter().filter(|s| s.new == pick).collect();
+        println!(
+            "    {what} sessions: {}, median RMS deviation {:.4} mm, median ℓJ {:.1}",
+            s.len(),
+            median_of(s.iter().map(|s| s.rms_mm).collect()),
+            median_of(s.iter().map(|s| s.joint_leverage).collect())
+        );
+    }
+    println!(
+        "    factor          sessions  pooled  (covered/probings)  Wilson 95 %       \
+         sessions' bootstrap  seeds' bootstrap  worst session                 < 0.88  median U95 mm  median κ"
+    );
+    for (f, v) in all.iter().enumerate() {
+        for (what, pick) in [
+            ("all", None),
+            ("new", Some(true)),
+            ("training", Some(false)),
+        ] {
+            let s: Vec<&PlacedSession> = v
+                .iter()
+                .filter(|s| pick.is_none_or(|p| s.new == p))
+                .collect();
+            let (k, n) = s
+                .iter()
+                .fold((0, 0), |(k, n), s| (k + s.covered, n + s.probings));
+            let (wl, wh) = forms::wilson(k, n);
+            let per_session: Vec<(usize, usize)> =
+                s.iter().map(|s| (s.covered, s.probings)).collect();
+            let (sl, sh) = forms::session_bootstrap(&per_session, 20_000, 27);
+            let mut per_seed = std::collections::BTreeMap::<u64, (usize, usize)>::new();
+            for x in &s {
+                let e = per_seed.entry(x.seed).or_default();
+                e.0 += x.covered;
+                e.1 += x.probings;
+            }
+            let per_seed: Vec<(usize, usize)> = per_seed.into_values().collect();
+            let (bl, bh) = forms::session_bootstrap(&per_seed, 20_000, 27);
+            let frac = |s: &PlacedSession| s.covered as f64 / s.probings.max(1) as f64;
+            let worst = s
+                .iter()
+                .min_by(|a, b| frac(a).total_cmp(&frac(b)))
+                .map_or("-".to_string(), |w| {
+                    format!("{:.3} (seed {} {})", frac(w), w.seed, w.name)
+                });
+            println!(
+                "    {:<13} {what:<9} {:>3}  {:.3}  ({k}/{n})  [{wl:.3}, {wh:.3}]  [{sl:.3}, {sh:.3}]  \
+                 [{bl:.3}, {bh:.3}]  {worst:<28}  {:>3}  {:.3}  {:.3}",
+                if what == "all" { FORMS[f] } else { "" },
+                s.len(),
+                k as f64 / n.max(1) as f64,
+                s.iter().filter(|s| frac(s) < 0.88).count(),
+                median_of(s.iter().map(|s| s.u95_mm).collect()),
+                median_of(s.iter().map(|s| s.kappa).collect()),
+            );
+        }
+    }
+    // The same sessions under both factors: which ℓJ moved, new and training apart.
+    for (what, pick) in [("new", true), ("training", false)] {
+        let (mut up, mut down, mut same) = (0, 0, 0);
+        for a in all[0].iter().filter(|s| s.new == pick) {
+            if let Some(b) = all[1].iter().find(|b| b.seed == a.seed && b.name == a.name) {
+                match b.covered.cmp(&a.covered) {
+                    std::cmp::Ordering::Greater => up += 1,
+                    std::cmp::Ordering::Less => down += 1,
+                    std::cmp::Ordering::Equal => same += 1,
                 }
             }
         }
         println!(
-            "  {:<10} pooled over seeds: max(1, ℓ) {:.3} of {}, max(1, ℓ, ℓJ) {:.3} of {}",
-            new.name,
-            sum[0].0 / sum[0].1.max(1) as f64,
-            sum[0].1,
-            sum[1].0 / sum[1].1.max(1) as f64,
-            sum[1].1
+            "    {what} sessions with ℓJ against max(1, ℓ): covered more {up}, less {down}, \
+             the same {same}"
         );
     }
-    println!("  took {:.0} s", t0.elapsed().as_secs_f64());
 }
 
 fn mukca() {

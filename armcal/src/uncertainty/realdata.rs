@@ -57,6 +57,11 @@ pub struct UnitCoverage {
     /// fraction flagged as extrapolated from the training sessions in tip space, and in
     /// joint space).
     pub per_session: Vec<(String, usize, f64, f64, f64, [f64; 2])>,
+    /// Per held-out session, in `per_session`'s order: the median U95 of the nested budget
+    /// and the RMS deviation of its probings from their socket's centre (mm). A measurement
+    /// of where the budget is wide and where the misfit is large, session by session (the
+    /// placement check, [`placement`]).
+    pub per_session_u95_rms_mm: Vec<[f64; 2]>,
     /// Median U95 of the probings (mm), without and with the model term.
     pub median_u95_mm: [f64; 2],
     /// RMS distance of the probings from their socket's centre (mm).
@@ -267,15 +272,19 @@ pub fn unit_coverage(unit: &Unit, rule: Rule) -> Option<UnitCoverage> {
         }
     }
     let (mut inside_nested, mut u_nested, mut per_session) = (0usize, Vec::new(), Vec::new());
+    let mut per_session_u95_rms_mm = Vec::new();
     for h in &held {
-        let (mut n, mut k) = (0usize, 0usize);
+        let (mut n, mut k, mut sq, mut us) = (0usize, 0usize, 0.0, Vec::new());
         for &(i, u) in &h.nested_u95 {
             let d = h.probings.iter().find(|p| p.0 == i).map_or(0.0, |p| p.1);
             k += usize::from(d <= u);
             n += 1;
+            sq += d * d;
+            us.push(u);
             u_nested.push(u);
         }
         inside_nested += k;
+        per_session_u95_rms_mm.push([median(us), (sq / n.max(1) as f64).sqrt()]);
         let g = h.test.rows.first().map_or(0, |r| r.group);
         per_session.push((
             unit.sessions.get(&g).cloned().unwrap_or_default(),
@@ -312,6 +321,7 @@ pub fn unit_coverage(unit: &Unit, rule: Rule) -> Option<UnitCoverage> {
         nested_u95_mm: median(u_nested),
         nested_model_mm: held.iter().map(|h| h.nested.model_mm).sum::<f64>() / sessions,
         per_session,
+        per_session_u95_rms_mm,
         unit: unit.name.clone(),
         sessions: held.len(),
         failed,
