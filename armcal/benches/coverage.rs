@@ -413,9 +413,9 @@ fn mukca() {
         Ok(u) => u,
         Err(e) => return println!("MUKCa: {e}"),
     };
-    // `mukca no-joints`: stop 37's factor max(1, ℓ), for the table beside the product's
-    // max(1, ℓ, ℓJ).
-    let joints = !std::env::args().any(|a| a == "no-joints");
+    // `mukca joints`: the opt-in factor max(1, ℓ, ℓJ) (`--joint-leverage`), for the table
+    // beside the product's max(1, ℓ).
+    let joints = std::env::args().any(|a| a == "joints");
     let rule = |fleet: f64| realdata::Rule {
         joint_leverage: joints,
         ..realdata::Rule::product(fleet)
@@ -424,9 +424,9 @@ fn mukca() {
         "MUKCa, whole sessions held out: probings within their predicted 95 % region; the pose \
          part's factor {}",
         if joints {
-            "max(1, ℓ, ℓJ) (the product's)"
+            "max(1, ℓ, ℓJ) (`joints`: the opt-in joint leverage)"
         } else {
-            "max(1, ℓ) (stop 37's, `no-joints`)"
+            "max(1, ℓ) (the product's)"
         }
     );
     let mut sessions: Vec<(usize, usize)> = Vec::new();
@@ -472,9 +472,11 @@ fn mukca() {
         .collect();
     let all: Vec<f64> = kappa2.iter().flatten().copied().collect();
     println!(
-        "  two-session κ of the fleet (median over {} units, the product's default): {:.3}",
+        "  two-session κ of the fleet (median over {} units): {:.3}; the default for this \
+         factor (`pose::two_group_scale`): {:.3}",
         all.len(),
-        realdata::fleet_scale(&all)
+        realdata::fleet_scale(&all),
+        armcal::uncertainty::pose::two_group_scale(joints)
     );
     for (k, unit) in loaded.iter().enumerate() {
         let others: Vec<f64> = kappa2

@@ -34,9 +34,16 @@ pub struct BudgetArgs {
     temperature_c: f64,
     /// Scale κ of the pose-dependent model term when the data are held out by group and have
     /// only two groups, so the data cannot set it: default measured with two training
-    /// sessions on the MUKCa fleet (docs/spec-reading.md); give your own fleet's.
-    #[arg(long, default_value_t = armcal::uncertainty::pose::TWO_GROUP_SCALE, value_parser = super::args::positive)]
-    fleet_kappa: f64,
+    /// sessions on the MUKCa fleet (0.968; 0.760 with `--joint-leverage`;
+    /// docs/spec-reading.md); give your own fleet's.
+    #[arg(long, value_parser = super::args::positive)]
+    fleet_kappa: Option<f64>,
+    /// Also widen the pose-dependent term where a reading's joint angles are far from the
+    /// calibration's (the factor max(1, ℓ, ℓJ), the file's `pose_joint_*` keys). Off by
+    /// default: measured, it covers held-out sessions less on simulated arms and gains
+    /// nothing on MUKCa's (docs/results/uncertainty.md, round 6).
+    #[arg(long)]
+    joint_leverage: bool,
 }
 
 impl BudgetArgs {
@@ -47,7 +54,10 @@ impl BudgetArgs {
             model_mm: self.model_mm,
             instrument_mm: self.instrument_mm,
             temperature_c: self.temperature_c,
-            two_group_scale: self.fleet_kappa,
+            two_group_scale: self
+                .fleet_kappa
+                .unwrap_or_else(|| armcal::uncertainty::pose::two_group_scale(self.joint_leverage)),
+            joint_leverage: self.joint_leverage,
             ..Settings::default()
         }
     }

@@ -48,17 +48,30 @@ pub const SCALE_MAX: f64 = 30.0;
 /// measured in the same regime. On each MUKCa unit with ≥ 3 sessions, each pair of
 /// consecutive sessions (cyclic) is calibrated, S_b taken from its two leave-one-session-out
 /// fits, and every other session's probings scored ([`least_scales`]) under the product's
-/// form (each probing's pose part times its max(1, ℓ, ℓJ), ℓ its tip's, ℓJ its joint angles'
-/// against the pair's); the unit's κ is the conformal quantile of its scores
-/// ([`conformal_scale`]) and this is the median over the 9 units
+/// form (each probing's pose part times its tip's max(1, ℓ)); the unit's κ is the conformal
+/// quantile of its scores ([`conformal_scale`]) and this is the median over the 9 units
 /// (`cargo test --profile test -p armcal --bench coverage -- mukca`, the line `two-session κ
-/// of the fleet`; `docs/results/uncertainty.md`, round 5). 0.968 under stop 37's max(1, ℓ)
-/// (`mukca no-joints`), 1.104 for the term without the leverage factor (stop 35's form,
-/// `Settings::leverage_scaled` off). A median over units, not a quantile over their pooled
+/// of the fleet`; `docs/results/uncertainty.md`). 1.104 for the term without the leverage
+/// factor (stop 35's form, `Settings::leverage_scaled` off); with the joint leverage
+/// [`TWO_GROUP_SCALE_WITH_JOINTS`]. A median over units, not a quantile over their pooled
 /// rows: the target is each unit's coverage, and one unit whose bad session no scale covers
 /// (panda_2 `high`) must not set every other unit's width. `--fleet-kappa` replaces it with
 /// the caller's fleet.
-pub const TWO_GROUP_SCALE: f64 = 0.664;
+pub const TWO_GROUP_SCALE: f64 = 0.968;
+
+/// [`TWO_GROUP_SCALE`] measured the same way with the factor max(1, ℓ, ℓJ) (the opt-in
+/// joint leverage, `--joint-leverage`; `mukca joints`, round 6): a smaller κ, because ℓJ
+/// widens the far sessions' scores' own factor.
+pub const TWO_GROUP_SCALE_WITH_JOINTS: f64 = 0.760;
+
+/// The fleet's two-group κ for the factor in use: with the joint leverage or without.
+pub fn two_group_scale(joint_leverage: bool) -> f64 {
+    if joint_leverage {
+        TWO_GROUP_SCALE_WITH_JOINTS
+    } else {
+        TWO_GROUP_SCALE
+    }
+}
 
 /// Where the term came from (the report's provenance).
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]

@@ -82,8 +82,8 @@ pub struct Rule {
     /// The leverage-scaled variant ([`super::pose::leverage_factor`]): the pose part of each
     /// probing's covariance times its leverage ratio, in the validation and in the scoring.
     pub leverage: bool,
-    /// With `leverage`, the joints' ℓJ in the factor, max(1, ℓ, ℓJ) (the product's since
-    /// round 5; off: stop 37's max(1, ℓ)).
+    /// With `leverage`, the joints' ℓJ in the factor, max(1, ℓ, ℓJ) (opt-in,
+    /// `--joint-leverage`; off: the product's max(1, ℓ)).
     pub joint_leverage: bool,
 }
 
@@ -94,7 +94,7 @@ impl Rule {
             two_group_scale,
             prior_groups: 0.0,
             leverage: true,
-            joint_leverage: true,
+            joint_leverage: false,
         }
     }
 }

@@ -221,7 +221,7 @@ pub fn unit(
 pub fn coverage(unit: &Unit, joint_leverage: bool) -> Option<super::UnitCoverage> {
     let rule = super::Rule {
         joint_leverage,
-        ..super::Rule::product(super::super::pose::TWO_GROUP_SCALE)
+        ..super::Rule::product(super::super::pose::two_group_scale(joint_leverage))
     };
     super::unit_coverage(unit, rule)
 }
