@@ -1,6 +1,6 @@
 //! What `docs/protocol.md` forbids, refused by the host's decoder: copies of the reproducers
 //! F5 and F6 of `../shared/repro/round2` (`frames.py` built them; kept in `tests/streams/` so
-//! the tests do not need `/work/shared`).
+//! the tests do not need `../shared`).
 
 use quatarm_wire::stream_decode::{Decoder, Inconsistency, Item};
 
