@@ -410,20 +410,17 @@ mod tests {
             .all(|c| c.kind == Kind::Shift && c.order == 0));
     }
 
-    /// The budget's pose part reaches the table: D's columns as the rows' entries, b and m;
-    /// a budget without one writes the block as before; a malformed one is refused naming
-    /// its key, and so is one that would make the table longer than a hub holds.
-    #[test]
-    fn the_pose_part_reaches_the_table_or_is_refused_by_key() {
+    /// The shipped six-joint arm and a budget over its six zero offsets (a diagonal C) whose
+    /// pose part has D's columns `factor`, b = 0.4, m = 3e-6 and the joint leverage `joints`:
+    /// the pose part's tests vary only those.
+    fn arm_with_pose(
+        factor: Vec<Vec<f64>>,
+        joints: Option<JointLeverage>,
+    ) -> (quatarm_ref::arm::Arm, Uncertainty) {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/default-6.toml");
         let arm = quatarm_ref::calfile::read(&path).unwrap().arm;
-        let keys: Vec<Param> = (0..6).map(Param::ZeroOffset).collect();
-        let factor = vec![
-            (0..6).map(|i| 1e-6 * i as f64).collect::<Vec<_>>(),
-            (0..6).map(|i| -2e-6 * i as f64 + 1e-7).collect(),
-        ];
-        let mut budget = Uncertainty {
-            parameters: keys,
+        let budget = Uncertainty {
+            parameters: (0..6).map(Param::ZeroOffset).collect(),
             covariance: (0..36)
                 .map(|k| if k % 7 == 0 { 1e-10 } else { 0.0 })
                 .collect(),
@@ -432,12 +429,25 @@ mod tests {
             temperature_c: 0.2,
             model_mm: 0.0,
             pose: Some(PoseLeverage {
-                factor: factor.clone(),
+                factor,
                 shrink: 0.4,
                 leverage_mean: 3e-6,
-                joints: None,
+                joints,
             }),
         };
+        (arm, budget)
+    }
+
+    /// The budget's pose part reaches the table: D's columns as the rows' entries, b and m;
+    /// a budget without one writes the block as before; a malformed one is refused naming
+    /// its key, and so is one that would make the table longer than a hub holds.
+    #[test]
+    fn the_pose_part_reaches_the_table_or_is_refused_by_key() {
+        let factor = vec![
+            (0..6).map(|i| 1e-6 * i as f64).collect::<Vec<_>>(),
+            (0..6).map(|i| -2e-6 * i as f64 + 1e-7).collect(),
+        ];
+        let (arm, mut budget) = arm_with_pose(factor.clone(), None);
         let table = crate::tablebuild::build_with(&arm, Some(&budget)).unwrap();
         let t = quatarm::Table::parse(&table).unwrap();
         let pose = t.parameters().unwrap().pose().unwrap();
@@ -525,8 +535,6 @@ mod tests {
     /// malformed one is refused naming its key.
     #[test]
     fn the_joint_leverage_reaches_the_table_or_is_refused_by_key() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/default-6.toml");
-        let arm = quatarm_ref::calfile::read(&path).unwrap().arm;
         let mean = vec![0.5, 1.0, 3.0, 6.0, -0.1, 2.0];
         // W symmetric: 1 + i on the diagonal, 0.1 · (i + j) off it.
         let weight: Vec<f64> = (0..36)
@@ -539,25 +547,13 @@ mod tests {
                 }
             })
             .collect();
-        let budget = Uncertainty {
-            parameters: (0..6).map(Param::ZeroOffset).collect(),
-            covariance: (0..36)
-                .map(|k| if k % 7 == 0 { 1e-10 } else { 0.0 })
-                .collect(),
-            encoder_counts: vec![0.3; 6],
-            probing_mm: 0.002,
-            temperature_c: 0.2,
-            model_mm: 0.0,
-            pose: Some(PoseLeverage {
-                factor: vec![(0..6).map(|i| 1e-6 * i as f64).collect()],
-                shrink: 0.4,
-                leverage_mean: 3e-6,
-                joints: Some(JointLeverage {
-                    mean: mean.clone(),
-                    weight: weight.clone(),
-                }),
+        let (arm, budget) = arm_with_pose(
+            vec![(0..6).map(|i| 1e-6 * i as f64).collect()],
+            Some(JointLeverage {
+                mean: mean.clone(),
+                weight: weight.clone(),
             }),
-        };
+        );
         let table = crate::tablebuild::build_with(&arm, Some(&budget)).unwrap();
         let t = quatarm::Table::parse(&table).unwrap();
         let j = t.parameters().unwrap().pose().unwrap().joints().unwrap();
