@@ -322,26 +322,14 @@ fn the_pose_term_is_estimated_from_sessions_and_covers_a_new_one() {
         ..Setup::BENCHMARK
     };
     let fresh = sim::perturb(&centre, 1e-4, 0.05, &mut rng);
-    let t_with = coverage::fresh(
-        &fresh,
-        &fit.arm,
-        &with.budget,
-        &setup,
-        &mut armcal::rng::rng(2),
-    );
-    let t_without = coverage::fresh(
-        &fresh,
-        &fit.arm,
-        &without.budget,
-        &setup,
-        &mut armcal::rng::rng(2),
-    );
-    let t_tip_only = coverage::fresh(
-        &fresh,
-        &fit.arm,
-        &t_off.budget,
-        &setup,
-        &mut armcal::rng::rng(2),
+    // Each budget scored on the same fresh readings (the same seed).
+    let score = |b: &armcal::uncertainty::Budget| {
+        coverage::fresh(&fresh, &fit.arm, b, &setup, &mut armcal::rng::rng(2))
+    };
+    let (t_with, t_without, t_tip_only) = (
+        score(&with.budget),
+        score(&without.budget),
+        score(&t_off.budget),
     );
     eprintln!(
         "pose {pose:?}; fresh session covered {} with the term, {} with stop 37's max(1, ℓ), \

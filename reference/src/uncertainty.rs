@@ -426,12 +426,7 @@ fn pose(
     limits: &Limits,
     dof: usize,
 ) -> Result<Option<PoseLeverage>, CalFileError> {
-    let present: Vec<&str> = POSE_KEYS
-        .iter()
-        .copied()
-        .filter(|k| t.contains_key(*k))
-        .collect();
-    if present.is_empty() {
+    if !all_or_none(t, &POSE_KEYS, "the pose part")? {
         if let Some(k) = JOINT_KEYS.iter().find(|k| t.contains_key(**k)) {
             return Err(err(
                 format!("uncertainty.{k}"),
@@ -440,16 +435,6 @@ fn pose(
             ));
         }
         return Ok(None);
-    }
-    if let Some(missing) = POSE_KEYS.iter().find(|k| !t.contains_key(**k)) {
-        return Err(err(
-            format!("uncertainty.{missing}"),
-            format!(
-                "missing: the pose part needs pose_factor, pose_shrink and \
-                 pose_leverage_mean together (the file has {})",
-                present.join(", ")
-            ),
-        ));
     }
     let n = parameters.len();
     const FACTOR: &str = "uncertainty.pose_factor";
@@ -480,11 +465,7 @@ fn pose(
         let mut v = Vec::with_capacity(n);
         for (i, x) in a.iter().enumerate() {
             let path = format!("{FACTOR}[{k}][{i}]");
-            let x = match x {
-                Value::Float(f) if f.is_finite() => *f,
-                Value::Integer(i) => *i as f64,
-                _ => return Err(err(path, "must be a finite number")),
-            };
+            let x = finite(x, &path)?;
             let limit = limit(parameters[i], limits);
             if x.abs() > limit {
                 return Err(err(
@@ -555,6 +536,37 @@ fn pose(
 /// negative variance.
 const SEMI_DEFINITE_TOLERANCE: f64 = 1e-8;
 
+/// Whether the keys `keys` of `what` are in `t`: all (true) or none (false); some without
+/// the others is an error naming the first missing one and those present.
+fn all_or_none(t: &Table, keys: &[&str], what: &str) -> Result<bool, CalFileError> {
+    let present: Vec<&str> = keys
+        .iter()
+        .copied()
+        .filter(|k| t.contains_key(*k))
+        .collect();
+    if present.is_empty() {
+        return Ok(false);
+    }
+    match keys.iter().find(|k| !t.contains_key(**k)) {
+        None => Ok(true),
+        Some(missing) => {
+            let (last, rest) = keys.split_last().unwrap_or((&"", &[]));
+            let needs = if rest.is_empty() {
+                last.to_string()
+            } else {
+                format!("{} and {last}", rest.join(", "))
+            };
+            Err(err(
+                format!("uncertainty.{missing}"),
+                format!(
+                    "missing: {what} needs {needs} together (the file has {})",
+                    present.join(", ")
+                ),
+            ))
+        }
+    }
+}
+
 /// A finite number at `path`.
 fn finite(x: &Value, path: &str) -> Result<f64, CalFileError> {
     match x {
@@ -568,23 +580,8 @@ fn finite(x: &Value, path: &str) -> Result<f64, CalFileError> {
 /// and `pose_joint_weight` (joints² numbers, row-major, symmetric and positive
 /// semi-definite to rounding), both or neither.
 fn joints(t: &Table, dof: usize) -> Result<Option<JointLeverage>, CalFileError> {
-    let present: Vec<&str> = JOINT_KEYS
-        .iter()
-        .copied()
-        .filter(|k| t.contains_key(*k))
-        .collect();
-    if present.is_empty() {
+    if !all_or_none(t, &JOINT_KEYS, "the joint leverage")? {
         return Ok(None);
-    }
-    if let Some(missing) = JOINT_KEYS.iter().find(|k| !t.contains_key(**k)) {
-        return Err(err(
-            format!("uncertainty.{missing}"),
-            format!(
-                "missing: the joint leverage needs pose_joint_mean and pose_joint_weight \
-                 together (the file has {})",
-                present.join(", ")
-            ),
-        ));
     }
     let numbers = |key: &str, len: usize, what: &str| -> Result<Vec<f64>, CalFileError> {
         let path = format!("uncertainty.{key}");
@@ -691,11 +688,7 @@ fn covariance(
         Some(Value::Array(a)) => a
             .iter()
             .enumerate()
-            .map(|(k, v)| match v {
-                Value::Float(f) if f.is_finite() => Ok(*f),
-                Value::Integer(i) => Ok(*i as f64),
-                _ => Err(err(format!("{PATH}[{k}]"), "must be a finite number")),
-            })
+            .map(|(k, v)| finite(v, &format!("{PATH}[{k}]")))
             .collect::<Result<_, _>>()?,
         Some(_) => return Err(err(PATH, "must be an array of numbers")),
     };

@@ -312,6 +312,22 @@ pub(crate) mod tests {
         (buf, n)
     }
 
+    /// The table `good[..n]` with `bytes` written at `at` (`what`) and its CRC made to match
+    /// is refused as a bad budget or a length that disagrees.
+    fn assert_refused(good: &[u8; MAX_TABLE_LEN], n: usize, what: &str, at: usize, bytes: &[u8]) {
+        let mut b = *good;
+        b[at..at + bytes.len()].copy_from_slice(bytes);
+        recrc(&mut b[..n]);
+        match Table::parse(&b[..n]) {
+            Err(TableError::Invalid {
+                field: Field::Budget,
+                ..
+            })
+            | Err(TableError::BadLength(_)) => {}
+            other => panic!("{what}: {other:?}"),
+        }
+    }
+
     /// Where the joint leverage starts in [`encoded_with_joints`].
     const JOINTS_AT: usize = AT + len(3, 2);
 
@@ -387,17 +403,7 @@ pub(crate) mod tests {
             ),
         ];
         for (what, at, bytes) in cases {
-            let mut b = good;
-            b[at..at + bytes.len()].copy_from_slice(&bytes);
-            recrc(&mut b[..n]);
-            match Table::parse(&b[..n]) {
-                Err(TableError::Invalid {
-                    field: Field::Budget,
-                    ..
-                })
-                | Err(TableError::BadLength(_)) => {}
-                other => panic!("{what}: {other:?}"),
-            }
+            assert_refused(&good, n, what, at, &bytes);
         }
         // Truncated: the last weight cut off, the length field and CRC made to agree.
         let short = n - 4;
@@ -477,18 +483,8 @@ pub(crate) mod tests {
             ("entry of D past the limit", AT + HEAD_LEN + 20, f(-3e6)),
         ];
         for (what, at, bytes) in cases {
-            let mut b = good;
             let k = if what == "reserved" { 2 } else { 4 };
-            b[at..at + k].copy_from_slice(&bytes[..k]);
-            recrc(&mut b[..n]);
-            match Table::parse(&b[..n]) {
-                Err(TableError::Invalid {
-                    field: Field::Budget,
-                    ..
-                })
-                | Err(TableError::BadLength(_)) => {}
-                other => panic!("{what}: {other:?}"),
-            }
+            assert_refused(&good, n, what, at, &bytes[..k]);
         }
         // r past the cap, with a length that agrees: refused by the check, not read.
         let r = MAX_FACTORS + 1;
