@@ -222,8 +222,9 @@ impl<P: Evaluator> Chain<P> {
         table: &Table<'_>,
     ) -> Result<&'o mut Chain<P>, ChainError> {
         let p = out.as_mut_ptr();
-        // SAFETY: raw pointers to the fields of `out`, written with `write` (nothing is read
-        // or dropped); the chain is only referenced once all five fields are written.
+        // SAFETY: raw pointers to the fields of `out`, written with `write` and the lean form
+        // through a `MaybeUninit` over its field, which its `build_in` writes whole (nothing
+        // is read or dropped); the chain is only referenced once all five fields are written.
         unsafe {
             addr_of_mut!((*p).model).write(Model::<P>::new(table)?);
             let model = &*addr_of!((*p).model);
@@ -244,7 +245,8 @@ impl<P: Evaluator> Chain<P> {
             addr_of_mut!((*p).second_order).write(model.second_order_gravity);
             addr_of_mut!((*p).wobble).write(Wobble::new(table, model)?);
             // The lean form takes the wobble where it can ([`crate::lean_wobble`]).
-            addr_of_mut!((*p).lean).write(P::Lean::build(table, model, true)?);
+            let lean = addr_of_mut!((*p).lean).cast::<MaybeUninit<P::Lean>>();
+            P::Lean::build_in(&mut *lean, table, model, true)?;
             Ok(out.assume_init_mut())
         }
     }

@@ -633,7 +633,8 @@ mod tests {
             let len = data.encode(&mut buf).unwrap();
             let table = Table::parse(&buf[..len]).unwrap();
             let model = Model::<F32>::new(&table).unwrap();
-            let lean = LeanF32::build(&table, &model, true).unwrap();
+            let mut place = core::mem::MaybeUninit::uninit();
+            let lean = *LeanF32::build_in(&mut place, &table, &model, true).unwrap();
             assert!(lean.applies() && lean.pow2 && lean.wobble.on());
             assert_eq!(lean.wobble.small, is_small);
             assert!(lean.wobble.dir_first);
