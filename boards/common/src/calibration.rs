@@ -100,7 +100,8 @@ impl<P: Evaluator> PointUncertainty<'_, P> for NoUncertainty {
 ///
 /// A hub builds it in place, [`Calibration::load_in`], into the one it runs from: 7,856 bytes
 /// on the f32 hubs with U95 and the wobble, which built by value and moved (chain, uncertainty,
-/// calibration, boot) were on the qemu-m4f hub's stack four times over at boot (issue 32).
+/// calibration, boot) were on the qemu-m4f hub's stack several times over at boot: its peak
+/// was 63,740 bytes, 46,100 since (issue 32, `docs/results/speed.md`).
 pub struct Calibration<'a, P: HubEvaluator> {
     /// The chain, written in place by `Chain::build_in` ([`build`]); initialised where
     /// `state` is `Ok` (and only then read), else why there is none.
