@@ -374,6 +374,27 @@ mod tests {
         assert_eq!(cal.eval(&[0; JOINTS], 0).unwrap(), before);
     }
 
+    /// Loading in place over a calibration replaces all of it: a refusal leaves no chain, a
+    /// table after it the same chain and U95 as a fresh load.
+    #[test]
+    fn a_load_in_place_replaces_what_was_there() {
+        let r = region(&fixtures::table_with_budget(LINK_MM));
+        let reading = [100, 200, 300, 400, 500, 600];
+        let fresh = load::<F32>(&r).eval(&reading, 0).unwrap();
+        let erased = [0xff; 4096];
+        let mut cal = load::<F32>(&r);
+        cal.load_in(&erased);
+        assert_eq!((cal.state(), cal.joints()), (TableState::Missing, 0));
+        assert!(cal.eval(&reading, 0).is_err());
+        assert!(!cal.mount(0));
+        cal.load_in(&r);
+        assert_eq!(cal.state(), TableState::Valid);
+        assert_eq!(cal.eval(&reading, 0).unwrap(), fresh);
+        cal.refuse(TableState::BadSignature);
+        assert_eq!(cal.state(), TableState::BadSignature);
+        assert!(cal.eval(&reading, 0).is_err());
+    }
+
     #[test]
     fn the_stream_format_is_the_evaluators() {
         assert_eq!(F32::STREAM, stream::NumberFormat::F32);
