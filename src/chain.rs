@@ -55,6 +55,7 @@ use crate::scalar::{Fixed, Scale, F32};
 use crate::table::{Table, MAX_JOINTS};
 use crate::wobble::{small_quat, turn_small, Wobble};
 use core::mem::MaybeUninit;
+use core::ptr::{addr_of, addr_of_mut};
 
 /// What the quaternion chain is evaluated in: a number format with the physical effects' terms
 /// in it ([`Physics`]), and what the targets that use the format may spend on the chain.
@@ -178,42 +179,76 @@ fn near_matrix([w, x, y, z]: [f64; 4]) -> [f64; 9] {
     ]
 }
 
+/// Joint `no`'s (1-based, for errors) constants: its fixed rotation `rotation` about `axis`,
+/// the joint before it turning about `prev`.
+fn joint_rotation<P: Physics>(
+    rotation: [f64; 4],
+    axis: u8,
+    prev: u8,
+    no: usize,
+) -> Result<JointRotation<P>, ChainError> {
+    let full = crate::model::z_frame_quat(rotation, prev, axis);
+    let mut full_q = [Quat::<P>::default(); 4];
+    for (q, f) in full_q.iter_mut().enumerate() {
+        *f = Quat::new(units::<P, 4>(quarter_half_turns(full, q), no)?);
+    }
+    let near = near_matrix(crate::model::near_quat(rotation, axis));
+    // (prev − axis) mod 3 for axes 0..=2, without `%` (a runtime call on the M0).
+    let shift = prev + 3 - axis;
+    Ok(JointRotation {
+        full: full_q,
+        near: units::<P, 9>(near, no)?,
+        shift: if shift >= 3 { shift - 3 } else { shift },
+    })
+}
+
 impl<P: Evaluator> Chain<P> {
     /// Builds the chain from a validated table.
     pub fn new(table: &Table<'_>) -> Result<Chain<P>, ChainError> {
-        let model = Model::<P>::new(table)?;
-        let mut rotation = [JointRotation::<P>::default(); MAX_JOINTS];
-        let mut prev = BASE_AXIS;
-        for (i, r) in rotation.iter_mut().enumerate().take(model.n) {
-            let j = table
-                .joint(i)
-                .ok_or(ChainError::Range { joint: i as u8 + 1 })?;
-            let full = crate::model::z_frame_quat(j.rotation, prev, j.axis);
-            let mut full_q = [Quat::<P>::default(); 4];
-            for (q, f) in full_q.iter_mut().enumerate() {
-                *f = Quat::new(units::<P, 4>(quarter_half_turns(full, q), i + 1)?);
+        let mut chain = MaybeUninit::uninit();
+        Chain::build_in(&mut chain, table)?;
+        // SAFETY: `build_in` returned `Ok`, so it wrote every field.
+        Ok(unsafe { chain.assume_init() })
+    }
+
+    /// Builds the chain of a validated table in `out`: [`Chain::new`] in place, every field
+    /// written where it stays, the chain returned only on success (`out` is then initialised).
+    /// A hub builds its chain at boot straight into the place it runs from: the f32 chain is
+    /// 3,740 bytes, and returned by value it was on the boot's stack two and three times over
+    /// (the qemu-m4f hub's stack peak, issue 32). On an error `out` may hold part of a chain,
+    /// and is to be taken as uninitialised.
+    pub fn build_in<'o>(
+        out: &'o mut MaybeUninit<Chain<P>>,
+        table: &Table<'_>,
+    ) -> Result<&'o mut Chain<P>, ChainError> {
+        let p = out.as_mut_ptr();
+        // SAFETY: raw pointers to the fields of `out`, written with `write` and the lean form
+        // through a `MaybeUninit` over its field, which its `build_in` writes whole (nothing
+        // is read or dropped); the chain is only referenced once all five fields are written.
+        unsafe {
+            addr_of_mut!((*p).model).write(Model::<P>::new(table)?);
+            let model = &*addr_of!((*p).model);
+            let rotation = addr_of_mut!((*p).rotation).cast::<JointRotation<P>>();
+            let mut prev = BASE_AXIS;
+            for i in 0..MAX_JOINTS {
+                rotation.add(i).write(if i < model.n {
+                    let j = table
+                        .joint(i)
+                        .ok_or(ChainError::Range { joint: i as u8 + 1 })?;
+                    let r = joint_rotation::<P>(j.rotation, j.axis, prev, i + 1)?;
+                    prev = j.axis;
+                    r
+                } else {
+                    JointRotation::default()
+                });
             }
-            let near = near_matrix(crate::model::near_quat(j.rotation, j.axis));
-            // (prev − axis) mod 3 for axes 0..=2, without `%` (a runtime call on the M0).
-            let shift = prev + 3 - j.axis;
-            *r = JointRotation {
-                full: full_q,
-                near: units::<P, 9>(near, i + 1)?,
-                shift: if shift >= 3 { shift - 3 } else { shift },
-            };
-            prev = j.axis;
+            addr_of_mut!((*p).second_order).write(model.second_order_gravity);
+            addr_of_mut!((*p).wobble).write(Wobble::new(table, model)?);
+            // The lean form takes the wobble where it can ([`crate::lean_wobble`]).
+            let lean = addr_of_mut!((*p).lean).cast::<MaybeUninit<P::Lean>>();
+            P::Lean::build_in(&mut *lean, table, model, true)?;
+            Ok(out.assume_init_mut())
         }
-        let second_order = model.second_order_gravity;
-        let wobble = Wobble::new(table, &model)?;
-        // The lean form takes the wobble where it can ([`crate::lean_wobble`]).
-        let lean = P::Lean::build(table, &model, true)?;
-        Ok(Chain {
-            model,
-            rotation,
-            wobble,
-            second_order,
-            lean,
-        })
     }
 
     /// Number of joints.

@@ -41,11 +41,19 @@ use core::mem::MaybeUninit;
 
 /// What a chain's evaluator offers as its lean form: the f32 chain of this module, or none.
 pub trait LeanForm<P: Physics>: Copy + Debug {
-    /// The lean form of `table`'s arm, or one that does not apply (`applies` false) where the
-    /// arm has what the form does not take (second-order gravity, harmonics past order 2, an
-    /// axis wobble [`crate::lean_wobble`] does not take) or the caller wants none (`eligible`
-    /// false).
-    fn build(table: &Table<'_>, model: &Model<P>, eligible: bool) -> Result<Self, ChainError>;
+    /// Writes in `out` the lean form of `table`'s arm, or one that does not apply (`applies`
+    /// false) where the arm has what the form does not take (second-order gravity, harmonics
+    /// past order 2, an axis wobble [`crate::lean_wobble`] does not take) or the caller wants
+    /// none (`eligible` false). In place, as the chain that holds it
+    /// ([`crate::chain::Chain::build_in`]): the f32 form is 1,360 bytes, and built in a local
+    /// and returned it was on the hub's boot stack twice more. On an error `out` holds no
+    /// usable form.
+    fn build_in<'o>(
+        out: &'o mut MaybeUninit<Self>,
+        table: &Table<'_>,
+        model: &Model<P>,
+        eligible: bool,
+    ) -> Result<&'o mut Self, ChainError>;
     /// Whether [`LeanForm::eval`] evaluates this arm.
     fn applies(&self) -> bool;
     /// The probe-ball centre and direction, as [`crate::chain::Chain::eval`].
@@ -60,8 +68,13 @@ pub trait LeanForm<P: Physics>: Copy + Debug {
 pub struct NoLean;
 
 impl<P: Physics> LeanForm<P> for NoLean {
-    fn build(_: &Table<'_>, _: &Model<P>, _: bool) -> Result<NoLean, ChainError> {
-        Ok(NoLean)
+    fn build_in<'o>(
+        out: &'o mut MaybeUninit<NoLean>,
+        _: &Table<'_>,
+        _: &Model<P>,
+        _: bool,
+    ) -> Result<&'o mut NoLean, ChainError> {
+        Ok(out.write(NoLean))
     }
     #[inline(always)]
     fn applies(&self) -> bool {
@@ -320,7 +333,13 @@ pub(crate) struct Angle {
 }
 
 impl LeanForm<F32> for LeanF32 {
-    fn build(table: &Table<'_>, model: &Model<F32>, eligible: bool) -> Result<Self, ChainError> {
+    fn build_in<'o>(
+        out: &'o mut MaybeUninit<LeanF32>,
+        table: &Table<'_>,
+        model: &Model<F32>,
+        eligible: bool,
+    ) -> Result<&'o mut LeanF32, ChainError> {
+        let out = out.write(LeanF32::default());
         let n = model.n;
         let takes = eligible
             && !model.second_order_gravity
@@ -328,13 +347,9 @@ impl LeanForm<F32> for LeanF32 {
                 .iter()
                 .all(|j| j.harmonic_count == 0 || j.harmonic_12.is_some());
         if !takes {
-            return Ok(LeanF32::default());
+            return Ok(out);
         }
-        let mut out = LeanF32 {
-            on: true,
-            n,
-            ..LeanF32::default()
-        };
+        (out.on, out.n) = (true, n);
         let mut prev = BASE_AXIS;
         // Each joint's Euler angles [a, α, b], in the z-axis frames.
         let mut euler = [[0u32; 3]; MAX_JOINTS];
@@ -346,7 +361,8 @@ impl LeanForm<F32> for LeanF32 {
             prev = j.axis;
         }
         if !out.wobble.build_in(table, &euler[..n])? {
-            return Ok(LeanF32::default());
+            *out = LeanF32::default();
+            return Ok(out);
         }
         let base = turn_of(euler[0][0])?;
         out.base = QuarterTurned::of(&base);
@@ -786,7 +802,7 @@ mod tests {
         let len = data.encode(&mut buf).unwrap();
         let table = Table::parse(&buf[..len]).unwrap();
         let model = Model::<F32>::new(&table).unwrap();
-        let lean = LeanF32::build(&table, &model, true).unwrap();
+        let lean = *LeanF32::build_in(&mut MaybeUninit::uninit(), &table, &model, true).unwrap();
         assert!(lean.on && lean.pow2);
         assert_eq!(lean.gravity_mask, HINGES);
         let quat = Chain::<F32>::new(&table).unwrap();

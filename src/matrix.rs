@@ -59,8 +59,9 @@ struct Reading<'a, P: Physics> {
     wobble: bool,
 }
 
-/// The 3×4 matrix chain of one evaluator.
-#[derive(Clone, Copy, Debug)]
+/// The 3×4 matrix chain of one evaluator (`Default`: an empty one, no joints, the place
+/// [`MatrixChain::build_in`] builds one in).
+#[derive(Clone, Copy, Debug, Default)]
 pub struct MatrixChain<P: Physics> {
     model: Model<P>,
     rotation: [Mat<P>; MAX_JOINTS],
@@ -81,11 +82,20 @@ fn mat_vec<P: Arithmetic, E: Scale<P>>(m: &Mat<P>, v: &Vec3<E>) -> Vec3<E> {
 impl<P: Physics> MatrixChain<P> {
     /// Builds the chain from a validated table.
     pub fn new(table: &Table<'_>) -> Result<MatrixChain<P>, ChainError> {
-        let model = Model::<P>::new(table)?;
-        let zero = P::U::default();
-        let mut rotation = [[[zero; 3]; 3]; MAX_JOINTS];
+        let mut chain = MatrixChain::default();
+        chain.build_in(table)?;
+        Ok(chain)
+    }
+
+    /// Builds the chain of a validated table in `self`, whatever it held: [`MatrixChain::new`]
+    /// in place, as [`crate::chain::Chain::build_in`] (the uncertainty's chain, built at a
+    /// hub's boot). On an error, `self` holds no usable chain.
+    pub fn build_in(&mut self, table: &Table<'_>) -> Result<(), ChainError> {
+        *self = MatrixChain::default();
+        self.model = Model::<P>::new(table)?;
+        let model = &self.model;
         let mut prev = BASE_AXIS;
-        for (i, r) in rotation.iter_mut().enumerate().take(model.n) {
+        for (i, r) in self.rotation.iter_mut().enumerate().take(model.n) {
             let j = table
                 .joint(i)
                 .ok_or(ChainError::Range { joint: i as u8 + 1 })?;
@@ -95,12 +105,8 @@ impl<P: Physics> MatrixChain<P> {
             }
             prev = j.axis;
         }
-        let wobble = Wobble::new(table, &model)?;
-        Ok(MatrixChain {
-            model,
-            rotation,
-            wobble,
-        })
+        self.wobble = Wobble::new(table, model)?;
+        Ok(())
     }
 
     /// Number of joints.

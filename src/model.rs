@@ -180,7 +180,7 @@ pub struct JointModel<P: Physics> {
 }
 
 /// The calibrated model in one evaluator's numbers.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Model<P: Physics> {
     /// Number of joints.
     pub n: usize,

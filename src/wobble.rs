@@ -52,7 +52,7 @@ struct JointWobble<P: Arithmetic> {
 }
 
 /// Every joint's axis wobble, for one evaluator.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Wobble<P: Arithmetic> {
     #[cfg(feature = "wobble")]
     joints: [JointWobble<P>; crate::table::MAX_JOINTS],

@@ -166,7 +166,8 @@ pub fn run<L: Link, P: HubEvaluator>(link: &mut L, region: &[u8], key: &[u8; KEY
     time_calibration_loop();
     time_signature(key, &table, region);
     let own = OwnTerms::new(&table);
-    let uncertainty = <P::Uncertainty<'_> as PointUncertainty<'_, P>>::of(&table);
+    let mut uncertainty = None;
+    <P::Uncertainty<'_> as PointUncertainty<'_, P>>::build_in(&mut uncertainty, &table);
     defmt::info!(
         "bench uncertainty budget {=bool}, streamed U95 {=bool}, parameter block {=bool}",
         own.is_some(),

@@ -8,6 +8,7 @@
 //! from boot; [`Calibration::mount`] converts another of the table's when the host selects
 //! it.
 
+use core::mem::MaybeUninit;
 use quatarm::stream::{self, Coordinates, Hub, Measure, TableState};
 use quatarm::uncertainty::Uncertainty;
 use quatarm::{Chain, ChainError, Evaluator, Point, Table};
@@ -51,8 +52,9 @@ impl HubEvaluator for quatarm::Fixed {
 
 /// A point's U95 as a hub computes it, built at boot from the table.
 pub trait PointUncertainty<'a, P: Evaluator>: Sized {
-    /// The table's; `None` where it has no budget (or the hub computes none).
-    fn of(table: &Table<'a>) -> Option<Self>;
+    /// The table's, built in `out` (in place, as the chain: [`Calibration::load_in`]); `None`
+    /// where it has no budget (or the hub computes none).
+    fn build_in(out: &mut Option<Self>, table: &Table<'a>);
     /// U95 of a point `chain` evaluated (nm); `None` where it cannot be computed.
     fn u95_nm(&self, chain: &Chain<P>, counts: &[u32], temp_mc: i32, p: &Point<P>) -> Option<u32>;
     /// Follows the chain to the table's probe `k`; `false` where it cannot.
@@ -60,10 +62,12 @@ pub trait PointUncertainty<'a, P: Evaluator>: Sized {
 }
 
 impl<'a, P: Evaluator> PointUncertainty<'a, P> for Uncertainty<'a, P> {
-    fn of(table: &Table<'a>) -> Option<Self> {
+    // Out of line: the temporaries of its construction stay out of the hub's own frame.
+    #[inline(never)]
+    fn build_in(out: &mut Option<Self>, table: &Table<'a>) {
         // A budget the chain cannot use (it built the same matrix chain's model) gives no U95
-        // rather than no coordinates.
-        Uncertainty::new(table).ok().flatten()
+        // rather than no coordinates: `out` is `None` on an error.
+        let _ = Uncertainty::build_in(out, table);
     }
     // Its own matrix chain's pass gives the Jacobians: neither the hub's chain nor its point.
     fn u95_nm(&self, _: &Chain<P>, counts: &[u32], temp_mc: i32, _: &Point<P>) -> Option<u32> {
@@ -79,8 +83,8 @@ pub enum NoUncertainty {}
 
 impl<P: Evaluator> PointUncertainty<'_, P> for NoUncertainty {
     #[inline(always)]
-    fn of(_: &Table<'_>) -> Option<Self> {
-        None
+    fn build_in(out: &mut Option<Self>, _: &Table<'_>) {
+        *out = None;
     }
     fn u95_nm(&self, _: &Chain<P>, _: &[u32], _: i32, _: &Point<P>) -> Option<u32> {
         match *self {}
@@ -93,8 +97,16 @@ impl<P: Evaluator> PointUncertainty<'_, P> for NoUncertainty {
 /// The boot check's outcome: a chain, or why there is none, and its points' uncertainty
 /// where the hub computes one. (Two fields, not a struct of both in the `Result`: built in
 /// one, the chain was copied once more on the stack, 728 bytes the M0's 8 KiB did not have.)
+///
+/// A hub builds it in place, [`Calibration::load_in`], into the one it runs from: 7,856 bytes
+/// on the f32 hubs with U95 and the wobble, which built by value and moved (chain, uncertainty,
+/// calibration, boot) were on the qemu-m4f hub's stack several times over at boot: its peak
+/// was 63,740 bytes, 46,100 since (issue 32, `docs/results/speed.md`).
 pub struct Calibration<'a, P: HubEvaluator> {
-    chain: Result<Chain<P>, TableState>,
+    /// The chain, written in place by `Chain::build_in` ([`build`]); initialised where
+    /// `state` is `Ok` (and only then read), else why there is none.
+    chain: MaybeUninit<Chain<P>>,
+    state: Result<(), TableState>,
     uncertainty: Option<P::Uncertainty<'a>>,
     /// The table the chain was built from (with the chain only), whose probes it mounts.
     table: Option<Table<'a>>,
@@ -105,20 +117,31 @@ impl<'a, P: HubEvaluator> Calibration<'a, P> {
     /// that does not fit the flash).
     pub fn refused(state: TableState) -> Calibration<'a, P> {
         Calibration {
-            chain: Err(state),
+            chain: MaybeUninit::uninit(),
+            state: Err(state),
             uncertainty: None,
             table: None,
         }
     }
 
-    fn of(table: Result<Table<'a>, TableState>) -> Calibration<'a, P> {
-        let chain = table.and_then(build::<P>);
-        let table = table.ok().filter(|_| chain.is_ok());
-        let uncertainty = table.as_ref().and_then(P::Uncertainty::of);
-        Calibration {
-            chain,
-            uncertainty,
-            table,
+    /// No chain, for the reason `state`, in place of whatever `self` held.
+    pub fn refuse(&mut self, state: TableState) {
+        self.state = Err(state);
+        self.uncertainty = None;
+        self.table = None;
+    }
+
+    /// Validates the region's bytes and builds the chain and its points' uncertainty in
+    /// `self`, in place of whatever it held (as [`load`]).
+    pub fn load_in(&mut self, region: &'a [u8]) {
+        self.refuse(TableState::Missing);
+        let table = validate(region);
+        self.state = build::<P>(&table, &mut self.chain);
+        if self.state.is_ok() {
+            self.table = table.ok();
+            if let Some(t) = &self.table {
+                P::Uncertainty::build_in(&mut self.uncertainty, t);
+            }
         }
     }
 
@@ -127,9 +150,11 @@ impl<'a, P: HubEvaluator> Calibration<'a, P> {
     /// the probe before stays, where there is no chain or the probe cannot be converted
     /// (which the boot's check of the reach with the longest probe rules out).
     pub fn mount(&mut self, k: usize) -> bool {
-        let (Ok(chain), Some(table)) = (&mut self.chain, &self.table) else {
+        let (Ok(()), Some(table)) = (self.state, &self.table) else {
             return false;
         };
+        // SAFETY: `state` is `Ok`: `build` initialised the chain.
+        let chain = unsafe { self.chain.assume_init_mut() };
         if chain.mount(table, k).is_err() {
             return false;
         }
@@ -146,7 +171,9 @@ impl<'a, P: HubEvaluator> Calibration<'a, P> {
 
 /// Validates the region's bytes and builds the chain.
 pub fn load<P: HubEvaluator>(region: &[u8]) -> Calibration<'_, P> {
-    Calibration::of(validate(region))
+    let mut cal = Calibration::refused(TableState::Missing);
+    cal.load_in(region);
+    cal
 }
 
 // Validation and construction are kept out of line, one after the other, so that their stack
@@ -157,9 +184,18 @@ fn validate(region: &[u8]) -> Result<Table<'_>, TableState> {
     Table::parse_for(region, JOINTS).map_err(|e| TableState::from(&e))
 }
 
+// The chain is built where it stays (`Chain::build_in`): returned by value, it was copied.
+// `Ok` where `chain` is initialised.
 #[inline(never)]
-fn build<P: Evaluator>(table: Table<'_>) -> Result<Chain<P>, TableState> {
-    Chain::<P>::new(&table).map_err(|_| TableState::Malformed)
+fn build<P: Evaluator>(
+    table: &Result<Table<'_>, TableState>,
+    chain: &mut MaybeUninit<Chain<P>>,
+) -> Result<(), TableState> {
+    let table = table.as_ref().map_err(|s| *s)?;
+    match Chain::build_in(chain, table) {
+        Ok(_) => Ok(()),
+        Err(_) => Err(TableState::Malformed),
+    }
 }
 
 impl<P: HubEvaluator> Calibration<'_, P> {
@@ -178,17 +214,24 @@ impl<P: HubEvaluator> Calibration<'_, P> {
 }
 
 impl<P: HubEvaluator> Calibration<'_, P> {
+    /// The chain, or why there is none.
+    fn chain(&self) -> Result<&Chain<P>, TableState> {
+        self.state?;
+        // SAFETY: `state` is `Ok`: `build` initialised the chain.
+        Ok(unsafe { self.chain.assume_init_ref() })
+    }
+
     /// What the stream reports about the table.
     pub fn state(&self) -> TableState {
-        match &self.chain {
-            Ok(_) => TableState::Valid,
-            Err(s) => *s,
+        match self.state {
+            Ok(()) => TableState::Valid,
+            Err(s) => s,
         }
     }
 
     /// Joints of the valid table (0 without one).
     pub fn joints(&self) -> u8 {
-        match &self.chain {
+        match self.chain() {
             Ok(c) => c.joint_count() as u8,
             Err(_) => 0,
         }
@@ -196,7 +239,7 @@ impl<P: HubEvaluator> Calibration<'_, P> {
 
     /// Runs the chain on one reading, with the point's U95 where the hub computes it.
     pub fn eval(&self, counts: &[u32], temp_mc: i32) -> Result<Coordinates, ChainError> {
-        match &self.chain {
+        match self.chain() {
             Ok(chain) => chain.eval(counts, temp_mc).map(|p| Coordinates {
                 xyz_nm: p.xyz_nm(),
                 dir_e9: p.dir_e9(),
@@ -329,6 +372,27 @@ mod tests {
         assert!(cal.mount(0));
         assert!(!cal.mount(1));
         assert_eq!(cal.eval(&[0; JOINTS], 0).unwrap(), before);
+    }
+
+    /// Loading in place over a calibration replaces all of it: a refusal leaves no chain, a
+    /// table after it the same chain and U95 as a fresh load.
+    #[test]
+    fn a_load_in_place_replaces_what_was_there() {
+        let r = region(&fixtures::table_with_budget(LINK_MM));
+        let reading = [100, 200, 300, 400, 500, 600];
+        let fresh = load::<F32>(&r).eval(&reading, 0).unwrap();
+        let erased = [0xff; 4096];
+        let mut cal = load::<F32>(&r);
+        cal.load_in(&erased);
+        assert_eq!((cal.state(), cal.joints()), (TableState::Missing, 0));
+        assert!(cal.eval(&reading, 0).is_err());
+        assert!(!cal.mount(0));
+        cal.load_in(&r);
+        assert_eq!(cal.state(), TableState::Valid);
+        assert_eq!(cal.eval(&reading, 0).unwrap(), fresh);
+        cal.refuse(TableState::BadSignature);
+        assert_eq!(cal.state(), TableState::BadSignature);
+        assert!(cal.eval(&reading, 0).is_err());
     }
 
     #[test]

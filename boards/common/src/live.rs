@@ -23,7 +23,7 @@ use quatarm::update::{Accept, Keys, Layout};
 
 use crate::calibration::{Calibration, HubEvaluator, JOINTS};
 use crate::clock;
-use crate::flash::Port;
+use crate::flash::{Boot, Port};
 
 pub use quatarm::stream::{TEMP_PERIOD_US, TEMP_STALE_POLLS};
 
@@ -62,7 +62,8 @@ pub fn run<P: HubEvaluator, const CORE_HZ: u32, F: NorFlash>(
     let mut scratch = [0u8; MAX_TABLE_LEN];
     let mut port = Port::new(flash, layout, accept, &mut scratch);
     loop {
-        let mut boot = port.boot::<P>(&mut live);
+        let mut boot = Boot::empty();
+        port.boot::<P>(&mut live, &mut boot);
         serve_live(
             link,
             boot.hub(),

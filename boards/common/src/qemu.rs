@@ -5,12 +5,12 @@
 use cortex_m_semihosting::debug::{self, EXIT_FAILURE, EXIT_SUCCESS};
 
 use embedded_storage::nor_flash::NorFlash;
-use quatarm::stream::Replay;
+use quatarm::stream::{Replay, TableState};
 use quatarm::table::MAX_TABLE_LEN;
 use quatarm::update::{Accept, Layout, Refusal};
 
-use crate::calibration::{self, HubEvaluator};
-use crate::flash::Port;
+use crate::calibration::{Calibration, HubEvaluator};
+use crate::flash::{Boot, Port};
 use crate::{bench, clock, serve, stack, table_region, Link, Served};
 
 /// The whole run of a QEMU hub image: boot on the live table, replay the recording that
@@ -40,7 +40,8 @@ pub fn hub_main<P: HubEvaluator, const CORE_HZ: u32, L: Link, F: NorFlash>(
     let mut scratch = [0u8; MAX_TABLE_LEN];
     let mut port = Port::new(flash, layout, accept, &mut scratch);
     loop {
-        let mut boot = port.boot::<P>(&mut live);
+        let mut boot = Boot::empty();
+        port.boot::<P>(&mut live, &mut boot);
         let served = serve(
             &mut link,
             boot.hub(),
@@ -68,7 +69,8 @@ pub fn hub_main_without_update<P: HubEvaluator, const CORE_HZ: u32, L: Link>(
 ) -> ! {
     stack::paint();
     let mut link = start(open_link);
-    let mut cal = calibration::load::<P>(table_region::bytes());
+    let mut cal = Calibration::<P>::refused(TableState::Missing);
+    cal.load_in(table_region::bytes());
     let hub = cal.hub();
     serve(
         &mut link,

@@ -54,10 +54,14 @@ impl<'s, F: NorFlash> Port<'s, F> {
         }
     }
 
-    /// Boots on the live table, copied into `live` ([`slots::boot`]).
-    pub fn boot<'a, P: HubEvaluator>(&mut self, live: &'a mut [u8; MAX_TABLE_LEN]) -> Boot<'a, P> {
+    /// Boots on the live table, copied into `live`, into `out` ([`slots::boot`]: in place).
+    pub fn boot<'a, P: HubEvaluator>(
+        &mut self,
+        live: &'a mut [u8; MAX_TABLE_LEN],
+        out: &mut Boot<'a, P>,
+    ) {
         let (layout, accept) = (self.updater.layout(), self.updater.accept());
-        slots::boot::<P, F>(&mut self.flash, layout, accept, live)
+        slots::boot::<P, F>(&mut self.flash, layout, accept, live, out);
     }
 
     /// Carries out one update step (`Updater::step`).
@@ -88,7 +92,8 @@ mod tests {
         );
         {
             let mut live = [0u8; MAX_TABLE_LEN];
-            let first = port.boot::<F32>(&mut live);
+            let mut first = Boot::empty();
+            port.boot::<F32>(&mut live, &mut first);
             assert_eq!(first.calibration.state(), TableState::Valid);
             assert_eq!(first.live.map(|l| l.slot), Some(0));
         }
@@ -98,7 +103,8 @@ mod tests {
             port.step(s).unwrap();
         }
         let mut live = [0u8; MAX_TABLE_LEN];
-        let second = port.boot::<F32>(&mut live);
+        let mut second = Boot::empty();
+        port.boot::<F32>(&mut live, &mut second);
         let id = second.live.expect("the new table");
         assert_eq!((id.slot, id.crc), (1, fixtures::crc_of(&new)));
         let x = second.calibration.eval(&[0; 6], 0).unwrap().xyz_nm[0];
@@ -124,7 +130,8 @@ mod tests {
             .any(|a| a.is_err());
         assert!(refused);
         let mut live = [0u8; MAX_TABLE_LEN];
-        let b = port.boot::<F32>(&mut live);
+        let mut b = Boot::empty();
+        port.boot::<F32>(&mut live, &mut b);
         let id = b.live.expect("the old table");
         assert_eq!((id.slot, id.crc), (0, fixtures::crc_of(&old)));
     }

@@ -15,7 +15,7 @@ use quatarm::update::{live_table, Accept, BootError, Layout};
 use embedded_storage::nor_flash::NorFlash;
 
 use super::window::{Raw, Window};
-use crate::calibration::{self, Calibration, HubEvaluator};
+use crate::calibration::{Calibration, HubEvaluator};
 
 extern "C" {
     static _cal_table_start: u8;
@@ -125,6 +125,14 @@ pub struct Boot<'a, P: HubEvaluator> {
 }
 
 impl<P: HubEvaluator> Boot<'_, P> {
+    /// No table yet: the place [`boot`] fills.
+    pub fn empty() -> Self {
+        Boot {
+            calibration: Calibration::refused(TableState::Missing),
+            live: None,
+        }
+    }
+
     /// A hub announcing this boot's table.
     pub fn hub(&self) -> Hub {
         let hub = self.calibration.hub();
@@ -142,40 +150,42 @@ impl<P: HubEvaluator> Boot<'_, P> {
 /// maker's signature); `live` receives the table, which the boot's calibration borrows for as
 /// long as it runs (its uncertainty reads the parameter block at every point): not the
 /// update's scratch, and a copy in RAM rather than the slot in place (`flash::port`).
+///
+/// The boot is written into `out` (whatever it held, [`Boot::empty`] at first), its chain
+/// and uncertainty built in place ([`Calibration::load_in`]): returned by value, the
+/// calibration was on the stack once more in each function it passed through.
 pub fn boot<'a, P: HubEvaluator, F: NorFlash>(
     flash: &mut F,
     layout: &Layout,
     accept: &Accept,
     live: &'a mut [u8; MAX_TABLE_LEN],
-) -> Boot<'a, P> {
+    out: &mut Boot<'a, P>,
+) {
     match live_table(flash, layout, accept, live) {
         Ok(live) => {
-            let id = LiveTable {
+            out.live = Some(LiveTable {
                 slot: live.slot,
                 seq: live.seq.unwrap_or(0),
                 crc: live.table.crc(),
-            };
-            let calibration = calibration::load::<P>(live.table.bytes());
-            Boot {
-                calibration,
-                live: Some(id),
-            }
+            });
+            out.calibration.load_in(live.table.bytes());
         }
         // No slot boots: slot 0's reason (the factory slot) is what the hub reports.
-        Err(BootError::NoTable(why)) => Boot {
-            calibration: Calibration::refused(why[0].state()),
-            live: None,
-        },
-        Err(BootError::Layout(_)) => Boot {
-            calibration: Calibration::refused(TableState::Malformed),
-            live: None,
-        },
+        Err(BootError::NoTable(why)) => {
+            out.live = None;
+            out.calibration.refuse(why[0].state());
+        }
+        Err(BootError::Layout(_)) => {
+            out.live = None;
+            out.calibration.refuse(TableState::Malformed);
+        }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::calibration;
     use quatarm::stream::TableState;
     use quatarm::update::fixtures;
     use quatarm::update::mock::MockFlash;
@@ -221,7 +231,8 @@ mod tests {
         accept: &Accept,
     ) -> (TableState, Option<LiveTable>) {
         let mut live = [0u8; MAX_TABLE_LEN];
-        let b = boot::<F32, _>(flash, layout, accept, &mut live);
+        let mut b = Boot::empty();
+        boot::<F32, _>(flash, layout, accept, &mut live, &mut b);
         (b.calibration.state(), b.live)
     }
 
@@ -252,7 +263,8 @@ mod tests {
         fixtures::update(&mut flash, &new).unwrap();
         let mut live = [0u8; MAX_TABLE_LEN];
         let accept = Accept::joints(calibration::JOINTS);
-        let b = boot::<F32, _>(&mut flash, &fixtures::layout(), &accept, &mut live);
+        let mut b = Boot::empty();
+        boot::<F32, _>(&mut flash, &fixtures::layout(), &accept, &mut live, &mut b);
         let id = b.live.expect("a live table");
         assert_eq!((id.slot, id.crc), (1, fixtures::crc_of(&new)));
         assert!(id.seq >= 1, "{id:?}");
