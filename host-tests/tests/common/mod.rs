@@ -810,7 +810,25 @@ pub fn defmt_log(name: &str) {
     assert!(lines[1].starts_with("damaged input frame: "), "{lines:?}");
     assert_eq!(lines[2], "replay done: 5 reports, 1 damaged input frames");
     let stack = host_tests::defmt_log::number_after(&lines, "stack peak").unwrap();
-    assert!(stack > 0 && stack < 64 * 1024, "{stack}");
+    let ceiling = stack_ceiling(name);
+    assert!(
+        stack > 0 && stack <= ceiling,
+        "{name}: stack peak {stack} B over its ceiling {ceiling} B"
+    );
+}
+
+/// The most stack a QEMU hub may reach on the default table: its RAM for statics and stack
+/// (qemu-m4f 64 KiB; qemu-m0's budget, `boards/qemu-m0/budget.x`, 8 KiB) less a reserve for
+/// the tables this replay does not load (a wobble, a pose part: deeper boot paths) and for
+/// interrupt frames. Measured: 46,100 B and 5,492 B (rustup 1.95; 46,100 and 5,500 with
+/// Debian's 1.96), against 63,740 and 7,836 before the hub built its calibration in place; a
+/// change that gives the room back fails here rather than on a customer's hub.
+fn stack_ceiling(name: &str) -> u64 {
+    match name {
+        "qemu-m4f" => 64 * 1024 - 8 * 1024,
+        "qemu-m0" => 8 * 1024 - 1536,
+        other => panic!("no stack ceiling for {other}"),
+    }
 }
 
 /// The soak's short version (`cargo xtask soak` runs 10^6): 25,000 readings in (about 40 s
