@@ -567,21 +567,7 @@ impl LeanF32 {
                 i < (8 - GRAVITY.leading_zeros()) as usize
             };
             if vertical {
-                // Rx(−α), then Rz(−θ') (without the harmonic error e: below).
-                let [ca, sa] = j.alpha_whole;
-                let (x, y, z) = if i == 0 {
-                    // The base frame's vertical is (0, 0, 1) itself: the same numbers without
-                    // the products by 0 and 1 (the compiler may not drop those in floating point).
-                    (s * sa, c * sa, ca)
-                } else {
-                    let (y, z) = (ca * zb[1] + sa * zb[2], ca * zb[2] - sa * zb[1]);
-                    (c * zb[0] + s * y, c * y - s * zb[0], z)
-                };
-                // Turned by Rz(−θ') alone, without the harmonic error e: the vertical is
-                // then off by at most Σ|e| (5.4e-4 rad on default-6-full) about the joints'
-                // axes, which moves each deflection g (w × ẑ_base)·ẑ_k of up to 5e-5 rad by
-                // at most 3e-8 rad (docs/results/speed.md, "The lean chain from 835").
-                zb = [x, y, z];
+                zb = j.turn_vertical(i == 0, c, s, zb);
                 // Written for every joint up to the last compliant one (read only where
                 // compliant): a store is cheaper than testing the flag.
                 verticals[i].write([zb[0], zb[1]]);
@@ -692,6 +678,27 @@ impl LeanJoint {
     pub(crate) fn harmonic_error(&self, c: f32, s: f32) -> f32 {
         let [s1, c1, s2, c2] = self.harmonics;
         s * (s1 + c * s2 - s * c2) + c * (c1 + c * c2)
+    }
+
+    /// The vertical `zb` (the base frame's ẑ in the frame before this joint; (0, 0, 1) where
+    /// `base`) in the frame after it: Rx(−α), then Rz(−θ') (cos `c`, sin `s`) without the
+    /// harmonic error e — and, in the wobble's pass ([`crate::lean_wobble`]), without the small
+    /// turns of the wobble. The vertical is then off by at most Σ|e| (5.4e-4 rad on
+    /// default-6-full), and Σ|φ| with the wobble, about the joints' axes, which moves each
+    /// deflection g (w × ẑ_base)·ẑ_k of up to 5e-5 rad by at most 3e-8 rad (Σ|e|; twice that
+    /// with a wobble as large as the harmonics: docs/results/speed.md, "The lean chain from
+    /// 835" and "The wobble from 1.76×").
+    #[inline(always)]
+    pub(crate) fn turn_vertical(&self, base: bool, c: f32, s: f32, zb: [f32; 3]) -> [f32; 3] {
+        let [ca, sa] = self.alpha_whole;
+        if base {
+            // The base frame's vertical is (0, 0, 1) itself: the same numbers without the
+            // products by 0 and 1 (the compiler may not drop those in floating point).
+            [s * sa, c * sa, ca]
+        } else {
+            let (y, z) = (ca * zb[1] + sa * zb[2], ca * zb[2] - sa * zb[1]);
+            [c * zb[0] + s * y, c * y - s * zb[0], z]
+        }
     }
 
     /// The link at temperature (a zero rate without thermal expansion: the link itself).
