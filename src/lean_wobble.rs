@@ -28,7 +28,9 @@
 //!
 //! **What φ costs.** φx and φy are harmonic series in θ' (the terms' sin hθ', cos hθ' by
 //! `angle::Multiples` from the pass's own cos θ', sin θ'), each term's four coefficients formed at
-//! boot. φz needs no series of its own: (φx, φy) = A (f1x, f1y) + B (f2x, f2y) to first order
+//! boot. The second pass (tip to base) forms them: its one selection by θ''s quarter turns
+//! gives cos θ', sin θ' beside Rz's quarter turns of the tip and the direction, so nothing of
+//! the wobble is stored between the passes. φz needs no series of its own: (φx, φy) = A (f1x, f1y) + B (f2x, f2y) to first order
 //! (f1 and f2 turned by Rz(b_i), whose z parts are of the size of the joint's tilt only), so A
 //! and B are a fixed linear map of φx, φy, and φz − ½ φx φy = A f1z + B f2z + ½ A B (f1 × f2)·ẑ
 //! − ½ φx φy is a linear and a quadratic form in φx, φy, five constants a joint.
@@ -51,7 +53,7 @@ use crate::angle::Multiples;
 use crate::lean::LeanF32;
 #[cfg(feature = "wobble")]
 use crate::lean::{
-    each_joint, rx_dir, turn_z, turned, Angle, HINGES, PERPENDICULAR, RUNTIME, RUNTIME_ALPHA,
+    each_joint, rx_dir, turned, Angle, HINGES, PERPENDICULAR, RUNTIME, RUNTIME_ALPHA,
 };
 use crate::model::{ChainError, Model, Point};
 use crate::scalar::F32;
@@ -394,19 +396,16 @@ fn run<
     let dt = model.check(counts, temp_mc)?;
     let n = if JOINTS > 0 { JOINTS } else { counts.len() }.min(MAX_JOINTS);
     let mut angles = [const { MaybeUninit::<Angle>::uninit() }; MAX_JOINTS];
-    // φx, φy of each joint (zeros where it does not wobble).
-    let mut phis = [const { MaybeUninit::<[f32; 2]>::uninit() }; MAX_JOINTS];
     let mut verticals = [const { MaybeUninit::<[f32; 2]>::uninit() }; MAX_JOINTS];
-    // Base to tip: the angles (φz in the error), φ, and the vertical up to the last compliant
-    // joint.
+    // Base to tip: the angles (the remainder not turned: the second pass forms θ''s cos and
+    // sin again from it, for φ), and the vertical up to the last compliant joint; nothing of
+    // the wobble.
     let mut zb = [0.0f32, 0.0, 1.0];
     each_joint!(JOINTS, n, false, |i| {
         let j = &lean.joints[i];
         let (a, c, s) = j.reading::<POW2>(i, counts[i])?;
-        let [px, py, pz] = wobble.phi::<SMALL>(i, c, s);
-        let e = j.harmonic_error(c, s) + pz;
+        let e = j.harmonic_error(c, s);
         angles[i].write(Angle { e, ..a });
-        phis[i].write([px, py]);
         let vertical = if GRAVITY == RUNTIME {
             i < lean.vertical_joints
         } else {
@@ -426,16 +425,27 @@ fn run<
     let mut d = lean.probe_dir;
     each_joint!(JOINTS, n, true, |i| {
         let j = &lean.joints[i];
-        // SAFETY: the first pass wrote every angle and φ below n (it returns early only with
-        // an error, before this pass).
-        let (a, [px, py]) = unsafe { (angles[i].assume_init_read(), phis[i].assume_init_read()) };
+        // SAFETY: the first pass wrote every angle below n (it returns early only with an
+        // error, before this pass).
+        let a = unsafe { angles[i].assume_init_read() };
         let link = j.link_at(dt);
         w = if i + 1 == n {
             link
         } else {
             [w[0] + link[0], w[1] + link[1], w[2] + link[2]]
         };
-        let mut e = a.e;
+        // One selection by θ''s quarter turns: its cos and sin whole (as the first pass's
+        // reading formed them), and Rz's quarter turns of the tip and the direction.
+        let cr = 1.0 - a.omc;
+        let ((c, s), (p, r), (dp, dr)) = match a.q & 3 {
+            0 => ((cr, a.sin), (w[0], w[1]), (d[0], d[1])),
+            1 => ((-a.sin, cr), (-w[1], w[0]), (-d[1], d[0])),
+            2 => ((-cr, -a.sin), (-w[0], -w[1]), (-d[0], -d[1])),
+            _ => ((a.sin, -cr), (w[1], -w[0]), (d[1], -d[0])),
+        };
+        // φ at θ': φz joins the error, as the first pass would have added it.
+        let [px, py, pz] = wobble.phi::<SMALL>(i, c, s);
+        let mut e = a.e + pz;
         let compliant = if GRAVITY == RUNTIME {
             j.has_gravity
         } else {
@@ -458,9 +468,10 @@ fn run<
             ((ALPHA >> (2 * i)) & 3) as u8
         };
         let h = 0.5 * (py * py);
-        w = turn_tip((a.q, sin, omc), (py, h), (qa, asin, aomc), w);
-        // The direction: Rz plainly, then Ry(φy) and Rx(α + φx).
-        (_, d) = turn_z(a.q, sin, omc, w, d);
+        w = turn_tip((p, r, sin, omc), (py, h), (qa, asin, aomc), w[2]);
+        // The direction: Rz plainly (as `turn_z`), then Ry(φy) and Rx(α + φx).
+        let cos = 1.0 - omc;
+        d = [dp * cos - dr * sin, dp * sin + dr * cos, d[2]];
         let [ca, sa] = j.alpha_whole;
         let first = if SMALL { true } else { wobble.dir_first };
         if first {
@@ -488,7 +499,8 @@ fn run<
     Ok(Point { xyz: w, dir: d })
 }
 
-/// The tip `w` turned by Rz (quarter turns `qz`, the remainder's sin and 1 − cos), then
+/// The tip (x, y quarter turned by Rz, `p` and `r`; z `w2`) turned by Rz's remainder (its sin
+/// and 1 − cos), then
 /// Ry(φy) to second order (`py`, h = ½ φy²), then Rx (quarter turns `qa` and the remainder
 /// turned by φx): with each large coordinate rounded as often as the lean pass rounds it.
 /// Ry's corrections are small (φy times the tip); added to x and z on their own, each would
@@ -500,17 +512,16 @@ fn run<
 #[cfg(feature = "wobble")]
 #[inline(always)]
 fn turn_tip(
-    (qz, sin, omc): (u8, f32, f32),
+    (p, r, sin, omc): (f32, f32, f32, f32),
     (py, h): (f32, f32),
     (qa, asin, aomc): (u8, f32, f32),
-    w: [f32; 3],
+    w2: f32,
 ) -> [f32; 3] {
     // Rz: x's correction kept apart; x1, x after it, only for Ry's small products.
-    let (p, r) = quarter_turns(qz, (w[0], w[1]));
     let cx = r * sin + p * omc;
     let x1 = p - cx;
     let y = r + (p * sin - r * omc);
-    let z = w[2];
+    let z = w2;
     // Ry(φy): x += py z − h x, z −= py x + h z.
     let x = p - (cx - (py * z - h * x1));
     let dz = py * x1 + h * z;
