@@ -82,6 +82,7 @@ struct Term {
 /// at boot, and per-joint room for four took the qemu-m4f hub's stack peak to 64,732 of its
 /// 65,536 bytes (measured). An arm with more runs the quaternion chain.
 pub const MAX_LEAN_TERMS: usize = 16;
+const _: () = assert!(MAX_LEAN_TERMS.is_power_of_two());
 
 /// One joint's wobble in the lean form (no terms where it has none).
 #[cfg(feature = "wobble")]
@@ -255,7 +256,8 @@ impl LeanWobble {
         let start = usize::from(j.start);
         let (x, y) = if SMALL {
             // Four terms from the start (the pool has three more): no bounds test.
-            match self.terms[start.min(MAX_LEAN_TERMS - 1)..].first_chunk::<4>() {
+            // (`start` is below MAX_LEAN_TERMS, a power of two: a mask rather than a `min`.)
+            match self.terms[start & (MAX_LEAN_TERMS - 1)..].first_chunk::<4>() {
                 Some(t) => small_series(j.orders, t, c, s),
                 None => (0.0, 0.0),
             }
@@ -287,7 +289,8 @@ impl LeanWobble {
 fn small_series(orders: u8, terms: &[Term; 4], c: f32, s: f32) -> (f32, f32) {
     macro_rules! arms {
         ($($m:literal),*) => {
-            match orders {
+            // (Masked: every value has an arm, so the jump has no range test.)
+            match orders & 15 {
                 $($m => series::<$m>(c, s, terms),)*
                 _ => (0.0, 0.0),
             }
