@@ -107,7 +107,8 @@ pub(crate) struct LeanJoint {
     /// selection made at boot ([`QuarterTurned`]).
     pub(crate) alpha: QuarterTurned,
     /// Rx(α_i) as its quarter turn and remainder: the wobble's pass turns the remainder by
-    /// φx per point ([`crate::lean_wobble`]).
+    /// φx per point ([`crate::lean_wobble`]); its `cos` is 1 − omc rounded in f32, as
+    /// [`turned`] would form it.
     #[cfg(feature = "wobble")]
     pub(crate) alpha_turn: Turn,
     /// cos α_i and sin α_i whole, the quarter turns applied at boot (exact): the plain turns
@@ -409,8 +410,13 @@ impl LeanForm<F32> for LeanF32 {
                 gravity: jm.gravity,
                 has_gravity: jm.has_gravity,
                 alpha: QuarterTurned::of(&alpha),
+                // cos r as the per-point turn forms it from 1 − cos r (f32), so that the
+                // wobble's pass reads it instead of forming it (the same numbers).
                 #[cfg(feature = "wobble")]
-                alpha_turn: alpha,
+                alpha_turn: Turn {
+                    cos: 1.0 - alpha.omc,
+                    ..alpha
+                },
                 alpha_whole: [ca, sa],
             };
             if jm.has_gravity {
@@ -743,8 +749,13 @@ pub(crate) fn remainder(t: u32) -> (u8, f32, f32) {
 /// error e³/6 < 2e-10).
 #[inline(always)]
 pub(crate) fn turned(sin: f32, omc: f32, e: f32) -> (f32, f32) {
+    turned_cos(sin, omc, 1.0 - omc, e)
+}
+
+/// [`turned`] with cos r = 1 − omc already formed (a constant remainder's, stored).
+#[inline(always)]
+pub(crate) fn turned_cos(sin: f32, omc: f32, c: f32, e: f32) -> (f32, f32) {
     let h = 0.5 * (e * e);
-    let c = 1.0 - omc;
     (sin + (c * e - sin * h), omc + (sin * e + c * h))
 }
 
