@@ -246,12 +246,14 @@ impl LeanWobble {
         }
     }
 
-    /// Joint `i`'s φx, φy and φz − ½ φx φy at θ' (cos `c`, sin `s`); zeros where it does not
-    /// wobble. `SMALL`: the arm's orders are [`LeanWobble::small`]'s (each joint's terms by
-    /// [`small_series`]), else `Multiples` advances through them.
+    /// Joint `i`'s φx, φy at θ' (cos `c`, sin `s`), and u, v with φz − ½ φx φy = φx u + φy v
+    /// (u = l_x + q_xx φx + q_xy φy, v = l_y + q_yy φy: the pass adds φx u and φy v to the
+    /// joint's error by multiply–adds); zeros where it does not wobble. `SMALL`: the arm's
+    /// orders are [`LeanWobble::small`]'s (each joint's terms by [`small_series`]), else
+    /// `Multiples` advances through them.
     #[cfg(feature = "wobble")]
     #[inline(always)]
-    fn phi<const SMALL: bool>(&self, i: usize, c: f32, s: f32) -> [f32; 3] {
+    fn phi<const SMALL: bool>(&self, i: usize, c: f32, s: f32) -> [f32; 4] {
         let j = &self.joints[i];
         let start = usize::from(j.start);
         let (x, y) = if SMALL {
@@ -277,7 +279,8 @@ impl LeanWobble {
             (x, y)
         };
         let [lx, ly, qxx, qxy, qyy] = j.z;
-        [x, y, x * (lx + (qxx * x + qxy * y)) + y * (ly + qyy * y)]
+        // Each sum from its constant (multiply–adds into the loaded constant, no copies).
+        [x, y, (lx + qxx * x) + qxy * y, ly + qyy * y]
     }
 }
 
@@ -446,9 +449,9 @@ fn run<
             2 => ((-cr, -a.sin), (-w[0], -w[1]), (-d[0], -d[1])),
             _ => ((a.sin, -cr), (w[1], -w[0]), (d[1], -d[0])),
         };
-        // φ at θ': φz joins the error, as the first pass would have added it.
-        let [px, py, pz] = wobble.phi::<SMALL>(i, c, s);
-        let mut e = a.e + pz;
+        // φ at θ': φz − ½ φx φy joins the error.
+        let [px, py, u, v] = wobble.phi::<SMALL>(i, c, s);
+        let mut e = (a.e + px * u) + py * v;
         let compliant = if GRAVITY == RUNTIME {
             j.has_gravity
         } else {
