@@ -404,14 +404,13 @@ fn run<
     let mut angles = [const { MaybeUninit::<Angle>::uninit() }; MAX_JOINTS];
     let mut verticals = [const { MaybeUninit::<[f32; 2]>::uninit() }; MAX_JOINTS];
     // Base to tip: the angles (the remainder not turned: the second pass forms θ''s cos and
-    // sin again from it, for φ), and the vertical up to the last compliant joint; nothing of
-    // the wobble.
+    // sin again from it, for the harmonic error and φ), and the vertical up to the last
+    // compliant joint; nothing of the wobble.
     let mut zb = [0.0f32, 0.0, 1.0];
     each_joint!(JOINTS, n, false, |i| {
         let j = &lean.joints[i];
         let (a, c, s) = j.reading::<POW2>(i, counts[i])?;
-        let e = j.harmonic_error(c, s);
-        angles[i].write(Angle { e, ..a });
+        angles[i].write(a);
         let vertical = if GRAVITY == RUNTIME {
             i < lean.vertical_joints
         } else {
@@ -449,9 +448,10 @@ fn run<
             2 => ((-cr, -a.sin), (-w[0], -w[1]), (-d[0], -d[1])),
             _ => ((a.sin, -cr), (w[1], -w[0]), (d[1], -d[0])),
         };
-        // φ at θ': φz − ½ φx φy joins the error.
+        // The harmonic error at θ' (here rather than in the first pass: not stored), and
+        // φ: φz − ½ φx φy joins the error.
         let [px, py, u, v] = wobble.phi::<SMALL>(i, c, s);
-        let mut e = (a.e + px * u) + py * v;
+        let mut e = (j.harmonic_error(c, s) + px * u) + py * v;
         let compliant = if GRAVITY == RUNTIME {
             j.has_gravity
         } else {
