@@ -295,7 +295,9 @@ fn small_series(orders: u8, terms: &[Term; 4], c: f32, s: f32) -> (f32, f32) {
             // (Masked: every value has an arm, so the jump has no range test.)
             match orders & 15 {
                 $($m => series::<$m>(c, s, terms),)*
-                _ => (0.0, 0.0),
+                // (c − c, s − s: +0 for the finite c, s, formed in this arm only; a constant
+                // zero was loaded before the jump on every joint.)
+                _ => (c - c, s - s),
             }
         };
     }
