@@ -82,7 +82,8 @@ struct Term {
 /// at boot, and per-joint room for four took the qemu-m4f hub's stack peak to 64,732 of its
 /// 65,536 bytes (measured). An arm with more runs the quaternion chain.
 pub const MAX_LEAN_TERMS: usize = 16;
-const _: () = assert!(MAX_LEAN_TERMS.is_power_of_two());
+// (A start below it fits the four bits of `WobbleJoint::packed`.)
+const _: () = assert!(MAX_LEAN_TERMS <= 16);
 
 /// One joint's wobble in the lean form (no terms where it has none).
 #[cfg(feature = "wobble")]
@@ -92,9 +93,11 @@ struct WobbleJoint {
     /// ([`Multiples`] only advances).
     start: u8,
     count: u8,
-    /// Its terms' orders where each is one of 1 to 4 and no two are the same, bit h − 1 for
-    /// order h (the six-axis copy's terms, [`small_series`]); 0 where it does not wobble.
-    orders: u8,
+    /// For the six-axis copy (its terms' orders each one of 1 to 4, no two the same):
+    /// `start` in the high four bits and the orders in the low four, bit h − 1 for order h
+    /// ([`small_series`]; 0 where it does not wobble): one byte read, and a start the compiler
+    /// knows is below 16.
+    packed: u8,
     /// φz − ½ φx φy as φx (l_x + q_xx φx + q_xy φy) + φy (l_y + q_yy φy): (l_x, l_y, q_xx,
     /// q_xy, q_yy).
     z: [f32; 5],
@@ -201,7 +204,9 @@ impl LeanWobble {
                 }
                 second += 0.5 * (bx_ * bx_ + by_ * by_);
                 let jw = &mut out.joints[i];
-                (jw.start, jw.count, jw.orders) = (taken as u8, used as u8, orders);
+                // (taken ≤ 15: at least one term of the 16 follows.)
+                (jw.start, jw.count) = (taken as u8, used as u8);
+                jw.packed = ((taken as u8) << 4) | (orders & 15);
                 taken += used;
                 // (A, B) = M⁻¹ (φx, φy), M = [[f1x, f2x], [f1y, f2y]], |det M| ≥ 1 − MAX_AXIS_Z²
                 // (unit orthogonal axes): A = ax·φ, B = bx·φ.
@@ -255,15 +260,15 @@ impl LeanWobble {
     #[inline(always)]
     fn phi<const SMALL: bool>(&self, i: usize, c: f32, s: f32) -> [f32; 4] {
         let j = &self.joints[i];
-        let start = usize::from(j.start);
         let (x, y) = if SMALL {
-            // Four terms from the start (the pool has three more): no bounds test.
-            // (`start` is below MAX_LEAN_TERMS, a power of two: a mask rather than a `min`.)
-            match self.terms[start & (MAX_LEAN_TERMS - 1)..].first_chunk::<4>() {
-                Some(t) => small_series(j.orders, t, c, s),
+            // Four terms from the start (below 16; the pool has three more): no bounds test.
+            let start = usize::from(j.packed >> 4);
+            match self.terms[start..].first_chunk::<4>() {
+                Some(t) => small_series(j.packed, t, c, s),
                 None => (0.0, 0.0),
             }
         } else {
+            let start = usize::from(j.start);
             // (A slice: `skip(start).take(count)` took 32 instructions a point more, measured.)
             let terms = self
                 .terms
@@ -285,8 +290,9 @@ impl LeanWobble {
 }
 
 /// φx, φy of a joint's terms (sorted by order, the first as many as `orders` has bits, the
-/// rest not read) whose orders are the bits of `orders` (bit h − 1 for order h ≤ 4): one
-/// jump to the code of that set of orders ([`series`]); zeros where `orders` is 0.
+/// rest not read) whose orders are the low four bits of `orders` (bit h − 1 for order h ≤ 4,
+/// the high bits ignored): one jump to the code of that set of orders ([`series`]); zeros
+/// where they are 0.
 #[cfg(feature = "wobble")]
 #[inline(always)]
 fn small_series(orders: u8, terms: &[Term; 4], c: f32, s: f32) -> (f32, f32) {
