@@ -108,7 +108,7 @@ pub(crate) struct LeanJoint {
     pub(crate) alpha: QuarterTurned,
     /// Rx(α_i) as its quarter turn and remainder: the wobble's pass turns the remainder by
     /// φx per point ([`crate::lean_wobble`]); its `cos` is 1 − omc rounded in f32, as
-    /// [`turned`] forms it.
+    /// [`turned`] would form it.
     #[cfg(feature = "wobble")]
     pub(crate) alpha_turn: Turn,
     /// cos α_i and sin α_i whole, the quarter turns applied at boot (exact): the plain turns
@@ -749,8 +749,13 @@ pub(crate) fn remainder(t: u32) -> (u8, f32, f32) {
 /// error e³/6 < 2e-10).
 #[inline(always)]
 pub(crate) fn turned(sin: f32, omc: f32, e: f32) -> (f32, f32) {
+    turned_cos(sin, omc, 1.0 - omc, e)
+}
+
+/// [`turned`] with cos r = 1 − omc already formed (a constant remainder's, stored).
+#[inline(always)]
+pub(crate) fn turned_cos(sin: f32, omc: f32, c: f32, e: f32) -> (f32, f32) {
     let h = 0.5 * (e * e);
-    let c = 1.0 - omc;
     (sin + (c * e - sin * h), omc + (sin * e + c * h))
 }
 

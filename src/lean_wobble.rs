@@ -53,7 +53,7 @@ use crate::angle::Multiples;
 use crate::lean::LeanF32;
 #[cfg(feature = "wobble")]
 use crate::lean::{
-    each_joint, rx_dir, turned, Angle, HINGES, PERPENDICULAR, RUNTIME, RUNTIME_ALPHA,
+    each_joint, rx_dir, turned, turned_cos, Angle, HINGES, PERPENDICULAR, RUNTIME, RUNTIME_ALPHA,
 };
 use crate::model::{ChainError, Model, Point};
 use crate::scalar::F32;
@@ -475,12 +475,7 @@ fn run<
         // direction's cos α, sin α turned by φx), the tip's turns by `turn_tip`.
         let (sin, omc) = turned(a.sin, a.omc, e);
         let al = &j.alpha_turn;
-        // (As `turned`, with 1 − cos summed into its loaded constant.)
-        let ha = 0.5 * (px * px);
-        let (asin, aomc) = (
-            al.sin + (al.cos * px - al.sin * ha),
-            (al.omc + al.sin * px) + al.cos * ha,
-        );
+        let (asin, aomc) = turned_cos(al.sin, al.omc, al.cos, px);
         let qa = if ALPHA == RUNTIME_ALPHA {
             al.q
         } else {
