@@ -30,7 +30,8 @@
 //! `angle::Multiples` from the pass's own cos θ', sin θ'), each term's four coefficients formed at
 //! boot. The second pass (tip to base) forms them: its one selection by θ''s quarter turns
 //! gives cos θ', sin θ' beside Rz's quarter turns of the tip and the direction, so nothing of
-//! the wobble is stored between the passes. φz needs no series of its own: (φx, φy) = A (f1x, f1y) + B (f2x, f2y) to first order
+//! the wobble is stored between the passes. φz needs no series of its own: (φx, φy) =
+//! A (f1x, f1y) + B (f2x, f2y) to first order
 //! (f1 and f2 turned by Rz(b_i), whose z parts are of the size of the joint's tilt only), so A
 //! and B are a fixed linear map of φx, φy, and φz − ½ φx φy = A f1z + B f2z + ½ A B (f1 × f2)·ẑ
 //! − ½ φx φy is a linear and a quadratic form in φx, φy, five constants a joint.
