@@ -120,7 +120,8 @@ pub(crate) struct LeanJoint {
     /// selection made at boot ([`QuarterTurned`]).
     pub(crate) alpha: QuarterTurned,
     /// Rx(α_i) as its quarter turn and remainder: the wobble's pass turns the remainder by
-    /// φx per point ([`crate::lean_wobble`]).
+    /// φx per point ([`crate::lean_wobble`]); its `cos` is 1 − omc rounded in f32, as
+    /// [`turned`] would form it.
     #[cfg(feature = "wobble")]
     pub(crate) alpha_turn: Turn,
     /// cos α_i and sin α_i whole, the quarter turns applied at boot (exact): the plain turns
@@ -425,8 +426,13 @@ impl LeanForm<F32> for LeanF32 {
                 gravity: jm.gravity,
                 has_gravity: jm.has_gravity,
                 alpha: QuarterTurned::of(&alpha),
+                // cos r as the per-point turn forms it from 1 − cos r (f32), so that the
+                // wobble's pass reads it instead of forming it (the same numbers).
                 #[cfg(feature = "wobble")]
-                alpha_turn: alpha,
+                alpha_turn: Turn {
+                    cos: 1.0 - alpha.omc,
+                    ..alpha
+                },
                 alpha_whole: [ca, sa],
             };
             if jm.has_gravity {
@@ -583,21 +589,7 @@ impl LeanF32 {
                 i < (8 - GRAVITY.leading_zeros()) as usize
             };
             if vertical {
-                // Rx(−α), then Rz(−θ') (without the harmonic error e: below).
-                let [ca, sa] = j.alpha_whole;
-                let (x, y, z) = if i == 0 {
-                    // The base frame's vertical is (0, 0, 1) itself: the same numbers without
-                    // the products by 0 and 1 (the compiler may not drop those in floating point).
-                    (s * sa, c * sa, ca)
-                } else {
-                    let (y, z) = (ca * zb[1] + sa * zb[2], ca * zb[2] - sa * zb[1]);
-                    (c * zb[0] + s * y, c * y - s * zb[0], z)
-                };
-                // Turned by Rz(−θ') alone, without the harmonic error e: the vertical is
-                // then off by at most Σ|e| (5.4e-4 rad on default-6-full) about the joints'
-                // axes, which moves each deflection g (w × ẑ_base)·ẑ_k of up to 5e-5 rad by
-                // at most 3e-8 rad (docs/results/speed.md, "The lean chain from 835").
-                zb = [x, y, z];
+                zb = j.turn_vertical(i == 0, c, s, zb);
                 // Written for every joint up to the last compliant one (read only where
                 // compliant): a store is cheaper than testing the flag.
                 verticals[i].write([zb[0], zb[1]]);
@@ -710,6 +702,27 @@ impl LeanJoint {
         s * (s1 + c * s2 - s * c2) + c * (c1 + c * c2)
     }
 
+    /// The vertical `zb` (the base frame's ẑ in the frame before this joint; (0, 0, 1) where
+    /// `base`) in the frame after it: Rx(−α), then Rz(−θ') (cos `c`, sin `s`) without the
+    /// harmonic error e — and, in the wobble's pass ([`crate::lean_wobble`]), without the small
+    /// turns of the wobble. The vertical is then off by at most Σ|e| (5.4e-4 rad on
+    /// default-6-full), and Σ|φ| with the wobble, about the joints' axes, which moves each
+    /// deflection g (w × ẑ_base)·ẑ_k of up to 5e-5 rad by at most 3e-8 rad (Σ|e|; twice that
+    /// with a wobble as large as the harmonics: docs/results/speed.md, "The lean chain from
+    /// 835" and "The wobble from 1.76×").
+    #[inline(always)]
+    pub(crate) fn turn_vertical(&self, base: bool, c: f32, s: f32, zb: [f32; 3]) -> [f32; 3] {
+        let [ca, sa] = self.alpha_whole;
+        if base {
+            // The base frame's vertical is (0, 0, 1) itself: the same numbers without the
+            // products by 0 and 1 (the compiler may not drop those in floating point).
+            [s * sa, c * sa, ca]
+        } else {
+            let (y, z) = (ca * zb[1] + sa * zb[2], ca * zb[2] - sa * zb[1]);
+            [c * zb[0] + s * y, c * y - s * zb[0], z]
+        }
+    }
+
     /// The link at temperature (a zero rate without thermal expansion: the link itself).
     /// (Written out: `map` over the three became a call once the joints were unrolled.)
     #[inline(always)]
@@ -752,8 +765,13 @@ pub(crate) fn remainder(t: u32) -> (u8, f32, f32) {
 /// error e³/6 < 2e-10).
 #[inline(always)]
 pub(crate) fn turned(sin: f32, omc: f32, e: f32) -> (f32, f32) {
+    turned_cos(sin, omc, 1.0 - omc, e)
+}
+
+/// [`turned`] with cos r = 1 − omc already formed (a constant remainder's, stored).
+#[inline(always)]
+pub(crate) fn turned_cos(sin: f32, omc: f32, c: f32, e: f32) -> (f32, f32) {
     let h = 0.5 * (e * e);
-    let c = 1.0 - omc;
     (sin + (c * e - sin * h), omc + (sin * e + c * h))
 }
 

@@ -22,12 +22,16 @@
 //! sums Rz and Rx already round (`turn_tip`: each large coordinate rounded as often as in the
 //! lean pass). The direction takes Rx(φx) Ry(φy) to first order where a boot bound on ½ Σ
 //! |φ|² allows ([`MAX_DIRECTION_SECOND_ORDER`]), else Ry and cos α, sin α turned by φx to
-//! second order. The vertical of the first pass takes the small
-//! turns to first order (it scales the gravity deflection only: 1e-4 of 4e-5 rad).
+//! second order. The vertical of the first pass leaves the small
+//! turns out, as it leaves out the harmonic error ([`crate::lean`]): it scales the gravity
+//! deflection only (Σ|φ| ≈ 6e-4 rad of 4e-5 rad, at most 3e-8 rad).
 //!
 //! **What φ costs.** φx and φy are harmonic series in θ' (the terms' sin hθ', cos hθ' by
 //! `angle::Multiples` from the pass's own cos θ', sin θ'), each term's four coefficients formed at
-//! boot. φz needs no series of its own: (φx, φy) = A (f1x, f1y) + B (f2x, f2y) to first order
+//! boot. The second pass (tip to base) forms them: its one selection by θ''s quarter turns
+//! gives cos θ', sin θ' beside Rz's quarter turns of the tip and the direction, so nothing of
+//! the wobble is stored between the passes. φz needs no series of its own: (φx, φy) =
+//! A (f1x, f1y) + B (f2x, f2y) to first order
 //! (f1 and f2 turned by Rz(b_i), whose z parts are of the size of the joint's tilt only), so A
 //! and B are a fixed linear map of φx, φy, and φz − ½ φx φy = A f1z + B f2z + ½ A B (f1 × f2)·ẑ
 //! − ½ φx φy is a linear and a quadratic form in φx, φy, five constants a joint.
@@ -50,7 +54,7 @@ use crate::angle::Multiples;
 use crate::lean::LeanF32;
 #[cfg(feature = "wobble")]
 use crate::lean::{
-    each_joint, rx_dir, turn_z, turned, Angle, HINGES, PERPENDICULAR, RUNTIME, RUNTIME_ALPHA,
+    each_joint, rx_dir, turned, turned_cos, Angle, HINGES, PERPENDICULAR, RUNTIME, RUNTIME_ALPHA,
 };
 use crate::model::{ChainError, Model, Point};
 use crate::scalar::F32;
@@ -81,6 +85,8 @@ struct Term {
 /// (one copy, 46,100 bytes of stack in all), so there would be room now; the bound is kept, as
 /// it decides which arms run the lean form. An arm with more runs the quaternion chain.
 pub const MAX_LEAN_TERMS: usize = 16;
+// (A start below it fits the four bits of `WobbleJoint::packed`.)
+const _: () = assert!(MAX_LEAN_TERMS <= 16);
 
 /// One joint's wobble in the lean form (no terms where it has none).
 #[cfg(feature = "wobble")]
@@ -90,9 +96,11 @@ struct WobbleJoint {
     /// ([`Multiples`] only advances).
     start: u8,
     count: u8,
-    /// Its terms' orders where each is one of 1 to 4 and no two are the same, bit h − 1 for
-    /// order h (the six-axis copy's terms, [`small_series`]); 0 where it does not wobble.
-    orders: u8,
+    /// For the six-axis copy (its terms' orders each one of 1 to 4, no two the same):
+    /// `start` in the high four bits and the orders in the low four, bit h − 1 for order h
+    /// ([`small_series`]; 0 where it does not wobble): one byte read, and a start the compiler
+    /// knows is below 16.
+    packed: u8,
     /// φz − ½ φx φy as φx (l_x + q_xx φx + q_xy φy) + φy (l_y + q_yy φy): (l_x, l_y, q_xx,
     /// q_xy, q_yy).
     z: [f32; 5],
@@ -199,7 +207,9 @@ impl LeanWobble {
                 }
                 second += 0.5 * (bx_ * bx_ + by_ * by_);
                 let jw = &mut out.joints[i];
-                (jw.start, jw.count, jw.orders) = (taken as u8, used as u8, orders);
+                // (taken ≤ 15: at least one term of the 16 follows.)
+                (jw.start, jw.count) = (taken as u8, used as u8);
+                jw.packed = ((taken as u8) << 4) | (orders & 15);
                 taken += used;
                 // (A, B) = M⁻¹ (φx, φy), M = [[f1x, f2x], [f1y, f2y]], |det M| ≥ 1 − MAX_AXIS_Z²
                 // (unit orthogonal axes): A = ax·φ, B = bx·φ.
@@ -244,21 +254,24 @@ impl LeanWobble {
         }
     }
 
-    /// Joint `i`'s φx, φy and φz − ½ φx φy at θ' (cos `c`, sin `s`); zeros where it does not
-    /// wobble. `SMALL`: the arm's orders are [`LeanWobble::small`]'s (each joint's terms by
-    /// [`small_series`]), else `Multiples` advances through them.
+    /// Joint `i`'s φx, φy at θ' (cos `c`, sin `s`), and u, v with φz − ½ φx φy = φx u + φy v
+    /// (u = l_x + q_xx φx + q_xy φy, v = l_y + q_yy φy: the pass adds φx u and φy v to the
+    /// joint's error by multiply–adds); zeros where it does not wobble. `SMALL`: the arm's
+    /// orders are [`LeanWobble::small`]'s (each joint's terms by [`small_series`]), else
+    /// `Multiples` advances through them.
     #[cfg(feature = "wobble")]
     #[inline(always)]
-    fn phi<const SMALL: bool>(&self, i: usize, c: f32, s: f32) -> [f32; 3] {
+    fn phi<const SMALL: bool>(&self, i: usize, c: f32, s: f32) -> [f32; 4] {
         let j = &self.joints[i];
-        let start = usize::from(j.start);
         let (x, y) = if SMALL {
-            // Four terms from the start (the pool has three more): no bounds test.
-            match self.terms[start.min(MAX_LEAN_TERMS - 1)..].first_chunk::<4>() {
-                Some(t) => small_series(j.orders, t, c, s),
+            // Four terms from the start (below 16; the pool has three more): no bounds test.
+            let start = usize::from(j.packed >> 4);
+            match self.terms[start..].first_chunk::<4>() {
+                Some(t) => small_series(j.packed, t, c, s),
                 None => (0.0, 0.0),
             }
         } else {
+            let start = usize::from(j.start);
             // (A slice: `skip(start).take(count)` took 32 instructions a point more, measured.)
             let terms = self
                 .terms
@@ -274,21 +287,26 @@ impl LeanWobble {
             (x, y)
         };
         let [lx, ly, qxx, qxy, qyy] = j.z;
-        [x, y, x * (lx + (qxx * x + qxy * y)) + y * (ly + qyy * y)]
+        // Each sum from its constant (multiply–adds into the loaded constant, no copies).
+        [x, y, (lx + qxx * x) + qxy * y, ly + qyy * y]
     }
 }
 
 /// φx, φy of a joint's terms (sorted by order, the first as many as `orders` has bits, the
-/// rest not read) whose orders are the bits of `orders` (bit h − 1 for order h ≤ 4): one
-/// jump to the code of that set of orders ([`series`]); zeros where `orders` is 0.
+/// rest not read) whose orders are the low four bits of `orders` (bit h − 1 for order h ≤ 4,
+/// the high bits ignored): one jump to the code of that set of orders ([`series`]); zeros
+/// where they are 0.
 #[cfg(feature = "wobble")]
 #[inline(always)]
 fn small_series(orders: u8, terms: &[Term; 4], c: f32, s: f32) -> (f32, f32) {
     macro_rules! arms {
         ($($m:literal),*) => {
-            match orders {
+            // (Masked: every value has an arm, so the jump has no range test.)
+            match orders & 15 {
                 $($m => series::<$m>(c, s, terms),)*
-                _ => (0.0, 0.0),
+                // (c − c, s − s: +0 for the finite c, s, formed in this arm only; a constant
+                // zero was loaded before the jump on every joint.)
+                _ => (c - c, s - s),
             }
         };
     }
@@ -395,38 +413,23 @@ fn run<
     let dt = model.check(counts, temp_mc)?;
     let n = if JOINTS > 0 { JOINTS } else { counts.len() }.min(MAX_JOINTS);
     let mut angles = [const { MaybeUninit::<Angle>::uninit() }; MAX_JOINTS];
-    // φx, φy of each joint (zeros where it does not wobble).
-    let mut phis = [const { MaybeUninit::<[f32; 2]>::uninit() }; MAX_JOINTS];
     let mut verticals = [const { MaybeUninit::<[f32; 2]>::uninit() }; MAX_JOINTS];
-    // Base to tip: the angles (φz in the error), φ, and the vertical up to the last compliant
-    // joint.
+    // Base to tip: the angles (the remainder not turned: the second pass forms θ''s cos and
+    // sin again from it, for the harmonic error and φ), and the vertical up to the last
+    // compliant joint; nothing of the wobble.
     let mut zb = [0.0f32, 0.0, 1.0];
     each_joint!(JOINTS, n, false, |i| {
         let j = &lean.joints[i];
         let (a, c, s) = j.reading::<POW2>(i, counts[i])?;
-        let [px, py, pz] = wobble.phi::<SMALL>(i, c, s);
-        let e = j.harmonic_error(c, s) + pz;
-        angles[i].write(Angle { e, ..a });
-        phis[i].write([px, py]);
+        angles[i].write(a);
         let vertical = if GRAVITY == RUNTIME {
             i < lean.vertical_joints
         } else {
             i < (8 - GRAVITY.leading_zeros()) as usize
         };
         if vertical {
-            // Rx(−α), Rx(−φx), Ry(−φy), Rz(−θ' − e), the small turns to first order.
-            let [ca, sa] = j.alpha_whole;
-            let (y, z) = if i == 0 {
-                // The base frame's vertical (0, 0, 1) itself: the same numbers without the
-                // products by 0 and 1, as the lean pass.
-                (sa, ca)
-            } else {
-                (ca * zb[1] + sa * zb[2], ca * zb[2] - sa * zb[1])
-            };
-            let (y, z) = (y + px * z, z - px * y);
-            let (x, z) = (zb[0] - py * z, z + py * zb[0]);
-            let (x, y) = (c * x + s * y, c * y - s * x);
-            zb = [x + e * y, y - e * x, z];
+            // Rx(−α), Rz(−θ'), as the lean pass: without the wobble's small turns or e.
+            zb = j.turn_vertical(i == 0, c, s, zb);
             // Written for every joint up to the last compliant one (read only where
             // compliant), as the lean pass does.
             verticals[i].write([zb[0], zb[1]]);
@@ -438,16 +441,28 @@ fn run<
     let mut d = lean.probe_dir;
     each_joint!(JOINTS, n, true, |i| {
         let j = &lean.joints[i];
-        // SAFETY: the first pass wrote every angle and φ below n (it returns early only with
-        // an error, before this pass).
-        let (a, [px, py]) = unsafe { (angles[i].assume_init_read(), phis[i].assume_init_read()) };
+        // SAFETY: the first pass wrote every angle below n (it returns early only with an
+        // error, before this pass).
+        let a = unsafe { angles[i].assume_init_read() };
         let link = j.link_at(dt);
         w = if i + 1 == n {
             link
         } else {
             [w[0] + link[0], w[1] + link[1], w[2] + link[2]]
         };
-        let mut e = a.e;
+        // One selection by θ''s quarter turns: its cos and sin whole (as the first pass's
+        // reading formed them), and Rz's quarter turns of the tip and the direction.
+        let cr = 1.0 - a.omc;
+        let ((c, s), (p, r), (dp, dr)) = match a.q & 3 {
+            0 => ((cr, a.sin), (w[0], w[1]), (d[0], d[1])),
+            1 => ((-a.sin, cr), (-w[1], w[0]), (-d[1], d[0])),
+            2 => ((-cr, -a.sin), (-w[0], -w[1]), (-d[0], -d[1])),
+            _ => ((a.sin, -cr), (w[1], -w[0]), (d[1], -d[0])),
+        };
+        // The harmonic error at θ' (here rather than in the first pass: not stored), and
+        // φ: φz − ½ φx φy joins the error.
+        let [px, py, u, v] = wobble.phi::<SMALL>(i, c, s);
+        let mut e = (j.harmonic_error(c, s) + px * u) + py * v;
         let compliant = if GRAVITY == RUNTIME {
             j.has_gravity
         } else {
@@ -463,16 +478,17 @@ fn run<
         // direction's cos α, sin α turned by φx), the tip's turns by `turn_tip`.
         let (sin, omc) = turned(a.sin, a.omc, e);
         let al = &j.alpha_turn;
-        let (asin, aomc) = turned(al.sin, al.omc, px);
+        let (asin, aomc) = turned_cos(al.sin, al.omc, al.cos, px);
         let qa = if ALPHA == RUNTIME_ALPHA {
             al.q
         } else {
             ((ALPHA >> (2 * i)) & 3) as u8
         };
         let h = 0.5 * (py * py);
-        w = turn_tip((a.q, sin, omc), (py, h), (qa, asin, aomc), w);
-        // The direction: Rz plainly, then Ry(φy) and Rx(α + φx).
-        (_, d) = turn_z(a.q, sin, omc, w, d);
+        w = turn_tip((p, r, sin, omc), (py, h), (qa, asin, aomc), w[2]);
+        // The direction: Rz plainly (as `turn_z`), then Ry(φy) and Rx(α + φx).
+        let cos = 1.0 - omc;
+        d = [dp * cos - dr * sin, dp * sin + dr * cos, d[2]];
         let [ca, sa] = j.alpha_whole;
         let first = if SMALL { true } else { wobble.dir_first };
         if first {
@@ -500,7 +516,8 @@ fn run<
     Ok(Point { xyz: w, dir: d })
 }
 
-/// The tip `w` turned by Rz (quarter turns `qz`, the remainder's sin and 1 − cos), then
+/// The tip (x, y quarter turned by Rz, `p` and `r`; z `w2`) turned by Rz's remainder (its sin
+/// and 1 − cos), then
 /// Ry(φy) to second order (`py`, h = ½ φy²), then Rx (quarter turns `qa` and the remainder
 /// turned by φx): with each large coordinate rounded as often as the lean pass rounds it.
 /// Ry's corrections are small (φy times the tip); added to x and z on their own, each would
@@ -512,17 +529,16 @@ fn run<
 #[cfg(feature = "wobble")]
 #[inline(always)]
 fn turn_tip(
-    (qz, sin, omc): (u8, f32, f32),
+    (p, r, sin, omc): (f32, f32, f32, f32),
     (py, h): (f32, f32),
     (qa, asin, aomc): (u8, f32, f32),
-    w: [f32; 3],
+    w2: f32,
 ) -> [f32; 3] {
     // Rz: x's correction kept apart; x1, x after it, only for Ry's small products.
-    let (p, r) = quarter_turns(qz, (w[0], w[1]));
     let cx = r * sin + p * omc;
     let x1 = p - cx;
     let y = r + (p * sin - r * omc);
-    let z = w[2];
+    let z = w2;
     // Ry(φy): x += py z − h x, z −= py x + h z.
     let x = p - (cx - (py * z - h * x1));
     let dz = py * x1 + h * z;
