@@ -79,31 +79,31 @@ struct Term {
 }
 
 /// Most wobble terms of all joints together the form keeps (the table allows
-/// [`crate::table::wobble::MAX_TERMS`] a joint, 28 for seven joints): each copy of the chain was
-/// on the hub's stack at boot, and per-joint room for four took the qemu-m4f hub's stack peak
-/// to 64,732 of its 65,536 bytes (measured). The boot builds the chain in place since issue 32
-/// (one copy, 46,100 bytes of stack in all), so there would be room now; the bound is kept, as
-/// it decides which arms run the lean form. An arm with more runs the quaternion chain.
+/// [`crate::table::wobble::MAX_TERMS`] a joint, 28 for seven joints). Each joint has fixed
+/// room for the table's four (no start to read per point): 560 bytes of terms where a pool of
+/// 19 took 380. That was too much for the stack while the boot held copies of the chain (the
+/// qemu-m4f hub's peak went to 64,732 of its 65,536 bytes, measured); since issue 32 the boot
+/// builds the chain in place and the peak stays far below it (docs/results/speed.md). The
+/// bound is kept, as it decides which arms run the lean form: an arm with more runs the
+/// quaternion chain.
 pub const MAX_LEAN_TERMS: usize = 16;
-// (A start below it fits the four bits of `WobbleJoint::packed`.)
-const _: () = assert!(MAX_LEAN_TERMS <= 16);
 
 /// One joint's wobble in the lean form (no terms where it has none).
 #[cfg(feature = "wobble")]
 #[derive(Clone, Copy, Debug, Default)]
 struct WobbleJoint {
-    /// Its terms, `terms[start..start + count]` of [`LeanWobble`], sorted by order
-    /// ([`Multiples`] only advances).
-    start: u8,
+    /// Its terms, the first `count` of `terms`, sorted by order ([`Multiples`] only
+    /// advances); the rest zero.
     count: u8,
-    /// For the six-axis copy (its terms' orders each one of 1 to 4, no two the same):
-    /// `start` in the high four bits and the orders in the low four, bit h − 1 for order h
-    /// ([`small_series`]; 0 where it does not wobble): one byte read, and a start the compiler
-    /// knows is below 16.
-    packed: u8,
+    /// For the six-axis copy (its terms' orders each one of 1 to 4, no two the same): bit
+    /// h − 1 for order h ([`small_series`]; 0 where it does not wobble).
+    orders: u8,
     /// φz − ½ φx φy as φx (l_x + q_xx φx + q_xy φy) + φy (l_y + q_yy φy): (l_x, l_y, q_xx,
     /// q_xy, q_yy).
     z: [f32; 5],
+    /// Room for the table's most terms a joint: the six-axis copy reads them at offsets
+    /// known to the compiler.
+    terms: [Term; MAX_TERMS],
 }
 
 /// The wobble's constants of an arm's lean form (empty without the `wobble` feature).
@@ -117,10 +117,6 @@ pub struct LeanWobble {
     small: bool,
     #[cfg(feature = "wobble")]
     joints: [WobbleJoint; MAX_JOINTS],
-    #[cfg(feature = "wobble")]
-    /// (Three more than [`MAX_LEAN_TERMS`], left zero: the six-axis copy reads four terms from
-    /// any start below [`MAX_LEAN_TERMS`] with no bounds test.)
-    terms: [Term; MAX_LEAN_TERMS + 3],
     /// ½ Σ |φ|² over the joints is at most [`MAX_DIRECTION_SECOND_ORDER`] (bounded by the terms'
     /// coefficients): the direction takes the small turns Rx(φx) Ry(φy) to first order.
     #[cfg(feature = "wobble")]
@@ -176,9 +172,8 @@ impl LeanWobble {
                 if taken + used > MAX_LEAN_TERMS {
                     return Ok(false);
                 }
-                let Some(terms) = out.terms.get_mut(taken..taken + used) else {
-                    return Ok(false);
-                };
+                let jw = &mut out.joints[i];
+                let terms = &mut jw.terms[..used];
                 for (t, src) in terms.iter_mut().zip(&w.terms[..used]) {
                     let order = u32::from(src.order);
                     // θ = θ' − offset: (s, c) → (s cos hc + c sin hc, c cos hc − s sin hc).
@@ -206,10 +201,7 @@ impl LeanWobble {
                     orders |= bit;
                 }
                 second += 0.5 * (bx_ * bx_ + by_ * by_);
-                let jw = &mut out.joints[i];
-                // (taken ≤ 15: at least one term of the 16 follows.)
-                (jw.start, jw.count) = (taken as u8, used as u8);
-                jw.packed = ((taken as u8) << 4) | (orders & 15);
+                (jw.count, jw.orders) = (used as u8, orders & 15);
                 taken += used;
                 // (A, B) = M⁻¹ (φx, φy), M = [[f1x, f2x], [f1y, f2y]], |det M| ≥ 1 − MAX_AXIS_Z²
                 // (unit orthogonal axes): A = ax·φ, B = bx·φ.
@@ -264,19 +256,9 @@ impl LeanWobble {
     fn phi<const SMALL: bool>(&self, i: usize, c: f32, s: f32) -> [f32; 4] {
         let j = &self.joints[i];
         let (x, y) = if SMALL {
-            // Four terms from the start (below 16; the pool has three more): no bounds test.
-            let start = usize::from(j.packed >> 4);
-            match self.terms[start..].first_chunk::<4>() {
-                Some(t) => small_series(j.packed, t, c, s),
-                None => (0.0, 0.0),
-            }
+            small_series(j.orders, &j.terms, c, s)
         } else {
-            let start = usize::from(j.start);
-            // (A slice: `skip(start).take(count)` took 32 instructions a point more, measured.)
-            let terms = self
-                .terms
-                .get(start..start + usize::from(j.count))
-                .unwrap_or(&[]);
+            let terms = j.terms.get(..usize::from(j.count)).unwrap_or(&[]);
             let mut m = Multiples::<F32>::new(c, s);
             let (mut x, mut y) = (0.0f32, 0.0f32);
             for t in terms {
