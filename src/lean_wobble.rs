@@ -96,8 +96,8 @@ struct WobbleJoint {
     /// advances); the rest zero.
     count: u8,
     /// For the six-axis copy (its terms' orders each one of 1 to 4, no two the same): bit
-    /// h − 1 for order h ([`small_series`]; 0 where it does not wobble).
-    orders: u8,
+    /// h − 1 for order h ([`small_series`]; none where it does not wobble).
+    orders: Orders,
     /// φz − ½ φx φy as φx (l_x + q_xx φx + q_xy φy) + φy (l_y + q_yy φy): (l_x, l_y, q_xx,
     /// q_xy, q_yy).
     z: [f32; 5],
@@ -201,7 +201,7 @@ impl LeanWobble {
                     orders |= bit;
                 }
                 second += 0.5 * (bx_ * bx_ + by_ * by_);
-                (jw.count, jw.orders) = (used as u8, orders & 15);
+                (jw.count, jw.orders) = (used as u8, Orders::of(orders));
                 taken += used;
                 // (A, B) = M⁻¹ (φx, φy), M = [[f1x, f2x], [f1y, f2y]], |det M| ≥ 1 − MAX_AXIS_Z²
                 // (unit orthogonal axes): A = ax·φ, B = bx·φ.
@@ -274,25 +274,64 @@ impl LeanWobble {
     }
 }
 
+/// A set of wobble orders 1 to 4, bit h − 1 for order h: an enum of its sixteen values, so
+/// that the jump on it needs neither a mask nor a range test (a `u8` masked to four bits took
+/// one instruction a joint more, measured).
+#[cfg(feature = "wobble")]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(u8)]
+enum Orders {
+    #[default]
+    O0,
+    O1,
+    O2,
+    O3,
+    O4,
+    O5,
+    O6,
+    O7,
+    O8,
+    O9,
+    O10,
+    O11,
+    O12,
+    O13,
+    O14,
+    O15,
+}
+
+#[cfg(feature = "wobble")]
+impl Orders {
+    /// The set of the low four bits of `bits`.
+    fn of(bits: u8) -> Orders {
+        use Orders::*;
+        const ALL: [Orders; 16] = [
+            O0, O1, O2, O3, O4, O5, O6, O7, O8, O9, O10, O11, O12, O13, O14, O15,
+        ];
+        ALL[usize::from(bits & 15)]
+    }
+}
+
 /// φx, φy of a joint's terms (sorted by order, the first as many as `orders` has bits, the
-/// rest not read) whose orders are the low four bits of `orders` (bit h − 1 for order h ≤ 4,
-/// the high bits ignored): one jump to the code of that set of orders ([`series`]); zeros
-/// where they are 0.
+/// rest not read) whose orders are `orders` (bit h − 1 for order h ≤ 4): one jump to the code
+/// of that set of orders ([`series`]); zeros where it is empty.
 #[cfg(feature = "wobble")]
 #[inline(always)]
-fn small_series(orders: u8, terms: &[Term; 4], c: f32, s: f32) -> (f32, f32) {
+fn small_series(orders: Orders, terms: &[Term; 4], c: f32, s: f32) -> (f32, f32) {
     macro_rules! arms {
-        ($($m:literal),*) => {
-            // (Masked: every value has an arm, so the jump has no range test.)
-            match orders & 15 {
-                $($m => series::<$m>(c, s, terms),)*
+        ($($v:ident $m:literal),*) => {
+            match orders {
+                $(Orders::$v => series::<$m>(c, s, terms),)*
                 // (c − c, s − s: +0 for the finite c, s, formed in this arm only; a constant
                 // zero was loaded before the jump on every joint.)
-                _ => (c - c, s - s),
+                Orders::O0 => (c - c, s - s),
             }
         };
     }
-    arms!(1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)
+    arms!(
+        O1 1, O2 2, O3 3, O4 4, O5 5, O6 6, O7 7, O8 8, O9 9, O10 10, O11 11, O12 12, O13 13,
+        O14 14, O15 15
+    )
 }
 
 /// φx, φy of the terms whose orders are the bits of `M` (bit h − 1 for order h ≤ 4), sorted
@@ -713,14 +752,14 @@ mod tests {
                 }
                 let mut four = [Term::default(); 4];
                 four[..terms.len()].copy_from_slice(&terms);
-                let got = small_series(orders, &four, c, s);
+                let got = small_series(Orders::of(orders), &four, c, s);
                 assert_eq!(
                     (got.0.to_bits(), got.1.to_bits()),
                     (x.to_bits(), y.to_bits())
                 );
             }
         }
-        assert_eq!(small_series(0, &pool, 0.6, 0.8), (0.0, 0.0));
+        assert_eq!(small_series(Orders::O0, &pool, 0.6, 0.8), (0.0, 0.0));
     }
 
     /// At the table's largest wobble (Σ |coefficients| up to 0.98e-3 a joint, the limit 1e-3) the left-out third
