@@ -79,31 +79,31 @@ struct Term {
 }
 
 /// Most wobble terms of all joints together the form keeps (the table allows
-/// [`crate::table::wobble::MAX_TERMS`] a joint, 28 for seven joints): each copy of the chain was
-/// on the hub's stack at boot, and per-joint room for four took the qemu-m4f hub's stack peak
-/// to 64,732 of its 65,536 bytes (measured). The boot builds the chain in place since issue 32
-/// (one copy, 46,100 bytes of stack in all), so there would be room now; the bound is kept, as
-/// it decides which arms run the lean form. An arm with more runs the quaternion chain.
+/// [`crate::table::wobble::MAX_TERMS`] a joint, 28 for seven joints). Each joint has fixed
+/// room for the table's four (no start to read per point): 560 bytes of terms where a pool of
+/// 19 took 380. That was too much for the stack while the boot held copies of the chain (the
+/// qemu-m4f hub's peak went to 64,732 of its 65,536 bytes, measured); since issue 32 the boot
+/// builds the chain in place and the peak stays far below it (docs/results/speed.md). The
+/// bound is kept, as it decides which arms run the lean form: an arm with more runs the
+/// quaternion chain.
 pub const MAX_LEAN_TERMS: usize = 16;
-// (A start below it fits the four bits of `WobbleJoint::packed`.)
-const _: () = assert!(MAX_LEAN_TERMS <= 16);
 
 /// One joint's wobble in the lean form (no terms where it has none).
 #[cfg(feature = "wobble")]
 #[derive(Clone, Copy, Debug, Default)]
 struct WobbleJoint {
-    /// Its terms, `terms[start..start + count]` of [`LeanWobble`], sorted by order
-    /// ([`Multiples`] only advances).
-    start: u8,
+    /// Its terms, the first `count` of `terms`, sorted by order ([`Multiples`] only
+    /// advances); the rest zero.
     count: u8,
-    /// For the six-axis copy (its terms' orders each one of 1 to 4, no two the same):
-    /// `start` in the high four bits and the orders in the low four, bit h − 1 for order h
-    /// ([`small_series`]; 0 where it does not wobble): one byte read, and a start the compiler
-    /// knows is below 16.
-    packed: u8,
+    /// For the six-axis copy (its terms' orders each one of 1 to 4, no two the same): bit
+    /// h − 1 for order h ([`small_series`]; none where it does not wobble).
+    orders: Orders,
     /// φz − ½ φx φy as φx (l_x + q_xx φx + q_xy φy) + φy (l_y + q_yy φy): (l_x, l_y, q_xx,
     /// q_xy, q_yy).
     z: [f32; 5],
+    /// Room for the table's most terms a joint: the six-axis copy reads them at offsets
+    /// known to the compiler.
+    terms: [Term; MAX_TERMS],
 }
 
 /// The wobble's constants of an arm's lean form (empty without the `wobble` feature).
@@ -117,10 +117,6 @@ pub struct LeanWobble {
     small: bool,
     #[cfg(feature = "wobble")]
     joints: [WobbleJoint; MAX_JOINTS],
-    #[cfg(feature = "wobble")]
-    /// (Three more than [`MAX_LEAN_TERMS`], left zero: the six-axis copy reads four terms from
-    /// any start below [`MAX_LEAN_TERMS`] with no bounds test.)
-    terms: [Term; MAX_LEAN_TERMS + 3],
     /// ½ Σ |φ|² over the joints is at most [`MAX_DIRECTION_SECOND_ORDER`] (bounded by the terms'
     /// coefficients): the direction takes the small turns Rx(φx) Ry(φy) to first order.
     #[cfg(feature = "wobble")]
@@ -176,9 +172,8 @@ impl LeanWobble {
                 if taken + used > MAX_LEAN_TERMS {
                     return Ok(false);
                 }
-                let Some(terms) = out.terms.get_mut(taken..taken + used) else {
-                    return Ok(false);
-                };
+                let jw = &mut out.joints[i];
+                let terms = &mut jw.terms[..used];
                 for (t, src) in terms.iter_mut().zip(&w.terms[..used]) {
                     let order = u32::from(src.order);
                     // θ = θ' − offset: (s, c) → (s cos hc + c sin hc, c cos hc − s sin hc).
@@ -206,10 +201,7 @@ impl LeanWobble {
                     orders |= bit;
                 }
                 second += 0.5 * (bx_ * bx_ + by_ * by_);
-                let jw = &mut out.joints[i];
-                // (taken ≤ 15: at least one term of the 16 follows.)
-                (jw.start, jw.count) = (taken as u8, used as u8);
-                jw.packed = ((taken as u8) << 4) | (orders & 15);
+                (jw.count, jw.orders) = (used as u8, Orders::of(orders));
                 taken += used;
                 // (A, B) = M⁻¹ (φx, φy), M = [[f1x, f2x], [f1y, f2y]], |det M| ≥ 1 − MAX_AXIS_Z²
                 // (unit orthogonal axes): A = ax·φ, B = bx·φ.
@@ -264,19 +256,9 @@ impl LeanWobble {
     fn phi<const SMALL: bool>(&self, i: usize, c: f32, s: f32) -> [f32; 4] {
         let j = &self.joints[i];
         let (x, y) = if SMALL {
-            // Four terms from the start (below 16; the pool has three more): no bounds test.
-            let start = usize::from(j.packed >> 4);
-            match self.terms[start..].first_chunk::<4>() {
-                Some(t) => small_series(j.packed, t, c, s),
-                None => (0.0, 0.0),
-            }
+            small_series(j.orders, &j.terms, c, s)
         } else {
-            let start = usize::from(j.start);
-            // (A slice: `skip(start).take(count)` took 32 instructions a point more, measured.)
-            let terms = self
-                .terms
-                .get(start..start + usize::from(j.count))
-                .unwrap_or(&[]);
+            let terms = j.terms.get(..usize::from(j.count)).unwrap_or(&[]);
             let mut m = Multiples::<F32>::new(c, s);
             let (mut x, mut y) = (0.0f32, 0.0f32);
             for t in terms {
@@ -292,25 +274,64 @@ impl LeanWobble {
     }
 }
 
+/// A set of wobble orders 1 to 4, bit h − 1 for order h: an enum of its sixteen values, so
+/// that the jump on it needs neither a mask nor a range test (a `u8` masked to four bits took
+/// one instruction a joint more, measured).
+#[cfg(feature = "wobble")]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(u8)]
+enum Orders {
+    #[default]
+    O0,
+    O1,
+    O2,
+    O3,
+    O4,
+    O5,
+    O6,
+    O7,
+    O8,
+    O9,
+    O10,
+    O11,
+    O12,
+    O13,
+    O14,
+    O15,
+}
+
+#[cfg(feature = "wobble")]
+impl Orders {
+    /// The set of the low four bits of `bits`.
+    fn of(bits: u8) -> Orders {
+        use Orders::*;
+        const ALL: [Orders; 16] = [
+            O0, O1, O2, O3, O4, O5, O6, O7, O8, O9, O10, O11, O12, O13, O14, O15,
+        ];
+        ALL[usize::from(bits & 15)]
+    }
+}
+
 /// φx, φy of a joint's terms (sorted by order, the first as many as `orders` has bits, the
-/// rest not read) whose orders are the low four bits of `orders` (bit h − 1 for order h ≤ 4,
-/// the high bits ignored): one jump to the code of that set of orders ([`series`]); zeros
-/// where they are 0.
+/// rest not read) whose orders are `orders` (bit h − 1 for order h ≤ 4): one jump to the code
+/// of that set of orders ([`series`]); zeros where it is empty.
 #[cfg(feature = "wobble")]
 #[inline(always)]
-fn small_series(orders: u8, terms: &[Term; 4], c: f32, s: f32) -> (f32, f32) {
+fn small_series(orders: Orders, terms: &[Term; 4], c: f32, s: f32) -> (f32, f32) {
     macro_rules! arms {
-        ($($m:literal),*) => {
-            // (Masked: every value has an arm, so the jump has no range test.)
-            match orders & 15 {
-                $($m => series::<$m>(c, s, terms),)*
+        ($($v:ident $m:literal),*) => {
+            match orders {
+                $(Orders::$v => series::<$m>(c, s, terms),)*
                 // (c − c, s − s: +0 for the finite c, s, formed in this arm only; a constant
                 // zero was loaded before the jump on every joint.)
-                _ => (c - c, s - s),
+                Orders::O0 => (c - c, s - s),
             }
         };
     }
-    arms!(1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)
+    arms!(
+        O1 1, O2 2, O3 3, O4 4, O5 5, O6 6, O7 7, O8 8, O9 9, O10 10, O11 11, O12 12, O13 13,
+        O14 14, O15 15
+    )
 }
 
 /// φx, φy of the terms whose orders are the bits of `M` (bit h − 1 for order h ≤ 4), sorted
@@ -731,14 +752,14 @@ mod tests {
                 }
                 let mut four = [Term::default(); 4];
                 four[..terms.len()].copy_from_slice(&terms);
-                let got = small_series(orders, &four, c, s);
+                let got = small_series(Orders::of(orders), &four, c, s);
                 assert_eq!(
                     (got.0.to_bits(), got.1.to_bits()),
                     (x.to_bits(), y.to_bits())
                 );
             }
         }
-        assert_eq!(small_series(0, &pool, 0.6, 0.8), (0.0, 0.0));
+        assert_eq!(small_series(Orders::O0, &pool, 0.6, 0.8), (0.0, 0.0));
     }
 
     /// At the table's largest wobble (Σ |coefficients| up to 0.98e-3 a joint, the limit 1e-3) the left-out third

@@ -820,9 +820,10 @@ pub fn defmt_log(name: &str) {
 /// The most stack a QEMU hub may reach on the default table: its RAM for statics and stack
 /// (qemu-m4f 64 KiB; qemu-m0's budget, `boards/qemu-m0/budget.x`, 8 KiB) less a reserve for
 /// the tables this replay does not load (a wobble, a pose part: deeper boot paths) and for
-/// interrupt frames. Measured: 46,100 B and 5,492 B (rustup 1.95; 46,100 and 5,500 with
-/// Debian's 1.96), against 63,740 and 7,836 before the hub built its calibration in place; a
-/// change that gives the room back fails here rather than on a customer's hub.
+/// interrupt frames. Measured: 46,284 B and 5,492 B (rustup 1.95; 46,276 and 5,500 with
+/// Debian's 1.96; qemu-m4f 46,100 before the wobble's fixed room of four terms a joint),
+/// against 63,740 and 7,836 before the hub built its calibration in place; a change that
+/// gives the room back fails here rather than on a customer's hub.
 fn stack_ceiling(name: &str) -> u64 {
     match name {
         "qemu-m4f" => 64 * 1024 - 8 * 1024,
