@@ -138,6 +138,8 @@ struct Outcome {
     others: Vec<(String, usize)>,
     /// Whether some other candidate's design mean passed Holm at 0.05.
     others05: bool,
+    /// Whether the shoulder's design mean passed Holm at each of [`ALPHAS`] in the full model.
+    design_full: [bool; 2],
     /// The full model's other candidates named at the fleet's α (candidate, arms named).
     others_full: Vec<(String, usize)>,
     /// Whether some other candidate's design mean passed Holm at 0.05 in the full model.
@@ -212,15 +214,15 @@ fn fleet_once(gs: &[f64], base: u64, full: bool) -> Outcome {
     let o = fleet::Options::default();
     let p = pool_candidates(&start, &units, &arms, &testable, &o);
     let (mut named, design, others, others05) = read(&p.effects, gs.len(), false);
-    let (mut others_full, mut others_full05) = (Vec::new(), false);
+    let (mut others_full, mut others_full05, mut design_full) = (Vec::new(), false, [false; 2]);
     if full {
         let f = pool_candidates_full(&start, &units, &arms, &testable, &o);
         for (what, why) in &f.left_out {
             eprintln!("full model, seed {base}: {what}: {why}");
         }
-        let (n, _, of, of05) = read(&f.effects, gs.len(), true);
+        let (n, df, of, of05) = read(&f.effects, gs.len(), true);
         named.extend(n);
-        (others_full, others_full05) = (of, of05);
+        (others_full, others_full05, design_full) = (of, of05, df);
     }
     Outcome {
         named,
@@ -229,6 +231,7 @@ fn fleet_once(gs: &[f64], base: u64, full: bool) -> Outcome {
         others05,
         others_full,
         others_full05,
+        design_full,
     }
 }
 
@@ -257,7 +260,7 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
     );
     let mut tally: Tally = vec![[0usize; 4]; cols.len()];
     let (mut design, mut other_fleets, mut other_arms, mut other05) = ([0; 2], 0, 0, 0);
-    let (mut full_fleets, mut full_arms, mut full05) = (0, 0, 0);
+    let (mut full_fleets, mut full_arms, mut full05, mut full_design) = (0, 0, 0, [0; 2]);
     for s in 0..seeds {
         let o = fleet_once(gs, base + 100 * s, full);
         let mut cells = Vec::new();
@@ -277,7 +280,10 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
             o.others,
             o.others05,
             if full {
-                format!(" | full model: {:?} {}", o.others_full, o.others_full05)
+                format!(
+                    " | full model: design {}/{}, {:?} {}",
+                    o.design_full[0], o.design_full[1], o.others_full, o.others_full05
+                )
             } else {
                 String::new()
             }
@@ -285,6 +291,9 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
         full_fleets += (!o.others_full.is_empty()) as usize;
         full_arms += o.others_full.iter().map(|o| o.1).sum::<usize>();
         full05 += o.others_full05 as usize;
+        for (n, d) in full_design.iter_mut().zip(o.design_full) {
+            *n += d as usize;
+        }
         for (n, d) in design.iter_mut().zip(o.design) {
             *n += d as usize;
         }
@@ -316,13 +325,21 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
     );
     if full {
         println!(
+            "  full model: design mean of joint 2's compliance named (Holm): {}/{seeds} fleets at \
+             α = 0.01, {}/{seeds} at 0.05",
+            full_design[0], full_design[1]
+        );
+        println!(
             "  full model, other candidates named: in {full_fleets}/{seeds} fleets ({full_arms} arms) \
              at α = 0.01; design means in {full05}/{seeds} fleets at α = 0.05"
         );
     }
     let mut others = format!("{other_fleets} ({other_arms})");
     if full {
-        others += &format!("; full model {full_fleets} ({full_arms})");
+        others += &format!(
+            "; full model {full_fleets} ({full_arms}), its design passes {}, {}",
+            full_design[0], full_design[1]
+        );
     }
     (tally, design, others)
 }
