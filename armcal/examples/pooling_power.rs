@@ -23,7 +23,12 @@
 //!     cargo run --release -p armcal --example pooling_power [seeds [null_seeds [mixed_seeds [parts]]]]
 //!
 //! `parts` (all by default) picks fleets: a comma-separated list of `spread`, `null`, `mixed6`,
-//! `mixed7` (`pooling_power 0 0 300 mixed7`: the 7+1 mixed fleet over 300 seeds).
+//! `mixed7` (`pooling_power 0 0 300 mixed7`: the 7+1 mixed fleet over 300 seeds); `full` among
+//! them also pools every candidate in the **full model** (each conditional on all the others,
+//! [`armcal::diagnose::fleet_pooled::pool_candidates_full`]) and counts its product naming of
+//! the shoulder's candidate as two more columns (`full model @ 0.01`, `@ 0.05`) and its other
+//! candidates named apart (claims.md §7.9). `full` alone runs every fleet with it
+//! (`pooling_power 20 40 30 full`; `pooling_power 0 0 300 mixed7,full`).
 //!
 //! 20, 40 and 30 by default: 180 fleets, 7.5 minutes release on the shared 2-core
 //! machine (docs/results/claims.md §7.6).
@@ -31,7 +36,7 @@
 use armcal::data::{Dataset, Kind};
 use armcal::diagnose::candidates;
 use armcal::diagnose::fleet::{self, UnitData};
-use armcal::diagnose::fleet_pooled::{pool_candidates, PooledEffect};
+use armcal::diagnose::fleet_pooled::{pool_candidates, pool_candidates_full, PooledEffect};
 use armcal::diagnose::pooling::{self, Arm as PooledArm};
 use armcal::diagnose::pooling_rules::RULES;
 use armcal::params::Effect;
@@ -79,12 +84,17 @@ fn arm_data(seed: u64, g: f64) -> Dataset {
 /// product's) and 0.05 (the same estimates re-pooled, Holm at 0.05).
 const ALPHAS: [f64; 2] = [0.01, 0.05];
 
-/// Column labels: every rule of [`RULES`] at each of [`ALPHAS`].
-fn labels() -> Vec<String> {
-    ALPHAS
+/// Column labels: every rule of [`RULES`] at each of [`ALPHAS`], then (with `full`) the
+/// product's rule on the full model's estimates at each of [`ALPHAS`].
+fn labels(full: bool) -> Vec<String> {
+    let mut out: Vec<String> = ALPHAS
         .iter()
         .flat_map(|a| RULES.iter().map(move |r| format!("{} @ {a}", r.label())))
-        .collect()
+        .collect();
+    if full {
+        out.extend(ALPHAS.iter().map(|a| format!("full model @ {a}")));
+    }
+    out
 }
 
 /// Which arms each column of [`labels`] names for the shoulder's pooled candidate `p`
@@ -128,10 +138,54 @@ struct Outcome {
     others: Vec<(String, usize)>,
     /// Whether some other candidate's design mean passed Holm at 0.05.
     others05: bool,
+    /// Whether the shoulder's design mean passed Holm at each of [`ALPHAS`] in the full model.
+    design_full: [bool; 2],
+    /// The full model's other candidates named at the fleet's α (candidate, arms named).
+    others_full: Vec<(String, usize)>,
+    /// Whether some other candidate's design mean passed Holm at 0.05 in the full model.
+    others_full05: bool,
 }
 
-/// One fleet of compliances `gs` (arm k's data from seed `base + k`).
-fn fleet_once(gs: &[f64], base: u64) -> Outcome {
+/// The shoulder's candidate named by the product's rule at each of [`ALPHAS`] (per arm), the
+/// other candidates named at the fleet's α (candidate, arms named), and whether any other's
+/// design mean passed Holm at 0.05, from the pooled candidates `effects`.
+type Named = (Vec<Vec<bool>>, [bool; 2], Vec<(String, usize)>, bool);
+
+/// Reads [`Named`] from the pooled candidates `effects` (all rules of [`RULES`], or the
+/// product's only with `product_only`).
+fn read(effects: &[PooledEffect], arms: usize, product_only: bool) -> Named {
+    let ps: Vec<f64> = effects.iter().map(|e| e.design.mean_p).collect();
+    let holm05 = fleet::holm(&ps, 0.05);
+    let cols = if product_only {
+        ALPHAS.len()
+    } else {
+        ALPHAS.len() * RULES.len()
+    };
+    let mut out: Named = (vec![vec![false; arms]; cols], [false; 2], Vec::new(), false);
+    for (e, &n05) in effects.iter().zip(&holm05) {
+        if e.effect == Effect::Gravity(1) {
+            let (all, design) = named(e, n05);
+            out.0 = if product_only {
+                // The product is the first rule at each α.
+                all.into_iter().step_by(RULES.len()).collect()
+            } else {
+                all
+            };
+            out.1 = design;
+        } else {
+            if e.named {
+                let arms = e.arms.iter().filter(|a| a.value.named_pooled).count();
+                out.2.push((e.term.clone(), arms));
+            }
+            out.3 |= n05;
+        }
+    }
+    out
+}
+
+/// One fleet of compliances `gs` (arm k's data from seed `base + k`); with `full`, also
+/// pooled in the full model.
+fn fleet_once(gs: &[f64], base: u64, full: bool) -> Outcome {
     let start = Arm::default6();
     let units: Vec<UnitData> = gs
         .iter()
@@ -159,41 +213,42 @@ fn fleet_once(gs: &[f64], base: u64) -> Outcome {
         .collect();
     let o = fleet::Options::default();
     let p = pool_candidates(&start, &units, &arms, &testable, &o);
-    let ps: Vec<f64> = p.effects.iter().map(|e| e.design.mean_p).collect();
-    let holm05 = fleet::holm(&ps, 0.05);
-    let mut out = Outcome {
-        named: vec![vec![false; gs.len()]; labels().len()],
-        design: [false; 2],
-        others: Vec::new(),
-        others05: false,
-    };
-    for (e, &n05) in p.effects.iter().zip(&holm05) {
-        if e.effect == Effect::Gravity(1) {
-            (out.named, out.design) = named(e, n05);
-        } else {
-            if e.named {
-                let arms = e.arms.iter().filter(|a| a.value.named_pooled).count();
-                out.others.push((e.term.clone(), arms));
-            }
-            out.others05 |= n05;
+    let (mut named, design, others, others05) = read(&p.effects, gs.len(), false);
+    let (mut others_full, mut others_full05, mut design_full) = (Vec::new(), false, [false; 2]);
+    if full {
+        let f = pool_candidates_full(&start, &units, &arms, &testable, &o);
+        for (what, why) in &f.left_out {
+            eprintln!("full model, seed {base}: {what}: {why}");
         }
+        let (n, df, of, of05) = read(&f.effects, gs.len(), true);
+        named.extend(n);
+        (others_full, others_full05, design_full) = (of, of05, df);
     }
-    out
+    Outcome {
+        named,
+        design,
+        others,
+        others05,
+        others_full,
+        others_full05,
+        design_full,
+    }
 }
 
 /// Per column: arms with the effect named, fleets with every such arm named, arms without it
 /// named, fleets with any of those named.
 type Tally = Vec<[usize; 4]>;
 
-/// Runs `seeds` fleets of compliances `gs`, prints each and the summary; returns the tally,
-/// the fleets whose design mean passed at each of [`ALPHAS`], and the fleets with another
-/// candidate named at the fleet's α.
-fn run(title: &str, gs: &[f64], base: u64, seeds: u64) -> (Tally, [usize; 2], usize) {
+/// Runs `seeds` fleets of compliances `gs` (with `full`, also in the full model), prints each
+/// and the summary; returns the tally, the fleets whose design mean passed at each of
+/// [`ALPHAS`], and the fleets with another candidate named at the fleet's α (the arms named),
+/// the full model's after.
+fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [usize; 2], String) {
     let with: Vec<bool> = gs.iter().map(|g| *g != 0.0).collect();
     let n_with = with.iter().filter(|w| **w).count();
     let n_without = gs.len() - n_with;
     let gs_text: Vec<String> = gs.iter().map(|g| format!("{:.2}", g * 1e9)).collect();
-    let cols = labels();
+    let cols = labels(full);
     println!(
         "{title}: {seeds} fleets of {} arms, joint-2 compliance [{}]e-9 rad/mm",
         gs.len(),
@@ -205,8 +260,9 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64) -> (Tally, [usize; 2], us
     );
     let mut tally: Tally = vec![[0usize; 4]; cols.len()];
     let (mut design, mut other_fleets, mut other_arms, mut other05) = ([0; 2], 0, 0, 0);
+    let (mut full_fleets, mut full_arms, mut full05, mut full_design) = (0, 0, 0, [0; 2]);
     for s in 0..seeds {
-        let o = fleet_once(gs, base + 100 * s);
+        let o = fleet_once(gs, base + 100 * s, full);
         let mut cells = Vec::new();
         for (t, r) in tally.iter_mut().zip(&o.named) {
             let right = r.iter().zip(&with).filter(|(n, w)| **n && **w).count();
@@ -218,12 +274,26 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64) -> (Tally, [usize; 2], us
             cells.push(format!("{right}/{wrong}"));
         }
         println!(
-            "  {s:>4}  {:<11}  {} | {:?} {}",
+            "  {s:>4}  {:<11}  {} | {:?} {}{}",
             format!("{}/{}", o.design[0], o.design[1]),
             cells.join("  "),
             o.others,
-            o.others05
+            o.others05,
+            if full {
+                format!(
+                    " | full model: design {}/{}, {:?} {}",
+                    o.design_full[0], o.design_full[1], o.others_full, o.others_full05
+                )
+            } else {
+                String::new()
+            }
         );
+        full_fleets += (!o.others_full.is_empty()) as usize;
+        full_arms += o.others_full.iter().map(|o| o.1).sum::<usize>();
+        full05 += o.others_full05 as usize;
+        for (n, d) in full_design.iter_mut().zip(o.design_full) {
+            *n += d as usize;
+        }
         for (n, d) in design.iter_mut().zip(o.design) {
             *n += d as usize;
         }
@@ -253,7 +323,25 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64) -> (Tally, [usize; 2], us
         "  other candidates named: in {other_fleets}/{seeds} fleets ({other_arms} arms) at α = 0.01; \
          design means in {other05}/{seeds} fleets at α = 0.05"
     );
-    (tally, design, other_fleets)
+    if full {
+        println!(
+            "  full model: design mean of joint 2's compliance named (Holm): {}/{seeds} fleets at \
+             α = 0.01, {}/{seeds} at 0.05",
+            full_design[0], full_design[1]
+        );
+        println!(
+            "  full model, other candidates named: in {full_fleets}/{seeds} fleets ({full_arms} arms) \
+             at α = 0.01; design means in {full05}/{seeds} fleets at α = 0.05"
+        );
+    }
+    let mut others = format!("{other_fleets} ({other_arms})");
+    if full {
+        others += &format!(
+            "; full model {full_fleets} ({full_arms}), its design passes {}, {}",
+            full_design[0], full_design[1]
+        );
+    }
+    (tally, design, others)
 }
 
 /// A compliance spread ±50 % around `mean` over `n` arms.
@@ -275,12 +363,18 @@ fn main() {
     let parts = std::env::args()
         .nth(4)
         .unwrap_or_else(|| "spread,null,mixed6,mixed7".to_string());
+    let full = parts.split(',').any(|p| p == "full");
+    let parts = if parts == "full" {
+        "spread,null,mixed6,mixed7".to_string()
+    } else {
+        parts
+    };
     let part = |name: &str| parts.split(',').any(|p| p == name);
     let t = std::time::Instant::now();
-    let cols = labels();
+    let cols = labels(full);
     let mut summary = Vec::new();
     for mean in MEANS.into_iter().filter(|_| part("spread")) {
-        let (tally, design, others) = run("spread fleet", &spread(mean, ARMS), 500, seeds);
+        let (tally, design, others) = run("spread fleet", &spread(mean, ARMS), 500, seeds, full);
         println!("({:.0} s)", t.elapsed().as_secs_f64());
         summary.push((
             format!("spread {:.1}e-9", mean * 1e9),
@@ -291,7 +385,7 @@ fn main() {
         ));
     }
     if part("null") {
-        let (tally, design, others) = run("null fleet", &[0.0; ARMS], 10_000, null_seeds);
+        let (tally, design, others) = run("null fleet", &[0.0; ARMS], 10_000, null_seeds, full);
         println!("({:.0} s)", t.elapsed().as_secs_f64());
         summary.push(("null".to_string(), null_seeds, tally, design, others));
     }
@@ -301,7 +395,7 @@ fn main() {
     {
         let mut gs = spread(MIXED, with);
         gs.resize(ARMS, 0.0);
-        let (tally, design, others) = run("mixed fleet", &gs, 30_000, mixed_seeds);
+        let (tally, design, others) = run("mixed fleet", &gs, 30_000, mixed_seeds, full);
         println!("({:.0} s)", t.elapsed().as_secs_f64());
         summary.push((
             format!("mixed {with}+{} at {:.1}e-9", ARMS - with, MIXED * 1e9),
@@ -318,7 +412,7 @@ fn main() {
          arms without it named | fleets with a false cause)"
     );
     println!(
-        "fleet | seeds | design passes at 0.01, 0.05 | other candidates named | {}",
+        "fleet | seeds | design passes at 0.01, 0.05 | other candidates named: fleets (arms) | {}",
         cols.join(" | ")
     );
     for (name, n, tally, design, others) in &summary {

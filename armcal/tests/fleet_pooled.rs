@@ -8,7 +8,10 @@ mod common;
 use armcal::data::{Dataset, Kind};
 use armcal::diagnose::candidates;
 use armcal::diagnose::fleet::{self, UnitData};
-use armcal::diagnose::fleet_pooled::{pool_arms, PooledFleet};
+use armcal::diagnose::fleet_pooled::{
+    pool_arms, pool_candidates, pool_candidates_full, PooledFleet,
+};
+use armcal::diagnose::pooling;
 use armcal::params::Effect;
 use armcal::sim;
 use quatarm_ref::arm::Arm;
@@ -25,8 +28,19 @@ fn arm_data(seed: u64, g: f64) -> Dataset {
     common::in_sessions(d, 4, "(simulated arm)")
 }
 
+/// A fleet of arms of compliances `gs` (arm k from seed `seed + k`), each arm its own
+/// recording: its recordings, arms and each recording's testable candidates.
+type Inputs = (Vec<UnitData>, Vec<(String, Vec<usize>)>, Vec<Vec<Effect>>);
+
 /// The pooled stage over eight arms of compliances `gs`, each arm its own recording.
 fn pooled(gs: &[f64], seed: u64) -> PooledFleet {
+    let (units, arms, testable) = fleet_inputs(gs, seed);
+    let start = Arm::default6();
+    pool_arms(&start, &units, &arms, &testable, &fleet::Options::default()).unwrap()
+}
+
+/// The inputs of [`pooled`].
+fn fleet_inputs(gs: &[f64], seed: u64) -> Inputs {
     let units: Vec<UnitData> = gs
         .iter()
         .enumerate()
@@ -52,7 +66,90 @@ fn pooled(gs: &[f64], seed: u64) -> PooledFleet {
                 .collect()
         })
         .collect();
-    pool_arms(&start, &units, &arms, &testable, &fleet::Options::default()).unwrap()
+    (units, arms, testable)
+}
+
+#[test]
+fn the_full_model_of_one_effect_is_its_estimate_alone() {
+    // `estimate_joint` of one candidate is `estimate` (the same fits); of two it differs,
+    // and a repeated candidate or a two-unknown effect is refused.
+    let d = arm_data(700, 5e-9);
+    let start = Arm::default6();
+    let o = fleet::geometric_options(&fleet::Options::default());
+    let alone = pooling::estimate(&start, &d, &o, Effect::Gravity(1))
+        .unwrap()
+        .unwrap();
+    let joint = pooling::estimate_joint(&start, &d, &o, &[Effect::Gravity(1)])
+        .unwrap()
+        .unwrap();
+    assert_eq!(joint, vec![alone]);
+    let two = pooling::estimate_joint(&start, &d, &o, &[Effect::Gravity(2), Effect::Gravity(1)])
+        .unwrap()
+        .unwrap();
+    assert_eq!((two.len(), two[1].df), (2, 3.0));
+    assert!(two[1].value != alone.value && two[1].se > 0.0, "{two:?}");
+    assert!(
+        pooling::estimate_joint(&start, &d, &o, &[Effect::Gravity(1), Effect::Gravity(1)])
+            .unwrap()
+            .is_none()
+    );
+    assert!(pooling::estimate_joint(&start, &d, &o, &[])
+        .unwrap()
+        .is_none());
+}
+
+#[test]
+fn an_alias_the_product_names_is_not_named_in_the_full_model() {
+    // The spread fleet of `examples/pooling_power.rs` at 7.5e-9 rad/mm, seed s = 5
+    // (docs/results/claims.md §7.6, §7.7, §7.9): fitted against the geometric model alone,
+    // joint 5's compliance takes up part of the shoulder's (they share its gravity lever), its
+    // design mean passes Holm and the product names it for arms that do not have it. In the
+    // full model (every candidate conditional on all the others) it is not named, and the
+    // shoulder's compliance still is.
+    let gs: Vec<f64> = (0..8).map(|k| 7.5e-9 * (0.5 + k as f64 / 7.0)).collect();
+    let (units, arms, testable) = fleet_inputs(&gs, 1000);
+    let start = Arm::default6();
+    let o = fleet::Options::default();
+    let product = pool_candidates(&start, &units, &arms, &testable, &o);
+    let alias = |p: &PooledFleet| {
+        p.effects
+            .iter()
+            .find(|e| e.effect == Effect::Gravity(4))
+            .expect("joint 5's compliance pooled")
+            .clone()
+    };
+    let a = alias(&product);
+    assert!(
+        a.named && a.arms.iter().any(|a| a.value.named_pooled),
+        "{:?}",
+        a.design
+    );
+    let full = pool_candidates_full(&start, &units, &arms, &testable, &o);
+    assert!(full.left_out.is_empty(), "{:?}", full.left_out);
+    assert_eq!(full.effects.len(), product.effects.len());
+    let a = alias(&full);
+    assert!(
+        !a.named && a.arms.iter().all(|a| !a.value.named_pooled),
+        "{:?}",
+        a.design
+    );
+    for e in full
+        .effects
+        .iter()
+        .filter(|e| e.effect != Effect::Gravity(1))
+    {
+        assert!(!e.named, "{} named: {:?}", e.term, e.design);
+    }
+    let g = full
+        .effects
+        .iter()
+        .find(|e| e.effect == Effect::Gravity(1))
+        .expect("the shoulder's compliance pooled");
+    assert!(
+        g.named && g.arms.iter().any(|a| a.value.named_pooled),
+        "{:?}",
+        g.design
+    );
 }
 
 #[test]

@@ -201,6 +201,26 @@ pub fn pool_candidates(
     opts: &Options,
 ) -> PooledFleet {
     let (used, left_out) = recordings(units, arms);
+    pool_alone(start, units, &used, left_out, testable, opts)
+}
+
+/// [`pool_candidates`] with every candidate estimated in the **full model**: each recording's
+/// values of all the shared candidates from one fit with all their terms
+/// ([`pooling::estimate_joint`]), so each candidate is conditional on all the others (a Wald
+/// test in one model fixed before the data, whose level depends on no selection); then pooled
+/// and named exactly as the product does (Holm over the candidates at `opts.alpha`, each arm by
+/// its pooled interval). A comparison measured beside the product's naming
+/// (docs/results/claims.md §7.9), not the product's: `armcal diagnose --fleet` does not call
+/// it. When a recording's full fit fails or cannot be made, nothing is pooled and the reason
+/// is in `left_out`.
+pub fn pool_candidates_full(
+    start: &Arm,
+    units: &[UnitData],
+    arms: &[(String, Vec<usize>)],
+    testable: &[Vec<Effect>],
+    opts: &Options,
+) -> PooledFleet {
+    let (used, left_out) = recordings(units, arms);
     let mut out = PooledFleet {
         alpha: opts.alpha,
         effects: Vec::new(),
@@ -210,16 +230,79 @@ pub fn pool_candidates(
         return out;
     }
     let calib = geometric_options(opts);
-    for e in shared_vocabulary(&used, testable) {
-        if let Some(p) = pool_effect(
-            start,
-            units,
-            &used,
-            &calib,
-            e,
-            opts.alpha,
-            &mut out.left_out,
-        ) {
+    let vocabulary: Vec<Effect> = shared_vocabulary(&used, testable).into_iter().collect();
+    let terms: Vec<String> = vocabulary.iter().map(|e| e.spec()).collect();
+    // Per arm, per recording: every candidate's estimate in the full model.
+    let mut per_arm: Vec<Vec<Vec<Estimate>>> = Vec::new();
+    for (_, recs) in &used {
+        let mut est = Vec::new();
+        for (r, _) in recs {
+            match pooling::estimate_joint(start, &units[*r].data, &calib, &vocabulary) {
+                Ok(Some(v)) => est.push(v),
+                Ok(None) => {
+                    out.left_out.push((
+                        terms.join(" "),
+                        format!(
+                            "the full model cannot be estimated on recording {}",
+                            units[*r].name
+                        ),
+                    ));
+                    return out;
+                }
+                Err(err) => {
+                    out.left_out.push((
+                        terms.join(" "),
+                        format!(
+                            "the full model's fit of recording {} failed: {err}",
+                            units[*r].name
+                        ),
+                    ));
+                    return out;
+                }
+            }
+        }
+        per_arm.push(est);
+    }
+    for (i, &e) in vocabulary.iter().enumerate() {
+        let mine: Option<Vec<ArmEstimate>> = per_arm
+            .iter()
+            .map(|recs| {
+                let est: Vec<Estimate> = recs.iter().map(|v| v[i]).collect();
+                let c = pooling::combine_recordings(&est)?;
+                Some((est, c))
+            })
+            .collect();
+        if let Some(p) = mine.and_then(|m| pool_estimates(units, &used, e, m, opts.alpha)) {
+            out.effects.push(p);
+        }
+    }
+    name_by_holm(&mut out.effects, opts.alpha);
+    out.effects
+        .sort_by(|a, b| a.design.mean_p.total_cmp(&b.design.mean_p));
+    out
+}
+
+/// [`pool_candidates`] on the used arms: each candidate estimated against the geometric model
+/// alone.
+fn pool_alone(
+    start: &Arm,
+    units: &[UnitData],
+    used: &[Used],
+    left_out: Vec<LeftOut>,
+    testable: &[Vec<Effect>],
+    opts: &Options,
+) -> PooledFleet {
+    let mut out = PooledFleet {
+        alpha: opts.alpha,
+        effects: Vec::new(),
+        left_out,
+    };
+    if used.len() < super::fleet::MIN_FLEET_UNITS {
+        return out;
+    }
+    let calib = geometric_options(opts);
+    for e in shared_vocabulary(used, testable) {
+        if let Some(p) = pool_effect(start, units, used, &calib, e, opts.alpha, &mut out.left_out) {
             out.effects.push(p);
         }
     }
@@ -300,6 +383,17 @@ fn pool_effect(
     left_out: &mut Vec<LeftOut>,
 ) -> Option<PooledEffect> {
     let per_arm = arm_estimates(start, units, used, calib, e, left_out)?;
+    pool_estimates(units, used, e, per_arm, alpha)
+}
+
+/// The candidate `e` pooled from each used arm's estimates `per_arm` (not yet named).
+fn pool_estimates(
+    units: &[UnitData],
+    used: &[Used],
+    e: Effect,
+    per_arm: Vec<ArmEstimate>,
+    alpha: f64,
+) -> Option<PooledEffect> {
     let y: Vec<f64> = per_arm.iter().map(|(_, c)| c.estimate).collect();
     let se: Vec<f64> = per_arm.iter().map(|(_, c)| c.se).collect();
     let df: Vec<f64> = per_arm.iter().map(|(_, c)| c.df).collect();

@@ -561,6 +561,67 @@ pub fn estimate(
     }))
 }
 
+/// Every one-unknown effect of `effects` estimated at once, each conditional on all the others
+/// (the full model, "type III"): one fit with all their terms (`Terms::with(effects)`) on all
+/// of the arm's sessions, and each effect's jackknife error over the sessions from the same
+/// leave-one-session-out fits, on n − 1 degrees of freedom as [`estimate`]. Why: fitted against
+/// the geometric model alone, a candidate sharing a strong effect's lever takes up a share of it
+/// in every arm (the alias of docs/results/claims.md §7.6); in the full model each candidate is
+/// measured for what the others do not explain, in one model fixed before the data are seen
+/// (no selection), at the price of the variance their collinearity adds. `None` below
+/// [`crate::stats::MIN_UNITS`] sessions, for an empty list, a repeated effect or an effect of
+/// more than one unknown. The values are in `effects`' order.
+pub fn estimate_joint(
+    start: &quatarm_ref::arm::Arm,
+    data: &Dataset,
+    opts: &crate::fit::options::Options,
+    effects: &[Effect],
+) -> Result<Option<Vec<Estimate>>, CalibError> {
+    let folds = crate::fit::holdout::by_group(data);
+    let params: Vec<_> = effects.iter().map(|e| e.params()).collect();
+    let repeated = effects
+        .iter()
+        .enumerate()
+        .any(|(i, e)| effects[..i].contains(e));
+    if effects.is_empty()
+        || repeated
+        || params.iter().any(|p| p.len() != 1)
+        || folds.len() < crate::stats::MIN_UNITS
+    {
+        return Ok(None);
+    }
+    let o = crate::fit::options::Options {
+        terms: Terms::with(effects),
+        ..opts.clone()
+    };
+    let all = calib::calibrate(start, data, &o)?;
+    let n = data.rows.len();
+    let mut loo: Vec<Vec<f64>> = vec![Vec::new(); effects.len()];
+    for out in &folds {
+        let keep: Vec<usize> = (0..n).filter(|i| !out.contains(i)).collect();
+        let fit = calib::calibrate(start, &data.subset(&keep), &o)?;
+        for (l, p) in loo.iter_mut().zip(&params) {
+            l.push(p[0].value(&fit.arm));
+        }
+    }
+    let k = folds.len() as f64;
+    Ok(Some(
+        params
+            .iter()
+            .zip(&loo)
+            .map(|(p, l)| {
+                let mean = l.iter().sum::<f64>() / k;
+                let ss = l.iter().map(|x| (x - mean).powi(2)).sum::<f64>();
+                Estimate {
+                    value: p[0].value(&all.arm),
+                    se: ((k - 1.0) / k * ss).sqrt(),
+                    df: k - 1.0,
+                }
+            })
+            .collect(),
+    ))
+}
+
 /// One session of an arm scored with the pooled value fixed.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PooledFold {
