@@ -200,8 +200,11 @@ pub fn pool_candidates(
     testable: &[Vec<Effect>],
     opts: &Options,
 ) -> PooledFleet {
-    let (used, left_out) = recordings(units, arms);
-    pool_alone(start, units, &used, left_out, testable, opts)
+    let (used, out) = match begin(units, arms, opts.alpha) {
+        Ok(begun) => begun,
+        Err(out) => return out,
+    };
+    pool_alone(start, units, &used, out, testable, opts)
 }
 
 /// [`pool_candidates`] with every candidate estimated in the **full model**: each recording's
@@ -220,15 +223,10 @@ pub fn pool_candidates_full(
     testable: &[Vec<Effect>],
     opts: &Options,
 ) -> PooledFleet {
-    let (used, left_out) = recordings(units, arms);
-    let mut out = PooledFleet {
-        alpha: opts.alpha,
-        effects: Vec::new(),
-        left_out,
+    let (used, mut out) = match begin(units, arms, opts.alpha) {
+        Ok(begun) => begun,
+        Err(out) => return out,
     };
-    if used.len() < super::fleet::MIN_FLEET_UNITS {
-        return out;
-    }
     let calib = geometric_options(opts);
     let vocabulary: Vec<Effect> = shared_vocabulary(&used, testable).into_iter().collect();
     let terms: Vec<String> = vocabulary.iter().map(|e| e.spec()).collect();
@@ -276,7 +274,33 @@ pub fn pool_candidates_full(
             out.effects.push(p);
         }
     }
-    name_by_holm(&mut out.effects, opts.alpha);
+    named(out)
+}
+
+/// The recordings each arm pools ([`recordings`]) and the fleet's result so far (nothing
+/// named, what was left out and why); `Err` with that result where fewer arms than a fleet
+/// needs are left, so that both namings (alone and in the full model) start and stop alike.
+fn begin(
+    units: &[UnitData],
+    arms: &[(String, Vec<usize>)],
+    alpha: f64,
+) -> Result<(Vec<Used>, PooledFleet), PooledFleet> {
+    let (used, left_out) = recordings(units, arms);
+    let out = PooledFleet {
+        alpha,
+        effects: Vec::new(),
+        left_out,
+    };
+    if used.len() < super::fleet::MIN_FLEET_UNITS {
+        return Err(out);
+    }
+    Ok((used, out))
+}
+
+/// `out` with its candidates named by Holm at its α and listed by their design mean's p,
+/// smallest first: the last step of both namings.
+fn named(mut out: PooledFleet) -> PooledFleet {
+    name_by_holm(&mut out.effects, out.alpha);
     out.effects
         .sort_by(|a, b| a.design.mean_p.total_cmp(&b.design.mean_p));
     out
@@ -288,28 +312,17 @@ fn pool_alone(
     start: &Arm,
     units: &[UnitData],
     used: &[Used],
-    left_out: Vec<LeftOut>,
+    mut out: PooledFleet,
     testable: &[Vec<Effect>],
     opts: &Options,
 ) -> PooledFleet {
-    let mut out = PooledFleet {
-        alpha: opts.alpha,
-        effects: Vec::new(),
-        left_out,
-    };
-    if used.len() < super::fleet::MIN_FLEET_UNITS {
-        return out;
-    }
     let calib = geometric_options(opts);
     for e in shared_vocabulary(used, testable) {
         if let Some(p) = pool_effect(start, units, used, &calib, e, opts.alpha, &mut out.left_out) {
             out.effects.push(p);
         }
     }
-    name_by_holm(&mut out.effects, opts.alpha);
-    out.effects
-        .sort_by(|a, b| a.design.mean_p.total_cmp(&b.design.mean_p));
-    out
+    named(out)
 }
 
 /// The one-unknown candidates every used recording can test (`testable`, one list per
