@@ -547,16 +547,23 @@ fn mukca() {
             }
             pooled += c.covered_nested * c.probings as f64;
             judged += c.probings;
-            sessions.extend(
-                c.per_session
-                    .iter()
-                    .map(|(_, n, f, ..)| ((f * *n as f64).round() as usize, *n)),
-            );
             let k = (c.covered_nested * c.probings as f64).round() as usize;
             let (lo, hi) = forms::wilson(k, c.probings);
+            // The unit's own sessions resampled: its probings are not independent (a session
+            // at a new placement is covered or missed as a whole), so this is the interval to
+            // read against the band; Wilson's treats them as independent.
+            let own: Vec<(usize, usize)> = c
+                .per_session
+                .iter()
+                .map(|(_, n, f, ..)| ((f * *n as f64).round() as usize, *n))
+                .collect();
+            let (sl, sh) = forms::session_bootstrap(&own, 20_000, 27);
+            sessions.extend_from_slice(&own);
             println!(
-                "    nested {:.3} (Wilson 95 % [{lo:.3}, {hi:.3}]), {}",
+                "    nested {:.3} (Wilson 95 % [{lo:.3}, {hi:.3}]; its {} sessions resampled \
+                 [{sl:.3}, {sh:.3}]), {}",
                 c.covered_nested,
+                own.len(),
                 if (0.88..=0.99).contains(&c.covered_nested) {
                     "in the band 88–99 %"
                 } else {
