@@ -251,12 +251,39 @@ fn mukca_grouping(
     let se: Vec<f64> = p.arms.iter().map(|a| a.value.se).collect();
     let df: Vec<f64> = p.arms.iter().map(|a| a.value.se_df).collect();
     let v: Vec<f64> = p.arms.iter().map(|a| a.combined.model_se).collect();
-    match pooling::pool_fleet_scale(&y, &se, &df, &v, ALPHA) {
+    // Arms with no recording of 3 sessions (no jackknife error: panda_7's 2 sessions) join
+    // through the fleet's scale: their recording of most sessions (2 or more), fitted once.
+    let mut joined_names = Vec::new();
+    let mut joined = Vec::new();
+    for (name, recs) in grouping
+        .iter()
+        .filter(|(a, _)| p.arms.iter().all(|b| b.arm != *a))
+    {
+        let best = recs
+            .iter()
+            .map(|r| &units[index(r)])
+            .max_by_key(|u| armcal::fit::holdout::by_group(&u.data).len())
+            .filter(|u| armcal::fit::holdout::by_group(&u.data).len() >= 2);
+        let Some(u) = best else { continue };
+        let geo = fleet::geometric_options(o);
+        if let Ok(Some(e)) = pooling::estimate_in_sample(start, &u.data, &geo, Effect::Gravity(1)) {
+            println!(
+                "    {name} (recording {}, {} sessions, no jackknife): {:+.3}, model se {:.4}",
+                u.name,
+                armcal::fit::holdout::by_group(&u.data).len(),
+                e.0 * 1e6,
+                e.1 * 1e6
+            );
+            joined_names.push(name.to_string());
+            joined.push(e);
+        }
+    }
+    match pooling::pool_fleet_scale_joined(&y, &se, &df, &v, &joined, ALPHA) {
         Some((disp, scaled, fd, farms)) => {
             if let Some(disp) = disp {
                 let rs: Vec<String> = disp.ratios.iter().map(|r| format!("{r:.1}")).collect();
                 println!(
-                    "  error's scale across the arms: r = [{}], φ̂ = {:.1} on {} df, Bartlett {:.2} (p = {:.3}): scale {}",
+                    "  error's scale across the arms: r = [{}], φ̂ = {:.1} on {:.1} df, Bartlett {:.2} (p = {:.3}): scale {}",
                     rs.join(", "),
                     disp.phi,
                     disp.df,
@@ -271,10 +298,15 @@ fn mukca_grouping(
                 fd.mean_p,
                 fd.spread * 1e6
             );
-            for (a, f) in p.arms.iter().zip(&farms) {
+            let names = p
+                .arms
+                .iter()
+                .map(|a| a.arm.clone())
+                .chain(joined_names.iter().cloned());
+            for (a, f) in names.zip(&farms) {
                 println!(
                     "    {:<8} s̃ {:.3} ({:.0} df) → pooled {:+.3} ± {:.3} ({:.0} df, named {})",
-                    a.arm,
+                    a,
                     f.se * 1e6,
                     f.se_df,
                     f.pooled * 1e6,

@@ -367,11 +367,40 @@ pub fn pool_fleet_scale(
     model_se: &[f64],
     alpha: f64,
 ) -> Option<(Option<Dispersion>, bool, Design, Vec<Arm>)> {
+    pool_fleet_scale_joined(y, se, df, model_se, &[], alpha)
+}
+
+/// [`pool_fleet_scale`] with arms that have **no jackknife error** joining (issue 30's
+/// recordings of fewer than 3 sessions, panda_7's 2): `joined` holds each such arm's value
+/// and model-based error, (y, v). They take no part in φ̂ (they have no ratio to give); when
+/// the fleet's scale is used they are pooled with s̃ = √φ̂·v on φ̂'s df like every other arm,
+/// their arms after `y`'s; when it is not (the ratios are not homogeneous, or there is no
+/// dispersion), they cannot be weighed and are left out (the pool then has `y.len()` arms).
+/// What it assumes beyond [`pool_fleet_scale`]: the arm without a jackknife shares the
+/// others' φ, which nothing can test (no ratio of its own); with 2 sessions its residuals'
+/// correlation within a session is no better known than theirs.
+pub fn pool_fleet_scale_joined(
+    y: &[f64],
+    se: &[f64],
+    df: &[f64],
+    model_se: &[f64],
+    joined: &[(f64, f64)],
+    alpha: f64,
+) -> Option<(Option<Dispersion>, bool, Design, Vec<Arm>)> {
     let disp = dispersion(se, df, model_se);
     match &disp {
         Some(d) if d.p >= alpha => {
-            let scaled: Vec<f64> = model_se.iter().map(|v| d.phi.sqrt() * v).collect();
-            let (design, arms) = pool(y, &scaled, &vec![d.df; y.len()], alpha)?;
+            let ys: Vec<f64> = y
+                .iter()
+                .copied()
+                .chain(joined.iter().map(|j| j.0))
+                .collect();
+            let scaled: Vec<f64> = model_se
+                .iter()
+                .chain(joined.iter().map(|j| &j.1))
+                .map(|v| d.phi.sqrt() * v)
+                .collect();
+            let (design, arms) = pool(&ys, &scaled, &vec![d.df; ys.len()], alpha)?;
             Some((disp, true, design, arms))
         }
         _ => {
@@ -379,6 +408,31 @@ pub fn pool_fleet_scale(
             Some((disp, false, design, arms))
         }
     }
+}
+
+/// An effect's value and its fit's model-based (in-sample) error from one fit on all of
+/// `data`'s sessions, with no jackknife: for a recording of too few sessions to have one,
+/// which can join a pool only through the fleet's error scale ([`pool_fleet_scale_joined`]).
+/// `None` for an effect of more than one unknown.
+pub fn estimate_in_sample(
+    start: &quatarm_ref::arm::Arm,
+    data: &Dataset,
+    opts: &crate::fit::options::Options,
+    effect: Effect,
+) -> Result<Option<(f64, f64)>, CalibError> {
+    let params = effect.params();
+    if params.len() != 1 {
+        return Ok(None);
+    }
+    let o = crate::fit::options::Options {
+        terms: Terms::with(&[effect]),
+        ..opts.clone()
+    };
+    let all = calib::calibrate(start, data, &o)?;
+    Ok(Some((
+        params[0].value(&all.arm),
+        model_se(&all, &params[0]),
+    )))
 }
 
 /// One estimate of a one-unknown effect ([`estimate`]): its value, its standard error and the
@@ -689,13 +743,13 @@ pub fn estimate(
     if params.len() != 1 || folds.len() < crate::stats::MIN_UNITS {
         return Ok(None);
     }
+    let Some((value, model_se)) = estimate_in_sample(start, data, opts, effect)? else {
+        return Ok(None);
+    };
     let o = crate::fit::options::Options {
         terms: Terms::with(&[effect]),
         ..opts.clone()
     };
-    let all = calib::calibrate(start, data, &o)?;
-    let value = params[0].value(&all.arm);
-    let model_se = model_se(&all, &params[0]);
     let n = data.rows.len();
     let mut loo = Vec::new();
     for out in &folds {
@@ -1157,6 +1211,26 @@ mod tests {
         assert!(!scaled && d.unwrap().p < 0.01);
         let (pd, pa) = pool(&y, &wild, &[3.0; 8], 0.01).unwrap();
         assert_eq!((design, arms), (pd, pa));
+    }
+
+    #[test]
+    fn an_arm_without_a_jackknife_joins_only_through_the_fleets_scale() {
+        let y = [0.5, 1.4, 0.9, 1.2, 0.6, 1.5, 0.8, 1.1];
+        let v = [0.3; 8];
+        let se = [0.45, 0.7, 0.5, 0.8, 0.6, 0.55, 0.75, 0.65];
+        let (d, scaled, _, alone) = pool_fleet_scale(&y, &se, &[3.0; 8], &v, 0.01).unwrap();
+        let (dj, scaled_j, _, arms) =
+            pool_fleet_scale_joined(&y, &se, &[3.0; 8], &v, &[(1.0, 0.6)], 0.01).unwrap();
+        // φ̂ is the other arms' alone; the joined arm gets √φ̂ times its model error.
+        assert!(scaled && scaled_j && d == dj && arms.len() == 9 && alone.len() == 8);
+        let phi = dj.unwrap().phi;
+        assert!((arms[8].se - phi.sqrt() * 0.6).abs() < 1e-12 && arms[8].se_df == 24.0);
+        // Where one φ does not hold, it cannot be weighed and is left out.
+        let mut wild = se;
+        wild[7] = 30.0;
+        let (_, scaled, _, arms) =
+            pool_fleet_scale_joined(&y, &wild, &[3.0; 8], &v, &[(1.0, 0.6)], 0.01).unwrap();
+        assert!(!scaled && arms.len() == 8);
     }
 
     #[test]
