@@ -10,7 +10,9 @@
 //! the error's scale pooled across the fleet (`pooling::pool_fleet_scale`, round 6: each
 //! arm's model error known, its jackknife variance φ v² χ²_ν/ν, φ̂ pooled on Σν df and tested
 //! for homogeneity at α), the share of fleets where that test failed and its width over the
-//! plug-in's (docs/results/claims.md §7.10).
+//! plug-in's (docs/results/claims.md §7.10); then the same where the arms do not share one φ
+//! (two values, 4 or 16 times apart, over alternate arms), with the coverage of the arms of
+//! the high one.
 //!
 //!     cargo run --release -p armcal --example pooling_coverage [fleets [sessions [alpha]]]
 //!
@@ -50,6 +52,30 @@ fn main() {
                 c.with_df, c.satterthwaite, c.with_tau, c.shrinkage, c.kh, c.kh_df, c.plugin, w[0], w[1], w[2], w[3], w[4], w[5], c.mean,
                 c.fleet_scale, c.fleet_scale_fallback, c.fleet_scale_width
             );
+        }
+    }
+    // Arms that do not share one φ (`pooling::simulated_coverage_phi`): half the arms' model
+    // errors φ_u = 4·ratio^(±½); the product's interval does not read them.
+    println!(
+        "\narms of two φ (ratio between them), {fleets} fleets per cell: product (Morris, own df) | fleet scale: coverage, of the high-φ arms, test failed"
+    );
+    for ratio in [4.0, 16.0] {
+        for arms in [4, 8] {
+            for tau in [0.0, 1.0] {
+                let c = armcal::diagnose::pooling::simulated_coverage_phi(
+                    arms,
+                    tau,
+                    sessions,
+                    fleets,
+                    30 + arms as u64,
+                    alpha,
+                    ratio,
+                );
+                println!(
+                    "ratio {ratio:>4}  arms {arms}  τ/s {tau:.2} | {:.3} | {:.3}, {:.3}, {:.3}",
+                    c.with_df, c.fleet_scale, c.fleet_scale_high_phi, c.fleet_scale_fallback
+                );
+            }
         }
     }
     println!("({:.1} s)", t0.elapsed().as_secs_f64());

@@ -588,6 +588,9 @@ pub struct Coverage {
     pub fleet_scale_fallback: f64,
     /// Its mean half-width over the plug-in's (every tenth fleet, as `width`).
     pub fleet_scale_width: f64,
+    /// `fleet_scale` over the odd arms only: those of high φ in [`simulated_coverage_phi`]
+    /// (with one φ, half the arms drawn as any others).
+    pub fleet_scale_high_phi: f64,
 }
 
 /// The dispersion φ of the jackknife variance over the model's in [`simulated_coverage`]'s
@@ -623,6 +626,25 @@ pub fn simulated_coverage(
     seed: u64,
     alpha: f64,
 ) -> Coverage {
+    simulated_coverage_phi(arms, tau, sessions, fleets, seed, alpha, 1.0)
+}
+
+/// [`simulated_coverage`] where the fleet's arms do **not** share one φ: arm u's model error
+/// is s_u/√φ_u with φ_u = [`SIMULATED_PHI`]·`phi_ratio`^(±½), low for even u and high for
+/// odd u (the ratio between them `phi_ratio`; MUKCa's Pandas' r_u range over 1.1–19). What
+/// it measures: how often the homogeneity test catches it, and what [`pool_fleet_scale`]'s
+/// interval covers where it does not ([`Coverage::fleet_scale_high_phi`]: the arms whose
+/// errors the fleet's scale makes too short). With `phi_ratio` 1 it is
+/// [`simulated_coverage`], draw for draw.
+pub fn simulated_coverage_phi(
+    arms: usize,
+    tau: f64,
+    sessions: usize,
+    fleets: usize,
+    seed: u64,
+    alpha: f64,
+    phi_ratio: f64,
+) -> Coverage {
     let mut rng = crate::rng::rng(seed);
     let nu = sessions.saturating_sub(1).max(1);
     // Hits of `with_df`, `satterthwaite`, `with_tau`, `kh`, `kh_df`, `plugin`, `shrinkage`.
@@ -633,12 +655,17 @@ pub fn simulated_coverage(
     let tdf = t_critical(alpha, interval_df(nu as f64, arms));
     let df = vec![nu as f64; arms];
     let (mut fs_hits, mut fs_fallback, mut fs_width) = (0usize, 0usize, 0.0);
+    // The odd arms' (the high φ's) intervals of the fleet-scale pool, and their hits.
+    let (mut high_n, mut high_hits) = (0usize, 0usize);
     for f in 0..fleets {
         let mut theta = Vec::with_capacity(arms);
         let mut y = Vec::with_capacity(arms);
         let mut se = Vec::with_capacity(arms);
         let model: Vec<f64> = (0..arms)
-            .map(|u| (0.5 + u as f64 / (arms.max(2) - 1) as f64) / SIMULATED_PHI.sqrt())
+            .map(|u| {
+                let phi = SIMULATED_PHI * phi_ratio.powf((u % 2) as f64 - 0.5);
+                (0.5 + u as f64 / (arms.max(2) - 1) as f64) / phi.sqrt()
+            })
             .collect();
         for u in 0..arms {
             let s = 0.5 + u as f64 / (arms.max(2) - 1) as f64;
@@ -653,9 +680,14 @@ pub fn simulated_coverage(
         };
         if let Some((_, scaled, _, fa)) = pool_fleet_scale(&y, &se, &df, &model, alpha) {
             fs_fallback += !scaled as usize;
-            for (a, t) in fa.iter().zip(&theta) {
+            for (u, (a, t)) in fa.iter().zip(&theta).enumerate() {
                 let half = t_critical(alpha, a.df) * a.pooled_se;
-                fs_hits += ((a.pooled - t).abs() <= half) as usize;
+                let hit = (a.pooled - t).abs() <= half;
+                fs_hits += hit as usize;
+                if u % 2 == 1 {
+                    high_n += 1;
+                    high_hits += hit as usize;
+                }
                 if f % 10 == 0 {
                     fs_width += half;
                 }
@@ -722,6 +754,7 @@ pub fn simulated_coverage(
         fleet_scale: share(fs_hits),
         fleet_scale_fallback: fs_fallback as f64 / pooled_fleets.max(1) as f64,
         fleet_scale_width: of_plugin(fs_width),
+        fleet_scale_high_phi: high_hits as f64 / high_n.max(1) as f64,
     }
 }
 
