@@ -38,7 +38,7 @@ use armcal::diagnose::candidates;
 use armcal::diagnose::fleet::{self, UnitData};
 use armcal::diagnose::fleet_pooled::{pool_candidates, pool_candidates_full, PooledEffect};
 use armcal::diagnose::pooling::{self, t_critical, Arm as PooledArm};
-use armcal::diagnose::pooling_rules::RULES;
+use armcal::diagnose::pooling_rules::{Rule, RULES};
 use armcal::params::Effect;
 use armcal::sim;
 use quatarm_ref::arm::Arm;
@@ -341,6 +341,10 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
     let (mut fs_design, mut fs_fallback) = ([0usize; 2], [0usize; 2]);
     let mut covered = [[0usize; 2]; 2];
     let mut phis: Vec<f64> = Vec::new();
+    // Pairs with the effect the single arm does not name, and of them named by the product
+    // and by the fleet scale, at each of [`ALPHAS`].
+    let mut beyond = [[0usize; 3]; 2];
+    let col = |i: usize, r: Rule| i * RULES.len() + RULES.iter().position(|x| *x == r).unwrap();
     for s in 0..seeds {
         let o = fleet_once(gs, base + 100 * s, full);
         let mut cells = Vec::new();
@@ -352,6 +356,13 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
             t[2] += wrong;
             t[3] += (wrong > 0) as usize;
             cells.push(format!("{right}/{wrong}"));
+        }
+        for (i, b) in beyond.iter_mut().enumerate() {
+            for u in (0..gs.len()).filter(|u| with[*u] && !o.named[col(i, Rule::OwnAlone)][*u]) {
+                b[0] += 1;
+                b[1] += o.named[col(i, Rule::Product)][u] as usize;
+                b[2] += o.named[col(i, Rule::FleetScale)][u] as usize;
+            }
         }
         for i in 0..2 {
             fs_design[i] += o.fs.fs_passed[i] as usize;
@@ -440,7 +451,8 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
     let fs_text = format!(
         "fleet scale: design passes {}, {}; homogeneity fails (own errors used) in {}, {} fleets at 0.01, 0.05; \
          φ̂ median {:.2} [{:.2} … {:.2}]; true compliance covered, product 99 % {}/{n_arms}, 95 % {}/{n_arms}; \
-         fleet scale 99 % {}/{n_arms}, 95 % {}/{n_arms}",
+         fleet scale 99 % {}/{n_arms}, 95 % {}/{n_arms}; of the pairs with the effect the single arm does not \
+         name: at 0.01 {}, the product names {}, the fleet scale {}; at 0.05 {}, {}, {}",
         fs_design[0],
         fs_design[1],
         fs_fallback[0],
@@ -451,7 +463,13 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
         covered[0][0],
         covered[0][1],
         covered[1][0],
-        covered[1][1]
+        covered[1][1],
+        beyond[0][0],
+        beyond[0][1],
+        beyond[0][2],
+        beyond[1][0],
+        beyond[1][1],
+        beyond[1][2]
     );
     println!("  {fs_text}");
     let mut others = format!("{other_fleets} ({other_arms}); {fs_text}");
