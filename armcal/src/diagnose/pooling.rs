@@ -47,6 +47,13 @@
 //! too seldom, or their false causes on fleets where some arms lack the effect are measured on
 //! too few such arms to say they stay at `alpha` (docs/results/claims.md §7.6).
 //!
+//! **The error's scale pooled across the fleet** ([`dispersion`], [`pool_fleet_scale`];
+//! counted as a rule beside the product's, not used by [`pool`]): each arm's jackknife error
+//! rests on 3 df, so its interval needs t₃; its fit's in-sample error v_u rests on hundreds of
+//! residuals but misses their correlation within a session. With one ratio φ = s²/v² for the
+//! design, φ̂ pooled over the arms (Σν df, tested for homogeneity) and s̃_u = √φ̂·v_u give every
+//! arm an error whose scale has the fleet's df (docs/results/claims.md §7.10).
+//!
 //! **The design's spread** has a Q-profile interval (Viechtbauer 2007): the τ² at which the
 //! generalised Q statistic equals the χ²_{k−1} quantiles.
 
