@@ -30,6 +30,14 @@
 //! candidates named apart (claims.md §7.9). `full` alone runs every fleet with it
 //! (`pooling_power 20 40 30 full`; `pooling_power 0 0 300 mixed7,full`).
 //!
+//! Every fleet also counts `Rule::FleetScale` (claims.md §7.10), the shoulder's candidate
+//! re-pooled with the error's scale pooled across the fleet
+//! ([`armcal::diagnose::pooling::pool_fleet_scale`], its gate by Holm with the other
+//! candidates' product p-values), and prints per fleet kind: its design passes, how often the
+//! ratios' homogeneity test failed (the arms' own errors used), φ̂'s median and range, each
+//! arm's pooled 99 % and 95 % intervals holding its true compliance (product and fleet scale),
+//! and of the pairs with the effect the single arm does not name, how many each names.
+//!
 //! 20, 40 and 30 by default: 180 fleets, 7.5 minutes release on the shared 2-core
 //! machine (docs/results/claims.md §7.6).
 
