@@ -228,6 +228,96 @@ fn mukca_grouping(
     for (who, why) in &pooled.left_out {
         println!("    {who} left out: {why}");
     }
+    // The error's scale pooled across the arms (claims.md §7.10): each recording's ratio of
+    // its jackknife variance to its fit's in-sample one, the arms' pooled φ̂ and the
+    // homogeneity test of their ratios, and the arms pooled with s̃ = √φ̂·v where it passes.
+    for a in &p.arms {
+        let r: Vec<String> = a
+            .recordings
+            .iter()
+            .zip(&a.per_recording)
+            .map(|(n, e)| {
+                format!(
+                    "{n}: model se {:.4}, r = s²/v² {:.1} ({} df)",
+                    e.model_se * 1e6,
+                    (e.se / e.model_se).powi(2),
+                    e.df
+                )
+            })
+            .collect();
+        println!("    ratio {:<8} {}", a.arm, r.join("; "));
+    }
+    let y: Vec<f64> = p.arms.iter().map(|a| a.value.estimate).collect();
+    let se: Vec<f64> = p.arms.iter().map(|a| a.value.se).collect();
+    let df: Vec<f64> = p.arms.iter().map(|a| a.value.se_df).collect();
+    let v: Vec<f64> = p.arms.iter().map(|a| a.combined.model_se).collect();
+    // Arms with no recording of 3 sessions (no jackknife error: panda_7's 2 sessions) join
+    // through the fleet's scale: their recording of most sessions (2 or more), fitted once.
+    let mut joined_names = Vec::new();
+    let mut joined = Vec::new();
+    for (name, recs) in grouping
+        .iter()
+        .filter(|(a, _)| p.arms.iter().all(|b| b.arm != *a))
+    {
+        let best = recs
+            .iter()
+            .map(|r| &units[index(r)])
+            .max_by_key(|u| armcal::fit::holdout::by_group(&u.data).len())
+            .filter(|u| armcal::fit::holdout::by_group(&u.data).len() >= 2);
+        let Some(u) = best else { continue };
+        let geo = fleet::geometric_options(o);
+        if let Ok(Some(e)) = pooling::estimate_in_sample(start, &u.data, &geo, Effect::Gravity(1)) {
+            println!(
+                "    {name} (recording {}, {} sessions, no jackknife): {:+.3}, model se {:.4}",
+                u.name,
+                armcal::fit::holdout::by_group(&u.data).len(),
+                e.0 * 1e6,
+                e.1 * 1e6
+            );
+            joined_names.push(name.to_string());
+            joined.push(e);
+        }
+    }
+    match pooling::pool_fleet_scale_joined(&y, &se, &df, &v, &joined, ALPHA) {
+        Some((disp, scaled, fd, farms)) => {
+            if let Some(disp) = disp {
+                let rs: Vec<String> = disp.ratios.iter().map(|r| format!("{r:.1}")).collect();
+                println!(
+                    "  error's scale across the arms: r = [{}], φ̂ = {:.1} on {:.1} df, Bartlett {:.2} (p = {:.3}): scale {}",
+                    rs.join(", "),
+                    disp.phi,
+                    disp.df,
+                    disp.bartlett,
+                    disp.p,
+                    if scaled { "pooled" } else { "not pooled (the arms' own errors)" }
+                );
+            }
+            println!(
+                "  pooled with it: design mean {:+.3} µrad/mm (p = {:.3}), spread τ {:.3}",
+                fd.mean * 1e6,
+                fd.mean_p,
+                fd.spread * 1e6
+            );
+            let names = p
+                .arms
+                .iter()
+                .map(|a| a.arm.clone())
+                .chain(joined_names.iter().cloned());
+            for (a, f) in names.zip(&farms) {
+                println!(
+                    "    {:<8} s̃ {:.3} ({:.0} df) → pooled {:+.3} ± {:.3} ({:.0} df, named {})",
+                    a,
+                    f.se * 1e6,
+                    f.se_df,
+                    f.pooled * 1e6,
+                    f.pooled_se * 1e6,
+                    f.df,
+                    f.named_pooled
+                );
+            }
+        }
+        None => println!("  error's scale across the arms: not pooled"),
+    }
     // panda_4 (one recording): its pooled value from its other sessions and the other arms.
     let i4 = p
         .arms
@@ -243,6 +333,7 @@ fn mukca_grouping(
             value: a.value.estimate,
             se: a.value.se,
             df: a.value.se_df,
+            model_se: a.combined.model_se,
         })
         .collect();
     let folds = pooling::pooled_holdout(

@@ -30,6 +30,14 @@
 //! candidates named apart (claims.md §7.9). `full` alone runs every fleet with it
 //! (`pooling_power 20 40 30 full`; `pooling_power 0 0 300 mixed7,full`).
 //!
+//! Every fleet also counts `Rule::FleetScale` (claims.md §7.10), the shoulder's candidate
+//! re-pooled with the error's scale pooled across the fleet
+//! ([`armcal::diagnose::pooling::pool_fleet_scale`], its gate by Holm with the other
+//! candidates' product p-values), and prints per fleet kind: its design passes, how often the
+//! ratios' homogeneity test failed (the arms' own errors used), φ̂'s median and range, each
+//! arm's pooled 99 % and 95 % intervals holding its true compliance (product and fleet scale),
+//! and of the pairs with the effect the single arm does not name, how many each names.
+//!
 //! 20, 40 and 30 by default: 180 fleets, 7.5 minutes release on the shared 2-core
 //! machine (docs/results/claims.md §7.6).
 
@@ -37,8 +45,8 @@ use armcal::data::{Dataset, Kind};
 use armcal::diagnose::candidates;
 use armcal::diagnose::fleet::{self, UnitData};
 use armcal::diagnose::fleet_pooled::{pool_candidates, pool_candidates_full, PooledEffect};
-use armcal::diagnose::pooling::{self, Arm as PooledArm};
-use armcal::diagnose::pooling_rules::RULES;
+use armcal::diagnose::pooling::{self, t_critical, Arm as PooledArm};
+use armcal::diagnose::pooling_rules::{Rule, RULES};
 use armcal::params::Effect;
 use armcal::sim;
 use quatarm_ref::arm::Arm;
@@ -97,17 +105,41 @@ fn labels(full: bool) -> Vec<String> {
     out
 }
 
+/// The shoulder's candidate as each rule names it, and what the fleet-scale pool
+/// ([`pooling::pool_fleet_scale`]) did, at each of [`ALPHAS`].
+#[derive(Default)]
+struct Shoulder {
+    /// Per column of [`labels`] (without the full model's), per arm: named.
+    cols: Vec<Vec<bool>>,
+    /// Whether the product's design mean passed Holm.
+    passed: [bool; 2],
+    /// Whether the fleet-scale pool's design mean passed Holm (with the other candidates'
+    /// product p-values).
+    fs_passed: [bool; 2],
+    /// Whether the fleet's scale was used (the ratios' homogeneity test passed at α).
+    fs_scaled: [bool; 2],
+    /// φ̂ and the homogeneity test's p (`NaN` without a dispersion).
+    phi: (f64, f64),
+    /// Arms whose pooled interval holds their true compliance: [product, fleet scale] ×
+    /// [99 % (pooled at 0.01), 95 % (at 0.05)].
+    covered: [[usize; 2]; 2],
+}
+
 /// Which arms each column of [`labels`] names for the shoulder's pooled candidate `p`
 /// (pooled at the fleet's α, its design named by Holm over the fleet's candidates);
-/// `named05` whether its design mean passes Holm at 0.05 over them. Returns the columns and
-/// whether the design passed at each of [`ALPHAS`].
-fn named(p: &PooledEffect, named05: bool) -> (Vec<Vec<bool>>, [bool; 2]) {
+/// `named05` whether its design mean passes Holm at 0.05 over them; `others_p` the other
+/// candidates' design-mean p-values (for the fleet-scale pool's own Holm gate); `truth` each
+/// arm's true compliance.
+fn named(p: &PooledEffect, named05: bool, others_p: &[f64], truth: &[f64]) -> Shoulder {
     let y: Vec<f64> = p.arms.iter().map(|a| a.value.estimate).collect();
     let se: Vec<f64> = p.arms.iter().map(|a| a.value.se).collect();
     let df: Vec<f64> = p.arms.iter().map(|a| a.value.se_df).collect();
+    let model: Vec<f64> = p.arms.iter().map(|a| a.combined.model_se).collect();
     let first: Vec<PooledArm> = p.arms.iter().map(|a| a.value).collect();
-    let mut out = Vec::new();
-    let mut passed = [false; 2];
+    let mut sh = Shoulder {
+        phi: (f64::NAN, f64::NAN),
+        ..Shoulder::default()
+    };
     for (i, &alpha) in ALPHAS.iter().enumerate() {
         let (d, arms) = if i == 0 {
             (p.design, first.clone())
@@ -120,12 +152,39 @@ fn named(p: &PooledEffect, named05: bool) -> (Vec<Vec<bool>>, [bool; 2]) {
                 None => (p.design, first.clone()),
             }
         };
-        passed[i] = d.named;
+        sh.passed[i] = d.named;
+        let (fd, farms) = match pooling::pool_fleet_scale(&y, &se, &df, &model, alpha) {
+            Some((disp, scaled, mut fd, farms)) => {
+                let mut ps = vec![fd.mean_p];
+                ps.extend_from_slice(others_p);
+                fd.named = fleet::holm(&ps, alpha)[0];
+                sh.fs_scaled[i] = scaled;
+                if let (0, Some(disp)) = (i, disp) {
+                    sh.phi = (disp.phi, disp.p);
+                }
+                (fd, farms)
+            }
+            None => (d, arms.clone()),
+        };
+        sh.fs_passed[i] = fd.named;
         for r in RULES {
-            out.push(arms.iter().map(|a| r.names(&d, a, alpha)).collect());
+            let (d, arms) = if r.fleet_scaled() {
+                (&fd, &farms)
+            } else {
+                (&d, &arms)
+            };
+            sh.cols
+                .push(arms.iter().map(|a| r.names(d, a, alpha)).collect());
+        }
+        for (c, arms) in sh.covered.iter_mut().zip([&arms, &farms]) {
+            c[i] += arms
+                .iter()
+                .zip(truth)
+                .filter(|(a, g)| (a.pooled - **g).abs() <= t_critical(alpha, a.df) * a.pooled_se)
+                .count();
         }
     }
-    (out, passed)
+    sh
 }
 
 /// One fleet's outcome.
@@ -134,6 +193,8 @@ struct Outcome {
     named: Vec<Vec<bool>>,
     /// Whether the shoulder's design mean passed Holm at each of [`ALPHAS`].
     design: [bool; 2],
+    /// The fleet-scale pool of the shoulder's candidate (its `cols` moved to `named`).
+    fs: Shoulder,
     /// Other candidates named at the fleet's α (candidate, arms named).
     others: Vec<(String, usize)>,
     /// Whether some other candidate's design mean passed Holm at 0.05.
@@ -149,11 +210,18 @@ struct Outcome {
 /// The shoulder's candidate named by the product's rule at each of [`ALPHAS`] (per arm), the
 /// other candidates named at the fleet's α (candidate, arms named), and whether any other's
 /// design mean passed Holm at 0.05, from the pooled candidates `effects`.
-type Named = (Vec<Vec<bool>>, [bool; 2], Vec<(String, usize)>, bool);
+type Named = (
+    Vec<Vec<bool>>,
+    [bool; 2],
+    Vec<(String, usize)>,
+    bool,
+    Shoulder,
+);
 
-/// Reads [`Named`] from the pooled candidates `effects` (all rules of [`RULES`], or the
-/// product's only with `product_only`).
-fn read(effects: &[PooledEffect], arms: usize, product_only: bool) -> Named {
+/// Reads [`Named`] from the pooled candidates `effects` of arms whose true compliances are
+/// `truth` (all rules of [`RULES`], or the product's only with `product_only`).
+fn read(effects: &[PooledEffect], truth: &[f64], product_only: bool) -> Named {
+    let arms = truth.len();
     let ps: Vec<f64> = effects.iter().map(|e| e.design.mean_p).collect();
     let holm05 = fleet::holm(&ps, 0.05);
     let cols = if product_only {
@@ -161,10 +229,24 @@ fn read(effects: &[PooledEffect], arms: usize, product_only: bool) -> Named {
     } else {
         ALPHAS.len() * RULES.len()
     };
-    let mut out: Named = (vec![vec![false; arms]; cols], [false; 2], Vec::new(), false);
+    let mut out: Named = (
+        vec![vec![false; arms]; cols],
+        [false; 2],
+        Vec::new(),
+        false,
+        Shoulder::default(),
+    );
     for (e, &n05) in effects.iter().zip(&holm05) {
         if e.effect == Effect::Gravity(1) {
-            let (all, design) = named(e, n05);
+            let others_p: Vec<f64> = effects
+                .iter()
+                .filter(|o| o.effect != e.effect)
+                .map(|o| o.design.mean_p)
+                .collect();
+            let mut sh = named(e, n05, &others_p, truth);
+            let all = std::mem::take(&mut sh.cols);
+            let design = sh.passed;
+            out.4 = sh;
             out.0 = if product_only {
                 // The product is the first rule at each α.
                 all.into_iter().step_by(RULES.len()).collect()
@@ -213,20 +295,21 @@ fn fleet_once(gs: &[f64], base: u64, full: bool) -> Outcome {
         .collect();
     let o = fleet::Options::default();
     let p = pool_candidates(&start, &units, &arms, &testable, &o);
-    let (mut named, design, others, others05) = read(&p.effects, gs.len(), false);
+    let (mut named, design, others, others05, fs) = read(&p.effects, gs, false);
     let (mut others_full, mut others_full05, mut design_full) = (Vec::new(), false, [false; 2]);
     if full {
         let f = pool_candidates_full(&start, &units, &arms, &testable, &o);
         for (what, why) in &f.left_out {
             eprintln!("full model, seed {base}: {what}: {why}");
         }
-        let (n, df, of, of05) = read(&f.effects, gs.len(), true);
+        let (n, df, of, of05, _) = read(&f.effects, gs, true);
         named.extend(n);
         (others_full, others_full05, design_full) = (of, of05, df);
     }
     Outcome {
         named,
         design,
+        fs,
         others,
         others05,
         others_full,
@@ -261,6 +344,15 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
     let mut tally: Tally = vec![[0usize; 4]; cols.len()];
     let (mut design, mut other_fleets, mut other_arms, mut other05) = ([0; 2], 0, 0, 0);
     let (mut full_fleets, mut full_arms, mut full05, mut full_design) = (0, 0, 0, [0; 2]);
+    // The fleet-scale pool: design passes, fleets where the homogeneity test failed (the
+    // arms' own errors used), coverage of the true compliance (as `Shoulder::covered`), φ̂s.
+    let (mut fs_design, mut fs_fallback) = ([0usize; 2], [0usize; 2]);
+    let mut covered = [[0usize; 2]; 2];
+    let mut phis: Vec<f64> = Vec::new();
+    // Pairs with the effect the single arm does not name, and of them named by the product
+    // and by the fleet scale, at each of [`ALPHAS`].
+    let mut beyond = [[0usize; 3]; 2];
+    let col = |i: usize, r: Rule| i * RULES.len() + RULES.iter().position(|x| *x == r).unwrap();
     for s in 0..seeds {
         let o = fleet_once(gs, base + 100 * s, full);
         let mut cells = Vec::new();
@@ -273,12 +365,35 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
             t[3] += (wrong > 0) as usize;
             cells.push(format!("{right}/{wrong}"));
         }
+        for (i, b) in beyond.iter_mut().enumerate() {
+            for u in (0..gs.len()).filter(|u| with[*u] && !o.named[col(i, Rule::OwnAlone)][*u]) {
+                b[0] += 1;
+                b[1] += o.named[col(i, Rule::Product)][u] as usize;
+                b[2] += o.named[col(i, Rule::FleetScale)][u] as usize;
+            }
+        }
+        for i in 0..2 {
+            fs_design[i] += o.fs.fs_passed[i] as usize;
+            fs_fallback[i] += !o.fs.fs_scaled[i] as usize;
+            for (c, oc) in covered.iter_mut().zip(&o.fs.covered) {
+                c[i] += oc[i];
+            }
+        }
+        if o.fs.phi.0.is_finite() {
+            phis.push(o.fs.phi.0);
+        }
         println!(
-            "  {s:>4}  {:<11}  {} | {:?} {}{}",
+            "  {s:>4}  {:<11}  {} | {:?} {} | fleet scale: design {}/{}, scale used {}/{}, φ̂ {:.2} (homogeneity p {:.3}){}",
             format!("{}/{}", o.design[0], o.design[1]),
             cells.join("  "),
             o.others,
             o.others05,
+            o.fs.fs_passed[0],
+            o.fs.fs_passed[1],
+            o.fs.fs_scaled[0],
+            o.fs.fs_scaled[1],
+            o.fs.phi.0,
+            o.fs.phi.1,
             if full {
                 format!(
                     " | full model: design {}/{}, {:?} {}",
@@ -334,7 +449,38 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
              at α = 0.01; design means in {full05}/{seeds} fleets at α = 0.05"
         );
     }
-    let mut others = format!("{other_fleets} ({other_arms})");
+    phis.sort_by(f64::total_cmp);
+    let q = |f: f64| {
+        phis.get(((phis.len().max(1) - 1) as f64 * f) as usize)
+            .copied()
+            .unwrap_or(f64::NAN)
+    };
+    let n_arms = gs.len() as u64 * seeds;
+    let fs_text = format!(
+        "fleet scale: design passes {}, {}; homogeneity fails (own errors used) in {}, {} fleets at 0.01, 0.05; \
+         φ̂ median {:.2} [{:.2} … {:.2}]; true compliance covered, product 99 % {}/{n_arms}, 95 % {}/{n_arms}; \
+         fleet scale 99 % {}/{n_arms}, 95 % {}/{n_arms}; of the pairs with the effect the single arm does not \
+         name: at 0.01 {}, the product names {}, the fleet scale {}; at 0.05 {}, {}, {}",
+        fs_design[0],
+        fs_design[1],
+        fs_fallback[0],
+        fs_fallback[1],
+        q(0.5),
+        q(0.0),
+        q(1.0),
+        covered[0][0],
+        covered[0][1],
+        covered[1][0],
+        covered[1][1],
+        beyond[0][0],
+        beyond[0][1],
+        beyond[0][2],
+        beyond[1][0],
+        beyond[1][1],
+        beyond[1][2]
+    );
+    println!("  {fs_text}");
+    let mut others = format!("{other_fleets} ({other_arms}); {fs_text}");
     if full {
         others += &format!(
             "; full model {full_fleets} ({full_arms}), its design passes {}, {}",

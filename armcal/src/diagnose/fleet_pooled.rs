@@ -464,6 +464,7 @@ fn held_out_gains(
             value: a.value.estimate,
             se: a.value.se,
             df: a.value.se_df,
+            model_se: a.combined.model_se,
         })
         .collect();
     for (i, a) in p.arms.iter_mut().enumerate() {

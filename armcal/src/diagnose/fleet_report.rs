@@ -15,8 +15,9 @@
 //!             "effects": [{"term", "named", "design": {"arms", "mean", "mean_se",
 //!                          "mean_interval", "mean_p", "spread", "spread_interval", "named"},
 //!                          "arms": [{"arm", "recordings", "sessions", "per_recording":
-//!                                    [{"value", "se", "df"}], "combined": {"estimate", "se",
-//!                                    "df", "recordings", "q", "q_p"}, "estimate", "se",
+//!                                    [{"value", "se", "df", "model_se"}], "combined":
+//!                                    {"estimate", "se", "df", "recordings", "q", "q_p",
+//!                                    "model_se"}, "estimate", "se",
 //!                                    "se_df", "named_alone", "shrinkage", "pooled",
 //!                                    "pooled_se", "pooled_se_plugin", "df", "named_pooled",
 //!                                    "holdout"}]}]}}
@@ -26,7 +27,9 @@
 //! recording fitted with its own probe and frame) combined into its `estimate`, then pooled
 //! over the arms; `pooled_se` carries τ̂²'s uncertainty, `pooled_se_plugin` does not; an arm's
 //! interval is `pooled` ± t_`df`·`pooled_se`, `df` its own error's degrees of freedom
-//! (`se_df`: sessions − 1) or arms − 1 where fewer.
+//! (`se_df`: sessions − 1) or arms − 1 where fewer. `model_se` is the fit's in-sample error of
+//! the same value (null where the fit gave none), read only by the fleet-scale rule measured in
+//! docs/results/claims.md §7.10.
 //!
 //! A unit is an arm ([`super::same_arm`]): recordings of one physical arm are one unit.
 //!

@@ -47,6 +47,13 @@
 //! too seldom, or their false causes on fleets where some arms lack the effect are measured on
 //! too few such arms to say they stay at `alpha` (docs/results/claims.md §7.6).
 //!
+//! **The error's scale pooled across the fleet** ([`dispersion`], [`pool_fleet_scale`];
+//! counted as a rule beside the product's, not used by [`pool`]): each arm's jackknife error
+//! rests on 3 df, so its interval needs t₃; its fit's in-sample error v_u rests on hundreds of
+//! residuals but misses their correlation within a session. With one ratio φ = s²/v² for the
+//! design, φ̂ pooled over the arms (Σν df, tested for homogeneity) and s̃_u = √φ̂·v_u give every
+//! arm an error whose scale has the fleet's df (docs/results/claims.md §7.10).
+//!
 //! **The design's spread** has a Q-profile interval (Viechtbauer 2007): the τ² at which the
 //! generalised Q statistic equals the χ²_{k−1} quantiles.
 
@@ -285,6 +292,156 @@ pub fn pool(y: &[f64], se: &[f64], df: &[f64], alpha: f64) -> Option<(Design, Ve
     Some((design, arms))
 }
 
+/// The fleet's dispersion of the jackknife variance over the model's ([`dispersion`]): how
+/// much the in-sample error of a design's fits misses, estimated once from every arm.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Dispersion {
+    /// Each arm's ratio r_u = s_u²/v_u² of its jackknife variance to its model-based one.
+    pub ratios: Vec<f64>,
+    /// φ̂ = Σ ν_u r_u / Σ ν_u: the pooled ratio.
+    pub phi: f64,
+    /// Its degrees of freedom, Σ ν_u.
+    pub df: f64,
+    /// Bartlett's statistic of the r_u's homogeneity (χ² on arms − 1 df when one φ holds).
+    pub bartlett: f64,
+    /// Its upper-tail p.
+    pub p: f64,
+}
+
+/// The dispersion φ of the arms' jackknife variances over their model-based ones, assumed
+/// common to a design measured by one protocol: s_u² ≈ φ·v_u²·χ²_ν/ν, so ν_u r_u/φ ~ χ²_ν_u
+/// with r_u = s_u²/v_u². φ̂ = Σ ν_u r_u / Σ ν_u is the pooled variance of those scaled
+/// "sample variances" (on Σ ν_u degrees of freedom), and the assumption is tested where it is
+/// used by **Bartlett's test** of their homogeneity: M = N ln φ̂ − Σ ν_u ln r_u (N = Σ ν_u),
+/// divided by 1 + (Σ 1/ν_u − 1/N)/(3(k − 1)), on χ²_{k−1}. Why φ: the in-sample error σ̂·√((JᵀJ)⁻¹)
+/// rests on hundreds of residuals but misses their correlation within a session (φ ≫ 1 on
+/// real arms); the jackknife sees it, but from 4 sessions, 3 df. Where one φ holds, the model
+/// gives each arm's error's shape and the fleet its scale. `None` with fewer than 2 arms, or
+/// when some `se`/`model_se` is not a positive finite number or some `df` is not positive and
+/// finite (an error taken as known has no ratio to pool).
+pub fn dispersion(se: &[f64], df: &[f64], model_se: &[f64]) -> Option<Dispersion> {
+    let k = se.len();
+    let ok = |x: &f64| x.is_finite() && *x > 0.0;
+    if k < 2
+        || df.len() != k
+        || model_se.len() != k
+        || !se.iter().all(ok)
+        || !df.iter().all(ok)
+        || !model_se.iter().all(ok)
+    {
+        return None;
+    }
+    let ratios: Vec<f64> = se
+        .iter()
+        .zip(model_se)
+        .map(|(s, v)| (s / v).powi(2))
+        .collect();
+    let n: f64 = df.iter().sum();
+    let phi = df.iter().zip(&ratios).map(|(nu, r)| nu * r).sum::<f64>() / n;
+    let m = n * phi.ln()
+        - df.iter()
+            .zip(&ratios)
+            .map(|(nu, r)| nu * r.ln())
+            .sum::<f64>();
+    let c = 1.0 + (df.iter().map(|nu| 1.0 / nu).sum::<f64>() - 1.0 / n) / (3.0 * (k - 1) as f64);
+    let bartlett = (m / c).max(0.0);
+    Some(Dispersion {
+        ratios,
+        phi,
+        df: n,
+        bartlett,
+        p: chi2_tail(bartlett, k - 1),
+    })
+}
+
+/// The arms pooled with the error's scale pooled across the fleet (issue 30, round 6; counted
+/// as [`super::pooling_rules::Rule::FleetScale`], not the product's naming): when the arms'
+/// ratios pass [`dispersion`]'s homogeneity test at `alpha` (the gate's α), each arm's error
+/// is s̃_u = √φ̂·v_u on φ̂'s Σ ν_u degrees of freedom and the arms are [`pool`]ed with them;
+/// when it fails (or some arm has no model error), with their own jackknife errors, as the
+/// product. Returns the dispersion (if any), whether the fleet's scale was used, and the pool.
+///
+/// **The interval's df.** [`pool`] gives each arm [`interval_df`] of its error's df, here
+/// min(Σ ν_u, k − 1) = k − 1 for 8 arms of 4 sessions (24 against 7). Why not Σ ν_u: what
+/// φ̂'s 24 df make sure is the errors' common scale; μ̂'s Hartung–Knapp error and τ̂² still rest
+/// on the k arms' scatter about μ̂, k − 1 df, and every arm's pooled variance carries them.
+/// With the errors' scale known this is the product's interval with errors known, whose 8-arm
+/// coverage was 0.94–1.00 (claims.md §7.4); measured for this rule in §7.10.
+pub fn pool_fleet_scale(
+    y: &[f64],
+    se: &[f64],
+    df: &[f64],
+    model_se: &[f64],
+    alpha: f64,
+) -> Option<(Option<Dispersion>, bool, Design, Vec<Arm>)> {
+    pool_fleet_scale_joined(y, se, df, model_se, &[], alpha)
+}
+
+/// [`pool_fleet_scale`] with arms that have **no jackknife error** joining (issue 30's
+/// recordings of fewer than 3 sessions, panda_7's 2): `joined` holds each such arm's value
+/// and model-based error, (y, v). They take no part in φ̂ (they have no ratio to give); when
+/// the fleet's scale is used they are pooled with s̃ = √φ̂·v on φ̂'s df like every other arm,
+/// their arms after `y`'s; when it is not (the ratios are not homogeneous, or there is no
+/// dispersion), they cannot be weighed and are left out (the pool then has `y.len()` arms).
+/// What it assumes beyond [`pool_fleet_scale`]: the arm without a jackknife shares the
+/// others' φ, which nothing can test (no ratio of its own); with 2 sessions its residuals'
+/// correlation within a session is no better known than theirs.
+pub fn pool_fleet_scale_joined(
+    y: &[f64],
+    se: &[f64],
+    df: &[f64],
+    model_se: &[f64],
+    joined: &[(f64, f64)],
+    alpha: f64,
+) -> Option<(Option<Dispersion>, bool, Design, Vec<Arm>)> {
+    let disp = dispersion(se, df, model_se);
+    match &disp {
+        Some(d) if d.p >= alpha => {
+            let ys: Vec<f64> = y
+                .iter()
+                .copied()
+                .chain(joined.iter().map(|j| j.0))
+                .collect();
+            let scaled: Vec<f64> = model_se
+                .iter()
+                .chain(joined.iter().map(|j| &j.1))
+                .map(|v| d.phi.sqrt() * v)
+                .collect();
+            let (design, arms) = pool(&ys, &scaled, &vec![d.df; ys.len()], alpha)?;
+            Some((disp, true, design, arms))
+        }
+        _ => {
+            let (design, arms) = pool(y, se, df, alpha)?;
+            Some((disp, false, design, arms))
+        }
+    }
+}
+
+/// An effect's value and its fit's model-based (in-sample) error from one fit on all of
+/// `data`'s sessions, with no jackknife: for a recording of too few sessions to have one,
+/// which can join a pool only through the fleet's error scale ([`pool_fleet_scale_joined`]).
+/// `None` for an effect of more than one unknown.
+pub fn estimate_in_sample(
+    start: &quatarm_ref::arm::Arm,
+    data: &Dataset,
+    opts: &crate::fit::options::Options,
+    effect: Effect,
+) -> Result<Option<(f64, f64)>, CalibError> {
+    let params = effect.params();
+    if params.len() != 1 {
+        return Ok(None);
+    }
+    let o = crate::fit::options::Options {
+        terms: Terms::with(&[effect]),
+        ..opts.clone()
+    };
+    let all = calib::calibrate(start, data, &o)?;
+    Ok(Some((
+        params[0].value(&all.arm),
+        model_se(&all, &params[0]),
+    )))
+}
+
 /// One estimate of a one-unknown effect ([`estimate`]): its value, its standard error and the
 /// degrees of freedom of that error.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -297,6 +454,12 @@ pub struct Estimate {
     /// 4-session recording is itself uncertain by a factor χ²₃/3, which an interval that
     /// takes it as known ignores).
     pub df: f64,
+    /// The model-based (in-sample) standard error of the value from the same fit on all the
+    /// sessions, σ̂·√((JᵀJ)⁻¹) (the fit's `uncertainty`); `NaN` where the fit gave none. On
+    /// real data it is too small (the residuals are not white), which is why the jackknife
+    /// `se` is the one the product weighs by; its *shape* over the arms is what
+    /// [`pool_fleet_scale`] borrows (docs/results/claims.md §7.10).
+    pub model_se: f64,
 }
 
 /// One arm's estimate from its recordings ([`combine_recordings`]).
@@ -317,6 +480,11 @@ pub struct Combined {
     /// Its upper-tail p on r − 1 degrees of freedom (1 for one recording): a small p says the
     /// recordings of "one arm" disagree beyond their errors (another arm, or a changed one).
     pub q_p: f64,
+    /// The model-based error of the combination: one recording's own
+    /// [`Estimate::model_se`], several recordings' 1/√Σ(1/v_r²) (their inverse-variance mean's
+    /// in-sample error, with no Birge widening: the widening is the jackknife's side of the
+    /// ratio [`pool_fleet_scale`] estimates); `NaN` when some recording has none.
+    pub model_se: f64,
 }
 
 /// One arm's estimate from its recordings' estimates `est`, each fitted on its own recording
@@ -368,6 +536,16 @@ pub fn combine_recordings(est: &[Estimate]) -> Option<Combined> {
     } else {
         (1.0, 1.0, df_s)
     };
+    let model_se = if r == 1 {
+        est[0].model_se
+    } else {
+        1.0 / est
+            .iter()
+            .map(|e| (e.model_se / unit).powi(-2))
+            .sum::<f64>()
+            .sqrt()
+            * unit
+    };
     Some(Combined {
         estimate: mean,
         se: unit * (birge / sw).sqrt(),
@@ -375,6 +553,7 @@ pub fn combine_recordings(est: &[Estimate]) -> Option<Combined> {
         recordings: r,
         q,
         q_p,
+        model_se,
     })
 }
 
@@ -408,7 +587,24 @@ pub struct Coverage {
     /// `satterthwaite`, `with_tau`, `kh`, `kh_df`, `shrinkage` (measured on every tenth
     /// fleet: t on fractional degrees of freedom is a search).
     pub width: [f64; 6],
+    /// Share of arms whose true value lies in the interval of [`pool_fleet_scale`] (t on its
+    /// arm's [`Arm::df`]), falling back to the arms' own errors where the ratios' homogeneity
+    /// test fails at `alpha`.
+    pub fleet_scale: f64,
+    /// Share of fleets where that test failed (the fleet's scale not used).
+    pub fleet_scale_fallback: f64,
+    /// Its mean half-width over the plug-in's (every tenth fleet, as `width`).
+    pub fleet_scale_width: f64,
+    /// `fleet_scale` over the odd arms only: those of high φ in [`simulated_coverage_phi`]
+    /// (with one φ, half the arms drawn as any others).
+    pub fleet_scale_high_phi: f64,
 }
+
+/// The dispersion φ of the jackknife variance over the model's in [`simulated_coverage`]'s
+/// fleets: the model error v_u = s_u/√φ of an arm whose true error is s_u (four times too
+/// small a variance, as a fit whose residuals are correlated within sessions reports). The
+/// coverage does not depend on its value: φ̂ scales it out.
+pub const SIMULATED_PHI: f64 = 4.0;
 
 /// The Knapp–Hartung standard error of arm `a`'s pooled value in a fleet pooled as `d` whose
 /// arms' errors are `se` ([`Coverage::kh`]).
@@ -426,7 +622,9 @@ fn kh_se(a: &Arm, d: &Design, se: &[f64]) -> f64 {
 /// estimated from `sessions` sessions (a jackknife: s_u² χ²/(sessions − 1), sessions − 1
 /// degrees of freedom), as on real arms. `tau` is in units of the mean error. The coverage is
 /// the frequentist one of an empirical Bayes interval: over arms whose values are drawn from
-/// the design's distribution.
+/// the design's distribution. Each arm's model error is known, s_u/√[`SIMULATED_PHI`], for
+/// [`pool_fleet_scale`]'s interval ([`Coverage::fleet_scale`]): its jackknife variance is
+/// then φ v_u² χ²_ν/ν, one φ for the fleet.
 pub fn simulated_coverage(
     arms: usize,
     tau: f64,
@@ -434,6 +632,25 @@ pub fn simulated_coverage(
     fleets: usize,
     seed: u64,
     alpha: f64,
+) -> Coverage {
+    simulated_coverage_phi(arms, tau, sessions, fleets, seed, alpha, 1.0)
+}
+
+/// [`simulated_coverage`] where the fleet's arms do **not** share one φ: arm u's model error
+/// is s_u/√φ_u with φ_u = [`SIMULATED_PHI`]·`phi_ratio`^(±½), low for even u and high for
+/// odd u (the ratio between them `phi_ratio`; MUKCa's Pandas' r_u range over 1.1–19). What
+/// it measures: how often the homogeneity test catches it, and what [`pool_fleet_scale`]'s
+/// interval covers where it does not ([`Coverage::fleet_scale_high_phi`]: the arms whose
+/// errors the fleet's scale makes too short). With `phi_ratio` 1 it is
+/// [`simulated_coverage`], draw for draw.
+pub fn simulated_coverage_phi(
+    arms: usize,
+    tau: f64,
+    sessions: usize,
+    fleets: usize,
+    seed: u64,
+    alpha: f64,
+    phi_ratio: f64,
 ) -> Coverage {
     let mut rng = crate::rng::rng(seed);
     let nu = sessions.saturating_sub(1).max(1);
@@ -444,10 +661,19 @@ pub fn simulated_coverage(
     let tc = t_critical(alpha, (arms.max(2) - 1) as f64);
     let tdf = t_critical(alpha, interval_df(nu as f64, arms));
     let df = vec![nu as f64; arms];
+    let (mut fs_hits, mut fs_fallback, mut fs_width) = (0usize, 0usize, 0.0);
+    // The odd arms' (the high φ's) intervals of the fleet-scale pool, and their hits.
+    let (mut high_n, mut high_hits) = (0usize, 0usize);
     for f in 0..fleets {
         let mut theta = Vec::with_capacity(arms);
         let mut y = Vec::with_capacity(arms);
         let mut se = Vec::with_capacity(arms);
+        let model: Vec<f64> = (0..arms)
+            .map(|u| {
+                let phi = SIMULATED_PHI * phi_ratio.powf((u % 2) as f64 - 0.5);
+                (0.5 + u as f64 / (arms.max(2) - 1) as f64) / phi.sqrt()
+            })
+            .collect();
         for u in 0..arms {
             let s = 0.5 + u as f64 / (arms.max(2) - 1) as f64;
             let t = 1.0 + tau * crate::rng::normal(&mut rng);
@@ -459,6 +685,21 @@ pub fn simulated_coverage(
         let Some((d, a)) = pool(&y, &se, &df, alpha) else {
             continue;
         };
+        if let Some((_, scaled, _, fa)) = pool_fleet_scale(&y, &se, &df, &model, alpha) {
+            fs_fallback += !scaled as usize;
+            for (u, (a, t)) in fa.iter().zip(&theta).enumerate() {
+                let half = t_critical(alpha, a.df) * a.pooled_se;
+                let hit = (a.pooled - t).abs() <= half;
+                fs_hits += hit as usize;
+                if u % 2 == 1 {
+                    high_n += 1;
+                    high_hits += hit as usize;
+                }
+                if f % 10 == 0 {
+                    fs_width += half;
+                }
+            }
+        }
         pooled_fleets += 1;
         mean += (d.mean_interval[0] <= 1.0 && 1.0 <= d.mean_interval[1]) as usize;
         for (a, t) in a.iter().zip(&theta) {
@@ -517,6 +758,10 @@ pub fn simulated_coverage(
             of_plugin(widths[4]),
             of_plugin(widths[6]),
         ],
+        fleet_scale: share(fs_hits),
+        fleet_scale_fallback: fs_fallback as f64 / pooled_fleets.max(1) as f64,
+        fleet_scale_width: of_plugin(fs_width),
+        fleet_scale_high_phi: high_hits as f64 / high_n.max(1) as f64,
     }
 }
 
@@ -538,12 +783,13 @@ pub fn estimate(
     if params.len() != 1 || folds.len() < crate::stats::MIN_UNITS {
         return Ok(None);
     }
+    let Some((value, model_se)) = estimate_in_sample(start, data, opts, effect)? else {
+        return Ok(None);
+    };
     let o = crate::fit::options::Options {
         terms: Terms::with(&[effect]),
         ..opts.clone()
     };
-    let all = calib::calibrate(start, data, &o)?;
-    let value = params[0].value(&all.arm);
     let n = data.rows.len();
     let mut loo = Vec::new();
     for out in &folds {
@@ -558,7 +804,17 @@ pub fn estimate(
         value,
         se,
         df: k - 1.0,
+        model_se,
     }))
+}
+
+/// The fit's own (in-sample) standard error of `p`, `NaN` where it was held or not fitted.
+fn model_se(fit: &crate::fit::finish::Fit, p: &crate::params::Param) -> f64 {
+    fit.params
+        .iter()
+        .position(|q| q == p)
+        .and_then(|k| fit.uncertainty[k])
+        .unwrap_or(f64::NAN)
 }
 
 /// Every one-unknown effect of `effects` estimated at once, each conditional on all the others
@@ -616,6 +872,7 @@ pub fn estimate_joint(
                     value: p[0].value(&all.arm),
                     se: ((k - 1.0) / k * ss).sqrt(),
                     df: k - 1.0,
+                    model_se: model_se(&all, &p[0]),
                 }
             })
             .collect(),
@@ -712,7 +969,12 @@ mod tests {
 
     /// A recording's estimate whose error comes from 4 sessions.
     fn est(value: f64, se: f64) -> Estimate {
-        Estimate { value, se, df: 3.0 }
+        Estimate {
+            value,
+            se,
+            df: 3.0,
+            model_se: se,
+        }
     }
 
     #[test]
@@ -922,6 +1184,107 @@ mod tests {
         // Two that disagree: the Birge ratio's 1 df joins the errors' 6.
         let d = combine_recordings(&[est(1.0, 0.1), est(2.0, 0.1)]).unwrap();
         assert!((d.df - 1.0 / (1.0 / 6.0 + 1.0)).abs() < 1e-9, "{d:?}");
+    }
+
+    #[test]
+    fn the_fleets_dispersion_recovers_a_known_phi() {
+        // 64 arms of 4 sessions whose jackknife variances are φ v² χ²₃/3, φ = 4: φ̂ on 192 df
+        // is within about two of its standard errors (φ √(2/192) = 0.41) of 4.
+        let mut rng = crate::rng::rng(3);
+        let v: Vec<f64> = (0..64).map(|u| 0.5 + u as f64 / 63.0).collect();
+        let se: Vec<f64> = v
+            .iter()
+            .map(|v| {
+                let chi2: f64 = (0..3).map(|_| crate::rng::normal(&mut rng).powi(2)).sum();
+                (4.0 * v * v * chi2 / 3.0).sqrt()
+            })
+            .collect();
+        let d = dispersion(&se, &[3.0; 64], &v).unwrap();
+        assert_eq!(d.df, 192.0);
+        assert!((d.phi - 4.0).abs() < 0.8, "{d:?}");
+        assert!(d.p > 0.01, "one φ holds: {d:?}");
+        // The scale of the effect does not matter.
+        let tiny = |x: &[f64]| x.iter().map(|x| x * 1e-9).collect::<Vec<_>>();
+        let ds = dispersion(&tiny(&se), &[3.0; 64], &tiny(&v)).unwrap();
+        assert!((ds.phi - d.phi).abs() < 1e-9 && (ds.p - d.p).abs() < 1e-9);
+    }
+
+    #[test]
+    fn equal_ratios_pass_the_homogeneity_test_and_wildly_unequal_fail() {
+        let v = [0.5, 1.0, 1.5, 0.7, 0.9, 1.2, 0.6, 1.1];
+        let same: Vec<f64> = v.iter().map(|v| 3.0 * v).collect();
+        let d = dispersion(&same, &[3.0; 8], &v).unwrap();
+        assert!(
+            (d.phi - 9.0).abs() < 1e-9 && d.bartlett < 1e-9 && d.p > 0.999,
+            "{d:?}"
+        );
+        // Half the arms with a ratio 100 times the others': one φ cannot hold.
+        let mixed: Vec<f64> = v
+            .iter()
+            .enumerate()
+            .map(|(u, v)| if u < 4 { *v } else { 10.0 * v })
+            .collect();
+        let d = dispersion(&mixed, &[3.0; 8], &v).unwrap();
+        assert!(d.p < 1e-4, "{d:?}");
+        // No model error, or an error taken as known: nothing to pool.
+        assert!(dispersion(&same, &[3.0; 8], &[f64::NAN; 8]).is_none());
+        assert!(dispersion(&same, &[f64::INFINITY; 8], &v).is_none());
+    }
+
+    #[test]
+    fn the_fleets_scale_is_used_only_where_one_phi_holds() {
+        let y = [0.5, 1.4, 0.9, 1.2, 0.6, 1.5, 0.8, 1.1];
+        let v = [0.3; 8];
+        // Jackknife errors scattering about 2·v as 3-df errors do: the scale is pooled, every
+        // arm's error is 2·v on 24 df and its interval on min(24, 7) = 7.
+        let se = [0.45, 0.7, 0.5, 0.8, 0.6, 0.55, 0.75, 0.65];
+        let (d, scaled, _, arms) = pool_fleet_scale(&y, &se, &[3.0; 8], &v, 0.01).unwrap();
+        let d = d.unwrap();
+        assert!(scaled && d.p >= 0.01, "{d:?}");
+        for a in &arms {
+            assert!((a.se - d.phi.sqrt() * 0.3).abs() < 1e-12 && a.se_df == 24.0 && a.df == 7.0);
+        }
+        // One arm's ratio far from the others': the arms' own errors, as the product's pool.
+        let mut wild = se;
+        wild[7] = 30.0;
+        let (d, scaled, design, arms) = pool_fleet_scale(&y, &wild, &[3.0; 8], &v, 0.01).unwrap();
+        assert!(!scaled && d.unwrap().p < 0.01);
+        let (pd, pa) = pool(&y, &wild, &[3.0; 8], 0.01).unwrap();
+        assert_eq!((design, arms), (pd, pa));
+    }
+
+    #[test]
+    fn an_arm_without_a_jackknife_joins_only_through_the_fleets_scale() {
+        let y = [0.5, 1.4, 0.9, 1.2, 0.6, 1.5, 0.8, 1.1];
+        let v = [0.3; 8];
+        let se = [0.45, 0.7, 0.5, 0.8, 0.6, 0.55, 0.75, 0.65];
+        let (d, scaled, _, alone) = pool_fleet_scale(&y, &se, &[3.0; 8], &v, 0.01).unwrap();
+        let (dj, scaled_j, _, arms) =
+            pool_fleet_scale_joined(&y, &se, &[3.0; 8], &v, &[(1.0, 0.6)], 0.01).unwrap();
+        // φ̂ is the other arms' alone; the joined arm gets √φ̂ times its model error.
+        assert!(scaled && scaled_j && d == dj && arms.len() == 9 && alone.len() == 8);
+        let phi = dj.unwrap().phi;
+        assert!((arms[8].se - phi.sqrt() * 0.6).abs() < 1e-12 && arms[8].se_df == 24.0);
+        // Where one φ does not hold, it cannot be weighed and is left out.
+        let mut wild = se;
+        wild[7] = 30.0;
+        let (_, scaled, _, arms) =
+            pool_fleet_scale_joined(&y, &wild, &[3.0; 8], &v, &[(1.0, 0.6)], 0.01).unwrap();
+        assert!(!scaled && arms.len() == 8);
+    }
+
+    #[test]
+    fn the_fleets_scale_covers_as_an_interval_with_errors_known() {
+        // 300 fleets of 8 arms: the interval on the pooled scale covers near 0.95 (0.94–1.00
+        // with errors known, claims.md §7.4); the homogeneity test fails on about α of them.
+        for tau in [0.0, 1.0] {
+            let c = simulated_coverage(8, tau, 4, 300, 7, 0.05);
+            assert!(
+                c.fleet_scale > 0.93 && c.fleet_scale < 0.995,
+                "tau = {tau}: {c:?}"
+            );
+            assert!(c.fleet_scale_fallback < 0.12, "tau = {tau}: {c:?}");
+        }
     }
 
     #[test]

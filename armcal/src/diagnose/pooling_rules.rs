@@ -39,10 +39,17 @@ pub enum Rule {
     /// The arm's own estimate alone, two-sided on its own ν (no pooling, no gate): the
     /// single-arm test.
     OwnAlone,
+    /// The product's gate and interval on a different pool: the arms' errors s̃ = √φ̂·v from
+    /// their model-based errors and the fleet's pooled dispersion φ̂ (on Σν df), where the
+    /// ratios pass their homogeneity test ([`super::pooling::pool_fleet_scale`]); the arms'
+    /// own jackknife errors where it fails. Its [`Rule::names`] must be given that pool's
+    /// design and arms ([`Rule::fleet_scaled`]), its design's `named` the gate on that pool's
+    /// mean (Holm over the candidates).
+    FleetScale,
 }
 
 /// Every rule, in the order the power example prints them.
-pub const RULES: [Rule; 7] = [
+pub const RULES: [Rule; 8] = [
     Rule::Product,
     Rule::RoundThree,
     Rule::Satterthwaite,
@@ -50,6 +57,7 @@ pub const RULES: [Rule; 7] = [
     Rule::OneSided,
     Rule::Predictive,
     Rule::OwnAlone,
+    Rule::FleetScale,
 ];
 
 impl Rule {
@@ -63,7 +71,14 @@ impl Rule {
             Rule::OneSided => "one-sided, own df",
             Rule::Predictive => "predictive N(μ̂, τ̂²)",
             Rule::OwnAlone => "own estimate alone",
+            Rule::FleetScale => "fleet's error scale",
         }
+    }
+
+    /// Whether the rule reads the pool of [`super::pooling::pool_fleet_scale`] instead of
+    /// [`super::pooling::pool`]'s: one implementation of the pooling, two inputs.
+    pub fn fleet_scaled(self) -> bool {
+        self == Rule::FleetScale
     }
 
     /// Whether the rule names the effect for arm `a` of the design `d` at `alpha`.
@@ -74,7 +89,7 @@ impl Rule {
         match self {
             Rule::OwnAlone => 2.0 * t_tail((a.estimate / a.se).abs(), a.se_df) < alpha,
             _ if !d.named => false,
-            Rule::Product => two_sided(interval_df(a.se_df, k)),
+            Rule::Product | Rule::FleetScale => two_sided(interval_df(a.se_df, k)),
             Rule::RoundThree => two_sided(k.saturating_sub(1).max(1) as f64),
             Rule::Satterthwaite => {
                 let own = (1.0 - a.shrinkage) * a.se * a.se;
@@ -151,6 +166,28 @@ mod tests {
         assert!(count(Rule::RoundThree) >= count(Rule::ShrinkageDf));
         assert!(count(Rule::ShrinkageDf) >= count(Rule::Product));
         assert!([0, 8].contains(&count(Rule::Predictive)));
+    }
+
+    #[test]
+    fn the_fleet_scale_rule_names_nothing_when_its_gate_does_not_pass() {
+        // Arms scattered about 0 with errors whose ratios to the model's agree: the scale is
+        // pooled, the design's mean does not pass, and nothing is named, though two arms' own
+        // estimates are many of their (fleet-scale) errors from 0.
+        let y = [2.0, -2.1, 0.3, -0.2, 0.1, -0.4, 0.2, 0.0];
+        let v = [0.1; 8];
+        let se = [0.15, 0.2, 0.18, 0.22, 0.2, 0.17, 0.25, 0.2];
+        let (_, scaled, d, arms) =
+            crate::diagnose::pooling::pool_fleet_scale(&y, &se, &[3.0; 8], &v, 0.01).unwrap();
+        assert!(scaled && !d.named, "{d:?}");
+        assert!(arms.iter().any(|a| a.named_alone));
+        assert!(arms.iter().all(|a| !Rule::FleetScale.names(&d, a, 0.01)));
+        // The same arms behind a passed gate: those two are named.
+        let open = Design { named: true, ..d };
+        let named = arms
+            .iter()
+            .filter(|a| Rule::FleetScale.names(&open, a, 0.01))
+            .count();
+        assert!(named >= 2, "{arms:?}");
     }
 
     #[test]
