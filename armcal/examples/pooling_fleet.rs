@@ -9,7 +9,7 @@
 //!     cargo run --release -p armcal --example pooling_fleet [seeds [mean compliance]]
 
 use armcal::data::{Dataset, Kind};
-use armcal::diagnose::fleet::{self, UnitData};
+use armcal::diagnose::fleet::{self, ErrorScale, UnitData};
 use armcal::diagnose::fleet_pooled::pool_arms;
 use armcal::diagnose::pooling::{self, Arm as Pooled, Design};
 use armcal::diagnose::{self, FoldChoice};
@@ -394,11 +394,15 @@ fn mukca_fleet() {
             data: u.data,
         })
         .collect();
+    // Each arm first on its own jackknife errors (`ErrorScale::Own`), then the same estimates
+    // on the fleet's error scale (the product's default since stop 40) in each grouping's
+    // "error's scale across the arms" lines, with panda_7 joined there.
     let o = fleet::Options {
         alpha: ALPHA,
+        error_scale: ErrorScale::Own,
         ..fleet::Options::default()
     };
-    println!("MUKCa Panda arms, joint-2 compliance (µrad/mm; session jackknife errors; each recording fitted with its own probe and frame)");
+    println!("MUKCa Panda arms, joint-2 compliance (µrad/mm; session jackknife errors, then the fleet's error scale; each recording fitted with its own probe and frame)");
     mukca_grouping(
         "one recording per physical arm (the table before issue 30's refit: panda_3_bis and panda_1 left out)",
         &[

@@ -1,9 +1,10 @@
 //! Power and false causes of the pooled stage of `armcal diagnose --fleet` over seeds (issue
 //! 30, rounds 4–5): simulated fleets of 8 `default-6` arms (120 tracker points in 4 sessions
 //! each). Every one-unknown candidate the arms can test is pooled and named as the product
-//! does ([`armcal::diagnose::fleet_pooled::pool_candidates`]: Holm over the candidates at the
-//! fleet's α = 0.01, each arm by its pooled 99 % interval, t on its own error's degrees of
-//! freedom or arms − 1 where fewer), and the shoulder's candidate is also named by every rule
+//! did until stop 40 ([`armcal::diagnose::fleet_pooled::pool_candidates`] with each arm's own
+//! jackknife error, `ErrorScale::Own`: Holm over the candidates at the fleet's α = 0.01, each
+//! arm by its pooled 99 % interval, t on its own error's degrees of freedom or arms − 1 where
+//! fewer; the columns "own errors"), and the shoulder's candidate is also named by every rule
 //! of [`armcal::diagnose::pooling_rules`] (the single-arm test among them).
 //!
 //! Three kinds of fleet:
@@ -35,16 +36,21 @@
 //! ([`armcal::diagnose::pooling::pool_fleet_scale`], its gate by Holm with the other
 //! candidates' product p-values), and prints per fleet kind: its design passes, how often the
 //! ratios' homogeneity test failed (the arms' own errors used), φ̂'s median and range, each
-//! arm's pooled 99 % and 95 % intervals holding its true compliance (product and fleet scale),
-//! and of the pairs with the effect the single arm does not name, how many each names.
+//! arm's pooled 99 % and 95 % intervals holding its true compliance (own errors and fleet
+//! scale), and of the pairs with the effect the single arm does not name, how many each names.
+//! Last, the lines "fleet scale on every candidate": the product's naming since stop 40
+//! (`ErrorScale::Fleet`), every candidate re-pooled from the same estimates
+//! ([`armcal::diagnose::fleet_pooled::repool`]) and named by Holm over their own p-values, with
+//! the other candidates it names (claims.md §7.11).
 //!
 //! 20, 40 and 30 by default: 180 fleets, 7.5 minutes release on the shared 2-core
 //! machine (docs/results/claims.md §7.6).
 
 use armcal::data::{Dataset, Kind};
 use armcal::diagnose::candidates;
+use armcal::diagnose::fleet::ErrorScale;
 use armcal::diagnose::fleet::{self, UnitData};
-use armcal::diagnose::fleet_pooled::{pool_candidates, pool_candidates_full, PooledEffect};
+use armcal::diagnose::fleet_pooled::{pool_candidates, pool_candidates_full, repool, PooledEffect};
 use armcal::diagnose::pooling::{self, t_critical, Arm as PooledArm};
 use armcal::diagnose::pooling_rules::{Rule, RULES};
 use armcal::params::Effect;
@@ -205,6 +211,43 @@ struct Outcome {
     others_full: Vec<(String, usize)>,
     /// Whether some other candidate's design mean passed Holm at 0.05 in the full model.
     others_full05: bool,
+    /// Every candidate pooled with the fleet's error scale (`ErrorScale::Fleet`, the same
+    /// estimates [`repool`]ed), at each of [`ALPHAS`].
+    fleet: [Everywhere; 2],
+}
+
+/// The fleet's error scale for every candidate (the product's naming since stop 40), at one α:
+/// the shoulder's arms named, whether its design passed, the other candidates named (candidate,
+/// arms named).
+#[derive(Default)]
+struct Everywhere {
+    shoulder: Vec<bool>,
+    design: bool,
+    others: Vec<(String, usize)>,
+}
+
+/// [`Everywhere`] of the candidates `effects` pooled again with the fleet's error scale at
+/// `alpha`.
+fn everywhere(
+    p: &armcal::diagnose::fleet_pooled::PooledFleet,
+    arms: usize,
+    alpha: f64,
+) -> Everywhere {
+    let r = repool(p, ErrorScale::Fleet, alpha);
+    let mut out = Everywhere {
+        shoulder: vec![false; arms],
+        ..Everywhere::default()
+    };
+    for e in &r.effects {
+        if e.effect == Effect::Gravity(1) {
+            out.design = e.named;
+            out.shoulder = e.arms.iter().map(|a| a.value.named_pooled).collect();
+        } else if e.named {
+            let n = e.arms.iter().filter(|a| a.value.named_pooled).count();
+            out.others.push((e.term.clone(), n));
+        }
+    }
+    out
 }
 
 /// The shoulder's candidate named by the product's rule at each of [`ALPHAS`] (per arm), the
@@ -293,8 +336,17 @@ fn fleet_once(gs: &[f64], base: u64, full: bool) -> Outcome {
                 .collect()
         })
         .collect();
-    let o = fleet::Options::default();
+    // Each arm's own errors (the product's naming until stop 40), the fleet's error scale
+    // counted from the same estimates below.
+    let o = fleet::Options {
+        error_scale: ErrorScale::Own,
+        ..fleet::Options::default()
+    };
     let p = pool_candidates(&start, &units, &arms, &testable, &o);
+    let fleet = [
+        everywhere(&p, gs.len(), ALPHAS[0]),
+        everywhere(&p, gs.len(), ALPHAS[1]),
+    ];
     let (mut named, design, others, others05, fs) = read(&p.effects, gs, false);
     let (mut others_full, mut others_full05, mut design_full) = (Vec::new(), false, [false; 2]);
     if full {
@@ -315,6 +367,7 @@ fn fleet_once(gs: &[f64], base: u64, full: bool) -> Outcome {
         others_full,
         others_full05,
         design_full,
+        fleet,
     }
 }
 
@@ -352,6 +405,10 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
     // Pairs with the effect the single arm does not name, and of them named by the product
     // and by the fleet scale, at each of [`ALPHAS`].
     let mut beyond = [[0usize; 3]; 2];
+    // Every candidate with the fleet's error scale, at each of [`ALPHAS`]: pairs with the
+    // effect named, fleets with all of them, arms without it named, fleets with one, design
+    // passes, fleets with another candidate named, its arms.
+    let mut every = [[0usize; 7]; 2];
     let col = |i: usize, r: Rule| i * RULES.len() + RULES.iter().position(|x| *x == r).unwrap();
     for s in 0..seeds {
         let o = fleet_once(gs, base + 100 * s, full);
@@ -368,7 +425,7 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
         for (i, b) in beyond.iter_mut().enumerate() {
             for u in (0..gs.len()).filter(|u| with[*u] && !o.named[col(i, Rule::OwnAlone)][*u]) {
                 b[0] += 1;
-                b[1] += o.named[col(i, Rule::Product)][u] as usize;
+                b[1] += o.named[col(i, Rule::OwnErrors)][u] as usize;
                 b[2] += o.named[col(i, Rule::FleetScale)][u] as usize;
             }
         }
@@ -378,6 +435,27 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
             for (c, oc) in covered.iter_mut().zip(&o.fs.covered) {
                 c[i] += oc[i];
             }
+        }
+        for (t, e) in every.iter_mut().zip(&o.fleet) {
+            let right = e
+                .shoulder
+                .iter()
+                .zip(&with)
+                .filter(|(n, w)| **n && **w)
+                .count();
+            let wrong = e
+                .shoulder
+                .iter()
+                .zip(&with)
+                .filter(|(n, w)| **n && !**w)
+                .count();
+            t[0] += right;
+            t[1] += (n_with > 0 && right == n_with) as usize;
+            t[2] += wrong;
+            t[3] += (wrong > 0) as usize;
+            t[4] += e.design as usize;
+            t[5] += (!e.others.is_empty()) as usize;
+            t[6] += e.others.iter().map(|o| o.1).sum::<usize>();
         }
         if o.fs.phi.0.is_finite() {
             phis.push(o.fs.phi.0);
@@ -458,9 +536,9 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
     let n_arms = gs.len() as u64 * seeds;
     let fs_text = format!(
         "fleet scale: design passes {}, {}; homogeneity fails (own errors used) in {}, {} fleets at 0.01, 0.05; \
-         φ̂ median {:.2} [{:.2} … {:.2}]; true compliance covered, product 99 % {}/{n_arms}, 95 % {}/{n_arms}; \
+         φ̂ median {:.2} [{:.2} … {:.2}]; true compliance covered, own errors 99 % {}/{n_arms}, 95 % {}/{n_arms}; \
          fleet scale 99 % {}/{n_arms}, 95 % {}/{n_arms}; of the pairs with the effect the single arm does not \
-         name: at 0.01 {}, the product names {}, the fleet scale {}; at 0.05 {}, {}, {}",
+         name: at 0.01 {}, own errors name {}, the fleet scale {}; at 0.05 {}, {}, {}",
         fs_design[0],
         fs_design[1],
         fs_fallback[0],
@@ -480,6 +558,22 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
         beyond[1][2]
     );
     println!("  {fs_text}");
+    for (a, t) in ALPHAS.iter().zip(&every) {
+        println!(
+            "  fleet scale on every candidate @ {a}: design passes {}/{seeds}; with the effect {}/{} \
+             pairs named, every such arm in {}/{seeds} fleets; without it {}/{} named, in \
+             {}/{seeds} fleets; other candidates named in {}/{seeds} fleets ({} arms)",
+            t[4],
+            t[0],
+            n_with as u64 * seeds,
+            t[1],
+            t[2],
+            n_without as u64 * seeds,
+            t[3],
+            t[5],
+            t[6]
+        );
+    }
     let mut others = format!("{other_fleets} ({other_arms}); {fs_text}");
     if full {
         others += &format!(

@@ -142,6 +142,17 @@ fn an_effect_of_one_unit_is_named_for_that_unit_only() {
     assert_eq!(g["named"], false, "{g:#}");
     assert!(g["design"]["spread"].as_f64().unwrap() > 1e-8, "{g:#}");
     assert_eq!(pooled["left_out"][0][0], "e", "{pooled:#}");
+    // Each arm weighed on the fleet's error scale where Bartlett's test at the fleet's α
+    // keeps one scale (the default, `--error-scale fleet`), said with its test.
+    let d = &g["dispersion"];
+    let (phi, p) = (d["phi"].as_f64().unwrap(), d["p"].as_f64().unwrap());
+    assert!(phi > 0.0 && (0.0..=1.0).contains(&p), "{g:#}");
+    assert_eq!(
+        g["fleet_scaled"],
+        p >= pooled["alpha"].as_f64().unwrap(),
+        "{g:#}"
+    );
+    assert_eq!(d["ratios"].as_array().unwrap().len(), 4, "{g:#}");
     // Piped with --progress: every stage counted, the time left once a step is done.
     let err = String::from_utf8_lossy(&out.stderr);
     for stage in [
@@ -222,4 +233,22 @@ fn bad_fleets_are_refused_with_the_file_named() {
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("same unit name"), "{err}");
+    // An error scale that is not one, named with the choices.
+    let o = common::armcal(
+        &[
+            "diagnose",
+            "--fleet",
+            &files[0],
+            &files[1],
+            "--error-scale",
+            "both",
+        ],
+        &dir,
+    );
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--error-scale") && err.contains("own") && err.contains("fleet"),
+        "{err}"
+    );
 }

@@ -7,9 +7,9 @@ mod common;
 
 use armcal::data::{Dataset, Kind};
 use armcal::diagnose::candidates;
-use armcal::diagnose::fleet::{self, UnitData};
+use armcal::diagnose::fleet::{self, ErrorScale, UnitData};
 use armcal::diagnose::fleet_pooled::{
-    pool_arms, pool_candidates, pool_candidates_full, PooledFleet,
+    pool_arms, pool_candidates, pool_candidates_full, repool, PooledFleet,
 };
 use armcal::diagnose::pooling;
 use armcal::params::Effect;
@@ -32,11 +32,21 @@ fn arm_data(seed: u64, g: f64) -> Dataset {
 /// recording: its recordings, arms and each recording's testable candidates.
 type Inputs = (Vec<UnitData>, Vec<(String, Vec<usize>)>, Vec<Vec<Effect>>);
 
-/// The pooled stage over eight arms of compliances `gs`, each arm its own recording.
-fn pooled(gs: &[f64], seed: u64) -> PooledFleet {
+/// The pooled stage over eight arms of compliances `gs`, each arm its own recording, each arm
+/// weighed by the errors `scale` says.
+fn pooled_with(gs: &[f64], seed: u64, scale: ErrorScale) -> PooledFleet {
     let (units, arms, testable) = fleet_inputs(gs, seed);
     let start = Arm::default6();
-    pool_arms(&start, &units, &arms, &testable, &fleet::Options::default()).unwrap()
+    let o = fleet::Options {
+        error_scale: scale,
+        ..fleet::Options::default()
+    };
+    pool_arms(&start, &units, &arms, &testable, &o).unwrap()
+}
+
+/// [`pooled_with`] the product's default errors.
+fn pooled(gs: &[f64], seed: u64) -> PooledFleet {
+    pooled_with(gs, seed, ErrorScale::default())
 }
 
 /// The inputs of [`pooled`].
@@ -99,17 +109,21 @@ fn the_full_model_of_one_effect_is_its_estimate_alone() {
 }
 
 #[test]
-fn an_alias_the_product_names_is_not_named_in_the_full_model() {
+fn an_alias_own_errors_name_is_named_neither_in_the_full_model_nor_on_the_fleets_scale() {
     // The spread fleet of `examples/pooling_power.rs` at 7.5e-9 rad/mm, seed s = 5
     // (docs/results/claims.md §7.6, §7.7, §7.9): fitted against the geometric model alone,
     // joint 5's compliance takes up part of the shoulder's (they share its gravity lever), its
-    // design mean passes Holm and the product names it for arms that do not have it. In the
-    // full model (every candidate conditional on all the others) it is not named, and the
-    // shoulder's compliance still is.
+    // design mean passes Holm and pooled on the arms' own errors (the product's naming until
+    // stop 40) it is named for arms that do not have it. In the full model (every candidate
+    // conditional on all the others) it is not named, and the shoulder's compliance still is;
+    // nor on the fleet's error scale (the product's default since, §7.11).
     let gs: Vec<f64> = (0..8).map(|k| 7.5e-9 * (0.5 + k as f64 / 7.0)).collect();
     let (units, arms, testable) = fleet_inputs(&gs, 1000);
     let start = Arm::default6();
-    let o = fleet::Options::default();
+    let o = fleet::Options {
+        error_scale: ErrorScale::Own,
+        ..fleet::Options::default()
+    };
     let product = pool_candidates(&start, &units, &arms, &testable, &o);
     let alias = |p: &PooledFleet| {
         p.effects
@@ -124,6 +138,19 @@ fn an_alias_the_product_names_is_not_named_in_the_full_model() {
         "{:?}",
         a.design
     );
+    // The same estimates on the fleet's scale: the alias not named, the shoulder named.
+    let fleet_scale = repool(&product, ErrorScale::Fleet, o.alpha);
+    let a = alias(&fleet_scale);
+    assert!(
+        a.fleet_scaled && !a.named,
+        "{:?} {:?}",
+        a.dispersion,
+        a.design
+    );
+    assert!(fleet_scale
+        .effects
+        .iter()
+        .any(|e| e.effect == Effect::Gravity(1) && e.named && e.fleet_scaled));
     let full = pool_candidates_full(&start, &units, &arms, &testable, &o);
     assert!(full.left_out.is_empty(), "{:?}", full.left_out);
     assert_eq!(full.effects.len(), product.effects.len());
@@ -155,8 +182,9 @@ fn an_alias_the_product_names_is_not_named_in_the_full_model() {
 #[test]
 fn a_spread_effect_too_small_for_each_arm_is_named_for_more_arms_pooled_than_alone() {
     // 1.25…3.75e-9 rad/mm: each arm's own estimate is within ~2 of its jackknife errors.
+    // Pooled on the arms' own errors (`ErrorScale::Own`); on the fleet's scale below.
     let gs: Vec<f64> = (0..8).map(|k| 2.5e-9 * (0.5 + k as f64 / 7.0)).collect();
-    let p = pooled(&gs, 500);
+    let p = pooled_with(&gs, 500, ErrorScale::Own);
     let g = p
         .effects
         .iter()
@@ -216,6 +244,57 @@ fn a_spread_effect_too_small_for_each_arm_is_named_for_more_arms_pooled_than_alo
         text.contains("+gravity_compliance:2") && text.contains("named for the design"),
         "{text}"
     );
+}
+
+#[test]
+fn on_the_fleets_error_scale_more_arms_are_named_than_on_their_own_errors() {
+    // The fleet above (seed 500) with the product's default errors: the arms' ratios of
+    // jackknife to in-sample variance pass Bartlett's test, each arm is weighed by √φ̂ times
+    // its in-sample error on the fleet's 24 df (its interval on t₇, not t₃), and more arms are
+    // named than on their own errors (docs/results/claims.md §7.10–§7.11).
+    let gs: Vec<f64> = (0..8).map(|k| 2.5e-9 * (0.5 + k as f64 / 7.0)).collect();
+    let own = pooled_with(&gs, 500, ErrorScale::Own);
+    let p = pooled(&gs, 500);
+    let shoulder = |p: &PooledFleet| {
+        p.effects
+            .iter()
+            .find(|e| e.effect == Effect::Gravity(1))
+            .expect("the shoulder's compliance pooled")
+            .clone()
+    };
+    let (o, g) = (shoulder(&own), shoulder(&p));
+    let d = g
+        .dispersion
+        .as_ref()
+        .expect("a dispersion on the fleet's scale");
+    assert!(g.fleet_scaled && d.p >= p.alpha && d.df == 24.0, "{d:?}");
+    assert!(o.dispersion.is_none() && !o.fleet_scaled);
+    for (a, b) in g.arms.iter().zip(&o.arms) {
+        assert_eq!((a.value.se_df, a.value.df), (24.0, 7.0), "{:?}", a.value);
+        // The same estimate, another error: √φ̂ × the fit's in-sample error.
+        assert_eq!(a.value.estimate, b.value.estimate);
+        let want = d.phi.sqrt() * a.combined.model_se;
+        assert!(
+            (a.value.se - want).abs() <= 1e-12 * want,
+            "{} {want}",
+            a.value.se
+        );
+    }
+    let named = |e: &armcal::diagnose::fleet_pooled::PooledEffect| {
+        e.arms.iter().filter(|a| a.value.named_pooled).count()
+    };
+    assert!(
+        g.named && named(&g) > named(&o),
+        "{} vs {}",
+        named(&g),
+        named(&o)
+    );
+    for e in p.effects.iter().filter(|e| e.effect != Effect::Gravity(1)) {
+        assert!(!e.named, "{} named: {:?}", e.term, e.design);
+    }
+    let mut text = String::new();
+    p.write_text(&mut text);
+    assert!(text.contains("the fleet's scale used"), "{text}");
 }
 
 #[test]

@@ -34,6 +34,12 @@ pub struct Args {
     #[arg(long, default_value_t = diagnose::fleet::ALPHA,
           value_parser = super::args::probability)]
     fleet_alpha: f64,
+    /// With `--fleet`: the error each arm's pooled estimate is weighed by. `fleet` (default):
+    /// its jackknife error's scale pooled over the arms (√φ̂ times its fit's in-sample error,
+    /// where Bartlett's test at the fleet's α does not reject one φ for the design; else its
+    /// own); `own`: its own jackknife error on its sessions − 1 df (the earlier default).
+    #[arg(long, value_enum, default_value_t = diagnose::fleet::ErrorScale::Fleet)]
+    error_scale: diagnose::fleet::ErrorScale,
     /// With `--fleet`: these recordings (unit names as the fleet gives them, e.g.
     /// `--same-arm panda_3=panda_3,panda_3_bis,panda_right`) are one physical arm, one unit of
     /// the fleet test named ARM, their sessions' evidence pooled. Repeat for more arms. Given, it sets
@@ -289,6 +295,7 @@ fn run_fleet(a: &Args) -> anyhow::Result<()> {
     }
     let mut opts = diagnose::fleet::Options {
         alpha: a.fleet_alpha,
+        error_scale: a.error_scale,
         ..diagnose::fleet::Options::default()
     };
     opts.diagnose.calib.lm.max_iterations = a.max_iter as usize;

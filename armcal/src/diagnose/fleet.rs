@@ -87,6 +87,8 @@ pub struct Options {
     pub diagnose: DiagOptions,
     /// Family-wise level of each step's test (Holm over the candidates).
     pub alpha: f64,
+    /// The errors the pooled stage weighs each arm by ([`super::fleet_pooled`]).
+    pub error_scale: ErrorScale,
 }
 
 impl Default for Options {
@@ -94,8 +96,23 @@ impl Default for Options {
         Options {
             diagnose: DiagOptions::default(),
             alpha: ALPHA,
+            error_scale: ErrorScale::default(),
         }
     }
+}
+
+/// Which standard error each arm is pooled with: its own jackknife error over its sessions
+/// ([`super::pooling::pool`]), or that error's scale pooled across the fleet ([`super::pooling::pool_fleet_scale`]: √φ̂ times
+/// the arm's in-sample error where the arms' ratios pass Bartlett's test, else their own).
+/// The fleet diagnosis's choice (`armcal diagnose --fleet --error-scale`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum ErrorScale {
+    /// Each arm's own jackknife error on its sessions − 1 df.
+    Own,
+    /// The jackknife errors' scale pooled over the arms (docs/results/claims.md §7.10).
+    #[default]
+    Fleet,
 }
 
 /// One unit's recordings.

@@ -11,7 +11,10 @@
 //! arms − 1 degrees of freedom) and the p-values corrected by Holm over the candidates at the
 //! fleet's `alpha`; for a candidate that passes, the effect is named for every arm whose pooled
 //! interval (at 1 − `alpha`, t on the arm's own error's degrees of freedom or arms − 1 where
-//! fewer: [`super::pooling::interval_df`]) excludes zero, and each such arm's **held-out
+//! fewer: [`super::pooling::interval_df`]) excludes zero, each arm weighed by the error
+//! `opts.error_scale` says (by default its jackknife error's scale pooled over the fleet where
+//! Bartlett's test does not reject one scale for the design, [`super::pooling::pool_fleet_scale`];
+//! else its own), and each such arm's **held-out
 //! gain** is measured nested ([`super::pooling::pooled_holdout`]: each session scored with the
 //! value pooled from the arm's other sessions and the other arms).
 //!
@@ -27,8 +30,8 @@
 //! This module sits above both [`super::fleet`] (whose arms and candidates it reads) and
 //! [`super::pooling`] (which it calls): neither of them knows it.
 
-use super::fleet::{geometric_options, holm, Fleet, Options, UnitData};
-use super::pooling::{self, Arm as PooledValue, Combined, Design, Estimate};
+use super::fleet::{geometric_options, holm, ErrorScale, Fleet, Options, UnitData};
+use super::pooling::{self, Arm as PooledValue, Combined, Design, Dispersion, Estimate};
 use crate::data::Dataset;
 use crate::fit::error::CalibError;
 use crate::fit::holdout::by_group;
@@ -91,6 +94,14 @@ pub struct PooledEffect {
     pub design: Design,
     /// Whether the design's mean passes Holm over the pooled candidates at `alpha`.
     pub named: bool,
+    /// The arms' errors' dispersion over their in-sample errors and its homogeneity test
+    /// (with [`ErrorScale::Fleet`], where every arm has both errors).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dispersion: Option<Dispersion>,
+    /// Whether the arms were pooled with the fleet's error scale (√φ̂ times their in-sample
+    /// error); false with [`ErrorScale::Own`] or where the homogeneity test failed at `alpha`
+    /// (then each arm's own jackknife error, as with `Own`).
+    pub fleet_scaled: bool,
     /// Every pooled arm.
     pub arms: Vec<PooledArm>,
 }
@@ -270,7 +281,9 @@ pub fn pool_candidates_full(
                 Some((est, c))
             })
             .collect();
-        if let Some(p) = mine.and_then(|m| pool_estimates(units, &used, e, m, opts.alpha)) {
+        if let Some(p) =
+            mine.and_then(|m| pool_estimates(units, &used, e, m, opts.error_scale, opts.alpha))
+        {
             out.effects.push(p);
         }
     }
@@ -318,7 +331,8 @@ fn pool_alone(
 ) -> PooledFleet {
     let calib = geometric_options(opts);
     for e in shared_vocabulary(used, testable) {
-        if let Some(p) = pool_effect(start, units, used, &calib, e, opts.alpha, &mut out.left_out) {
+        let how = (opts.error_scale, opts.alpha);
+        if let Some(p) = pool_effect(start, units, used, &calib, e, how, &mut out.left_out) {
             out.effects.push(p);
         }
     }
@@ -392,25 +406,25 @@ fn pool_effect(
     used: &[Used],
     calib: &crate::fit::options::Options,
     e: Effect,
-    alpha: f64,
+    (scale, alpha): (ErrorScale, f64),
     left_out: &mut Vec<LeftOut>,
 ) -> Option<PooledEffect> {
     let per_arm = arm_estimates(start, units, used, calib, e, left_out)?;
-    pool_estimates(units, used, e, per_arm, alpha)
+    pool_estimates(units, used, e, per_arm, scale, alpha)
 }
 
-/// The candidate `e` pooled from each used arm's estimates `per_arm` (not yet named).
+/// The candidate `e` pooled from each used arm's estimates `per_arm` with the errors `scale`
+/// says (not yet named).
 fn pool_estimates(
     units: &[UnitData],
     used: &[Used],
     e: Effect,
     per_arm: Vec<ArmEstimate>,
+    scale: ErrorScale,
     alpha: f64,
 ) -> Option<PooledEffect> {
-    let y: Vec<f64> = per_arm.iter().map(|(_, c)| c.estimate).collect();
-    let se: Vec<f64> = per_arm.iter().map(|(_, c)| c.se).collect();
-    let df: Vec<f64> = per_arm.iter().map(|(_, c)| c.df).collect();
-    let (design, values) = pooling::pool(&y, &se, &df, alpha)?;
+    let combined: Vec<&Combined> = per_arm.iter().map(|(_, c)| c).collect();
+    let (dispersion, fleet_scaled, design, values) = pool_combined(&combined, scale, alpha)?;
     let arms = used
         .iter()
         .zip(per_arm)
@@ -430,8 +444,66 @@ fn pool_estimates(
         effect: e,
         design,
         named: false,
+        dispersion,
+        fleet_scaled,
         arms,
     })
+}
+
+/// The arms' estimates `combined` pooled with the errors `scale` says: the one place both
+/// [`pool_estimates`] and [`repool`] pool.
+fn pool_combined(
+    combined: &[&Combined],
+    scale: ErrorScale,
+    alpha: f64,
+) -> Option<(Option<Dispersion>, bool, Design, Vec<PooledValue>)> {
+    let y: Vec<f64> = combined.iter().map(|c| c.estimate).collect();
+    let se: Vec<f64> = combined.iter().map(|c| c.se).collect();
+    let df: Vec<f64> = combined.iter().map(|c| c.df).collect();
+    let model: Vec<f64> = combined.iter().map(|c| c.model_se).collect();
+    pooling::pool_with(scale, &y, &se, &df, &model, alpha)
+}
+
+/// `fleet`'s candidates pooled again from the same estimates with the errors `scale` says and
+/// named afresh at `alpha` (Holm over the candidates, intervals at 1 − `alpha`; no held-out
+/// gains): what the choice of errors or level changes, without a fit
+/// (`examples/pooling_power.rs` counts both choices on each simulated fleet). A candidate that
+/// cannot be pooled so is left out with the reason.
+pub fn repool(fleet: &PooledFleet, scale: ErrorScale, alpha: f64) -> PooledFleet {
+    let mut out = PooledFleet {
+        alpha,
+        effects: Vec::new(),
+        left_out: fleet.left_out.clone(),
+    };
+    for p in &fleet.effects {
+        let combined: Vec<&Combined> = p.arms.iter().map(|a| &a.combined).collect();
+        let Some((dispersion, fleet_scaled, design, values)) =
+            pool_combined(&combined, scale, alpha)
+        else {
+            out.left_out
+                .push((p.term.clone(), "cannot be pooled again".to_string()));
+            continue;
+        };
+        let arms = p
+            .arms
+            .iter()
+            .zip(values)
+            .map(|(a, value)| PooledArm {
+                value,
+                holdout: None,
+                ..a.clone()
+            })
+            .collect();
+        out.effects.push(PooledEffect {
+            design,
+            named: false,
+            dispersion,
+            fleet_scaled,
+            arms,
+            ..p.clone()
+        });
+    }
+    named(out)
 }
 
 /// Names the candidates whose design mean passes Holm at `alpha` over all of them, and keeps
@@ -521,8 +593,9 @@ impl PooledFleet {
             s,
             "\npooled effects (each arm's value drawn from the design's distribution, \
              DerSimonian–Laird; the design's mean tested two-sided, Holm at α = {}; named for \
-             an arm whose pooled {:.0} % interval, t on its own error's df or arms − 1 where \
-             fewer, excludes 0)",
+             an arm whose pooled {:.0} % interval, t on its error's df or arms − 1 where \
+             fewer, excludes 0; each arm's error its jackknife over its sessions, or where the \
+             fleet's errors share one scale, √φ̂ times its fit's in-sample error)",
             self.alpha,
             100.0 * (1.0 - self.alpha)
         );
@@ -549,6 +622,21 @@ impl PooledFleet {
                     "not named"
                 }
             );
+            if let Some(d) = &p.dispersion {
+                let _ = writeln!(
+                    s,
+                    "    errors: jackknife over in-sample variance φ̂ = {:.2} on {:.0} df, \
+                     Bartlett's test of one φ p = {:.2}: {}",
+                    d.phi,
+                    d.df,
+                    d.p,
+                    if p.fleet_scaled {
+                        "the fleet's scale used (√φ̂ × each arm's in-sample error)"
+                    } else {
+                        "rejected, each arm's own jackknife error used"
+                    }
+                );
+            }
             if !p.named {
                 continue;
             }

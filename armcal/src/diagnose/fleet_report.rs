@@ -14,7 +14,8 @@
 //!  "pooled": {"alpha", "left_out": [[arm, "arm: recording R" or candidate, why]],
 //!             "effects": [{"term", "named", "design": {"arms", "mean", "mean_se",
 //!                          "mean_interval", "mean_p", "spread", "spread_interval", "named"},
-//!                          "arms": [{"arm", "recordings", "sessions", "per_recording":
+//!                          "dispersion": {"ratios", "phi", "df", "bartlett", "p"},
+//!                          "fleet_scaled", "arms": [{"arm", "recordings", "sessions", "per_recording":
 //!                                    [{"value", "se", "df", "model_se"}], "combined":
 //!                                    {"estimate", "se", "df", "recordings", "q", "q_p",
 //!                                    "model_se"}, "estimate", "se",
@@ -26,10 +27,13 @@
 //! `pooled` is [`super::fleet_pooled`]'s stage: an arm's `per_recording` estimates (each
 //! recording fitted with its own probe and frame) combined into its `estimate`, then pooled
 //! over the arms; `pooled_se` carries τ̂²'s uncertainty, `pooled_se_plugin` does not; an arm's
-//! interval is `pooled` ± t_`df`·`pooled_se`, `df` its own error's degrees of freedom
-//! (`se_df`: sessions − 1) or arms − 1 where fewer. `model_se` is the fit's in-sample error of
-//! the same value (null where the fit gave none), read only by the fleet-scale rule measured in
-//! docs/results/claims.md §7.10.
+//! interval is `pooled` ± t_`df`·`pooled_se`, `df` its error's degrees of freedom (`se_df`)
+//! or arms − 1 where fewer. `model_se` is the fit's in-sample error of the same value (null
+//! where the fit gave none). With `fleet_scaled` (the default `--error-scale fleet`, where
+//! Bartlett's test of the arms' ratios s²/v² in `dispersion` keeps one scale at `alpha`) an
+//! arm's `se` is √`phi` × its `model_se` on the fleet's `df` (Σ sessions − 1); without it
+//! (the test rejected, or `--error-scale own`, which has no `dispersion`), its jackknife
+//! error on its sessions − 1 (docs/results/claims.md §7.10–§7.11).
 //!
 //! A unit is an arm ([`super::same_arm`]): recordings of one physical arm are one unit.
 //!

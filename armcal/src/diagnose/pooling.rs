@@ -47,17 +47,18 @@
 //! too seldom, or their false causes on fleets where some arms lack the effect are measured on
 //! too few such arms to say they stay at `alpha` (docs/results/claims.md §7.6).
 //!
-//! **The error's scale pooled across the fleet** ([`dispersion`], [`pool_fleet_scale`];
-//! counted as a rule beside the product's, not used by [`pool`]): each arm's jackknife error
-//! rests on 3 df, so its interval needs t₃; its fit's in-sample error v_u rests on hundreds of
+//! **The error's scale pooled across the fleet** ([`dispersion`], [`pool_fleet_scale`]; the
+//! fleet diagnosis's default since stop 40, `ErrorScale::Fleet`, [`pool_with`]): each arm's
+//! jackknife error rests on 3 df, so its interval needs t₃; its fit's in-sample error v_u rests on hundreds of
 //! residuals but misses their correlation within a session. With one ratio φ = s²/v² for the
 //! design, φ̂ pooled over the arms (Σν df, tested for homogeneity) and s̃_u = √φ̂·v_u give every
-//! arm an error whose scale has the fleet's df (docs/results/claims.md §7.10).
+//! arm an error whose scale has the fleet's df (docs/results/claims.md §7.10–§7.11). Where the
+//! test rejects one φ, each arm keeps its own error.
 //!
 //! **The design's spread** has a Q-profile interval (Viechtbauer 2007): the τ² at which the
 //! generalised Q statistic equals the χ²_{k−1} quantiles.
 
-use super::fleet::dersimonian_laird;
+use super::fleet::{dersimonian_laird, ErrorScale};
 use crate::data::Dataset;
 use crate::fit::calib::{self};
 use crate::fit::error::CalibError;
@@ -354,8 +355,25 @@ pub fn dispersion(se: &[f64], df: &[f64], model_se: &[f64]) -> Option<Dispersion
     })
 }
 
-/// The arms pooled with the error's scale pooled across the fleet (issue 30, round 6; counted
-/// as [`super::pooling_rules::Rule::FleetScale`], not the product's naming): when the arms'
+/// The arms pooled with the error `scale` says ([`ErrorScale`]): the dispersion (only with
+/// [`ErrorScale::Fleet`] and where one can be formed), whether the fleet's scale was used, and
+/// the pool.
+pub fn pool_with(
+    scale: ErrorScale,
+    y: &[f64],
+    se: &[f64],
+    df: &[f64],
+    model_se: &[f64],
+    alpha: f64,
+) -> Option<(Option<Dispersion>, bool, Design, Vec<Arm>)> {
+    match scale {
+        ErrorScale::Own => pool(y, se, df, alpha).map(|(d, a)| (None, false, d, a)),
+        ErrorScale::Fleet => pool_fleet_scale(y, se, df, model_se, alpha),
+    }
+}
+
+/// The arms pooled with the error's scale pooled across the fleet (issue 30, round 6;
+/// [`super::pooling_rules::Rule::FleetScale`], the product's naming since stop 40): when the arms'
 /// ratios pass [`dispersion`]'s homogeneity test at `alpha` (the gate's α), each arm's error
 /// is s̃_u = √φ̂·v_u on φ̂'s Σ ν_u degrees of freedom and the arms are [`pool`]ed with them;
 /// when it fails (or some arm has no model error), with their own jackknife errors, as the

@@ -1,8 +1,10 @@
 //! Rules that name a pooled effect for an arm, side by side (issue 30, round 5).
 //!
-//! The product names by one rule ([`Rule::Product`], the one [`super::pooling::pool`] and
-//! [`super::fleet_pooled`] apply): the design's mean passes, then each arm whose pooled interval
-//! (t on [`super::pooling::interval_df`]) excludes zero. Rules that would name more are kept here
+//! The product names by one rule, the one [`super::fleet_pooled`] applies: the design's mean
+//! passes, then each arm whose pooled interval (t on [`super::pooling::interval_df`]) excludes
+//! zero; since stop 40 on the pool with the fleet's error scale ([`Rule::FleetScale`],
+//! `ErrorScale::Fleet`), before on the arms' own errors ([`Rule::OwnErrors`], `ErrorScale::Own`,
+//! still `armcal diagnose --fleet --error-scale own`). Rules that would name more are kept here
 //! so that `examples/pooling_power.rs` can count, on the same pooled fleets, what each names
 //! where the effect is (power) and where it is not (false causes: null fleets, and mixed fleets
 //! whose design mean passes while some arms have nothing). A rule is adopted by the product only
@@ -19,8 +21,9 @@ use crate::stats::{t_critical, t_tail};
 /// A rule that names an arm.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Rule {
-    /// The product's: gate, then the arm's pooled interval on min(ν, k − 1) df excludes 0.
-    Product,
+    /// Gate, then the arm's pooled interval on min(ν, k − 1) df excludes 0, each arm pooled
+    /// with its own jackknife error (the product's until stop 40; `ErrorScale::Own`).
+    OwnErrors,
     /// Round 3's: the pooled interval on k − 1 df (covers 0.88–0.92 with 8 arms of 4 sessions).
     RoundThree,
     /// The pooled interval on [`satterthwaite_df`] (covers 0.87–0.95).
@@ -39,7 +42,8 @@ pub enum Rule {
     /// The arm's own estimate alone, two-sided on its own ν (no pooling, no gate): the
     /// single-arm test.
     OwnAlone,
-    /// The product's gate and interval on a different pool: the arms' errors s̃ = √φ̂·v from
+    /// The product's (since stop 40; `ErrorScale::Fleet`): [`Rule::OwnErrors`]'s gate and
+    /// interval on a different pool: the arms' errors s̃ = √φ̂·v from
     /// their model-based errors and the fleet's pooled dispersion φ̂ (on Σν df), where the
     /// ratios pass their homogeneity test ([`super::pooling::pool_fleet_scale`]); the arms'
     /// own jackknife errors where it fails. Its [`Rule::names`] must be given that pool's
@@ -50,7 +54,7 @@ pub enum Rule {
 
 /// Every rule, in the order the power example prints them.
 pub const RULES: [Rule; 8] = [
-    Rule::Product,
+    Rule::OwnErrors,
     Rule::RoundThree,
     Rule::Satterthwaite,
     Rule::ShrinkageDf,
@@ -64,14 +68,14 @@ impl Rule {
     /// A short name for tables.
     pub fn label(self) -> &'static str {
         match self {
-            Rule::Product => "product (own df)",
+            Rule::OwnErrors => "own errors (own df)",
             Rule::RoundThree => "round 3 (k − 1 df)",
             Rule::Satterthwaite => "Satterthwaite df",
             Rule::ShrinkageDf => "shrinkage df",
             Rule::OneSided => "one-sided, own df",
             Rule::Predictive => "predictive N(μ̂, τ̂²)",
             Rule::OwnAlone => "own estimate alone",
-            Rule::FleetScale => "fleet's error scale",
+            Rule::FleetScale => "fleet's error scale (product)",
         }
     }
 
@@ -89,7 +93,7 @@ impl Rule {
         match self {
             Rule::OwnAlone => 2.0 * t_tail((a.estimate / a.se).abs(), a.se_df) < alpha,
             _ if !d.named => false,
-            Rule::Product | Rule::FleetScale => two_sided(interval_df(a.se_df, k)),
+            Rule::OwnErrors | Rule::FleetScale => two_sided(interval_df(a.se_df, k)),
             Rule::RoundThree => two_sided(k.saturating_sub(1).max(1) as f64),
             Rule::Satterthwaite => {
                 let own = (1.0 - a.shrinkage) * a.se * a.se;
@@ -129,7 +133,7 @@ mod tests {
         ] {
             let (d, arms) = pool(&y, &se, &[3.0; 8], 0.01).unwrap();
             for a in &arms {
-                assert_eq!(Rule::Product.names(&d, a, 0.01), a.named_pooled, "{a:?}");
+                assert_eq!(Rule::OwnErrors.names(&d, a, 0.01), a.named_pooled, "{a:?}");
             }
         }
     }
@@ -157,14 +161,14 @@ mod tests {
         let (d, arms) = agreeing();
         let count = |r: Rule| arms.iter().filter(|a| r.names(&d, a, 0.01)).count();
         for a in &arms {
-            if Rule::Product.names(&d, a, 0.01) {
+            if Rule::OwnErrors.names(&d, a, 0.01) {
                 for r in [Rule::OneSided, Rule::RoundThree, Rule::ShrinkageDf] {
                     assert!(r.names(&d, a, 0.01), "{r:?} {a:?}");
                 }
             }
         }
         assert!(count(Rule::RoundThree) >= count(Rule::ShrinkageDf));
-        assert!(count(Rule::ShrinkageDf) >= count(Rule::Product));
+        assert!(count(Rule::ShrinkageDf) >= count(Rule::OwnErrors));
         assert!([0, 8].contains(&count(Rule::Predictive)));
     }
 
@@ -203,7 +207,7 @@ mod tests {
         assert!(d.named && d.mean > 0.0, "{d:?}");
         let last = &arms[15];
         assert!(
-            last.pooled < 0.0 && Rule::Product.names(&d, last, 0.01),
+            last.pooled < 0.0 && Rule::OwnErrors.names(&d, last, 0.01),
             "{last:?}"
         );
         assert!(!Rule::OneSided.names(&d, last, 0.01));
