@@ -278,45 +278,57 @@ fn mukca_grouping(
             joined.push(e);
         }
     }
-    match pooling::pool_fleet_scale_joined(&y, &se, &df, &v, &joined, ALPHA) {
-        Some((disp, scaled, fd, farms)) => {
-            if let Some(disp) = disp {
-                let rs: Vec<String> = disp.ratios.iter().map(|r| format!("{r:.1}")).collect();
-                println!(
-                    "  error's scale across the arms: r = [{}], φ̂ = {:.1} on {:.1} df, Bartlett {:.2} (p = {:.3}): scale {}",
-                    rs.join(", "),
-                    disp.phi,
-                    disp.df,
-                    disp.bartlett,
-                    disp.p,
-                    if scaled { "pooled" } else { "not pooled (the arms' own errors)" }
-                );
-            }
-            println!(
-                "  pooled with it: design mean {:+.3} µrad/mm (p = {:.3}), spread τ {:.3}",
-                fd.mean * 1e6,
-                fd.mean_p,
-                fd.spread * 1e6
-            );
-            let names = p
-                .arms
-                .iter()
-                .map(|a| a.arm.clone())
-                .chain(joined_names.iter().cloned());
-            for (a, f) in names.zip(&farms) {
-                println!(
-                    "    {:<8} s̃ {:.3} ({:.0} df) → pooled {:+.3} ± {:.3} ({:.0} df, named {})",
-                    a,
-                    f.se * 1e6,
-                    f.se_df,
-                    f.pooled * 1e6,
-                    f.pooled_se * 1e6,
-                    f.df,
-                    f.named_pooled
-                );
-            }
+    // As `armcal diagnose --fleet` pools (the arms of 3 sessions or more), then with the arms
+    // of 2 sessions joined.
+    let ways: [(&str, &[(f64, f64)], &[String]); 2] = [
+        ("as diagnose --fleet", &[], &[]),
+        ("arms of 2 sessions joined", &joined, &joined_names),
+    ];
+    for (way, joined, joined_names) in ways {
+        if way != ways[0].0 && joined.is_empty() {
+            continue;
         }
-        None => println!("  error's scale across the arms: not pooled"),
+        println!("  {way}:");
+        match pooling::pool_fleet_scale_joined(&y, &se, &df, &v, joined, ALPHA) {
+            Some((disp, scaled, fd, farms)) => {
+                if let Some(disp) = disp {
+                    let rs: Vec<String> = disp.ratios.iter().map(|r| format!("{r:.1}")).collect();
+                    println!(
+                        "  error's scale across the arms: r = [{}], φ̂ = {:.1} on {:.1} df, Bartlett {:.2} (p = {:.3}): scale {}",
+                        rs.join(", "),
+                        disp.phi,
+                        disp.df,
+                        disp.bartlett,
+                        disp.p,
+                        if scaled { "pooled" } else { "not pooled (the arms' own errors)" }
+                    );
+                }
+                println!(
+                    "  pooled with it: design mean {:+.3} µrad/mm (p = {:.3}), spread τ {:.3}",
+                    fd.mean * 1e6,
+                    fd.mean_p,
+                    fd.spread * 1e6
+                );
+                let names = p
+                    .arms
+                    .iter()
+                    .map(|a| a.arm.clone())
+                    .chain(joined_names.iter().cloned());
+                for (a, f) in names.zip(&farms) {
+                    println!(
+                        "    {:<8} s̃ {:.3} ({:.0} df) → pooled {:+.3} ± {:.3} ({:.0} df, named {})",
+                        a,
+                        f.se * 1e6,
+                        f.se_df,
+                        f.pooled * 1e6,
+                        f.pooled_se * 1e6,
+                        f.df,
+                        f.named_pooled
+                    );
+                }
+            }
+            None => println!("  error's scale across the arms: not pooled"),
+        }
     }
     // panda_4 (one recording): its pooled value from its other sessions and the other arms.
     let i4 = p
