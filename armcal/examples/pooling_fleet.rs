@@ -168,6 +168,10 @@ fn simulated(seeds: u64, mean: f64) {
 /// recording of 3 sessions or more gives its own estimate (its own probe and frame), an arm's
 /// recordings are combined by inverse variance, the arms pooled; then panda_4's nested
 /// held-out gain with its pooled compliance fixed.
+/// One way of pooling the fleet's scale in [`mukca_grouping`]: its name, the arms joined
+/// without a jackknife (value, in-sample error) and their names.
+type Way<'a> = (&'a str, &'a [(f64, f64)], &'a [String]);
+
 fn mukca_grouping(
     title: &str,
     grouping: &[(&str, &[&str])],
@@ -280,7 +284,7 @@ fn mukca_grouping(
     }
     // As `armcal diagnose --fleet` pools (the arms of 3 sessions or more), then with the arms
     // of 2 sessions joined.
-    let ways: [(&str, &[(f64, f64)], &[String]); 2] = [
+    let ways: [Way; 2] = [
         ("as diagnose --fleet", &[], &[]),
         ("arms of 2 sessions joined", &joined, &joined_names),
     ];
