@@ -212,8 +212,9 @@ struct Outcome {
     /// Whether some other candidate's design mean passed Holm at 0.05 in the full model.
     others_full05: bool,
     /// Every candidate pooled with the fleet's error scale (`ErrorScale::Fleet`, the same
-    /// estimates [`repool`]ed), at each of [`ALPHAS`].
-    fleet: [Everywhere; 2],
+    /// estimates [`repool`]ed), at each of [`ALPHAS`]: against the geometric model alone,
+    /// then (with `full`) in the full model.
+    fleet: Vec<[Everywhere; 2]>,
 }
 
 /// The fleet's error scale for every candidate (the product's naming since stop 40), at one α:
@@ -343,10 +344,13 @@ fn fleet_once(gs: &[f64], base: u64, full: bool) -> Outcome {
         ..fleet::Options::default()
     };
     let p = pool_candidates(&start, &units, &arms, &testable, &o);
-    let fleet = [
-        everywhere(&p, gs.len(), ALPHAS[0]),
-        everywhere(&p, gs.len(), ALPHAS[1]),
-    ];
+    let both = |p: &_| {
+        [
+            everywhere(p, gs.len(), ALPHAS[0]),
+            everywhere(p, gs.len(), ALPHAS[1]),
+        ]
+    };
+    let mut fleet = vec![both(&p)];
     let (mut named, design, others, others05, fs) = read(&p.effects, gs, false);
     let (mut others_full, mut others_full05, mut design_full) = (Vec::new(), false, [false; 2]);
     if full {
@@ -355,6 +359,7 @@ fn fleet_once(gs: &[f64], base: u64, full: bool) -> Outcome {
             eprintln!("full model, seed {base}: {what}: {why}");
         }
         let (n, df, of, of05, _) = read(&f.effects, gs, true);
+        fleet.push(both(&f));
         named.extend(n);
         (others_full, others_full05, design_full) = (of, of05, df);
     }
@@ -408,7 +413,7 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
     // Every candidate with the fleet's error scale, at each of [`ALPHAS`]: pairs with the
     // effect named, fleets with all of them, arms without it named, fleets with one, design
     // passes, fleets with another candidate named, its arms.
-    let mut every = [[0usize; 7]; 2];
+    let mut every = vec![[[0usize; 7]; 2]; 1 + full as usize];
     let col = |i: usize, r: Rule| i * RULES.len() + RULES.iter().position(|x| *x == r).unwrap();
     for s in 0..seeds {
         let o = fleet_once(gs, base + 100 * s, full);
@@ -436,7 +441,7 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
                 c[i] += oc[i];
             }
         }
-        for (t, e) in every.iter_mut().zip(&o.fleet) {
+        for (t, e) in every.iter_mut().flatten().zip(o.fleet.iter().flatten()) {
             let right = e
                 .shoulder
                 .iter()
@@ -558,9 +563,16 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
         beyond[1][2]
     );
     println!("  {fs_text}");
-    for (a, t) in ALPHAS.iter().zip(&every) {
+    for (model, t) in ["", "full model, "]
+        .iter()
+        .zip(&every)
+        .flat_map(|(m, e)| e.iter().map(move |t| (m, t)))
+        .zip(ALPHAS.iter().cycle())
+        .map(|((m, t), a)| ((m, a), t))
+    {
+        let (model, a) = model;
         println!(
-            "  fleet scale on every candidate @ {a}: design passes {}/{seeds}; with the effect {}/{} \
+            "  {model}fleet scale on every candidate @ {a}: design passes {}/{seeds}; with the effect {}/{} \
              pairs named, every such arm in {}/{seeds} fleets; without it {}/{} named, in \
              {}/{seeds} fleets; other candidates named in {}/{seeds} fleets ({} arms)",
             t[4],
