@@ -1249,13 +1249,17 @@ mod tests {
         assert!(dispersion(&same, &[f64::INFINITY; 8], &v).is_none());
     }
 
+    /// Eight arms' estimates, their in-sample errors and jackknife errors scattering about
+    /// 2·v as 3-df errors do.
+    const Y: [f64; 8] = [0.5, 1.4, 0.9, 1.2, 0.6, 1.5, 0.8, 1.1];
+    const V: [f64; 8] = [0.3; 8];
+    const SE: [f64; 8] = [0.45, 0.7, 0.5, 0.8, 0.6, 0.55, 0.75, 0.65];
+
     #[test]
     fn the_fleets_scale_is_used_only_where_one_phi_holds() {
-        let y = [0.5, 1.4, 0.9, 1.2, 0.6, 1.5, 0.8, 1.1];
-        let v = [0.3; 8];
-        // Jackknife errors scattering about 2·v as 3-df errors do: the scale is pooled, every
-        // arm's error is 2·v on 24 df and its interval on min(24, 7) = 7.
-        let se = [0.45, 0.7, 0.5, 0.8, 0.6, 0.55, 0.75, 0.65];
+        let (y, v, se) = (Y, V, SE);
+        // The scale is pooled, every arm's error is 2·v on 24 df and its interval on
+        // min(24, 7) = 7.
         let (d, scaled, _, arms) = pool_fleet_scale(&y, &se, &[3.0; 8], &v, 0.01).unwrap();
         let d = d.unwrap();
         assert!(scaled && d.p >= 0.01, "{d:?}");
@@ -1273,9 +1277,7 @@ mod tests {
 
     #[test]
     fn an_arm_without_a_jackknife_joins_only_through_the_fleets_scale() {
-        let y = [0.5, 1.4, 0.9, 1.2, 0.6, 1.5, 0.8, 1.1];
-        let v = [0.3; 8];
-        let se = [0.45, 0.7, 0.5, 0.8, 0.6, 0.55, 0.75, 0.65];
+        let (y, v, se) = (Y, V, SE);
         let (d, scaled, _, alone) = pool_fleet_scale(&y, &se, &[3.0; 8], &v, 0.01).unwrap();
         let (dj, scaled_j, _, arms) =
             pool_fleet_scale_joined(&y, &se, &[3.0; 8], &v, &[(1.0, 0.6)], 0.01).unwrap();
