@@ -7,7 +7,7 @@ mod common;
 
 use armcal::data::{Dataset, Kind};
 use armcal::diagnose::candidates;
-use armcal::diagnose::fleet::{self, ErrorScale, UnitData};
+use armcal::diagnose::fleet::{self, ErrorScale, PooledModel, UnitData};
 use armcal::diagnose::fleet_pooled::{
     pool_arms, pool_candidates, pool_candidates_full, repool, PooledFleet,
 };
@@ -33,20 +33,24 @@ fn arm_data(seed: u64, g: f64) -> Dataset {
 type Inputs = (Vec<UnitData>, Vec<(String, Vec<usize>)>, Vec<Vec<Effect>>);
 
 /// The pooled stage over eight arms of compliances `gs`, each arm its own recording, each arm
-/// weighed by the errors `scale` says.
+/// weighed by the errors `scale` says, each candidate estimated against the geometric model
+/// alone (the error's scale apart from the model's choice).
 fn pooled_with(gs: &[f64], seed: u64, scale: ErrorScale) -> PooledFleet {
     let (units, arms, testable) = fleet_inputs(gs, seed);
     let start = Arm::default6();
     let o = fleet::Options {
         error_scale: scale,
+        pooled_model: PooledModel::Alone,
         ..fleet::Options::default()
     };
     pool_arms(&start, &units, &arms, &testable, &o).unwrap()
 }
 
-/// [`pooled_with`] the product's default errors.
+/// The pooled stage with the product's defaults (the full model on the fleet's error scale).
 fn pooled(gs: &[f64], seed: u64) -> PooledFleet {
-    pooled_with(gs, seed, ErrorScale::default())
+    let (units, arms, testable) = fleet_inputs(gs, seed);
+    let start = Arm::default6();
+    pool_arms(&start, &units, &arms, &testable, &fleet::Options::default()).unwrap()
 }
 
 /// The inputs of [`pooled`].
@@ -254,7 +258,7 @@ fn on_the_fleets_error_scale_more_arms_are_named_than_on_their_own_errors() {
     // named than on their own errors (docs/results/claims.md §7.10–§7.11).
     let gs: Vec<f64> = (0..8).map(|k| 2.5e-9 * (0.5 + k as f64 / 7.0)).collect();
     let own = pooled_with(&gs, 500, ErrorScale::Own);
-    let p = pooled(&gs, 500);
+    let p = pooled_with(&gs, 500, ErrorScale::Fleet);
     let shoulder = |p: &PooledFleet| {
         p.effects
             .iter()
@@ -299,9 +303,17 @@ fn on_the_fleets_error_scale_more_arms_are_named_than_on_their_own_errors() {
 
 #[test]
 fn a_fleet_with_nothing_hidden_gets_nothing_named() {
+    // With the product's defaults: every candidate in the full model, on the fleet's scale.
     for seed in [10_000, 10_100] {
         let p = pooled(&[0.0; 8], seed);
-        assert!(!p.effects.is_empty());
+        assert!(
+            !p.effects.is_empty() && p.model == PooledModel::Full,
+            "{p:?}"
+        );
+        assert!(p.effects.iter().all(|e| e.dispersion.is_some()), "{p:?}");
+        let mut text = String::new();
+        p.write_text(&mut text);
+        assert!(text.contains("the full model"), "{text}");
         for e in &p.effects {
             assert!(!e.named, "seed {seed}: {} named: {:?}", e.term, e.design);
             assert!(e

@@ -40,6 +40,12 @@ pub struct Args {
     /// own); `own`: its own jackknife error on its sessions − 1 df (the earlier default).
     #[arg(long, value_enum, default_value_t = diagnose::fleet::ErrorScale::Fleet)]
     error_scale: diagnose::fleet::ErrorScale,
+    /// With `--fleet`: the model each pooled candidate is estimated in. `full` (default): every
+    /// candidate the recordings share in one fit, each conditional on all the others (a joint
+    /// sharing another's gravity lever is not named for it; where a recording's full fit cannot
+    /// be made, each alone, said); `alone`: each with the geometric model alone.
+    #[arg(long, value_enum, default_value_t = diagnose::fleet::PooledModel::Full)]
+    pooled_model: diagnose::fleet::PooledModel,
     /// With `--fleet`: these recordings (unit names as the fleet gives them, e.g.
     /// `--same-arm panda_3=panda_3,panda_3_bis,panda_right`) are one physical arm, one unit of
     /// the fleet test named ARM, their sessions' evidence pooled. Repeat for more arms. Given, it sets
@@ -296,6 +302,7 @@ fn run_fleet(a: &Args) -> anyhow::Result<()> {
     let mut opts = diagnose::fleet::Options {
         alpha: a.fleet_alpha,
         error_scale: a.error_scale,
+        pooled_model: a.pooled_model,
         ..diagnose::fleet::Options::default()
     };
     opts.diagnose.calib.lm.max_iterations = a.max_iter as usize;

@@ -89,6 +89,8 @@ pub struct Options {
     pub alpha: f64,
     /// The errors the pooled stage weighs each arm by ([`super::fleet_pooled`]).
     pub error_scale: ErrorScale,
+    /// The model each pooled candidate is estimated in ([`super::fleet_pooled`]).
+    pub pooled_model: PooledModel,
 }
 
 impl Default for Options {
@@ -97,6 +99,7 @@ impl Default for Options {
             diagnose: DiagOptions::default(),
             alpha: ALPHA,
             error_scale: ErrorScale::default(),
+            pooled_model: PooledModel::default(),
         }
     }
 }
@@ -113,6 +116,23 @@ pub enum ErrorScale {
     /// The jackknife errors' scale pooled over the arms (docs/results/claims.md §7.10).
     #[default]
     Fleet,
+}
+
+/// The model each candidate of the fleet's pooled stage is estimated in: against the
+/// geometric model alone, or with every shared candidate at once, each conditional on all the
+/// others (the full model, [`super::fleet_pooled::pool_candidates_full`]). The fleet
+/// diagnosis's choice (`armcal diagnose --fleet --pooled-model`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum PooledModel {
+    /// Each candidate fitted with the geometric model alone: another joint's compliance
+    /// sharing a strong one's gravity lever takes up part of it (an alias).
+    Alone,
+    /// Every candidate in one fit: on the fleet's error scale no alias named in 1,500 mixed
+    /// fleets at α = 0.01 (docs/results/claims.md §7.11). Where an arm's full fit cannot be
+    /// made, the stage falls back to [`PooledModel::Alone`] and says so.
+    #[default]
+    Full,
 }
 
 /// One unit's recordings.

@@ -30,7 +30,7 @@
 //! This module sits above both [`super::fleet`] (whose arms and candidates it reads) and
 //! [`super::pooling`] (which it calls): neither of them knows it.
 
-use super::fleet::{geometric_options, holm, ErrorScale, Fleet, Options, UnitData};
+use super::fleet::{geometric_options, holm, ErrorScale, Fleet, Options, PooledModel, UnitData};
 use super::pooling::{self, Arm as PooledValue, Combined, Design, Dispersion, Estimate};
 use crate::data::Dataset;
 use crate::fit::error::CalibError;
@@ -111,6 +111,8 @@ pub struct PooledEffect {
 pub struct PooledFleet {
     /// The family-wise level (Holm over the candidates) and 1 − the intervals' level.
     pub alpha: f64,
+    /// The model the candidates were estimated in.
+    pub model: PooledModel,
     /// Every one-unknown candidate pooled, the most significant design mean first.
     pub effects: Vec<PooledEffect>,
     /// Arms, recordings of an arm, or candidates left out, with why.
@@ -188,7 +190,29 @@ pub fn pool_arms(
     testable: &[Vec<Effect>],
     opts: &Options,
 ) -> Result<PooledFleet, CalibError> {
-    let mut out = pool_candidates(start, units, arms, testable, opts);
+    let mut out = match opts.pooled_model {
+        PooledModel::Alone => pool_candidates(start, units, arms, testable, opts),
+        PooledModel::Full => {
+            let full = pool_candidates_full(start, units, arms, testable, opts);
+            if full
+                .left_out
+                .iter()
+                .any(|(_, why)| why.starts_with(FULL_FAILED))
+            {
+                // An arm's full fit could not be made: every candidate alone, said.
+                let mut alone = pool_candidates(start, units, arms, testable, opts);
+                alone.left_out.extend(
+                    full.left_out
+                        .into_iter()
+                        .filter(|(_, why)| why.starts_with(FULL_FAILED))
+                        .map(|(what, why)| (what, format!("{why}; each candidate pooled alone"))),
+                );
+                alone
+            } else {
+                full
+            }
+        }
+    };
     let (used, _) = recordings(units, arms);
     let calib = geometric_options(opts);
     let data: Vec<Vec<&Dataset>> = used
@@ -223,10 +247,10 @@ pub fn pool_candidates(
 /// ([`pooling::estimate_joint`]), so each candidate is conditional on all the others (a Wald
 /// test in one model fixed before the data, whose level depends on no selection); then pooled
 /// and named exactly as the product does (Holm over the candidates at `opts.alpha`, each arm by
-/// its pooled interval). A comparison measured beside the product's naming
-/// (docs/results/claims.md §7.9), not the product's: `armcal diagnose --fleet` does not call
-/// it. When a recording's full fit fails or cannot be made, nothing is pooled and the reason
-/// is in `left_out`.
+/// its pooled interval). `armcal diagnose --fleet`'s default since stop 40 (with the fleet's
+/// error scale: no alias named in 1,500 mixed fleets at α = 0.01, docs/results/claims.md
+/// §7.9, §7.11). When a recording's full fit fails or cannot be made, nothing is pooled and
+/// the reason is in `left_out` (starting [`FULL_FAILED`]; [`pool_arms`] then pools alone).
 pub fn pool_candidates_full(
     start: &Arm,
     units: &[UnitData],
@@ -238,6 +262,7 @@ pub fn pool_candidates_full(
         Ok(begun) => begun,
         Err(out) => return out,
     };
+    out.model = PooledModel::Full;
     let calib = geometric_options(opts);
     let vocabulary: Vec<Effect> = shared_vocabulary(&used, testable).into_iter().collect();
     let terms: Vec<String> = vocabulary.iter().map(|e| e.spec()).collect();
@@ -252,7 +277,7 @@ pub fn pool_candidates_full(
                     out.left_out.push((
                         terms.join(" "),
                         format!(
-                            "the full model cannot be estimated on recording {}",
+                            "{FULL_FAILED} on recording {}: it cannot be estimated",
                             units[*r].name
                         ),
                     ));
@@ -261,10 +286,7 @@ pub fn pool_candidates_full(
                 Err(err) => {
                     out.left_out.push((
                         terms.join(" "),
-                        format!(
-                            "the full model's fit of recording {} failed: {err}",
-                            units[*r].name
-                        ),
+                        format!("{FULL_FAILED} on recording {}: {err}", units[*r].name),
                     ));
                     return out;
                 }
@@ -290,6 +312,10 @@ pub fn pool_candidates_full(
     named(out)
 }
 
+/// How a reason in `left_out` starts where the full model's fit of a recording could not be
+/// made ([`pool_candidates_full`]); [`pool_arms`] then pools every candidate alone.
+const FULL_FAILED: &str = "the full model failed";
+
 /// The recordings each arm pools ([`recordings`]) and the fleet's result so far (nothing
 /// named, what was left out and why); `Err` with that result where fewer arms than a fleet
 /// needs are left, so that both namings (alone and in the full model) start and stop alike.
@@ -301,6 +327,7 @@ fn begin(
     let (used, left_out) = recordings(units, arms);
     let out = PooledFleet {
         alpha,
+        model: PooledModel::Alone,
         effects: Vec::new(),
         left_out,
     };
@@ -472,6 +499,7 @@ fn pool_combined(
 pub fn repool(fleet: &PooledFleet, scale: ErrorScale, alpha: f64) -> PooledFleet {
     let mut out = PooledFleet {
         alpha,
+        model: fleet.model,
         effects: Vec::new(),
         left_out: fleet.left_out.clone(),
     };
@@ -595,9 +623,14 @@ impl PooledFleet {
              DerSimonian–Laird; the design's mean tested two-sided, Holm at α = {}; named for \
              an arm whose pooled {:.0} % interval, t on its error's df or arms − 1 where \
              fewer, excludes 0; each arm's error its jackknife over its sessions, or where the \
-             fleet's errors share one scale, √φ̂ times its fit's in-sample error)",
+             fleet's errors share one scale, √φ̂ times its fit's in-sample error; {})",
             self.alpha,
-            100.0 * (1.0 - self.alpha)
+            100.0 * (1.0 - self.alpha),
+            match self.model {
+                PooledModel::Full =>
+                    "each candidate fitted with all the others at once, the full model",
+                PooledModel::Alone => "each candidate fitted with the geometric model alone",
+            }
         );
         if self.effects.is_empty() {
             let _ = writeln!(s, "  none pooled (fewer than 3 arms with 3 sessions)");

@@ -11,7 +11,7 @@
 //!            "evidence": {"rule", "pairs": [{"a", "b", "chi2", "dof", "f", "p_value", "same"}]}}],
 //!  "pairs": [every pair of recordings, as in "evidence"], "uncompared": [[recording, why]],
 //!  "halves": [{"recording", "chi2", "dof"}], "overdispersion": {"phi", "dof"},
-//!  "pooled": {"alpha", "left_out": [[arm, "arm: recording R" or candidate, why]],
+//!  "pooled": {"alpha", "model": "full" | "alone", "left_out": [[arm, "arm: recording R" or candidate, why]],
 //!             "effects": [{"term", "named", "design": {"arms", "mean", "mean_se",
 //!                          "mean_interval", "mean_p", "spread", "spread_interval", "named"},
 //!                          "dispersion": {"ratios", "phi", "df", "bartlett", "p"},
@@ -33,7 +33,10 @@
 //! Bartlett's test of the arms' ratios s²/v² in `dispersion` keeps one scale at `alpha`) an
 //! arm's `se` is √`phi` × its `model_se` on the fleet's `df` (Σ sessions − 1); without it
 //! (the test rejected, or `--error-scale own`, which has no `dispersion`), its jackknife
-//! error on its sessions − 1 (docs/results/claims.md §7.10–§7.11).
+//! error on its sessions − 1 (docs/results/claims.md §7.10–§7.11). `model` is the model the
+//! candidates were estimated in: `full` (the default `--pooled-model full`: every shared
+//! candidate in one fit, each conditional on the others) or `alone` (each with the geometric
+//! model alone; also where a recording's full fit could not be made, said in `left_out`).
 //!
 //! A unit is an arm ([`super::same_arm`]): recordings of one physical arm are one unit.
 //!
