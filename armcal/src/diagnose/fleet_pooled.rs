@@ -250,7 +250,7 @@ pub fn pool_candidates(
 /// its pooled interval). `armcal diagnose --fleet`'s default since stop 40 (with the fleet's
 /// error scale: no alias named in 1,500 mixed fleets at α = 0.01, docs/results/claims.md
 /// §7.9, §7.11). When a recording's full fit fails or cannot be made, nothing is pooled and
-/// the reason is in `left_out` (starting [`FULL_FAILED`]; [`pool_arms`] then pools alone).
+/// the reason is in `left_out` (starting "the full model failed"; [`pool_arms`] then pools each candidate alone).
 pub fn pool_candidates_full(
     start: &Arm,
     units: &[UnitData],
