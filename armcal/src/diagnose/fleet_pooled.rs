@@ -483,7 +483,7 @@ fn pool_combined(
     combined: &[&Combined],
     scale: ErrorScale,
     alpha: f64,
-) -> Option<(Option<Dispersion>, bool, Design, Vec<PooledValue>)> {
+) -> Option<pooling::ScaledPool> {
     let y: Vec<f64> = combined.iter().map(|c| c.estimate).collect();
     let se: Vec<f64> = combined.iter().map(|c| c.se).collect();
     let df: Vec<f64> = combined.iter().map(|c| c.df).collect();

@@ -355,6 +355,10 @@ pub fn dispersion(se: &[f64], df: &[f64], model_se: &[f64]) -> Option<Dispersion
     })
 }
 
+/// A pool with its errors' scale: the dispersion (where one was formed), whether the fleet's
+/// scale was used, the design and the arms.
+pub type ScaledPool = (Option<Dispersion>, bool, Design, Vec<Arm>);
+
 /// The arms pooled with the error `scale` says ([`ErrorScale`]): the dispersion (only with
 /// [`ErrorScale::Fleet`] and where one can be formed), whether the fleet's scale was used, and
 /// the pool.
@@ -365,7 +369,7 @@ pub fn pool_with(
     df: &[f64],
     model_se: &[f64],
     alpha: f64,
-) -> Option<(Option<Dispersion>, bool, Design, Vec<Arm>)> {
+) -> Option<ScaledPool> {
     match scale {
         ErrorScale::Own => pool(y, se, df, alpha).map(|(d, a)| (None, false, d, a)),
         ErrorScale::Fleet => pool_fleet_scale(y, se, df, model_se, alpha),
@@ -376,8 +380,8 @@ pub fn pool_with(
 /// [`super::pooling_rules::Rule::FleetScale`], the product's naming since stop 40): when the arms'
 /// ratios pass [`dispersion`]'s homogeneity test at `alpha` (the gate's α), each arm's error
 /// is s̃_u = √φ̂·v_u on φ̂'s Σ ν_u degrees of freedom and the arms are [`pool`]ed with them;
-/// when it fails (or some arm has no model error), with their own jackknife errors, as the
-/// product. Returns the dispersion (if any), whether the fleet's scale was used, and the pool.
+/// when it fails (or some arm has no model error), with their own jackknife errors, as
+/// [`ErrorScale::Own`]. Returns the dispersion (if any), whether the fleet's scale was used, and the pool.
 ///
 /// **The interval's df.** [`pool`] gives each arm [`interval_df`] of its error's df, here
 /// min(Σ ν_u, k − 1) = k − 1 for 8 arms of 4 sessions (24 against 7). Why not Σ ν_u: what
@@ -391,7 +395,7 @@ pub fn pool_fleet_scale(
     df: &[f64],
     model_se: &[f64],
     alpha: f64,
-) -> Option<(Option<Dispersion>, bool, Design, Vec<Arm>)> {
+) -> Option<ScaledPool> {
     pool_fleet_scale_joined(y, se, df, model_se, &[], alpha)
 }
 
@@ -411,7 +415,7 @@ pub fn pool_fleet_scale_joined(
     model_se: &[f64],
     joined: &[(f64, f64)],
     alpha: f64,
-) -> Option<(Option<Dispersion>, bool, Design, Vec<Arm>)> {
+) -> Option<ScaledPool> {
     let disp = dispersion(se, df, model_se);
     match &disp {
         Some(d) if d.p >= alpha => {
