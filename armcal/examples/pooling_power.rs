@@ -225,21 +225,31 @@ struct Everywhere {
     shoulder: Vec<bool>,
     design: bool,
     others: Vec<(String, usize)>,
+    /// Arms whose pooled interval (at 1 − α) holds their true value: the shoulder's (its
+    /// compliance) and every other candidate's (0), and how many intervals there were.
+    covered: [usize; 2],
 }
 
 /// [`Everywhere`] of the candidates `effects` pooled again with the fleet's error scale at
 /// `alpha`.
 fn everywhere(
     p: &armcal::diagnose::fleet_pooled::PooledFleet,
-    arms: usize,
+    truth: &[f64],
     alpha: f64,
 ) -> Everywhere {
     let r = repool(p, ErrorScale::Fleet, alpha);
     let mut out = Everywhere {
-        shoulder: vec![false; arms],
+        shoulder: vec![false; truth.len()],
         ..Everywhere::default()
     };
     for e in &r.effects {
+        let zero = vec![0.0; truth.len()];
+        let want = if e.effect == Effect::Gravity(1) { truth } else { &zero };
+        for (a, g) in e.arms.iter().zip(want) {
+            let half = t_critical(alpha, a.value.df) * a.value.pooled_se;
+            out.covered[0] += ((a.value.pooled - g).abs() <= half) as usize;
+            out.covered[1] += 1;
+        }
         if e.effect == Effect::Gravity(1) {
             out.design = e.named;
             out.shoulder = e.arms.iter().map(|a| a.value.named_pooled).collect();
@@ -346,8 +356,8 @@ fn fleet_once(gs: &[f64], base: u64, full: bool) -> Outcome {
     let p = pool_candidates(&start, &units, &arms, &testable, &o);
     let both = |p: &_| {
         [
-            everywhere(p, gs.len(), ALPHAS[0]),
-            everywhere(p, gs.len(), ALPHAS[1]),
+            everywhere(p, gs, ALPHAS[0]),
+            everywhere(p, gs, ALPHAS[1]),
         ]
     };
     let mut fleet = vec![both(&p)];
@@ -413,7 +423,7 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
     // Every candidate with the fleet's error scale, at each of [`ALPHAS`]: pairs with the
     // effect named, fleets with all of them, arms without it named, fleets with one, design
     // passes, fleets with another candidate named, its arms.
-    let mut every = vec![[[0usize; 7]; 2]; 1 + full as usize];
+    let mut every = vec![[[0usize; 9]; 2]; 1 + full as usize];
     let col = |i: usize, r: Rule| i * RULES.len() + RULES.iter().position(|x| *x == r).unwrap();
     for s in 0..seeds {
         let o = fleet_once(gs, base + 100 * s, full);
@@ -461,6 +471,8 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
             t[4] += e.design as usize;
             t[5] += (!e.others.is_empty()) as usize;
             t[6] += e.others.iter().map(|o| o.1).sum::<usize>();
+            t[7] += e.covered[0];
+            t[8] += e.covered[1];
         }
         if o.fs.phi.0.is_finite() {
             phis.push(o.fs.phi.0);
@@ -574,7 +586,8 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
         println!(
             "  {model}fleet scale on every candidate @ {a}: design passes {}/{seeds}; with the effect {}/{} \
              pairs named, every such arm in {}/{seeds} fleets; without it {}/{} named, in \
-             {}/{seeds} fleets; other candidates named in {}/{seeds} fleets ({} arms)",
+             {}/{seeds} fleets; other candidates named in {}/{seeds} fleets ({} arms); every \
+             candidate's interval holds its true value for {}/{} arms",
             t[4],
             t[0],
             n_with as u64 * seeds,
@@ -583,7 +596,9 @@ fn run(title: &str, gs: &[f64], base: u64, seeds: u64, full: bool) -> (Tally, [u
             n_without as u64 * seeds,
             t[3],
             t[5],
-            t[6]
+            t[6],
+            t[7],
+            t[8]
         );
     }
     let mut others = format!("{other_fleets} ({other_arms}); {fs_text}");
