@@ -130,7 +130,7 @@ pub enum PooledModel {
     Alone,
     /// Every candidate in one fit: on the fleet's error scale no alias named in 1,500 mixed
     /// fleets at α = 0.01 (docs/results/claims.md §7.11). Where an arm's full fit cannot be
-    /// made, the stage falls back to [`PooledModel::Alone`] and says so.
+    /// made, the stage falls back to `alone` for the fleet and says so.
     #[default]
     Full,
 }
