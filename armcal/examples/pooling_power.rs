@@ -244,7 +244,11 @@ fn everywhere(
     };
     for e in &r.effects {
         let zero = vec![0.0; truth.len()];
-        let want = if e.effect == Effect::Gravity(1) { truth } else { &zero };
+        let want = if e.effect == Effect::Gravity(1) {
+            truth
+        } else {
+            &zero
+        };
         for (a, g) in e.arms.iter().zip(want) {
             let half = t_critical(alpha, a.value.df) * a.value.pooled_se;
             out.covered[0] += ((a.value.pooled - g).abs() <= half) as usize;
@@ -354,12 +358,7 @@ fn fleet_once(gs: &[f64], base: u64, full: bool) -> Outcome {
         ..fleet::Options::default()
     };
     let p = pool_candidates(&start, &units, &arms, &testable, &o);
-    let both = |p: &_| {
-        [
-            everywhere(p, gs, ALPHAS[0]),
-            everywhere(p, gs, ALPHAS[1]),
-        ]
-    };
+    let both = |p: &_| [everywhere(p, gs, ALPHAS[0]), everywhere(p, gs, ALPHAS[1])];
     let mut fleet = vec![both(&p)];
     let (mut named, design, others, others05, fs) = read(&p.effects, gs, false);
     let (mut others_full, mut others_full05, mut design_full) = (Vec::new(), false, [false; 2]);
