@@ -192,26 +192,17 @@ pub fn pool_arms(
 ) -> Result<PooledFleet, CalibError> {
     let mut out = match opts.pooled_model {
         PooledModel::Alone => pool_candidates(start, units, arms, testable, opts),
-        PooledModel::Full => {
-            let full = pool_candidates_full(start, units, arms, testable, opts);
-            if full
-                .left_out
-                .iter()
-                .any(|(_, why)| why.starts_with(FULL_FAILED))
-            {
-                // An arm's full fit could not be made: every candidate alone, said.
+        PooledModel::Full => match try_full(start, units, arms, testable, opts) {
+            Ok(full) => full,
+            // A recording's full fit could not be made: every candidate alone, said.
+            Err((_, (what, why))) => {
                 let mut alone = pool_candidates(start, units, arms, testable, opts);
-                alone.left_out.extend(
-                    full.left_out
-                        .into_iter()
-                        .filter(|(_, why)| why.starts_with(FULL_FAILED))
-                        .map(|(what, why)| (what, format!("{why}; each candidate pooled alone"))),
-                );
                 alone
-            } else {
-                full
+                    .left_out
+                    .push((what, format!("{why}; each candidate pooled alone")));
+                alone
             }
-        }
+        },
     };
     let (used, _) = recordings(units, arms);
     let calib = geometric_options(opts);
@@ -250,7 +241,7 @@ pub fn pool_candidates(
 /// its pooled interval). `armcal diagnose --fleet`'s default since stop 40 (with the fleet's
 /// error scale: no alias named in 1,500 mixed fleets at α = 0.01, docs/results/claims.md
 /// §7.9, §7.11). When a recording's full fit fails or cannot be made, nothing is pooled and
-/// the reason is in `left_out` (starting "the full model failed"; [`pool_arms`] then pools each candidate alone).
+/// the reason is in `left_out` ([`pool_arms`] then pools each candidate alone).
 pub fn pool_candidates_full(
     start: &Arm,
     units: &[UnitData],
@@ -258,9 +249,25 @@ pub fn pool_candidates_full(
     testable: &[Vec<Effect>],
     opts: &Options,
 ) -> PooledFleet {
+    try_full(start, units, arms, testable, opts).unwrap_or_else(|(mut out, failed)| {
+        out.left_out.push(failed);
+        out
+    })
+}
+
+/// [`pool_candidates_full`], with a recording whose full fit fails or cannot be made an `Err`
+/// of the fleet so far (nothing pooled) and why, so that [`pool_arms`] can pool each
+/// candidate alone instead.
+fn try_full(
+    start: &Arm,
+    units: &[UnitData],
+    arms: &[(String, Vec<usize>)],
+    testable: &[Vec<Effect>],
+    opts: &Options,
+) -> Result<PooledFleet, (PooledFleet, LeftOut)> {
     let (used, mut out) = match begin(units, arms, opts.alpha) {
         Ok(begun) => begun,
-        Err(out) => return out,
+        Err(out) => return Ok(out),
     };
     out.model = PooledModel::Full;
     let calib = geometric_options(opts);
@@ -271,26 +278,19 @@ pub fn pool_candidates_full(
     for (_, recs) in &used {
         let mut est = Vec::new();
         for (r, _) in recs {
-            match pooling::estimate_joint(start, &units[*r].data, &calib, &vocabulary) {
-                Ok(Some(v)) => est.push(v),
-                Ok(None) => {
-                    out.left_out.push((
-                        terms.join(" "),
-                        format!(
-                            "{FULL_FAILED} on recording {}: it cannot be estimated",
-                            units[*r].name
-                        ),
-                    ));
-                    return out;
+            let why = match pooling::estimate_joint(start, &units[*r].data, &calib, &vocabulary) {
+                Ok(Some(v)) => {
+                    est.push(v);
+                    continue;
                 }
-                Err(err) => {
-                    out.left_out.push((
-                        terms.join(" "),
-                        format!("{FULL_FAILED} on recording {}: {err}", units[*r].name),
-                    ));
-                    return out;
-                }
-            }
+                Ok(None) => "it cannot be estimated".to_string(),
+                Err(err) => err.to_string(),
+            };
+            let failed = format!(
+                "the full model failed on recording {}: {why}",
+                units[*r].name
+            );
+            return Err((out, (terms.join(" "), failed)));
         }
         per_arm.push(est);
     }
@@ -309,12 +309,8 @@ pub fn pool_candidates_full(
             out.effects.push(p);
         }
     }
-    named(out)
+    Ok(named(out))
 }
-
-/// How a reason in `left_out` starts where the full model's fit of a recording could not be
-/// made ([`pool_candidates_full`]); [`pool_arms`] then pools every candidate alone.
-const FULL_FAILED: &str = "the full model failed";
 
 /// The recordings each arm pools ([`recordings`]) and the fleet's result so far (nothing
 /// named, what was left out and why); `Err` with that result where fewer arms than a fleet
@@ -357,8 +353,8 @@ fn pool_alone(
     opts: &Options,
 ) -> PooledFleet {
     let calib = geometric_options(opts);
+    let how = (opts.error_scale, opts.alpha);
     for e in shared_vocabulary(used, testable) {
-        let how = (opts.error_scale, opts.alpha);
         if let Some(p) = pool_effect(start, units, used, &calib, e, how, &mut out.left_out) {
             out.effects.push(p);
         }
