@@ -105,8 +105,9 @@ impl Default for Options {
 }
 
 /// Which standard error each arm is pooled with: its own jackknife error over its sessions
-/// ([`super::pooling::pool`]), or that error's scale pooled across the fleet ([`super::pooling::pool_fleet_scale`]: √φ̂ times
-/// the arm's in-sample error where the arms' ratios pass Bartlett's test, else their own).
+/// ([`super::pooling::pool`]), or that error's scale pooled across the fleet
+/// ([`super::pooling::pool_fleet_scale`]: √φ̂ times the arm's in-sample error where the arms'
+/// ratios pass Bartlett's test, else their own).
 /// The fleet diagnosis's choice (`armcal diagnose --fleet --error-scale`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]

@@ -49,8 +49,8 @@
 //!
 //! **The error's scale pooled across the fleet** ([`dispersion`], [`pool_fleet_scale`]; the
 //! fleet diagnosis's default since stop 40, `ErrorScale::Fleet`, [`pool_with`]): each arm's
-//! jackknife error rests on 3 df, so its interval needs t₃; its fit's in-sample error v_u rests on hundreds of
-//! residuals but misses their correlation within a session. With one ratio φ = s²/v² for the
+//! jackknife error rests on 3 df, so its interval needs t₃; its fit's in-sample error v_u
+//! rests on hundreds of residuals but misses their correlation within a session. With one ratio φ = s²/v² for the
 //! design, φ̂ pooled over the arms (Σν df, tested for homogeneity) and s̃_u = √φ̂·v_u give every
 //! arm an error whose scale has the fleet's df (docs/results/claims.md §7.10–§7.11). Where the
 //! test rejects one φ, each arm keeps its own error.
@@ -377,11 +377,12 @@ pub fn pool_with(
 }
 
 /// The arms pooled with the error's scale pooled across the fleet (issue 30, round 6;
-/// [`super::pooling_rules::Rule::FleetScale`], the product's naming since stop 40): when the arms'
-/// ratios pass [`dispersion`]'s homogeneity test at `alpha` (the gate's α), each arm's error
+/// [`super::pooling_rules::Rule::FleetScale`], the product's naming since stop 40): when the
+/// arms' ratios pass [`dispersion`]'s homogeneity test at `alpha` (the gate's α), each arm's error
 /// is s̃_u = √φ̂·v_u on φ̂'s Σ ν_u degrees of freedom and the arms are [`pool`]ed with them;
 /// when it fails (or some arm has no model error), with their own jackknife errors, as
-/// [`ErrorScale::Own`]. Returns the dispersion (if any), whether the fleet's scale was used, and the pool.
+/// [`ErrorScale::Own`]. Returns the dispersion (if any), whether the fleet's scale was used,
+/// and the pool.
 ///
 /// **The interval's df.** [`pool`] gives each arm [`interval_df`] of its error's df, here
 /// min(Σ ν_u, k − 1) = k − 1 for 8 arms of 4 sessions (24 against 7). Why not Σ ν_u: what
@@ -683,6 +684,15 @@ pub fn simulated_coverage_phi(
     let tc = t_critical(alpha, (arms.max(2) - 1) as f64);
     let tdf = t_critical(alpha, interval_df(nu as f64, arms));
     let df = vec![nu as f64; arms];
+    // Each arm's true error, and its model error: the same in every fleet.
+    let true_se: Vec<f64> = (0..arms)
+        .map(|u| 0.5 + u as f64 / (arms.max(2) - 1) as f64)
+        .collect();
+    let model: Vec<f64> = true_se
+        .iter()
+        .enumerate()
+        .map(|(u, s)| s / (SIMULATED_PHI * phi_ratio.powf((u % 2) as f64 - 0.5)).sqrt())
+        .collect();
     let (mut fs_hits, mut fs_fallback, mut fs_width) = (0usize, 0usize, 0.0);
     // The odd arms' (the high φ's) intervals of the fleet-scale pool, and their hits.
     let (mut high_n, mut high_hits) = (0usize, 0usize);
@@ -690,14 +700,7 @@ pub fn simulated_coverage_phi(
         let mut theta = Vec::with_capacity(arms);
         let mut y = Vec::with_capacity(arms);
         let mut se = Vec::with_capacity(arms);
-        let model: Vec<f64> = (0..arms)
-            .map(|u| {
-                let phi = SIMULATED_PHI * phi_ratio.powf((u % 2) as f64 - 0.5);
-                (0.5 + u as f64 / (arms.max(2) - 1) as f64) / phi.sqrt()
-            })
-            .collect();
-        for u in 0..arms {
-            let s = 0.5 + u as f64 / (arms.max(2) - 1) as f64;
+        for &s in &true_se {
             let t = 1.0 + tau * crate::rng::normal(&mut rng);
             theta.push(t);
             y.push(t + s * crate::rng::normal(&mut rng));
