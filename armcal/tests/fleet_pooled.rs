@@ -9,7 +9,7 @@ use armcal::data::{Dataset, Kind};
 use armcal::diagnose::candidates;
 use armcal::diagnose::fleet::{self, ErrorScale, PooledModel, UnitData};
 use armcal::diagnose::fleet_pooled::{
-    pool_arms, pool_candidates, pool_candidates_full, repool, PooledFleet,
+    pool_arms, pool_candidates, pool_candidates_full, repool, PooledEffect, PooledFleet,
 };
 use armcal::diagnose::pooling;
 use armcal::params::Effect;
@@ -36,21 +36,31 @@ type Inputs = (Vec<UnitData>, Vec<(String, Vec<usize>)>, Vec<Vec<Effect>>);
 /// weighed by the errors `scale` says, each candidate estimated against the geometric model
 /// alone (the error's scale apart from the model's choice).
 fn pooled_with(gs: &[f64], seed: u64, scale: ErrorScale) -> PooledFleet {
-    let (units, arms, testable) = fleet_inputs(gs, seed);
-    let start = Arm::default6();
     let o = fleet::Options {
         error_scale: scale,
         pooled_model: PooledModel::Alone,
         ..fleet::Options::default()
     };
-    pool_arms(&start, &units, &arms, &testable, &o).unwrap()
+    pooled_by(gs, seed, &o)
 }
 
 /// The pooled stage with the product's defaults (the full model on the fleet's error scale).
 fn pooled(gs: &[f64], seed: u64) -> PooledFleet {
+    pooled_by(gs, seed, &fleet::Options::default())
+}
+
+/// The pooled stage over eight arms of compliances `gs` with the options `o`.
+fn pooled_by(gs: &[f64], seed: u64, o: &fleet::Options) -> PooledFleet {
     let (units, arms, testable) = fleet_inputs(gs, seed);
-    let start = Arm::default6();
-    pool_arms(&start, &units, &arms, &testable, &fleet::Options::default()).unwrap()
+    pool_arms(&Arm::default6(), &units, &arms, &testable, o).unwrap()
+}
+
+/// The pooled candidate `e` of `p`; panics with the fleet where it was not pooled.
+fn effect(p: &PooledFleet, e: Effect) -> &PooledEffect {
+    p.effects
+        .iter()
+        .find(|x| x.effect == e)
+        .unwrap_or_else(|| panic!("{} not pooled: {p:#?}", e.spec()))
 }
 
 /// The inputs of [`pooled`].
@@ -129,13 +139,7 @@ fn an_alias_own_errors_name_is_named_neither_in_the_full_model_nor_on_the_fleets
         ..fleet::Options::default()
     };
     let product = pool_candidates(&start, &units, &arms, &testable, &o);
-    let alias = |p: &PooledFleet| {
-        p.effects
-            .iter()
-            .find(|e| e.effect == Effect::Gravity(4))
-            .expect("joint 5's compliance pooled")
-            .clone()
-    };
+    let alias = |p: &PooledFleet| effect(p, Effect::Gravity(4)).clone();
     let a = alias(&product);
     assert!(
         a.named && a.arms.iter().any(|a| a.value.named_pooled),
@@ -171,11 +175,7 @@ fn an_alias_own_errors_name_is_named_neither_in_the_full_model_nor_on_the_fleets
     {
         assert!(!e.named, "{} named: {:?}", e.term, e.design);
     }
-    let g = full
-        .effects
-        .iter()
-        .find(|e| e.effect == Effect::Gravity(1))
-        .expect("the shoulder's compliance pooled");
+    let g = effect(&full, Effect::Gravity(1));
     assert!(
         g.named && g.arms.iter().any(|a| a.value.named_pooled),
         "{:?}",
@@ -189,11 +189,7 @@ fn a_spread_effect_too_small_for_each_arm_is_named_for_more_arms_pooled_than_alo
     // Pooled on the arms' own errors (`ErrorScale::Own`); on the fleet's scale below.
     let gs: Vec<f64> = (0..8).map(|k| 2.5e-9 * (0.5 + k as f64 / 7.0)).collect();
     let p = pooled_with(&gs, 500, ErrorScale::Own);
-    let g = p
-        .effects
-        .iter()
-        .find(|e| e.effect == Effect::Gravity(1))
-        .unwrap_or_else(|| panic!("shoulder compliance not pooled: {p:#?}"));
+    let g = effect(&p, Effect::Gravity(1));
     assert!(g.named, "{:?}", g.design);
     assert_eq!(g.design.arms, 8);
     let [lo, hi] = g.design.mean_interval;
@@ -259,14 +255,10 @@ fn on_the_fleets_error_scale_more_arms_are_named_than_on_their_own_errors() {
     let gs: Vec<f64> = (0..8).map(|k| 2.5e-9 * (0.5 + k as f64 / 7.0)).collect();
     let own = pooled_with(&gs, 500, ErrorScale::Own);
     let p = pooled_with(&gs, 500, ErrorScale::Fleet);
-    let shoulder = |p: &PooledFleet| {
-        p.effects
-            .iter()
-            .find(|e| e.effect == Effect::Gravity(1))
-            .expect("the shoulder's compliance pooled")
-            .clone()
-    };
-    let (o, g) = (shoulder(&own), shoulder(&p));
+    let (o, g) = (
+        effect(&own, Effect::Gravity(1)),
+        effect(&p, Effect::Gravity(1)),
+    );
     let d = g
         .dispersion
         .as_ref()
@@ -284,14 +276,12 @@ fn on_the_fleets_error_scale_more_arms_are_named_than_on_their_own_errors() {
             a.value.se
         );
     }
-    let named = |e: &armcal::diagnose::fleet_pooled::PooledEffect| {
-        e.arms.iter().filter(|a| a.value.named_pooled).count()
-    };
+    let named = |e: &PooledEffect| e.arms.iter().filter(|a| a.value.named_pooled).count();
     assert!(
-        g.named && named(&g) > named(&o),
+        g.named && named(g) > named(o),
         "{} vs {}",
-        named(&g),
-        named(&o)
+        named(g),
+        named(o)
     );
     for e in p.effects.iter().filter(|e| e.effect != Effect::Gravity(1)) {
         assert!(!e.named, "{} named: {:?}", e.term, e.design);
