@@ -430,6 +430,7 @@ fn mukca() {
         }
     );
     let mut sessions: Vec<(usize, usize)> = Vec::new();
+    let (mut in_band, mut band_units) = (0usize, Vec::<(String, Vec<(usize, usize)>)>::new());
     println!(
         "  unit                 sessions  probings  covered  +model  nested  median U95 mm \
          (+model) [nested]  RMS dev mm  probing mm  model mm  nested model mm"
@@ -559,6 +560,8 @@ fn mukca() {
                 .collect();
             let (sl, sh) = forms::session_bootstrap(&own, 20_000, 27);
             sessions.extend_from_slice(&own);
+            in_band += usize::from((0.88..=0.99).contains(&c.covered_nested));
+            band_units.push((c.unit.clone(), own.clone()));
             println!(
                 "    nested {:.3} (Wilson 95 % [{lo:.3}, {hi:.3}]; its {} sessions resampled \
                  [{sl:.3}, {sh:.3}]), {}",
@@ -591,6 +594,27 @@ fn mukca() {
          (95 % [{lo:.3}, {hi:.3}], {} whole sessions resampled)",
         pooled / judged.max(1) as f64,
         sessions.len()
+    );
+    // What the band can show with these session counts: each unit's sessions drawn from the
+    // other units' held-out sessions, as many as it has.
+    let own: Vec<Vec<(usize, usize)>> = band_units.iter().map(|(_, s)| s.clone()).collect();
+    let chance = forms::band_chance(&own, (0.88, 0.99), in_band, 20_000, 27);
+    println!(
+        "  units in 88–99 %: {in_band} of {}; with each unit's sessions drawn from the other \
+         units' ({} draws): {:.2} of {} on average, all in {:.3} of draws, {in_band} or fewer in \
+         {:.3}; per unit {}",
+        own.len(),
+        20_000,
+        chance.mean_in_band,
+        own.len(),
+        chance.all_in_band,
+        chance.at_most_observed,
+        band_units
+            .iter()
+            .zip(&chance.per_unit)
+            .map(|((name, s), p)| format!("{name} ({} sessions) {p:.3}", s.len()))
+            .collect::<Vec<_>>()
+            .join(", ")
     );
     println!(
         "  pooled, sensitivity (3-session units at the other units' mean-coverage κ): {:.3}",

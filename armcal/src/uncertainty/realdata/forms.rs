@@ -701,6 +701,82 @@ pub fn session_bootstrap(sessions: &[(usize, usize)], draws: usize, seed: u64) -
     (at(0.025), at(0.975))
 }
 
+/// How often units with a unit's few sessions land in a coverage band by the sessions they
+/// happen to have, if each unit's held-out sessions were like the fleet's
+/// ([`band_chance`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BandChance {
+    /// Per unit, the share of draws whose coverage is in the band.
+    pub per_unit: Vec<f64>,
+    /// The mean number of units in the band per draw.
+    pub mean_in_band: f64,
+    /// The share of draws with every unit in the band.
+    pub all_in_band: f64,
+    /// The share of draws with at most `observed` units in the band.
+    pub at_most_observed: f64,
+}
+
+/// Each unit's coverage if its sessions were drawn from the *other* units' held-out
+/// sessions: per draw, unit u gets as many sessions as it has (`units[u]`, each (covered,
+/// probings)), drawn with replacement from every other unit's, and is in the band where its
+/// pooled coverage is within `band` (inclusive). `draws` draws from `seed`; `observed` the
+/// units in the band on the data. It asks what the per-unit band can show with 3–4 sessions a
+/// unit when sessions are covered nearly whole or not at all: a unit's figure is then mostly
+/// which sessions it happened to have. A unit whose others have no sessions is never in the
+/// band.
+pub fn band_chance(
+    units: &[Vec<(usize, usize)>],
+    band: (f64, f64),
+    observed: usize,
+    draws: usize,
+    seed: u64,
+) -> BandChance {
+    use rand::Rng;
+    let mut rng = crate::rng::rng(seed);
+    let mut hits = vec![0usize; units.len()];
+    let (mut total, mut all, mut at_most) = (0usize, 0usize, 0usize);
+    let pools: Vec<Vec<(usize, usize)>> = (0..units.len())
+        .map(|u| {
+            units
+                .iter()
+                .enumerate()
+                .filter(|(o, _)| *o != u)
+                .flat_map(|(_, s)| s.iter().copied())
+                .collect()
+        })
+        .collect();
+    for _ in 0..draws {
+        let mut inside = 0usize;
+        for (u, own) in units.iter().enumerate() {
+            let pool = &pools[u];
+            if pool.is_empty() || own.is_empty() {
+                continue;
+            }
+            let (mut k, mut n) = (0usize, 0usize);
+            for _ in 0..own.len() {
+                let s = pool[rng.gen_range(0..pool.len())];
+                k += s.0;
+                n += s.1;
+            }
+            let f = k as f64 / n.max(1) as f64;
+            if f >= band.0 && f <= band.1 {
+                hits[u] += 1;
+                inside += 1;
+            }
+        }
+        total += inside;
+        all += usize::from(inside == units.len());
+        at_most += usize::from(inside <= observed);
+    }
+    let share = |c: usize| c as f64 / draws.max(1) as f64;
+    BandChance {
+        per_unit: hits.into_iter().map(share).collect(),
+        mean_in_band: share(total),
+        all_in_band: share(all),
+        at_most_observed: share(at_most),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -778,6 +854,35 @@ mod tests {
             lo < 208.0 / 240.0 && hi > 208.0 / 240.0 && hi <= 1.0,
             "{lo} {hi}"
         );
+    }
+
+    /// Sessions covered at 95 % put every unit in the band; sessions covered whole or not at
+    /// all never put a 3-session unit there (its coverage is 0, ⅓, ⅔ or 1).
+    #[test]
+    fn the_band_chance_follows_the_sessions_spread() {
+        let even = vec![vec![(57, 60); 3]; 4];
+        let c = band_chance(&even, (0.88, 0.99), 4, 500, 3);
+        assert_eq!(c.per_unit, vec![1.0; 4]);
+        assert_eq!(
+            (c.mean_in_band, c.all_in_band, c.at_most_observed),
+            (4.0, 1.0, 1.0)
+        );
+        let whole = vec![vec![(60, 60), (60, 60), (0, 60)]; 4];
+        let c = band_chance(&whole, (0.88, 0.99), 0, 500, 3);
+        assert_eq!(
+            (c.mean_in_band, c.all_in_band, c.at_most_observed),
+            (0.0, 0.0, 1.0)
+        );
+        // Mixed: the others' 57/60 sessions put a unit in the band unless it draws a 0/60.
+        let mixed = vec![
+            vec![(57, 60), (57, 60), (57, 60), (0, 60)],
+            vec![(57, 60); 4],
+        ];
+        let c = band_chance(&mixed, (0.88, 0.99), 1, 4000, 5);
+        assert_eq!(c.per_unit[0], 1.0);
+        // Unit 1 draws from unit 0's: all four from the three 57s, (3/4)^4 = 0.316.
+        assert!((c.per_unit[1] - 0.316).abs() < 0.03, "{:?}", c.per_unit);
+        assert!((c.all_in_band - c.per_unit[1]).abs() < 1e-12);
     }
 
     /// The t-ratio shrinks a κ validated on spreads with one group fewer, most with few
