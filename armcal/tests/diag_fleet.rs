@@ -130,7 +130,7 @@ fn an_effect_of_one_unit_is_named_for_that_unit_only() {
     assert_eq!(j["design"]["causes"], Value::Array(Vec::new()), "{j:#}");
     // The pooled stage: one arm's compliance is not made the design's by pooling either (the
     // arms disagree, τ is large, the design's mean does not pass); the arm of two sessions
-    // has no jackknife error and is left out, said.
+    // has no jackknife error and is left out, said, naming the option that would join it.
     let pooled = &j["pooled"];
     let g = pooled["effects"]
         .as_array()
@@ -142,16 +142,16 @@ fn an_effect_of_one_unit_is_named_for_that_unit_only() {
     assert_eq!(g["named"], false, "{g:#}");
     assert!(g["design"]["spread"].as_f64().unwrap() > 1e-8, "{g:#}");
     assert_eq!(pooled["left_out"][0][0], "e", "{pooled:#}");
+    let why = pooled["left_out"][0][1].as_str().unwrap();
+    assert!(why.contains("--join-short"), "{why}");
     // Each arm weighed on the fleet's error scale where Bartlett's test at the fleet's α
-    // keeps one scale (the default, `--error-scale fleet`), said with its test.
+    // keeps one scale (the default, `--error-scale fleet`), said with its test; the four
+    // arms with a jackknife give φ̂.
     let d = &g["dispersion"];
     let (phi, p) = (d["phi"].as_f64().unwrap(), d["p"].as_f64().unwrap());
     assert!(phi > 0.0 && (0.0..=1.0).contains(&p), "{g:#}");
-    assert_eq!(
-        g["fleet_scaled"],
-        p >= pooled["alpha"].as_f64().unwrap(),
-        "{g:#}"
-    );
+    assert!(p >= pooled["alpha"].as_f64().unwrap(), "{g:#}");
+    assert_eq!(g["fleet_scaled"], true, "{g:#}");
     assert_eq!(d["ratios"].as_array().unwrap().len(), 4, "{g:#}");
     // Piped with --progress: every stage counted, the time left once a step is done.
     let err = String::from_utf8_lossy(&out.stderr);
@@ -195,6 +195,39 @@ fn an_effect_of_one_unit_is_named_for_that_unit_only() {
             assert!(u.get("cannot_test").is_none(), "{u:#}");
         }
     }
+    // With `--join-short` the arm of two sessions (no jackknife error) joins on that scale,
+    // last, weighed by √φ̂ times its in-sample error.
+    args.push("--join-short");
+    let out = common::armcal_ok(&args, &dir);
+    let j: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let pooled = &j["pooled"];
+    let g = &pooled["effects"][0];
+    assert_eq!(g["design"]["arms"], 5, "{g:#}");
+    let e = &g["arms"][4];
+    assert_eq!(
+        (&e["arm"], &e["jackknife"]),
+        (&Value::from("e"), &Value::from(false))
+    );
+    let phi = g["dispersion"]["phi"].as_f64().unwrap();
+    let want = phi.sqrt() * e["combined"]["model_se"].as_f64().unwrap();
+    assert!(
+        (e["se"].as_f64().unwrap() - want).abs() <= 1e-9 * want,
+        "{e:#}"
+    );
+    assert!(
+        pooled["left_out"].as_array().unwrap().is_empty(),
+        "{pooled:#}"
+    );
+    // On the arms' own errors it has nothing to be weighed by.
+    args.extend(["--error-scale", "own"]);
+    let out = common::armcal_ok(&args, &dir);
+    let j: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let pooled = &j["pooled"];
+    let g = &pooled["effects"][0];
+    assert_eq!(g["design"]["arms"], 4, "{g:#}");
+    assert_eq!(pooled["left_out"][0][0], "e", "{pooled:#}");
+    let why = pooled["left_out"][0][1].as_str().unwrap();
+    assert!(why.contains("--error-scale fleet"), "{why}");
 }
 
 #[test]

@@ -410,3 +410,98 @@ fn an_arm_recorded_twice_pools_both_recordings_each_with_its_own_probe() {
         "{text}"
     );
 }
+
+#[test]
+fn an_arm_of_two_sessions_joins_on_the_fleets_scale_only() {
+    // Four arms of 4 sessions, one of 2 (no jackknife error: issue 30's panda_7) and one of a
+    // single session. With `join_short` on the fleet's error scale the 2-session arm joins,
+    // weighed by √φ̂ times its in-sample error, last among the arms and with no held-out gain;
+    // on the arms' own errors it cannot be weighed, and by default it is not asked to: left
+    // out, said. The 1-session arm is left out either way.
+    let data = [
+        ("arm_0", recording(800, 3e-8, [0.0; 3], 11, 4)),
+        ("arm_1", recording(801, 3.5e-8, [0.0; 3], 12, 4)),
+        ("arm_2", recording(802, 4e-8, [0.0; 3], 13, 4)),
+        ("arm_3", recording(803, 2.5e-8, [0.0; 3], 14, 4)),
+        ("arm_4", recording(804, 3e-8, [0.0; 3], 15, 2)),
+        ("arm_5", recording(805, 3e-8, [0.0; 3], 16, 1)),
+    ];
+    let units: Vec<UnitData> = data
+        .into_iter()
+        .map(|(n, d)| UnitData {
+            name: n.to_string(),
+            file: format!("{n}.csv"),
+            data: d,
+        })
+        .collect();
+    let arms: Vec<(String, Vec<usize>)> = units
+        .iter()
+        .enumerate()
+        .map(|(k, u)| (u.name.clone(), vec![k]))
+        .collect();
+    let start = Arm::default6();
+    let testable = vec![vec![Effect::Gravity(1)]; units.len()];
+    let join = fleet::Options {
+        join_short: true,
+        ..fleet::Options::default()
+    };
+    let p = pool_arms(&start, &units, &arms, &testable, &join).unwrap();
+    let g = effect(&p, Effect::Gravity(1));
+    let d = g.dispersion.as_ref().expect("a dispersion");
+    assert!(g.fleet_scaled && d.df == 12.0, "{d:?}");
+    assert_eq!(g.design.arms, 5, "{:?}", g.design);
+    let joined = g.arms.last().unwrap();
+    assert_eq!((joined.arm.as_str(), joined.sessions), ("arm_4", 2));
+    assert!(!joined.jackknife && joined.combined.se.is_nan());
+    assert!(g.arms[..4].iter().all(|a| a.jackknife));
+    let want = d.phi.sqrt() * joined.combined.model_se;
+    assert!(
+        (joined.value.se - want).abs() <= 1e-12 * want && joined.value.se_df == d.df,
+        "{:?} {want}",
+        joined.value
+    );
+    // Its estimate is the in-sample fit's, near its compliance.
+    assert!(
+        (joined.value.estimate / 3e-8 - 1.0).abs() < 0.3,
+        "{:?}",
+        joined.value
+    );
+    assert!(joined.holdout.is_none());
+    assert!(
+        p.left_out
+            .iter()
+            .any(|(who, why)| who == "arm_5" && why.contains("no recording of 2 sessions")),
+        "{:?}",
+        p.left_out
+    );
+    assert!(!p.left_out.iter().any(|(who, _)| who.starts_with("arm_4")));
+    let mut text = String::new();
+    p.write_text(&mut text);
+    assert!(
+        g.named && joined.value.named_pooled && text.contains("2 sessions: no jackknife"),
+        "{text}"
+    );
+    // On the arms' own errors, and by default: left out, with the option that would take it.
+    for (o, option) in [
+        (
+            fleet::Options {
+                error_scale: ErrorScale::Own,
+                ..join
+            },
+            "--error-scale fleet",
+        ),
+        (fleet::Options::default(), "--join-short"),
+    ] {
+        let p = pool_arms(&start, &units, &arms, &testable, &o).unwrap();
+        let g = effect(&p, Effect::Gravity(1));
+        assert_eq!(g.design.arms, 4);
+        assert!(g.arms.iter().all(|a| a.jackknife && a.arm != "arm_4"));
+        assert!(
+            p.left_out
+                .iter()
+                .any(|(who, why)| who == "arm_4" && why.contains(option)),
+            "{:?}",
+            p.left_out
+        );
+    }
+}

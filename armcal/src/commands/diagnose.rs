@@ -46,6 +46,12 @@ pub struct Args {
     /// be made, each alone, said); `alone`: each with the geometric model alone.
     #[arg(long, value_enum, default_value_t = diagnose::fleet::PooledModel::Full)]
     pooled_model: diagnose::fleet::PooledModel,
+    /// With `--fleet`: an arm with no recording of 3 sessions or more but one of 2 joins the
+    /// pooled stage, its value from one fit on all its sessions weighed by √φ̂ times that fit's
+    /// in-sample error (only on the fleet's error scale; its φ is assumed the other arms',
+    /// which nothing can test), with no held-out gain. Off by default: left out, said.
+    #[arg(long, requires = "fleet")]
+    join_short: bool,
     /// With `--fleet`: these recordings (unit names as the fleet gives them, e.g.
     /// `--same-arm panda_3=panda_3,panda_3_bis,panda_right`) are one physical arm, one unit of
     /// the fleet test named ARM, their sessions' evidence pooled. Repeat for more arms. Given, it sets
@@ -303,6 +309,7 @@ fn run_fleet(a: &Args) -> anyhow::Result<()> {
         alpha: a.fleet_alpha,
         error_scale: a.error_scale,
         pooled_model: a.pooled_model,
+        join_short: a.join_short,
         ..diagnose::fleet::Options::default()
     };
     opts.diagnose.calib.lm.max_iterations = a.max_iter as usize;

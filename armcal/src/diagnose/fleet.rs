@@ -91,6 +91,10 @@ pub struct Options {
     pub error_scale: ErrorScale,
     /// The model each pooled candidate is estimated in ([`super::fleet_pooled`]).
     pub pooled_model: PooledModel,
+    /// Whether an arm with no recording of [`MIN_UNITS`] sessions, but one of
+    /// [`super::fleet_pooled::MIN_JOINED`], joins the pool on the fleet's error scale (its φ
+    /// assumed the others': nothing can test it). Off by default.
+    pub join_short: bool,
 }
 
 impl Default for Options {
@@ -100,6 +104,7 @@ impl Default for Options {
             alpha: ALPHA,
             error_scale: ErrorScale::default(),
             pooled_model: PooledModel::default(),
+            join_short: false,
         }
     }
 }

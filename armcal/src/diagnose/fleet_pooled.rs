@@ -23,8 +23,16 @@
 //! the probe is one of the geometric unknowns every recording's fit refits) gives one estimate
 //! per recording of [`crate::stats::MIN_UNITS`] sessions or more, combined by inverse variance
 //! ([`super::pooling::combine_recordings`]). Recordings with fewer sessions have no jackknife
-//! error and are left out of their arm, and arms with no such recording out of the pool, each
-//! with the reason. Which recordings are one arm is the fleet's grouping (`arms`), whose source
+//! error and are left out of an arm that has a longer one. An arm with none, but a recording
+//! of [`MIN_JOINED`] sessions or more (MUKCa's panda_7), is left out, said, unless
+//! `opts.join_short` (`--join-short`; off by default, its φ cannot be tested): then it
+//! **joins on the fleet's error scale**:
+//! its value from one fit on all its sessions, weighed by √φ̂ times that fit's in-sample error
+//! ([`super::pooling::pool_fleet_scale_joined`]; it gives nothing to φ̂ and does not count
+//! towards the fleet's least number of arms), with no held-out gain (too few sessions to leave
+//! one out). Where the fleet's scale is not used (`--error-scale own`, or Bartlett's test
+//! rejects one scale for a candidate) it cannot be weighed and is left out, said; so is an arm
+//! of one session. Which recordings are one arm is the fleet's grouping (`arms`), whose source
 //! (detected from the data, given by hand, or each file an arm) the fleet report says.
 //!
 //! This module sits above both [`super::fleet`] (whose arms and candidates it reads) and
@@ -54,6 +62,10 @@ pub struct PooledArm {
     pub per_recording: Vec<Estimate>,
     /// Their combination (the arm's "alone" estimate below).
     pub combined: Combined,
+    /// Whether its estimate has a jackknife error; `false` for an arm whose one recording has
+    /// too few sessions ([`MIN_JOINED`] to [`MIN_UNITS`] − 1), pooled only on the fleet's error
+    /// scale (√φ̂ times its in-sample error), with no held-out gain.
+    pub jackknife: bool,
     /// Alone and pooled.
     #[serde(flatten)]
     pub value: PooledValue,
@@ -119,8 +131,19 @@ pub struct PooledFleet {
     pub left_out: Vec<(String, String)>,
 }
 
-/// An arm pooled: its name and its recordings used (index, sessions).
-type Used = (String, Vec<(usize, usize)>);
+/// Fewest sessions of a recording that joins the pool without a jackknife error (issue 30's
+/// panda_7): two, so that its in-sample error is not one placement's alone.
+pub const MIN_JOINED: usize = 2;
+
+/// An arm pooled: its name, its recordings used (index, sessions), and whether they have a
+/// jackknife error (else one recording of [`MIN_JOINED`] to [`MIN_UNITS`] − 1 sessions,
+/// joined on the fleet's error scale). The arms without come last: the pool takes them after
+/// the others ([`pooling::pool_fleet_scale_joined`]).
+struct Used {
+    name: String,
+    recs: Vec<(usize, usize)>,
+    jackknife: bool,
+}
 
 /// An arm or a recording left out: (name, why).
 type LeftOut = (String, String);
@@ -128,18 +151,31 @@ type LeftOut = (String, String);
 /// An arm's estimate of a candidate: each recording's, and their combination.
 type ArmEstimate = (Vec<Estimate>, Combined);
 
-/// Each arm's recordings of [`MIN_UNITS`] sessions or more, and the arms and recordings left
-/// out with why.
-fn recordings(units: &[UnitData], arms: &[(String, Vec<usize>)]) -> (Vec<Used>, Vec<LeftOut>) {
+/// Each arm's recordings of [`MIN_UNITS`] sessions or more, then, with `opts.join_short`, the
+/// arms with none but one of [`MIN_JOINED`] sessions or more (their longest recording; only
+/// where the error scale is the fleet's, the one way they can be weighed), and the arms and
+/// recordings left out with why.
+fn recordings(
+    units: &[UnitData],
+    arms: &[(String, Vec<usize>)],
+    opts: &Options,
+) -> (Vec<Used>, Vec<LeftOut>) {
     let mut used = Vec::new();
+    let mut joined = Vec::new();
     let mut left_out = Vec::new();
     for (name, recs) in arms {
-        let mut mine = Vec::new();
-        for &r in recs.iter().filter(|&&r| r < units.len()) {
-            let n = by_group(&units[r].data).len();
-            if n >= MIN_UNITS {
-                mine.push((r, n));
-            } else if recs.len() > 1 {
+        let sessions: Vec<(usize, usize)> = recs
+            .iter()
+            .filter(|&&r| r < units.len())
+            .map(|&r| (r, by_group(&units[r].data).len()))
+            .collect();
+        let mine: Vec<(usize, usize)> = sessions
+            .iter()
+            .copied()
+            .filter(|(_, n)| *n >= MIN_UNITS)
+            .collect();
+        if !mine.is_empty() {
+            for &(r, n) in sessions.iter().filter(|(_, n)| *n < MIN_UNITS) {
                 left_out.push((
                     format!("{name}: recording {}", units[r].name),
                     format!(
@@ -148,19 +184,66 @@ fn recordings(units: &[UnitData], arms: &[(String, Vec<usize>)]) -> (Vec<Used>, 
                     ),
                 ));
             }
+            used.push(Used {
+                name: name.clone(),
+                recs: mine,
+                jackknife: true,
+            });
+            continue;
         }
-        if mine.is_empty() {
-            left_out.push((
+        // The longest recording (the first of the longest).
+        let longest = sessions
+            .iter()
+            .copied()
+            .fold(None, |b: Option<(usize, usize)>, s| match b {
+                Some(b) if b.1 >= s.1 => Some(b),
+                _ => Some(s),
+            });
+        match longest {
+            Some((r, n))
+                if n >= MIN_JOINED && opts.join_short && opts.error_scale == ErrorScale::Fleet =>
+            {
+                for &(o, m) in sessions.iter().filter(|(o, _)| *o != r) {
+                    left_out.push((
+                        format!("{name}: recording {}", units[o].name),
+                        format!(
+                            "{m} session(s): the arm joins by its longest recording, {}",
+                            units[r].name
+                        ),
+                    ));
+                }
+                joined.push(Used {
+                    name: name.clone(),
+                    recs: vec![(r, n)],
+                    jackknife: false,
+                });
+            }
+            Some((_, n)) if n >= MIN_JOINED && opts.join_short => left_out.push((
                 name.clone(),
                 format!(
-                    "no recording of {MIN_UNITS} sessions or more: no jackknife error to weigh \
-                     its estimate by"
+                    "no recording of {MIN_UNITS} sessions or more (its longest has {n}): \
+                     without a jackknife error it joins only on the fleet's error scale \
+                     (--error-scale fleet)"
                 ),
-            ));
-        } else {
-            used.push((name.clone(), mine));
+            )),
+            Some((_, n)) if n >= MIN_JOINED => left_out.push((
+                name.clone(),
+                format!(
+                    "no recording of {MIN_UNITS} sessions or more (its longest has {n}): no \
+                     jackknife error to weigh its estimate by (--join-short weighs it on the \
+                     fleet's error scale)"
+                ),
+            )),
+            _ => left_out.push((
+                name.clone(),
+                format!(
+                    "no recording of {MIN_JOINED} sessions or more: neither a jackknife error \
+                     nor an in-sample error over sessions to weigh its estimate by"
+                ),
+            )),
         }
     }
+    used.extend(joined);
     (used, left_out)
 }
 
@@ -204,11 +287,11 @@ pub fn pool_arms(
             }
         },
     };
-    let (used, _) = recordings(units, arms);
+    let (used, _) = recordings(units, arms, opts);
     let calib = geometric_options(opts);
     let data: Vec<Vec<&Dataset>> = used
         .iter()
-        .map(|(_, recs)| recs.iter().map(|(r, _)| &units[*r].data).collect())
+        .map(|u| u.recs.iter().map(|(r, _)| &units[*r].data).collect())
         .collect();
     for p in out.effects.iter_mut().filter(|p| p.named) {
         held_out_gains(start, &data, &calib, opts.alpha, p)?;
@@ -226,7 +309,7 @@ pub fn pool_candidates(
     testable: &[Vec<Effect>],
     opts: &Options,
 ) -> PooledFleet {
-    let (used, out) = match begin(units, arms, opts.alpha) {
+    let (used, out) = match begin(units, arms, opts) {
         Ok(begun) => begun,
         Err(out) => return out,
     };
@@ -265,7 +348,7 @@ fn try_full(
     testable: &[Vec<Effect>],
     opts: &Options,
 ) -> Result<PooledFleet, (PooledFleet, LeftOut)> {
-    let (used, mut out) = match begin(units, arms, opts.alpha) {
+    let (used, mut out) = match begin(units, arms, opts) {
         Ok(begun) => begun,
         Err(out) => return Ok(out),
     };
@@ -275,10 +358,17 @@ fn try_full(
     let terms: Vec<String> = vocabulary.iter().map(|e| e.spec()).collect();
     // Per arm, per recording: every candidate's estimate in the full model.
     let mut per_arm: Vec<Vec<Vec<Estimate>>> = Vec::new();
-    for (_, recs) in &used {
+    for u in &used {
         let mut est = Vec::new();
-        for (r, _) in recs {
-            let why = match pooling::estimate_joint(start, &units[*r].data, &calib, &vocabulary) {
+        for (r, _) in &u.recs {
+            let data = &units[*r].data;
+            let fit = if u.jackknife {
+                pooling::estimate_joint(start, data, &calib, &vocabulary)
+            } else {
+                pooling::estimate_joint_in_sample(start, data, &calib, &vocabulary)
+                    .map(|v| v.map(|v| v.into_iter().map(Estimate::in_sample).collect()))
+            };
+            let why = match fit {
                 Ok(Some(v)) => {
                     est.push(v);
                     continue;
@@ -297,14 +387,16 @@ fn try_full(
     for (i, &e) in vocabulary.iter().enumerate() {
         let mine: Option<Vec<ArmEstimate>> = per_arm
             .iter()
-            .map(|recs| {
+            .zip(&used)
+            .map(|(recs, u)| {
                 let est: Vec<Estimate> = recs.iter().map(|v| v[i]).collect();
-                let c = pooling::combine_recordings(&est)?;
+                let c = combine(u, &est)?;
                 Some((est, c))
             })
             .collect();
+        let how = (opts.error_scale, opts.alpha);
         if let Some(p) =
-            mine.and_then(|m| pool_estimates(units, &used, e, m, opts.error_scale, opts.alpha))
+            mine.and_then(|m| pool_estimates(units, &used, e, m, how, &mut out.left_out))
         {
             out.effects.push(p);
         }
@@ -318,16 +410,17 @@ fn try_full(
 fn begin(
     units: &[UnitData],
     arms: &[(String, Vec<usize>)],
-    alpha: f64,
+    opts: &Options,
 ) -> Result<(Vec<Used>, PooledFleet), PooledFleet> {
-    let (used, left_out) = recordings(units, arms);
+    let (used, left_out) = recordings(units, arms, opts);
     let out = PooledFleet {
-        alpha,
+        alpha: opts.alpha,
         model: PooledModel::Alone,
         effects: Vec::new(),
         left_out,
     };
-    if used.len() < super::fleet::MIN_FLEET_UNITS {
+    // The arms without a jackknife error do not count: φ̂ and the design rest on the others.
+    if used.iter().filter(|u| u.jackknife).count() < super::fleet::MIN_FLEET_UNITS {
         return Err(out);
     }
     Ok((used, out))
@@ -377,9 +470,7 @@ fn shared_vocabulary(used: &[Used], testable: &[Vec<Effect>]) -> BTreeSet<Effect
             })
             .unwrap_or_default()
     };
-    let mut all_recordings = used
-        .iter()
-        .flat_map(|(_, recs)| recs.iter().map(|(r, _)| *r));
+    let mut all_recordings = used.iter().flat_map(|u| u.recs.iter().map(|(r, _)| *r));
     let mut vocabulary = all_recordings.next().map(one_unknown).unwrap_or_default();
     for r in all_recordings {
         vocabulary = vocabulary.intersection(&one_unknown(r)).copied().collect();
@@ -400,10 +491,17 @@ fn arm_estimates(
     left_out: &mut Vec<LeftOut>,
 ) -> Option<Vec<ArmEstimate>> {
     let mut per_arm = Vec::new();
-    for (_, recs) in used {
+    for u in used {
         let mut est = Vec::new();
-        for (r, _) in recs {
-            match pooling::estimate(start, &units[*r].data, calib, e) {
+        for (r, _) in &u.recs {
+            let data = &units[*r].data;
+            let fit = if u.jackknife {
+                pooling::estimate(start, data, calib, e)
+            } else {
+                pooling::estimate_in_sample(start, data, calib, e)
+                    .map(|v| v.map(Estimate::in_sample))
+            };
+            match fit {
                 Ok(Some(v)) => est.push(v),
                 Ok(None) => return None,
                 Err(err) => {
@@ -415,7 +513,7 @@ fn arm_estimates(
                 }
             }
         }
-        let c = pooling::combine_recordings(&est)?;
+        let c = combine(u, &est)?;
         per_arm.push((est, c));
     }
     Some(per_arm)
@@ -433,31 +531,54 @@ fn pool_effect(
     left_out: &mut Vec<LeftOut>,
 ) -> Option<PooledEffect> {
     let per_arm = arm_estimates(start, units, used, calib, e, left_out)?;
-    pool_estimates(units, used, e, per_arm, scale, alpha)
+    pool_estimates(units, used, e, per_arm, (scale, alpha), left_out)
+}
+
+/// An arm's combination of its recordings' estimates `est`: by inverse variance where they
+/// have a jackknife error ([`pooling::combine_recordings`]), else its one recording's value
+/// and in-sample error ([`Combined::in_sample`]).
+fn combine(u: &Used, est: &[Estimate]) -> Option<Combined> {
+    if u.jackknife {
+        pooling::combine_recordings(est)
+    } else {
+        est.first().map(Combined::in_sample)
+    }
 }
 
 /// The candidate `e` pooled from each used arm's estimates `per_arm` with the errors `scale`
-/// says (not yet named).
+/// says (not yet named). An arm without a jackknife error that the pool could not weigh (the
+/// fleet's scale rejected for this candidate) is pushed to `left_out` with why.
 fn pool_estimates(
     units: &[UnitData],
     used: &[Used],
     e: Effect,
     per_arm: Vec<ArmEstimate>,
-    scale: ErrorScale,
-    alpha: f64,
+    (scale, alpha): (ErrorScale, f64),
+    left_out: &mut Vec<LeftOut>,
 ) -> Option<PooledEffect> {
     let combined: Vec<&Combined> = per_arm.iter().map(|(_, c)| c).collect();
-    let (dispersion, fleet_scaled, design, values) = pool_combined(&combined, scale, alpha)?;
+    let jackknife: Vec<bool> = used.iter().map(|u| u.jackknife).collect();
+    let (dispersion, fleet_scaled, design, values) =
+        pool_combined(&combined, &jackknife, scale, alpha)?;
+    for u in used.iter().skip(values.len()) {
+        left_out.push((
+            format!("{}: {}", u.name, e.spec()),
+            "no jackknife error, and the fleet's error scale was not used for this candidate \
+             (Bartlett's test rejected one scale): nothing to weigh its estimate by"
+                .to_string(),
+        ));
+    }
     let arms = used
         .iter()
         .zip(per_arm)
         .zip(values)
-        .map(|(((name, recs), (est, combined)), value)| PooledArm {
-            arm: name.clone(),
-            recordings: recs.iter().map(|(r, _)| units[*r].name.clone()).collect(),
-            sessions: recs.iter().map(|(_, n)| n).sum(),
+        .map(|((u, (est, combined)), value)| PooledArm {
+            arm: u.name.clone(),
+            recordings: u.recs.iter().map(|(r, _)| units[*r].name.clone()).collect(),
+            sessions: u.recs.iter().map(|(_, n)| n).sum(),
             per_recording: est,
             combined,
+            jackknife: u.jackknife,
             value,
             holdout: None,
         })
@@ -475,16 +596,22 @@ fn pool_estimates(
 
 /// The arms' estimates `combined` pooled with the errors `scale` says: the one place both
 /// [`pool_estimates`] and [`repool`] pool.
+/// `jackknife` says which arms have a jackknife error; those without come last and are
+/// pooled only on the fleet's scale.
 fn pool_combined(
     combined: &[&Combined],
+    jackknife: &[bool],
     scale: ErrorScale,
     alpha: f64,
 ) -> Option<pooling::ScaledPool> {
-    let y: Vec<f64> = combined.iter().map(|c| c.estimate).collect();
-    let se: Vec<f64> = combined.iter().map(|c| c.se).collect();
-    let df: Vec<f64> = combined.iter().map(|c| c.df).collect();
-    let model: Vec<f64> = combined.iter().map(|c| c.model_se).collect();
-    pooling::pool_with(scale, &y, &se, &df, &model, alpha)
+    let n = jackknife.iter().filter(|j| **j).count();
+    let (own, joined) = combined.split_at(n.min(combined.len()));
+    let y: Vec<f64> = own.iter().map(|c| c.estimate).collect();
+    let se: Vec<f64> = own.iter().map(|c| c.se).collect();
+    let df: Vec<f64> = own.iter().map(|c| c.df).collect();
+    let model: Vec<f64> = own.iter().map(|c| c.model_se).collect();
+    let joined: Vec<(f64, f64)> = joined.iter().map(|c| (c.estimate, c.model_se)).collect();
+    pooling::pool_with(scale, &y, &se, &df, &model, &joined, alpha)
 }
 
 /// `fleet`'s candidates pooled again from the same estimates with the errors `scale` says and
@@ -501,13 +628,22 @@ pub fn repool(fleet: &PooledFleet, scale: ErrorScale, alpha: f64) -> PooledFleet
     };
     for p in &fleet.effects {
         let combined: Vec<&Combined> = p.arms.iter().map(|a| &a.combined).collect();
+        let jackknife: Vec<bool> = p.arms.iter().map(|a| a.jackknife).collect();
         let Some((dispersion, fleet_scaled, design, values)) =
-            pool_combined(&combined, scale, alpha)
+            pool_combined(&combined, &jackknife, scale, alpha)
         else {
             out.left_out
                 .push((p.term.clone(), "cannot be pooled again".to_string()));
             continue;
         };
+        for a in p.arms.iter().skip(values.len()) {
+            out.left_out.push((
+                format!("{}: {}", a.arm, p.term),
+                "no jackknife error, and the fleet's error scale was not used: nothing to \
+                 weigh its estimate by"
+                    .to_string(),
+            ));
+        }
         let arms = p
             .arms
             .iter()
@@ -564,7 +700,8 @@ fn held_out_gains(
         })
         .collect();
     for (i, a) in p.arms.iter_mut().enumerate() {
-        if !a.value.named_pooled {
+        // An arm without a jackknife has too few sessions to leave one out and estimate again.
+        if !a.value.named_pooled || !a.jackknife {
             continue;
         }
         let others: Vec<Estimate> = all
@@ -633,11 +770,23 @@ impl PooledFleet {
         }
         for p in &self.effects {
             let d = &p.design;
+            let joined: Vec<&str> = p
+                .arms
+                .iter()
+                .filter(|a| !a.jackknife)
+                .map(|a| a.arm.as_str())
+                .collect();
             let _ = writeln!(
                 s,
-                "  {}: design mean {:+.3e} [{:+.3e}, {:+.3e}], p = {:.1e}; spread τ {:.2e} \
-                 [{:.2e}, {:.2e}]; {}",
+                "  {}: {} arms{}; design mean {:+.3e} [{:+.3e}, {:+.3e}], p = {:.1e}; spread τ \
+                 {:.2e} [{:.2e}, {:.2e}]; {}",
                 p.term,
+                p.arms.len(),
+                if joined.is_empty() {
+                    String::new()
+                } else {
+                    format!(" ({} without a jackknife)", joined.join(", "))
+                },
                 d.mean,
                 d.mean_interval[0],
                 d.mean_interval[1],
@@ -685,6 +834,14 @@ impl PooledFleet {
                     a.value.shrinkage,
                     if a.value.named_pooled { ", named" } else { "" }
                 );
+                if !a.jackknife {
+                    let _ = write!(
+                        s,
+                        " [{} sessions: no jackknife, its in-sample error ± {:.1e} on the \
+                         fleet's scale; no held-out gain]",
+                        a.sessions, a.combined.model_se
+                    );
+                }
                 if a.combined.recordings > 1 {
                     let each: Vec<String> = a
                         .recordings

@@ -361,18 +361,21 @@ pub type ScaledPool = (Option<Dispersion>, bool, Design, Vec<Arm>);
 
 /// The arms pooled with the error `scale` says ([`ErrorScale`]): the dispersion (only with
 /// [`ErrorScale::Fleet`] and where one can be formed), whether the fleet's scale was used, and
-/// the pool.
+/// the pool. `joined` are arms with no jackknife error, (value, in-sample error), pooled after
+/// the others only where the fleet's scale is used ([`pool_fleet_scale_joined`]); elsewhere
+/// the pool has `y.len()` arms.
 pub fn pool_with(
     scale: ErrorScale,
     y: &[f64],
     se: &[f64],
     df: &[f64],
     model_se: &[f64],
+    joined: &[(f64, f64)],
     alpha: f64,
 ) -> Option<ScaledPool> {
     match scale {
         ErrorScale::Own => pool(y, se, df, alpha).map(|(d, a)| (None, false, d, a)),
-        ErrorScale::Fleet => pool_fleet_scale(y, se, df, model_se, alpha),
+        ErrorScale::Fleet => pool_fleet_scale_joined(y, se, df, model_se, joined, alpha),
     }
 }
 
@@ -450,19 +453,39 @@ pub fn estimate_in_sample(
     opts: &crate::fit::options::Options,
     effect: Effect,
 ) -> Result<Option<(f64, f64)>, CalibError> {
-    let params = effect.params();
-    if params.len() != 1 {
+    Ok(estimate_joint_in_sample(start, data, opts, &[effect])?.and_then(|v| v.first().copied()))
+}
+
+/// [`estimate_in_sample`] of every effect of `effects` at once, each conditional on the others
+/// (the full model of [`estimate_joint`], its one fit on all the sessions without the
+/// leave-one-session-out fits): what a recording of too few sessions for a jackknife gives
+/// `armcal diagnose --fleet`'s default. `None` for an empty list, a repeated effect or an
+/// effect of more than one unknown; the values in `effects`' order.
+pub fn estimate_joint_in_sample(
+    start: &quatarm_ref::arm::Arm,
+    data: &Dataset,
+    opts: &crate::fit::options::Options,
+    effects: &[Effect],
+) -> Result<Option<Vec<(f64, f64)>>, CalibError> {
+    let params: Vec<_> = effects.iter().map(|e| e.params()).collect();
+    let repeated = effects
+        .iter()
+        .enumerate()
+        .any(|(i, e)| effects[..i].contains(e));
+    if effects.is_empty() || repeated || params.iter().any(|p| p.len() != 1) {
         return Ok(None);
     }
     let o = crate::fit::options::Options {
-        terms: Terms::with(&[effect]),
+        terms: Terms::with(effects),
         ..opts.clone()
     };
     let all = calib::calibrate(start, data, &o)?;
-    Ok(Some((
-        params[0].value(&all.arm),
-        model_se(&all, &params[0]),
-    )))
+    Ok(Some(
+        params
+            .iter()
+            .map(|p| (p[0].value(&all.arm), model_se(&all, &p[0])))
+            .collect(),
+    ))
 }
 
 /// One estimate of a one-unknown effect ([`estimate`]): its value, its standard error and the
@@ -483,6 +506,19 @@ pub struct Estimate {
     /// `se` is the one the product weighs by; its *shape* over the arms is what
     /// [`pool_fleet_scale`] borrows (docs/results/claims.md §7.10).
     pub model_se: f64,
+}
+
+impl Estimate {
+    /// A recording's estimate with no jackknife (too few sessions): its value and in-sample
+    /// error, `se` and `df` not numbers ([`estimate_joint_in_sample`]).
+    pub fn in_sample((value, model_se): (f64, f64)) -> Estimate {
+        Estimate {
+            value,
+            se: f64::NAN,
+            df: f64::NAN,
+            model_se,
+        }
+    }
 }
 
 /// One arm's estimate from its recordings ([`combine_recordings`]).
@@ -508,6 +544,22 @@ pub struct Combined {
     /// in-sample error, with no Birge widening: the widening is the jackknife's side of the
     /// ratio [`pool_fleet_scale`] estimates); `NaN` when some recording has none.
     pub model_se: f64,
+}
+
+impl Combined {
+    /// An arm's one recording with no jackknife error ([`Estimate::in_sample`]) as its
+    /// combination: its value and in-sample error, `se` and `df` not numbers.
+    pub fn in_sample(e: &Estimate) -> Combined {
+        Combined {
+            estimate: e.value,
+            se: f64::NAN,
+            df: f64::NAN,
+            recordings: 1,
+            q: 0.0,
+            q_p: 1.0,
+            model_se: e.model_se,
+        }
+    }
 }
 
 /// One arm's estimate from its recordings' estimates `est`, each fitted on its own recording
