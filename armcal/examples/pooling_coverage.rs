@@ -12,7 +12,8 @@
 //! for homogeneity at α), the share of fleets where that test failed and its width over the
 //! plug-in's (docs/results/claims.md §7.10); then the same where the arms do not share one φ
 //! (two values, 4 or 16 times apart, over alternate arms), with the coverage of the arms of
-//! the high one.
+//! the high one; last, one more arm without a jackknife error joined on the fleet's scale
+//! (`diagnose --fleet --join-short`), its φ the others' times 0.5, 1, 2 or 4.
 //!
 //!     cargo run --release -p armcal --example pooling_coverage [fleets [sessions [alpha]]]
 //!
@@ -74,6 +75,33 @@ fn main() {
                 println!(
                     "ratio {ratio:>4}  arms {arms}  τ/s {tau:.2} | {:.3} | {:.3}, {:.3}, {:.3}",
                     c.with_df, c.fleet_scale, c.fleet_scale_high_phi, c.fleet_scale_fallback
+                );
+            }
+        }
+    }
+    // One more arm without a jackknife error (a 2-session recording, `diagnose --fleet
+    // --join-short`), joined on the fleet's scale (`pooling::simulated_joined_coverage`): its
+    // true error √2 times the others' middle one (half their sessions), its φ the others'
+    // times `ratio` (1: the assumption the join makes).
+    println!(
+        "\nan arm without a jackknife joined on the fleet's scale, {fleets} fleets per cell: \
+         fleets joined | its coverage | the others' | its width over theirs"
+    );
+    for ratio in [0.5, 1.0, 2.0, 4.0] {
+        for arms in [4, 8] {
+            for tau in [0.0, 1.0] {
+                let c = armcal::diagnose::pooling::simulated_joined_coverage(
+                    arms,
+                    tau,
+                    sessions,
+                    fleets,
+                    40 + arms as u64,
+                    alpha,
+                    (std::f64::consts::SQRT_2, ratio),
+                );
+                println!(
+                    "φ ratio {ratio:>3}  arms {arms}+1  τ/s {tau:.2} | {:.3} | {:.3} | {:.3} | {:.2}",
+                    c.joined, c.joined_coverage, c.others_coverage, c.joined_width
                 );
             }
         }

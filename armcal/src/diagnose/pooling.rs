@@ -675,6 +675,95 @@ pub struct Coverage {
     pub fleet_scale_high_phi: f64,
 }
 
+/// What [`simulated_joined_coverage`] measures: a fleet's arms with a jackknife error and one
+/// arm without, joined on the fleet's error scale ([`pool_fleet_scale_joined`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JoinedCoverage {
+    /// Fleets drawn.
+    pub fleets: usize,
+    /// Share of fleets where the joined arm was pooled (the homogeneity test kept one φ).
+    pub joined: f64,
+    /// Share of those fleets whose joined arm's interval (1 − `alpha`, t on its df) holds its
+    /// true value.
+    pub joined_coverage: f64,
+    /// The same over the arms with a jackknife error, in the same fleets.
+    pub others_coverage: f64,
+    /// The joined arm's mean half-width over the mean of the others'.
+    pub joined_width: f64,
+}
+
+/// [`simulated_coverage`]'s fleets of `arms` arms with a jackknife error from `sessions`
+/// sessions and one φ ([`SIMULATED_PHI`]), and one more arm **without** a jackknife error
+/// (a 2-session recording, `armcal diagnose --fleet --join-short`): its value drawn with true
+/// error `joined_se` (in the others' units: theirs run 0.5–1.5), its in-sample error
+/// `joined_se`/√(φ·`phi_ratio`). With `phi_ratio` 1 it shares the others' φ, the assumption
+/// the join makes and nothing on the data can test; above 1 its in-sample error understates
+/// its error more than the others' do. The joined arm is pooled with √φ̂ times its in-sample
+/// error where the others' ratios pass the homogeneity test at `alpha`, else left out
+/// (counted in [`JoinedCoverage::joined`]).
+pub fn simulated_joined_coverage(
+    arms: usize,
+    tau: f64,
+    sessions: usize,
+    fleets: usize,
+    seed: u64,
+    alpha: f64,
+    (joined_se, phi_ratio): (f64, f64),
+) -> JoinedCoverage {
+    let mut rng = crate::rng::rng(seed);
+    let nu = sessions.saturating_sub(1).max(1);
+    let df = vec![nu as f64; arms];
+    let true_se: Vec<f64> = (0..arms)
+        .map(|u| 0.5 + u as f64 / (arms.max(2) - 1) as f64)
+        .collect();
+    let model: Vec<f64> = true_se.iter().map(|s| s / SIMULATED_PHI.sqrt()).collect();
+    let joined_model = joined_se / (SIMULATED_PHI * phi_ratio).sqrt();
+    let (mut pooled, mut hits, mut others, mut other_hits) = (0usize, 0usize, 0usize, 0usize);
+    let (mut width, mut other_width) = (0.0, 0.0);
+    for _ in 0..fleets {
+        let (mut theta, mut y, mut se) = (Vec::new(), Vec::new(), Vec::new());
+        for &s in &true_se {
+            let t = 1.0 + tau * crate::rng::normal(&mut rng);
+            theta.push(t);
+            y.push(t + s * crate::rng::normal(&mut rng));
+            let chi2: f64 = (0..nu).map(|_| crate::rng::normal(&mut rng).powi(2)).sum();
+            se.push(s * (chi2 / nu as f64).sqrt());
+        }
+        let tj = 1.0 + tau * crate::rng::normal(&mut rng);
+        let yj = tj + joined_se * crate::rng::normal(&mut rng);
+        let Some((_, scaled, _, a)) =
+            pool_fleet_scale_joined(&y, &se, &df, &model, &[(yj, joined_model)], alpha)
+        else {
+            continue;
+        };
+        if !scaled || a.len() != arms + 1 {
+            continue;
+        }
+        pooled += 1;
+        theta.push(tj);
+        for (u, (a, t)) in a.iter().zip(&theta).enumerate() {
+            let half = t_critical(alpha, a.df) * a.pooled_se;
+            let hit = (a.pooled - t).abs() <= half;
+            if u == arms {
+                hits += hit as usize;
+                width += half;
+            } else {
+                others += 1;
+                other_hits += hit as usize;
+                other_width += half;
+            }
+        }
+    }
+    JoinedCoverage {
+        fleets,
+        joined: pooled as f64 / fleets.max(1) as f64,
+        joined_coverage: hits as f64 / pooled.max(1) as f64,
+        others_coverage: other_hits as f64 / others.max(1) as f64,
+        joined_width: (width / pooled.max(1) as f64)
+            / (other_width / others.max(1) as f64).max(f64::MIN_POSITIVE),
+    }
+}
+
 /// The dispersion φ of the jackknife variance over the model's in [`simulated_coverage`]'s
 /// fleets: the model error v_u = s_u/√φ of an arm whose true error is s_u (four times too
 /// small a variance, as a fit whose residuals are correlated within sessions reports). The
@@ -1373,5 +1462,32 @@ mod tests {
         assert!(pool(&[1.0, 2.0, 3.0], &[1.0, 1.0, 1.0], &[3.0, 0.0, 3.0], 0.05).is_none());
         assert!(pool(&[1.0, 2.0, 3.0], &[1.0, 1.0, 1.0], &[3.0; 2], 0.05).is_none());
         assert!(pool(&[1.0, f64::NAN, 3.0], &[1.0, 1.0, 1.0], &[3.0; 3], 0.05).is_none());
+    }
+
+    /// An arm joined without a jackknife covers as its φ allows: over-covers with no spread
+    /// where it shares the others' φ (the join's assumption), covers less where its φ is four
+    /// times theirs; the others' coverage barely depends on it. (2,000 fleets a cell; the
+    /// example's 20,000: 0.993, 0.903 and 0.786.)
+    #[test]
+    fn a_joined_arm_covers_as_its_phi_allows() {
+        let c = |tau: f64, ratio: f64| {
+            simulated_joined_coverage(8, tau, 4, 2000, 48, 0.05, (2f64.sqrt(), ratio))
+        };
+        let (same, spread, high) = (c(0.0, 1.0), c(1.0, 1.0), c(1.0, 4.0));
+        assert!(same.joined > 0.9 && same.joined < 1.0, "{same:?}");
+        assert!(same.joined_coverage > 0.97, "{same:?}");
+        assert!(
+            spread.joined_coverage > 0.87 && spread.joined_coverage < 0.94,
+            "{spread:?}"
+        );
+        assert!(
+            high.joined_coverage < spread.joined_coverage - 0.05,
+            "{high:?}"
+        );
+        // The others' barely move (the joined arm enters τ̂² only).
+        assert!(
+            (high.others_coverage - spread.others_coverage).abs() < 0.01,
+            "{high:?} {spread:?}"
+        );
     }
 }
