@@ -341,6 +341,17 @@ fn recording(
     common::in_sessions(d, sessions, "(simulated recording)")
 }
 
+/// Each named recording as a unit of the fleet (its file `<name>.csv`).
+fn units_of<const N: usize>(data: [(&str, Dataset); N]) -> Vec<UnitData> {
+    data.into_iter()
+        .map(|(n, d)| UnitData {
+            name: n.to_string(),
+            file: format!("{n}.csv"),
+            data: d,
+        })
+        .collect()
+}
+
 #[test]
 fn an_arm_recorded_twice_pools_both_recordings_each_with_its_own_probe() {
     // arm_0 measured three times with tools up to half a millimetre apart (the third
@@ -353,14 +364,7 @@ fn an_arm_recorded_twice_pools_both_recordings_each_with_its_own_probe() {
         ("arm_1", recording(701, 3.5e-8, [0.0; 3], 4, 4)),
         ("arm_2", recording(702, 4e-8, [0.0; 3], 5, 4)),
     ];
-    let units: Vec<UnitData> = data
-        .into_iter()
-        .map(|(n, d)| UnitData {
-            name: n.to_string(),
-            file: format!("{n}.csv"),
-            data: d,
-        })
-        .collect();
+    let units = units_of(data);
     let arms = vec![
         ("arm_0".to_string(), vec![0, 1, 2]),
         ("arm_1".to_string(), vec![3]),
@@ -426,14 +430,7 @@ fn an_arm_of_two_sessions_joins_on_the_fleets_scale_only() {
         ("arm_4", recording(804, 3e-8, [0.0; 3], 15, 2)),
         ("arm_5", recording(805, 3e-8, [0.0; 3], 16, 1)),
     ];
-    let units: Vec<UnitData> = data
-        .into_iter()
-        .map(|(n, d)| UnitData {
-            name: n.to_string(),
-            file: format!("{n}.csv"),
-            data: d,
-        })
-        .collect();
+    let units = units_of(data);
     let arms: Vec<(String, Vec<usize>)> = units
         .iter()
         .enumerate()

@@ -675,6 +675,15 @@ pub struct Coverage {
     pub fleet_scale_high_phi: f64,
 }
 
+/// One simulated arm of a fleet: its true value 1 + τ·N(0, 1), its estimate with true error
+/// `s`, and its jackknife error s·√(χ²_ν/ν) over ν = `nu` degrees of freedom.
+fn simulated_arm(rng: &mut crate::rng::SimRng, tau: f64, s: f64, nu: usize) -> (f64, f64, f64) {
+    let t = 1.0 + tau * crate::rng::normal(rng);
+    let y = t + s * crate::rng::normal(rng);
+    let chi2: f64 = (0..nu).map(|_| crate::rng::normal(rng).powi(2)).sum();
+    (t, y, s * (chi2 / nu as f64).sqrt())
+}
+
 /// What [`simulated_joined_coverage`] measures: a fleet's arms with a jackknife error and one
 /// arm without, joined on the fleet's error scale ([`pool_fleet_scale_joined`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -723,11 +732,10 @@ pub fn simulated_joined_coverage(
     for _ in 0..fleets {
         let (mut theta, mut y, mut se) = (Vec::new(), Vec::new(), Vec::new());
         for &s in &true_se {
-            let t = 1.0 + tau * crate::rng::normal(&mut rng);
+            let (t, v, e) = simulated_arm(&mut rng, tau, s, nu);
             theta.push(t);
-            y.push(t + s * crate::rng::normal(&mut rng));
-            let chi2: f64 = (0..nu).map(|_| crate::rng::normal(&mut rng).powi(2)).sum();
-            se.push(s * (chi2 / nu as f64).sqrt());
+            y.push(v);
+            se.push(e);
         }
         let tj = 1.0 + tau * crate::rng::normal(&mut rng);
         let yj = tj + joined_se * crate::rng::normal(&mut rng);
@@ -842,11 +850,10 @@ pub fn simulated_coverage_phi(
         let mut y = Vec::with_capacity(arms);
         let mut se = Vec::with_capacity(arms);
         for &s in &true_se {
-            let t = 1.0 + tau * crate::rng::normal(&mut rng);
+            let (t, v, e) = simulated_arm(&mut rng, tau, s, nu);
             theta.push(t);
-            y.push(t + s * crate::rng::normal(&mut rng));
-            let chi2: f64 = (0..nu).map(|_| crate::rng::normal(&mut rng).powi(2)).sum();
-            se.push(s * (chi2 / nu as f64).sqrt());
+            y.push(v);
+            se.push(e);
         }
         let Some((d, a)) = pool(&y, &se, &df, alpha) else {
             continue;
