@@ -27,9 +27,12 @@
 //! every joint's |r| plus its bound on |φx| is within [`MAX_RHO`] (a boot gate,
 //! [`LeanWobble::rho`]): sin ρ and 1 − cos ρ from ρ itself ([`small_turn`]; r stored in f32,
 //! formed in f64 at boot), in every copy of the pass; else the stored sin r, 1 − cos r turned
-//! by φx to second order. The vertical of the first pass leaves the small turns out, as it
-//! leaves out the harmonic error ([`crate::lean`]): it scales the gravity
-//! deflection only (Σ|φ| ≈ 6e-4 rad of 4e-5 rad, at most 3e-8 rad).
+//! by φx to second order. With ρ, the direction's first-order turns are Ry(φy) alone, then
+//! Rx(α + φx) as the tip's, by α's quarter turns and ρ (cos ρ = 1 − (1 − cos ρ)), instead of
+//! d + (φx, φy, 0) × d and cos α, sin α whole (½ φy² left out where ½ (φx² + φy²) was).
+//! The vertical of the first pass leaves the small turns out, as it leaves out the harmonic
+//! error ([`crate::lean`]): it scales the gravity deflection only (Σ|φ| ≈ 6e-4 rad of
+//! 4e-5 rad, at most 3e-8 rad).
 //!
 //! **What φ costs.** φx and φy are harmonic series in θ' (the terms' sin hθ', cos hθ' by
 //! `angle::Multiples` from the pass's own cos θ', sin θ'), each term's four coefficients formed at
@@ -553,7 +556,14 @@ fn run<
         d = [dp * cos - dr * sin, dp * sin + dr * cos, d[2]];
         let [ca, sa] = j.alpha_whole;
         let first = if SMALL { true } else { wobble.dir_first };
-        if first {
+        if first && (SMALL || wobble.rho) {
+            // Ry(φy) to first order (within MAX_DIRECTION_SECOND_ORDER), then Rx(α + φx) as
+            // its quarter turns and ρ's sin and cos = 1 − (1 − cos), as the tip's.
+            let x = d[0] + py * d[2];
+            let (y, z) = quarter_turns(qa, (d[1], d[2] - py * d[0]));
+            let cr = 1.0 - aomc;
+            d = [x, y * cr - z * asin, y * asin + z * cr];
+        } else if first {
             // Rx(φx) Ry(φy) to first order, d + (φx, φy, 0) × d (within
             // MAX_DIRECTION_SECOND_ORDER), then Rx(α) as the lean pass.
             d = [
