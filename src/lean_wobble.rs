@@ -25,7 +25,7 @@
 //! second order. α's remainder r beside its quarter turns (a joint's tilt off its nominal
 //! axis: at most 2.6e-3 rad on the hubs' arm) and φx are one small angle ρ = r + φx where
 //! every joint's |r| plus its bound on |φx| is within [`MAX_RHO`] (a boot gate,
-//! [`LeanWobble::rho`]): sin ρ and 1 − cos ρ from ρ itself ([`small_turn`]; r stored in f32,
+//! `LeanWobble::rho`): sin ρ and 1 − cos ρ from ρ itself (`small_turn`; r stored in f32,
 //! formed in f64 at boot), in every copy of the pass; else the stored sin r, 1 − cos r turned
 //! by φx to second order. With ρ, the direction's first-order turns are Ry(φy) alone, then
 //! Rx(α + φx) as the tip's, by α's quarter turns and ρ (cos ρ = 1 − (1 − cos ρ)), instead of
@@ -142,11 +142,14 @@ pub struct LeanWobble {
 
 /// Largest |ρ| = |r + φx| (α's remainder turned by the wobble, bounded at boot by |r| plus
 /// the sum of the joint's φx coefficients) for which the pass takes sin ρ ≈ ρ − ρ³/6 and
-/// 1 − cos ρ ≈ ½ ρ² ([`small_turn`]): the terms left out, ρ⁵/120 and ρ⁴/24, are at most
+/// 1 − cos ρ ≈ ½ ρ² (`small_turn`): the terms left out, ρ⁵/120 and ρ⁴/24, are at most
 /// 8.4e-13 and 4.2e-10 rad there, under 1 nm a joint on a 2 m lever and 2.5e-9 on the
 /// direction over six joints, far under f32's roundings of the tip (0.06 µm an ulp at
-/// 1.5 m). The hubs' arm (`data/default-6-wobble.toml`) reaches at most 2.6e-3 (module
-/// docs); an arm past it keeps the remainder turned by φx.
+/// 1.5 m). The hubs' arm (`data/default-6-wobble.toml`) is bounded by 2.74e-3 (|r| up to
+/// 2.60e-3, |φx| up to 1.6e-4); the table's wobble (Σ |coefficients| ≤ 1e-3 a joint, its
+/// bound on |φx| then at most √2 × 1e-3: the offset's rotation of each coefficient pair)
+/// cannot take an arm past the gate unless its |r| is past 8.5e-3, and an arm past it keeps
+/// the remainder turned by φx.
 pub const MAX_RHO: f64 = 0.01;
 
 /// Largest bound on the direction's error from taking each joint's Rx(φx) Ry(φy) to first
