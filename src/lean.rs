@@ -120,7 +120,8 @@ pub(crate) struct LeanJoint {
     /// selection made at boot ([`QuarterTurned`]).
     pub(crate) alpha: QuarterTurned,
     /// Rx(α_i) as its quarter turn and remainder: the wobble's pass turns the remainder by
-    /// φx per point ([`crate::lean_wobble`]); its `cos` is 1 − omc rounded in f32, as
+    /// φx per point where the remainder and φx are not one small angle
+    /// ([`crate::lean_wobble::MAX_RHO`]); its `cos` is 1 − omc rounded in f32, as
     /// [`turned`] would form it.
     #[cfg(feature = "wobble")]
     pub(crate) alpha_turn: Turn,

@@ -22,9 +22,17 @@
 //! sums Rz and Rx already round (`turn_tip`: each large coordinate rounded as often as in the
 //! lean pass). The direction takes Rx(φx) Ry(φy) to first order where a boot bound on ½ Σ
 //! |φ|² allows ([`MAX_DIRECTION_SECOND_ORDER`]), else Ry and cos α, sin α turned by φx to
-//! second order. The vertical of the first pass leaves the small
-//! turns out, as it leaves out the harmonic error ([`crate::lean`]): it scales the gravity
-//! deflection only (Σ|φ| ≈ 6e-4 rad of 4e-5 rad, at most 3e-8 rad).
+//! second order. α's remainder r beside its quarter turns (a joint's tilt off its nominal
+//! axis: at most 2.6e-3 rad on the hubs' arm) and φx are one small angle ρ = r + φx where
+//! every joint's |r| plus its bound on |φx| is within [`MAX_RHO`] (a boot gate,
+//! `LeanWobble::rho`): sin ρ and 1 − cos ρ from ρ itself (`small_turn`; r stored in f32,
+//! formed in f64 at boot), in every copy of the pass; else the stored sin r, 1 − cos r turned
+//! by φx to second order. With ρ, the direction's first-order turns are Ry(φy) alone, then
+//! Rx(α + φx) as the tip's, by α's quarter turns and ρ (cos ρ = 1 − (1 − cos ρ)), instead of
+//! d + (φx, φy, 0) × d and cos α, sin α whole (½ φy² left out where ½ (φx² + φy²) was).
+//! The vertical of the first pass leaves the small turns out, as it leaves out the harmonic
+//! error ([`crate::lean`]): it scales the gravity deflection only (Σ|φ| ≈ 6e-4 rad of
+//! 4e-5 rad, at most 3e-8 rad).
 //!
 //! **What φ costs.** φx and φy are harmonic series in θ' (the terms' sin hθ', cos hθ' by
 //! `angle::Multiples` from the pass's own cos θ', sin θ'), each term's four coefficients formed at
@@ -101,6 +109,10 @@ struct WobbleJoint {
     /// φz − ½ φx φy as φx (l_x + q_xx φx + q_xy φy) + φy (l_y + q_yy φy): (l_x, l_y, q_xx,
     /// q_xy, q_yy).
     z: [f32; 5],
+    /// α's remainder r (|r| ≤ π/4 beside its quarter turns, `LeanJoint::alpha_turn`), rad,
+    /// rounded to f32 from f64 at boot: where [`LeanWobble::rho`], the pass turns it by φx
+    /// as one small angle ρ = r + φx ([`small_turn`]). Every joint's, wobbling or not.
+    alpha: f32,
     /// Room for the table's most terms a joint: the six-axis copy reads them at offsets
     /// known to the compiler.
     terms: [Term; MAX_TERMS],
@@ -121,7 +133,24 @@ pub struct LeanWobble {
     /// coefficients): the direction takes the small turns Rx(φx) Ry(φy) to first order.
     #[cfg(feature = "wobble")]
     dir_first: bool,
+    /// Every joint's |r| (α's remainder) plus its bound on |φx| (the sum of its terms' φx
+    /// coefficients) is at most [`MAX_RHO`]: the pass forms sin and 1 − cos of ρ = r + φx
+    /// from ρ itself ([`small_turn`]) instead of turning the stored sin r, 1 − cos r by φx.
+    #[cfg(feature = "wobble")]
+    rho: bool,
 }
+
+/// Largest |ρ| = |r + φx| (α's remainder turned by the wobble, bounded at boot by |r| plus
+/// the sum of the joint's φx coefficients) for which the pass takes sin ρ ≈ ρ − ρ³/6 and
+/// 1 − cos ρ ≈ ½ ρ² (`small_turn`): the terms left out, ρ⁵/120 and ρ⁴/24, are at most
+/// 8.4e-13 and 4.2e-10 rad there, under 1 nm a joint on a 2 m lever and 2.5e-9 on the
+/// direction over six joints, far under f32's roundings of the tip (0.06 µm an ulp at
+/// 1.5 m). The hubs' arm (`data/default-6-wobble.toml`) is bounded by 2.74e-3 (|r| up to
+/// 2.60e-3, |φx| up to 1.6e-4); the table's wobble (Σ |coefficients| ≤ 1e-3 a joint, its
+/// bound on |φx| then at most √2 × 1e-3: the offset's rotation of each coefficient pair)
+/// cannot take an arm past the gate unless its |r| is past 8.5e-3, and an arm past it keeps
+/// the remainder turned by φx.
+pub const MAX_RHO: f64 = 0.01;
 
 /// Largest bound on the direction's error from taking each joint's Rx(φx) Ry(φy) to first
 /// order (½ Σ |φ|² over the joints, |φ| bounded by the sum of its terms' coefficients at
@@ -147,11 +176,20 @@ impl LeanWobble {
             let n = euler.len();
             let out = self;
             out.small = true;
+            out.rho = true;
             let mut taken = 0usize;
             let mut second = 0.0f64;
             for i in 0..n {
+                // α's remainder r (as the lean form splits it, `split_turn`), in rad.
+                let q = euler[i][1].wrapping_add(1 << 29) >> 30;
+                let r = f64::from(euler[i][1].wrapping_sub(q << 30) as i32)
+                    * (core::f64::consts::PI / 2_147_483_648.0);
+                out.joints[i].alpha = r as f32;
                 let w = table.joint_wobble(i);
                 if w.count == 0 {
+                    if r.abs() > MAX_RHO {
+                        out.rho = false;
+                    }
                     continue;
                 }
                 let no = i + 1;
@@ -201,6 +239,9 @@ impl LeanWobble {
                     orders |= bit;
                 }
                 second += 0.5 * (bx_ * bx_ + by_ * by_);
+                if r.abs() + bx_ > MAX_RHO {
+                    out.rho = false;
+                }
                 (jw.count, jw.orders) = (used as u8, Orders::of(orders));
                 taken += used;
                 // (A, B) = M⁻¹ (φx, φy), M = [[f1x, f2x], [f1y, f2y]], |det M| ≥ 1 − MAX_AXIS_Z²
@@ -387,11 +428,12 @@ pub(crate) fn eval(
         // Six joints with power-of-two scales written out (the hubs' arms), any other arm
         // looped, as the lean pass without the wobble.
         // The six-axis arm of the hubs (gravity on the hinges, perpendicular axes, the
-        // wobble's orders at most 4) with those known to the compiler, as the lean pass's own
-        // copy.
+        // wobble's orders at most 4, α's remainders within MAX_RHO) with those known to the
+        // compiler, as the lean pass's own copy.
         if counts.len() == 6 && lean.pow2 {
             if lean.wobble.small
                 && lean.wobble.dir_first
+                && lean.wobble.rho
                 && lean.gravity_mask == HINGES
                 && lean.alpha_quarters == PERPENDICULAR
             {
@@ -414,8 +456,9 @@ pub(crate) fn eval(
 /// [`eval`] for `JOINTS` joints (0: as many as `counts` has); `POW2`: every joint's scale is
 /// a power of two; `GRAVITY` and `ALPHA` the compliant joints and the quarter turns of α
 /// where known to the compiler, as the lean pass's (`RUNTIME`, `RUNTIME_ALPHA`: read from
-/// the joints); `SMALL`: the terms' orders are [`LeanWobble::small`]'s and the direction
-/// takes its small turns to first order ([`LeanWobble::dir_first`]; the other copies read it).
+/// the joints); `SMALL`: the terms' orders are [`LeanWobble::small`]'s, the direction
+/// takes its small turns to first order ([`LeanWobble::dir_first`]) and α's remainder and φx
+/// are one angle ([`LeanWobble::rho`]; the other copies read both).
 #[cfg(feature = "wobble")]
 #[inline(always)]
 fn run<
@@ -499,7 +542,11 @@ fn run<
         // direction's cos α, sin α turned by φx), the tip's turns by `turn_tip`.
         let (sin, omc) = turned(a.sin, a.omc, e);
         let al = &j.alpha_turn;
-        let (asin, aomc) = turned_cos(al.sin, al.omc, al.cos, px);
+        let (asin, aomc) = if SMALL || wobble.rho {
+            small_turn(wobble.joints[i].alpha + px)
+        } else {
+            turned_cos(al.sin, al.omc, al.cos, px)
+        };
         let qa = if ALPHA == RUNTIME_ALPHA {
             al.q
         } else {
@@ -512,7 +559,14 @@ fn run<
         d = [dp * cos - dr * sin, dp * sin + dr * cos, d[2]];
         let [ca, sa] = j.alpha_whole;
         let first = if SMALL { true } else { wobble.dir_first };
-        if first {
+        if first && (SMALL || wobble.rho) {
+            // Ry(φy) to first order (within MAX_DIRECTION_SECOND_ORDER), then Rx(α + φx) as
+            // its quarter turns and ρ's sin and cos = 1 − (1 − cos), as the tip's.
+            let x = d[0] + py * d[2];
+            let (y, z) = quarter_turns(qa, (d[1], d[2] - py * d[0]));
+            let cr = 1.0 - aomc;
+            d = [x, y * cr - z * asin, y * asin + z * cr];
+        } else if first {
             // Rx(φx) Ry(φy) to first order, d + (φx, φy, 0) × d (within
             // MAX_DIRECTION_SECOND_ORDER), then Rx(α) as the lean pass.
             d = [
@@ -535,6 +589,17 @@ fn run<
     // Rz(a_1).
     (w, d) = lean.rz_base(w, d);
     Ok(Point { xyz: w, dir: d })
+}
+
+/// sin ρ and 1 − cos ρ of a small angle ρ (|ρ| ≤ [`MAX_RHO`]): ρ − ρ³/6 and ½ ρ², sharing
+/// ρ² (errors ρ⁵/120 and ρ⁴/24).
+#[cfg(feature = "wobble")]
+#[inline(always)]
+fn small_turn(rho: f32) -> (f32, f32) {
+    /// −1/6 in f32 (relative error 3e-8 of a term under 2e-7).
+    const S: f32 = -1.0 / 6.0;
+    let z = rho * rho;
+    (rho + (rho * z) * S, 0.5 * z)
 }
 
 /// The tip (x, y quarter turned by Rz, `p` and `r`; z `w2`) turned by Rz's remainder (its sin
@@ -655,17 +720,30 @@ mod tests {
     }
 
     /// The copies of the pass (six joints written out, looped; on an arm whose orders are 1
-    /// to 4, the six-axis copy with the compliant set, the quarter turns of α and the orders
-    /// known) give the same numbers bit for bit; they agree with the quaternion chain with
-    /// its wobble to f32's rounding (under 0.5 µm, 1e-6 on the direction), while the wobble
-    /// moves the tip by far more than that (the lean pass without it misses by micrometres);
-    /// a count out of range is refused by each, naming its joint.
+    /// to 4 and whose α remainders turned by φx stay within [`MAX_RHO`], the six-axis copy
+    /// with the compliant set, the quarter turns of α and the orders known) give the same
+    /// numbers bit for bit, with α's remainder and φx as one angle where the arm is within
+    /// [`MAX_RHO`] and turned by φx where it is not (joint 1 tilted by 0.02 rad); they agree
+    /// with the quaternion chain with its wobble to f32's rounding (under 0.5 µm, 1e-6 on the
+    /// direction), while the wobble moves the tip by far more than that (the lean pass
+    /// without it misses by micrometres); a count out of range is refused by each, naming
+    /// its joint.
     #[test]
     fn the_copies_agree_and_meet_the_quaternion_chain() {
-        // With joint 4's order-64 term (`Multiples`' loop), and without it (orders 1 to 4).
+        // With joint 4's order-64 term (`Multiples`' loop), and without it (orders 1 to 4);
+        // the latter with joint 1's α 0.02 rad off its quarter turn (past MAX_RHO).
         let mut small = wobbling(0.003, 1.0);
         small.wobble[3].count = 3;
-        for (data, is_small) in [(wobbling(0.003, 1.0), false), (small, true)] {
+        let mut steep = small;
+        let h = 0.01f64;
+        let q = [(1.0 - h * h).sqrt(), h, 0.0, 0.0];
+        steep.joints[0].rotation = q;
+        steep.joints[0].matrix = crate::table::quat_to_matrix(&q);
+        for (data, is_small, is_rho) in [
+            (wobbling(0.003, 1.0), false, true),
+            (small, true, true),
+            (steep, true, false),
+        ] {
             let chain = chain_of(&data);
             assert!(chain.is_lean());
             let mut buf = [0u8; MAX_TABLE_LEN];
@@ -676,6 +754,7 @@ mod tests {
             let lean = *LeanF32::build_in(&mut place, &table, &model, true).unwrap();
             assert!(lean.applies() && lean.pow2 && lean.wobble.on());
             assert_eq!(lean.wobble.small, is_small);
+            assert_eq!(lean.wobble.rho, is_rho);
             assert!(lean.wobble.dir_first);
             assert_eq!(
                 (lean.gravity_mask, lean.alpha_quarters),
@@ -695,7 +774,7 @@ mod tests {
                     run::<0, false, RUNTIME, RUNTIME_ALPHA, false>(&lean, &model, &counts, temp)
                         .unwrap();
                 assert_eq!(bits(&a), bits(&b), "{counts:?}");
-                if is_small {
+                if is_small && is_rho {
                     let f =
                         run::<6, true, HINGES, PERPENDICULAR, true>(&lean, &model, &counts, temp)
                             .unwrap();
@@ -722,6 +801,25 @@ mod tests {
             assert_eq!(r6.map(|_| ()), want);
             assert_eq!(r0.map(|_| ()), want);
             assert_eq!(rf.map(|_| ()), want);
+        }
+    }
+
+    /// [`small_turn`] within [`MAX_RHO`]: sin ρ to f32's rounding of it (half an ulp of ρ,
+    /// 4.7e-10 at 0.01, and the dropped ρ⁵/120), 1 − cos ρ within the dropped ρ⁴/24 (4.2e-10
+    /// at 0.01) and its rounding.
+    #[test]
+    fn the_small_turn_is_sin_and_one_minus_cos() {
+        for k in -1000..=1000 {
+            let rho = k as f32 * (MAX_RHO as f32 / 1000.0);
+            let (s, omc) = small_turn(rho);
+            let r = f64::from(rho);
+            let ulp = f64::from(f32::EPSILON) * r.abs();
+            assert!((f64::from(s) - r.sin()).abs() <= ulp, "{rho}");
+            let left_out = r.powi(4) / 24.0;
+            assert!(
+                (f64::from(omc) - (1.0 - r.cos())).abs() <= left_out + ulp * r.abs(),
+                "{rho}"
+            );
         }
     }
 
