@@ -518,7 +518,10 @@ fn run<
         // reading formed them), and Rz's quarter turns of the tip and the direction.
         let cr = 1.0 - a.omc;
         let ((c, s), (p, r), (dp, dr)) = match a.q & 3 {
-            0 => ((cr, a.sin), (w[0], w[1]), (d[0], d[1])),
+            0 => {
+                own_block();
+                ((cr, a.sin), (w[0], w[1]), (d[0], d[1]))
+            }
             1 => ((-a.sin, cr), (-w[1], w[0]), (-d[1], d[0])),
             2 => ((-cr, -a.sin), (-w[0], -w[1]), (-d[0], -d[1])),
             _ => ((a.sin, -cr), (w[1], -w[0]), (d[1], -d[0])),
@@ -589,6 +592,18 @@ fn run<
     // Rz(a_1).
     (w, d) = lean.rz_base(w, d);
     Ok(Point { xyz: w, dir: d })
+}
+
+/// Nothing (an empty `asm!`, no instruction): a match arm that only renames its values
+/// (the quarter turn 0) gets a block of its own, where the compiler places the register
+/// copies that join it to the other arms. Without it those copies stood before the jump and
+/// ran on every quarter turn, the other arms overwriting them (4 a joint: 1,164 → 1,145
+/// instructions a point on the M4F hub, docs/results/speed.md, "The wobble, round 2").
+#[cfg(feature = "wobble")]
+#[inline(always)]
+fn own_block() {
+    // SAFETY: an empty template: no instruction, no operand, no memory, stack or flags.
+    unsafe { core::arch::asm!("", options(nomem, nostack, preserves_flags)) };
 }
 
 /// sin ρ and 1 − cos ρ of a small angle ρ (|ρ| ≤ [`MAX_RHO`]): ρ − ρ³/6 and ½ ρ², sharing
