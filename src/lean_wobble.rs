@@ -555,8 +555,7 @@ fn run<
         } else {
             ((ALPHA >> (2 * i)) & 3) as u8
         };
-        let h = 0.5 * (py * py);
-        w = turn_tip((p, r, sin, omc), (py, h), (qa, asin, aomc), w[2]);
+        w = turn_tip((p, r, sin, omc), (py, 0.5 * py), (qa, asin, aomc), w[2]);
         // The direction: Rz plainly (as `turn_z`), then Ry(φy) and Rx(α + φx).
         let cos = 1.0 - omc;
         d = [dp * cos - dr * sin, dp * sin + dr * cos, d[2]];
@@ -580,6 +579,7 @@ fn run<
             d = rx_dir([ca, sa], d);
         } else {
             // Ry(φy), and cos α, sin α turned by φx, to second order.
+            let h = 0.5 * (py * py);
             d = [
                 d[0] + (py * d[2] - h * d[0]),
                 d[1],
@@ -619,7 +619,7 @@ fn small_turn(rho: f32) -> (f32, f32) {
 
 /// The tip (x, y quarter turned by Rz, `p` and `r`; z `w2`) turned by Rz's remainder (its sin
 /// and 1 − cos), then
-/// Ry(φy) to second order (`py`, h = ½ φy²), then Rx (quarter turns `qa` and the remainder
+/// Ry(φy) to second order (`py`, `hp` = ½ φy), then Rx (quarter turns `qa` and the remainder
 /// turned by φx): with each large coordinate rounded as often as the lean pass rounds it.
 /// Ry's corrections are small (φy times the tip); added to x and z on their own, each would
 /// round a large coordinate once more a joint (two more roundings of up to 0.5 ulp at
@@ -631,7 +631,7 @@ fn small_turn(rho: f32) -> (f32, f32) {
 #[inline(always)]
 fn turn_tip(
     (p, r, sin, omc): (f32, f32, f32, f32),
-    (py, h): (f32, f32),
+    (py, hp): (f32, f32),
     (qa, asin, aomc): (u8, f32, f32),
     w2: f32,
 ) -> [f32; 3] {
@@ -640,9 +640,11 @@ fn turn_tip(
     let x1 = p - cx;
     let y = r + (p * sin - r * omc);
     let z = w2;
-    // Ry(φy): x += py z − h x, z −= py x + h z.
-    let x = p - (cx - (py * z - h * x1));
-    let dz = py * x1 + h * z;
+    // Ry(φy): x += py z − h x, z −= py x + h z, h = ½ φy²: with u = φy z and t = φy x,
+    // x += u − (½ φy) t and z −= t + (½ φy) u (five operations where h took six).
+    let (u, t) = (py * z, py * x1);
+    let x = p - (cx - (u - hp * t));
+    let dz = t + hp * u;
     // Rx: the quarter turns of (y, z), of (y, z − dz) for the correction and of (−0, −dz)
     // (−0: a sum with it the compiler can drop where the quarter turn puts it on r).
     let (p, r) = quarter_turns(qa, (y, z));
