@@ -138,7 +138,35 @@ pub struct LeanWobble {
     /// from ρ itself ([`small_turn`]) instead of turning the stored sin r, 1 − cos r by φx.
     #[cfg(feature = "wobble")]
     rho: bool,
+    /// The z forms of [`Z_HUB`] (the hinges' φz − ½ φx φy linear, the swivels' after the
+    /// base with q_xy alone) leave out at most [`MAX_Z_SECOND_ORDER`] over the joints
+    /// (bounded by the terms' coefficients at boot): the six-axis copy takes them.
+    #[cfg(feature = "wobble")]
+    z_hub: bool,
 }
+
+/// A joint's φz − ½ φx φy in the six-axis copy, two bits a joint (joint i + 1 at bits 2i):
+/// 0 whole (φx (l_x + q_xx φx + q_xy φy) + φy (l_y + q_yy φy)), 1 without q_xx and q_yy
+/// (φx (l_x + q_xy φy) + φy l_y), 2 linear (φx l_x + φy l_y).
+#[cfg(feature = "wobble")]
+const Z_CROSS: u8 = 1;
+#[cfg(feature = "wobble")]
+const Z_LINEAR: u8 = 2;
+
+/// The z forms of the hubs' arm ([`crate::lean::HINGES`], [`crate::lean::PERPENDICULAR`]):
+/// the hinges' (joints 2, 4, 6) linear, the swivels' 3 and 5 without q_xx and q_yy, the
+/// base's whole. On that arm the wobble's axes lie along the lean frame's x and y at the
+/// hinges (q ≈ 0: the quadratic part at most 1.4e-13 rad over the three) and across them
+/// at the swivels (q_xy = −1, q_xx and q_yy 2e-10), but not quite at the base (q_xx 0.045).
+#[cfg(feature = "wobble")]
+const Z_HUB: u16 = 0b10_01_10_01_10_00;
+
+/// Largest bound on the angle about the joints' axes that the z forms of `Z_HUB` leave
+/// out (Σ over the joints of the dropped |q| times the bounds on |φx|, |φy|, each the sum of
+/// the joint's terms' coefficients): 1e-10 rad, 0.2 nm on a 2 m lever (f32 rounds the tip
+/// to 0.06 µm at 1.5 m). The hubs' arm (`data/default-6-wobble.toml`): 1.4e-13.
+#[cfg(feature = "wobble")]
+pub const MAX_Z_SECOND_ORDER: f64 = 1e-10;
 
 /// Largest |ρ| = |r + φx| (α's remainder turned by the wobble, bounded at boot by |r| plus
 /// the sum of the joint's φx coefficients) for which the pass takes sin ρ ≈ ρ − ρ³/6 and
@@ -179,6 +207,8 @@ impl LeanWobble {
             out.rho = true;
             let mut taken = 0usize;
             let mut second = 0.0f64;
+            // The angle that Z_HUB's forms leave out, bounded.
+            let mut dropped = 0.0f64;
             for i in 0..n {
                 // α's remainder r (as the lean form splits it, `split_turn`), in rad.
                 let q = euler[i][1].wrapping_add(1 << 29) >> 30;
@@ -251,19 +281,22 @@ impl LeanWobble {
                 // A f1z + B f2z, then ½ A B kz − ½ φx φy, kz = (f1 × f2)·ẑ = det.
                 let l = [0, 1].map(|k| ax[k] * f1[2] + bx[k] * f2[2]);
                 let h = 0.5 * det;
-                jw.z = units::<F32, 5>(
-                    [
-                        l[0],
-                        l[1],
-                        h * ax[0] * bx[0],
-                        h * (ax[0] * bx[1] + ax[1] * bx[0]) - 0.5,
-                        h * ax[1] * bx[1],
-                    ],
-                    no,
-                )?;
+                let q = [
+                    h * ax[0] * bx[0],
+                    h * (ax[0] * bx[1] + ax[1] * bx[0]) - 0.5,
+                    h * ax[1] * bx[1],
+                ];
+                let cross = q[0].abs() * bx_ * bx_ + q[2].abs() * by_ * by_;
+                dropped += match (Z_HUB >> (2 * i.min(7))) as u8 & 3 {
+                    Z_CROSS if i < 6 => cross,
+                    Z_LINEAR if i < 6 => cross + q[1].abs() * bx_ * by_,
+                    _ => 0.0,
+                };
+                jw.z = units::<F32, 5>([l[0], l[1], q[0], q[1], q[2]], no)?;
                 out.on = true;
             }
             out.dir_first = second <= MAX_DIRECTION_SECOND_ORDER;
+            out.z_hub = dropped <= MAX_Z_SECOND_ORDER;
             Ok(true)
         }
         #[cfg(not(feature = "wobble"))]
@@ -294,7 +327,7 @@ impl LeanWobble {
     /// `Multiples` advances through them.
     #[cfg(feature = "wobble")]
     #[inline(always)]
-    fn phi<const SMALL: bool>(&self, i: usize, c: f32, s: f32) -> [f32; 4] {
+    fn phi<const SMALL: bool, const Z: u16>(&self, i: usize, c: f32, s: f32) -> [f32; 4] {
         let j = &self.joints[i];
         let (x, y) = if SMALL {
             small_series(j.orders, &j.terms, c, s)
@@ -309,9 +342,16 @@ impl LeanWobble {
             }
             (x, y)
         };
-        let [lx, ly, qxx, qxy, qyy] = j.z;
-        // Each sum from its constant (multiply–adds into the loaded constant, no copies).
-        [x, y, (lx + qxx * x) + qxy * y, ly + qyy * y]
+        // Each sum from its constant (multiply–adds into the loaded constant, no copies);
+        // the form of `Z` (0, whole, for every joint but in the six-axis copy of Z_HUB).
+        match (Z >> (2 * i)) as u8 & 3 {
+            Z_LINEAR => [x, y, j.z[0], j.z[1]],
+            Z_CROSS => [x, y, j.z[0] + j.z[3] * y, j.z[1]],
+            _ => {
+                let [lx, ly, qxx, qxy, qyy] = j.z;
+                [x, y, (lx + qxx * x) + qxy * y, ly + qyy * y]
+            }
+        }
     }
 }
 
@@ -434,15 +474,16 @@ pub(crate) fn eval(
             if lean.wobble.small
                 && lean.wobble.dir_first
                 && lean.wobble.rho
+                && lean.wobble.z_hub
                 && lean.gravity_mask == HINGES
                 && lean.alpha_quarters == PERPENDICULAR
             {
-                run::<6, true, HINGES, PERPENDICULAR, true>(lean, model, counts, temp_mc)
+                run::<6, true, HINGES, PERPENDICULAR, true, Z_HUB>(lean, model, counts, temp_mc)
             } else {
-                run::<6, true, RUNTIME, RUNTIME_ALPHA, false>(lean, model, counts, temp_mc)
+                run::<6, true, RUNTIME, RUNTIME_ALPHA, false, 0>(lean, model, counts, temp_mc)
             }
         } else {
-            run::<0, false, RUNTIME, RUNTIME_ALPHA, false>(lean, model, counts, temp_mc)
+            run::<0, false, RUNTIME, RUNTIME_ALPHA, false, 0>(lean, model, counts, temp_mc)
         }
     }
     #[cfg(not(feature = "wobble"))]
@@ -458,7 +499,8 @@ pub(crate) fn eval(
 /// where known to the compiler, as the lean pass's (`RUNTIME`, `RUNTIME_ALPHA`: read from
 /// the joints); `SMALL`: the terms' orders are [`LeanWobble::small`]'s, the direction
 /// takes its small turns to first order ([`LeanWobble::dir_first`]) and α's remainder and φx
-/// are one angle ([`LeanWobble::rho`]; the other copies read both).
+/// are one angle ([`LeanWobble::rho`]; the other copies read both); `Z`: each joint's form of
+/// φz − ½ φx φy ([`Z_HUB`] where [`LeanWobble::z_hub`], else 0: whole).
 #[cfg(feature = "wobble")]
 #[inline(always)]
 fn run<
@@ -467,6 +509,7 @@ fn run<
     const GRAVITY: u8,
     const ALPHA: u16,
     const SMALL: bool,
+    const Z: u16,
 >(
     lean: &LeanF32,
     model: &Model<F32>,
@@ -528,7 +571,7 @@ fn run<
         };
         // The harmonic error at θ' (here rather than in the first pass: not stored), and
         // φ: φz − ½ φx φy joins the error.
-        let [px, py, u, v] = wobble.phi::<SMALL>(i, c, s);
+        let [px, py, u, v] = wobble.phi::<SMALL, Z>(i, c, s);
         let mut e = (j.harmonic_error(c, s) + px * u) + py * v;
         let compliant = if GRAVITY == RUNTIME {
             j.has_gravity
@@ -674,6 +717,11 @@ mod tests {
     /// builder makes them (f1 = Rz(−Δθ) Ry(−tilt) x̂, f2 = Rz(−Δθ) ŷ), a worn bearing's
     /// 1e-4 rad on each term times `size`.
     fn wobbling(tilt: f64, size: f64) -> TableData {
+        wobbling_turned(tilt, size, 1.0)
+    }
+
+    /// [`wobbling`] with the axes' turns about z (0.4 + k rad at joint k + 1) times `turn`.
+    fn wobbling_turned(tilt: f64, size: f64, turn: f64) -> TableData {
         let mut data = sample();
         for j in data.joints.iter_mut().filter(|j| j.gravity != 0.0) {
             j.gravity = 1e-8;
@@ -701,7 +749,7 @@ mod tests {
             if t.is_empty() {
                 continue;
             }
-            let turn = 0.4 + k as f64;
+            let turn = turn * (0.4 + k as f64);
             let (c, s) = (turn.cos(), turn.sin());
             let (ct, st) = (tilt.cos(), tilt.sin());
             // In the z-axis frame, then in the file's frame of the joint's axis (the inverse
@@ -785,16 +833,18 @@ mod tests {
             for k in 0..200u32 {
                 let counts = counts_of(k);
                 let temp = 10_000 + 125 * k as i32;
-                let a = run::<6, true, RUNTIME, RUNTIME_ALPHA, false>(&lean, &model, &counts, temp)
-                    .unwrap();
+                let a =
+                    run::<6, true, RUNTIME, RUNTIME_ALPHA, false, 0>(&lean, &model, &counts, temp)
+                        .unwrap();
                 let b =
-                    run::<0, false, RUNTIME, RUNTIME_ALPHA, false>(&lean, &model, &counts, temp)
+                    run::<0, false, RUNTIME, RUNTIME_ALPHA, false, 0>(&lean, &model, &counts, temp)
                         .unwrap();
                 assert_eq!(bits(&a), bits(&b), "{counts:?}");
                 if is_small && is_rho {
-                    let f =
-                        run::<6, true, HINGES, PERPENDICULAR, true>(&lean, &model, &counts, temp)
-                            .unwrap();
+                    let f = run::<6, true, HINGES, PERPENDICULAR, true, 0>(
+                        &lean, &model, &counts, temp,
+                    )
+                    .unwrap();
                     assert_eq!(bits(&a), bits(&f), "{counts:?}");
                 }
                 assert_eq!(bits(&a), bits(&chain.eval(&counts, temp).unwrap()));
@@ -812,9 +862,11 @@ mod tests {
             let mut counts = [5u32; 6];
             counts[3] = 1 << 20;
             let want = Err(ChainError::CountOutOfRange { joint: 4 });
-            let r6 = run::<6, true, RUNTIME, RUNTIME_ALPHA, false>(&lean, &model, &counts, 20_000);
-            let r0 = run::<0, false, RUNTIME, RUNTIME_ALPHA, false>(&lean, &model, &counts, 20_000);
-            let rf = run::<6, true, HINGES, PERPENDICULAR, true>(&lean, &model, &counts, 20_000);
+            let r6 =
+                run::<6, true, RUNTIME, RUNTIME_ALPHA, false, 0>(&lean, &model, &counts, 20_000);
+            let r0 =
+                run::<0, false, RUNTIME, RUNTIME_ALPHA, false, 0>(&lean, &model, &counts, 20_000);
+            let rf = run::<6, true, HINGES, PERPENDICULAR, true, 0>(&lean, &model, &counts, 20_000);
             assert_eq!(r6.map(|_| ()), want);
             assert_eq!(r0.map(|_| ()), want);
             assert_eq!(rf.map(|_| ()), want);
@@ -824,6 +876,50 @@ mod tests {
     /// [`small_turn`] within [`MAX_RHO`]: sin ρ to f32's rounding of it (half an ulp of ρ,
     /// 4.7e-10 at 0.01, and the dropped ρ⁵/120), 1 − cos ρ within the dropped ρ⁴/24 (4.2e-10
     /// at 0.01) and its rounding.
+    /// The six-axis copy's z forms of `Z_HUB`: on an arm whose wobble's axes lie nearly
+    /// along the lean frames' x and y (tilted by 1e-4 rad; the sample arm's frames leave the
+    /// hinges' q_xx at 2e-3 to 6e-3, so a wobble of 2e-5 rad a term keeps the bound), within a
+    /// nanometre and 1e-9 of the whole forms (the same copy with the whole form, 0, at every joint),
+    /// and gated where they do not (the axes turned about z, q up to 0.97, 1e-4 a term).
+    #[test]
+    fn the_hub_s_z_forms_leave_out_little() {
+        let mut along = wobbling_turned(1e-4, 0.2, 0.0);
+        along.wobble[3].count = 3;
+        let mut turned = wobbling(1e-4, 1.0);
+        turned.wobble[3].count = 3;
+        for (data, hub) in [(along, true), (turned, false)] {
+            let mut buf = [0u8; MAX_TABLE_LEN];
+            let len = data.encode(&mut buf).unwrap();
+            let table = Table::parse(&buf[..len]).unwrap();
+            let model = Model::<F32>::new(&table).unwrap();
+            let mut place = core::mem::MaybeUninit::uninit();
+            let lean = *LeanF32::build_in(&mut place, &table, &model, true).unwrap();
+            assert!(lean.wobble.small && lean.wobble.rho && lean.wobble.dir_first);
+            assert_eq!(lean.wobble.z_hub, hub);
+            if !hub {
+                continue;
+            }
+            for k in 0..500u32 {
+                let counts = counts_of(k);
+                let temp = 10_000 + 125 * k as i32;
+                let a =
+                    run::<6, true, HINGES, PERPENDICULAR, true, 0>(&lean, &model, &counts, temp)
+                        .unwrap();
+                let b = run::<6, true, HINGES, PERPENDICULAR, true, Z_HUB>(
+                    &lean, &model, &counts, temp,
+                )
+                .unwrap();
+                let (pa, pb) = (a.xyz_nm(), b.xyz_nm());
+                let (da, db) = (a.dir_e9(), b.dir_e9());
+                for m in 0..3 {
+                    assert!((pa[m] - pb[m]).abs() <= 1, "{counts:?}: {pa:?} {pb:?}");
+                    assert!((da[m] - db[m]).abs() <= 1, "{counts:?}: {da:?} {db:?}");
+                }
+                assert_eq!(b.xyz, chain_of(&data).eval(&counts, temp).unwrap().xyz);
+            }
+        }
+    }
+
     #[test]
     fn the_small_turn_is_sin_and_one_minus_cos() {
         for k in -1000..=1000 {
