@@ -138,33 +138,34 @@ pub struct LeanWobble {
     /// from ρ itself ([`small_turn`]) instead of turning the stored sin r, 1 − cos r by φx.
     #[cfg(feature = "wobble")]
     rho: bool,
-    /// The z forms of [`Z_HUB`] (the hinges' φz − ½ φx φy linear, the swivels' after the
-    /// base with q_xy alone) leave out at most [`MAX_Z_SECOND_ORDER`] over the joints
+    /// The z forms of [`Z_HUB`] (the hinges' φz − ½ φx φy as φx l_x, the swivels' after
+    /// the base as φy (l_y − φx)) leave out at most [`MAX_Z_SECOND_ORDER`] over the joints
     /// (bounded by the terms' coefficients at boot): the six-axis copy takes them.
     #[cfg(feature = "wobble")]
     z_hub: bool,
 }
 
 /// A joint's φz − ½ φx φy in the six-axis copy, two bits a joint (joint i + 1 at bits 2i):
-/// 0 whole (φx (l_x + q_xx φx + q_xy φy) + φy (l_y + q_yy φy)), 1 without q_xx and q_yy
-/// (φx (l_x + q_xy φy) + φy l_y), 2 linear (φx l_x + φy l_y).
+/// 0 whole (φx (l_x + q_xx φx + q_xy φy) + φy (l_y + q_yy φy)), 1 across (l_x, q_xx, q_yy
+/// taken as 0 and q_xy as −1: φy (l_y − φx)), 2 along (l_y and the q taken as 0: φx l_x).
 #[cfg(feature = "wobble")]
 const Z_CROSS: u8 = 1;
 #[cfg(feature = "wobble")]
 const Z_LINEAR: u8 = 2;
 
 /// The z forms of the hubs' arm ([`crate::lean::HINGES`], [`crate::lean::PERPENDICULAR`]):
-/// the hinges' (joints 2, 4, 6) linear, the swivels' 3 and 5 without q_xx and q_yy, the
-/// base's whole. On that arm the wobble's axes lie along the lean frame's x and y at the
-/// hinges (q ≈ 0: the quadratic part at most 1.4e-13 rad over the three) and across them
-/// at the swivels (q_xy = −1, q_xx and q_yy 2e-10), but not quite at the base (q_xx 0.045).
+/// the hinges' (joints 2, 4, 6) along, the swivels' 3 and 5 across, the base's whole. On
+/// that arm the wobble's axes lie along the lean frame's x and y at the hinges (q up to
+/// 2.6e-6, l_y up to 1.2e-8) and across them at the swivels (q_xy = −1 in f32, q_xx and q_yy
+/// 2e-10, l_x 1e-12), but not quite at the base (q_xx 0.045, l_y 1.1e-3).
 #[cfg(feature = "wobble")]
 const Z_HUB: u16 = 0b10_01_10_01_10_00;
 
 /// Largest bound on the angle about the joints' axes that the z forms of `Z_HUB` leave
-/// out (Σ over the joints of the dropped |q| times the bounds on |φx|, |φy|, each the sum of
-/// the joint's terms' coefficients): 1e-10 rad, 0.2 nm on a 2 m lever (f32 rounds the tip
-/// to 0.06 µm at 1.5 m). The hubs' arm (`data/default-6-wobble.toml`): 1.4e-13.
+/// out (Σ over the joints of each dropped |q| or |l| (and |q_xy + 1| across) times the
+/// bounds on |φx|, |φy| it multiplies, each the sum of the joint's terms' coefficients):
+/// 1e-10 rad, 0.2 nm on a 2 m lever (f32 rounds the tip to 0.06 µm at 1.5 m). The hubs'
+/// arm (`data/default-6-wobble.toml`): 2.3e-12 (3.7e-12 with its wobble × 1.6).
 #[cfg(feature = "wobble")]
 pub const MAX_Z_SECOND_ORDER: f64 = 1e-10;
 
@@ -288,8 +289,8 @@ impl LeanWobble {
                 ];
                 let cross = q[0].abs() * bx_ * bx_ + q[2].abs() * by_ * by_;
                 dropped += match (Z_HUB >> (2 * i.min(7))) as u8 & 3 {
-                    Z_CROSS if i < 6 => cross,
-                    Z_LINEAR if i < 6 => cross + q[1].abs() * bx_ * by_,
+                    Z_CROSS if i < 6 => cross + (q[1] + 1.0).abs() * bx_ * by_ + l[0].abs() * bx_,
+                    Z_LINEAR if i < 6 => cross + q[1].abs() * bx_ * by_ + l[1].abs() * by_,
                     _ => 0.0,
                 };
                 jw.z = units::<F32, 5>([l[0], l[1], q[0], q[1], q[2]], no)?;
@@ -345,8 +346,8 @@ impl LeanWobble {
         // Each sum from its constant (multiply–adds into the loaded constant, no copies);
         // the form of `Z` (0, whole, for every joint but in the six-axis copy of Z_HUB).
         match (Z >> (2 * i)) as u8 & 3 {
-            Z_LINEAR => [x, y, j.z[0], j.z[1]],
-            Z_CROSS => [x, y, j.z[0] + j.z[3] * y, j.z[1]],
+            Z_LINEAR => [x, y, j.z[0], 0.0],
+            Z_CROSS => [x, y, 0.0, j.z[1] - x],
             _ => {
                 let [lx, ly, qxx, qxy, qyy] = j.z;
                 [x, y, (lx + qxx * x) + qxy * y, ly + qyy * y]
@@ -572,7 +573,11 @@ fn run<
         // The harmonic error at θ' (here rather than in the first pass: not stored), and
         // φ: φz − ½ φx φy joins the error.
         let [px, py, u, v] = wobble.phi::<SMALL, Z>(i, c, s);
-        let mut e = (j.harmonic_error(c, s) + px * u) + py * v;
+        let mut e = match (Z >> (2 * i)) as u8 & 3 {
+            Z_LINEAR => j.harmonic_error(c, s) + px * u,
+            Z_CROSS => j.harmonic_error(c, s) + py * v,
+            _ => (j.harmonic_error(c, s) + px * u) + py * v,
+        };
         let compliant = if GRAVITY == RUNTIME {
             j.has_gravity
         } else {
@@ -873,14 +878,12 @@ mod tests {
         }
     }
 
-    /// [`small_turn`] within [`MAX_RHO`]: sin ρ to f32's rounding of it (half an ulp of ρ,
-    /// 4.7e-10 at 0.01, and the dropped ρ⁵/120), 1 − cos ρ within the dropped ρ⁴/24 (4.2e-10
-    /// at 0.01) and its rounding.
     /// The six-axis copy's z forms of `Z_HUB`: on an arm whose wobble's axes lie nearly
     /// along the lean frames' x and y (tilted by 1e-4 rad; the sample arm's frames leave the
-    /// hinges' q_xx at 2e-3 to 6e-3, so a wobble of 2e-5 rad a term keeps the bound), within a
-    /// nanometre and 1e-9 of the whole forms (the same copy with the whole form, 0, at every joint),
-    /// and gated where they do not (the axes turned about z, q up to 0.97, 1e-4 a term).
+    /// hinges' q_xx at 2e-3 to 6e-3 and l_y at 4e-7 to 1.2e-6, so a wobble of 2e-5 rad a term
+    /// keeps the bound), within a nanometre and 1e-9 of the whole forms (the same copy with
+    /// the whole form, 0, at every joint), and gated where they do not (the axes turned about
+    /// z, q up to 0.97, 1e-4 a term).
     #[test]
     fn the_hub_s_z_forms_leave_out_little() {
         let mut along = wobbling_turned(1e-4, 0.2, 0.0);
@@ -920,6 +923,9 @@ mod tests {
         }
     }
 
+    /// [`small_turn`] within [`MAX_RHO`]: sin ρ to f32's rounding of it (half an ulp of ρ,
+    /// 4.7e-10 at 0.01, and the dropped ρ⁵/120), 1 − cos ρ within the dropped ρ⁴/24 (4.2e-10
+    /// at 0.01) and its rounding.
     #[test]
     fn the_small_turn_is_sin_and_one_minus_cos() {
         for k in -1000..=1000 {
