@@ -62,7 +62,8 @@ use crate::angle::Multiples;
 use crate::lean::LeanF32;
 #[cfg(feature = "wobble")]
 use crate::lean::{
-    each_joint, rx_dir, turned, turned_cos, Angle, HINGES, PERPENDICULAR, RUNTIME, RUNTIME_ALPHA,
+    each_joint, own_block, rx_dir, turned, turned_cos, Angle, HINGES, PERPENDICULAR, RUNTIME,
+    RUNTIME_ALPHA,
 };
 use crate::model::{ChainError, Model, Point};
 use crate::scalar::F32;
@@ -640,18 +641,6 @@ fn run<
     // Rz(a_1).
     (w, d) = lean.rz_base(w, d);
     Ok(Point { xyz: w, dir: d })
-}
-
-/// Nothing (an empty `asm!`, no instruction): a match arm that only renames its values
-/// (the quarter turn 0) gets a block of its own, where the compiler places the register
-/// copies that join it to the other arms. Without it those copies stood before the jump and
-/// ran on every quarter turn, the other arms overwriting them (4 a joint: 1,164 → 1,145
-/// instructions a point on the M4F hub, docs/results/speed.md, "The wobble, round 2").
-#[cfg(feature = "wobble")]
-#[inline(always)]
-fn own_block() {
-    // SAFETY: an empty template: no instruction, no operand, no memory, stack or flags.
-    unsafe { core::arch::asm!("", options(nomem, nostack, preserves_flags)) };
 }
 
 /// sin ρ and 1 − cos ρ of a small angle ρ (|ρ| ≤ [`MAX_RHO`]): ρ − ρ³/6 and ½ ρ², sharing
