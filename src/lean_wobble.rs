@@ -612,9 +612,12 @@ fn run<
         let first = if SMALL { true } else { wobble.dir_first };
         if first && (SMALL || wobble.rho) {
             // Ry(φy) to first order (within MAX_DIRECTION_SECOND_ORDER), then Rx(α + φx) as
-            // its quarter turns and ρ's sin and cos = 1 − (1 − cos), as the tip's.
+            // its quarter turns and ρ's sin and cos = 1 − (1 − cos), as the tip's. z takes
+            // φy times x already turned (d_z − φy d_x − φy² d_z): what it leaves out of Ry's
+            // second order is +½ φy² d_z where d_z − φy d_x left out −½ φy² d_z, the same
+            // bound, and d_x is not needed beside x (one register copy a joint fewer).
             let x = d[0] + py * d[2];
-            let (y, z) = quarter_turns(qa, (d[1], d[2] - py * d[0]));
+            let (y, z) = quarter_turns(qa, (d[1], d[2] - py * x));
             let cr = 1.0 - aomc;
             d = [x, y * cr - z * asin, y * asin + z * cr];
         } else if first {
