@@ -681,10 +681,10 @@ fn turn_tip(
     let y = r + (p * sin - r * omc);
     let z = w2;
     // Ry(φy): x += py z − h x, z −= py x + h z, h = ½ φy²: with u = φy z and t = φy x,
-    // x += xc = u − (½ φy) t and z −= t + (½ φy) xc (five operations where h took six; xc
-    // where u was adds −¼ φy³ x to z, third order as the −φy³/6 x Ry's second order leaves
-    // out: 1.8 pm at 1.5 m for this arm's |φy| ≤ 1.7e-4, 1 nm at the table's 1.4e-3, and
-    // u is not needed beside xc: one register copy a joint fewer).
+    // x += xc = u − (½ φy) t and z −= t + (½ φy) xc (five operations where h took six;
+    // xc where u was adds −¼ φy³ x to z, third order as the φy³ x / 6 Ry's second order
+    // leaves out: 1.8 pm at 1.5 m for this arm's |φy| ≤ 1.7e-4, 1 nm at the table's
+    // 1.4e-3; and u is not needed beside xc: one register copy a joint fewer).
     let (u, t) = (py * z, py * x1);
     let xc = u - hp * t;
     let x = p - (cx - xc);
