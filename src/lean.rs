@@ -685,7 +685,18 @@ impl LeanJoint {
             self.scale.binary(count)
         };
         let (q, sin, omc) = remainder(t.wrapping_add(self.offset));
-        let (c, s) = quarter_turns(q, (1.0 - omc, sin));
+        // Its cos and sin whole by the quarter turns, the turn 0 in a block of its own, each
+        // arm forming its 1 − omc (with 1 − omc formed once before the jump the compiler's
+        // choices gave the lean chain 3 instructions a point fewer, the wobble's 7 more).
+        let (c, s) = match q & 3 {
+            0 => {
+                own_block();
+                (1.0 - omc, sin)
+            }
+            1 => (-sin, 1.0 - omc),
+            2 => (-(1.0 - omc), -sin),
+            _ => (sin, -(1.0 - omc)),
+        };
         let angle = Angle {
             q,
             sin,
@@ -786,6 +797,18 @@ pub(crate) fn turn_z(q: u8, sin: f32, omc: f32, w: [f32; 3], d: [f32; 3]) -> ([f
     let (p, r) = quarter_turns(q, (d[0], d[1]));
     let d = [p * cos - r * sin, p * sin + r * cos, d[2]];
     (w, d)
+}
+
+/// Nothing (an empty `asm!`, no instruction): a match arm that only passes its values on
+/// (the quarter turn 0) gets a block of its own, where the compiler places the register
+/// copies that join it to the other arms. Without it those copies stood before the jump and
+/// ran on every quarter turn, the other arms overwriting them (docs/results/speed.md, "The
+/// wobble, round 2": the M4F hub's lean chain 790 → 777 instructions a point with the
+/// reading's selection apart, the wobble's second pass 4 a joint fewer).
+#[inline(always)]
+pub(crate) fn own_block() {
+    // SAFETY: an empty template: no instruction, no operand, no memory, stack or flags.
+    unsafe { core::arch::asm!("", options(nomem, nostack, preserves_flags)) };
 }
 
 /// Rx(α) of the direction, plainly by cos α and sin α whole.

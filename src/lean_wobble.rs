@@ -62,7 +62,8 @@ use crate::angle::Multiples;
 use crate::lean::LeanF32;
 #[cfg(feature = "wobble")]
 use crate::lean::{
-    each_joint, rx_dir, turned, turned_cos, Angle, HINGES, PERPENDICULAR, RUNTIME, RUNTIME_ALPHA,
+    each_joint, own_block, rx_dir, turned, turned_cos, Angle, HINGES, PERPENDICULAR, RUNTIME,
+    RUNTIME_ALPHA,
 };
 use crate::model::{ChainError, Model, Point};
 use crate::scalar::F32;
@@ -138,7 +139,36 @@ pub struct LeanWobble {
     /// from ρ itself ([`small_turn`]) instead of turning the stored sin r, 1 − cos r by φx.
     #[cfg(feature = "wobble")]
     rho: bool,
+    /// The z forms of [`Z_HUB`] (the hinges' φz − ½ φx φy as φx l_x, the swivels' after
+    /// the base as φy (l_y − φx)) leave out at most [`MAX_Z_SECOND_ORDER`] over the joints
+    /// (bounded by the terms' coefficients at boot): the six-axis copy takes them.
+    #[cfg(feature = "wobble")]
+    z_hub: bool,
 }
+
+/// A joint's φz − ½ φx φy in the six-axis copy, two bits a joint (joint i + 1 at bits 2i):
+/// 0 whole (φx (l_x + q_xx φx + q_xy φy) + φy (l_y + q_yy φy)), 1 across (l_x, q_xx, q_yy
+/// taken as 0 and q_xy as −1: φy (l_y − φx)), 2 along (l_y and the q taken as 0: φx l_x).
+#[cfg(feature = "wobble")]
+const Z_CROSS: u8 = 1;
+#[cfg(feature = "wobble")]
+const Z_LINEAR: u8 = 2;
+
+/// The z forms of the hubs' arm ([`crate::lean::HINGES`], [`crate::lean::PERPENDICULAR`]):
+/// the hinges' (joints 2, 4, 6) along, the swivels' 3 and 5 across, the base's whole. On
+/// that arm the wobble's axes lie along the lean frame's x and y at the hinges (q up to
+/// 2.6e-6, l_y up to 1.2e-8) and across them at the swivels (q_xy = −1 in f32, q_xx and q_yy
+/// 2e-10, l_x 1e-12), but not quite at the base (q_xx 0.045, l_y 1.1e-3).
+#[cfg(feature = "wobble")]
+const Z_HUB: u16 = 0b10_01_10_01_10_00;
+
+/// Largest bound on the angle about the joints' axes that the z forms of `Z_HUB` leave
+/// out (Σ over the joints of each dropped |q| or |l| (and |q_xy + 1| across) times the
+/// bounds on |φx|, |φy| it multiplies, each the sum of the joint's terms' coefficients):
+/// 1e-10 rad, 0.2 nm on a 2 m lever (f32 rounds the tip to 0.06 µm at 1.5 m). The hubs'
+/// arm (`data/default-6-wobble.toml`): 2.3e-12 (3.7e-12 with its wobble × 1.6).
+#[cfg(feature = "wobble")]
+pub const MAX_Z_SECOND_ORDER: f64 = 1e-10;
 
 /// Largest |ρ| = |r + φx| (α's remainder turned by the wobble, bounded at boot by |r| plus
 /// the sum of the joint's φx coefficients) for which the pass takes sin ρ ≈ ρ − ρ³/6 and
@@ -179,6 +209,8 @@ impl LeanWobble {
             out.rho = true;
             let mut taken = 0usize;
             let mut second = 0.0f64;
+            // The angle that Z_HUB's forms leave out, bounded.
+            let mut dropped = 0.0f64;
             for i in 0..n {
                 // α's remainder r (as the lean form splits it, `split_turn`), in rad.
                 let q = euler[i][1].wrapping_add(1 << 29) >> 30;
@@ -251,19 +283,22 @@ impl LeanWobble {
                 // A f1z + B f2z, then ½ A B kz − ½ φx φy, kz = (f1 × f2)·ẑ = det.
                 let l = [0, 1].map(|k| ax[k] * f1[2] + bx[k] * f2[2]);
                 let h = 0.5 * det;
-                jw.z = units::<F32, 5>(
-                    [
-                        l[0],
-                        l[1],
-                        h * ax[0] * bx[0],
-                        h * (ax[0] * bx[1] + ax[1] * bx[0]) - 0.5,
-                        h * ax[1] * bx[1],
-                    ],
-                    no,
-                )?;
+                let q = [
+                    h * ax[0] * bx[0],
+                    h * (ax[0] * bx[1] + ax[1] * bx[0]) - 0.5,
+                    h * ax[1] * bx[1],
+                ];
+                let cross = q[0].abs() * bx_ * bx_ + q[2].abs() * by_ * by_;
+                dropped += match (Z_HUB >> (2 * i.min(7))) as u8 & 3 {
+                    Z_CROSS if i < 6 => cross + (q[1] + 1.0).abs() * bx_ * by_ + l[0].abs() * bx_,
+                    Z_LINEAR if i < 6 => cross + q[1].abs() * bx_ * by_ + l[1].abs() * by_,
+                    _ => 0.0,
+                };
+                jw.z = units::<F32, 5>([l[0], l[1], q[0], q[1], q[2]], no)?;
                 out.on = true;
             }
             out.dir_first = second <= MAX_DIRECTION_SECOND_ORDER;
+            out.z_hub = dropped <= MAX_Z_SECOND_ORDER;
             Ok(true)
         }
         #[cfg(not(feature = "wobble"))]
@@ -294,7 +329,7 @@ impl LeanWobble {
     /// `Multiples` advances through them.
     #[cfg(feature = "wobble")]
     #[inline(always)]
-    fn phi<const SMALL: bool>(&self, i: usize, c: f32, s: f32) -> [f32; 4] {
+    fn phi<const SMALL: bool, const Z: u16>(&self, i: usize, c: f32, s: f32) -> [f32; 4] {
         let j = &self.joints[i];
         let (x, y) = if SMALL {
             small_series(j.orders, &j.terms, c, s)
@@ -309,9 +344,16 @@ impl LeanWobble {
             }
             (x, y)
         };
-        let [lx, ly, qxx, qxy, qyy] = j.z;
-        // Each sum from its constant (multiply–adds into the loaded constant, no copies).
-        [x, y, (lx + qxx * x) + qxy * y, ly + qyy * y]
+        // Each sum from its constant (multiply–adds into the loaded constant, no copies);
+        // the form of `Z` (0, whole, for every joint but in the six-axis copy of Z_HUB).
+        match (Z >> (2 * i)) as u8 & 3 {
+            Z_LINEAR => [x, y, j.z[0], 0.0],
+            Z_CROSS => [x, y, 0.0, j.z[1] - x],
+            _ => {
+                let [lx, ly, qxx, qxy, qyy] = j.z;
+                [x, y, (lx + qxx * x) + qxy * y, ly + qyy * y]
+            }
+        }
     }
 }
 
@@ -434,15 +476,16 @@ pub(crate) fn eval(
             if lean.wobble.small
                 && lean.wobble.dir_first
                 && lean.wobble.rho
+                && lean.wobble.z_hub
                 && lean.gravity_mask == HINGES
                 && lean.alpha_quarters == PERPENDICULAR
             {
-                run::<6, true, HINGES, PERPENDICULAR, true>(lean, model, counts, temp_mc)
+                run::<6, true, HINGES, PERPENDICULAR, true, Z_HUB>(lean, model, counts, temp_mc)
             } else {
-                run::<6, true, RUNTIME, RUNTIME_ALPHA, false>(lean, model, counts, temp_mc)
+                run::<6, true, RUNTIME, RUNTIME_ALPHA, false, 0>(lean, model, counts, temp_mc)
             }
         } else {
-            run::<0, false, RUNTIME, RUNTIME_ALPHA, false>(lean, model, counts, temp_mc)
+            run::<0, false, RUNTIME, RUNTIME_ALPHA, false, 0>(lean, model, counts, temp_mc)
         }
     }
     #[cfg(not(feature = "wobble"))]
@@ -458,7 +501,8 @@ pub(crate) fn eval(
 /// where known to the compiler, as the lean pass's (`RUNTIME`, `RUNTIME_ALPHA`: read from
 /// the joints); `SMALL`: the terms' orders are [`LeanWobble::small`]'s, the direction
 /// takes its small turns to first order ([`LeanWobble::dir_first`]) and α's remainder and φx
-/// are one angle ([`LeanWobble::rho`]; the other copies read both).
+/// are one angle ([`LeanWobble::rho`]; the other copies read both); `Z`: each joint's form of
+/// φz − ½ φx φy ([`Z_HUB`] where [`LeanWobble::z_hub`], else 0: whole).
 #[cfg(feature = "wobble")]
 #[inline(always)]
 fn run<
@@ -467,6 +511,7 @@ fn run<
     const GRAVITY: u8,
     const ALPHA: u16,
     const SMALL: bool,
+    const Z: u16,
 >(
     lean: &LeanF32,
     model: &Model<F32>,
@@ -518,15 +563,22 @@ fn run<
         // reading formed them), and Rz's quarter turns of the tip and the direction.
         let cr = 1.0 - a.omc;
         let ((c, s), (p, r), (dp, dr)) = match a.q & 3 {
-            0 => ((cr, a.sin), (w[0], w[1]), (d[0], d[1])),
+            0 => {
+                own_block();
+                ((cr, a.sin), (w[0], w[1]), (d[0], d[1]))
+            }
             1 => ((-a.sin, cr), (-w[1], w[0]), (-d[1], d[0])),
             2 => ((-cr, -a.sin), (-w[0], -w[1]), (-d[0], -d[1])),
             _ => ((a.sin, -cr), (w[1], -w[0]), (d[1], -d[0])),
         };
         // The harmonic error at θ' (here rather than in the first pass: not stored), and
         // φ: φz − ½ φx φy joins the error.
-        let [px, py, u, v] = wobble.phi::<SMALL>(i, c, s);
-        let mut e = (j.harmonic_error(c, s) + px * u) + py * v;
+        let [px, py, u, v] = wobble.phi::<SMALL, Z>(i, c, s);
+        let mut e = match (Z >> (2 * i)) as u8 & 3 {
+            Z_LINEAR => j.harmonic_error(c, s) + px * u,
+            Z_CROSS => j.harmonic_error(c, s) + py * v,
+            _ => (j.harmonic_error(c, s) + px * u) + py * v,
+        };
         let compliant = if GRAVITY == RUNTIME {
             j.has_gravity
         } else {
@@ -552,8 +604,7 @@ fn run<
         } else {
             ((ALPHA >> (2 * i)) & 3) as u8
         };
-        let h = 0.5 * (py * py);
-        w = turn_tip((p, r, sin, omc), (py, h), (qa, asin, aomc), w[2]);
+        w = turn_tip((p, r, sin, omc), (py, 0.5 * py), (qa, asin, aomc), w[2]);
         // The direction: Rz plainly (as `turn_z`), then Ry(φy) and Rx(α + φx).
         let cos = 1.0 - omc;
         d = [dp * cos - dr * sin, dp * sin + dr * cos, d[2]];
@@ -561,9 +612,12 @@ fn run<
         let first = if SMALL { true } else { wobble.dir_first };
         if first && (SMALL || wobble.rho) {
             // Ry(φy) to first order (within MAX_DIRECTION_SECOND_ORDER), then Rx(α + φx) as
-            // its quarter turns and ρ's sin and cos = 1 − (1 − cos), as the tip's.
+            // its quarter turns and ρ's sin and cos = 1 − (1 − cos), as the tip's. z takes
+            // φy times x already turned (d_z − φy d_x − φy² d_z): what it leaves out of Ry's
+            // second order is +½ φy² d_z where d_z − φy d_x left out −½ φy² d_z, the same
+            // bound, and d_x is not needed beside x (one register copy a joint fewer).
             let x = d[0] + py * d[2];
-            let (y, z) = quarter_turns(qa, (d[1], d[2] - py * d[0]));
+            let (y, z) = quarter_turns(qa, (d[1], d[2] - py * x));
             let cr = 1.0 - aomc;
             d = [x, y * cr - z * asin, y * asin + z * cr];
         } else if first {
@@ -577,6 +631,7 @@ fn run<
             d = rx_dir([ca, sa], d);
         } else {
             // Ry(φy), and cos α, sin α turned by φx, to second order.
+            let h = 0.5 * (py * py);
             d = [
                 d[0] + (py * d[2] - h * d[0]),
                 d[1],
@@ -604,7 +659,7 @@ fn small_turn(rho: f32) -> (f32, f32) {
 
 /// The tip (x, y quarter turned by Rz, `p` and `r`; z `w2`) turned by Rz's remainder (its sin
 /// and 1 − cos), then
-/// Ry(φy) to second order (`py`, h = ½ φy²), then Rx (quarter turns `qa` and the remainder
+/// Ry(φy) to second order (`py`, `hp` = ½ φy), then Rx (quarter turns `qa` and the remainder
 /// turned by φx): with each large coordinate rounded as often as the lean pass rounds it.
 /// Ry's corrections are small (φy times the tip); added to x and z on their own, each would
 /// round a large coordinate once more a joint (two more roundings of up to 0.5 ulp at
@@ -616,7 +671,7 @@ fn small_turn(rho: f32) -> (f32, f32) {
 #[inline(always)]
 fn turn_tip(
     (p, r, sin, omc): (f32, f32, f32, f32),
-    (py, h): (f32, f32),
+    (py, hp): (f32, f32),
     (qa, asin, aomc): (u8, f32, f32),
     w2: f32,
 ) -> [f32; 3] {
@@ -625,9 +680,15 @@ fn turn_tip(
     let x1 = p - cx;
     let y = r + (p * sin - r * omc);
     let z = w2;
-    // Ry(φy): x += py z − h x, z −= py x + h z.
-    let x = p - (cx - (py * z - h * x1));
-    let dz = py * x1 + h * z;
+    // Ry(φy): x += py z − h x, z −= py x + h z, h = ½ φy²: with u = φy z and t = φy x,
+    // x += xc = u − (½ φy) t and z −= t + (½ φy) xc (five operations where h took six;
+    // xc where u was adds −¼ φy³ x to z, third order as the φy³ x / 6 Ry's second order
+    // leaves out: 1.8 pm at 1.5 m for this arm's |φy| ≤ 1.7e-4, 1 nm at the table's
+    // 1.4e-3; and u is not needed beside xc: one register copy a joint fewer).
+    let (u, t) = (py * z, py * x1);
+    let xc = u - hp * t;
+    let x = p - (cx - xc);
+    let dz = t + hp * xc;
     // Rx: the quarter turns of (y, z), of (y, z − dz) for the correction and of (−0, −dz)
     // (−0: a sum with it the compiler can drop where the quarter turn puts it on r).
     let (p, r) = quarter_turns(qa, (y, z));
@@ -657,6 +718,11 @@ mod tests {
     /// builder makes them (f1 = Rz(−Δθ) Ry(−tilt) x̂, f2 = Rz(−Δθ) ŷ), a worn bearing's
     /// 1e-4 rad on each term times `size`.
     fn wobbling(tilt: f64, size: f64) -> TableData {
+        wobbling_turned(tilt, size, 1.0)
+    }
+
+    /// [`wobbling`] with the axes' turns about z (0.4 + k rad at joint k + 1) times `turn`.
+    fn wobbling_turned(tilt: f64, size: f64, turn: f64) -> TableData {
         let mut data = sample();
         for j in data.joints.iter_mut().filter(|j| j.gravity != 0.0) {
             j.gravity = 1e-8;
@@ -684,7 +750,7 @@ mod tests {
             if t.is_empty() {
                 continue;
             }
-            let turn = 0.4 + k as f64;
+            let turn = turn * (0.4 + k as f64);
             let (c, s) = (turn.cos(), turn.sin());
             let (ct, st) = (tilt.cos(), tilt.sin());
             // In the z-axis frame, then in the file's frame of the joint's axis (the inverse
@@ -768,16 +834,18 @@ mod tests {
             for k in 0..200u32 {
                 let counts = counts_of(k);
                 let temp = 10_000 + 125 * k as i32;
-                let a = run::<6, true, RUNTIME, RUNTIME_ALPHA, false>(&lean, &model, &counts, temp)
-                    .unwrap();
+                let a =
+                    run::<6, true, RUNTIME, RUNTIME_ALPHA, false, 0>(&lean, &model, &counts, temp)
+                        .unwrap();
                 let b =
-                    run::<0, false, RUNTIME, RUNTIME_ALPHA, false>(&lean, &model, &counts, temp)
+                    run::<0, false, RUNTIME, RUNTIME_ALPHA, false, 0>(&lean, &model, &counts, temp)
                         .unwrap();
                 assert_eq!(bits(&a), bits(&b), "{counts:?}");
                 if is_small && is_rho {
-                    let f =
-                        run::<6, true, HINGES, PERPENDICULAR, true>(&lean, &model, &counts, temp)
-                            .unwrap();
+                    let f = run::<6, true, HINGES, PERPENDICULAR, true, 0>(
+                        &lean, &model, &counts, temp,
+                    )
+                    .unwrap();
                     assert_eq!(bits(&a), bits(&f), "{counts:?}");
                 }
                 assert_eq!(bits(&a), bits(&chain.eval(&counts, temp).unwrap()));
@@ -795,12 +863,59 @@ mod tests {
             let mut counts = [5u32; 6];
             counts[3] = 1 << 20;
             let want = Err(ChainError::CountOutOfRange { joint: 4 });
-            let r6 = run::<6, true, RUNTIME, RUNTIME_ALPHA, false>(&lean, &model, &counts, 20_000);
-            let r0 = run::<0, false, RUNTIME, RUNTIME_ALPHA, false>(&lean, &model, &counts, 20_000);
-            let rf = run::<6, true, HINGES, PERPENDICULAR, true>(&lean, &model, &counts, 20_000);
+            let r6 =
+                run::<6, true, RUNTIME, RUNTIME_ALPHA, false, 0>(&lean, &model, &counts, 20_000);
+            let r0 =
+                run::<0, false, RUNTIME, RUNTIME_ALPHA, false, 0>(&lean, &model, &counts, 20_000);
+            let rf = run::<6, true, HINGES, PERPENDICULAR, true, 0>(&lean, &model, &counts, 20_000);
             assert_eq!(r6.map(|_| ()), want);
             assert_eq!(r0.map(|_| ()), want);
             assert_eq!(rf.map(|_| ()), want);
+        }
+    }
+
+    /// The six-axis copy's z forms of `Z_HUB`: on an arm whose wobble's axes lie nearly
+    /// along the lean frames' x and y (tilted by 1e-4 rad; the sample arm's frames leave the
+    /// hinges' q_xx at 2e-3 to 6e-3 and l_y at 4e-7 to 1.2e-6, so a wobble of 2e-5 rad a term
+    /// keeps the bound), within a nanometre and 1e-9 of the whole forms (the same copy with
+    /// the whole form, 0, at every joint), and gated where they do not (the axes turned about
+    /// z, q up to 0.97, 1e-4 a term).
+    #[test]
+    fn the_hub_s_z_forms_leave_out_little() {
+        let mut along = wobbling_turned(1e-4, 0.2, 0.0);
+        along.wobble[3].count = 3;
+        let mut turned = wobbling(1e-4, 1.0);
+        turned.wobble[3].count = 3;
+        for (data, hub) in [(along, true), (turned, false)] {
+            let mut buf = [0u8; MAX_TABLE_LEN];
+            let len = data.encode(&mut buf).unwrap();
+            let table = Table::parse(&buf[..len]).unwrap();
+            let model = Model::<F32>::new(&table).unwrap();
+            let mut place = core::mem::MaybeUninit::uninit();
+            let lean = *LeanF32::build_in(&mut place, &table, &model, true).unwrap();
+            assert!(lean.wobble.small && lean.wobble.rho && lean.wobble.dir_first);
+            assert_eq!(lean.wobble.z_hub, hub);
+            if !hub {
+                continue;
+            }
+            for k in 0..500u32 {
+                let counts = counts_of(k);
+                let temp = 10_000 + 125 * k as i32;
+                let a =
+                    run::<6, true, HINGES, PERPENDICULAR, true, 0>(&lean, &model, &counts, temp)
+                        .unwrap();
+                let b = run::<6, true, HINGES, PERPENDICULAR, true, Z_HUB>(
+                    &lean, &model, &counts, temp,
+                )
+                .unwrap();
+                let (pa, pb) = (a.xyz_nm(), b.xyz_nm());
+                let (da, db) = (a.dir_e9(), b.dir_e9());
+                for m in 0..3 {
+                    assert!((pa[m] - pb[m]).abs() <= 1, "{counts:?}: {pa:?} {pb:?}");
+                    assert!((da[m] - db[m]).abs() <= 1, "{counts:?}: {da:?} {db:?}");
+                }
+                assert_eq!(b.xyz, chain_of(&data).eval(&counts, temp).unwrap().xyz);
+            }
         }
     }
 
