@@ -473,14 +473,18 @@ pub(crate) fn eval(
         // wobble's orders at most 4, α's remainders within MAX_RHO) with those known to the
         // compiler, as the lean pass's own copy.
         if counts.len() == 6 && lean.pow2 {
-            if lean.wobble.small
+            let six_axis = lean.wobble.small
                 && lean.wobble.dir_first
                 && lean.wobble.rho
-                && lean.wobble.z_hub
                 && lean.gravity_mask == HINGES
-                && lean.alpha_quarters == PERPENDICULAR
-            {
+                && lean.alpha_quarters == PERPENDICULAR;
+            if six_axis && lean.wobble.z_hub {
                 run::<6, true, HINGES, PERPENDICULAR, true, Z_HUB>(lean, model, counts, temp_mc)
+            } else if six_axis {
+                // The same arm's shape with its wobble's axes elsewhere in the lean frames
+                // (past MAX_Z_SECOND_ORDER): every z form whole, 1,118 instructions a point
+                // on qemu-m4f where Z_HUB's take 1,076 (docs/results/speed.md).
+                run::<6, true, HINGES, PERPENDICULAR, true, 0>(lean, model, counts, temp_mc)
             } else {
                 run::<6, true, RUNTIME, RUNTIME_ALPHA, false, 0>(lean, model, counts, temp_mc)
             }
