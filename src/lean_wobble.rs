@@ -785,6 +785,17 @@ mod tests {
         Chain::<F32>::new(&Table::parse(&buf[..len]).unwrap()).unwrap()
     }
 
+    /// The lean form of `data`'s arm and its model, as the hub builds them.
+    fn lean_of(data: &TableData) -> (LeanF32, Model<F32>) {
+        let mut buf = [0u8; MAX_TABLE_LEN];
+        let len = data.encode(&mut buf).unwrap();
+        let table = Table::parse(&buf[..len]).unwrap();
+        let model = Model::<F32>::new(&table).unwrap();
+        let mut place = core::mem::MaybeUninit::uninit();
+        let lean = *LeanF32::build_in(&mut place, &table, &model, true).unwrap();
+        (lean, model)
+    }
+
     fn counts_of(k: u32) -> [u32; 6] {
         core::array::from_fn(|j| (k * 77_773 + j as u32 * 191_111) % (1 << 20))
     }
@@ -816,12 +827,7 @@ mod tests {
         ] {
             let chain = chain_of(&data);
             assert!(chain.is_lean());
-            let mut buf = [0u8; MAX_TABLE_LEN];
-            let len = data.encode(&mut buf).unwrap();
-            let table = Table::parse(&buf[..len]).unwrap();
-            let model = Model::<F32>::new(&table).unwrap();
-            let mut place = core::mem::MaybeUninit::uninit();
-            let lean = *LeanF32::build_in(&mut place, &table, &model, true).unwrap();
+            let (lean, model) = lean_of(&data);
             assert!(lean.applies() && lean.pow2 && lean.wobble.on());
             assert_eq!(lean.wobble.small, is_small);
             assert_eq!(lean.wobble.rho, is_rho);
@@ -891,12 +897,7 @@ mod tests {
         let mut turned = wobbling(1e-4, 1.0);
         turned.wobble[3].count = 3;
         for (data, hub) in [(along, true), (turned, false)] {
-            let mut buf = [0u8; MAX_TABLE_LEN];
-            let len = data.encode(&mut buf).unwrap();
-            let table = Table::parse(&buf[..len]).unwrap();
-            let model = Model::<F32>::new(&table).unwrap();
-            let mut place = core::mem::MaybeUninit::uninit();
-            let lean = *LeanF32::build_in(&mut place, &table, &model, true).unwrap();
+            let (lean, model) = lean_of(&data);
             assert!(lean.wobble.small && lean.wobble.rho && lean.wobble.dir_first);
             assert_eq!(lean.wobble.z_hub, hub);
             if !hub {

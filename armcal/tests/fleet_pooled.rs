@@ -74,11 +74,7 @@ fn fleet_inputs(gs: &[f64], seed: u64) -> Inputs {
             data: arm_data(seed + k as u64, g),
         })
         .collect();
-    let arms: Vec<(String, Vec<usize>)> = units
-        .iter()
-        .enumerate()
-        .map(|(k, u)| (u.name.clone(), vec![k]))
-        .collect();
+    let arms = each_its_own_arm(&units);
     let start = Arm::default6();
     let testable: Vec<Vec<Effect>> = units
         .iter()
@@ -341,6 +337,15 @@ fn recording(
     common::in_sessions(d, sessions, "(simulated recording)")
 }
 
+/// Every recording an arm of its own, named as the recording.
+fn each_its_own_arm(units: &[UnitData]) -> Vec<(String, Vec<usize>)> {
+    units
+        .iter()
+        .enumerate()
+        .map(|(k, u)| (u.name.clone(), vec![k]))
+        .collect()
+}
+
 /// Each named recording as a unit of the fleet (its file `<name>.csv`).
 fn units_of<const N: usize>(data: [(&str, Dataset); N]) -> Vec<UnitData> {
     data.into_iter()
@@ -431,11 +436,7 @@ fn an_arm_of_two_sessions_joins_on_the_fleets_scale_only() {
         ("arm_5", recording(805, 3e-8, [0.0; 3], 16, 1)),
     ];
     let units = units_of(data);
-    let arms: Vec<(String, Vec<usize>)> = units
-        .iter()
-        .enumerate()
-        .map(|(k, u)| (u.name.clone(), vec![k]))
-        .collect();
+    let arms = each_its_own_arm(&units);
     let start = Arm::default6();
     let testable = vec![vec![Effect::Gravity(1)]; units.len()];
     let join = fleet::Options {
