@@ -223,9 +223,7 @@ pub struct LeanF32 {
 /// 1 − cos r), Taylor series to r^22 (|r| ≤ π/4: error under 1e-19). Boot only: the per-point
 /// path has no f64.
 fn split_turn(t: u32) -> (u8, f64, f64) {
-    let q = t.wrapping_add(1 << 29) >> 30;
-    let r = t.wrapping_sub(q << 30) as i32;
-    let x = f64::from(r) * (core::f64::consts::PI / 2_147_483_648.0);
+    let (q, x) = turn_remainder(t);
     let z = x * x;
     let (mut s, mut omc) = (0.0, 0.0);
     // Horner from the highest term: sin x = x Σ (−z)^k/(2k+1)!, 1 − cos x = −Σ_(k≥1) (−z)^k/(2k)!.
@@ -234,7 +232,19 @@ fn split_turn(t: u32) -> (u8, f64, f64) {
         s = 1.0 - z * s / ((2.0 * k + 2.0) * (2.0 * k + 3.0));
         omc = z / ((2.0 * k + 1.0) * (2.0 * k + 2.0)) * (1.0 - omc);
     }
-    (q as u8, x * s, omc)
+    (q, x * s, omc)
+}
+
+/// A binary angle's quarter turns q and its remainder in radians (|r| ≤ π/4), in f64: the
+/// split every boot-time turn of the lean form makes ([`split_turn`], and α's remainder of
+/// the wobble's pass, `crate::lean_wobble`).
+pub(crate) fn turn_remainder(t: u32) -> (u8, f64) {
+    let q = t.wrapping_add(1 << 29) >> 30;
+    let r = t.wrapping_sub(q << 30) as i32;
+    (
+        q as u8,
+        f64::from(r) * (core::f64::consts::PI / 2_147_483_648.0),
+    )
 }
 
 /// cos and sin of a binary angle, in f64.

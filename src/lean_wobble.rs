@@ -162,6 +162,17 @@ const Z_LINEAR: u8 = 2;
 #[cfg(feature = "wobble")]
 const Z_HUB: u16 = 0b10_01_10_01_10_00;
 
+/// Joint `i`'s z form in the forms `z` (two bits a joint; 0, whole, past the seventh).
+#[cfg(feature = "wobble")]
+#[inline(always)]
+const fn z_form(z: u16, i: usize) -> u8 {
+    if i < 8 {
+        (z >> (2 * i)) as u8 & 3
+    } else {
+        0
+    }
+}
+
 /// Largest bound on the angle about the joints' axes that the z forms of `Z_HUB` leave
 /// out (Σ over the joints of each dropped |q| or |l| (and |q_xy + 1| across) times the
 /// bounds on |φx|, |φy| it multiplies, each the sum of the joint's terms' coefficients):
@@ -212,10 +223,8 @@ impl LeanWobble {
             // The angle that Z_HUB's forms leave out, bounded.
             let mut dropped = 0.0f64;
             for i in 0..n {
-                // α's remainder r (as the lean form splits it, `split_turn`), in rad.
-                let q = euler[i][1].wrapping_add(1 << 29) >> 30;
-                let r = f64::from(euler[i][1].wrapping_sub(q << 30) as i32)
-                    * (core::f64::consts::PI / 2_147_483_648.0);
+                // α's remainder r, in rad (as the lean form splits α).
+                let (_, r) = crate::lean::turn_remainder(euler[i][1]);
                 out.joints[i].alpha = r as f32;
                 let w = table.joint_wobble(i);
                 if w.count == 0 {
@@ -289,7 +298,7 @@ impl LeanWobble {
                     h * ax[1] * bx[1],
                 ];
                 let cross = q[0].abs() * bx_ * bx_ + q[2].abs() * by_ * by_;
-                dropped += match (Z_HUB >> (2 * i.min(7))) as u8 & 3 {
+                dropped += match z_form(Z_HUB, i) {
                     Z_CROSS if i < 6 => cross + (q[1] + 1.0).abs() * bx_ * by_ + l[0].abs() * bx_,
                     Z_LINEAR if i < 6 => cross + q[1].abs() * bx_ * by_ + l[1].abs() * by_,
                     _ => 0.0,
@@ -346,7 +355,7 @@ impl LeanWobble {
         };
         // Each sum from its constant (multiply–adds into the loaded constant, no copies);
         // the form of `Z` (0, whole, for every joint but in the six-axis copy of Z_HUB).
-        match (Z >> (2 * i)) as u8 & 3 {
+        match z_form(Z, i) {
             Z_LINEAR => [x, y, j.z[0], 0.0],
             Z_CROSS => [x, y, 0.0, j.z[1] - x],
             _ => {
@@ -578,7 +587,7 @@ fn run<
         // The harmonic error at θ' (here rather than in the first pass: not stored), and
         // φ: φz − ½ φx φy joins the error.
         let [px, py, u, v] = wobble.phi::<SMALL, Z>(i, c, s);
-        let mut e = match (Z >> (2 * i)) as u8 & 3 {
+        let mut e = match z_form(Z, i) {
             Z_LINEAR => j.harmonic_error(c, s) + px * u,
             Z_CROSS => j.harmonic_error(c, s) + py * v,
             _ => (j.harmonic_error(c, s) + px * u) + py * v,
