@@ -407,6 +407,14 @@ fn placement_summary(label: &str, new: &str, all: &[Vec<PlacedSession>; 2], secs
     }
 }
 
+/// Issue 27's band for each MUKCa unit's nested coverage.
+const BAND: (f64, f64) = (0.88, 0.99);
+
+/// Whether a unit's coverage `f` is in [`BAND`] (inclusive).
+fn in_band_of(f: f64) -> bool {
+    (BAND.0..=BAND.1).contains(&f)
+}
+
 fn mukca() {
     let dir = armcal::mukca::default_dir();
     let units = match armcal::mukca::unit_names(&dir) {
@@ -560,14 +568,15 @@ fn mukca() {
                 .collect();
             let (sl, sh) = forms::session_bootstrap(&own, 20_000, 27);
             sessions.extend_from_slice(&own);
-            in_band += usize::from((0.88..=0.99).contains(&c.covered_nested));
+            let inside = in_band_of(c.covered_nested);
+            in_band += usize::from(inside);
             band_units.push((c.unit.clone(), own.clone()));
             println!(
                 "    nested {:.3} (Wilson 95 % [{lo:.3}, {hi:.3}]; its {} sessions resampled \
                  [{sl:.3}, {sh:.3}]), {}",
                 c.covered_nested,
                 own.len(),
-                if (0.88..=0.99).contains(&c.covered_nested) {
+                if inside {
                     "in the band 88–99 %"
                 } else {
                     "outside 88–99 %"
@@ -598,7 +607,7 @@ fn mukca() {
     // What the band can show with these session counts: each unit's sessions drawn from the
     // other units' held-out sessions, as many as it has.
     let own: Vec<Vec<(usize, usize)>> = band_units.iter().map(|(_, s)| s.clone()).collect();
-    let chance = forms::band_chance(&own, (0.88, 0.99), in_band, 20_000, 27);
+    let chance = forms::band_chance(&own, BAND, in_band, 20_000, 27);
     println!(
         "  units in 88–99 %: {in_band} of {}; with each unit's sessions drawn from the other \
          units' ({} draws): {:.2} of {} on average, all in {:.3} of draws, {in_band} or fewer in \
@@ -1065,10 +1074,7 @@ impl Variants {
                     .map(|(&k, (c, at))| format!("{} {c:.3} (κ {at:.2})", self.loaded[k].name))
                     .collect::<Vec<_>>()
                     .join("  "),
-                cells
-                    .iter()
-                    .filter(|(c, _)| (0.88..=0.99).contains(c))
-                    .count(),
+                cells.iter().filter(|(c, _)| in_band_of(*c)).count(),
                 cells.len()
             );
         }
@@ -1146,7 +1152,7 @@ impl Variants {
                 c.unit,
                 c.covered_nested,
                 c.probings,
-                if (0.88..=0.99).contains(&c.covered_nested) {
+                if in_band_of(c.covered_nested) {
                     "in the band"
                 } else {
                     "outside"

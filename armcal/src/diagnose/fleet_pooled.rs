@@ -384,6 +384,7 @@ fn try_full(
         }
         per_arm.push(est);
     }
+    let how = (opts.error_scale, opts.alpha);
     for (i, &e) in vocabulary.iter().enumerate() {
         let mine: Option<Vec<ArmEstimate>> = per_arm
             .iter()
@@ -394,7 +395,6 @@ fn try_full(
                 Some((est, c))
             })
             .collect();
-        let how = (opts.error_scale, opts.alpha);
         if let Some(p) =
             mine.and_then(|m| pool_estimates(units, &used, e, m, how, &mut out.left_out))
         {
@@ -561,12 +561,7 @@ fn pool_estimates(
     let (dispersion, fleet_scaled, design, values) =
         pool_combined(&combined, &jackknife, scale, alpha)?;
     for u in used.iter().skip(values.len()) {
-        left_out.push((
-            format!("{}: {}", u.name, e.spec()),
-            "no jackknife error, and the fleet's error scale was not used for this candidate \
-             (Bartlett's test rejected one scale): nothing to weigh its estimate by"
-                .to_string(),
-        ));
+        left_out.push(unweighed(&u.name, &e.spec()));
     }
     let arms = used
         .iter()
@@ -592,6 +587,18 @@ fn pool_estimates(
         fleet_scaled,
         arms,
     })
+}
+
+/// An arm without a jackknife error left out of candidate `term`'s pool (the one way to
+/// weigh it, the fleet's error scale, not used for it).
+fn unweighed(arm: &str, term: &str) -> LeftOut {
+    (
+        format!("{arm}: {term}"),
+        "no jackknife error, and the fleet's error scale was not used for this candidate \
+         (`--error-scale own`, or Bartlett's test rejected one scale): nothing to weigh its \
+         estimate by"
+            .to_string(),
+    )
 }
 
 /// The arms' estimates `combined` pooled with the errors `scale` says: the one place both
@@ -637,12 +644,7 @@ pub fn repool(fleet: &PooledFleet, scale: ErrorScale, alpha: f64) -> PooledFleet
             continue;
         };
         for a in p.arms.iter().skip(values.len()) {
-            out.left_out.push((
-                format!("{}: {}", a.arm, p.term),
-                "no jackknife error, and the fleet's error scale was not used: nothing to \
-                 weigh its estimate by"
-                    .to_string(),
-            ));
+            out.left_out.push(unweighed(&a.arm, &p.term));
         }
         let arms = p
             .arms

@@ -459,7 +459,7 @@ pub fn estimate_in_sample(
 /// [`estimate_in_sample`] of every effect of `effects` at once, each conditional on the others
 /// (the full model of [`estimate_joint`], its one fit on all the sessions without the
 /// leave-one-session-out fits): what a recording of too few sessions for a jackknife gives
-/// `armcal diagnose --fleet`'s default. `None` for an empty list, a repeated effect or an
+/// the full model of `armcal diagnose --fleet --join-short`. `None` for an empty list, a repeated effect or an
 /// effect of more than one unknown; the values in `effects`' order.
 pub fn estimate_joint_in_sample(
     start: &quatarm_ref::arm::Arm,
@@ -675,6 +675,13 @@ pub struct Coverage {
     pub fleet_scale_high_phi: f64,
 }
 
+/// The simulated fleets' arms' true errors, 0.5 to 1.5 evenly: the same in every fleet.
+fn simulated_true_se(arms: usize) -> Vec<f64> {
+    (0..arms)
+        .map(|u| 0.5 + u as f64 / (arms.max(2) - 1) as f64)
+        .collect()
+}
+
 /// One simulated arm of a fleet: its true value 1 + τ·N(0, 1), its estimate with true error
 /// `s`, and its jackknife error s·√(χ²_ν/ν) over ν = `nu` degrees of freedom.
 fn simulated_arm(rng: &mut crate::rng::SimRng, tau: f64, s: f64, nu: usize) -> (f64, f64, f64) {
@@ -722,9 +729,7 @@ pub fn simulated_joined_coverage(
     let mut rng = crate::rng::rng(seed);
     let nu = sessions.saturating_sub(1).max(1);
     let df = vec![nu as f64; arms];
-    let true_se: Vec<f64> = (0..arms)
-        .map(|u| 0.5 + u as f64 / (arms.max(2) - 1) as f64)
-        .collect();
+    let true_se = simulated_true_se(arms);
     let model: Vec<f64> = true_se.iter().map(|s| s / SIMULATED_PHI.sqrt()).collect();
     let joined_model = joined_se / (SIMULATED_PHI * phi_ratio).sqrt();
     let (mut pooled, mut hits, mut others, mut other_hits) = (0usize, 0usize, 0usize, 0usize);
@@ -834,9 +839,7 @@ pub fn simulated_coverage_phi(
     let tdf = t_critical(alpha, interval_df(nu as f64, arms));
     let df = vec![nu as f64; arms];
     // Each arm's true error, and its model error: the same in every fleet.
-    let true_se: Vec<f64> = (0..arms)
-        .map(|u| 0.5 + u as f64 / (arms.max(2) - 1) as f64)
-        .collect();
+    let true_se = simulated_true_se(arms);
     let model: Vec<f64> = true_se
         .iter()
         .enumerate()

@@ -680,25 +680,29 @@ pub fn wilson(k: usize, n: usize) -> (f64, f64) {
 /// `draws` resamples from `seed`): `sessions` are (covered, probings) per session, the unit
 /// that is exchangeable. (0, 1) without sessions.
 pub fn session_bootstrap(sessions: &[(usize, usize)], draws: usize, seed: u64) -> (f64, f64) {
-    use rand::Rng;
     if sessions.is_empty() || draws == 0 {
         return (0.0, 1.0);
     }
     let mut rng = crate::rng::rng(seed);
     let mut v: Vec<f64> = (0..draws)
-        .map(|_| {
-            let (mut k, mut n) = (0usize, 0usize);
-            for _ in 0..sessions.len() {
-                let s = sessions[rng.gen_range(0..sessions.len())];
-                k += s.0;
-                n += s.1;
-            }
-            k as f64 / n.max(1) as f64
-        })
+        .map(|_| drawn_coverage(&mut rng, sessions, sessions.len()))
         .collect();
     v.sort_by(f64::total_cmp);
     let at = |q: f64| v[((q * draws as f64) as usize).min(draws - 1)];
     (at(0.025), at(0.975))
+}
+
+/// The pooled coverage of `count` sessions drawn with replacement from `pool` (covered,
+/// probings): one draw of [`session_bootstrap`] and [`band_chance`]. `pool` not empty.
+fn drawn_coverage(rng: &mut crate::rng::SimRng, pool: &[(usize, usize)], count: usize) -> f64 {
+    use rand::Rng;
+    let (mut k, mut n) = (0usize, 0usize);
+    for _ in 0..count {
+        let s = pool[rng.gen_range(0..pool.len())];
+        k += s.0;
+        n += s.1;
+    }
+    k as f64 / n.max(1) as f64
 }
 
 /// How often units with a unit's few sessions land in a coverage band by the sessions they
@@ -731,7 +735,6 @@ pub fn band_chance(
     draws: usize,
     seed: u64,
 ) -> BandChance {
-    use rand::Rng;
     let mut rng = crate::rng::rng(seed);
     let mut hits = vec![0usize; units.len()];
     let (mut total, mut all, mut at_most) = (0usize, 0usize, 0usize);
@@ -752,13 +755,7 @@ pub fn band_chance(
             if pool.is_empty() || own.is_empty() {
                 continue;
             }
-            let (mut k, mut n) = (0usize, 0usize);
-            for _ in 0..own.len() {
-                let s = pool[rng.gen_range(0..pool.len())];
-                k += s.0;
-                n += s.1;
-            }
-            let f = k as f64 / n.max(1) as f64;
+            let f = drawn_coverage(&mut rng, pool, own.len());
             if f >= band.0 && f <= band.1 {
                 hits[u] += 1;
                 inside += 1;
