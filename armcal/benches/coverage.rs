@@ -181,6 +181,9 @@ struct PlacedSession {
     joint_leverage: f64,
     /// The pose term's κ its nested calibration validated.
     kappa: f64,
+    /// Whether `calibrate --by-group` on every session of the seed names it as missed as a
+    /// whole (the product's report, not nested; the same under both factors' columns).
+    named: bool,
 }
 
 fn median_of(mut v: Vec<f64>) -> f64 {
@@ -262,6 +265,11 @@ fn placement() {
                 continue;
             };
             let lj = placement::session_joint_leverages(&unit);
+            let named = realdata::named_sessions(
+                &unit,
+                realdata::Rule::product(armcal::uncertainty::pose::two_group_scale(false)),
+            )
+            .unwrap_or_default();
             let c = [
                 placement::coverage(&unit, false),
                 placement::coverage(&unit, true),
@@ -295,6 +303,7 @@ fn placement() {
                         rms_mm,
                         joint_leverage,
                         kappa,
+                        named: named.get(name).is_some_and(|g| g.missed()),
                     });
                 }
                 println!(
@@ -388,6 +397,15 @@ fn placement_summary(label: &str, new: &str, all: &[Vec<PlacedSession>; 2], secs
             );
         }
     }
+    // The report's naming of missed sessions (calibrate --by-group on all five, not nested)
+    // against the product's nested check: [nested ≥ 0.88, < 0.88][not named, named].
+    for (what, pick) in [("new", true), ("training", false)] {
+        let mut naming = Naming::default();
+        for x in all[0].iter().filter(|s| s.new == pick) {
+            naming.add(x.covered as f64 / x.probings.max(1) as f64, x.named);
+        }
+        println!("    {what} sessions named missed by calibrate's report: {naming}");
+    }
     // The same sessions under both factors: which ℓJ moved, new and training apart.
     for (what, pick) in [("new", true), ("training", false)] {
         let (mut up, mut down, mut same) = (0, 0, 0);
@@ -404,6 +422,34 @@ fn placement_summary(label: &str, new: &str, all: &[Vec<PlacedSession>; 2], secs
             "    {what} sessions with ℓJ against max(1, ℓ): covered more {up}, less {down}, \
              the same {same}"
         );
+    }
+}
+
+/// The report's naming of sessions missed as a whole (`calibrate --by-group` on every
+/// session) against the nested check: counts by [nested ≥ 0.88, < 0.88][not named, named].
+#[derive(Default)]
+struct Naming([[usize; 2]; 2]);
+
+impl Naming {
+    /// One session: its nested coverage and whether the report named it.
+    fn add(&mut self, nested: f64, named: bool) {
+        self.0[usize::from(nested < BAND.0)][usize::from(named)] += 1;
+    }
+}
+
+impl std::fmt::Display for Naming {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [above, below] = self.0;
+        write!(
+            f,
+            "nested < {}: {} of {} named; nested ≥ {}: {} of {} named",
+            BAND.0,
+            below[1],
+            below[0] + below[1],
+            BAND.0,
+            above[1],
+            above[0] + above[1]
+        )
     }
 }
 
@@ -480,12 +526,16 @@ fn mukca() {
         })
         .collect();
     let all: Vec<f64> = kappa2.iter().flatten().copied().collect();
+    // The κ `calibrate` takes where two sessions cannot set it, and the report's naming of
+    // missed sessions against the nested check.
+    let two_group = armcal::uncertainty::pose::two_group_scale(joints);
+    let mut naming = Naming::default();
     println!(
         "  two-session κ of the fleet (median over {} units): {:.3}; the default for this \
          factor (`pose::two_group_scale`): {:.3}",
         all.len(),
         realdata::fleet_scale(&all),
-        armcal::uncertainty::pose::two_group_scale(joints)
+        two_group
     );
     for (k, unit) in loaded.iter().enumerate() {
         let others: Vec<f64> = kappa2
@@ -549,6 +599,29 @@ fn mukca() {
             }
         } else if c.sessions > 3 {
             pooled_alt += c.covered_nested * c.probings as f64;
+        }
+        // What `calibrate --by-group` on every session names in its report (not nested),
+        // against what the nested check finds.
+        if let Some(named) = realdata::named_sessions(unit, rule(two_group)) {
+            let said: Vec<String> = named
+                .iter()
+                .filter(|(_, g)| g.missed())
+                .map(|(s, g)| format!("{s} ({:.1} %)", 100.0 * g.fraction()))
+                .collect();
+            println!(
+                "    calibrate --by-group on all {} sessions names as missed as a whole: {}",
+                named.len(),
+                if said.is_empty() {
+                    "none".to_string()
+                } else {
+                    said.join(", ")
+                }
+            );
+            if c.sessions >= 3 {
+                for (s, _, f, ..) in &c.per_session {
+                    naming.add(*f, named.get(s).is_some_and(|g| g.missed()));
+                }
+            }
         }
         if c.sessions >= 3 {
             for (k, (_, f)) in c.pose_sweep.iter().enumerate() {
@@ -624,6 +697,11 @@ fn mukca() {
             .map(|((name, s), p)| format!("{name} ({} sessions) {p:.3}", s.len()))
             .collect::<Vec<_>>()
             .join(", ")
+    );
+    println!(
+        "  the report's naming (calibrate --by-group on every session, groups missed as a whole \
+         at p < {}) against the nested check, sessions of units with ≥ 3: {naming}",
+        armcal::uncertainty::misfit::GROUP_MISSED_P,
     );
     println!(
         "  pooled, sensitivity (3-session units at the other units' mean-coverage κ): {:.3}",

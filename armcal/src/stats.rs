@@ -1,7 +1,7 @@
 //! Every distribution the tool uses, in one place: the F, t, normal and χ² tails (a cause's
 //! in-sample test, a calibration's significance test), the paired comparison of held-out
-//! errors a diagnosis's out-of-sample test rests on, and the exact sign test with the smallest
-//! p a number of sessions allows.
+//! errors a diagnosis's out-of-sample test rests on, the exact binomial tail (the sign test,
+//! with the smallest p a number of sessions allows; a held-out group's coverage).
 
 /// ln Γ(x) for x > 0 (Lanczos, g = 7, nine terms; relative error below 1e-14).
 pub(crate) fn ln_gamma(x: f64) -> f64 {
@@ -180,24 +180,38 @@ pub fn sign_test_p(better: usize, n: usize) -> f64 {
     if n == 0 || better == 0 {
         return 1.0;
     }
-    let better = better.min(n);
-    if n <= 1000 {
-        // Σ_{k ≥ better} C(n, k) / 2ⁿ from the top term ½ⁿ down, C(n, k−1) = C(n, k) k / (n − k + 1):
-        // exact to rounding (½ⁿ for n of n), no overflow.
-        let mut term = 0.5f64.powi(n as i32);
+    binomial_at_least(better.min(n), n, 0.5)
+}
+
+/// P(X ≥ `k`) for X ~ Binomial(`n`, `p`): the sign test's tail ([`sign_test_p`]) and a
+/// held-out group's coverage against 95 % ([`crate::uncertainty::misfit::group_coverage`],
+/// as P(misses ≥ m) with p = 0.05).
+pub fn binomial_at_least(k: usize, n: usize, p: f64) -> f64 {
+    if k == 0 || p >= 1.0 {
+        return 1.0;
+    }
+    if k > n || p <= 0.0 || p.is_nan() {
+        return 0.0;
+    }
+    let top = p.powf(n as f64);
+    if n <= 1000 && top > 1e-290 {
+        // Σ_{j ≥ k} C(n, j) pʲ qⁿ⁻ʲ from the top term pⁿ down, each term the one above times
+        // j/(n − j + 1) · q/p: exact to rounding, no overflow.
+        let r = (1.0 - p) / p;
+        let mut term = top;
         let mut sum = term;
-        for k in (better + 1..=n).rev() {
-            term *= k as f64 / (n - k + 1) as f64;
+        for j in (k + 1..=n).rev() {
+            term *= j as f64 / (n - j + 1) as f64 * r;
             sum += term;
         }
         return sum.min(1.0);
     }
-    let ln_choose = |k: usize| {
-        ln_gamma(n as f64 + 1.0) - ln_gamma(k as f64 + 1.0) - ln_gamma((n - k) as f64 + 1.0)
+    let ln_choose = |j: usize| {
+        ln_gamma(n as f64 + 1.0) - ln_gamma(j as f64 + 1.0) - ln_gamma((n - j) as f64 + 1.0)
     };
-    let ln_half = n as f64 * 0.5f64.ln();
-    (better..=n)
-        .map(|k| (ln_choose(k) + ln_half).exp())
+    let (lp, lq) = (p.ln(), (1.0 - p).ln());
+    (k..=n)
+        .map(|j| (ln_choose(j) + j as f64 * lp + (n - j) as f64 * lq).exp())
         .sum::<f64>()
         .min(1.0)
 }
@@ -382,6 +396,29 @@ mod tests {
         assert!(p > 0.5 && p < 0.56, "{p}");
         let p = sign_test_p(1000, 2000);
         assert!(p > 0.5 && p < 0.52, "{p}");
+    }
+
+    /// The general tail: small cases by hand, the complement of the lower tail, and the
+    /// long path (terms in logs) where pⁿ would underflow.
+    #[test]
+    fn the_binomial_tail_is_its_sum() {
+        // P(X ≥ 2 | 3, 0.9) = 3 · 0.81 · 0.1 + 0.729 = 0.972.
+        assert!((binomial_at_least(2, 3, 0.9) - 0.972).abs() < 1e-12);
+        assert_eq!(binomial_at_least(0, 5, 0.3), 1.0);
+        assert_eq!(binomial_at_least(6, 5, 0.3), 0.0);
+        // P(X ≥ k) + P(X ≤ k − 1) = 1, the latter as P(n − X ≥ n − k + 1) with 1 − p.
+        for (k, n, p) in [
+            (3, 10, 0.3),
+            (50, 60, 0.95),
+            (590, 600, 0.05),
+            (12, 2000, 0.01),
+        ] {
+            let s = binomial_at_least(k, n, p) + binomial_at_least(n - k + 1, n, 1.0 - p);
+            assert!((s - 1.0).abs() < 1e-9, "{k} {n} {p}: {s}");
+        }
+        // 0.05⁶⁰⁰ underflows: the log path. P(misses ≥ 30 | 600, 0.05) is about ½ (mean 30).
+        let mid = binomial_at_least(30, 600, 0.05);
+        assert!(mid > 0.45 && mid < 0.6, "{mid}");
     }
 
     #[test]

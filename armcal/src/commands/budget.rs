@@ -84,7 +84,8 @@ impl BudgetArgs {
 }
 
 /// The budget for the file, or none and a warning that says why: a fit without a covariance
-/// is still written (`calibrate`, `diagnose -o`), without an `[uncertainty]` section.
+/// is still written (`calibrate`, `diagnose -o`), without an `[uncertainty]` section. The
+/// budget's own warnings (held-out groups it misses as a whole) join the report's.
 pub fn or_warning(
     made: anyhow::Result<(Uncertainty, BudgetReport)>,
     report: &mut Option<BudgetReport>,
@@ -92,6 +93,7 @@ pub fn or_warning(
 ) -> Option<Uncertainty> {
     match made {
         Ok((budget, budget_report)) => {
+            warnings.extend(budget_report.warnings());
             *report = Some(budget_report);
             Some(budget)
         }

@@ -17,7 +17,7 @@
 //!   else assumed 0 and said so; set by the caller (`--model-mm`) over both.
 //! - Temperature: assumed (0 unless set).
 
-use super::{misfit, propagate, Budget, QUANTISATION_COUNTS};
+use super::{misfit, propagate, u95, Budget, QUANTISATION_COUNTS};
 use crate::data::{Dataset, Kind};
 use crate::fit::finish::Fit;
 use crate::fit::holdout::Holdout;
@@ -95,6 +95,17 @@ pub struct ModelSource {
     pub covered_with: f64,
     /// The pose-dependent part, when the rows were held out by group.
     pub pose: Option<super::pose::PoseSource>,
+    /// Each held-out group's coverage under the whole budget, when the rows were held out by
+    /// group (empty otherwise).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub groups: Vec<misfit::GroupCoverage>,
+}
+
+impl ModelSource {
+    /// The held-out groups the budget misses as a whole.
+    pub fn missed_groups(&self) -> impl Iterator<Item = &misfit::GroupCoverage> {
+        self.groups.iter().filter(|g| g.missed())
+    }
 }
 
 /// A budget with, per term, how it was obtained.
@@ -320,6 +331,9 @@ fn model_step(
                 }
                 budget.model_mm = tau;
                 notes.push(model_note(tau, &src, h, s.instrument_mm));
+                if !src.groups.is_empty() {
+                    notes.push(groups_note(&src.groups));
+                }
                 Some(src)
             }
             None => {
@@ -406,6 +420,12 @@ fn model_term(
         covered_without: misfit::coverage(&sc, 0.0),
         covered_with: misfit::coverage(&sc, tau),
         pose: pose.as_ref().map(|p| p.source.clone()),
+        groups: if super::pose::fold_groups(data, &h.fits).is_some() {
+            let groups: Vec<i64> = rows.iter().map(|r| data.rows[r.row].group).collect();
+            misfit::group_coverage(&groups, &sc, tau)
+        } else {
+            Vec::new()
+        },
     };
     Some((tau, src, pose))
 }
@@ -516,6 +536,45 @@ fn model_note(tau: f64, src: &ModelSource, h: &Holdout, instrument_mm: f64) -> S
             String::new()
         } else {
             format!("; {} folds failed to fit", h.failed.len())
+        }
+    )
+}
+
+/// The report's line on each held-out group's coverage under the whole budget.
+fn groups_note(groups: &[misfit::GroupCoverage]) -> String {
+    let at_95 = groups.iter().filter(|g| g.fraction() >= u95::LEVEL).count();
+    let lowest = groups
+        .iter()
+        .map(misfit::GroupCoverage::fraction)
+        .fold(f64::INFINITY, f64::min);
+    let missed: Vec<String> = groups
+        .iter()
+        .filter(|g| g.missed())
+        .map(|g| {
+            format!(
+                "group {} ({} of {} rows, {:.1} %)",
+                g.group,
+                g.covered,
+                g.rows,
+                100.0 * g.fraction()
+            )
+        })
+        .collect();
+    format!(
+        "held-out groups: {} scored, {at_95} with ≥ 95 % of their rows inside their 95 % \
+         region, the lowest {:.1} %; {}",
+        groups.len(),
+        100.0 * lowest,
+        if missed.is_empty() {
+            "none missed as a whole".to_string()
+        } else {
+            format!(
+                "missed as a whole (p < {} were its rows inside with 95 % each): {}; the \
+                 budget's 95 % holds over the groups, not within these: placements the other \
+                 groups do not predict",
+                misfit::GROUP_MISSED_P,
+                missed.join(", ")
+            )
         }
     )
 }

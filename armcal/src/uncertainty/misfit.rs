@@ -253,6 +253,60 @@ pub fn coverage(scores: &[Score], tau: f64) -> f64 {
     scores.iter().filter(|s| s.covered(tau)).count() as f64 / scores.len().max(1) as f64
 }
 
+/// A held-out group's rows are said to be missed as a whole when so few of them are inside
+/// their 95 % region that rows inside with 95 % each would leave that few with this chance
+/// at most.
+pub const GROUP_MISSED_P: f64 = 0.01;
+
+/// One held-out group's rows inside their predicted 95 % region under the whole budget.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct GroupCoverage {
+    /// The group (session, placement) number of the data.
+    pub group: i64,
+    /// Its held-out rows scored.
+    pub rows: usize,
+    /// How many of them are inside.
+    pub covered: usize,
+    /// P(no more than `covered` inside) were each row inside with 95 % on its own. Rows of
+    /// one session share its placement, so this is a yardstick for "missed as a whole", not a
+    /// test of the budget: a session's rows are not independent.
+    pub p: f64,
+}
+
+impl GroupCoverage {
+    /// Fraction of its rows inside.
+    pub fn fraction(&self) -> f64 {
+        self.covered as f64 / self.rows.max(1) as f64
+    }
+
+    /// Is the group missed as a whole ([`GROUP_MISSED_P`])?
+    pub fn missed(&self) -> bool {
+        self.p < GROUP_MISSED_P
+    }
+}
+
+/// Each held-out group's coverage with the model term τ: `groups[k]` the group of the row
+/// scored `scores[k]`; in ascending group number. A session the budget misses as a whole
+/// shows here and nowhere in the pooled figure, which the conformal term holds at 95 % over
+/// all rows (issue 27: MUKCa's raised placements).
+pub fn group_coverage(groups: &[i64], scores: &[Score], tau: f64) -> Vec<GroupCoverage> {
+    let mut by: std::collections::BTreeMap<i64, (usize, usize)> = Default::default();
+    for (&g, s) in groups.iter().zip(scores) {
+        let e = by.entry(g).or_default();
+        e.0 += 1;
+        e.1 += usize::from(s.covered(tau));
+    }
+    by.into_iter()
+        .map(|(group, (n, c))| GroupCoverage {
+            group,
+            rows: n,
+            covered: c,
+            // P(inside ≤ c) = P(outside ≥ n − c), each row outside with 5 %.
+            p: crate::stats::binomial_at_least(n - c, n, 1.0 - u95::LEVEL),
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -293,6 +347,34 @@ mod tests {
         };
         let t = far.threshold();
         assert!(far.covered(t) && !far.covered(0.99 * t), "{t}");
+    }
+
+    /// Each group's rows counted apart: a group whose rows are all far is missed as a
+    /// whole, one with a row or two outside (as 95 % leaves) is not.
+    #[test]
+    fn a_group_missed_as_a_whole_is_told_from_one_missed_by_chance() {
+        let row = |deviation: f64| Score {
+            deviation,
+            lambda: [1e-4; 3],
+            m: 1.0,
+        };
+        // Group 1: 40 rows, 2 far (95 % leaves 2); group 2: 20 rows, 12 far.
+        let mut groups = vec![1; 40];
+        groups.extend([2; 20]);
+        let scores: Vec<Score> = (0..60)
+            .map(|k| row(if (2..48).contains(&k) { 1e-3 } else { 1.0 }))
+            .collect();
+        let g = group_coverage(&groups, &scores, 0.0);
+        assert_eq!(g.len(), 2);
+        assert_eq!((g[0].group, g[0].rows, g[0].covered), (1, 40, 38));
+        assert!(!g[0].missed() && g[0].p > 0.5, "{:?}", g[0]);
+        assert_eq!((g[1].group, g[1].rows, g[1].covered), (2, 20, 8));
+        assert!(g[1].missed() && g[1].p < 1e-9, "{:?}", g[1]);
+        assert!((g[1].fraction() - 0.4).abs() < 1e-12);
+        // A model term that covers the far rows leaves no group missed.
+        assert!(group_coverage(&groups, &scores, 1.0)
+            .iter()
+            .all(|g| g.covered == g.rows && g.p == 1.0));
     }
 
     /// A fold's frame error (a rigid motion of its predictions) is taken out of its held-out

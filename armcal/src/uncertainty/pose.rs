@@ -139,7 +139,7 @@ pub struct PoseTerm {
 }
 
 /// The group of each fold that fitted, when each left out one whole group.
-fn fold_groups(data: &Dataset, fits: &[FoldFit]) -> Option<Vec<i64>> {
+pub(crate) fn fold_groups(data: &Dataset, fits: &[FoldFit]) -> Option<Vec<i64>> {
     let mut seen = BTreeSet::new();
     let mut out = Vec::new();
     for f in fits {

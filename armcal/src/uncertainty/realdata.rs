@@ -24,6 +24,7 @@ use crate::fit::residuals::residuals;
 use crate::mukca::{self, Unit};
 use quatarm_ref::arm::Arm;
 use serde::Serialize;
+use std::collections::BTreeMap;
 
 /// One unit's figures.
 #[derive(Clone, Debug, Serialize)]
@@ -88,6 +89,17 @@ pub struct Rule {
 }
 
 impl Rule {
+    /// The budget's settings under this rule (the rest as `calibrate` has them).
+    fn settings(&self) -> Settings {
+        Settings {
+            two_group_scale: self.two_group_scale,
+            fleet_prior_groups: self.prior_groups,
+            leverage_scaled: self.leverage,
+            joint_leverage: self.joint_leverage,
+            ..Settings::default()
+        }
+    }
+
     /// The product's rule with the fleet's κ `two_group_scale`.
     pub fn product(two_group_scale: f64) -> Rule {
         Rule {
@@ -97,6 +109,35 @@ impl Rule {
             joint_leverage: false,
         }
     }
+}
+
+/// Each session's coverage under the budget `calibrate --by-group` writes from *every*
+/// session of `unit` under `rule` (the report's "held-out groups" line, and a warning for
+/// each group it misses as a whole: [`super::misfit::GroupCoverage::missed`]), by session
+/// name. Not nested: the scored session is in the fit and in κ; what it measures is whether
+/// the report names the sessions that the nested check ([`unit_coverage`]) finds missed.
+/// `None` when the unit cannot be calibrated or has fewer than two sessions.
+pub fn named_sessions(
+    unit: &Unit,
+    rule: Rule,
+) -> Option<BTreeMap<String, super::misfit::GroupCoverage>> {
+    let opts = mukca::options(None);
+    let fit = crate::fit::calib::calibrate(&unit.arm, &unit.data, &opts).ok()?;
+    let h = crate::fit::holdout::validate(
+        &unit.arm,
+        &unit.data,
+        &opts,
+        &crate::fit::holdout::by_group(&unit.data),
+    );
+    (h.folds > 1).then_some(())?;
+    let e = estimate::from_fit(&fit, &unit.data, Some(&h), 0.0, &rule.settings()).ok()?;
+    Some(
+        e.model?
+            .groups
+            .into_iter()
+            .filter_map(|g| Some((unit.sessions.get(&g.group)?.clone(), g)))
+            .collect(),
+    )
 }
 
 /// The margin (rad, about 5.7°) of the per-joint range check measured beside the others.
@@ -147,14 +188,7 @@ fn hold_out(unit: &Unit, groups: &[i64], g: i64, rule: Rule) -> Result<Held, sup
         &crate::fit::holdout::by_group(&train_data),
     );
     let (nested, pose, pose_scale) = if inner.folds > 1 {
-        let with = Settings {
-            two_group_scale: rule.two_group_scale,
-            fleet_prior_groups: rule.prior_groups,
-            leverage_scaled: rule.leverage,
-            joint_leverage: rule.joint_leverage,
-            ..Settings::default()
-        };
-        let e = estimate::from_fit(&fit, &train_data, Some(&inner), 0.0, &with)?;
+        let e = estimate::from_fit(&fit, &train_data, Some(&inner), 0.0, &rule.settings())?;
         let without = estimate::from_fit(&fit, &train_data, Some(&inner), 0.0, &no_model)?;
         let scale = e
             .model

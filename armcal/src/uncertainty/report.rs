@@ -116,6 +116,29 @@ impl BudgetReport {
         }
     }
 
+    /// What the report's reader must see first: the held-out groups the budget's own
+    /// held-out check misses as a whole (each a placement the other groups do not predict).
+    pub fn warnings(&self) -> Vec<String> {
+        let Some(src) = &self.model_estimated else {
+            return Vec::new();
+        };
+        src.missed_groups()
+            .map(|g| {
+                format!(
+                    "the uncertainty budget's held-out check misses group {} as a whole: {} of \
+                     its {} rows ({:.1} %) inside their 95 % region (p = {:.1e} were each \
+                     inside with 95 %); the budget's 95 % holds over the groups, not within \
+                     this one: a placement the other groups do not predict",
+                    g.group,
+                    g.covered,
+                    g.rows,
+                    100.0 * g.fraction(),
+                    g.p
+                )
+            })
+            .collect()
+    }
+
     /// The text section.
     pub fn text(&self, s: &mut String) {
         let _ = writeln!(
