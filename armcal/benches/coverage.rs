@@ -220,6 +220,12 @@ fn placement() {
         Err(e) => return println!("{}: {e}", path.display()),
     };
     let hard = placement::amplified(&truth, k);
+    // `fold`: κ validated with each held-out row's ℓ against its fold's design (stop 42's
+    // variant) under both factors.
+    let fold = std::env::args().any(|a| a == "fold");
+    if fold {
+        println!("κ validated with each held-out row's ℓ against its fold's own design (`fold`)");
+    }
     let nominal = quatarm_ref::arm::Arm::default6();
     println!(
         "placements: the geometric model fitted, 4 training sessions at placements {}, then a \
@@ -271,8 +277,8 @@ fn placement() {
             )
             .unwrap_or_default();
             let c = [
-                placement::coverage(&unit, false),
-                placement::coverage(&unit, true),
+                placement::coverage_with(&unit, false, fold),
+                placement::coverage_with(&unit, true, fold),
             ];
             println!(
                 "  {label} / new {} seed {seed}: session  ℓJ  RMS dev mm | {} covered, κ, \
@@ -470,8 +476,12 @@ fn mukca() {
     // `mukca joints`: the opt-in factor max(1, ℓ, ℓJ) (`--joint-leverage`), for the table
     // beside the product's max(1, ℓ).
     let joints = std::env::args().any(|a| a == "joints");
+    // `mukca fold`: κ validated with each held-out row's ℓ against its fold's own design
+    // (stop 42's variant).
+    let fold = std::env::args().any(|a| a == "fold");
     let rule = |fleet: f64| realdata::Rule {
         joint_leverage: joints,
+        fold_leverage: fold,
         ..realdata::Rule::product(fleet)
     };
     println!(

@@ -262,6 +262,28 @@ fn the_pose_term_is_estimated_from_sessions_and_covers_a_new_one() {
         "{pose:?} vs {tip_only:?}"
     );
     assert!(lev.range[0] < 1.0 && lev.range[1] > 1.0, "{lev:?}");
+    // Stop 42's variant (off in the product): κ validated with each held-out row's ℓ
+    // against its fold's own design. Every fold fit keeps its covariance for it; it moves
+    // the validated κ, and the κ it sets covers its own scores at the conformal rank.
+    assert!(h.fits.iter().all(|f| f.covariance.is_some()));
+    let fold = variant(Settings {
+        fold_leverage: true,
+        joint_leverage: false,
+        ..s
+    });
+    assert!(fold.validated && fold.covered[1] >= 0.95, "{fold:?}");
+    // A held-out session is newer to the design without it: its rows' ℓ against their
+    // fold's design is above 1 on average (against the whole calibration's it is 1 on
+    // average by construction).
+    let own =
+        armcal::uncertainty::pose::fold_tip_ratios(&fit.arm, &with.budget.params, &data, &h.fits);
+    assert!(
+        own.iter().all(|x| x.is_finite()),
+        "every row was held out once"
+    );
+    let mean_own = own.iter().sum::<f64>() / own.len() as f64;
+    assert!(mean_own > 1.01, "{mean_own}");
+    assert!(!Settings::default().fold_leverage);
     let pooled = variant(Settings {
         fleet_prior_groups: 1.0,
         two_group_scale: 2.0,

@@ -75,6 +75,10 @@ pub struct FoldFit {
     pub arm: Arm,
     /// The unknowns that fit estimated (the others held at their start value).
     pub fitted: Vec<crate::params::Param>,
+    /// That fit's covariance of its unknowns (the frame's among them), by unknown; `None`
+    /// where JᵀJ was singular. What a held-out row's tip leverage against the fold's own
+    /// design is taken with ([`crate::uncertainty::pose`]).
+    pub covariance: Option<(Vec<crate::params::Param>, nalgebra::DMatrix<f64>)>,
 }
 
 /// Fits `start` on all folds but one and judges the one left out, for every fold.
@@ -128,6 +132,9 @@ pub fn validate_observed(
         fits.push(FoldFit {
             rows: out.clone(),
             fitted: fit.ident.kept.iter().map(|&k| fit.params[k]).collect(),
+            covariance: fit
+                .covariance
+                .map(|(order, c)| (order.iter().map(|&k| fit.params[k]).collect(), c)),
             arm: fit.arm,
         });
     }

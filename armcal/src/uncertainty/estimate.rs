@@ -60,6 +60,10 @@ pub struct Settings {
     /// covers held-out training sessions less (its validated κ is smaller) without covering
     /// a new placement that max(1, ℓ) misses (`docs/results/uncertainty.md`, round 6).
     pub joint_leverage: bool,
+    /// With `leverage_scaled`, κ validated with each held-out row's tip leverage against
+    /// the fold that did not see it, not against the whole calibration (a variant measured
+    /// at stop 42, off; `docs/results/uncertainty.md`).
+    pub fold_leverage: bool,
 }
 
 impl Default for Settings {
@@ -74,6 +78,7 @@ impl Default for Settings {
             fleet_prior_groups: 0.0,
             leverage_scaled: true,
             joint_leverage: false,
+            fold_leverage: false,
         }
     }
 }
@@ -401,6 +406,7 @@ fn model_term(
         s.fleet_prior_groups,
         s.leverage_scaled,
         s.joint_leverage,
+        s.fold_leverage,
     );
     let zero = nalgebra::Matrix3::zeros();
     let sc: Vec<misfit::Score> = rows

@@ -328,6 +328,44 @@ pub fn tip_leverages(
         .collect()
 }
 
+/// Each row's tip leverage ratio against the fold that held it out: tr(J C_f Jᵀ) over the
+/// mean of the same over that fold's training rows, C_f the fold fit's covariance of
+/// `params` (an unknown it held has none); NaN for a row no fold held out or a fold without
+/// a covariance.
+pub fn fold_tip_ratios(
+    arm: &quatarm_ref::arm::Arm,
+    params: &[Param],
+    data: &Dataset,
+    fits: &[FoldFit],
+) -> Vec<f64> {
+    let mut out = vec![f64::NAN; data.rows.len()];
+    for f in fits {
+        let Some((order, c)) = &f.covariance else {
+            continue;
+        };
+        let at: Vec<Option<usize>> = params
+            .iter()
+            .map(|p| order.iter().position(|q| q == p))
+            .collect();
+        let cf = DMatrix::from_fn(params.len(), params.len(), |a, b| match (at[a], at[b]) {
+            (Some(i), Some(j)) => c[(i, j)],
+            _ => 0.0,
+        });
+        let lev = tip_leverages(arm, params, &cf, data);
+        let mut held = vec![false; data.rows.len()];
+        f.rows.iter().for_each(|&i| held[i] = true);
+        let train: Vec<f64> = (0..lev.len())
+            .filter(|&i| !held[i])
+            .map(|i| lev[i])
+            .collect();
+        let mean = train.iter().sum::<f64>() / train.len().max(1) as f64;
+        if mean.is_finite() && mean > 0.0 {
+            f.rows.iter().for_each(|&i| out[i] = lev[i] / mean);
+        }
+    }
+    out
+}
+
 /// What a covariance `cov` of the parameters alone predicts for the rows `judged`, in the
 /// order of [`super::misfit::row_covariances`].
 fn tip_part(
@@ -441,6 +479,7 @@ pub fn estimate(
     prior_groups: f64,
     leverage: bool,
     joint_leverage: bool,
+    fold_leverage: bool,
 ) -> Option<PoseTerm> {
     let groups = fold_groups(data, &h.fits)?;
     let g_all = groups.len();
@@ -485,6 +524,12 @@ pub fn estimate(
     let joints = lev_mean
         .filter(|_| joint_leverage)
         .and_then(|_| super::extrapolation::JointSupport::of(data));
+    // The variant measured at stop 42 (`fold_leverage`, off in the product): a held-out
+    // row's ℓ against the design of the fit that did not see it (that fold's C, over the
+    // mean of its own training rows), as a fresh reading's is against the calibration's.
+    let fold_ratio = lev_mean
+        .filter(|_| fold_leverage)
+        .map(|_| fold_tip_ratios(arm, params, data, &h.fits));
     if let (Some(lev), Some(mean)) = (&lev, lev_mean) {
         let mut without: std::collections::HashMap<
             i64,
@@ -501,8 +546,13 @@ pub fn estimate(
                     .as_ref()
                     .map(|j| j.ratio(&row.theta))
             });
+            let tip = fold_ratio
+                .as_ref()
+                .map(|f| f[r.row])
+                .filter(|x| x.is_finite())
+                .unwrap_or(lev[r.row] / mean);
             let l = super::propagate::Leverage {
-                tip: Some(lev[r.row] / mean),
+                tip: Some(tip),
                 joints: lj,
             };
             extra[k] *= leverage_factor(l.ratio().unwrap_or(1.0));
@@ -597,6 +647,7 @@ mod tests {
             rows: vec![0],
             arm,
             fitted: fitted.to_vec(),
+            covariance: None,
         }
     }
 

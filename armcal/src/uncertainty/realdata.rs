@@ -86,6 +86,9 @@ pub struct Rule {
     /// With `leverage`, the joints' ℓJ in the factor, max(1, ℓ, ℓJ) (opt-in,
     /// `--joint-leverage`; off: the product's max(1, ℓ)).
     pub joint_leverage: bool,
+    /// With `leverage`, κ validated with each held-out row's ℓ against its fold's own
+    /// design ([`super::estimate::Settings::fold_leverage`]; off in the product).
+    pub fold_leverage: bool,
 }
 
 impl Rule {
@@ -96,6 +99,7 @@ impl Rule {
             fleet_prior_groups: self.prior_groups,
             leverage_scaled: self.leverage,
             joint_leverage: self.joint_leverage,
+            fold_leverage: self.fold_leverage,
             ..Settings::default()
         }
     }
@@ -107,6 +111,7 @@ impl Rule {
             prior_groups: 0.0,
             leverage: true,
             joint_leverage: false,
+            fold_leverage: false,
         }
     }
 }

@@ -219,8 +219,19 @@ pub fn unit(
 /// The unit's coverage under the product's nested path with the factor max(1, ℓ, ℓJ)
 /// (`joint_leverage`) or max(1, ℓ); `None` with fewer than two sessions.
 pub fn coverage(unit: &Unit, joint_leverage: bool) -> Option<super::UnitCoverage> {
+    coverage_with(unit, joint_leverage, false)
+}
+
+/// [`coverage`], with κ validated on each held-out row's ℓ against its fold's own design
+/// where `fold_leverage` ([`super::Rule::fold_leverage`]; the variant of stop 42).
+pub fn coverage_with(
+    unit: &Unit,
+    joint_leverage: bool,
+    fold_leverage: bool,
+) -> Option<super::UnitCoverage> {
     let rule = super::Rule {
         joint_leverage,
+        fold_leverage,
         ..super::Rule::product(super::super::pose::two_group_scale(joint_leverage))
     };
     super::unit_coverage(unit, rule)
