@@ -682,13 +682,26 @@ fn simulated_true_se(arms: usize) -> Vec<f64> {
         .collect()
 }
 
-/// One simulated arm of a fleet: its true value 1 + τ·N(0, 1), its estimate with true error
-/// `s`, and its jackknife error s·√(χ²_ν/ν) over ν = `nu` degrees of freedom.
-fn simulated_arm(rng: &mut crate::rng::SimRng, tau: f64, s: f64, nu: usize) -> (f64, f64, f64) {
-    let t = 1.0 + tau * crate::rng::normal(rng);
-    let y = t + s * crate::rng::normal(rng);
-    let chi2: f64 = (0..nu).map(|_| crate::rng::normal(rng).powi(2)).sum();
-    (t, y, s * (chi2 / nu as f64).sqrt())
+/// One simulated fleet of arms whose true errors are `true_se`: per arm its true value
+/// 1 + τ·N(0, 1), its estimate with its true error s, and its jackknife error s·√(χ²_ν/ν)
+/// over ν = `nu` degrees of freedom, drawn arm by arm; (true values, estimates, errors).
+fn simulated_fleet(
+    rng: &mut crate::rng::SimRng,
+    tau: f64,
+    true_se: &[f64],
+    nu: usize,
+) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let mut theta = Vec::with_capacity(true_se.len() + 1);
+    let mut y = Vec::with_capacity(true_se.len());
+    let mut se = Vec::with_capacity(true_se.len());
+    for &s in true_se {
+        let t = 1.0 + tau * crate::rng::normal(rng);
+        y.push(t + s * crate::rng::normal(rng));
+        let chi2: f64 = (0..nu).map(|_| crate::rng::normal(rng).powi(2)).sum();
+        se.push(s * (chi2 / nu as f64).sqrt());
+        theta.push(t);
+    }
+    (theta, y, se)
 }
 
 /// What [`simulated_joined_coverage`] measures: a fleet's arms with a jackknife error and one
@@ -735,13 +748,7 @@ pub fn simulated_joined_coverage(
     let (mut pooled, mut hits, mut others, mut other_hits) = (0usize, 0usize, 0usize, 0usize);
     let (mut width, mut other_width) = (0.0, 0.0);
     for _ in 0..fleets {
-        let (mut theta, mut y, mut se) = (Vec::new(), Vec::new(), Vec::new());
-        for &s in &true_se {
-            let (t, v, e) = simulated_arm(&mut rng, tau, s, nu);
-            theta.push(t);
-            y.push(v);
-            se.push(e);
-        }
+        let (mut theta, y, se) = simulated_fleet(&mut rng, tau, &true_se, nu);
         let tj = 1.0 + tau * crate::rng::normal(&mut rng);
         let yj = tj + joined_se * crate::rng::normal(&mut rng);
         let Some((_, scaled, _, a)) =
@@ -849,15 +856,7 @@ pub fn simulated_coverage_phi(
     // The odd arms' (the high φ's) intervals of the fleet-scale pool, and their hits.
     let (mut high_n, mut high_hits) = (0usize, 0usize);
     for f in 0..fleets {
-        let mut theta = Vec::with_capacity(arms);
-        let mut y = Vec::with_capacity(arms);
-        let mut se = Vec::with_capacity(arms);
-        for &s in &true_se {
-            let (t, v, e) = simulated_arm(&mut rng, tau, s, nu);
-            theta.push(t);
-            y.push(v);
-            se.push(e);
-        }
+        let (theta, y, se) = simulated_fleet(&mut rng, tau, &true_se, nu);
         let Some((d, a)) = pool(&y, &se, &df, alpha) else {
             continue;
         };
